@@ -1,0 +1,5 @@
+"""Closed-form geometric models of library robots, vectorised over poses (numpy)."""
+
+from pkdyn.closed_form import delta
+
+__all__ = ["delta", "gough_stewart", "planar_3rrr"]

@@ -1,0 +1,113 @@
+"""pkdyn's exceptions: one base class, one subclass per kind of user error.
+
+Every exception carries the offending element or value in its attributes and says, in its
+message, what was found and how to fix it. The CLI prints ``str(err)`` on one line.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "PkdynError",
+    "DescriptionError",
+    "UnknownRobotError",
+    "ParameterError",
+    "InvalidInputError",
+    "AssemblyError",
+    "UnreachablePoseError",
+    "JointLimitError",
+    "SingularConfigurationError",
+]
+
+
+class PkdynError(Exception):
+    """Base class of every error a pkdyn user can cause."""
+
+
+class DescriptionError(PkdynError):
+    """A robot description (URDF, extension element or YAML sidecar) is malformed.
+
+    Attributes:
+        source: File or robot the description came from.
+        culprit: The element, attribute or name at fault.
+    """
+
+    def __init__(self, source: str, culprit: str, message: str) -> None:
+        self.source = source
+        self.culprit = culprit
+        super().__init__(f"{source}: {culprit}: {message}")
+
+
+class UnknownRobotError(PkdynError):
+    """Neither a library robot nor an existing file was named."""
+
+    def __init__(self, name: str, known: list[str]) -> None:
+        self.name = name
+        self.known = known
+        super().__init__(
+            f"unknown robot '{name}': not a file and not one of the library robots "
+            f"({', '.join(known)})"
+        )
+
+
+class ParameterError(PkdynError):
+    """A builder parameter is unknown or has an invalid value."""
+
+    def __init__(self, family: str, name: str, message: str) -> None:
+        self.family = family
+        self.name = name
+        super().__init__(f"{family}: parameter '{name}': {message}")
+
+
+class InvalidInputError(PkdynError):
+    """A numeric input is malformed: wrong size, NaN or infinite."""
+
+    def __init__(self, name: str, message: str) -> None:
+        self.name = name
+        super().__init__(f"{name}: {message}")
+
+
+class AssemblyError(PkdynError):
+    """The closures could not be satisfied (the geometry cannot be assembled).
+
+    Attributes:
+        closure: Name of the closure with the largest residual.
+        residual: Its residual norm [m or rad].
+    """
+
+    def __init__(self, closure: str, residual: float, message: str) -> None:
+        self.closure = closure
+        self.residual = residual
+        super().__init__(message)
+
+
+class UnreachablePoseError(AssemblyError):
+    """A requested platform pose is outside what the mechanism can reach."""
+
+
+class JointLimitError(PkdynError):
+    """A solution exists but a joint (actuator stroke, angle) is outside its limits.
+
+    Attributes:
+        joint: Joint name.
+        value: Joint value [rad or m].
+        lower: Lower limit [rad or m].
+        upper: Upper limit [rad or m].
+    """
+
+    def __init__(self, joint: str, value: float, lower: float, upper: float) -> None:
+        self.joint = joint
+        self.value = value
+        self.lower = lower
+        self.upper = upper
+        super().__init__(
+            f"joint '{joint}' would be at {value:.6g}, outside its limits "
+            f"[{lower:.6g}, {upper:.6g}]; choose a pose inside the workspace"
+        )
+
+
+class SingularConfigurationError(PkdynError):
+    """The configuration is exactly singular for the requested operation."""
+
+    def __init__(self, kind: str, message: str) -> None:
+        self.kind = kind
+        super().__init__(message)

@@ -1,0 +1,196 @@
+"""Clavel's Delta with rotary actuators (seed 000, sections 1.3.5 and 1.4).
+
+Three arms driven about horizontal axes on a base circle of radius ``ra`` (arm ``i`` in the
+vertical plane at ``theta_i = 0, 120, 240 deg``, arm 1 along +x; base in z = 0, nacelle below);
+each arm carries a parallelogram of two bars of length ``lb`` with ball joints (or, with
+``bar_joint="universal"``, a universal joint at the upper end, which removes the bars' spin);
+the bars close on the nacelle at radius ``rb``. Defaults: the DELTA 580 prototype
+(ra=150, rb=25, la=200, lb=380 mm).
+
+Model: the nacelle hangs on a free-flyer (its placement is part of q); upper bar ends are tree
+joints (spherical / universal), lower bar ends are ``point`` closures on the nacelle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.closed_form import delta as cf
+from pkdyn.exceptions import ParameterError
+from pkdyn.library._check import in_range, positive
+from pkdyn.urdf_writer import Shape, UrdfWriter, rod_inertia, rpy_z_to, segment_origin
+
+__all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
+
+NAME = "delta"
+SUMMARY = "Clavel's Delta, rotary actuators, parallelograms of two ball-jointed bars (DELTA 580)"
+
+
+@dataclass(frozen=True)
+class Params:
+    """Delta parameters (SI units). Defaults: DELTA 580 (seed 000) with plausible masses.
+
+    Attributes:
+        ra: Base centre to arm axis [m].
+        rb: Nacelle centre to parallelogram side [m].
+        la: Arm length [m].
+        lb: Bar length [m].
+        bar_spacing: Distance between the two bars of a parallelogram [m].
+        arm_mass: Arm mass, elbow included [kg].
+        bar_mass: Mass of one bar [kg].
+        nacelle_mass: Nacelle mass [kg].
+        arm_radius: Arm tube radius (inertia, display, collision) [m].
+        bar_radius: Bar tube radius [m].
+        z_home: Nacelle height at the home configuration [m] (negative: below the base).
+        alpha_min: Lower arm-angle limit [rad].
+        alpha_max: Upper arm-angle limit [rad].
+        effort: Joint-side actuator torque limit [N m].
+        velocity: Joint-side actuator speed limit [rad/s].
+        reduction: Gear reduction between motor and arm.
+        bar_joint: ``spherical`` (12 ball joints, mobility 9 of which 6 internal) or
+            ``universal`` (universal joint at the upper end of each bar, mobility 3).
+        cone_half_angle: Ball-joint cone limit about the home bar direction [rad].
+    """
+
+    ra: float = 0.150
+    rb: float = 0.025
+    la: float = 0.200
+    lb: float = 0.380
+    bar_spacing: float = 0.060
+    arm_mass: float = 0.250
+    bar_mass: float = 0.040
+    nacelle_mass: float = 0.150
+    arm_radius: float = 0.012
+    bar_radius: float = 0.005
+    z_home: float = -0.350
+    alpha_min: float = -0.8
+    alpha_max: float = 1.6
+    effort: float = 40.0
+    velocity: float = 15.0
+    reduction: float = 20.0
+    bar_joint: str = "spherical"
+    cone_half_angle: float = 0.8
+
+    def __post_init__(self) -> None:
+        positive(NAME, **{k: v for k, v in asdict(self).items() if k not in _SIGNED})
+        in_range(NAME, "alpha_min", self.alpha_min, -np.pi, self.alpha_max)
+        in_range(NAME, "alpha_max", self.alpha_max, self.alpha_min, np.pi)
+        if self.bar_joint not in ("spherical", "universal"):
+            raise ParameterError(NAME, "bar_joint", "must be 'spherical' or 'universal'")
+        if self.ra <= self.rb:
+            raise ParameterError(NAME, "ra", f"must exceed rb ({self.rb}) for a Delta")
+        _, ok = cf.inverse(self, np.array([0.0, 0.0, self.z_home]))
+        if self.z_home >= 0 or not ok[0]:
+            raise ParameterError(
+                NAME, "z_home", f"{self.z_home} m is not reachable below the base with these lengths"
+            )
+
+
+_SIGNED = {"z_home", "alpha_min", "alpha_max", "bar_joint"}
+
+
+def home(p: Params) -> list[float]:
+    """Arm angles [rad] with the nacelle at ``(0, 0, z_home)``."""
+    alpha, _ = cf.inverse(p, np.array([0.0, 0.0, p.z_home]))
+    return [float(a) for a in alpha[0]]
+
+
+def _arm_rotation(theta: float, alpha: float) -> np.ndarray:
+    return pin.rpy.rpyToMatrix(0.0, 0.0, theta) @ pin.rpy.rpyToMatrix(0.0, alpha, 0.0)
+
+
+def build_urdf(p: Params) -> str:
+    """Write the pkdyn description of a Delta.
+
+    Args:
+        p: Parameters.
+
+    Returns:
+        URDF text with pkdyn extension elements.
+    """
+    w = UrdfWriter("delta")
+    s = 0.5 * p.bar_spacing
+    grey, blue, orange = (0.6, 0.6, 0.65, 1.0), (0.2, 0.4, 0.8, 1.0), (0.9, 0.5, 0.1, 1.0)
+    w.link(
+        "base",
+        visuals=[Shape("cylinder", (p.ra + 0.04, 0.01), (0, 0, 0.02), rgba=grey)],
+        collisions=[Shape("cylinder", (p.ra + 0.04, 0.01), (0, 0, 0.02))],
+    )
+    alphas = home(p)
+    P = np.array([0.0, 0.0, p.z_home])
+    for i, (theta, alpha) in enumerate(zip(cf.THETA, alphas, strict=True), start=1):
+        u = np.array([np.cos(theta), np.sin(theta), 0.0])
+        t = np.array([-np.sin(theta), np.cos(theta), 0.0])
+        arm = f"arm{i}"
+        com, inertia = rod_inertia(p.arm_mass, p.arm_radius, (0, 0, 0), (p.la, 0, 0))
+        xyz, rpy, length = segment_origin((0, 0, 0), (p.la, 0, 0))
+        elbow = Shape("cylinder", (p.arm_radius * 0.8, p.bar_spacing + 0.02), (p.la, 0, 0), (np.pi / 2, 0, 0), blue)
+        w.link(
+            arm,
+            p.arm_mass,
+            com,
+            inertia,
+            visuals=[Shape("cylinder", (p.arm_radius, length), xyz, rpy, blue), elbow],
+            collisions=[Shape("cylinder", (p.arm_radius, length), xyz, rpy)],
+        )
+        w.joint(
+            arm,
+            "revolute",
+            "base",
+            arm,
+            xyz=p.ra * u,
+            rpy=(0.0, 0.0, theta),
+            axis=(0.0, 1.0, 0.0),
+            limit=(p.alpha_min, p.alpha_max, p.effort, p.velocity),
+        )
+        w.transmission(arm, f"motor{i}", p.reduction)
+        R_arm = _arm_rotation(theta, alpha)
+        O = p.ra * u
+        for side, sign in (("a", 1.0), ("b", -1.0)):
+            bar = f"bar{i}{side}"
+            elbow_w = O + R_arm @ np.array([p.la, sign * s, 0.0])
+            attach = P + p.rb * u + sign * s * t
+            d_arm = R_arm.T @ (attach - elbow_w)
+            jrpy = rpy_z_to(d_arm)
+            bcom, binertia = rod_inertia(p.bar_mass, p.bar_radius, (0, 0, 0), (0, 0, p.lb))
+            shape = Shape("cylinder", (p.bar_radius, p.lb), (0, 0, 0.5 * p.lb), rgba=orange)
+            w.link(
+                bar,
+                p.bar_mass,
+                bcom,
+                binertia,
+                visuals=[shape],
+                collisions=[Shape("cylinder", (p.bar_radius, p.lb), (0, 0, 0.5 * p.lb))],
+            )
+            R_j = pin.rpy.rpyToMatrix(*jrpy)
+            cone = ((0.0, 0.0, 1.0), p.cone_half_angle)
+            if p.bar_joint == "spherical":
+                w.spherical(f"{bar}_upper", arm, bar, (p.la, sign * s, 0.0), jrpy, cone=cone)
+            else:
+                axis1 = R_j.T @ np.array([0.0, 1.0, 0.0])
+                axis2 = np.cross(np.array([0.0, 0.0, 1.0]), axis1)
+                w.universal(
+                    f"{bar}_upper", arm, bar, (p.la, sign * s, 0.0), jrpy, axis1, axis2, cone=cone
+                )
+            w.closure(
+                f"loop{i}{side}",
+                "point",
+                (bar, (0.0, 0.0, p.lb), (0.0, 0.0, 0.0)),
+                ("nacelle", p.rb * u + sign * s * t, (0.0, 0.0, 0.0)),
+            )
+    nacelle_r = p.rb + 0.015
+    I_n = np.diag([1 / 4, 1 / 4, 1 / 2]) * p.nacelle_mass * nacelle_r**2
+    w.link(
+        "nacelle",
+        p.nacelle_mass,
+        (0, 0, 0),
+        I_n,
+        visuals=[Shape("cylinder", (nacelle_r, 0.01), rgba=grey)],
+        collisions=[Shape("cylinder", (nacelle_r, 0.01))],
+    )
+    w.joint("nacelle", "floating", "base", "nacelle", xyz=P)
+    w.platform("nacelle", ("x", "y", "z"))
+    return w.to_string(comment="generated by pkdyn.library.delta; edit the builder, not this file")
