@@ -7,7 +7,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test lint bench urdf clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -25,6 +25,9 @@ lint: $(STAMP)
 
 test: lint
 	$(PY) -m pytest -q
+
+urdf: $(STAMP)
+	for r in delta gough_stewart planar_3rrr five_bar tripod; do $(VENV)/bin/pkdyn urdf $$r -o urdf/$$r.urdf; done
 
 bench: $(STAMP)
 	$(PY) bench/run.py

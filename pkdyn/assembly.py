@@ -75,14 +75,18 @@ def closure_residual(robot: Robot, q: np.ndarray) -> float:
     return float(np.max(np.abs(robot.closure_set.residual(robot.data, q))))
 
 
-def _closure_fn(robot: Robot):  # type: ignore[no-untyped-def]
-    cs = robot.closure_set
-    data = robot.data
-
-    def fun(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return cs.residual_and_jacobian(data, q)
-
-    return fun
+def _solve_closures(
+    robot: Robot, q0: np.ndarray, free: np.ndarray | None, tol: float
+) -> SolveResult:
+    cs, data = robot.closure_set, robot.data
+    return solve_lm(
+        robot.model,
+        q0,
+        lambda q: cs.residual(data, q),
+        lambda q: cs.jacobian(data, q),
+        free=free,
+        tol=tol,
+    )
 
 
 def _worst(robot: Robot, q: np.ndarray) -> tuple[str, float]:
@@ -94,10 +98,10 @@ def _worst(robot: Robot, q: np.ndarray) -> tuple[str, float]:
     return owners[name], per[name]
 
 
-def _result(robot: Robot, sol: SolveResult) -> GeometryResult:
+def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryResult:
     placement = robot.platform_placement(sol.q) if robot.platform_frame is not None else None
     return GeometryResult(
-        sol.q, sol.q[robot.actuated_q].copy(), placement, closure_residual(robot, sol.q), sol.iterations
+        sol.q, sol.q[robot.actuated_q].copy(), placement, closure_error, sol.iterations
     )
 
 
@@ -119,7 +123,7 @@ def project(robot: Robot, q: np.ndarray, tol: float = DEFAULT_TOL) -> np.ndarray
     q = as_finite("q", q, robot.nq)
     if robot.closure_set.nc == 0:
         return q
-    sol = solve_lm(robot.model, q, _closure_fn(robot), tol=tol)
+    sol = _solve_closures(robot, q, None, tol)
     if not sol.converged:
         name, res = _worst(robot, sol.q)
         raise AssemblyError(
@@ -136,6 +140,7 @@ def forward_geometry(
     qa: Sequence[float] | np.ndarray,
     q_init: np.ndarray | None = None,
     tol: float = DEFAULT_TOL,
+    check_limits: bool = True,
 ) -> GeometryResult:
     """Direct geometric model: full configuration and platform pose from actuated coordinates.
 
@@ -147,18 +152,22 @@ def forward_geometry(
         qa: Actuated coordinates in actuator order [rad or m].
         q_init: Initial configuration (nq,), e.g. the previous solution (warm start).
         tol: Residual threshold [m or rad].
+        check_limits: Raise if an actuated coordinate is outside its limits.
 
     Returns:
         The solved configuration and platform placement.
 
     Raises:
         InvalidInputError: Wrong number of values or non-finite values.
+        JointLimitError: An actuated coordinate is outside its limits.
         AssemblyError: The mechanism cannot be assembled with these actuator values.
     """
     qa = as_finite("actuated coordinates", qa, len(robot.actuators))
     q0 = np.array(robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq))
     q0[robot.actuated_q] = qa
-    sol = solve_lm(robot.model, q0, _closure_fn(robot), free=robot.passive_v, tol=tol)
+    if check_limits:
+        check_actuator_limits(robot, q0)
+    sol = _solve_closures(robot, q0, robot.passive_v, tol)
     if not sol.converged:
         name, res = _worst(robot, sol.q)
         raise AssemblyError(
@@ -167,7 +176,7 @@ def forward_geometry(
             f"{robot.name}: actuator values {np.array2string(qa, precision=6)} cannot be "
             f"assembled: closure '{name}' keeps a residual of {res:.3g}",
         )
-    return _result(robot, sol)
+    return _result(robot, sol, sol.error)
 
 
 def assembly_modes(
@@ -198,7 +207,7 @@ def assembly_modes(
             dv[robot.passive_v] = rng.uniform(-spread, spread, robot.passive_v.size)
         q0 = pin.integrate(robot.model, robot.q_home, dv)
         try:
-            res = forward_geometry(robot, qa, q0)
+            res = forward_geometry(robot, qa, q0, check_limits=False)
         except AssemblyError:
             continue
         key = res.placement.translation if res.placement is not None else res.q
@@ -245,13 +254,15 @@ def inverse_geometry(
     cs = robot.closure_set
     data = robot.data
 
-    def fun(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        r, J = cs.residual_and_jacobian(data, q)
-        rt, Jt = task.residual_and_jacobian(data)
-        return np.concatenate([r, rt]), np.vstack([J, Jt])
+    def residual(q: np.ndarray) -> np.ndarray:
+        return np.concatenate([cs.residual(data, q), task.residual(data)])
+
+    def jacobian(q: np.ndarray) -> np.ndarray:
+        _, J = cs.residual_and_jacobian(data, q)
+        return np.vstack([J, task.residual_and_jacobian(data)[1]])
 
     q0 = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
-    sol = solve_lm(robot.model, q0, fun, tol=tol, max_iter=100)
+    sol = solve_lm(robot.model, q0, residual, jacobian, tol=tol, max_iter=100)
     if not sol.converged:
         pos, rpy = pose_to_vector(target)
         name, res = _worst(robot, sol.q)
@@ -265,7 +276,7 @@ def inverse_geometry(
         )
     if check_limits:
         check_actuator_limits(robot, sol.q)
-    return _result(robot, sol)
+    return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.nc]), initial=0.0)))
 
 
 def check_actuator_limits(robot: Robot, q: np.ndarray) -> None:

@@ -287,9 +287,17 @@ def _joint(source: str, el: ET.Element) -> JointSpec:
     return JointSpec(name, kind, axis2, limit)
 
 
-def _actuators(source: str, root: ET.Element) -> list[ActuatorSpec]:
+def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[ActuatorSpec]:
+    """Actuators of the ``SimpleTransmission`` elements (other transmission types are ignored).
+
+    With ``strict=False`` (a plain URDF, without pkdyn elements), ros_control transmissions
+    pkdyn cannot use (no joint, a joint absent from the URDF or not revolute / prismatic) are
+    skipped instead of raising.
+    """
     limits: dict[str, tuple[float, float]] = {}
+    kinds: dict[str, str] = {}
     for j in root.findall("joint"):
+        kinds[j.get("name", "")] = j.get("type", "")
         lim = j.find("limit")
         if lim is not None:
             limits[j.get("name", "")] = (
@@ -299,22 +307,35 @@ def _actuators(source: str, root: ET.Element) -> list[ActuatorSpec]:
     out = []
     for t in root.findall("transmission"):
         tname = t.get("name", "?")
+        ttype = t.findtext("type") or t.get("type") or "SimpleTransmission"
+        if not ttype.strip().endswith("SimpleTransmission"):
+            continue
         joint = t.find("joint")
+        if not strict and (
+            joint is None or kinds.get(joint.get("name", "")) not in ("revolute", "prismatic")
+        ):
+            continue
         if joint is None or not joint.get("name"):
             raise DescriptionError(source, f"transmission '{tname}'", "needs a <joint name=...>")
         act = t.find("actuator")
         reduction = 1.0
         aname = tname
+        red = t.find("mechanicalReduction")  # ROS 1 style: directly in the transmission
         if act is not None:
             aname = act.get("name", tname)
-            red = act.find("mechanicalReduction")
-            if red is not None and red.text:
-                try:
-                    reduction = float(red.text)
-                except ValueError:
-                    raise DescriptionError(
-                        source, f"transmission '{tname}' mechanicalReduction", "not a number"
-                    ) from None
+            if act.find("mechanicalReduction") is not None:
+                red = act.find("mechanicalReduction")
+        if red is not None and red.text:
+            try:
+                reduction = float(red.text)
+            except ValueError:
+                reduction = math.nan
+            if not math.isfinite(reduction) or reduction == 0.0:
+                raise DescriptionError(
+                    source,
+                    f"transmission '{tname}' mechanicalReduction '{red.text.strip()}'",
+                    "expected a finite non-zero number",
+                )
         jname = joint.get("name", "")
         effort, velocity = limits.get(jname, (math.inf, math.inf))
         out.append(ActuatorSpec(aname, jname, reduction, effort, velocity))
@@ -344,6 +365,7 @@ def parse_description(xml_text: str, source: str) -> Description:
     joint_names = tuple(el.get("name", "") for el in root.findall("joint"))
     closures = tuple(_closure(source, el, links) for el in root.findall(_NS + "closure"))
     joints = tuple(_joint(source, el) for el in root.findall(_NS + "joint"))
+    extended = any(isinstance(el.tag, str) and el.tag.startswith(_NS) for el in root)
     names = [c.name for c in closures]
     for n in names:
         if names.count(n) > 1:
@@ -364,7 +386,7 @@ def parse_description(xml_text: str, source: str) -> Description:
         name=root.get("name", source),
         closures=closures,
         joints=joints,
-        actuators=tuple(_actuators(source, root)),
+        actuators=tuple(_actuators(source, root, strict=extended)),
         platform=platform,
         links=tuple(sorted(links)),
         joint_names=joint_names,

@@ -223,7 +223,9 @@ def _home(robot: Robot, home: list[float] | None) -> np.ndarray:
         q0[robot.actuated_q] = home
         free = robot.passive_v
     cs, data = robot.closure_set, robot.data
-    sol = solve_lm(robot.model, q0, lambda q: cs.residual_and_jacobian(data, q), free=free, tol=1e-12)
+    sol = solve_lm(
+        robot.model, q0, lambda q: cs.residual(data, q), lambda q: cs.jacobian(data, q), free, 1e-12
+    )
     if not sol.converged:
         per = cs.split(sol.residual)
         worst = max(per, key=lambda k: per[k])

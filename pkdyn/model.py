@@ -65,11 +65,19 @@ def build_tree(xml: str, joints: Sequence[JointSpec], source: str) -> pin.Model:
                 source, f"pkdyn:joint '{name}'", "no moving URDF joint of that name"
             )
         jm = model.joints[model.getJointId(name)]
-        if jm.nv != 1:
+        # revolute shortnames: JointModelR{X,Y,Z}, JointModelRUB{X,Y,Z}, JointModelRevolute*
+        if jm.nv != 1 or not jm.shortname().startswith("JointModelR"):
             raise DescriptionError(
                 source,
                 f"pkdyn:joint '{name}'",
                 "the placeholder must be a 'continuous' or 'revolute' URDF joint",
+            )
+        axis2 = specs[name].axis2
+        if axis2 is not None and abs(float(_axis_of(jm) @ axis2)) > 1e-9:
+            raise DescriptionError(
+                source,
+                f"pkdyn:joint '{name}' axis2",
+                "must be orthogonal to the placeholder joint's <axis>",
             )
     return _rebuild(model, specs)
 

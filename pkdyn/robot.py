@@ -81,6 +81,39 @@ class Robot:
         """Names of the actuated joints, in actuator order."""
         return [a.joint for a in self.actuators]
 
+    @property
+    def loops(self) -> int:
+        """Number of independent kinematic loops of the mechanism (graph cyclomatic number).
+
+        Bodies are vertices (the ground included); physical joints and closures are edges.
+        Free-flyer and planar joints are modelling devices (a platform or a floating base), not
+        hardware, and are not edges. ``loops = edges - vertices + connected components``; for
+        the Delta with 12 ball joints it gives Clavel's 5.
+        """
+        model = self.model
+        parent = list(range(model.njoints))
+
+        def find(i: int) -> int:
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        edges = 0
+        links = []
+        for j in range(1, model.njoints):
+            if model.joints[j].shortname() in ("JointModelFreeFlyer", "JointModelPlanar"):
+                continue
+            links.append((j, model.parents[j]))
+        owners = dict(zip(self.constraint_owner, self.constraint_models, strict=True))
+        for cm in owners.values():
+            links.append((cm.joint1_id, cm.joint2_id))
+        for a, b in links:
+            edges += 1
+            parent[find(a)] = find(b)
+        components = len({find(i) for i in range(model.njoints)})
+        return edges - model.njoints + components
+
     def constraint_data(self) -> pin.StdVec_RigidConstraintData:
         """Fresh Pinocchio constraint data for ``constraint_models``."""
         out = pin.StdVec_RigidConstraintData()

@@ -20,12 +20,7 @@ import pinocchio as pin
 
 __all__ = ["ClosureSet"]
 
-_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _LOCAL = pin.ReferenceFrame.LOCAL
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 class ClosureSet:
@@ -51,6 +46,43 @@ class ClosureSet:
             self.sizes.append(3 if is_point else 6)
         self.offsets = np.concatenate([[0], np.cumsum(self.sizes)]).astype(int)
         self.nc = int(self.offsets[-1])
+        # Point constraints are evaluated together: each distinct joint placement is fetched
+        # once, contact points are mapped in one batch, and point Jacobians come from the world
+        # Jacobian data.J restricted (masked) to each joint's support.
+        pts = [k for k, it in enumerate(self._items) if it[0]]
+        self._pt_rows = (
+            np.concatenate([np.arange(self.offsets[k], self.offsets[k] + 3) for k in pts])
+            if pts
+            else np.zeros(0, dtype=int)
+        )
+        joints = sorted({it[j] for k in pts for j in (1, 3) for it in (self._items[k],)})
+        self._pt_joints = joints
+        slot = {j: n for n, j in enumerate(joints)}
+        self._pt_slot = np.array(
+            [[slot[self._items[k][1]] for k in pts], [slot[self._items[k][3]] for k in pts]],
+            dtype=int,
+        ).reshape(2, len(pts))
+        self._pt_local = np.array(
+            [
+                [self._items[k][2].translation for k in pts],
+                [self._items[k][4].translation for k in pts],
+            ]
+        ).reshape(2, len(pts), 3)
+        self._pt_mask = np.zeros((2, len(pts), 1, model.nv))
+        for n, k in enumerate(pts):
+            for side, j in enumerate((self._items[k][1], self._items[k][3])):
+                self._pt_mask[side, n, 0] = self._support_mask(model, j)
+        self._welds = [k for k, it in enumerate(self._items) if not it[0]]
+        self._n_pts = len(pts)
+
+    @staticmethod
+    def _support_mask(model: pin.Model, j: int) -> np.ndarray:
+        mask = np.zeros(model.nv)
+        while j > 0:
+            jm = model.joints[j]
+            mask[jm.idx_v : jm.idx_v + jm.nv] = 1.0
+            j = model.parents[j]
+        return mask
 
     def residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
         """Closure residual at ``q`` (runs the forward kinematics).
@@ -65,16 +97,21 @@ class ClosureSet:
         pin.forwardKinematics(self.model, data, q)
         return self._residual(data)
 
-    def _residual(self, data: pin.Data) -> np.ndarray:
+    def _points(self, data: pin.Data) -> np.ndarray:
+        """World positions (2, n, 3) of the two contact points of each point constraint."""
+        oMi = data.oMi
+        H = np.array([oMi[j].homogeneous for j in self._pt_joints])[self._pt_slot]
+        return np.einsum("snij,snj->sni", H[..., :3, :3], self._pt_local) + H[..., :3, 3]
+
+    def _residual(self, data: pin.Data, P: np.ndarray | None = None) -> np.ndarray:
         r = np.empty(self.nc)
-        for k, (is_point, j1, M1, j2, M2) in enumerate(self._items):
+        if self._n_pts:
+            P = self._points(data) if P is None else P
+            r[self._pt_rows] = (P[0] - P[1]).reshape(-1)
+        for k in self._welds:
+            _, j1, M1, j2, M2 = self._items[k]
             o = self.offsets[k]
-            oMc1 = data.oMi[j1] * M1
-            oMc2 = data.oMi[j2] * M2
-            if is_point:
-                r[o : o + 3] = oMc1.translation - oMc2.translation
-            else:
-                r[o : o + 6] = pin.log6(oMc1.actInv(oMc2)).vector
+            r[o : o + 6] = pin.log6((data.oMi[j1] * M1).actInv(data.oMi[j2] * M2)).vector
         return r
 
     def residual_and_jacobian(
@@ -91,33 +128,47 @@ class ClosureSet:
         """
         model = self.model
         pin.computeJointJacobians(model, data, q)
-        return self._residual(data), self._jacobian(data)
+        P = self._points(data) if self._n_pts else None
+        return self._residual(data, P), self._jacobian(data, P)
 
-    def _jacobian(self, data: pin.Data) -> np.ndarray:
+    def _jacobian(self, data: pin.Data, P: np.ndarray | None) -> np.ndarray:
         model = self.model
         J = np.zeros((self.nc, model.nv))
-        for k, (is_point, j1, M1, j2, M2) in enumerate(self._items):
+        if P is not None:
+            Jw = data.J
+            # velocity of a point p on a joint's support: v_O + w x p = v_O - [p]x w
+            S = np.zeros(P.shape + (3,))
+            S[..., 0, 1], S[..., 0, 2] = -P[..., 2], P[..., 1]
+            S[..., 1, 0], S[..., 1, 2] = P[..., 2], -P[..., 0]
+            S[..., 2, 0], S[..., 2, 1] = -P[..., 1], P[..., 0]
+            Jp = (Jw[:3] - S @ Jw[3:]) * self._pt_mask  # (2, n, 3, nv)
+            J[self._pt_rows] = (Jp[0] - Jp[1]).reshape(3 * self._n_pts, model.nv)
+        for k in self._welds:
+            _, j1, M1, j2, M2 = self._items[k]
             o = self.offsets[k]
-            if is_point:
-                for sign, j, M in ((1.0, j1, M1), (-1.0, j2, M2)):
-                    if j == 0:
-                        continue
-                    oMi = data.oMi[j]
-                    Jj = pin.getJointJacobian(model, data, j, _LWA)
-                    lever = oMi.rotation @ M.translation
-                    J[o : o + 3] += sign * (Jj[:3] - _skew(lever) @ Jj[3:])
-            else:
-                oMc1 = data.oMi[j1] * M1
-                oMc2 = data.oMi[j2] * M2
-                c1Mc2 = oMc1.actInv(oMc2)
-                nu = np.zeros((6, model.nv))
-                if j2 != 0:
-                    nu += M2.toActionMatrixInverse() @ pin.getJointJacobian(model, data, j2, _LOCAL)
-                if j1 != 0:
-                    J1 = M1.toActionMatrixInverse() @ pin.getJointJacobian(model, data, j1, _LOCAL)
-                    nu -= c1Mc2.toActionMatrixInverse() @ J1
-                J[o : o + 6] = pin.Jlog6(c1Mc2) @ nu
+            oMc1 = data.oMi[j1] * M1
+            oMc2 = data.oMi[j2] * M2
+            c1Mc2 = oMc1.actInv(oMc2)
+            nu = np.zeros((6, model.nv))
+            if j2 != 0:
+                nu += M2.toActionMatrixInverse() @ pin.getJointJacobian(model, data, j2, _LOCAL)
+            if j1 != 0:
+                J1 = M1.toActionMatrixInverse() @ pin.getJointJacobian(model, data, j1, _LOCAL)
+                nu -= c1Mc2.toActionMatrixInverse() @ J1
+            J[o : o + 6] = pin.Jlog6(c1Mc2) @ nu
         return J
+
+    def jacobian(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
+        """Closure Jacobian (nc, nv) at ``q`` (runs kinematics and joint Jacobians).
+
+        Args:
+            data: Pinocchio data of ``model``.
+            q: Configuration (nq,).
+
+        Returns:
+            Jacobian (nc, nv).
+        """
+        return self.residual_and_jacobian(data, q)[1]
 
     def split(self, r: np.ndarray) -> dict[str, float]:
         """Norm of the residual of each constraint, by name.

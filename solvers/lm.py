@@ -16,7 +16,8 @@ import pinocchio as pin
 
 __all__ = ["SolveResult", "solve_lm"]
 
-ResidualFn = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+ResidualFn = Callable[[np.ndarray], np.ndarray]
+JacobianFn = Callable[[np.ndarray], np.ndarray]
 
 
 @dataclass
@@ -44,17 +45,23 @@ class SolveResult:
 def solve_lm(
     model: pin.Model,
     q0: np.ndarray,
-    fun: ResidualFn,
+    residual: ResidualFn,
+    jacobian: JacobianFn,
     free: np.ndarray | None = None,
     tol: float = 1e-12,
     max_iter: int = 60,
 ) -> SolveResult:
-    """Solve ``fun(q) = 0`` for ``q`` on the model's configuration manifold.
+    """Solve ``residual(q) = 0`` for ``q`` on the model's configuration manifold.
+
+    Trial steps evaluate only the residual; the Jacobian is evaluated at accepted points that
+    have not converged yet.
 
     Args:
         model: Model whose ``integrate`` defines the manifold.
         q0: Initial configuration (nq,).
-        fun: ``q -> (r, J)`` with residual (m,) and Jacobian (m, nv).
+        residual: ``q -> r`` (m,).
+        jacobian: ``q -> J`` (m, nv), derivative of ``residual`` for increments applied by
+            ``pin.integrate``.
         free: Velocity indices allowed to move (default: all).
         tol: Convergence threshold on ``max |r|`` [m or rad].
         max_iter: Maximum number of iterations.
@@ -63,31 +70,38 @@ def solve_lm(
         The solution attempt; check ``converged``.
     """
     q = np.array(q0, dtype=float)
-    r, J = fun(q)
+    r = residual(q)
     nv = model.nv
-    idx = np.arange(nv) if free is None else np.asarray(free, dtype=int)
+    idx = None if free is None else np.asarray(free, dtype=int)
     it = 0
     err = float(np.max(np.abs(r))) if r.size else 0.0
     f = float(r @ r)
     mu = 1.0
+    dq = np.zeros(nv)
     while err > tol and it < max_iter:
-        Jf = J[:, idx]
+        J = jacobian(q)
+        Jf = J if idx is None else J[:, idx]
+        m, n = Jf.shape
+        small = m <= n
+        A = Jf @ Jf.T if small else Jf.T @ Jf
+        g = r if small else Jf.T @ r
+        diag = np.diag_indices(A.shape[0])
+        A0 = A[diag].copy()
         accepted = False
         for _ in range(12):
-            lam = mu * f + 1e-16
-            m, n = Jf.shape
-            if m <= n:
-                y = np.linalg.solve(Jf @ Jf.T + lam * np.eye(m), r)
-                step = -Jf.T @ y
+            A[diag] = A0 + mu * f + 1e-16
+            y = np.linalg.solve(A, g)
+            step = -(Jf.T @ y) if small else -y
+            if idx is None:
+                dq = step
             else:
-                step = -np.linalg.solve(Jf.T @ Jf + lam * np.eye(n), Jf.T @ r)
-            dq = np.zeros(nv)
-            dq[idx] = step
+                dq[:] = 0.0
+                dq[idx] = step
             q_new = pin.integrate(model, q, dq)
-            r_new, J_new = fun(q_new)
+            r_new = residual(q_new)
             f_new = float(r_new @ r_new)
-            if np.isfinite(f_new) and f_new < f:
-                q, r, J, f = q_new, r_new, J_new, f_new
+            if f_new < f:  # False for NaN
+                q, r, f = q_new, r_new, f_new
                 mu = max(mu * 0.3, 1e-3)
                 accepted = True
                 break

@@ -41,6 +41,17 @@ class FramePoseTask:
         e[3:] = pin.log3(self.target.rotation.T @ oMf.rotation)
         return e
 
+    def residual(self, data: pin.Data) -> np.ndarray:
+        """Selected error rows; needs the joint placements of ``data`` up to date.
+
+        Args:
+            data: Pinocchio data after forward kinematics.
+
+        Returns:
+            Residual (len(rows),).
+        """
+        return self.error(pin.updateFramePlacement(self.model, data, self.frame_id))[self.rows]
+
     def residual_and_jacobian(self, data: pin.Data) -> tuple[np.ndarray, np.ndarray]:
         """Selected error rows and their Jacobian; needs ``computeJointJacobians`` done.
 

@@ -6,14 +6,16 @@ are the builders' output on the default parameters (a test keeps them in sync).
 
 from __future__ import annotations
 
+import ast
 import dataclasses
+import importlib
+import importlib.util
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from pkdyn.exceptions import ParameterError
-from pkdyn.library import delta
 
 __all__ = ["Family", "FAMILIES", "URDF_DIR", "family_names"]
 
@@ -66,20 +68,37 @@ class Family:
                         "true",
                         "yes",
                     )
+                elif isinstance(default, tuple):
+                    parsed = ast.literal_eval(value) if isinstance(value, str) else value
+                    kwargs[key] = tuple(
+                        tuple(float(x) for x in row) if isinstance(row, list | tuple) else float(row)
+                        for row in parsed
+                    )
                 elif isinstance(default, int | float):
                     kwargs[key] = type(default)(float(value))
                 else:
                     kwargs[key] = type(default)(value)
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, SyntaxError):
                 raise ParameterError(
                     self.name, key, f"cannot use {value!r} (expected {type(default).__name__})"
                 ) from None
         return self.params(**kwargs)
 
 
+MODULES = ("delta", "gough_stewart", "planar_3rrr", "five_bar", "tripod")
+"""Family modules of ``pkdyn.library``, in documentation order."""
+
+
+def _family(module: str) -> Family:
+    m = importlib.import_module(f"pkdyn.library.{module}")
+    return Family(m.NAME, m.SUMMARY, m.Params, m.build_urdf, m.home)
+
+
 FAMILIES: dict[str, Family] = {
-    m.NAME: Family(m.NAME, m.SUMMARY, m.Params, m.build_urdf, m.home)
-    for m in (delta,)
+    f.name: f
+    for f in (
+        _family(m) for m in MODULES if importlib.util.find_spec(f"pkdyn.library.{m}") is not None
+    )
 }
 
 

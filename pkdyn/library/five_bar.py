@@ -1,0 +1,330 @@
+"""Planar five-bar linkage (closed RRRRR chain) with two actuated base revolutes.
+
+Base points ``A_1 = (-d/2, 0)`` and ``A_2 = (d/2, 0)`` in the plane z = 0; proximal links ``l1``
+driven about z at ``A_j`` (absolute angle ``theta_j`` from the base x axis); distal links ``l2``
+from the elbows ``C_j = A_j + l1 (cos theta_j, sin theta_j)`` meet at the end-effector point
+``E = (x, y)``. Defaults: ``d = 0.2``, ``l1 = 0.2``, ``l2 = 0.3`` m, home ``E = (0, 0.3)`` in the
+working mode with both elbows outward (``working_mode = "+-"``).
+
+Closed forms (vectorised, see :func:`inverse` and :func:`forward`): with ``K = E - A_j``,
+``K_x cos theta_j + K_y sin theta_j = K_3 = (|K|^2 + l1^2 - l2^2) / (2 l1)``, hence
+``theta_j = atan2(K_y, K_x) + s_j acos(K_3 / |K|)``, where ``s_j = +1`` puts elbow ``C_j`` on
+the left of ``A_j -> E`` (counter-clockwise) and ``-1`` on its right. ``E`` is the intersection
+of the circles of radius ``l2`` about ``C_1`` and ``C_2``; the ``+1`` assembly mode takes it on
+the left of ``C_1 -> C_2``.
+
+Model: tree ``base -> proximal1 -> distal1`` (end-effector at the tip of ``distal1``, which also
+carries the fixed link ``effector``, a point mass) and ``base -> proximal2 -> distal2``, closed
+by the ``hinge`` closure ``loop`` (axis z) between the two distal tips. Actuated joints
+``proximal1``, ``proximal2`` (actuators ``motor1``, ``motor2``, in that order; coordinate
+``theta_j``); passive joints ``distal1``, ``distal2`` have their frames turned by the home
+relative angle, so their neutral coordinates are the home configuration. Platform frame on the
+tip of ``distal1``; task ``x y``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkdyn.exceptions import ParameterError
+from pkdyn.library._check import in_range, positive
+from pkdyn.urdf_writer import Shape, UrdfWriter, rod_inertia, segment_origin
+
+__all__ = [
+    "NAME",
+    "SUMMARY",
+    "Params",
+    "build_urdf",
+    "home",
+    "inverse",
+    "forward",
+    "elbow_points",
+    "mode_signs",
+]
+
+NAME = "five_bar"
+SUMMARY = "Planar five-bar, two actuated base revolutes, end-effector where the distal links meet"
+
+_MODES = ("+-", "-+", "++", "--")
+_PASSIVE_VELOCITY = 1e3
+"""Velocity limit written on passive joints [rad/s] (effort 0: they are not driven)."""
+
+
+@dataclass(frozen=True)
+class Params:
+    """Five-bar parameters (SI units).
+
+    Attributes:
+        d: Distance between the two base revolutes [m].
+        l1: Proximal (actuated) link length [m].
+        l2: Distal link length [m].
+        x_home: End-effector x at the home configuration [m].
+        y_home: End-effector y at the home configuration [m].
+        working_mode: Elbow side of chains 1 and 2, ``s_1 s_2`` among ``+-`` (both elbows
+            outward, default), ``-+`` (both inward), ``++``, ``--``; ``+`` is the left of
+            ``A_j -> E``.
+        proximal_mass: Mass of a proximal link [kg].
+        distal_mass: Mass of a distal link [kg].
+        effector_mass: Point mass at the end-effector (tool), carried by ``distal1`` [kg].
+        link_radius: Link tube radius (inertia, display, collision) [m].
+        q_min: Lower limit of the actuated angles ``theta_j`` [rad].
+        q_max: Upper limit of the actuated angles ``theta_j`` [rad].
+        effort: Joint-side actuator torque limit [N m].
+        velocity: Joint-side actuator speed limit [rad/s].
+        reduction: Gear reduction between motor and proximal link.
+    """
+
+    d: float = 0.20
+    l1: float = 0.20
+    l2: float = 0.30
+    x_home: float = 0.0
+    y_home: float = 0.30
+    working_mode: str = "+-"
+    proximal_mass: float = 0.20
+    distal_mass: float = 0.15
+    effector_mass: float = 0.10
+    link_radius: float = 0.010
+    q_min: float = -math.pi
+    q_max: float = math.pi
+    effort: float = 5.0
+    velocity: float = 10.0
+    reduction: float = 10.0
+
+    def __post_init__(self) -> None:
+        positive(
+            NAME,
+            d=self.d,
+            l1=self.l1,
+            l2=self.l2,
+            proximal_mass=self.proximal_mass,
+            distal_mass=self.distal_mass,
+            effector_mass=self.effector_mass,
+            link_radius=self.link_radius,
+            effort=self.effort,
+            velocity=self.velocity,
+            reduction=self.reduction,
+        )
+        in_range(NAME, "x_home", self.x_home, -math.inf, math.inf)
+        in_range(NAME, "y_home", self.y_home, -math.inf, math.inf)
+        if self.working_mode not in _MODES:
+            raise ParameterError(
+                NAME, "working_mode", f"must be one of {', '.join(_MODES)}, got {self.working_mode!r}"
+            )
+        in_range(NAME, "q_min", self.q_min, -math.pi, self.q_max)
+        in_range(NAME, "q_max", self.q_max, self.q_min, math.pi)
+        theta, ok = inverse(self, self.home_point)
+        if not ok[0]:
+            raise ParameterError(
+                NAME,
+                "y_home",
+                f"home point ({self.x_home}, {self.y_home}) m is out of reach with these lengths "
+                "(each base point must lie between |l1 - l2| and l1 + l2 from it)",
+            )
+        out = [float(v) for v in theta[0] if not self.q_min <= v <= self.q_max]
+        if out:
+            raise ParameterError(
+                NAME,
+                "q_min" if out[0] < self.q_min else "q_max",
+                f"home actuated angle {out[0]:.6g} rad lies outside [q_min, q_max]",
+            )
+
+    @property
+    def base_xy(self) -> np.ndarray:
+        """Base points ``A_1, A_2``, shape (2, 2) [m]."""
+        return np.array([[-0.5 * self.d, 0.0], [0.5 * self.d, 0.0]])
+
+    @property
+    def home_point(self) -> np.ndarray:
+        """Home end-effector point ``(x, y)`` [m]."""
+        return np.array([self.x_home, self.y_home])
+
+
+def mode_signs(working_mode: str) -> np.ndarray:
+    """Elbow signs ``(s_1, s_2)`` of a working mode string such as ``"+-"``.
+
+    Args:
+        working_mode: Two characters among ``+`` and ``-``.
+
+    Returns:
+        Array (2,) of +1 / -1.
+    """
+    if working_mode not in _MODES:
+        raise ValueError(f"working mode must be one of {', '.join(_MODES)}, got {working_mode!r}")
+    return np.array([1.0 if c == "+" else -1.0 for c in working_mode])
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return np.pi - (np.pi - a) % (2.0 * np.pi)
+
+
+def inverse(
+    p: Params, E: np.ndarray, working_mode: str | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse geometric model: actuated angles from end-effector points.
+
+    Per chain, ``K = E - A_j`` and ``K_3 = (|K|^2 + l1^2 - l2^2) / (2 l1)``; then
+    ``theta_j = atan2(K_y, K_x) + s_j acos(K_3 / |K|)`` when ``|K_3| <= |K|``.
+
+    Args:
+        p: Parameters (``d``, ``l1``, ``l2``; ``working_mode`` unless given).
+        E: End-effector points, shape (N, 2) or (2,) [m].
+        working_mode: Overrides ``p.working_mode``.
+
+    Returns:
+        ``(theta, valid)``: angles (N, 2) [rad] in ``(-pi, pi]`` (NaN where a chain cannot reach)
+        and mask (N,).
+    """
+    P = np.atleast_2d(np.asarray(E, dtype=float))
+    s = mode_signs(p.working_mode if working_mode is None else working_mode)
+    A = p.base_xy
+    Kx = P[:, :1] - A[:, 0]
+    Ky = P[:, 1:2] - A[:, 1]
+    rho = np.hypot(Kx, Ky)
+    K3 = (rho**2 + p.l1**2 - p.l2**2) / (2.0 * p.l1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = K3 / rho
+    ok = (np.abs(ratio) <= 1.0) & (rho > 0.0)
+    theta = np.arctan2(Ky, Kx) + s * np.arccos(np.clip(np.where(ok, ratio, 0.0), -1.0, 1.0))
+    theta = _wrap(theta)
+    theta[~ok] = np.nan
+    return theta, ok.all(axis=1)
+
+
+def elbow_points(p: Params, theta: np.ndarray) -> np.ndarray:
+    """Elbows ``C_j = A_j + l1 (cos theta_j, sin theta_j)``.
+
+    Args:
+        p: Parameters.
+        theta: Actuated angles, shape (N, 2) or (2,) [rad].
+
+    Returns:
+        Elbow points, shape (N, 2, 2) [m].
+    """
+    t = np.atleast_2d(np.asarray(theta, dtype=float))
+    A = p.base_xy
+    return np.stack([A[:, 0] + p.l1 * np.cos(t), A[:, 1] + p.l1 * np.sin(t)], axis=-1)
+
+
+def forward(p: Params, theta: np.ndarray, assembly: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Direct geometric model: end-effector points from actuated angles.
+
+    ``E = M + s n sqrt(l2^2 - |C_1 C_2|^2 / 4)`` with ``M`` the midpoint of ``C_1 C_2`` and
+    ``n`` the unit normal on the left of ``C_1 -> C_2``.
+
+    Args:
+        p: Parameters.
+        theta: Actuated angles, shape (N, 2) or (2,) [rad].
+        assembly: ``s = +1`` (E on the left of ``C_1 -> C_2``; above the base for the default
+            robot) or ``-1``.
+
+    Returns:
+        ``(E, valid)``: points (N, 2) [m] (NaN where not assemblable) and mask (N,).
+    """
+    C = elbow_points(p, theta)
+    u = C[:, 1] - C[:, 0]
+    c = np.linalg.norm(u, axis=1)
+    h2 = p.l2**2 - 0.25 * c**2
+    ok = (h2 >= 0.0) & (c > 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n = np.stack([-u[:, 1], u[:, 0]], axis=1) / c[:, None]
+    E = 0.5 * (C[:, 0] + C[:, 1]) + assembly * n * np.sqrt(np.where(ok, h2, 0.0))[:, None]
+    E[~ok] = np.nan
+    return E, ok
+
+
+def home(p: Params) -> list[float]:
+    """Actuated angles ``theta_1, theta_2`` [rad] with the end-effector at the home point."""
+    theta, _ = inverse(p, p.home_point)
+    return [float(v) for v in theta[0]]
+
+
+def build_urdf(p: Params) -> str:
+    """Write the pkdyn description of a five-bar.
+
+    Args:
+        p: Parameters.
+
+    Returns:
+        URDF text with pkdyn extension elements.
+    """
+    w = UrdfWriter("five_bar")
+    grey, blue, orange = (0.6, 0.6, 0.65, 1.0), (0.2, 0.4, 0.8, 1.0), (0.9, 0.5, 0.1, 1.0)
+    r = p.link_radius
+    z_prox, z_dist = 0.0, 2.5 * r  # display layers; the kinematics is in z = 0
+    A = p.base_xy
+    w.link(
+        "base",
+        visuals=[Shape("box", (p.d + 6 * r, 4 * r, 2 * r), (0.0, 0.0, -2 * r), rgba=grey)],
+        collisions=[Shape("box", (p.d + 6 * r, 4 * r, 2 * r), (0.0, 0.0, -2 * r))],
+    )
+    theta = np.array(home(p))
+    C = elbow_points(p, theta)[0]
+    E = p.home_point
+    for j in range(2):
+        k = j + 1
+        prox, dist = f"proximal{k}", f"distal{k}"
+        beta = math.atan2(E[1] - C[j, 1], E[0] - C[j, 0])
+        com, inertia = rod_inertia(p.proximal_mass, r, (0, 0, z_prox), (p.l1, 0, z_prox))
+        xyz, rpy, length = segment_origin((0, 0, z_prox), (p.l1, 0, z_prox))
+        w.link(
+            prox,
+            p.proximal_mass,
+            com,
+            inertia,
+            visuals=[Shape("cylinder", (r, length), xyz, rpy, blue)],
+            collisions=[Shape("cylinder", (r, length), xyz, rpy)],
+        )
+        w.joint(
+            prox,
+            "revolute",
+            "base",
+            prox,
+            xyz=(float(A[j, 0]), float(A[j, 1]), 0.0),
+            axis=(0.0, 0.0, 1.0),
+            limit=(p.q_min, p.q_max, p.effort, p.velocity),
+        )
+        w.transmission(prox, f"motor{k}", p.reduction)
+        com, inertia = rod_inertia(p.distal_mass, r, (0, 0, z_dist), (p.l2, 0, z_dist))
+        xyz, rpy, length = segment_origin((0, 0, z_dist), (p.l2, 0, z_dist))
+        w.link(
+            dist,
+            p.distal_mass,
+            com,
+            inertia,
+            visuals=[Shape("cylinder", (r, length), xyz, rpy, orange)],
+            collisions=[Shape("cylinder", (r, length), xyz, rpy)],
+        )
+        # Joint frame turned by the home relative angle: neutral = home configuration.
+        w.joint(
+            dist,
+            "revolute",
+            prox,
+            dist,
+            xyz=(p.l1, 0.0, 0.0),
+            rpy=(0.0, 0.0, float(_wrap(np.array(beta - theta[j])))),
+            axis=(0.0, 0.0, 1.0),
+            limit=(-math.pi, math.pi, 0.0, _PASSIVE_VELOCITY),
+        )
+    r_e = 1.5 * r
+    I_e = np.eye(3) * 0.4 * p.effector_mass * r_e**2
+    w.link(
+        "effector",
+        p.effector_mass,
+        (0.0, 0.0, 0.0),
+        I_e,
+        visuals=[Shape("sphere", (r_e,), (0.0, 0.0, z_dist), rgba=grey)],
+        collisions=[Shape("sphere", (r_e,), (0.0, 0.0, z_dist))],
+    )
+    w.joint("effector", "fixed", "distal1", "effector", xyz=(p.l2, 0.0, 0.0))
+    w.closure(
+        "loop",
+        "hinge",
+        ("distal1", (p.l2, 0.0, 0.0), (0.0, 0.0, 0.0)),
+        ("distal2", (p.l2, 0.0, 0.0), (0.0, 0.0, 0.0)),
+        axis=(0.0, 0.0, 1.0),
+    )
+    w.platform("distal1", ("x", "y"), xyz=(p.l2, 0.0, 0.0))
+    return w.to_string(comment="generated by pkdyn.library.five_bar; edit the builder, not this file")
