@@ -47,6 +47,7 @@ class GeometryResult:
         placement: Platform placement (``None`` if the robot has no platform).
         residual: Largest closure residual component after the solve [m or rad].
         iterations: Solver iterations.
+
     """
 
     q: np.ndarray
@@ -119,6 +120,7 @@ def project(robot: Robot, q: np.ndarray, tol: float = DEFAULT_TOL) -> np.ndarray
     Raises:
         InvalidInputError: ``q`` has the wrong size or non-finite values.
         AssemblyError: The closures cannot be satisfied from this guess.
+
     """
     q = as_finite("q", q, robot.nq)
     if robot.closure_set.nc == 0:
@@ -161,6 +163,7 @@ def forward_geometry(
         InvalidInputError: Wrong number of values or non-finite values.
         JointLimitError: An actuated coordinate is outside its limits.
         AssemblyError: The mechanism cannot be assembled with these actuator values.
+
     """
     qa = as_finite("actuated coordinates", qa, len(robot.actuators))
     q0 = np.array(robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq))
@@ -197,6 +200,7 @@ def assembly_modes(
 
     Returns:
         Distinct solutions, sorted by platform height then position (first: the home-like one).
+
     """
     qa = as_finite("actuated coordinates", qa, len(robot.actuators))
     rng = np.random.default_rng(seed)
@@ -245,6 +249,7 @@ def inverse_geometry(
         InvalidInputError: Malformed pose.
         UnreachablePoseError: No assembled configuration reaches the pose.
         JointLimitError: The pose needs an actuator outside its limits.
+
     """
     target = pose_from_vector(pose)
     if robot.platform_frame is None:
@@ -285,9 +290,12 @@ def check_actuator_limits(robot: Robot, q: np.ndarray) -> None:
     Args:
         robot: The robot.
         q: Configuration (nq,).
+
     """
-    lo = robot.model.lowerPositionLimit
-    hi = robot.model.upperPositionLimit
-    for a, iq in zip(robot.actuators, robot.actuated_q, strict=True):
-        if not (lo[iq] - 1e-12 <= q[iq] <= hi[iq] + 1e-12):
-            raise JointLimitError(a.joint, float(q[iq]), float(lo[iq]), float(hi[iq]))
+    iq = robot.actuated_q
+    lo = robot.model.lowerPositionLimit[iq]
+    hi = robot.model.upperPositionLimit[iq]
+    bad = np.flatnonzero((q[iq] < lo - 1e-12) | (q[iq] > hi + 1e-12))
+    if bad.size:
+        k = int(bad[0])
+        raise JointLimitError(robot.actuators[k].joint, float(q[iq[k]]), float(lo[k]), float(hi[k]))

@@ -26,8 +26,8 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"pkdyn: error: {message} (see pkdyn {self.prog.split()[-1]} --help)\n")
 
 
-def _params(items: Sequence[str] | None) -> dict[str, str]:
-    out: dict[str, str] = {}
+def _params(items: Sequence[str] | None) -> dict[str, Any]:
+    out: dict[str, Any] = {}
     for item in items or []:
         key, sep, value = item.partition("=")
         if not sep or not key:
@@ -169,6 +169,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Returns:
         Exit code: 0 on success, 1 on a user error (one line on stderr).
+
     """
     args = _parser().parse_args(argv)
     try:

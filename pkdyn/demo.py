@@ -27,6 +27,7 @@ def run_demo(samples: int = 200, seed: int = 0) -> list[dict[str, float]]:
 
     Returns:
         One row per robot (the printed figures).
+
     """
     rng = np.random.default_rng(seed)
     rows = []
@@ -48,15 +49,20 @@ def run_demo(samples: int = 200, seed: int = 0) -> list[dict[str, float]]:
             d[robot.task_rows] = rng.uniform(-1, 1, robot.task_rows.size)
             d[:3] *= 0.02
             d[3:] *= 0.05
-            target = home * pin.exp6(d) if robot.task_rows.size == 6 else pin.SE3(
-                home.rotation, home.translation + d[:3]
-            ) * pin.SE3(pin.exp3(d[3:]), np.zeros(3))
+            target = (
+                home * pin.exp6(d)
+                if robot.task_rows.size == 6
+                else pin.SE3(home.rotation, home.translation + d[:3])
+                * pin.SE3(pin.exp3(d[3:]), np.zeros(3))
+            )
             ik = inverse_geometry(robot, target, q_init=q)
             fk = forward_geometry(robot, ik.qa, q_init=ik.q)
             assert fk.placement is not None
             err = np.concatenate(
-                [fk.placement.translation - target.translation,
-                 pin.log3(target.rotation.T @ fk.placement.rotation)]
+                [
+                    fk.placement.translation - target.translation,
+                    pin.log3(target.rotation.T @ fk.placement.rotation),
+                ]
             )[robot.task_rows]
             worst_p = max(worst_p, float(np.max(np.abs(err))))
             worst_c = max(worst_c, fk.residual, ik.residual)

@@ -57,6 +57,7 @@ class FrameRef:
     Attributes:
         link: Link or frame name.
         placement: Placement of the frame in the link frame.
+
     """
 
     link: str
@@ -75,6 +76,7 @@ class ClosureSpec:
         frame2: Second frame; at assembly its origin coincides with frame1's (and, for a weld,
             its orientation too).
         axis: Hinge axis, unit vector in the coordinates of each of the two frames.
+
     """
 
     name: str
@@ -135,6 +137,7 @@ class JointSpec:
         kind: ``spherical`` or ``universal``.
         axis2: Second axis of a universal joint (in the frame after the first rotation).
         limit: Optional passive-joint limit.
+
     """
 
     name: str
@@ -153,6 +156,7 @@ class ActuatorSpec:
         reduction: Mechanical reduction (joint speed x reduction = motor speed).
         effort: Joint-side effort limit [N m or N] (``inf`` when absent).
         velocity: Joint-side velocity limit [rad/s or m/s] (``inf`` when absent).
+
     """
 
     name: str
@@ -342,6 +346,42 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
     return out
 
 
+_URDF_NUMBERS = {
+    "origin": ("xyz", "rpy"),
+    "axis": ("xyz",),
+    "mass": ("value",),
+    "inertia": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
+    "limit": ("lower", "upper", "effort", "velocity"),
+}
+
+
+def _check_urdf_numbers(source: str, root: ET.Element) -> None:
+    """Reject NaN / infinite numbers in links and joints, naming where they are.
+
+    The URDF parser either rejects the whole document without saying where, or (inertials)
+    silently drops the element; other malformed numbers are left to it.
+    """
+    for kind in ("link", "joint"):
+        for owner in root.findall(kind):
+            for el in owner.iter():
+                for attr in _URDF_NUMBERS.get(str(el.tag), ()):
+                    text = el.get(attr)
+                    if text is None:
+                        continue
+                    for token in text.split():
+                        try:
+                            finite = math.isfinite(float(token))
+                        except ValueError:
+                            continue
+                        if not finite:
+                            raise DescriptionError(
+                                source,
+                                f"{kind} '{owner.get('name', '?')}' <{el.tag}> "
+                                f"attribute {attr}='{text}'",
+                                "NaN and infinite values are not allowed",
+                            )
+
+
 def parse_description(xml_text: str, source: str) -> Description:
     """Parse the pkdyn extension elements of a URDF document.
 
@@ -354,6 +394,7 @@ def parse_description(xml_text: str, source: str) -> Description:
 
     Raises:
         DescriptionError: Malformed XML or a malformed extension element.
+
     """
     try:
         root = ET.fromstring(xml_text)
@@ -361,6 +402,7 @@ def parse_description(xml_text: str, source: str) -> Description:
         raise DescriptionError(source, "XML", f"malformed document ({err})") from None
     if root.tag != "robot":
         raise DescriptionError(source, f"<{root.tag}>", "the root element must be <robot>")
+    _check_urdf_numbers(source, root)
     links = {el.get("name", "") for el in root.findall("link")}
     joint_names = tuple(el.get("name", "") for el in root.findall("joint"))
     closures = tuple(_closure(source, el, links) for el in root.findall(_NS + "closure"))

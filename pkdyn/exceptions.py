@@ -29,6 +29,7 @@ class DescriptionError(PkdynError):
     Attributes:
         source: File or robot the description came from.
         culprit: The element, attribute or name at fault.
+
     """
 
     def __init__(self, source: str, culprit: str, message: str) -> None:
@@ -72,6 +73,7 @@ class AssemblyError(PkdynError):
     Attributes:
         closure: Name of the closure with the largest residual.
         residual: Its residual norm [m or rad].
+
     """
 
     def __init__(self, closure: str, residual: float, message: str) -> None:
@@ -92,6 +94,7 @@ class JointLimitError(PkdynError):
         value: Joint value [rad or m].
         lower: Lower limit [rad or m].
         upper: Upper limit [rad or m].
+
     """
 
     def __init__(self, joint: str, value: float, lower: float, upper: float) -> None:

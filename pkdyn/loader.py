@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from pathlib import Path
@@ -63,6 +64,7 @@ def load(
         ParameterError: Unknown or invalid builder parameter, or parameters given for a file.
         DescriptionError: Malformed description.
         AssemblyError: The home configuration cannot be assembled.
+
     """
     name = str(name_or_path)
     if name in library.FAMILIES:
@@ -113,6 +115,7 @@ def load_string(
 
     Returns:
         The loaded robot.
+
     """
     desc = parse_description(xml, source)
     model = build_tree(xml, desc.joints, source)
@@ -122,7 +125,11 @@ def load_string(
         moving = [model.names[j] for j in range(1, model.njoints)]
         extra_c, extra_a = read_sidecar(sidecar, moving)
         closures += extra_c
-        actuators += [a for a in extra_a if a.joint not in [b.joint for b in actuators]]
+        for a in extra_a:  # effort and velocity limits from the joint's URDF <limit>
+            if a.joint not in [b.joint for b in actuators]:
+                iv = model.joints[model.getJointId(a.joint)].idx_v
+                eff, vel = float(model.effortLimit[iv]), float(model.velocityLimit[iv])
+                actuators.append(dataclasses.replace(a, effort=eff, velocity=vel))
     desc = Description(
         desc.name,
         tuple(closures),
@@ -184,7 +191,9 @@ def _actuation(
     for a in actuators:
         if not model.existJointName(a.joint):
             raise DescriptionError(
-                source, f"transmission of '{a.name}'", f"names joint '{a.joint}', which is not a moving joint"
+                source,
+                f"transmission of '{a.name}'",
+                f"names joint '{a.joint}', which is not a moving joint",
             )
         jid = model.getJointId(a.joint)
         jm = model.joints[jid]
@@ -209,7 +218,12 @@ def _guess(model: pin.Model) -> np.ndarray:
         if jm.nq != 1:
             continue
         i = jm.idx_q
-        if math.isfinite(lo[i]) and math.isfinite(hi[i]) and lo[i] < hi[i] and not lo[i] <= q[i] <= hi[i]:
+        if (
+            math.isfinite(lo[i])
+            and math.isfinite(hi[i])
+            and lo[i] < hi[i]
+            and not lo[i] <= q[i] <= hi[i]
+        ):
             q[i] = 0.5 * (lo[i] + hi[i])
     return q
 

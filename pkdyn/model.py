@@ -50,6 +50,7 @@ def build_tree(xml: str, joints: Sequence[JointSpec], source: str) -> pin.Model:
 
     Raises:
         DescriptionError: The URDF is rejected, or an upgrade names a missing or unsuitable joint.
+
     """
     try:
         with _quiet_stderr():
@@ -82,17 +83,22 @@ def build_tree(xml: str, joints: Sequence[JointSpec], source: str) -> pin.Model:
     return _rebuild(model, specs)
 
 
-_AXES = {"X": 0, "Y": 1, "Z": 2}
-
-
 def _axis_of(jm: pin.JointModel) -> np.ndarray:
-    """Axis of a revolute Pinocchio joint model (aligned or unaligned, bounded or not)."""
-    short = jm.shortname()
-    if hasattr(jm, "axis"):
-        return np.asarray(jm.axis, dtype=float)
-    e = np.zeros(3)
-    e[_AXES[short[-1]]] = 1.0
-    return e
+    """Axis of a 1-DOF revolute joint model (aligned or not, bounded or not).
+
+    Read from the joint's motion subspace at its neutral configuration.
+    """
+    jd = jm.createData()
+    jm.calc(jd, pin.neutral(_single_joint_model(jm)))
+    S = np.reshape(np.asarray(jd.S), (6, -1))
+    axis = S[3:, 0]
+    return axis / np.linalg.norm(axis)
+
+
+def _single_joint_model(jm: pin.JointModel) -> pin.Model:
+    m = pin.Model()
+    m.addJoint(0, jm, pin.SE3.Identity(), "j")
+    return m
 
 
 def _rebuild(model: pin.Model, specs: dict[str, JointSpec]) -> pin.Model:
@@ -156,6 +162,7 @@ def build_geometry(
 
     Raises:
         DescriptionError: A geometry cannot be parsed or a mesh file is missing.
+
     """
     try:
         with _quiet_stderr():
@@ -178,6 +185,7 @@ def resolve_frame(model: pin.Model, ref: FrameRef, source: str, what: str) -> tu
 
     Raises:
         DescriptionError: No link or frame of that name.
+
     """
     fid = None
     for ftype in (pin.FrameType.BODY, None):
@@ -212,6 +220,7 @@ def constraint_models(
 
     Raises:
         DescriptionError: A closure names a missing link, or both frames are on one body.
+
     """
     out: list[pin.RigidConstraintModel] = []
     owner: list[str] = []

@@ -12,7 +12,9 @@ from pkdyn.exceptions import InvalidInputError
 __all__ = ["as_finite", "pose_from_vector", "pose_to_vector"]
 
 
-def as_finite(name: str, values: Sequence[float] | np.ndarray, size: int | None = None) -> np.ndarray:
+def as_finite(
+    name: str, values: Sequence[float] | np.ndarray, size: int | None = None
+) -> np.ndarray:
     """Validate a numeric input: right size, no NaN or infinity.
 
     Args:
@@ -25,6 +27,7 @@ def as_finite(name: str, values: Sequence[float] | np.ndarray, size: int | None 
 
     Raises:
         InvalidInputError: Wrong size or non-finite values.
+
     """
     try:
         arr = np.array(values, dtype=float).reshape(-1)
@@ -49,12 +52,15 @@ def pose_from_vector(pose: Sequence[float] | np.ndarray | pin.SE3) -> pin.SE3:
 
     Raises:
         InvalidInputError: Wrong length or non-finite values.
+
     """
     if isinstance(pose, pin.SE3):
         return pin.SE3(pose)
     arr = as_finite("pose", pose)
     if arr.size not in (3, 6):
-        raise InvalidInputError("pose", f"expected 3 or 6 values (x y z [roll pitch yaw]), got {arr.size}")
+        raise InvalidInputError(
+            "pose", f"expected 3 or 6 values (x y z [roll pitch yaw]), got {arr.size}"
+        )
     R = pin.rpy.rpyToMatrix(arr[3:]) if arr.size == 6 else np.eye(3)
     return pin.SE3(R, arr[:3])
 
@@ -67,5 +73,6 @@ def pose_to_vector(M: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
 
     Returns:
         ``(position, rpy)``.
+
     """
     return np.array(M.translation), np.array(pin.rpy.matrixToRpy(M.rotation))

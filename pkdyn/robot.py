@@ -38,6 +38,7 @@ class Robot:
         task_rows: Controlled pose components as indices into (x, y, z, rx, ry, rz).
         q_home: An assembled reference configuration (nq,).
         params: Builder parameters for library robots, else ``None``.
+
     """
 
     name: str
@@ -130,6 +131,7 @@ class Robot:
 
         Returns:
             Number of degrees of freedom, internal mobilities included.
+
         """
         qq = self.q_home if q is None else q
         if self.closure_set.nc == 0:
@@ -147,6 +149,7 @@ class Robot:
 
         Returns:
             Platform placement (a copy).
+
         """
         if self.platform_frame is None:
             raise ValueError(f"{self.name} declares no platform frame")

@@ -32,6 +32,7 @@ def read_sidecar(
 
     Raises:
         DescriptionError: Malformed YAML, mismatched lists, unknown type, or no joint matched.
+
     """
     src = str(path)
     try:
@@ -56,7 +57,7 @@ def read_sidecar(
         closures.append(
             ClosureSpec(f"loop{k + 1}", _TYPES[key], FrameRef(str(pair[0])), FrameRef(str(pair[1])))
         )
-    actuators = []
+    actuators: list[ActuatorSpec] = []
     for pattern in data.get("name_mot") or []:
         matched = [n for n in joint_names if re.search(str(pattern), n)]
         if not matched:

@@ -33,6 +33,7 @@ class Shape:
         xyz: Origin in the link frame [m].
         rpy: Orientation in the link frame [rad].
         rgba: Display colour.
+
     """
 
     kind: str
@@ -58,6 +59,7 @@ def rpy_z_to(d: Vec) -> tuple[float, float, float]:
 
     Returns:
         ``(roll, pitch, yaw)``.
+
     """
     import pinocchio as pin
 
@@ -81,6 +83,7 @@ def segment_origin(p0: Vec, p1: Vec) -> tuple[tuple[float, ...], tuple[float, fl
 
     Returns:
         ``(xyz, rpy, length)`` for a :class:`Shape` of kind ``cylinder``.
+
     """
     a = np.asarray(p0, dtype=float)
     b = np.asarray(p1, dtype=float)
@@ -101,6 +104,7 @@ def rod_inertia(
 
     Returns:
         ``(com, I)`` with ``I`` a 3x3 inertia tensor [kg m^2].
+
     """
     a = np.asarray(p0, dtype=float)
     b = np.asarray(p1, dtype=float)
@@ -118,6 +122,7 @@ class UrdfWriter:
 
     Args:
         name: Robot name.
+
     """
 
     def __init__(self, name: str) -> None:
@@ -143,6 +148,7 @@ class UrdfWriter:
             inertia: 3x3 inertia about the COM in link axes [kg m^2].
             visuals: Visual shapes.
             collisions: Collision shapes.
+
         """
         out = [f'  <link name="{name}">']
         if mass > 0:
@@ -188,6 +194,7 @@ class UrdfWriter:
             rpy: Joint orientation in the parent link frame [rad].
             axis: Joint axis in the joint frame.
             limit: ``(lower, upper, effort, velocity)`` [rad or m, N m or N, rad/s or m/s].
+
         """
         out = [
             f'  <joint name="{name}" type="{kind}">',
@@ -225,6 +232,7 @@ class UrdfWriter:
             rpy: Joint frame orientation [rad].
             cone: Optional ``(axis, half_angle)`` limit.
             pyramid: Optional ``(axis, ref, (half_angle_1, half_angle_2))`` limit.
+
         """
         self.joint(name, "continuous", parent, child, xyz, rpy, axis=(0.0, 0.0, 1.0))
         self._ext.append(self._pkdyn_joint(name, "spherical", None, cone, pyramid))
@@ -253,6 +261,7 @@ class UrdfWriter:
             axis2: Second axis (frame after the first rotation).
             cone: Optional ``(axis, half_angle)`` limit.
             pyramid: Optional ``(axis, ref, (half_angle_1, half_angle_2))`` limit.
+
         """
         self.joint(name, "continuous", parent, child, xyz, rpy, axis=axis1)
         self._ext.append(self._pkdyn_joint(name, "universal", axis2, cone, pyramid))
@@ -295,13 +304,16 @@ class UrdfWriter:
             frame1: ``(link, xyz, rpy)`` of the first frame.
             frame2: ``(link, xyz, rpy)`` of the second frame.
             axis: Hinge axis in each frame's coordinates.
+
         """
         extra = f' axis="{_v(axis)}"' if axis is not None else ""
         frames = "".join(
             f'<pkdyn:frame link="{link}" xyz="{_v(xyz)}" rpy="{_v(rpy)}"/>'
             for link, xyz, rpy in (frame1, frame2)
         )
-        self._ext.append(f'  <pkdyn:closure name="{name}" type="{kind}"{extra}>{frames}</pkdyn:closure>')
+        self._ext.append(
+            f'  <pkdyn:closure name="{name}" type="{kind}"{extra}>{frames}</pkdyn:closure>'
+        )
 
     def transmission(self, joint: str, actuator: str, reduction: float) -> None:
         """Add a SimpleTransmission driving ``joint``.
@@ -310,6 +322,7 @@ class UrdfWriter:
             joint: Actuated joint name.
             actuator: Actuator (motor) name.
             reduction: Mechanical reduction (motor speed / joint speed).
+
         """
         self._parts.append(
             f'  <transmission name="{joint}_transmission">\n'
@@ -321,7 +334,9 @@ class UrdfWriter:
             "  </transmission>"
         )
 
-    def platform(self, link: str, task: Sequence[str], xyz: Vec = (0, 0, 0), rpy: Vec = (0, 0, 0)) -> None:
+    def platform(
+        self, link: str, task: Sequence[str], xyz: Vec = (0, 0, 0), rpy: Vec = (0, 0, 0)
+    ) -> None:
         """Declare the platform / end-effector frame.
 
         Args:
@@ -329,6 +344,7 @@ class UrdfWriter:
             task: Controlled pose components among x y z rx ry rz.
             xyz: Frame origin in the link frame [m].
             rpy: Frame orientation in the link frame [rad].
+
         """
         self._ext.append(
             f'  <pkdyn:platform link="{link}" xyz="{_v(xyz)}" rpy="{_v(rpy)}" '
@@ -343,6 +359,7 @@ class UrdfWriter:
 
         Returns:
             The URDF text, ending with a newline.
+
         """
         head = ['<?xml version="1.0"?>']
         if comment:

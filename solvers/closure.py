@@ -23,6 +23,11 @@ __all__ = ["ClosureSet"]
 _LOCAL = pin.ReferenceFrame.LOCAL
 
 
+def _joint_jacobian(model: pin.Model, data: pin.Data, j: int) -> np.ndarray:
+    """Local joint Jacobian (6, nv), also when nv == 1 (eigenpy would return a vector)."""
+    return np.reshape(pin.getJointJacobian(model, data, j, _LOCAL), (6, model.nv))
+
+
 class ClosureSet:
     """Closure equations of rigid constraint models, evaluated on a Pinocchio model.
 
@@ -30,6 +35,7 @@ class ClosureSet:
         model: The kinematic tree.
         constraints: CONTACT_3D / CONTACT_6D rigid constraint models (their reference frame is
             ignored: residuals use the conventions of this module).
+
     """
 
     def __init__(self, model: pin.Model, constraints: Sequence[pin.RigidConstraintModel]) -> None:
@@ -74,6 +80,11 @@ class ClosureSet:
                 self._pt_mask[side, n, 0] = self._support_mask(model, j)
         self._welds = [k for k, it in enumerate(self._items) if not it[0]]
         self._n_pts = len(pts)
+        self._cache: tuple[np.ndarray | None, pin.Data | None, np.ndarray | None] = (
+            None,
+            None,
+            None,
+        )
 
     @staticmethod
     def _support_mask(model: pin.Model, j: int) -> np.ndarray:
@@ -93,9 +104,12 @@ class ClosureSet:
 
         Returns:
             Residual (nc,) [m, rad].
+
         """
         pin.forwardKinematics(self.model, data, q)
-        return self._residual(data)
+        P = self._points(data) if self._n_pts else None
+        self._cache = (q.copy(), data, P)
+        return self._residual(data, P)
 
     def _points(self, data: pin.Data) -> np.ndarray:
         """World positions (2, n, 3) of the two contact points of each point constraint."""
@@ -114,9 +128,7 @@ class ClosureSet:
             r[o : o + 6] = pin.log6((data.oMi[j1] * M1).actInv(data.oMi[j2] * M2)).vector
         return r
 
-    def residual_and_jacobian(
-        self, data: pin.Data, q: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def residual_and_jacobian(self, data: pin.Data, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Closure residual and its Jacobian at ``q`` (runs kinematics and joint Jacobians).
 
         Args:
@@ -125,6 +137,7 @@ class ClosureSet:
 
         Returns:
             Residual (nc,) [m, rad] and Jacobian (nc, nv).
+
         """
         model = self.model
         pin.computeJointJacobians(model, data, q)
@@ -135,7 +148,7 @@ class ClosureSet:
         model = self.model
         J = np.zeros((self.nc, model.nv))
         if P is not None:
-            Jw = data.J
+            Jw = data.J.reshape(6, model.nv)  # eigenpy returns (6,) when nv == 1
             # velocity of a point p on a joint's support: v_O + w x p = v_O - [p]x w
             S = np.zeros(P.shape + (3,))
             S[..., 0, 1], S[..., 0, 2] = -P[..., 2], P[..., 1]
@@ -151,9 +164,9 @@ class ClosureSet:
             c1Mc2 = oMc1.actInv(oMc2)
             nu = np.zeros((6, model.nv))
             if j2 != 0:
-                nu += M2.toActionMatrixInverse() @ pin.getJointJacobian(model, data, j2, _LOCAL)
+                nu += M2.toActionMatrixInverse() @ _joint_jacobian(model, data, j2)
             if j1 != 0:
-                J1 = M1.toActionMatrixInverse() @ pin.getJointJacobian(model, data, j1, _LOCAL)
+                J1 = M1.toActionMatrixInverse() @ _joint_jacobian(model, data, j1)
                 nu -= c1Mc2.toActionMatrixInverse() @ J1
             J[o : o + 6] = pin.Jlog6(c1Mc2) @ nu
         return J
@@ -167,7 +180,13 @@ class ClosureSet:
 
         Returns:
             Jacobian (nc, nv).
+
         """
+        q_last, data_last, P = self._cache
+        if q_last is not None and data_last is data and np.array_equal(q_last, q):
+            # kinematics at q already known: only the joint Jacobians are missing
+            pin.computeJointJacobians(self.model, data, q)
+            return self._jacobian(data, P)
         return self.residual_and_jacobian(data, q)[1]
 
     def split(self, r: np.ndarray) -> dict[str, float]:
@@ -178,6 +197,7 @@ class ClosureSet:
 
         Returns:
             ``{constraint name: residual norm}``.
+
         """
         return {
             n: float(np.linalg.norm(r[self.offsets[k] : self.offsets[k + 1]]))

@@ -29,6 +29,7 @@ class SolveResult:
         residual: Final residual vector.
         iterations: Number of accepted steps.
         converged: Whether ``max |residual| <= tol``.
+
     """
 
     q: np.ndarray
@@ -68,34 +69,37 @@ def solve_lm(
 
     Returns:
         The solution attempt; check ``converged``.
+
     """
     q = np.array(q0, dtype=float)
     r = residual(q)
     nv = model.nv
     idx = None if free is None else np.asarray(free, dtype=int)
     it = 0
-    err = float(np.max(np.abs(r))) if r.size else 0.0
+    err = float(np.abs(r).max()) if r.size else 0.0
     f = float(r @ r)
     mu = 1.0
     dq = np.zeros(nv)
+    solve = np.linalg.solve
     while err > tol and it < max_iter:
         J = jacobian(q)
         Jf = J if idx is None else J[:, idx]
-        m, n = Jf.shape
-        small = m <= n
+        small = Jf.shape[0] <= Jf.shape[1]
         A = Jf @ Jf.T if small else Jf.T @ Jf
         g = r if small else Jf.T @ r
-        diag = np.diag_indices(A.shape[0])
-        A0 = A[diag].copy()
+        A0 = A.diagonal().copy()
+        diag = A.reshape(-1)[:: A.shape[0] + 1]  # writable view of the diagonal
         accepted = False
         for _ in range(12):
-            A[diag] = A0 + mu * f + 1e-16
-            y = np.linalg.solve(A, g)
+            diag[:] = A0 + (mu * f + 1e-16)
+            try:
+                y = solve(A, g)
+            except np.linalg.LinAlgError:  # exactly singular: the damping fell below round-off
+                y = np.linalg.lstsq(A, g, rcond=None)[0]
             step = -(Jf.T @ y) if small else -y
             if idx is None:
                 dq = step
             else:
-                dq[:] = 0.0
                 dq[idx] = step
             q_new = pin.integrate(model, q, dq)
             r_new = residual(q_new)
@@ -109,5 +113,5 @@ def solve_lm(
         if not accepted:
             break
         it += 1
-        err = float(np.max(np.abs(r))) if r.size else 0.0
+        err = float(np.abs(r).max()) if r.size else 0.0
     return SolveResult(q, r, it, err <= tol)

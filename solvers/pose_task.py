@@ -19,6 +19,7 @@ class FramePoseTask:
         model: The kinematic tree.
         frame_id: Frame whose pose is controlled.
         rows: Selected rows among (x, y, z, rx, ry, rz), as indices 0..5.
+
     """
 
     def __init__(self, model: pin.Model, frame_id: int, rows: np.ndarray) -> None:
@@ -35,6 +36,7 @@ class FramePoseTask:
 
         Returns:
             (6,) error: position [m] then rotation [rad].
+
         """
         e = np.empty(6)
         e[:3] = oMf.translation - self.target.translation
@@ -49,6 +51,7 @@ class FramePoseTask:
 
         Returns:
             Residual (len(rows),).
+
         """
         return self.error(pin.updateFramePlacement(self.model, data, self.frame_id))[self.rows]
 
@@ -60,10 +63,16 @@ class FramePoseTask:
 
         Returns:
             Residual (len(rows),) and Jacobian (len(rows), nv).
+
         """
         model = self.model
         oMf = pin.updateFramePlacement(model, data, self.frame_id)
-        Jw = pin.getFrameJacobian(model, data, self.frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        Jw = np.reshape(
+            pin.getFrameJacobian(
+                model, data, self.frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+            ),
+            (6, model.nv),
+        )
         Rerr = self.target.rotation.T @ oMf.rotation
         J = np.empty((6, model.nv))
         J[:3] = Jw[:3]

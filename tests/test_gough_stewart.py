@@ -51,7 +51,9 @@ def test_closed_form_matches_numeric_ik(gough_stewart):
     poses = _poses(gough_stewart, 50, rng)
     rho = cf.leg_lengths_rpy(p.a, p.b, poses)
     for k, pose in enumerate(poses):
-        np.testing.assert_allclose(pkdyn.inverse_geometry(gough_stewart, pose).qa, rho[k], atol=1e-9)
+        np.testing.assert_allclose(
+            pkdyn.inverse_geometry(gough_stewart, pose).qa, rho[k], atol=1e-9
+        )
 
 
 def test_fk_ik_round_trip_1000_poses(gough_stewart):
@@ -77,7 +79,9 @@ def test_assembly_from_random_actuator_inputs(gough_stewart):
     for rho in lengths + rng.uniform(-0.003, 0.003, lengths.shape):
         fk = pkdyn.forward_geometry(gough_stewart, rho)
         assert pkdyn.closure_residual(gough_stewart, fk.q) < 1e-10
-        np.testing.assert_allclose(cf.leg_lengths(p.a, p.b, fk.position, fk.placement.rotation)[0], rho, atol=1e-10)
+        np.testing.assert_allclose(
+            cf.leg_lengths(p.a, p.b, fk.position, fk.placement.rotation)[0], rho, atol=1e-10
+        )
 
 
 def test_stroke_limit_is_reported_with_the_leg(gough_stewart):

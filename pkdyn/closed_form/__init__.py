@@ -1,5 +1,5 @@
 """Closed-form geometric models of library robots, vectorised over poses (numpy)."""
 
-from pkdyn.closed_form import delta, gough_stewart
+from pkdyn.closed_form import delta, gough_stewart, planar_3rrr
 
-__all__ = ["delta", "gough_stewart"]
+__all__ = ["delta", "gough_stewart", "planar_3rrr"]

@@ -25,10 +25,14 @@ THETA = np.deg2rad([0.0, 120.0, 240.0])
 class DeltaGeometry(Protocol):
     """Anything with Clavel's four lengths [m]."""
 
-    ra: float
-    rb: float
-    la: float
-    lb: float
+    @property
+    def ra(self) -> float: ...  # noqa: D102
+    @property
+    def rb(self) -> float: ...  # noqa: D102
+    @property
+    def la(self) -> float: ...  # noqa: D102
+    @property
+    def lb(self) -> float: ...  # noqa: D102
 
 
 def inverse(g: DeltaGeometry, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -43,6 +47,7 @@ def inverse(g: DeltaGeometry, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Returns:
         ``(alpha, valid)``: arm angles (N, 3) [rad] (NaN where unreachable) and mask (N,).
+
     """
     P = np.atleast_2d(np.asarray(P, dtype=float))
     R = g.ra - g.rb
@@ -84,6 +89,7 @@ def forward(g: DeltaGeometry, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
     Returns:
         ``(P, valid)``: nacelle positions (N, 3) [m] (NaN where not assemblable) and mask (N,).
+
     """
     alpha = np.atleast_2d(np.asarray(alpha, dtype=float))
     R, la, lb = g.ra - g.rb, g.la, g.lb

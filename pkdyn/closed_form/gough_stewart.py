@@ -24,6 +24,7 @@ def leg_lengths(A: np.ndarray, B: np.ndarray, p: np.ndarray, R: np.ndarray) -> n
 
     Returns:
         Leg lengths rho (N, 6) [m].
+
     """
     p = np.atleast_2d(np.asarray(p, dtype=float))
     R = np.asarray(R, dtype=float)
@@ -43,6 +44,7 @@ def leg_lengths_rpy(A: np.ndarray, B: np.ndarray, poses: np.ndarray) -> np.ndarr
 
     Returns:
         Leg lengths (N, 6) [m].
+
     """
     poses = np.atleast_2d(np.asarray(poses, dtype=float))
     R = np.stack([pin.rpy.rpyToMatrix(r) for r in poses[:, 3:]])

@@ -94,12 +94,11 @@ def platform_joints(g: Planar3RRRGeometry, pose: np.ndarray) -> np.ndarray:
 
     Returns:
         ``B`` of shape (N, 3, 2) [m]: ``B[n, i]`` is chain ``i``'s platform joint.
+
     """
     X = _poses(pose)
     ang = X[:, 2:3] + np.asarray(g.platform_angles, dtype=float)
-    return np.stack(
-        [X[:, :1] + g.h * np.cos(ang), X[:, 1:2] + g.h * np.sin(ang)], axis=-1
-    )
+    return np.stack([X[:, :1] + g.h * np.cos(ang), X[:, 1:2] + g.h * np.sin(ang)], axis=-1)
 
 
 def inverse(
@@ -115,6 +114,7 @@ def inverse(
     Returns:
         ``(q1, valid)``: actuated angles (N, 3) [rad] in ``(-pi, pi]`` (NaN where a chain cannot
         reach its platform joint) and mask (N,) of the poses every chain reaches.
+
     """
     B = platform_joints(g, pose)
     base = np.asarray(g.base_xy, dtype=float)
@@ -145,6 +145,7 @@ def elbow_points(g: Planar3RRRGeometry, q1: np.ndarray) -> np.ndarray:
 
     Returns:
         Elbow points, shape (N, 3, 2) [m].
+
     """
     q = np.atleast_2d(np.asarray(q1, dtype=float))
     base = np.asarray(g.base_xy, dtype=float)
@@ -167,6 +168,7 @@ def chain_angles(
     Returns:
         ``(q, valid)``: angles (N, 3, 3) [rad] with ``q[n, i] = (q_1^i, q_2^i, q_3^i)`` (NaN
         where unreachable) and mask (N,).
+
     """
     X = _poses(pose)
     q1, ok = inverse(g, X, elbow)

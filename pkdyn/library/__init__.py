@@ -33,6 +33,7 @@ class Family:
         params: Frozen dataclass of parameters (SI units, documented defaults).
         build_urdf: ``params -> URDF text``.
         home: ``params -> actuated coordinates`` of the home configuration.
+
     """
 
     name: str
@@ -52,6 +53,7 @@ class Family:
 
         Raises:
             ParameterError: Unknown name or value that does not convert / validate.
+
         """
         fields = {f.name: f for f in dataclasses.fields(self.params)}
         kwargs: dict[str, Any] = {}
@@ -63,15 +65,22 @@ class Family:
             default = getattr(self.params(), key)
             try:
                 if isinstance(default, bool):
-                    kwargs[key] = value if isinstance(value, bool) else str(value).lower() in (
-                        "1",
-                        "true",
-                        "yes",
+                    kwargs[key] = (
+                        value
+                        if isinstance(value, bool)
+                        else str(value).lower()
+                        in (
+                            "1",
+                            "true",
+                            "yes",
+                        )
                     )
                 elif isinstance(default, tuple):
                     parsed = ast.literal_eval(value) if isinstance(value, str) else value
                     kwargs[key] = tuple(
-                        tuple(float(x) for x in row) if isinstance(row, list | tuple) else float(row)
+                        tuple(float(x) for x in row)
+                        if isinstance(row, list | tuple)
+                        else float(row)
                         for row in parsed
                     )
                 elif isinstance(default, int | float):

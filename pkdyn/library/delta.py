@@ -53,6 +53,7 @@ class Params:
         bar_joint: ``spherical`` (12 ball joints, mobility 9 of which 6 internal) or
             ``universal`` (universal joint at the upper end of each bar, mobility 3).
         cone_half_angle: Ball-joint cone limit about the home bar direction [rad].
+
     """
 
     ra: float = 0.150
@@ -85,7 +86,9 @@ class Params:
         _, ok = cf.inverse(self, np.array([0.0, 0.0, self.z_home]))
         if self.z_home >= 0 or not ok[0]:
             raise ParameterError(
-                NAME, "z_home", f"{self.z_home} m is not reachable below the base with these lengths"
+                NAME,
+                "z_home",
+                f"{self.z_home} m is not reachable below the base with these lengths",
             )
 
 
@@ -110,6 +113,7 @@ def build_urdf(p: Params) -> str:
 
     Returns:
         URDF text with pkdyn extension elements.
+
     """
     w = UrdfWriter("delta")
     s = 0.5 * p.bar_spacing
@@ -127,7 +131,13 @@ def build_urdf(p: Params) -> str:
         arm = f"arm{i}"
         com, inertia = rod_inertia(p.arm_mass, p.arm_radius, (0, 0, 0), (p.la, 0, 0))
         xyz, rpy, length = segment_origin((0, 0, 0), (p.la, 0, 0))
-        elbow = Shape("cylinder", (p.arm_radius * 0.8, p.bar_spacing + 0.02), (p.la, 0, 0), (np.pi / 2, 0, 0), blue)
+        elbow = Shape(
+            "cylinder",
+            (p.arm_radius * 0.8, p.bar_spacing + 0.02),
+            (p.la, 0, 0),
+            (np.pi / 2, 0, 0),
+            blue,
+        )
         w.link(
             arm,
             p.arm_mass,

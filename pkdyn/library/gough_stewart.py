@@ -19,7 +19,17 @@ from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
 from pkdyn.urdf_writer import Shape, UrdfWriter, rpy_z_to
 
-__all__ = ["NAME", "SUMMARY", "MEL_A", "MEL_B", "MEL_RHO_MIN", "MEL_RHO_MAX", "Params", "build_urdf", "home"]
+__all__ = [
+    "NAME",
+    "SUMMARY",
+    "MEL_A",
+    "MEL_B",
+    "MEL_RHO_MIN",
+    "MEL_RHO_MAX",
+    "Params",
+    "build_urdf",
+    "home",
+]
 
 NAME = "gough_stewart"
 SUMMARY = "6-UPS Gough-Stewart hexapod; defaults: Merlet's MEL prototype (Tables 3.1, 3.2)"
@@ -60,6 +70,7 @@ class Params:
         effort: Actuator force limit [N].
         velocity: Actuator speed limit [m/s].
         reduction: Transmission ratio motor [rad] per leg length [m] (2 pi / screw lead).
+
     """
 
     A: tuple[tuple[float, float, float], ...] = MEL_A
@@ -104,7 +115,9 @@ class Params:
         bad = np.flatnonzero((rho < lo) | (rho > hi))
         if bad.size:
             raise ParameterError(
-                NAME, "z_home", f"home pose puts leg {bad[0] + 1} at {rho[bad[0]]:.4f} m, off stroke"
+                NAME,
+                "z_home",
+                f"home pose puts leg {bad[0] + 1} at {rho[bad[0]]:.4f} m, off stroke",
             )
 
     @property
@@ -142,6 +155,7 @@ def build_urdf(p: Params) -> str:
 
     Returns:
         URDF text with pkdyn extension elements.
+
     """
     w = UrdfWriter("gough_stewart")
     grey, blue, orange = (0.6, 0.6, 0.65, 1.0), (0.2, 0.4, 0.8, 1.0), (0.9, 0.5, 0.1, 1.0)
@@ -192,7 +206,9 @@ def build_urdf(p: Params) -> str:
             limit=(p.rho_min[i], p.rho_max[i], p.effort, p.velocity),
         )
         w.transmission(f"leg{i + 1}", f"motor{i + 1}", p.reduction)
-        w.closure(f"S{i + 1}", "point", (rod, (0, 0, 0), (0, 0, 0)), ("platform", p.b[i], (0, 0, 0)))
+        w.closure(
+            f"S{i + 1}", "point", (rod, (0, 0, 0), (0, 0, 0)), ("platform", p.b[i], (0, 0, 0))
+        )
     R = p.platform_radius
     Ip = np.diag([0.25 * R**2, 0.25 * R**2, 0.5 * R**2]) * p.platform_mass
     w.link(

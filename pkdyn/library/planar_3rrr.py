@@ -67,6 +67,7 @@ class Params:
         effort: Joint-side actuator torque limit [N m].
         velocity: Joint-side actuator speed limit [rad/s].
         reduction: Gear reduction between motor and proximal link.
+
     """
 
     l1: float = 0.30
@@ -109,7 +110,7 @@ class Params:
             _angles(name, getattr(self, name))
         if self.base_points:
             pts = self.base_points
-            if len(pts) != 3 or any(len(pt) != 2 for pt in pts):
+            if len(pts) != 3 or any(not isinstance(pt, tuple | list) or len(pt) != 2 for pt in pts):
                 raise ParameterError(NAME, "base_points", "give three (a_i, b_i) pairs [m]")
             if not all(isinstance(v, int | float) and math.isfinite(v) for pt in pts for v in pt):
                 raise ParameterError(NAME, "base_points", f"must be finite numbers, got {pts!r}")
@@ -150,9 +151,7 @@ class Params:
 
 
 def _angles(name: str, values: tuple[float, ...]) -> None:
-    if len(values) != 3 or not all(
-        isinstance(v, int | float) and math.isfinite(v) for v in values
-    ):
+    if len(values) != 3 or not all(isinstance(v, int | float) and math.isfinite(v) for v in values):
         raise ParameterError(NAME, name, f"give three finite angles [rad], got {values!r}")
 
 
@@ -170,6 +169,7 @@ def build_urdf(p: Params) -> str:
 
     Returns:
         URDF text with pkdyn extension elements.
+
     """
     w = UrdfWriter("planar_3rrr")
     grey, blue, orange = (0.6, 0.6, 0.65, 1.0), (0.2, 0.4, 0.8, 1.0), (0.9, 0.5, 0.1, 1.0)
@@ -257,7 +257,12 @@ def build_urdf(p: Params) -> str:
         collisions=[Shape("cylinder", (p.h, thick), (0.0, 0.0, z_plat))],
     )
     w.joint(
-        "effector", "planar", "base", "effector", xyz=(p.x_home, p.y_home, 0.0), rpy=(0, 0, p.phi_home)
+        "effector",
+        "planar",
+        "base",
+        "effector",
+        xyz=(p.x_home, p.y_home, 0.0),
+        rpy=(0, 0, p.phi_home),
     )
     w.platform("effector", ("x", "y", "rz"))
     return w.to_string(

@@ -1,0 +1,92 @@
+"""The pkdyn command line: JSON keys, round trips, one-line errors with non-zero exit."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import pkdyn
+from pkdyn.cli import main
+from pkdyn.closed_form import delta as cf
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_info_json_keys(capsys):
+    code, out, _ = run(capsys, "info", "delta", "--json")
+    assert code == 0
+    info = json.loads(out)
+    assert set(info) >= {"name", "nq", "nv", "dof", "actuated", "loops", "closures"}
+    assert info["actuated"] == ["arm1", "arm2", "arm3"]
+    assert info["loops"] == 5 and info["dof"] == 9
+    assert {c["type"] for c in info["closures"]} == {"point"}
+
+
+def test_ik_then_fk_round_trip(capsys):
+    code, out, _ = run(capsys, "ik", "delta", "--pose", "0.05", "-0.02", "-0.4", "--json")
+    assert code == 0
+    q = json.loads(out)["q"]
+    alpha, _ = cf.inverse(pkdyn.load("delta", geometry=False).params, np.array([0.05, -0.02, -0.4]))
+    np.testing.assert_allclose(q, alpha[0], atol=1e-9)
+    code, out, _ = run(capsys, "fk", "delta", "--q", *map(repr, q), "--json")
+    fk = json.loads(out)
+    np.testing.assert_allclose(fk["position"], [0.05, -0.02, -0.4], atol=1e-9)
+    assert set(fk) >= {"position", "rpy", "q_full"}
+
+
+def test_param_override_changes_the_robot(capsys):
+    code, out, _ = run(capsys, "info", "delta", "--param", "bar_joint=universal", "--json")
+    assert code == 0 and json.loads(out)["dof"] == 3
+
+
+def test_urdf_to_file_loads(tmp_path, capsys):
+    path = tmp_path / "gs.urdf"
+    code, _, _ = run(capsys, "urdf", "gough_stewart", "--param", "leg_radius=0.01", "-o", str(path))
+    assert code == 0
+    robot = pkdyn.load(str(path), geometry=False)
+    assert robot.dof() == 6
+
+
+@pytest.mark.parametrize(
+    "argv, culprit",
+    [
+        (["info", "nosuchrobot"], "nosuchrobot"),
+        (["info", "delta", "--param", "foo=1"], "foo"),
+        (["info", "delta", "--param", "la"], "la"),
+        (["info", "delta", "--param", "la=-0.2"], "la"),
+        (["ik", "delta", "--pose", "1", "2", "3"], "out of reach"),
+        (["ik", "delta", "--pose", "1", "2"], "pose"),
+        (["fk", "delta", "--q", "0.1", "nan", "0.2"], "nan"),
+        (["fk", "delta", "--q", "0.1", "0.2"], "3 values"),
+        (["fk", "gough_stewart", "--q", "0.4", "0.4", "0.4", "0.4", "0.4", "0.4"], "leg1"),
+        (["urdf", "delta", "-o", "/nonexistent/dir/x.urdf"], "x.urdf"),
+    ],
+)
+def test_user_errors_are_one_line(capsys, argv, culprit):
+    code, out, err = run(capsys, *argv)
+    assert code == 1
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("pkdyn: error:")
+    assert culprit in lines[0]
+    assert "Traceback" not in err
+
+
+def test_console_script_bad_usage_one_line():
+    proc = subprocess.run(
+        [sys.executable, "-m", "pkdyn.cli", "fk", "delta"], capture_output=True, text=True
+    )
+    assert proc.returncode == 2
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_malformed_file_is_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.urdf"
+    bad.write_text("<robot name='x'><link name='a'></robot>")
+    code, _, err = run(capsys, "info", str(bad))
+    assert code == 1 and "bad.urdf" in err and len(err.strip().splitlines()) == 1
