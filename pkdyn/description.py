@@ -281,12 +281,21 @@ def _joint(source: str, el: ET.Element) -> JointSpec:
     pyramid = el.find(_NS + "pyramid")
     if cone is not None:
         axis = _unit(source, f"joint '{name}' cone axis", _vec(source, cone, "axis", "0 0 1"))
-        limit = ConeLimit(axis, _float(source, cone, "half_angle"))
+        half = _float(source, cone, "half_angle")
+        if not 0.0 < half <= math.pi:
+            raise DescriptionError(
+                source, f"pkdyn:joint '{name}' cone half_angle={half}", "must lie in (0, pi] rad"
+            )
+        limit = ConeLimit(axis, half)
     elif pyramid is not None:
         axis = _unit(source, f"joint '{name}' pyramid", _vec(source, pyramid, "axis", "0 0 1"))
         ref = _vec(source, pyramid, "ref", "1 0 0")
         ref = _unit(source, f"joint '{name}' pyramid ref", ref - (ref @ axis) * axis)
         ha = _vec(source, pyramid, "half_angles", "", 2)
+        if not all(0.0 < h <= math.pi / 2 for h in ha):
+            raise DescriptionError(
+                source, f"pkdyn:joint '{name}' pyramid half_angles", "must lie in (0, pi/2] rad"
+            )
         limit = PyramidLimit(axis, ref, (float(ha[0]), float(ha[1])))
     return JointSpec(name, kind, axis2, limit)
 

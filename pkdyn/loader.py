@@ -23,19 +23,13 @@ __all__ = ["load", "load_string"]
 
 
 def _package_dirs(path: Path | None) -> list[str]:
+    """The file's directory and its ancestors: where ``package://`` meshes usually resolve."""
     dirs: list[str] = []
     if path is not None:
         p = path.resolve().parent
         for _ in range(5):
             dirs.append(str(p))
             p = p.parent
-    try:
-        import example_robot_data
-
-        erd = Path(example_robot_data.getModelPath("ur_description/urdf/ur5_robot.urdf"))
-        dirs.append(str(erd))
-    except Exception:  # noqa: BLE001 - optional data package, any failure means "absent"
-        pass
     return dirs
 
 

@@ -320,6 +320,42 @@ def test_transmission_naming_a_missing_joint():
     assert "crank_motor" in str(err.value)
 
 
+_PLAIN = (
+    '<robot name="plain"><link name="base"/><link name="arm"/>'
+    '<joint name="j" type="revolute"><parent link="base"/><child link="arm"/>'
+    '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="4" velocity="2"/></joint>'
+    "{transmissions}</robot>"
+)
+
+
+def test_plain_urdf_skips_ros_control_transmissions_pkdyn_cannot_use():
+    # without pkdyn elements, transmissions are ros_control metadata: keep the usable ones
+    text = _PLAIN.format(
+        transmissions='<transmission name="gone"><type>SimpleTransmission</type>'
+        '<joint name="removed_joint"/><actuator name="m0"/></transmission>'
+        '<transmission name="wrist" type="WristTransmission">'
+        '<flexJoint name="j"/><rightActuator name="m1"/></transmission>'
+        '<transmission name="diff"><type>transmission_interface/DifferentialTransmission</type>'
+        '<joint name="j"/><actuator name="m2"/></transmission>'
+        '<transmission name="ok"><type>transmission_interface/SimpleTransmission</type>'
+        '<joint name="j"/><actuator name="m3"><mechanicalReduction>-3</mechanicalReduction>'
+        "</actuator></transmission>"
+    )
+    robot = _load_text(text)
+    assert [(a.name, a.joint, a.reduction) for a in robot.actuators] == [("m3", "j", -3.0)]
+    assert (robot.actuators[0].effort, robot.actuators[0].velocity) == (4.0, 2.0)
+
+
+def test_ros1_style_reduction_in_the_transmission():
+    text = _PLAIN.format(
+        transmissions='<transmission name="t" type="pr2_mechanism_model/SimpleTransmission">'
+        '<actuator name="m"/><joint name="j"/><mechanicalReduction>50</mechanicalReduction>'
+        "</transmission>"
+    )
+    (act,) = _load_text(text).actuators
+    assert (act.name, act.joint, act.reduction) == ("m", "j", 50.0)
+
+
 def test_transmission_with_invalid_reduction():
     text = _edit(FOUR_BAR, "<mechanicalReduction>10<", "<mechanicalReduction>nan<")
     with pytest.raises(pkdyn.DescriptionError) as err:
@@ -558,3 +594,17 @@ def test_unreadable_file_is_a_description_error(tmp_path):
 def test_a_directory_is_not_a_robot(tmp_path):
     with pytest.raises(pkdyn.UnknownRobotError):
         pkdyn.load(tmp_path)
+
+
+@pytest.mark.parametrize(
+    "limit",
+    ['<pkdyn:cone axis="0 0 1" half_angle="-0.3"/>', '<pkdyn:pyramid half_angles="0.5 2.0"/>'],
+)
+def test_bad_passive_limit_names_the_joint(limit):
+    text = (
+        '<robot name="r" xmlns:pkdyn="urn:pkdyn:urdf:1"><link name="a"/><link name="b"/>'
+        '<joint name="s" type="continuous"><parent link="a"/><child link="b"/></joint>'
+        f'<pkdyn:joint name="s" type="spherical">{limit}</pkdyn:joint></robot>'
+    )
+    with pytest.raises(pkdyn.DescriptionError, match="'s'"):
+        pkdyn.load_string(text, "lim.urdf", geometry=False)
