@@ -172,6 +172,39 @@ class UrdfWriter:
         out.append("  </link>")
         self._parts.append("\n".join(out))
 
+    def rod(
+        self,
+        name: str,
+        mass: float,
+        radius: float,
+        p0: Vec,
+        p1: Vec,
+        rgba: tuple[float, ...] = (0.7, 0.7, 0.7, 1.0),
+        extra_visuals: Sequence[Shape] = (),
+    ) -> None:
+        """Add a link that is a solid rod ``p0 -> p1``: inertia, visual and collision cylinder.
+
+        Args:
+            name: Link name.
+            mass: Rod mass [kg].
+            radius: Rod radius [m].
+            p0: Rod start in the link frame [m].
+            p1: Rod end in the link frame [m].
+            rgba: Display colour.
+            extra_visuals: More visual shapes (e.g. an elbow).
+
+        """
+        com, inertia = rod_inertia(mass, radius, p0, p1)
+        xyz, rpy, length = segment_origin(p0, p1)
+        self.link(
+            name,
+            mass,
+            com,
+            inertia,
+            visuals=[Shape("cylinder", (radius, length), xyz, rpy, rgba), *extra_visuals],
+            collisions=[Shape("cylinder", (radius, length), xyz, rpy)],
+        )
+
     def joint(
         self,
         name: str,

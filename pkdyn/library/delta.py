@@ -21,7 +21,7 @@ import pinocchio as pin
 from pkdyn.closed_form import delta as cf
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
-from pkdyn.urdf_writer import Shape, UrdfWriter, rod_inertia, rpy_z_to, segment_origin
+from pkdyn.urdf_writer import Shape, UrdfWriter, rpy_z_to
 
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
 
@@ -129,8 +129,6 @@ def build_urdf(p: Params) -> str:
         u = np.array([np.cos(theta), np.sin(theta), 0.0])
         t = np.array([-np.sin(theta), np.cos(theta), 0.0])
         arm = f"arm{i}"
-        com, inertia = rod_inertia(p.arm_mass, p.arm_radius, (0, 0, 0), (p.la, 0, 0))
-        xyz, rpy, length = segment_origin((0, 0, 0), (p.la, 0, 0))
         elbow = Shape(
             "cylinder",
             (p.arm_radius * 0.8, p.bar_spacing + 0.02),
@@ -138,14 +136,7 @@ def build_urdf(p: Params) -> str:
             (np.pi / 2, 0, 0),
             blue,
         )
-        w.link(
-            arm,
-            p.arm_mass,
-            com,
-            inertia,
-            visuals=[Shape("cylinder", (p.arm_radius, length), xyz, rpy, blue), elbow],
-            collisions=[Shape("cylinder", (p.arm_radius, length), xyz, rpy)],
-        )
+        w.rod(arm, p.arm_mass, p.arm_radius, (0, 0, 0), (p.la, 0, 0), blue, [elbow])
         w.joint(
             arm,
             "revolute",
@@ -165,16 +156,7 @@ def build_urdf(p: Params) -> str:
             attach = P + p.rb * u + sign * s * t
             d_arm = R_arm.T @ (attach - elbow_w)
             jrpy = rpy_z_to(d_arm)
-            bcom, binertia = rod_inertia(p.bar_mass, p.bar_radius, (0, 0, 0), (0, 0, p.lb))
-            shape = Shape("cylinder", (p.bar_radius, p.lb), (0, 0, 0.5 * p.lb), rgba=orange)
-            w.link(
-                bar,
-                p.bar_mass,
-                bcom,
-                binertia,
-                visuals=[shape],
-                collisions=[Shape("cylinder", (p.bar_radius, p.lb), (0, 0, 0.5 * p.lb))],
-            )
+            w.rod(bar, p.bar_mass, p.bar_radius, (0, 0, 0), (0, 0, p.lb), orange)
             R_j = pin.rpy.rpyToMatrix(*jrpy)
             cone = ((0.0, 0.0, 1.0), p.cone_half_angle)
             if p.bar_joint == "spherical":

@@ -31,7 +31,7 @@ import numpy as np
 
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
-from pkdyn.urdf_writer import Shape, UrdfWriter, rod_inertia, segment_origin
+from pkdyn.urdf_writer import Shape, UrdfWriter
 
 __all__ = [
     "NAME",
@@ -275,16 +275,7 @@ def build_urdf(p: Params) -> str:
         k = j + 1
         prox, dist = f"proximal{k}", f"distal{k}"
         beta = math.atan2(E[1] - C[j, 1], E[0] - C[j, 0])
-        com, inertia = rod_inertia(p.proximal_mass, r, (0, 0, z_prox), (p.l1, 0, z_prox))
-        xyz, rpy, length = segment_origin((0, 0, z_prox), (p.l1, 0, z_prox))
-        w.link(
-            prox,
-            p.proximal_mass,
-            com,
-            inertia,
-            visuals=[Shape("cylinder", (r, length), xyz, rpy, blue)],
-            collisions=[Shape("cylinder", (r, length), xyz, rpy)],
-        )
+        w.rod(prox, p.proximal_mass, r, (0, 0, z_prox), (p.l1, 0, z_prox), blue)
         w.joint(
             prox,
             "revolute",
@@ -295,16 +286,7 @@ def build_urdf(p: Params) -> str:
             limit=(p.q_min, p.q_max, p.effort, p.velocity),
         )
         w.transmission(prox, f"motor{k}", p.reduction)
-        com, inertia = rod_inertia(p.distal_mass, r, (0, 0, z_dist), (p.l2, 0, z_dist))
-        xyz, rpy, length = segment_origin((0, 0, z_dist), (p.l2, 0, z_dist))
-        w.link(
-            dist,
-            p.distal_mass,
-            com,
-            inertia,
-            visuals=[Shape("cylinder", (r, length), xyz, rpy, orange)],
-            collisions=[Shape("cylinder", (r, length), xyz, rpy)],
-        )
+        w.rod(dist, p.distal_mass, r, (0, 0, z_dist), (p.l2, 0, z_dist), orange)
         # Joint frame turned by the home relative angle: neutral = home configuration.
         w.joint(
             dist,
