@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from pkdyn.description import ActuatorSpec, ClosureSpec, Description
+from pkdyn.exceptions import PkdynError
 from solvers import ClosureSet
 
 __all__ = ["Robot"]
@@ -60,7 +61,6 @@ class Robot:
     task_rows: np.ndarray
     q_home: np.ndarray
     params: Any = None
-    extras: dict[str, Any] = field(default_factory=dict)
 
     @property
     def nq(self) -> int:
@@ -152,6 +152,6 @@ class Robot:
 
         """
         if self.platform_frame is None:
-            raise ValueError(f"{self.name} declares no platform frame")
+            raise PkdynError(f"{self.name} declares no platform frame (add a <pkdyn:platform>)")
         pin.framesForwardKinematics(self.model, self.data, q)
         return pin.SE3(self.data.oMf[self.platform_frame])
