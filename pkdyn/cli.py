@@ -124,6 +124,13 @@ def _cmd_ik(args: argparse.Namespace) -> None:
     _emit(args, payload, text)
 
 
+def _cmd_mobility(args: argparse.Namespace) -> None:
+    from pkdyn.mobility import format_mobility, mobility
+
+    result = mobility(_load(args))
+    _emit(args, result.as_json(), format_mobility(result))
+
+
 def _cmd_demo(args: argparse.Namespace) -> None:
     from pkdyn.demo import run_demo
 
@@ -156,6 +163,9 @@ def _parser() -> argparse.ArgumentParser:
     )
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_ik)
+    sp = robot_cmd("mobility", "mobility: Gruebler and rank-based (Pasqui), internal mobilities")
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=_cmd_mobility)
     sp = sub.add_parser("demo", help="run the demonstration on built-in defaults")
     sp.set_defaults(func=_cmd_demo)
     return p

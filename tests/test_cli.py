@@ -90,3 +90,16 @@ def test_malformed_file_is_one_line(tmp_path, capsys):
     bad.write_text("<robot name='x'><link name='a'></robot>")
     code, _, err = run(capsys, "info", str(bad))
     assert code == 1 and "bad.urdf" in err and len(err.strip().splitlines()) == 1
+
+
+def test_mobility_json(capsys):
+    code, out, _ = run(capsys, "mobility", "delta", "--json")
+    assert code == 0
+    m = json.loads(out)
+    assert {"grubler", "mobility", "internal", "hyperstatism", "rank"} <= set(m)
+    assert (m["grubler"], m["mobility"], m["internal"], m["hyperstatism"]) == (9, 9, 6, 0)
+
+
+def test_mobility_text_names_internal_modes(capsys):
+    code, out, _ = run(capsys, "mobility", "delta")
+    assert code == 0 and "spins" in out

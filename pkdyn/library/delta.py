@@ -9,6 +9,17 @@ the bars close on the nacelle at radius ``rb``. Defaults: the DELTA 580 prototyp
 
 Model: the nacelle hangs on a free-flyer (its placement is part of q); upper bar ends are tree
 joints (spherical / universal), lower bar ends are ``point`` closures on the nacelle.
+
+With ``parallelogram="hinge"`` each parallelogram is made of revolute joints (Tsai's
+construction): both bars of arm ``i`` hang from the elbow on universal joints whose first axes
+lie on the elbow line (parallel to the arm axis) and whose second axes are the normal ``n`` to
+the parallelogram plane; a lower beam ``beam{i}`` turns about ``n`` at the lower end of bar
+``a`` (revolute ``beam{i}``), bar ``b`` closes on it with the ``hinge`` closure ``loop{i}b``
+(about ``n``), and the beam closes on the nacelle with the ``hinge`` closure ``loop{i}`` about
+an axis parallel to the arm axis. Every hinge axis is a coordinate axis of both of its frames,
+so the parallel axes stay exactly parallel in the written file. Each parallelogram is a planar
+four-bar closed in space and the three legs all keep the nacelle's orientation, so Grübler's
+count (-6) misses redundant equations; the mobility is still 3 (see :mod:`pkdyn.mobility`).
 """
 
 from __future__ import annotations
@@ -52,6 +63,10 @@ class Params:
         reduction: Gear reduction between motor and arm.
         bar_joint: ``spherical`` (12 ball joints, mobility 9 of which 6 internal) or
             ``universal`` (universal joint at the upper end of each bar, mobility 3).
+            Ignored when ``parallelogram="hinge"`` (the upper joints are then universal).
+        parallelogram: ``ball`` (bars closed on the nacelle by ball joints, mobility 9 or 3
+            with ``bar_joint``) or ``hinge`` (revolute-jointed parallelograms with a lower beam
+            hinged to the nacelle, mobility 3; each beam has the mass and radius of a bar).
         cone_half_angle: Ball-joint cone limit about the home bar direction [rad].
 
     """
@@ -74,6 +89,7 @@ class Params:
     reduction: float = 20.0
     bar_joint: str = "spherical"
     cone_half_angle: float = 0.8
+    parallelogram: str = "ball"
 
     def __post_init__(self) -> None:
         positive(NAME, **{k: v for k, v in asdict(self).items() if k not in _SIGNED})
@@ -81,6 +97,8 @@ class Params:
         in_range(NAME, "alpha_max", self.alpha_max, self.alpha_min, np.pi)
         if self.bar_joint not in ("spherical", "universal"):
             raise ParameterError(NAME, "bar_joint", "must be 'spherical' or 'universal'")
+        if self.parallelogram not in ("ball", "hinge"):
+            raise ParameterError(NAME, "parallelogram", "must be 'ball' or 'hinge'")
         if self.ra <= self.rb:
             raise ParameterError(NAME, "ra", f"must exceed rb ({self.rb}) for a Delta")
         _, ok = cf.inverse(self, np.array([0.0, 0.0, self.z_home]))
@@ -92,7 +110,9 @@ class Params:
             )
 
 
-_SIGNED = {"z_home", "alpha_min", "alpha_max", "bar_joint"}
+_SIGNED = {"z_home", "alpha_min", "alpha_max", "bar_joint", "parallelogram"}
+_PASSIVE_VELOCITY = 1e3
+"""Velocity limit written on passive revolute joints [rad/s] (effort 0: they are not driven)."""
 
 
 def home(p: Params) -> list[float]:
@@ -103,6 +123,49 @@ def home(p: Params) -> list[float]:
 
 def _arm_rotation(theta: float, alpha: float) -> np.ndarray:
     return pin.rpy.rpyToMatrix(0.0, 0.0, theta) @ pin.rpy.rpyToMatrix(0.0, alpha, 0.0)
+
+
+def _hinged_bar(
+    w: UrdfWriter,
+    p: Params,
+    i: int,
+    side: str,
+    u: np.ndarray,
+    theta: float,
+    pitch: tuple[float, float, float],
+    cone: tuple[tuple[float, float, float], float],
+) -> None:
+    """Upper universal joint of a bar of a hinged parallelogram, and the beam or its closures.
+
+    Bar frames: z along the bar, y along the arm axis, x along the parallelogram normal ``n``.
+    """
+    s = 0.5 * p.bar_spacing
+    arm, bar, beam = f"arm{i}", f"bar{i}{side}", f"beam{i}"
+    sign = 1.0 if side == "a" else -1.0
+    x, y = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
+    w.universal(f"{bar}_upper", arm, bar, (p.la, sign * s, 0.0), pitch, y, x, cone=cone)
+    if side == "a":
+        w.rod(beam, p.bar_mass, p.bar_radius, (0, 0, 0), (0, -2 * s, 0), (0.9, 0.5, 0.1, 1.0))
+        w.joint(
+            beam,
+            "revolute",
+            bar,
+            beam,
+            xyz=(0.0, 0.0, p.lb),
+            axis=x,
+            limit=(-np.pi, np.pi, 0.0, _PASSIVE_VELOCITY),
+        )
+        return
+    zero = (0.0, 0.0, 0.0)
+    w.closure(f"loop{i}b", "hinge", (bar, (0.0, 0.0, p.lb), zero), (beam, (0, -2 * s, 0), zero), x)
+    # The beam frame's y and a nacelle frame turned by theta are both the arm axis.
+    w.closure(
+        f"loop{i}",
+        "hinge",
+        (beam, (0.0, -s, 0.0), zero),
+        ("nacelle", p.rb * u, (0.0, 0.0, theta)),
+        y,
+    )
 
 
 def build_urdf(p: Params) -> str:
@@ -150,6 +213,12 @@ def build_urdf(p: Params) -> str:
         w.transmission(arm, f"motor{i}", p.reduction)
         R_arm = _arm_rotation(theta, alpha)
         O = p.ra * u
+        hinged = p.parallelogram == "hinge"
+        if hinged:
+            # Bar direction in the arm frame: in its xz plane (the bars are normal to the arm
+            # axis y at home). A pitch-only joint frame keeps y (the arm axis) exact.
+            d = R_arm.T @ (P + p.rb * u - O - R_arm @ np.array([p.la, 0.0, 0.0]))
+            pitch = (0.0, float(np.arctan2(d[0], d[2])), 0.0)
         for side, sign in (("a", 1.0), ("b", -1.0)):
             bar = f"bar{i}{side}"
             elbow_w = O + R_arm @ np.array([p.la, sign * s, 0.0])
@@ -157,8 +226,11 @@ def build_urdf(p: Params) -> str:
             d_arm = R_arm.T @ (attach - elbow_w)
             jrpy = rpy_z_to(d_arm)
             w.rod(bar, p.bar_mass, p.bar_radius, (0, 0, 0), (0, 0, p.lb), orange)
-            R_j = pin.rpy.rpyToMatrix(*jrpy)
             cone = ((0.0, 0.0, 1.0), p.cone_half_angle)
+            if hinged:
+                _hinged_bar(w, p, i, side, u, theta, pitch, cone)
+                continue
+            R_j = pin.rpy.rpyToMatrix(*jrpy)
             if p.bar_joint == "spherical":
                 w.spherical(f"{bar}_upper", arm, bar, (p.la, sign * s, 0.0), jrpy, cone=cone)
             else:

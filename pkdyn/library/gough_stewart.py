@@ -6,6 +6,9 @@ legs 4-6: 491-733 mm). Each leg: universal joint at ``A_i``, actuated prismatic 
 coordinate is the leg length ``rho_i``, spherical joint at ``B_i`` (a ``point`` closure on the
 platform). The base joints are limited by a square hole, modelled as a 4-face pyramid about
 the home leg direction (Merlet, chapter 3).
+
+With ``base_joint="spherical"`` the base joints are ball joints ``leg{i}_S`` (S-P-S legs): each
+leg may then spin about its own axis, Pasqui's mobility 12 = 6 + 6 internal (seed 001).
 """
 
 from __future__ import annotations
@@ -70,6 +73,9 @@ class Params:
         effort: Actuator force limit [N].
         velocity: Actuator speed limit [m/s].
         reduction: Transmission ratio motor [rad] per leg length [m] (2 pi / screw lead).
+        base_joint: ``universal`` (6-UPS, joints ``leg{i}_U``, mobility 6) or ``spherical``
+            (6-SPS, joints ``leg{i}_S``: each leg spins about its axis, mobility 12 of which 6
+            internal).
 
     """
 
@@ -88,8 +94,11 @@ class Params:
     effort: float = 800.0
     velocity: float = 0.25
     reduction: float = 2 * np.pi / 0.005
+    base_joint: str = "universal"
 
     def __post_init__(self) -> None:
+        if self.base_joint not in ("universal", "spherical"):
+            raise ParameterError(NAME, "base_joint", "must be 'universal' or 'spherical'")
         for name in ("A", "B"):
             arr = np.asarray(getattr(self, name), dtype=float)
             if arr.shape != (6, 3) or not np.all(np.isfinite(arr)):
@@ -187,16 +196,20 @@ def build_urdf(p: Params) -> str:
             visuals=[Shape("cylinder", (r, Lr), (0, 0, -0.5 * Lr), rgba=orange)],
             collisions=[Shape("cylinder", (r, Lr), (0, 0, -0.5 * Lr))],
         )
-        w.universal(
-            f"leg{i + 1}_U",
-            "base",
-            cyl,
-            p.a[i],
-            rpy,
-            (1.0, 0.0, 0.0),
-            (0.0, 1.0, 0.0),
-            pyramid=((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (p.pyramid_half_angle,) * 2),
-        )
+        pyramid = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (p.pyramid_half_angle,) * 2)
+        if p.base_joint == "spherical":
+            w.spherical(f"leg{i + 1}_S", "base", cyl, p.a[i], rpy, pyramid=pyramid)
+        else:
+            w.universal(
+                f"leg{i + 1}_U",
+                "base",
+                cyl,
+                p.a[i],
+                rpy,
+                (1.0, 0.0, 0.0),
+                (0.0, 1.0, 0.0),
+                pyramid=pyramid,
+            )
         w.joint(
             f"leg{i + 1}",
             "prismatic",
