@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
@@ -131,6 +132,46 @@ def _cmd_mobility(args: argparse.Namespace) -> None:
     _emit(args, result.as_json(), format_mobility(result))
 
 
+def _configuration(args: argparse.Namespace) -> tuple[Any, np.ndarray]:
+    """The robot and the assembled configuration named by ``--pose`` or ``--q``."""
+    import pkdyn
+
+    robot = _load(args)
+    if args.q is not None:
+        return robot, pkdyn.forward_geometry(robot, args.q, check_limits=False).q
+    return robot, pkdyn.inverse_geometry(robot, args.pose, check_limits=False).q
+
+
+def _cmd_jacobian(args: argparse.Namespace) -> None:
+    from pkdyn.kinematics import jacobian_json
+
+    robot, q = _configuration(args)
+    out = jacobian_json(robot, q)
+    text = "\n".join(f"{k} =\n{np.array2string(np.array(out[k]), precision=5)}" for k in "ABJ")
+    _emit(args, out, text)
+
+
+def _cmd_singularity(args: argparse.Namespace) -> None:
+    from pkdyn.singularity import singularity_json
+
+    robot, q = _configuration(args)
+    out = singularity_json(robot, q)
+    text = (
+        f"{out['kind']}: cond(A) = {out['cond_A']:.4g}, cond(B) = {out['cond_B']:.4g}, "
+        f"distance = {out['distance']:.4g}"
+    )
+    _emit(args, out, text)
+
+
+def _cmd_statics(args: argparse.Namespace) -> None:
+    from pkdyn.statics import statics_json
+
+    robot, q = _configuration(args)
+    out = statics_json(robot, q, args.wrench, gravity=args.gravity)
+    text = "\n".join(f"{n}: {t:.6g}" for n, t in zip(out["actuators"], out["tau"], strict=True))
+    _emit(args, out, text)
+
+
 def _cmd_demo(args: argparse.Namespace) -> None:
     from pkdyn.demo import run_demo
 
@@ -166,9 +207,38 @@ def _parser() -> argparse.ArgumentParser:
     sp = robot_cmd("mobility", "mobility: Gruebler and rank-based (Pasqui), internal mobilities")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_mobility)
+
+    def posed(name: str, help_: str) -> argparse.ArgumentParser:
+        sp = robot_cmd(name, help_)
+        where = sp.add_mutually_exclusive_group(required=True)
+        where.add_argument("--pose", nargs="+", type=float, help="X Y Z [ROLL PITCH YAW] (m, rad)")
+        where.add_argument("--q", nargs="+", type=float, help="actuated coordinates")
+        sp.add_argument("--json", action="store_true")
+        return sp
+
+    posed("jacobian", "parallel-robot form A xd = B qd, J = A^-1 B").set_defaults(
+        func=_cmd_jacobian
+    )
+    posed("singularity", "regular / serial / parallel / both, conditioning").set_defaults(
+        func=_cmd_singularity
+    )
+    sp = posed("statics", "actuator efforts holding the platform against a wrench")
+    sp.add_argument(
+        "--wrench",
+        nargs=6,
+        type=float,
+        default=[0.0] * 6,
+        metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
+    )
+    sp.add_argument("--gravity", action="store_true", help="include the robot's weight")
+    sp.set_defaults(func=_cmd_statics)
     sp = sub.add_parser("demo", help="run the demonstration on built-in defaults")
     sp.set_defaults(func=_cmd_demo)
     return p
+
+
+def _one_line_warning(message: Warning | str, category: type[Warning], *_: Any, **__: Any) -> None:
+    print(f"pkdyn: warning: {message}", file=sys.stderr)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -182,6 +252,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     """
     args = _parser().parse_args(argv)
+    warnings.showwarning = _one_line_warning
     try:
         args.func(args)
     except PkdynError as err:

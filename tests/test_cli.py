@@ -103,3 +103,61 @@ def test_mobility_json(capsys):
 def test_mobility_text_names_internal_modes(capsys):
     code, out, _ = run(capsys, "mobility", "delta")
     assert code == 0 and "spins" in out
+
+
+def test_jacobian_json_matches_fk_differences(capsys):
+    """J from the CLI against central differences of the direct geometric model."""
+    robot = pkdyn.load("delta", geometry=False)
+    qa = pkdyn.inverse_geometry(robot, [0.03, -0.02, -0.38]).qa
+    code, out, _ = run(capsys, "jacobian", "delta", "--q", *map(str, qa.tolist()), "--json")
+    assert code == 0
+    J = np.array(json.loads(out)["J"])
+    assert {"A", "B"} <= set(json.loads(out))
+    h = 1e-6
+    Jfd = np.column_stack(
+        [
+            (
+                pkdyn.forward_geometry(robot, qa + h * e).position
+                - pkdyn.forward_geometry(robot, qa - h * e).position
+            )
+            / (2 * h)
+            for e in np.eye(3)
+        ]
+    )
+    np.testing.assert_allclose(J, Jfd, atol=1e-6)
+
+
+def test_singularity_json_keys(capsys):
+    code, out, _ = run(
+        capsys, "singularity", "planar_3rrr", "--pose", "0", "0", "0", "0", "0", "0.1", "--json"
+    )
+    s = json.loads(out)
+    assert code == 0 and s["kind"] == "regular"
+    assert {"kind", "cond_A", "cond_B", "directions"} <= set(s)
+
+
+def test_statics_virtual_work(capsys):
+    """tau . dq + F . dx = 0 for a small motion of the hexapod, with tau from the CLI."""
+    robot = pkdyn.load("gough_stewart", geometry=False)
+    pose = np.array([0.01, -0.02, robot.params.home_height() + 0.01, 0.02, 0.0, 0.05])
+    F = np.array([3.0, -2.0, -100.0, 0.0, 0.0, 0.0])  # pure force: moment convention irrelevant
+    code, out, _ = run(
+        capsys,
+        "statics",
+        "gough_stewart",
+        "--pose",
+        *map(str, pose),
+        "--wrench",
+        *map(str, F),
+        "--json",
+    )
+    assert code == 0
+    tau = np.array(json.loads(out)["tau"])
+    dx = np.array([1e-6, 2e-6, -1e-6])
+    a = pkdyn.inverse_geometry(robot, pose[:3].tolist() + pose[3:].tolist())
+    M = a.placement
+    import pinocchio as pin
+
+    target = pin.SE3(M.rotation, M.translation + dx)
+    dq = pkdyn.inverse_geometry(robot, target, q_init=a.q).qa - a.qa
+    assert abs(tau @ dq + F[:3] @ dx) < 1e-9 * np.abs(F).max()

@@ -1,0 +1,178 @@
+"""Statics: actuator efforts and closure reactions against the principle of virtual work."""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import pkdyn
+from pkdyn import kinematics, statics
+
+ROBOTS = ["delta", "gough_stewart", "planar_3rrr", "five_bar"]
+SPREAD = {"delta": (0.06, 0.0), "gough_stewart": (0.03, 0.08), "planar_3rrr": (0.05, 0.3)}
+
+
+@pytest.fixture(scope="module")
+def robots(delta, gough_stewart):
+    out = {"delta": delta, "gough_stewart": gough_stewart}
+    for name in ("planar_3rrr", "five_bar"):
+        out[name] = pkdyn.load(name, geometry=False)
+    return out
+
+
+def random_configs(robot, n, seed):
+    rng = np.random.default_rng(seed)
+    dp, dr = SPREAD.get(robot.name, (0.05, 0.0))
+    M0 = robot.platform_placement(robot.q_home)
+    out = []
+    while len(out) < n:
+        d = np.zeros(6)
+        d[robot.task_rows] = np.concatenate([rng.uniform(-dp, dp, 3), rng.uniform(-dr, dr, 3)])[
+            robot.task_rows
+        ]
+        target = pin.SE3(M0.rotation @ pin.exp3(d[3:]), M0.translation + d[:3])
+        try:
+            out.append(pkdyn.inverse_geometry(robot, target, q_init=robot.q_home).q)
+        except pkdyn.PkdynError:
+            continue
+    return out
+
+
+def small_motion(robot, q, dqa):
+    """Configurations at q_a -/+ dq_a (direct geometric model, warm started)."""
+    qa = q[robot.actuated_q]
+    return [
+        pkdyn.forward_geometry(robot, qa + s * dqa, q_init=q, check_limits=False).q
+        for s in (-1.0, 1.0)
+    ]
+
+
+def platform_displacement(robot, q, q_minus, q_plus):
+    """Task components of the platform displacement between q- and q+ (central)."""
+    M0 = robot.platform_placement(q)
+    e = []
+    for qq in (q_minus, q_plus):
+        M = robot.platform_placement(qq)
+        e.append(
+            np.concatenate([M.translation - M0.translation, pin.log3(M0.rotation.T @ M.rotation)])
+        )
+    return ((e[1] - e[0]) / 2.0)[robot.task_rows]
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_efforts_satisfy_virtual_work(robots, name):
+    """tau . dq_a + F . dx = 0 on small motions compatible with the closures."""
+    robot = robots[name]
+    rng = np.random.default_rng(21)
+    for q in random_configs(robot, 3, seed=22):
+        m = robot.task_rows.size
+        F = rng.normal(scale=50.0, size=m)
+        tau = statics.actuator_efforts(robot, q, F)
+        for _ in range(2):
+            dqa = 1e-5 * rng.normal(size=len(robot.actuators))
+            dx = platform_displacement(robot, q, *small_motion(robot, q, dqa))
+            work = tau @ dqa + F @ dx
+            assert abs(work) < 1e-8 * np.linalg.norm(tau) * np.linalg.norm(dqa) + 1e-14
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_full_equilibrium_matches_jacobian_transpose(robots, name):
+    robot = robots[name]
+    (q,) = random_configs(robot, 1, seed=23)
+    F = np.linspace(10.0, -20.0, robot.task_rows.size)
+    res = statics.static_equilibrium(robot, q, F)
+    np.testing.assert_allclose(res.tau, statics.actuator_efforts(robot, q, F), atol=1e-8)
+    assert res.residual < 1e-8
+    assert set(res.reactions) == set(robot.closure_set.names)
+
+
+@pytest.mark.parametrize("name", ["delta", "gough_stewart"])
+def test_gravity_efforts_satisfy_virtual_work(robots, name):
+    """With gravity: tau . dq_a = dU (actuators supply the potential energy change)."""
+    robot = robots[name]
+    rng = np.random.default_rng(24)
+    model, data = robot.model, robot.data
+    for q in random_configs(robot, 2, seed=25):
+        tau = statics.static_equilibrium(robot, q, gravity=True).tau
+        dqa = 1e-5 * rng.normal(size=len(robot.actuators))
+        qm, qp = small_motion(robot, q, dqa)
+        dU = (
+            pin.computePotentialEnergy(model, data, qp)
+            - pin.computePotentialEnergy(model, data, qm)
+        ) / 2
+        assert abs(tau @ dqa - dU) < 1e-8 * np.linalg.norm(tau) * np.linalg.norm(dqa)
+
+
+def test_gough_stewart_legs_are_two_force_members(robots):
+    """Without gravity each leg only carries its actuator force along its axis."""
+    robot = robots["gough_stewart"]
+    (q,) = random_configs(robot, 1, seed=26)
+    F = np.array([30.0, -20.0, 400.0, 5.0, -8.0, 3.0])
+    res = statics.static_equilibrium(robot, q, F)
+    pin.forwardKinematics(robot.model, robot.data, q)
+    for i, cm in enumerate(robot.constraint_models):
+        B = robot.data.oMi[cm.joint2_id].act(cm.joint2_placement.translation)
+        A = np.asarray(robot.params.a[i])
+        u = (B - A) / np.linalg.norm(B - A)
+        # force of the platform on the rod: minus the actuator force along the leg
+        np.testing.assert_allclose(res.reactions[cm.name], -res.tau[i] * u, atol=1e-8)
+
+
+def test_delta_arms_do_not_feel_moments_on_the_nacelle(robots):
+    """The parallelograms take any moment on the nacelle: the arm torques are unchanged."""
+    robot = robots["delta"]
+    (q,) = random_configs(robot, 1, seed=27)
+    force = np.array([3.0, -4.0, 20.0])
+    t_force = statics.static_equilibrium(robot, q, force).tau
+    res = statics.static_equilibrium(robot, q, np.concatenate([force, [0.5, -0.7, 0.3]]))
+    np.testing.assert_allclose(res.tau, t_force, atol=1e-9)
+    assert res.residual < 1e-8
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_platform_wrench_inverts_efforts(robots, name):
+    robot = robots[name]
+    (q,) = random_configs(robot, 1, seed=28)
+    F = np.linspace(-5.0, 7.0, robot.task_rows.size)
+    tau = statics.actuator_efforts(robot, q, F)
+    np.testing.assert_allclose(statics.platform_wrench(robot, q, tau), -F, atol=1e-8)
+
+
+def test_statics_at_parallel_singularity_raises():
+    robot = pkdyn.load("planar_3rrr", geometry=False)
+    phi = float(np.arccos(0.8))  # distal lines concurrent at the platform centre
+    q = robot.q_home
+    for t in np.linspace(0.0, 1.0, 7)[1:]:
+        q = pkdyn.inverse_geometry(robot, [0, 0, 0, 0, 0, t * phi], q_init=q).q
+    with pytest.raises(pkdyn.SingularConfigurationError, match="no static equilibrium"):
+        statics.static_equilibrium(robot, q, [0.0, 0.0, 1.0])  # a torque on the platform
+    with pytest.raises(pkdyn.SingularConfigurationError):
+        statics.actuator_efforts(robot, q, [1.0, 0.0, 0.0])
+    # a force through the centre is held by the concurrent links alone; tau is not unique
+    with pytest.raises(pkdyn.SingularConfigurationError, match="not unique"):
+        statics.static_equilibrium(robot, q, [1.0, 0.0, 0.0])
+
+
+def test_statics_json_and_input_checks(robots):
+    robot = robots["delta"]
+    out = statics.statics_json(robot, robot.q_home, [0.0, 0.0, -9.81], gravity=True)
+    assert len(out["tau"]) == 3 and np.isfinite(out["tau"]).all()
+    assert out["actuators"] == robot.actuator_names
+    with pytest.raises(pkdyn.InvalidInputError):
+        statics.static_equilibrium(robot, robot.q_home, [1.0, 2.0])
+    with pytest.raises(pkdyn.InvalidInputError):
+        statics.actuator_efforts(robot, robot.q_home, [np.nan, 0.0, 0.0])
+
+
+def test_efforts_from_seed_screws_gough_stewart(robots):
+    """Merlet's statics: tau_i is the leg force, F balanced by sum of tau_i along the legs."""
+    robot = robots["gough_stewart"]
+    (q,) = random_configs(robot, 1, seed=29)
+    F = np.array([10.0, 20.0, -300.0, 1.0, 2.0, -3.0])
+    tau = statics.actuator_efforts(robot, q, F)
+    km = kinematics.kinematic_models(robot, q)
+    # J_inv^T tau is the wrench applied by the legs on the platform (A^T tau with B = I)
+    from pkdyn.screws import reciprocal_screws
+
+    A, _ = reciprocal_screws(robot, q)
+    np.testing.assert_allclose(A.T @ tau, -F, atol=1e-8)
+    assert km.cond_A < 1e3
