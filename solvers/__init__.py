@@ -5,7 +5,36 @@ Nothing here knows about Deltas or hexapods: inputs are a ``pin.Model``, rigid c
 """
 
 from solvers.closure import ClosureSet
+from solvers.forward_dynamics import (
+    Actuation,
+    ForwardDynamics,
+    ForwardResult,
+    JointFriction,
+    SimulationError,
+    simulate,
+)
+from solvers.inverse_dynamics import (
+    InfeasibleError,
+    InverseDynamics,
+    InverseResult,
+    InverseTrajectory,
+)
 from solvers.lm import SolveResult, solve_lm
 from solvers.pose_task import FramePoseTask
 
-__all__ = ["ClosureSet", "FramePoseTask", "SolveResult", "solve_lm"]
+__all__ = [
+    "Actuation",
+    "ClosureSet",
+    "ForwardDynamics",
+    "ForwardResult",
+    "FramePoseTask",
+    "InfeasibleError",
+    "InverseDynamics",
+    "InverseResult",
+    "InverseTrajectory",
+    "JointFriction",
+    "SimulationError",
+    "SolveResult",
+    "simulate",
+    "solve_lm",
+]

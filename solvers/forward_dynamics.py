@@ -1,0 +1,872 @@
+"""Time stepping of the constrained forward dynamics of a closed-loop mechanism.
+
+The accelerations come from Pinocchio's proximal ``pin.constraintDynamics``, which solves
+``M a + h = tau + J^T lambda`` with ``J a = -Jdot v - Kd J v - Kp e`` (Baumgarte) for the rigid
+constraint models, including redundant (rank-deficient) sets such as the two point constraints
+of a hinge closure. On top of it:
+
+- integrators on the configuration manifold (``pin.integrate``), explicit Runge-Kutta
+  schemes in the exponential chart centred at the current configuration (Runge-Kutta-Munthe-
+  Kaas: stage velocities are mapped to the chart with ``pin.dDifference``, so the order holds on
+  the non-commutative joints, spherical and free-flyer):
+
+  - ``"dopri5"`` (default): Dormand-Prince 5(4) with error control; ``dt`` is the output step
+    and the largest substep; substeps shrink where the dynamics are stiff (near singular
+    configurations, where the constraint forces peak), six evaluations per accepted substep;
+  - ``"rk4"``: classical Runge-Kutta 4 at the fixed step ``dt``, four evaluations per step;
+  - ``"euler"``: semi-implicit (symplectic) Euler, ``v+ = v + dt a(q, v)``,
+    ``q+ = q (+) dt v+``; one evaluation per step, first order (energy error ~ ``omega dt``);
+    for fast, rough runs;
+
+- drift control: Baumgarte gains on copies of the constraint models, and a projection of the
+  state onto the closures after each output step whose closure residual exceeds a threshold:
+  ``q`` by minimum-norm Gauss-Newton / Levenberg-Marquardt steps on
+  :class:`~solvers.closure.ClosureSet`, then ``v`` by the kinetic-energy-metric projection onto
+  the null space of the closure Jacobian (``v+ = argmin |v+ - v|_M  s.t.  J v+ = 0``, the
+  velocity after a perfectly inelastic impulse, which never adds energy);
+- joint friction: viscous plus smooth Coulomb (``tanh``) per velocity coordinate;
+- actuation: efforts ``tau(t, q, v) -> (n_a,)`` mapped to generalized forces by an
+  :class:`Actuation` selection.
+
+Units: SI. Pinocchio's constraint forces (``data.lambda_c``, for ``J =
+pin.getConstraintsJacobian``) are, per constraint model, the force (3D) or wrench (6D) on
+``joint1``'s body at its contact frame, expressed in that frame. The recorded
+``constraint_forces`` are converted to the convention of :class:`~solvers.closure.ClosureSet`
+and of the inverse dynamics (:func:`ForwardDynamics.closure_forces`): 3D, the world-frame force
+[N] on ``joint1``'s body; 6D, the wrench [N, N m] on ``joint2``'s body in its contact frame.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from solvers.closure import ClosureSet
+from solvers.lm import solve_lm
+
+__all__ = [
+    "Actuation",
+    "JointFriction",
+    "ForwardResult",
+    "ForwardDynamics",
+    "SimulationError",
+    "TorqueFn",
+    "simulate",
+]
+
+TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+"""Actuator efforts ``tau(t [s], q (nq,), v (nv,)) -> (n_a,)`` [N m or N]."""
+
+_COMMUTATIVE = {
+    "JointModelRX",
+    "JointModelRY",
+    "JointModelRZ",
+    "JointModelRevoluteUnaligned",
+    "JointModelRUBX",
+    "JointModelRUBY",
+    "JointModelRUBZ",
+    "JointModelRevoluteUnboundedUnaligned",
+    "JointModelPX",
+    "JointModelPY",
+    "JointModelPZ",
+    "JointModelPrismaticUnaligned",
+    "JointModelTranslation",
+    "JointModelHX",
+    "JointModelHY",
+    "JointModelHZ",
+    "JointModelHelicalUnaligned",
+    "JointModelUniversal",
+    "JointModelSphericalZYX",
+}
+"""Joints whose configuration space is a commutative group (``dDifference`` is the identity);
+universal and ZYX-spherical joints are parametrised by angles added by ``integrate``."""
+
+
+@dataclass
+class _Eval:
+    """One dynamics evaluation: acceleration, actuator efforts, actuator and friction power."""
+
+    a: np.ndarray
+    tau: np.ndarray
+    p_act: float
+    p_fric: float
+
+
+@dataclass(frozen=True)
+class _Tableau:
+    """Butcher tableau of an explicit Runge-Kutta method (``e``: embedded error weights)."""
+
+    a: np.ndarray
+    b: np.ndarray
+    c: np.ndarray
+    e: np.ndarray
+
+    @property
+    def stages(self) -> int:
+        return int(self.b.size)
+
+
+_RK4 = _Tableau(
+    a=np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1.0, 0]]),
+    b=np.array([1 / 6, 1 / 3, 1 / 3, 1 / 6]),
+    c=np.array([0, 0.5, 0.5, 1.0]),
+    e=np.zeros(4),
+)
+
+_DOPRI5 = _Tableau(
+    a=np.array(
+        [
+            [0, 0, 0, 0, 0, 0, 0],
+            [1 / 5, 0, 0, 0, 0, 0, 0],
+            [3 / 40, 9 / 40, 0, 0, 0, 0, 0],
+            [44 / 45, -56 / 15, 32 / 9, 0, 0, 0, 0],
+            [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0, 0],
+            [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0, 0],
+            [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0],
+        ]
+    ),
+    b=np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0]),
+    c=np.array([0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1, 1]),
+    e=np.array([71 / 57600, 0, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40]),
+)
+"""Dormand-Prince 5(4), first same as last: the last stage is the new state."""
+
+_ARG1 = pin.ArgumentPosition.ARG1
+_POINT = pin.ContactType.CONTACT_3D
+
+
+class SimulationError(RuntimeError):
+    """The simulation cannot go on: non-finite state or closures that cannot be restored.
+
+    Attributes:
+        t: Time at which it happened [s].
+
+    """
+
+    def __init__(self, t: float, message: str) -> None:
+        self.t = t
+        super().__init__(message)
+
+
+class Actuation:
+    """Actuated velocity coordinates and their transmission gains.
+
+    The generalized force of actuator efforts ``tau`` (n_a,) is ``S^T tau`` with
+    ``S[i, v_index[i]] = gains[i]``: ``gains`` are reductions when ``tau`` is a motor-side
+    effort, ones (default) when ``tau`` is the joint-side effort.
+
+    Args:
+        v_index: Velocity index of each actuator (n_a,), distinct.
+        gains: Transmission gain of each actuator (n_a,) (default: ones).
+        names: Actuator names, for error messages (default ``a0, a1, ...``).
+
+    Raises:
+        ValueError: Repeated or negative indices, or sizes that do not match.
+
+    """
+
+    def __init__(
+        self,
+        v_index: Sequence[int] | np.ndarray,
+        gains: Sequence[float] | np.ndarray | None = None,
+        names: Sequence[str] | None = None,
+    ) -> None:
+        self.v_index = np.asarray(v_index, dtype=int).reshape(-1)
+        n = self.v_index.size
+        if np.unique(self.v_index).size != n or np.any(self.v_index < 0):
+            raise ValueError(
+                f"actuated velocity indices must be distinct and >= 0: {self.v_index.tolist()}"
+            )
+        self.gains = np.ones(n) if gains is None else np.asarray(gains, dtype=float).reshape(-1)
+        if self.gains.size != n:
+            raise ValueError(f"{self.gains.size} gains for {n} actuators")
+        self.names = [f"a{i}" for i in range(n)] if names is None else list(names)
+        if len(self.names) != n:
+            raise ValueError(f"{len(self.names)} names for {n} actuators")
+
+    @property
+    def n(self) -> int:
+        """Number of actuators."""
+        return int(self.v_index.size)
+
+    def matrix(self, nv: int) -> np.ndarray:
+        """Selection matrix ``S`` (n_a, nv): the generalized force is ``S^T tau``.
+
+        Args:
+            nv: Size of the velocity vector.
+
+        Returns:
+            ``S``.
+
+        """
+        S = np.zeros((self.n, nv))
+        S[np.arange(self.n), self.v_index] = self.gains
+        return S
+
+    def generalized(self, tau: np.ndarray, nv: int) -> np.ndarray:
+        """Generalized force ``S^T tau`` (nv,) [N m or N] of actuator efforts ``tau`` (n_a,)."""
+        out = np.zeros(nv)
+        out[self.v_index] = self.gains * tau
+        return out
+
+    def velocity(self, v: np.ndarray) -> np.ndarray:
+        """Actuator-side velocities ``S v`` (n_a,) conjugate to ``tau`` [rad/s or m/s]."""
+        return self.gains * v[self.v_index]
+
+
+@dataclass
+class JointFriction:
+    """Viscous and smooth Coulomb friction on each velocity coordinate.
+
+    The generalized friction force is ``-(viscous v + coulomb tanh(v / smoothing))``. On a
+    multi-dof joint (spherical, free-flyer) it acts per velocity component.
+
+    Attributes:
+        viscous: Viscous coefficients, scalar or (nv,) [N m s/rad or N s/m].
+        coulomb: Coulomb (dry) friction levels, scalar or (nv,) [N m or N].
+        smoothing: Velocity at which ``tanh`` reaches 76 % of the Coulomb level [rad/s or m/s].
+
+    """
+
+    viscous: float | np.ndarray = 0.0
+    coulomb: float | np.ndarray = 0.0
+    smoothing: float = 1e-2
+
+    def __post_init__(self) -> None:
+        if not self.smoothing > 0.0:
+            raise ValueError(f"friction smoothing must be > 0, got {self.smoothing}")
+
+    def force(self, v: np.ndarray) -> np.ndarray:
+        """Generalized friction force (nv,) at velocity ``v`` [N m or N]."""
+        return -(self.viscous * v + self.coulomb * np.tanh(v / self.smoothing))
+
+
+@dataclass
+class ForwardResult:
+    """Time series of a simulation, one row per recorded sample.
+
+    Attributes:
+        t: Times (N,) [s].
+        q: Configurations (N, nq).
+        v: Velocities (N, nv).
+        a: Accelerations (N, nv) at the recorded states.
+        tau: Actuator efforts (N, n_a) at the recorded states [N m or N].
+        constraint_forces: Closure multipliers ``lambda`` (N, nc) at the recorded states
+            [N, N m], in the convention of the inverse dynamics (see the module docstring).
+        closure_residual: Largest closure residual component (N,) [m or rad].
+        kinetic: Kinetic energy (N,) [J].
+        potential: Gravitational potential energy (N,) [J].
+        work: Actuator work done since the start (N,) [J], integrated with the step's
+            quadrature (fifth order for ``dopri5``, fourth for ``rk4``, first for ``euler``).
+        dissipated: Energy dissipated by joint friction since the start (N,) [J].
+        projections: Number of output steps whose state was projected onto the closures.
+        extras: Integrator statistics (``substeps``, ``rejected`` for ``dopri5``).
+
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    tau: np.ndarray
+    constraint_forces: np.ndarray
+    closure_residual: np.ndarray
+    kinetic: np.ndarray
+    potential: np.ndarray
+    work: np.ndarray
+    dissipated: np.ndarray
+    projections: int = 0
+    extras: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def energy(self) -> np.ndarray:
+        """Mechanical energy ``kinetic + potential`` (N,) [J]."""
+        return self.kinetic + self.potential
+
+    def energy_drift(self) -> float:
+        """Largest violation of the energy balance, relative to the energy exchanged.
+
+        ``max |E(t) - E(0) - work(t) + dissipated(t)|`` divided by the largest of the kinetic
+        energy, the actuator work and the dissipated energy along the run: for a passive
+        frictionless run, the relative drift of the mechanical energy. The potential energy is
+        not used as the scale because its origin is arbitrary.
+
+        Returns:
+            The relative drift (0 when nothing moves).
+
+        """
+        e = self.energy - self.energy[0] - self.work + self.dissipated
+        scale = max(
+            float(np.max(self.kinetic)),
+            float(np.max(np.abs(self.work))),
+            float(np.max(self.dissipated)),
+        )
+        return float(np.max(np.abs(e)) / scale) if scale > 0.0 else 0.0
+
+
+class ForwardDynamics:
+    """Constrained forward dynamics and time stepping on a Pinocchio model.
+
+    Args:
+        model: The kinematic tree (no mimic joints: ``pin.constraintDynamics`` rejects them).
+        constraints: CONTACT_3D / CONTACT_6D rigid constraint models; copied (the Baumgarte
+            gains are set on the copies).
+        actuation: Actuated coordinates (default: none).
+        friction: Joint friction (default: none).
+        integrator: ``"dopri5"``, ``"rk4"`` or ``"euler"`` (see the module docstring).
+        baumgarte: Baumgarte gains ``(Kp [1/s^2], Kd [1/s])`` of the closure error (default:
+            critically damped at 50 rad/s; unstabilised, the closure error of a free Delta grows
+            like ``exp(45 t)``).
+        project: Project ``q`` and ``v`` onto the closures (the initial state, then every
+            ``project_every`` output steps if the closure residual exceeds ``project_tol``).
+        project_tol: Residual above which the state is projected [m or rad].
+        project_every: Output steps between two residual checks.
+        rtol: Relative tolerance of ``dopri5`` on the velocity.
+        atol: Absolute tolerance of ``dopri5`` on the configuration increment [m or rad] and
+            the velocity [m/s or rad/s].
+        prox_accuracy: Stopping threshold of the proximal solver (on the constraint
+            acceleration residual, or on the change of the forces between iterations).
+        prox_mu: Proximal regularisation of the solver (handles redundant closures).
+        prox_max_iter: Iteration cap of the proximal solver.
+
+    Raises:
+        ValueError: Unknown integrator or inconsistent sizes.
+
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        constraints: Sequence[pin.RigidConstraintModel],
+        actuation: Actuation | None = None,
+        *,
+        friction: JointFriction | None = None,
+        integrator: str = "dopri5",
+        baumgarte: tuple[float, float] = (2500.0, 100.0),
+        project: bool = True,
+        project_tol: float = 1e-11,
+        project_every: int = 1,
+        rtol: float = 1e-8,
+        atol: float = 1e-10,
+        prox_accuracy: float = 1e-12,
+        prox_mu: float = 1e-6,
+        prox_max_iter: int = 30,
+    ) -> None:
+        if integrator not in ("rk4", "dopri5", "euler"):
+            raise ValueError(f"unknown integrator {integrator!r} (rk4, dopri5 or euler)")
+        self.rtol = rtol
+        self.atol = atol
+        self._h = 0.0
+        self.steps = 0
+        self.rejected = 0
+        self.model = model
+        self.data = model.createData()
+        self._kin = model.createData()  # kinematics for residuals, energies, projections
+        self.actuation = actuation if actuation is not None else Actuation([])
+        if self.actuation.n and int(self.actuation.v_index.max()) >= model.nv:
+            raise ValueError(f"actuated velocity index out of range (nv = {model.nv})")
+        self.friction = friction
+        self.integrator = integrator
+        self.project = project
+        self.project_tol = project_tol
+        if project_every < 1:
+            raise ValueError(f"project_every must be >= 1, got {project_every}")
+        self.project_every = project_every
+        corrector = pin.BaumgarteCorrectorParameters(float(baumgarte[0]), float(baumgarte[1]))
+        self.constraint_models = pin.StdVec_RigidConstraintModel()
+        self.constraint_datas = pin.StdVec_RigidConstraintData()
+        for cm in constraints:
+            c = pin.RigidConstraintModel(cm)
+            c.setBaumgarteCorrectorParameters(corrector)
+            self.constraint_models.append(c)
+            self.constraint_datas.append(c.createData())
+        self.closure_set = ClosureSet(model, list(self.constraint_models))
+        self.nc = self.closure_set.nc
+        # conversion of Pinocchio's multipliers to the ClosureSet convention (see the module doc)
+        pts = [k for k, cm in enumerate(self.constraint_models) if cm.type == _POINT]
+        self._pt_rows = np.array([self.closure_set.offsets[k] for k in pts], dtype=int)
+        self._pt_joint1 = [self.constraint_models[k].joint1_id for k in pts]
+        self._pt_rot1 = np.array(
+            [self.constraint_models[k].joint1_placement.rotation for k in pts]
+        ).reshape(-1, 3, 3)
+        self.prox = pin.ProximalSettings(prox_accuracy, prox_accuracy, prox_mu, prox_max_iter)
+        if self.nc:
+            pin.initConstraintDynamics(
+                model, self.data, self.constraint_models, self.constraint_datas
+            )
+        self._chart = any(
+            model.joints[j].shortname() not in _COMMUTATIVE for j in range(1, model.njoints)
+        )
+        self._zero_tau = np.zeros(self.actuation.n)
+        self._zero_nv = np.zeros(model.nv)
+        self._v_index = self.actuation.v_index
+        gains = self.actuation.gains
+        self._gains = None if np.all(gains == 1.0) else gains
+
+    # ------------------------------------------------------------------ dynamics
+
+    def acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Constrained acceleration for generalized forces ``tau`` (nv,).
+
+        The constraint forces are left in ``self.data.lambda_c``.
+
+        Args:
+            q: Configuration (nq,).
+            v: Velocity (nv,).
+            tau: Generalized forces (nv,) [N m or N] (actuation and friction included).
+
+        Returns:
+            Acceleration (nv,) (a copy).
+
+        """
+        return np.array(self._accel(q, v, tau))
+
+    def _accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Acceleration as a view on ``data.ddq`` (overwritten by the next call)."""
+        if self.nc:
+            return pin.constraintDynamics(
+                self.model,
+                self.data,
+                q,
+                v,
+                tau,
+                self.constraint_models,
+                self.constraint_datas,
+                self.prox,
+            )
+        return pin.aba(self.model, self.data, q, v, tau)
+
+    def _generalized(
+        self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Actuator efforts and their generalized force (friction excluded)."""
+        if tau_fn is None:
+            return self._zero_tau, self._zero_nv
+        tau_a = np.asarray(tau_fn(t, q, v), dtype=float)
+        if tau_a.shape != self._zero_tau.shape:
+            tau_a = tau_a.reshape(-1)
+            if tau_a.size != self.actuation.n:
+                raise ValueError(
+                    f"the torque function returned {tau_a.size} values for "
+                    f"{self.actuation.n} actuators"
+                )
+        gen = np.zeros(self.model.nv)
+        gen[self._v_index] = tau_a if self._gains is None else self._gains * tau_a
+        return tau_a, gen
+
+    def _forces(
+        self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
+    ) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """Actuator efforts, generalized force, actuator power [W], friction loss [W]."""
+        tau_a, gen = self._generalized(t, q, v, tau_fn)
+        p_act = 0.0 if tau_fn is None else float(gen @ v)
+        if self.friction is None:
+            return tau_a, gen, p_act, 0.0
+        f = self.friction.force(v)
+        return tau_a, gen + f, p_act, -float(f @ v)
+
+    # ------------------------------------------------------------------ stepping
+
+    def _stages(
+        self,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray,
+        h: float,
+        tab: _Tableau,
+        tau_fn: TorqueFn | None,
+        first: _Eval,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Stages of an explicit Runge-Kutta step in the exponential chart centred at ``q``.
+
+        Returns:
+            Chart velocities ``K`` (s, nv), accelerations ``A`` (s, nv), actuator and friction
+            powers ``P`` (s, 2), the last stage's configuration and actuator efforts.
+
+        """
+        model = self.model
+        s = tab.stages
+        K = np.empty((s, model.nv))
+        A = np.empty((s, model.nv))
+        P = np.empty((s, 2))
+        K[0], A[0], P[0] = v, first.a, (first.p_act, first.p_fric)
+        qi, tau_a = q, first.tau
+        ha = h * tab.a
+        # (x[:i].T.dot(c) is the cheapest small linear combination of rows in numpy)
+        for i in range(1, s):
+            row = ha[i, :i]
+            qi = pin.integrate(model, q, K[:i].T.dot(row))
+            vi = v + A[:i].T.dot(row)
+            tau_a, g, pa, pf = self._forces(t + tab.c[i] * h, qi, vi, tau_fn)
+            A[i] = self._accel(qi, vi, g)
+            K[i] = pin.dDifference(model, q, qi, _ARG1).dot(vi) if self._chart else vi
+            P[i] = pa, pf
+        return K, A, P, qi, tau_a
+
+    def _evaluate(self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None) -> _Eval:
+        tau_a, g, pa, pf = self._forces(t, q, v, tau_fn)
+        return _Eval(self.acceleration(q, v, g), tau_a, pa, pf)
+
+    def _advance(
+        self,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray,
+        dt: float,
+        tau_fn: TorqueFn | None,
+        first: _Eval,
+    ) -> tuple[np.ndarray, np.ndarray, float, float, _Eval | None]:
+        """Advance the state by ``dt`` from (q, v), whose evaluation ``first`` is known.
+
+        Returns:
+            ``q+``, ``v+``, actuator work and friction loss over ``dt`` [J], and the evaluation
+            at the new state when the scheme computed it (``dopri5``), else ``None``.
+
+        """
+        model = self.model
+        if self.integrator == "euler":
+            v1 = v + dt * first.a
+            return pin.integrate(model, q, dt * v1), v1, dt * first.p_act, dt * first.p_fric, None
+        if self.integrator == "rk4":
+            K, A, P, _, _ = self._stages(t, q, v, dt, _RK4, tau_fn, first)
+            hb = dt * _RK4.b
+            w = P.T.dot(hb)
+            q1 = pin.integrate(model, q, K.T.dot(hb))
+            return q1, v + A.T.dot(hb), float(w[0]), float(w[1]), None
+        return self._advance_adaptive(t, q, v, dt, tau_fn, first)
+
+    def _advance_adaptive(
+        self,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray,
+        dt: float,
+        tau_fn: TorqueFn | None,
+        first: _Eval,
+    ) -> tuple[np.ndarray, np.ndarray, float, float, _Eval]:
+        """Dormand-Prince 5(4) substeps with error control from ``t`` to ``t + dt``."""
+        model = self.model
+        tab = _DOPRI5
+        t_end = t + dt
+        w_act = w_fric = 0.0
+        while t_end - t > 1e-12 * dt:
+            h = min(self._h, t_end - t)
+            K, A, P, q_new, tau_new = self._stages(t, q, v, h, tab, tau_fn, first)
+            # first same as last: the last stage is the new state (its evaluation is reused)
+            v_new = v + A.T.dot(h * tab.b)
+            e_q = K.T.dot((h / self.atol) * tab.e)
+            e_v = A.T.dot(h * tab.e) / (
+                self.atol + self.rtol * np.maximum(np.abs(v), np.abs(v_new))
+            )
+            err = float(np.sqrt((e_q @ e_q + e_v @ e_v) / (2 * model.nv)))
+            if not np.isfinite(err):
+                err = 1e10
+            fac = min(5.0, 0.9 * err**-0.2) if err > 0.0 else 5.0
+            if err <= 1.0:
+                w = P.T.dot(h * tab.b)
+                w_act += float(w[0])
+                w_fric += float(w[1])
+                t += h
+                q, v = q_new, v_new
+                first = _Eval(A[-1], tau_new, float(P[-1, 0]), float(P[-1, 1]))
+                self.steps += 1
+                # a step shortened to land on t_end says nothing about the next one
+                self._h = max(self._h, h * fac) if h < self._h else h * fac
+            else:
+                self.rejected += 1
+                self._h = h * max(0.1, fac)
+                if self._h < 1e-12 * dt:
+                    raise SimulationError(t, f"step size underflow at t = {t:.9g} s")
+        self._h = min(self._h, dt)
+        return q, v, w_act, w_fric, first
+
+    def step(
+        self,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray,
+        dt: float,
+        tau: TorqueFn | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Advance a state by one step ``dt`` (with the projection check if ``project``).
+
+        For a control loop: no recording. ``dopri5`` keeps its substep size between calls.
+
+        Args:
+            t: Time [s].
+            q: Configuration (nq,).
+            v: Velocity (nv,).
+            dt: Step [s].
+            tau: Actuator efforts ``tau(t, q, v) -> (n_a,)`` (default: zero).
+
+        Returns:
+            The state ``(q, v)`` at ``t + dt``.
+
+        Raises:
+            SimulationError: The closures could not be restored, or the step size of
+                ``dopri5`` underflowed.
+
+        """
+        if self.integrator == "euler":
+            _, g = self._generalized(t, q, v, tau)
+            if self.friction is not None:
+                g = g + self.friction.force(v)
+            v = v + dt * self._accel(q, v, g)
+            q = pin.integrate(self.model, q, dt * v)
+        else:
+            if self._h <= 0.0:
+                self._h = dt
+            q, v, _, _, _ = self._advance(t, q, v, dt, tau, self._evaluate(t, q, v, tau))
+        if self.project and self.nc:
+            r = self.closure_set.residual(self._kin, q)
+            if float(np.max(np.abs(r))) > self.project_tol:
+                try:
+                    q, v = self.project_state(q, v)
+                except SimulationError as err:
+                    raise SimulationError(t + dt, f"t = {t + dt:.6g} s: {err}") from None
+        return q, v
+
+    def closure_forces(self, kin: pin.Data, lambda_c: np.ndarray) -> np.ndarray:
+        """Pinocchio's constraint forces in the :class:`~solvers.closure.ClosureSet` convention.
+
+        3D point: ``R_c1 lambda`` (world-frame force on ``joint1``'s body); 6D weld:
+        ``-lambda`` (wrench on ``joint2``'s body in its contact frame, exact at closure).
+
+        Args:
+            kin: Data whose joint placements are those of the current configuration.
+            lambda_c: ``data.lambda_c`` (nc,) of ``pin.constraintDynamics``.
+
+        Returns:
+            The multipliers (nc,) [N, N m], as returned by the inverse dynamics.
+
+        """
+        out = -np.asarray(lambda_c, dtype=float)
+        if self._pt_rows.size:
+            R = np.array([kin.oMi[j].rotation for j in self._pt_joint1]) @ self._pt_rot1
+            idx = self._pt_rows[:, None] + np.arange(3)
+            out[idx] = np.einsum("kij,kj->ki", R, lambda_c[idx])
+        return out
+
+    def project_state(
+        self, q: np.ndarray, v: np.ndarray, tol: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Project a state onto the closures: ``q`` by Gauss-Newton, ``v`` in the ``M`` metric.
+
+        ``v+`` minimises the kinetic energy of ``v+ - v`` under ``J v+ = 0`` (Euclidean norm
+        if the mass matrix is singular).
+
+        Args:
+            q: Configuration (nq,).
+            v: Velocity (nv,).
+            tol: Closure residual to reach [m or rad] (default: aim at ``project_tol / 100``,
+                accept ``project_tol``).
+
+        Returns:
+            The projected ``(q, v)``.
+
+        Raises:
+            SimulationError: The closures cannot be restored.
+
+        """
+        if not self.nc:
+            return q, v
+        cs, kin = self.closure_set, self._kin
+        sol = solve_lm(
+            self.model,
+            q,
+            lambda x: cs.residual(kin, x),
+            lambda x: cs.jacobian(kin, x),
+            tol=self.project_tol * 1e-2 if tol is None else tol,
+        )
+        if sol.error > (self.project_tol if tol is None else tol):
+            raise SimulationError(
+                float("nan"),
+                f"the closures cannot be restored (residual {sol.error:.3g} after projection)",
+            )
+        q = sol.q
+        J = cs.jacobian(kin, q)
+        M = pin.crba(self.model, kin, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        try:
+            L = np.linalg.cholesky(M)
+        except np.linalg.LinAlgError:  # massless bodies: Euclidean projection instead
+            return q, v - np.linalg.pinv(J, rcond=1e-10) @ (J @ v)
+        # v+ = v - M^-1 J^T y with (J M^-1 J^T) y = J v (minimum-norm y for redundant closures)
+        B = np.linalg.solve(L, J.T)  # L^-1 J^T
+        y = np.linalg.lstsq(B.T @ B, J @ v, rcond=1e-12)[0]
+        return q, v - np.linalg.solve(L.T, B @ y)
+
+    def simulate(
+        self,
+        q0: np.ndarray,
+        v0: np.ndarray,
+        duration: float,
+        dt: float,
+        tau: TorqueFn | None = None,
+        record_every: int = 1,
+        t0: float = 0.0,
+    ) -> ForwardResult:
+        """Integrate the dynamics from ``(q0, v0)`` for ``duration`` seconds.
+
+        Args:
+            q0: Initial configuration (nq,), assembled (projected first if ``project``).
+            v0: Initial velocity (nv,), consistent with the closures (projected first if
+                ``project``).
+            duration: Simulated time [s], rounded to a whole number of steps.
+            dt: Time step [s] (``dopri5``: output step and largest substep).
+            tau: Actuator efforts ``tau(t, q, v) -> (n_a,)`` (default: zero).
+            record_every: Record one sample every ``record_every`` steps (first and last
+                states always recorded).
+            t0: Initial time [s].
+
+        Returns:
+            The recorded time series.
+
+        Raises:
+            ValueError: Non-positive ``dt``, ``duration`` or ``record_every``.
+            SimulationError: The state became non-finite or the closures could not be restored.
+
+        """
+        if not (dt > 0.0 and duration > 0.0 and record_every >= 1):
+            raise ValueError("dt, duration and record_every must be positive")
+        model = self.model
+        n_steps = int(round(duration / dt))
+        n_rec = n_steps // record_every + 1 + (1 if n_steps % record_every else 0)
+        rec = _Recorder(n_rec, model.nq, model.nv, self.actuation.n, self.nc)
+        q = np.array(q0, dtype=float)
+        v = np.array(v0, dtype=float)
+        if self.project:
+            q, v = self.project_state(q, v)
+        self._h = dt
+        self.steps = self.rejected = 0
+        w_act = w_fric = 0.0
+        projections = 0
+        t = t0
+        ev: _Eval | None = None
+        for k in range(n_steps + 1):
+            if ev is None:
+                ev = self._evaluate(t, q, v, tau)
+            if not math.isfinite(float(ev.a @ ev.a)):
+                raise SimulationError(t, f"non-finite acceleration at t = {t:.6g} s")
+            if k % record_every == 0 or k == n_steps:
+                rec.add(self, t, q, v, ev, w_act, w_fric)
+            if k == n_steps:
+                break
+            q, v, dw_a, dw_f, ev = self._advance(t, q, v, dt, tau, ev)
+            w_act += dw_a
+            w_fric += dw_f
+            t = t0 + (k + 1) * dt
+            if self.project and self.nc and (k + 1) % self.project_every == 0:
+                r = self.closure_set.residual(self._kin, q)
+                if float(np.max(np.abs(r))) > self.project_tol:
+                    try:
+                        q, v = self.project_state(q, v)
+                    except SimulationError as err:
+                        raise SimulationError(t, f"t = {t:.6g} s: {err}") from None
+                    projections += 1
+                    ev = None
+        out = rec.result()
+        out.projections = projections
+        out.extras["substeps"] = float(self.steps)
+        out.extras["rejected"] = float(self.rejected)
+        return out
+
+
+class _Recorder:
+    """Preallocated storage of a :class:`ForwardResult`."""
+
+    def __init__(self, n: int, nq: int, nv: int, na: int, nc: int) -> None:
+        self.k = 0
+        self.t = np.empty(n)
+        self.q = np.empty((n, nq))
+        self.v = np.empty((n, nv))
+        self.a = np.empty((n, nv))
+        self.tau = np.empty((n, na))
+        self.lam = np.empty((n, nc))
+        self.res = np.empty(n)
+        self.ke = np.empty(n)
+        self.pe = np.empty(n)
+        self.work = np.empty(n)
+        self.diss = np.empty(n)
+
+    def add(
+        self,
+        fd: ForwardDynamics,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray,
+        ev: _Eval,
+        work: float,
+        dissipated: float,
+    ) -> None:
+        k = self.k
+        model, kin = fd.model, fd._kin
+        self.t[k] = t
+        self.q[k] = q
+        self.v[k] = v
+        self.a[k] = ev.a
+        self.tau[k] = ev.tau
+        if fd.nc:  # the residual runs the kinematics the force conversion needs
+            self.res[k] = float(np.max(np.abs(fd.closure_set.residual(kin, q))))
+            self.lam[k] = fd.closure_forces(kin, fd.data.lambda_c)
+        else:
+            self.res[k] = 0.0
+        self.ke[k] = pin.computeKineticEnergy(model, kin, q, v)
+        self.pe[k] = pin.computePotentialEnergy(model, kin, q)
+        self.work[k] = work
+        self.diss[k] = dissipated
+        self.k = k + 1
+
+    def result(self) -> ForwardResult:
+        n = self.k
+        return ForwardResult(
+            self.t[:n],
+            self.q[:n],
+            self.v[:n],
+            self.a[:n],
+            self.tau[:n],
+            self.lam[:n],
+            self.res[:n],
+            self.ke[:n],
+            self.pe[:n],
+            self.work[:n],
+            self.diss[:n],
+        )
+
+
+def simulate(
+    model: pin.Model,
+    constraints: Sequence[pin.RigidConstraintModel],
+    q0: np.ndarray,
+    v0: np.ndarray,
+    duration: float,
+    dt: float,
+    tau: TorqueFn | None = None,
+    actuation: Actuation | None = None,
+    record_every: int = 1,
+    **options: object,
+) -> ForwardResult:
+    """Simulate a constrained mechanism (see :class:`ForwardDynamics` for ``options``).
+
+    Args:
+        model: The kinematic tree.
+        constraints: Rigid constraint models of the closures.
+        q0: Initial configuration (nq,).
+        v0: Initial velocity (nv,).
+        duration: Simulated time [s].
+        dt: Time step [s].
+        tau: Actuator efforts ``tau(t, q, v) -> (n_a,)`` (default: zero).
+        actuation: Actuated coordinates (needed with ``tau``).
+        record_every: Record one sample every ``record_every`` steps.
+        **options: Keyword arguments of :class:`ForwardDynamics`.
+
+    Returns:
+        The recorded time series.
+
+    """
+    fd = ForwardDynamics(model, constraints, actuation, **options)  # type: ignore[arg-type]
+    return fd.simulate(q0, v0, duration, dt, tau, record_every)

@@ -1,0 +1,400 @@
+"""Inverse dynamics of a closed-loop mechanism: actuator efforts and closure forces.
+
+Given a state and an acceleration ``(q, v, a)`` consistent with the closures, find actuator
+efforts ``tau`` (n_a,) and closure forces ``lambda`` (nc,) with
+
+    M(q) a + h(q, v) = S^T tau + J^T lambda,
+
+where ``M a + h`` comes from ``pin.rnea``, ``S`` from the :class:`~solvers.Actuation`
+selection and ``J`` is :meth:`ClosureSet.jacobian <solvers.closure.ClosureSet.jacobian>`.
+``lambda`` is the multiplier in that convention: for a 3D point closure, the world-frame force
+[N] applied at the contact point of ``joint1``'s body (the opposite force acts on ``joint2``'s
+body); for a 6D weld, the wrench [N, N m] applied on ``joint2``'s body at its contact frame,
+expressed in that frame (the opposite on ``joint1``'s). Among all multipliers the minimum-norm
+one is returned (the limit of a vanishing regularisation ``eps |lambda|^2``), which settles the
+redundant equations of hinge closures.
+
+Method (null-space reduction, exact and well conditioned):
+
+1. SVD of ``J``: ``Z`` spans its null space (the motions the closures allow); projecting the
+   equation on ``Z`` removes ``lambda``: ``(Z^T S^T) tau = Z^T (M a + h)``;
+2. SVD of ``G = Z^T S^T``: its range rows give ``rank(G)`` independent equations on ``tau``;
+   its left null space gives consistency conditions that no actuator can influence
+   (unactuated internal mobilities, e.g. the spin of a ball-ended bar, or a parallel
+   singularity): if ``a`` violates them, :class:`InfeasibleError` is raised with no actuator;
+3. non-redundant actuation (``rank(G) = n_a``): ``tau`` is unique and solved directly;
+   redundant actuation (``rank(G) < n_a``): ``tau`` minimises ``sum w_i tau_i^2`` under the
+   equations and the effort bounds, a QP solved by proxsuite, warm-started from the previous
+   sample along a trajectory (the QP object is kept). This includes actuators whose effort the
+   closures take entirely (an actuator locked by a weld): they get the least effort;
+4. ``lambda`` is the minimum-norm solution of ``J^T lambda = M a + h - S^T tau``.
+
+The direct QP over ``(tau, lambda)`` with the full equation as its equality constraint and a
+tiny weight on ``lambda`` gives the same solution in the limit, but proxsuite does not converge
+on it for the Delta (its spin rows make the equality nearly degenerate); the reduction above
+keeps the QP small (``n_a`` variables) and well conditioned (orthonormal equality rows).
+
+Units: SI; ``tau`` in the units of the actuation (joint-side N m or N with unit gains).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from proxsuite import proxqp
+
+from solvers.closure import ClosureSet
+from solvers.forward_dynamics import Actuation
+
+__all__ = ["InfeasibleError", "InverseDynamics", "InverseResult", "InverseTrajectory"]
+
+
+class InfeasibleError(Exception):
+    """No actuator efforts within the bounds (or none at all) produce the requested motion.
+
+    Attributes:
+        sample: Index of the trajectory sample, or ``None`` for a single state.
+        actuator: Index of the actuator at fault (largest bound violation, relative to its
+            half range, of the least-loaded solution), or ``None`` when the dynamics equation
+            itself cannot be satisfied (motion not dynamically consistent, or singular
+            configuration).
+        name: Name of that actuator, or ``None``.
+        required: Effort that actuator would need [N m or N], or ``None``.
+        lower: Its lower bound, or ``None``.
+        upper: Its upper bound, or ``None``.
+        residual: Residual of the dynamics equation without bounds [N m or N].
+
+    """
+
+    def __init__(
+        self,
+        message: str,
+        sample: int | None = None,
+        actuator: int | None = None,
+        name: str | None = None,
+        required: float | None = None,
+        lower: float | None = None,
+        upper: float | None = None,
+        residual: float = 0.0,
+    ) -> None:
+        self.sample = sample
+        self.actuator = actuator
+        self.name = name
+        self.required = required
+        self.lower = lower
+        self.upper = upper
+        self.residual = residual
+        super().__init__(message)
+
+
+@dataclass
+class InverseResult:
+    """Solution of the inverse dynamics at one state.
+
+    Attributes:
+        tau: Actuator efforts (n_a,) [N m or N].
+        constraint_forces: Closure multipliers ``lambda`` (nc,) [N, N m] (module convention).
+        residual: ``max |M a + h - S^T tau - J^T lambda|`` [N m or N].
+        redundancy: Degree of actuation redundancy (``n_a - rank``; 0: ``tau`` is unique).
+        iterations: QP iterations (0 when ``tau`` is unique).
+
+    """
+
+    tau: np.ndarray
+    constraint_forces: np.ndarray
+    residual: float
+    redundancy: int
+    iterations: int
+
+
+@dataclass
+class InverseTrajectory:
+    """Inverse dynamics along a trajectory, one row per sample.
+
+    Attributes:
+        tau: Actuator efforts (N, n_a) [N m or N].
+        constraint_forces: Closure multipliers (N, nc) [N, N m].
+        residual: Dynamics equation residual per sample (N,) [N m or N].
+
+    """
+
+    tau: np.ndarray
+    constraint_forces: np.ndarray
+    residual: np.ndarray
+
+
+class InverseDynamics:
+    """Actuator efforts and closure forces of a closed-loop mechanism (see the module doc).
+
+    Args:
+        model: The kinematic tree.
+        constraints: CONTACT_3D / CONTACT_6D rigid constraint models of the closures.
+        actuation: Actuated coordinates and gains.
+        lower: Lower effort bounds (n_a,) [N m or N] (default: none).
+        upper: Upper effort bounds (n_a,) [N m or N] (default: none).
+        weights: Weights ``w`` (n_a,) of the effort norm minimised under redundant actuation
+            (default: ones; ``1 / effort_limit^2`` balances the actuators' loads).
+        rank_tol: Singular-value threshold for the ranks of ``J`` (relative to its largest
+            singular value) and of ``Z^T S^T`` (relative to the largest actuation gain).
+        consistency_tol: Largest acceptable residual of the dynamics equation, relative to
+            ``max(1, |M a + h|)``.
+        eps: Absolute accuracy of the QP [N m or N].
+        max_iter: Iteration cap of the QP.
+
+    Raises:
+        ValueError: Inconsistent sizes or bounds.
+
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        constraints: Sequence[pin.RigidConstraintModel],
+        actuation: Actuation,
+        lower: Sequence[float] | np.ndarray | None = None,
+        upper: Sequence[float] | np.ndarray | None = None,
+        weights: Sequence[float] | np.ndarray | None = None,
+        rank_tol: float = 1e-9,
+        consistency_tol: float = 1e-7,
+        eps: float = 1e-11,
+        max_iter: int = 200,
+    ) -> None:
+        self.model = model
+        self.data = model.createData()
+        self._kin = model.createData()
+        self.closure_set = ClosureSet(model, list(constraints))
+        self.actuation = actuation
+        n = actuation.n
+        if n == 0:
+            raise ValueError("inverse dynamics needs at least one actuator")
+        if int(actuation.v_index.max()) >= model.nv:
+            raise ValueError(f"actuated velocity index out of range (nv = {model.nv})")
+        self.S = actuation.matrix(model.nv)
+        self.lower = _vector(lower, n, -np.inf, "lower")
+        self.upper = _vector(upper, n, np.inf, "upper")
+        if np.any(self.lower > self.upper):
+            k = int(np.flatnonzero(self.lower > self.upper)[0])
+            raise ValueError(f"actuator {actuation.names[k]}: lower bound above upper bound")
+        self.weights = _vector(weights, n, 1.0, "weights")
+        if np.any(self.weights <= 0.0):
+            raise ValueError("effort weights must be > 0")
+        self.rank_tol = rank_tol
+        self.consistency_tol = consistency_tol
+        self.eps = eps
+        self.max_iter = max_iter
+        self._g_tol = rank_tol * max(1.0, float(np.max(np.abs(actuation.gains))))
+        self._bounded = bool(np.any(np.isfinite(self.lower) | np.isfinite(self.upper)))
+        self._qp: proxqp.dense.QP | None = None
+        self._qp_rank = -1
+
+    # ------------------------------------------------------------------ one state
+
+    def solve(
+        self, q: np.ndarray, v: np.ndarray, a: np.ndarray, sample: int | None = None
+    ) -> InverseResult:
+        """Actuator efforts and closure forces at one state.
+
+        Args:
+            q: Configuration (nq,), assembled.
+            v: Velocity (nv,), consistent with the closures.
+            a: Acceleration (nv,), consistent with the closures (``J a = -Jdot v``).
+            sample: Trajectory index reported by :class:`InfeasibleError`.
+
+        Returns:
+            ``tau``, ``lambda`` and the residual of the dynamics equation.
+
+        Raises:
+            InfeasibleError: No efforts within the bounds produce ``a``, or the dynamics
+                equation cannot be satisfied at all.
+
+        """
+        model = self.model
+        b = np.array(pin.rnea(model, self.data, q, v, a))
+        cs = self.closure_set
+        if cs.nc:
+            _, J = cs.residual_and_jacobian(self._kin, q)
+            U, s, Vt = np.linalg.svd(J)
+            r = int(np.sum(s > self.rank_tol * max(float(s[0]), 1e-300))) if s.size else 0
+            Z = Vt[r:].T
+        else:
+            J = np.zeros((0, model.nv))
+            U, s, Vt, r = np.zeros((0, 0)), np.zeros(0), np.eye(model.nv), 0
+            Z = np.eye(model.nv)
+        G = Z.T @ self.S.T  # (d, n_a)
+        f0 = Z.T @ b
+        Ug, sg, Vgt = np.linalg.svd(G, full_matrices=False)
+        # |G| <= max gain (Z has orthonormal columns): an absolute threshold, so that actuators
+        # that cannot move anything (all their effort taken by the closures) are recognised
+        rg = int(np.sum(sg > self._g_tol))
+        # rank(G) independent equations E tau = f with orthonormal rows E
+        E = Vgt[:rg]
+        f = (Ug[:, :rg].T @ f0) / sg[:rg]
+        scale = max(1.0, float(np.max(np.abs(b))))
+        # the part of Z^T (M a + h) no actuator reaches: the residual of the dynamics equation
+        Ur = Ug[:, :rg]
+        unreachable = float(np.max(np.abs(Z @ (f0 - Ur @ (Ur.T @ f0))), initial=0.0))
+        if unreachable > self.consistency_tol * scale:
+            raise InfeasibleError(
+                f"{_where(sample)}the dynamics equation cannot be satisfied (residual "
+                f"{unreachable:.3g}): the acceleration is not consistent with the closures and "
+                "the unactuated mobilities, or the configuration is singular",
+                sample=sample,
+                residual=unreachable,
+            )
+        redundancy = self.actuation.n - rg
+        iterations = 0
+        if redundancy == 0:
+            tau = E.T @ f
+            if self._bounded:
+                self._check_bounds(tau, E, f, sample)
+        elif rg == 0:  # no actuator influences the motion: the least effort within the bounds
+            tau = np.clip(np.zeros(self.actuation.n), self.lower, self.upper)
+        else:
+            tau, iterations = self._qp_solve(E, f, scale, sample)
+        y = b - self.S.T @ tau
+        lam = U[:, :r] @ ((Vt[:r] @ y) / s[:r]) if r else np.zeros(cs.nc)
+        residual = float(np.max(np.abs(y - J.T @ lam), initial=0.0))
+        return InverseResult(tau, lam, residual, redundancy, iterations)
+
+    def _check_bounds(
+        self, tau: np.ndarray, E: np.ndarray, f: np.ndarray, sample: int | None
+    ) -> None:
+        tol = self.eps * max(1.0, float(np.max(np.abs(tau))))
+        if np.all(tau >= self.lower - tol) and np.all(tau <= self.upper + tol):
+            return
+        self._raise_bounds(E, f, sample)
+
+    def _raise_bounds(self, E: np.ndarray, f: np.ndarray, sample: int | None) -> None:
+        """Name the actuator at fault from the least-loaded solution, and raise.
+
+        The least-loaded solution minimises ``sum ((tau_i - c_i) / d_i)^2`` under the
+        equations, with ``c`` the middle of the bounds and ``d`` their half range (a one-sided
+        bound is its own centre, with unit scale); the actuator at fault is the one that
+        exceeds its bounds most, relative to ``d``.
+        """
+        lo, hi = self.lower, self.upper
+        f_lo, f_hi = np.isfinite(lo), np.isfinite(hi)
+        both = f_lo & f_hi
+        center = np.where(both, 0.5 * (lo + hi), np.where(f_lo, lo, np.where(f_hi, hi, 0.0)))
+        D = np.where(both, 0.5 * (hi - lo), 1.0)
+        D = np.maximum(D, 1e-12 * max(1.0, float(np.max(np.abs(center)))))
+        s_opt = np.linalg.lstsq(E * D, f - E @ center, rcond=None)[0]
+        tau = center + D * s_opt
+        rel = np.maximum(lo - tau, tau - hi) / D
+        k = int(np.argmax(rel))
+        if not rel[k] > 0.0:  # the bounds admit a solution: the QP itself failed
+            raise InfeasibleError(
+                f"{_where(sample)}the effort QP did not converge although the bounds admit a "
+                "solution",
+                sample=sample,
+            )
+        name = self.actuation.names[k]
+        raise InfeasibleError(
+            f"{_where(sample)}actuator '{name}' would need {tau[k]:.6g}, outside its bounds "
+            f"[{lo[k]:.6g}, {hi[k]:.6g}] (least-loaded solution); the motion is too demanding "
+            "for the actuators",
+            sample=sample,
+            actuator=k,
+            name=name,
+            required=float(tau[k]),
+            lower=float(lo[k]),
+            upper=float(hi[k]),
+        )
+
+    def _qp_solve(
+        self, E: np.ndarray, f: np.ndarray, scale: float, sample: int | None
+    ) -> tuple[np.ndarray, int]:
+        """Minimum weighted-norm efforts under ``E tau = f`` and the bounds (proxsuite)."""
+        n = self.actuation.n
+        rg = E.shape[0]
+        H = np.diag(self.weights)
+        g = np.zeros(n)
+        lo = np.where(np.isfinite(self.lower), self.lower, -1e20)
+        hi = np.where(np.isfinite(self.upper), self.upper, 1e20)
+        n_in = n if self._bounded else 0
+        C = np.eye(n) if n_in else None
+        qp = self._qp
+        if qp is None or self._qp_rank != rg:
+            qp = proxqp.dense.QP(n, rg, n_in)
+            qp.settings.eps_rel = 0.0
+            qp.settings.max_iter = self.max_iter
+            qp.settings.verbose = False
+            qp.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
+            qp.settings.eps_abs = self.eps * scale
+            if n_in:
+                qp.init(H, g, E, f, C, lo, hi)
+            else:
+                qp.init(H, g, E, f)
+            self._qp, self._qp_rank = qp, rg
+        else:
+            qp.settings.eps_abs = self.eps * scale
+            qp.update(A=E, b=f)
+        qp.solve()
+        status = qp.results.info.status
+        tau = np.array(qp.results.x)
+        ok = status == proxqp.QPSolverOutput.PROXQP_SOLVED
+        if ok and n_in:
+            tol = 1e3 * self.eps * scale
+            ok = bool(np.all(tau >= self.lower - tol) and np.all(tau <= self.upper + tol))
+        if not ok:
+            self._qp = None  # a failed solve is no warm start
+            if n_in:
+                self._raise_bounds(E, f, sample)
+            raise InfeasibleError(
+                f"{_where(sample)}the effort QP did not converge ({status})", sample=sample
+            )
+        return tau, int(qp.results.info.iter)
+
+    # ------------------------------------------------------------------ trajectories
+
+    def trajectory(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        a: np.ndarray,
+    ) -> InverseTrajectory:
+        """Inverse dynamics at every sample of a trajectory (warm-started QP).
+
+        Args:
+            q: Configurations (N, nq).
+            v: Velocities (N, nv).
+            a: Accelerations (N, nv).
+
+        Returns:
+            Efforts, closure forces and residuals per sample.
+
+        Raises:
+            InfeasibleError: At the first sample that cannot be realised (``.sample`` set).
+
+        """
+        q, v, a = np.atleast_2d(q), np.atleast_2d(v), np.atleast_2d(a)
+        N = q.shape[0]
+        if v.shape[0] != N or a.shape[0] != N:
+            raise ValueError(
+                f"{N} configurations, {v.shape[0]} velocities, {a.shape[0]} accelerations"
+            )
+        tau = np.empty((N, self.actuation.n))
+        lam = np.empty((N, self.closure_set.nc))
+        res = np.empty(N)
+        for k in range(N):
+            out = self.solve(q[k], v[k], a[k], sample=k)
+            tau[k], lam[k], res[k] = out.tau, out.constraint_forces, out.residual
+        return InverseTrajectory(tau, lam, res)
+
+
+def _vector(
+    x: Sequence[float] | np.ndarray | None, n: int, default: float, what: str
+) -> np.ndarray:
+    if x is None:
+        return np.full(n, default)
+    out = np.asarray(x, dtype=float).reshape(-1)
+    if out.size != n:
+        raise ValueError(f"{what}: {out.size} values for {n} actuators")
+    return out
+
+
+def _where(sample: int | None) -> str:
+    return "" if sample is None else f"sample {sample}: "
