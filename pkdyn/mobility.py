@@ -34,12 +34,11 @@ import scipy.linalg
 from pkdyn.assembly import project
 from pkdyn.description import CLOSURE_KINDS
 from pkdyn.exceptions import AssemblyError, InvalidInputError
-from pkdyn.robot import Robot
+from pkdyn.robot import MODELLING_JOINTS, Robot
 from solvers import FramePoseTask
 
 __all__ = [
     "CLOSURE_FREEDOM",
-    "MODELLING_JOINTS",
     "InternalMobility",
     "MobilityResult",
     "mobility",
@@ -48,9 +47,6 @@ __all__ = [
 
 CLOSURE_FREEDOM = {kind: 6 - n for kind, n in CLOSURE_KINDS.items()}
 """Degrees of freedom of the joint a closure stands for: point 3, hinge 1, weld 0."""
-
-MODELLING_JOINTS = ("JointModelFreeFlyer", "JointModelPlanar")
-"""Pinocchio joints that are modelling devices (a platform's pose in ``q``), not hardware."""
 
 RANK_TOL = 1e-8
 """Default relative singular-value threshold of the rank decisions."""
@@ -332,28 +328,10 @@ def _generic_configuration(robot: Robot, seed: int) -> np.ndarray:
     return np.array(robot.q_home)
 
 
-def _components(robot: Robot) -> list[int]:
-    """Connected component (a representative joint id) of each joint over physical edges."""
-    model = robot.model
-    parent = list(range(model.njoints))
-
-    def find(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    edges = [(j, model.parents[j]) for j in range(1, model.njoints) if not _is_modelling(model, j)]
-    edges += [(cm.joint1_id, cm.joint2_id) for cm in robot.constraint_models]
-    for a, b in edges:
-        parent[find(a)] = find(b)
-    return [find(j) for j in range(model.njoints)]
-
-
 def _floating_velocity_indices(robot: Robot) -> np.ndarray:
     """Velocity indices of modelling joints that tie nothing to their parent's component."""
     model = robot.model
-    comp = _components(robot)
+    comp = robot.components()
     idx: list[int] = []
     for j in range(1, model.njoints):
         if _is_modelling(model, j) and comp[j] != comp[model.parents[j]]:

@@ -12,7 +12,10 @@ from pkdyn.description import ActuatorSpec, ClosureSpec, Description
 from pkdyn.exceptions import PkdynError
 from solvers import ClosureSet
 
-__all__ = ["Robot"]
+__all__ = ["MODELLING_JOINTS", "Robot"]
+
+MODELLING_JOINTS = ("JointModelFreeFlyer", "JointModelPlanar")
+"""Joint models that place a platform or floating base: modelling devices, not hardware."""
 
 
 @dataclass
@@ -82,14 +85,15 @@ class Robot:
         """Names of the actuated joints, in actuator order."""
         return [a.joint for a in self.actuators]
 
-    @property
-    def loops(self) -> int:
-        """Number of independent kinematic loops of the mechanism (graph cyclomatic number).
+    def components(self) -> list[int]:
+        """Connected component of each joint's body over physical edges (union-find).
 
-        Bodies are vertices (the ground included); physical joints and closures are edges.
-        Free-flyer and planar joints are modelling devices (a platform or a floating base), not
-        hardware, and are not edges. ``loops = edges - vertices + connected components``; for
-        the Delta with 12 ball joints it gives Clavel's 5.
+        Physical edges are the tree joints except free-flyer and planar joints (modelling devices
+        for a platform or a floating base, not hardware) and the loop closures.
+
+        Returns:
+            A representative joint id per joint id (0..njoints-1).
+
         """
         model = self.model
         parent = list(range(model.njoints))
@@ -100,20 +104,30 @@ class Robot:
                 i = parent[i]
             return i
 
-        edges = 0
-        links = []
-        for j in range(1, model.njoints):
-            if model.joints[j].shortname() in ("JointModelFreeFlyer", "JointModelPlanar"):
-                continue
-            links.append((j, model.parents[j]))
-        owners = dict(zip(self.constraint_owner, self.constraint_models, strict=True))
-        for cm in owners.values():
-            links.append((cm.joint1_id, cm.joint2_id))
-        for a, b in links:
-            edges += 1
+        for a, b in self._physical_edges():
             parent[find(a)] = find(b)
-        components = len({find(i) for i in range(model.njoints)})
-        return edges - model.njoints + components
+        return [find(j) for j in range(model.njoints)]
+
+    def _physical_edges(self) -> list[tuple[int, int]]:
+        model = self.model
+        edges = [
+            (j, model.parents[j])
+            for j in range(1, model.njoints)
+            if model.joints[j].shortname() not in MODELLING_JOINTS
+        ]
+        owners = dict(zip(self.constraint_owner, self.constraint_models, strict=True))
+        edges += [(cm.joint1_id, cm.joint2_id) for cm in owners.values()]  # one per closure
+        return edges
+
+    @property
+    def loops(self) -> int:
+        """Number of independent kinematic loops of the mechanism (graph cyclomatic number).
+
+        Bodies are vertices (the ground included); physical joints and closures are edges (see
+        :meth:`components`). ``loops = edges - vertices + connected components``; for the Delta
+        with 12 ball joints it gives Clavel's 5.
+        """
+        return len(self._physical_edges()) - self.model.njoints + len(set(self.components()))
 
     def constraint_data(self) -> pin.StdVec_RigidConstraintData:
         """Fresh Pinocchio constraint data for ``constraint_models``."""
