@@ -1,4 +1,4 @@
-"""Plots of pkdyn results (matplotlib, imported lazily; no pyplot, no global backend change).
+"""Conditioning and singularity maps (matplotlib Agg figures).
 
 Figures are :class:`matplotlib.figure.Figure` objects drawn with the Agg canvas, so they can be
 saved headless (``path=...``) or shown in a notebook (a Figure displays itself in Jupyter).

@@ -1,0 +1,163 @@
+"""Geometry and kinematic-analysis commands: info, urdf, fk, ik, mobility, jacobian, statics."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+import numpy as np
+
+from pkdyn.cli._common import configuration, emit, fmt, load, params, posed_command, robot_command
+from pkdyn.exceptions import PkdynError
+
+__all__ = ["register"]
+
+
+def _cmd_info(args: argparse.Namespace) -> None:
+    robot = load(args)
+    closures = [{"name": c.name, "type": c.kind} for c in robot.closures]
+    payload = {
+        "name": robot.name,
+        "nq": robot.nq,
+        "nv": robot.nv,
+        "dof": robot.dof(),
+        "actuated": robot.actuator_names,
+        "loops": robot.loops,
+        "closures": closures,
+    }
+    lines = [
+        f"{robot.name}: nq={robot.nq} nv={robot.nv} dof={payload['dof']} loops={robot.loops}",
+        "actuated: " + ", ".join(robot.actuator_names),
+        "closures: " + ", ".join(f"{c['name']} ({c['type']})" for c in closures),
+    ]
+    emit(args, payload, "\n".join(lines))
+
+
+def _cmd_urdf(args: argparse.Namespace) -> None:
+    from pkdyn import library
+
+    overrides = params(args.param)
+    if args.robot in library.FAMILIES:
+        fam = library.FAMILIES[args.robot]
+        text = fam.build_urdf(fam.make_params(overrides))
+    else:
+        import pkdyn
+
+        pkdyn.load(args.robot, geometry=False, **overrides)  # validates the file
+        with open(args.robot) as fh:
+            text = fh.read()
+    if args.output:
+        try:
+            with open(args.output, "w") as fh:
+                fh.write(text)
+        except OSError as err:
+            raise PkdynError(f"cannot write '{args.output}': {err.strerror}") from None
+    else:
+        sys.stdout.write(text)
+
+
+def _cmd_fk(args: argparse.Namespace) -> None:
+    import pkdyn
+
+    robot = load(args)
+    res = pkdyn.forward_geometry(robot, args.q)
+    if res.placement is None:
+        raise PkdynError(f"{robot.name} declares no platform frame; nothing to report")
+    payload = {
+        "position": res.position.tolist(),
+        "rpy": res.rpy.tolist(),
+        "q_full": res.q.tolist(),
+        "residual": res.residual,
+    }
+    text = f"position [m]: {fmt(res.position)}\nrpy [rad]:    {fmt(res.rpy)}"
+    emit(args, payload, text)
+
+
+def _cmd_ik(args: argparse.Namespace) -> None:
+    import pkdyn
+
+    robot = load(args)
+    res = pkdyn.inverse_geometry(robot, args.pose)
+    names = robot.actuator_names
+    payload = {"q": res.qa.tolist(), "actuators": names, "residual": res.residual}
+    text = "\n".join(f"{n}: {v:.9f}" for n, v in zip(names, res.qa, strict=True))
+    emit(args, payload, text)
+
+
+def _cmd_mobility(args: argparse.Namespace) -> None:
+    from pkdyn.mobility import format_mobility, mobility
+
+    result = mobility(load(args))
+    emit(args, result.as_json(), format_mobility(result))
+
+
+def _cmd_jacobian(args: argparse.Namespace) -> None:
+    from pkdyn.kinematics import jacobian_json
+
+    robot, q = configuration(args)
+    out = jacobian_json(robot, q)
+    text = "\n".join(f"{k} =\n{np.array2string(np.array(out[k]), precision=5)}" for k in "ABJ")
+    emit(args, out, text)
+
+
+def _cmd_singularity(args: argparse.Namespace) -> None:
+    from pkdyn.singularity import singularity_json
+
+    robot, q = configuration(args)
+    out = singularity_json(robot, q)
+    text = (
+        f"{out['kind']}: cond(A) = {out['cond_A']:.4g}, cond(B) = {out['cond_B']:.4g}, "
+        f"distance = {out['distance']:.4g}"
+    )
+    emit(args, out, text)
+
+
+def _cmd_statics(args: argparse.Namespace) -> None:
+    from pkdyn.statics import statics_json
+
+    robot, q = configuration(args)
+    out = statics_json(robot, q, args.wrench, gravity=args.gravity)
+    text = "\n".join(f"{n}: {t:.6g}" for n, t in zip(out["actuators"], out["tau"], strict=True))
+    emit(args, out, text)
+
+
+def register(sub: Any) -> None:
+    """Add this module's sub-commands to the ``pkdyn`` parser."""
+    sp = robot_command(sub, "info", "model summary")
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=_cmd_info)
+    sp = robot_command(sub, "urdf", "write the description")
+    sp.add_argument("-o", "--output", help="output file (default: stdout)")
+    sp.set_defaults(func=_cmd_urdf)
+    sp = robot_command(sub, "fk", "direct geometric model")
+    sp.add_argument("--q", nargs="+", type=float, required=True, help="actuated coordinates")
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=_cmd_fk)
+    sp = robot_command(sub, "ik", "inverse geometric model")
+    sp.add_argument(
+        "--pose", nargs="+", type=float, required=True, help="X Y Z [ROLL PITCH YAW] (m, rad)"
+    )
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=_cmd_ik)
+    sp = robot_command(
+        sub, "mobility", "mobility: Gruebler and rank-based (Pasqui), internal mobilities"
+    )
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=_cmd_mobility)
+    posed_command(sub, "jacobian", "parallel-robot form A xd = B qd, J = A^-1 B").set_defaults(
+        func=_cmd_jacobian
+    )
+    posed_command(
+        sub, "singularity", "regular / serial / parallel / both, conditioning"
+    ).set_defaults(func=_cmd_singularity)
+    sp = posed_command(sub, "statics", "actuator efforts holding the platform against a wrench")
+    sp.add_argument(
+        "--wrench",
+        nargs=6,
+        type=float,
+        default=[0.0] * 6,
+        metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
+    )
+    sp.add_argument("--gravity", action="store_true", help="include the robot's weight")
+    sp.set_defaults(func=_cmd_statics)

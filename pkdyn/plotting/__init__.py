@@ -1,0 +1,12 @@
+"""Plots of pkdyn results (matplotlib, imported lazily; no pyplot, no global backend change).
+
+One module per kind of result; each function returns a :class:`matplotlib.figure.Figure` drawn
+with the Agg canvas, so it can be saved headless (``path=...``) or shown in a notebook (a Figure
+displays itself in Jupyter). The CLI and the notebooks use these functions only.
+"""
+
+from __future__ import annotations
+
+from pkdyn.plotting.maps import plot_conditioning_map
+
+__all__ = ["plot_conditioning_map"]
