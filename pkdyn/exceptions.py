@@ -16,6 +16,9 @@ __all__ = [
     "UnreachablePoseError",
     "JointLimitError",
     "SingularConfigurationError",
+    "TrajectoryError",
+    "InfeasibleEffortError",
+    "SimulationError",
 ]
 
 
@@ -114,3 +117,51 @@ class SingularConfigurationError(PkdynError):
     def __init__(self, kind: str, message: str) -> None:
         self.kind = kind
         super().__init__(message)
+
+
+class TrajectoryError(PkdynError):
+    """A trajectory cannot be mapped to the joints: out of reach, singular or not finite.
+
+    Attributes:
+        sample: Index of the first offending sample (``None`` for the trajectory as a whole).
+        time: Its time [s] (``None`` if unknown).
+
+    """
+
+    def __init__(self, message: str, sample: int | None = None, time: float | None = None) -> None:
+        self.sample = sample
+        self.time = time
+        where = (
+            ""
+            if sample is None
+            else f"sample {sample}" + ("" if time is None else f" (t = {time:.6g} s)") + ": "
+        )
+        super().__init__(where + message)
+
+
+class InfeasibleEffortError(PkdynError):
+    """No actuator efforts within the limits realise the motion.
+
+    Attributes:
+        sample: Trajectory sample index (``None`` for a single state).
+        actuator: Name of the actuator at fault (``None`` if the motion itself is inconsistent).
+
+    """
+
+    def __init__(self, message: str, sample: int | None = None, actuator: str | None = None):
+        self.sample = sample
+        self.actuator = actuator
+        super().__init__(message)
+
+
+class SimulationError(PkdynError):
+    """A simulation cannot continue (state not finite, closures lost, step size collapsed).
+
+    Attributes:
+        time: Simulated time at the failure [s].
+
+    """
+
+    def __init__(self, message: str, time: float) -> None:
+        self.time = time
+        super().__init__(f"t = {time:.6g} s: {message}")

@@ -3,10 +3,12 @@
 Given a state and an acceleration ``(q, v, a)`` consistent with the closures, find actuator
 efforts ``tau`` (n_a,) and closure forces ``lambda`` (nc,) with
 
-    M(q) a + h(q, v) = S^T tau + J^T lambda,
+    M(q) a + h(q, v) = S^T tau + J^T lambda + f_ext,
 
 where ``M a + h`` comes from ``pin.rnea``, ``S`` from the :class:`~solvers.Actuation`
-selection and ``J`` is :meth:`ClosureSet.jacobian <solvers.closure.ClosureSet.jacobian>`.
+selection, ``J`` is :meth:`ClosureSet.jacobian <solvers.closure.ClosureSet.jacobian>` and
+``f_ext`` (nv,) an optional generalized external force (``J_frame^T F`` of a wrench ``F`` applied
+to the mechanism, e.g. a machining wrench or a payload's weight).
 ``lambda`` is the multiplier in that convention: for a 3D point closure, the world-frame force
 [N] applied at the contact point of ``joint1``'s body (the opposite force acts on ``joint2``'s
 body); for a 6D weld, the wrench [N, N m] applied on ``joint2``'s body at its contact frame,
@@ -193,7 +195,12 @@ class InverseDynamics:
     # ------------------------------------------------------------------ one state
 
     def solve(
-        self, q: np.ndarray, v: np.ndarray, a: np.ndarray, sample: int | None = None
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        a: np.ndarray,
+        sample: int | None = None,
+        f_ext: np.ndarray | None = None,
     ) -> InverseResult:
         """Actuator efforts and closure forces at one state.
 
@@ -202,6 +209,7 @@ class InverseDynamics:
             v: Velocity (nv,), consistent with the closures.
             a: Acceleration (nv,), consistent with the closures (``J a = -Jdot v``).
             sample: Trajectory index reported by :class:`InfeasibleError`.
+            f_ext: Generalized external force (nv,) acting on the mechanism [N m or N].
 
         Returns:
             ``tau``, ``lambda`` and the residual of the dynamics equation.
@@ -213,6 +221,8 @@ class InverseDynamics:
         """
         model = self.model
         b = np.array(pin.rnea(model, self.data, q, v, a))
+        if f_ext is not None:
+            b -= np.asarray(f_ext, dtype=float).reshape(model.nv)
         cs = self.closure_set
         if cs.nc:
             _, J = cs.residual_and_jacobian(self._kin, q)
@@ -355,6 +365,7 @@ class InverseDynamics:
         q: np.ndarray,
         v: np.ndarray,
         a: np.ndarray,
+        f_ext: np.ndarray | None = None,
     ) -> InverseTrajectory:
         """Inverse dynamics at every sample of a trajectory (warm-started QP).
 
@@ -362,6 +373,7 @@ class InverseDynamics:
             q: Configurations (N, nq).
             v: Velocities (N, nv).
             a: Accelerations (N, nv).
+            f_ext: Generalized external forces (N, nv) [N m or N] (default: none).
 
         Returns:
             Efforts, closure forces and residuals per sample.
@@ -379,8 +391,10 @@ class InverseDynamics:
         tau = np.empty((N, self.actuation.n))
         lam = np.empty((N, self.closure_set.nc))
         res = np.empty(N)
+        if f_ext is not None:
+            f_ext = np.asarray(f_ext, dtype=float).reshape(N, self.model.nv)
         for k in range(N):
-            out = self.solve(q[k], v[k], a[k], sample=k)
+            out = self.solve(q[k], v[k], a[k], sample=k, f_ext=None if f_ext is None else f_ext[k])
             tau[k], lam[k], res[k] = out.tau, out.constraint_forces, out.residual
         return InverseTrajectory(tau, lam, res)
 
