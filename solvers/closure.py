@@ -9,6 +9,11 @@ Conventions (exact derivatives, checked against finite differences in the tests)
 
 Both are derivatives with respect to a velocity-space increment ``dq`` applied as
 ``pin.integrate(model, q, dq)``.
+
+Second derivative along a motion ``(q, v, a)``: ``d^2 r / dt^2 = J a + gamma(q, v)``, with the
+acceleration drift ``gamma`` of :meth:`ClosureSet.drift` (classical accelerations of the contact
+points at ``a = 0`` for points; for welds the relative spatial acceleration at ``a = 0``, exact
+when the weld's relative velocity vanishes, as it does on a closed mechanism).
 """
 
 from __future__ import annotations
@@ -188,6 +193,49 @@ class ClosureSet:
             pin.computeJointJacobians(self.model, data, q)
             return self._jacobian(data, P)
         return self.residual_and_jacobian(data, q)[1]
+
+    def drift(self, data: pin.Data, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Acceleration drift ``gamma`` (nc,): ``d^2 r/dt^2 = J a + gamma`` (runs the kinematics).
+
+        A motion keeps the closures to second order when ``J a = -gamma``. Exact for point
+        constraints at any state; for welds when their relative velocity is zero (``J v = 0``).
+
+        Args:
+            data: Pinocchio data of ``model`` (its kinematics are overwritten).
+            q: Configuration (nq,).
+            v: Velocity (nv,).
+
+        Returns:
+            Drift (nc,) [m/s^2, rad/s^2].
+
+        """
+        model = self.model
+        pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
+        self._cache = (None, None, None)
+        g = np.zeros(self.nc)
+        zero = pin.Motion.Zero()
+        for k, (is_point, j1, M1, j2, M2) in enumerate(self._items):
+            o = self.offsets[k]
+            if is_point:
+                acc = []
+                for j, M in ((j1, M1), (j2, M2)):
+                    if j == 0:
+                        acc.append(np.zeros(3))
+                        continue
+                    vp = M.actInv(data.v[j])
+                    ap = M.actInv(data.a[j])
+                    lin = ap.linear + np.cross(vp.angular, vp.linear)
+                    acc.append((data.oMi[j] * M).rotation @ lin)
+                g[o : o + 3] = acc[0] - acc[1]
+                continue
+            c1Mc2 = (data.oMi[j1] * M1).actInv(data.oMi[j2] * M2)
+            v1 = c1Mc2.actInv(M1.actInv(data.v[j1])) if j1 else zero
+            a1 = c1Mc2.actInv(M1.actInv(data.a[j1])) if j1 else zero
+            v2 = M2.actInv(data.v[j2]) if j2 else zero
+            a2 = M2.actInv(data.a[j2]) if j2 else zero
+            nu = v2 - v1
+            g[o : o + 6] = pin.Jlog6(c1Mc2) @ (a2 - a1 + nu.cross(v1)).vector
+        return g
 
     def split(self, r: np.ndarray) -> dict[str, float]:
         """Norm of the residual of each constraint, by name.
