@@ -4,8 +4,10 @@ Joint centres from Table 3.1 (base joints ``A_i`` 25 mm below the base plate, pl
 ``B_i`` 20 mm below the platform frame), leg strokes from Table 3.2 (legs 1-3: 528-757 mm,
 legs 4-6: 491-733 mm). Each leg: universal joint at ``A_i``, actuated prismatic joint whose
 coordinate is the leg length ``rho_i``, spherical joint at ``B_i`` (a ``point`` closure on the
-platform). The base joints are limited by a square hole, modelled as a 4-face pyramid about
-the home leg direction (Merlet, chapter 3).
+platform). The base joints sit under the base plate and the legs pass through square holes,
+modelled as 4-face pyramids about the home leg direction with two faces facing the base centre
+(Merlet, chapter 3; the report gives no hole size: ``pyramid_half_angle`` is an assumption).
+The base plate carries collision geometry, so legs are checked against it.
 
 With ``base_joint="spherical"`` the base joints are ball joints ``leg{i}_S`` (S-P-S legs): each
 leg may then spin about its own axis, Pasqui's mobility 12 = 6 + 6 internal (seed 001).
@@ -16,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 from pkdyn.closed_form.gough_stewart import leg_lengths
 from pkdyn.exceptions import ParameterError
@@ -156,6 +159,20 @@ def home(p: Params) -> list[float]:
     return [float(r) for r in rho]
 
 
+def _hole_ref(a: np.ndarray, rpy: tuple[float, float, float]) -> tuple[float, float, float]:
+    """Pyramid ``ref`` (joint frame) facing the base centre: the square hole's sides face it.
+
+    The horizontal direction from ``A_i`` to the base axis, made normal to the pyramid axis
+    (the joint frame's z, the home leg direction), in joint-frame coordinates.
+    """
+    R = pin.rpy.rpyToMatrix(*rpy)
+    inward = -np.array([a[0], a[1], 0.0])
+    ref = R.T @ inward
+    ref[2] = 0.0
+    ref /= np.linalg.norm(ref)
+    return (float(ref[0]), float(ref[1]), 0.0)
+
+
 def build_urdf(p: Params) -> str:
     """Write the pkdyn description of a 6-UPS Gough-Stewart platform.
 
@@ -169,7 +186,8 @@ def build_urdf(p: Params) -> str:
     w = UrdfWriter("gough_stewart")
     grey, blue, orange = (0.6, 0.6, 0.65, 1.0), (0.2, 0.4, 0.8, 1.0), (0.9, 0.5, 0.1, 1.0)
     base_r = float(np.max(np.linalg.norm(p.a[:, :2], axis=1))) + 0.04
-    w.link("base", visuals=[Shape("cylinder", (base_r, 0.01), (0, 0, -0.005), rgba=grey)])
+    plate = Shape("cylinder", (base_r, 0.01), (0, 0, -0.005), rgba=grey)
+    w.link("base", visuals=[plate], collisions=[plate])
     zh = p.home_height()
     C = np.array([0.0, 0.0, zh])
     L, r = p.cylinder_length, p.leg_radius
@@ -196,7 +214,7 @@ def build_urdf(p: Params) -> str:
             visuals=[Shape("cylinder", (r, Lr), (0, 0, -0.5 * Lr), rgba=orange)],
             collisions=[Shape("cylinder", (r, Lr), (0, 0, -0.5 * Lr))],
         )
-        pyramid = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (p.pyramid_half_angle,) * 2)
+        pyramid = ((0.0, 0.0, 1.0), _hole_ref(p.a[i], rpy), (p.pyramid_half_angle,) * 2)
         if p.base_joint == "spherical":
             w.spherical(f"leg{i + 1}_S", "base", cyl, p.a[i], rpy, pyramid=pyramid)
         else:
