@@ -57,6 +57,7 @@ __all__ = [
     "adept_cycle",
     "concatenate",
     "map_task_trajectory",
+    "named_task",
     "named_trajectory",
     "point_to_point",
     "sinusoid",
@@ -522,15 +523,37 @@ def _home_pose(robot: Robot) -> np.ndarray:
     return np.concatenate([pos, rpy])
 
 
-def named_trajectory(robot: Robot, name: str, **options: Any) -> JointTrajectory:
-    """A built-in trajectory of ``robot``, mapped to joint space.
+def named_trajectory(
+    robot: Robot, name: str, check_limits: bool = True, **options: Any
+) -> JointTrajectory:
+    """A built-in trajectory of ``robot`` (see :func:`named_task`), mapped to joint space.
+
+    Args:
+        robot: The robot.
+        name: ``adept``, ``sine`` or ``p2p``.
+        check_limits: Raise if an actuator leaves its position or velocity limits.
+        **options: See :func:`named_task`.
+
+    Returns:
+        The joint trajectory.
+
+    Raises:
+        InvalidInputError: Unknown name or option.
+        TrajectoryError: The trajectory leaves the workspace or meets a singularity.
+
+    """
+    return map_task_trajectory(robot, named_task(robot, name, **options), check_limits=check_limits)
+
+
+def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:
+    """A built-in platform trajectory of ``robot``.
 
     ``adept``: :func:`adept_cycle` centred below the home pose (options: ``cycle_time`` [s],
     default 0.5; ``depth`` [m] below home of the pick-and-place line, default 0.05; ``up``,
     ``across``, ``direction``, ``profile``, ``overlap``, ``dt``, ``cycles``, default 1).
     ``sine``: :func:`sinusoid` about the home pose on every task component (options:
-    ``amplitude`` [m] for translations, default 0.02; ``angle`` [rad] for rotations, default
-    0.05; ``frequency`` [Hz], default 1; ``duration`` [s], default one period; ``dt``).
+    ``amplitude`` [m] for translations, default 0.01; ``angle`` [rad] for rotations, default
+    0.02; ``frequency`` [Hz], default 1; ``duration`` [s], default one period; ``dt``).
     ``p2p``: one :func:`point_to_point` move from home by ``offset`` (default 5 cm along x and
     0.1 rad on the task rotations) in ``duration`` (default 0.5 s) with ``profile``.
 
@@ -540,11 +563,10 @@ def named_trajectory(robot: Robot, name: str, **options: Any) -> JointTrajectory
         **options: See above.
 
     Returns:
-        The joint trajectory.
+        The platform trajectory.
 
     Raises:
         InvalidInputError: Unknown name or option.
-        TrajectoryError: The trajectory leaves the workspace or meets a singularity.
 
     """
     home = _home_pose(robot)
@@ -560,8 +582,8 @@ def named_trajectory(robot: Robot, name: str, **options: Any) -> JointTrajectory
             one = adept_cycle(bottom, dt=dt, **opts)
             task = concatenate([one] * max(1, cycles), name=one.name)
         elif name == "sine":
-            amp = float(opts.pop("amplitude", 0.02))
-            ang = float(opts.pop("angle", 0.05))
+            amp = float(opts.pop("amplitude", 0.01))
+            ang = float(opts.pop("angle", 0.02))
             f = float(opts.pop("frequency", 1.0))
             duration = float(opts.pop("duration", 1.0 / f))
             A = np.where(task_mask, np.r_[[amp] * 3, [ang] * 3], 0.0)
@@ -588,4 +610,4 @@ def named_trajectory(robot: Robot, name: str, **options: Any) -> JointTrajectory
         raise InvalidInputError("trajectory", f"{name}: {err}") from None
     except ValueError as err:
         raise InvalidInputError("trajectory", f"{name}: {err}") from None
-    return map_task_trajectory(robot, task)
+    return task

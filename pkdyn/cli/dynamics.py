@@ -1,0 +1,110 @@
+"""Dynamics commands: ``simulate`` (passive constrained dynamics) and ``size`` (motor sizing)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+import numpy as np
+
+from pkdyn.cli._common import emit, load, robot_command
+from pkdyn.exceptions import InvalidInputError
+
+__all__ = ["register"]
+
+
+def _cmd_simulate(args: argparse.Namespace) -> None:
+    from pkdyn.dynamics import simulate
+
+    robot = load(args)
+    res = simulate(robot, args.duration, args.dt, integrator=args.integrator)
+    payload = {
+        "robot": robot.name,
+        "duration": float(res.t[-1] - res.t[0]),
+        "dt": args.dt,
+        "integrator": args.integrator,
+        "steps": int(res.t.size - 1),
+        "substeps": int(res.extras.get("substeps", res.t.size - 1)),
+        "max_closure_residual": float(np.max(res.closure_residual)),
+        "energy_drift_rel": res.energy_drift(),
+        "max_kinetic_energy": float(np.max(res.kinetic)),
+        "projections": int(res.projections),
+    }
+    text = (
+        f"{robot.name}: {payload['duration']:g} s passive under gravity, {payload['steps']} steps "
+        f"of {args.dt:g} s ({args.integrator}, {payload['substeps']} substeps)\n"
+        f"max closure residual: {payload['max_closure_residual']:.3g} m\n"
+        f"energy drift:         {payload['energy_drift_rel']:.3g} (relative to the largest "
+        f"kinetic energy, {payload['max_kinetic_energy']:.4g} J)"
+    )
+    emit(args, payload, text)
+
+
+def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
+    if args.cycle_time is not None and args.cycle_time <= 0.0:
+        raise InvalidInputError("--cycle-time", f"must be > 0 s, got {args.cycle_time}")
+    opts: dict[str, Any] = {"dt": args.dt}
+    if args.trajectory == "adept":
+        opts["cycle_time"] = 0.5 if args.cycle_time is None else args.cycle_time
+        opts["profile"] = args.profile
+        opts["cycles"] = args.cycles
+    elif args.trajectory == "sine":
+        if args.cycle_time is not None:
+            opts["frequency"] = 1.0 / args.cycle_time
+            opts["duration"] = args.cycle_time * args.cycles
+    else:  # p2p
+        opts["profile"] = args.profile
+        if args.cycle_time is not None:
+            opts["duration"] = args.cycle_time
+    return opts
+
+
+def _cmd_size(args: argparse.Namespace) -> None:
+    from pkdyn.sizing import size
+    from pkdyn.trajectory import named_trajectory
+
+    robot = load(args)
+    traj = named_trajectory(robot, args.trajectory, **_trajectory_options(args))
+    result = size(robot, traj, payload=args.payload)
+    if args.csv:
+        result.write_csv(args.csv)
+    if args.plot:
+        from pkdyn.plotting.dynamics import plot_efforts
+
+        try:
+            plot_efforts(result, path=args.plot)
+        except (OSError, ValueError) as err:
+            raise InvalidInputError("--plot", f"cannot write '{args.plot}': {err}") from None
+    head = (
+        f"{robot.name}: {result.trajectory}, {result.duration:g} s, payload {args.payload:g} kg"
+        + ("" if result.feasible else "  -- LIMITS EXCEEDED")
+    )
+    emit(args, result.as_json(), head + "\n" + result.table())
+
+
+def register(sub: Any) -> None:
+    """Add ``simulate`` and ``size`` to the ``pkdyn`` parser."""
+    sp = robot_command(sub, "simulate", "passive constrained dynamics under gravity")
+    sp.add_argument("--duration", type=float, default=1.0, help="simulated time [s]")
+    sp.add_argument("--dt", type=float, default=1e-3, help="output time step [s]")
+    sp.add_argument("--integrator", choices=("dopri5", "rk4", "euler"), default="dopri5")
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=_cmd_simulate)
+    sp = robot_command(sub, "size", "actuator efforts, speeds and powers along a trajectory")
+    sp.add_argument("--trajectory", choices=("adept", "sine", "p2p"), default="adept")
+    sp.add_argument("--payload", type=float, default=0.0, help="payload mass [kg]")
+    sp.add_argument(
+        "--cycle-time",
+        type=float,
+        default=None,
+        help="adept: cycle time; sine: period; p2p: move duration [s]",
+    )
+    sp.add_argument("--cycles", type=int, default=1, help="number of cycles (adept, sine)")
+    sp.add_argument("--profile", choices=("quintic", "jerk"), default="quintic")
+    sp.add_argument("--dt", type=float, default=1e-3, help="sample period [s]")
+    sp.add_argument(
+        "--csv", metavar="FILE", help="write the time series (t, q_, qd_, tau_, energy)"
+    )
+    sp.add_argument("--plot", metavar="FILE.png", help="plot effort, speed, power vs time")
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=_cmd_size)

@@ -1,0 +1,329 @@
+"""Dynamics of a loaded robot: inverse dynamics along trajectories, simulation, payloads, energy.
+
+Thin robot-aware layer over the robot-agnostic :mod:`solvers` (``InverseDynamics``,
+``ForwardDynamics``): it builds the actuation from the robot's transmissions, adds payloads and
+platform wrenches, and turns the solvers' failures into typed pkdyn exceptions naming the sample
+and the actuator.
+
+Conventions: efforts ``tau`` are joint-side [N m or N] (motor side: divide by the reduction);
+the platform wrench ``F`` is the one of :mod:`pkdyn.statics` (applied by the environment on the
+platform, force in world axes [N], moment in platform axes [N m]); gravity is ``model.gravity``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import (
+    InfeasibleEffortError,
+    InvalidInputError,
+    SimulationError,
+    TrajectoryError,
+)
+from pkdyn.kinematics import platform_jacobian
+from pkdyn.pose import as_finite
+from pkdyn.robot import Robot
+from pkdyn.trajectory import JointTrajectory
+from solvers import Actuation, ForwardDynamics, ForwardResult, InverseDynamics, JointFriction
+from solvers import InfeasibleError as _SolverInfeasible
+from solvers import SimulationError as _SolverSimulationError
+
+__all__ = [
+    "EffortTrajectory",
+    "actuation",
+    "inverse_dynamics",
+    "mechanical_energy",
+    "simulate",
+    "with_payload",
+]
+
+
+def actuation(robot: Robot) -> Actuation:
+    """The robot's actuation for the solvers (joint-side efforts: unit gains).
+
+    Args:
+        robot: The robot.
+
+    Returns:
+        Actuated velocity indices and names, in actuator order.
+
+    """
+    return Actuation(robot.actuated_v, names=robot.actuator_names)
+
+
+def with_payload(
+    robot: Robot,
+    mass: float,
+    offset: Sequence[float] = (0.0, 0.0, 0.0),
+    inertia: Sequence[float] | np.ndarray | None = None,
+) -> Robot:
+    """A copy of ``robot`` carrying a payload rigidly attached to the platform.
+
+    Args:
+        robot: The robot (unchanged).
+        mass: Payload mass [kg] (>= 0).
+        offset: Payload centre of mass in the platform frame [m].
+        inertia: Rotational inertia about its centre of mass, platform axes (3, 3) [kg m^2]
+            (default: a point mass).
+
+    Returns:
+        A robot whose platform body includes the payload (same joints, closures and home).
+
+    Raises:
+        InvalidInputError: Negative or non-finite mass, or a robot without platform.
+
+    """
+    if not np.isfinite(mass) or mass < 0.0:
+        raise InvalidInputError("payload", f"payload mass must be >= 0 kg, got {mass}")
+    if robot.platform_frame is None:
+        raise InvalidInputError("robot", f"{robot.name} declares no platform to carry a payload")
+    c = as_finite("offset", offset, 3)
+    I3 = np.zeros((3, 3)) if inertia is None else np.asarray(inertia, dtype=float).reshape(3, 3)
+    model = pin.Model(robot.model)
+    frame = model.frames[robot.platform_frame]
+    joint = frame.parentJoint
+    # payload inertia expressed in the joint frame
+    body = pin.Inertia(float(mass), c, I3)
+    model.inertias[joint] = model.inertias[joint] + frame.placement.act(body)
+    return dataclasses.replace(robot, model=model, data=model.createData())
+
+
+def mechanical_energy(robot: Robot, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+    """Kinetic and gravitational potential energy of the whole mechanism.
+
+    Args:
+        robot: The robot.
+        q: Configuration (nq,).
+        v: Velocity (nv,).
+
+    Returns:
+        ``(kinetic, potential)`` [J] (potential relative to the world origin).
+
+    """
+    model, data = robot.model, robot.data
+    kinetic = float(pin.computeKineticEnergy(model, data, q, v))
+    potential = float(pin.computePotentialEnergy(model, data, q))
+    return kinetic, potential
+
+
+@dataclass(frozen=True)
+class EffortTrajectory:
+    """Actuator efforts along a joint trajectory.
+
+    Attributes:
+        trajectory: The joint trajectory.
+        actuators: Actuator (joint) names.
+        tau: Joint-side efforts (N, n_a) [N m or N].
+        constraint_forces: Closure forces (N, nc) [N, N m] (convention of
+            :mod:`solvers.inverse_dynamics`).
+        residual: Residual of the dynamics equation per sample (N,) [N m or N].
+        kinetic: Kinetic energy (N,) [J].
+        potential: Gravitational potential energy (N,) [J].
+
+    """
+
+    trajectory: JointTrajectory
+    actuators: list[str]
+    tau: np.ndarray
+    constraint_forces: np.ndarray
+    residual: np.ndarray
+    kinetic: np.ndarray
+    potential: np.ndarray
+
+    @property
+    def t(self) -> np.ndarray:
+        """Sample times (N,) [s]."""
+        return self.trajectory.t
+
+    @property
+    def energy(self) -> np.ndarray:
+        """Mechanical energy, kinetic + potential (N,) [J]."""
+        return self.kinetic + self.potential
+
+    @property
+    def power(self) -> np.ndarray:
+        """Actuator powers ``tau * qd`` (N, n_a) [W]."""
+        return self.tau * self.trajectory.qa_d
+
+
+def _wrench_series(robot: Robot, wrench: Any, n: int) -> np.ndarray | None:
+    if wrench is None:
+        return None
+    W = np.asarray(wrench, dtype=float)
+    if W.shape == (6,):
+        W = np.broadcast_to(W, (n, 6))
+    if W.shape != (n, 6) or not np.all(np.isfinite(W)):
+        raise InvalidInputError("wrench", f"expected 6 finite values or ({n}, 6), got {W.shape}")
+    if robot.platform_frame is None:
+        raise InvalidInputError("wrench", f"{robot.name} declares no platform to apply it to")
+    return W
+
+
+def inverse_dynamics(
+    robot: Robot,
+    trajectory: JointTrajectory,
+    wrench: Sequence[float] | np.ndarray | None = None,
+    limits: bool = False,
+    weights: Sequence[float] | np.ndarray | None = None,
+    progress: bool | None = None,
+) -> EffortTrajectory:
+    """Actuator efforts (and closure forces) realising a trajectory, with gravity.
+
+    Non-redundant actuation gives the unique efforts; redundant actuation the efforts of least
+    weighted norm (proxsuite QP, warm-started along the trajectory), within the effort limits
+    when ``limits`` is set.
+
+    Args:
+        robot: The robot (add a payload with :func:`with_payload`).
+        trajectory: Joint trajectory consistent with the closures
+            (:func:`pkdyn.trajectory.map_task_trajectory`).
+        wrench: Wrench on the platform, (6,) constant or (N, 6) per sample [N, N m]
+            (convention of :mod:`pkdyn.statics`); e.g. a machining force.
+        limits: Bound the efforts by the actuators' effort limits (URDF ``effort``).
+        weights: Effort weights for redundant actuation (default ``1 / effort_limit^2`` when
+            limits are finite, else ones).
+        progress: Show a progress bar (default: > 2000 samples and stderr is a terminal).
+
+    Returns:
+        Efforts, closure forces, residuals and energies per sample.
+
+    Raises:
+        InfeasibleEffortError: No efforts within the limits realise a sample (names the sample
+            and the actuator), or the motion is not dynamically consistent there.
+        TrajectoryError: The trajectory does not belong to this robot or is not finite.
+
+    """
+    traj = trajectory
+    N = traj.t.size
+    if traj.q.shape != (N, robot.nq) or traj.v.shape != (N, robot.nv):
+        raise TrajectoryError(
+            f"trajectory of shape q {traj.q.shape}, v {traj.v.shape} does not fit {robot.name} "
+            f"(nq = {robot.nq}, nv = {robot.nv})"
+        )
+    for what, arr in (("q", traj.q), ("v", traj.v), ("a", traj.a)):
+        bad = np.flatnonzero(~np.isfinite(arr).all(axis=1))
+        if bad.size:
+            k = int(bad[0])
+            raise TrajectoryError(f"{what} is not finite", sample=k, time=float(traj.t[k]))
+    W = _wrench_series(robot, wrench, N)
+    effort = np.array([a.effort for a in robot.actuators])
+    lower = -effort if limits else None
+    upper = effort if limits else None
+    if weights is None and np.all(np.isfinite(effort)) and np.all(effort > 0.0):
+        weights = 1.0 / effort**2
+    solver = InverseDynamics(
+        robot.model,
+        list(robot.constraint_models),
+        actuation(robot),
+        lower=lower,
+        upper=upper,
+        weights=weights,
+    )
+    tau = np.empty((N, len(robot.actuators)))
+    lam = np.empty((N, solver.closure_set.nc))
+    res = np.empty(N)
+    kin = np.empty(N)
+    pot = np.empty(N)
+    iterator: Any = range(N)
+    if progress is None:
+        progress = N > 2000 and sys.stderr.isatty()
+    if progress:
+        from tqdm import tqdm
+
+        iterator = tqdm(iterator, desc="inverse dynamics", unit="sample")
+    for k in iterator:
+        q, v, a = traj.q[k], traj.v[k], traj.a[k]
+        f_ext = None
+        if W is not None:
+            f_ext = platform_jacobian(robot, q).T @ W[k]
+        try:
+            out = solver.solve(q, v, a, sample=k, f_ext=f_ext)
+        except _SolverInfeasible as err:
+            raise InfeasibleEffortError(
+                f"t = {traj.t[k]:.6g} s: {err}", sample=k, actuator=err.name
+            ) from None
+        tau[k], lam[k], res[k] = out.tau, out.constraint_forces, out.residual
+        kin[k], pot[k] = mechanical_energy(robot, q, v)
+    return EffortTrajectory(traj, robot.actuator_names, tau, lam, res, kin, pot)
+
+
+TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+
+
+def simulate(
+    robot: Robot,
+    duration: float,
+    dt: float,
+    q0: np.ndarray | None = None,
+    v0: np.ndarray | None = None,
+    torque: TorqueFn | None = None,
+    viscous: float | Sequence[float] = 0.0,
+    coulomb: float | Sequence[float] = 0.0,
+    integrator: str = "dopri5",
+    record_every: int = 1,
+) -> ForwardResult:
+    """Constrained forward dynamics of the robot under gravity and actuator efforts.
+
+    Args:
+        robot: The robot.
+        duration: Simulated time [s].
+        dt: Output time step [s] (largest substep for ``dopri5``).
+        q0: Initial configuration (default ``robot.q_home``); projected onto the closures.
+        v0: Initial velocity (default zero); projected onto the closures.
+        torque: Joint-side actuator efforts ``torque(t, q, v) -> (n_a,)`` [N m or N]
+            (default: none, the actuators are free).
+        viscous: Viscous friction coefficient(s) per velocity coordinate [N m s/rad or N s/m].
+        coulomb: Coulomb friction level(s) per velocity coordinate [N m or N].
+        integrator: ``dopri5`` (adaptive, default), ``rk4`` or ``euler``.
+        record_every: Record one sample every that many steps.
+
+    Returns:
+        Time series: q, v, a, efforts, closure forces and residuals, energies and work.
+
+    Raises:
+        InvalidInputError: Non-positive duration or step, unknown integrator, bad sizes.
+        SimulationError: The state becomes non-finite or the closures cannot be kept.
+
+    """
+    for what, val in (("duration", duration), ("dt", dt)):
+        if not np.isfinite(val) or val <= 0.0:
+            raise InvalidInputError(what, f"must be > 0 s, got {val}")
+    if integrator not in ("dopri5", "rk4", "euler"):
+        raise InvalidInputError("integrator", f"unknown {integrator!r} (dopri5, rk4 or euler)")
+    if record_every < 1:
+        raise InvalidInputError("record_every", f"must be >= 1, got {record_every}")
+    q = robot.q_home if q0 is None else as_finite("q0", q0, robot.nq)
+    v = np.zeros(robot.nv) if v0 is None else as_finite("v0", v0, robot.nv)
+    friction = None
+    if np.any(np.asarray(viscous) != 0.0) or np.any(np.asarray(coulomb) != 0.0):
+        friction = JointFriction(
+            viscous=np.asarray(viscous, dtype=float), coulomb=np.asarray(coulomb, dtype=float)
+        )
+    fd = ForwardDynamics(
+        robot.model,
+        list(robot.constraint_models),
+        actuation(robot),
+        friction=friction,
+        integrator=integrator,
+    )
+    tau_fn = torque
+    if torque is not None:
+        n_a = len(robot.actuators)
+
+        def tau_fn(t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+            out = np.asarray(torque(t, q, v), dtype=float).reshape(-1)
+            if out.size != n_a or not np.all(np.isfinite(out)):
+                raise SimulationError(f"torque function returned {out!r} ({n_a} finite values)", t)
+            return out
+
+    try:
+        return fd.simulate(q, v, duration, dt, tau=tau_fn, record_every=record_every)
+    except _SolverSimulationError as err:
+        raise SimulationError(str(err), err.t) from None
