@@ -1,0 +1,38 @@
+"""``pkdyn mjcf``: write a MuJoCo model (MJCF) of a robot."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from pkdyn.cli._common import load, robot_command
+from pkdyn.exceptions import PkdynError
+
+__all__ = ["register"]
+
+
+def _cmd_mjcf(args: argparse.Namespace) -> None:
+    from pkdyn.mjcf import MjcfOptions, to_mjcf, write_mjcf
+
+    if not args.timestep > 0.0:
+        raise PkdynError(f"--timestep must be > 0 s, got {args.timestep}")
+    robot = load(args, geometry=True)
+    options = MjcfOptions(timestep=args.timestep, contacts=not args.no_contacts)
+    if args.output:
+        write_mjcf(robot, args.output, options)
+    else:
+        sys.stdout.write(to_mjcf(robot, options))
+
+
+def register(sub: Any) -> None:
+    """Add the ``mjcf`` sub-command to the ``pkdyn`` parser."""
+    sp = robot_command(sub, "mjcf", "write a MuJoCo model (MJCF) of the robot")
+    sp.add_argument("-o", "--output", help="output file (default: stdout)")
+    sp.add_argument(
+        "--timestep", type=float, default=1e-3, help="simulation time step [s] (default 0.001)"
+    )
+    sp.add_argument(
+        "--no-contacts", action="store_true", help="write collision geoms without contacts"
+    )
+    sp.set_defaults(func=_cmd_mjcf)
