@@ -1,0 +1,150 @@
+"""Clavel's Delta workspace (seed 000, section 1.4): closed form against the mechanism."""
+
+import json
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import pkdyn
+from pkdyn.closed_form.delta_workspace import (
+    AB_MIN,
+    GAMMA_MAX,
+    clavel_angles,
+    clavel_closed_form,
+    clavel_numeric,
+    clavel_valid,
+)
+
+
+@dataclass(frozen=True)
+class G:
+    ra: float
+    rb: float
+    la: float
+    lb: float
+
+
+def _geometry(r, b, la=0.2, rb=0.025):
+    return G(ra=r * la + rb, rb=rb, la=la, lb=b * la)
+
+
+def test_seed_coefficients():
+    """Section 1.4: d = 2 b sin(gamma_max) ~ 1.3 b, s = 1.431 b^2, z_T = z_T' at r = 0.63."""
+    for b in (1.5, 1.9, 2.5):
+        f = clavel_closed_form(_geometry(0.625, b)).dimensionless()
+        assert f["d"] / b == pytest.approx(1.2856, abs=1e-4)
+        assert f["s"] / b**2 == pytest.approx(1.431, abs=5e-4)
+    g = GAMMA_MAX
+    r_star = math.sqrt(3) * (1 - math.cos(g)) / math.sin(g)
+    assert r_star == pytest.approx(0.63, abs=1e-2)
+    b = 1.9
+    z_t = -math.sqrt((1 + b) ** 2 - (r_star + 2 * b * math.sin(g) / math.sqrt(3)) ** 2)
+    z_tp = -math.sqrt((1 + b * math.cos(g)) ** 2 - (r_star + b * math.sin(g) / math.sqrt(3)) ** 2)
+    assert z_t == pytest.approx(z_tp, abs=1e-12)
+    # z_h for (alpha+beta)_min = 30 deg: -sqrt(1 + b^2 - b sqrt 3)
+    f = clavel_closed_form(_geometry(0.625, b)).dimensionless()
+    assert f["z_h"] == pytest.approx(-math.sqrt(1 + b * b - b * math.sqrt(3)), abs=1e-12)
+
+
+def test_angles_match_the_pinocchio_model(delta):
+    """gamma_i and alpha_i + beta_i from Clavel's closed form vs the assembled URDF model."""
+    rng = np.random.default_rng(0)
+    p = delta.params
+    model, data = delta.model, delta.data
+    for _ in range(10):
+        P = np.array([*rng.uniform(-0.12, 0.12, 2), rng.uniform(-0.45, -0.3)])
+        ik = pkdyn.inverse_geometry(delta, P, check_limits=False)
+        pin.forwardKinematics(model, data, ik.q)
+        alpha, ab, gamma = clavel_angles(p, P[None])
+        for i, theta in enumerate(np.deg2rad([0.0, 120.0, 240.0])):
+            e_r = np.array([np.cos(theta), np.sin(theta), 0.0])
+            e_t = np.array([-np.sin(theta), np.cos(theta), 0.0])
+            for side in "ab":
+                jid = model.getJointId(f"bar{i + 1}{side}_upper")
+                u = data.oMi[jid].rotation[:, 2]  # bar axis, world
+                assert math.asin(u @ e_t) == pytest.approx(gamma[0, i], abs=1e-9)
+                beta = math.atan2(-u[2], -(u @ e_r))
+                assert alpha[0, i] + beta == pytest.approx(ab[0, i], abs=1e-9)
+            assert ik.qa[i] == pytest.approx(alpha[0, i], abs=1e-9)
+
+
+@pytest.mark.parametrize(
+    "r, b, gamma_deg, ab_deg",
+    [(0.625, 1.9, 40, 30), (0.3, 2.5, 40, 30), (1.0, 1.5, 40, 30), (0.625, 1.9, 55, 20)],
+)
+def test_closed_form_against_numeric(r, b, gamma_deg, ab_deg):
+    """Both branches of z_b (r below and above 0.63) and other limits: agreement to 1e-8 m."""
+    g = _geometry(r, b)
+    gm, ab = math.radians(gamma_deg), math.radians(ab_deg)
+    cf = clavel_closed_form(g, gm, ab)
+    nu, v_ws = clavel_numeric(g, gm, ab, rays=36, fractions=11, heights=60)
+    for key in ("D", "H", "Hmax", "zh", "zb"):
+        assert getattr(nu, key) == pytest.approx(getattr(cf, key), abs=1e-8), key
+    assert nu.S == pytest.approx(cf.S, abs=1e-8)
+    assert nu.V == pytest.approx(cf.V, rel=1e-7)
+    # the workspace is the prism plus a dome above and a cap below
+    assert v_ws > 1.1 * cf.V
+
+
+def test_numeric_prism_is_inside_the_workspace_and_tight():
+    """Independent sampling: every point of the closed-form prism is valid; just outside is not."""
+    p = pkdyn.load("delta", geometry=False).params
+    cf = clavel_closed_form(p)
+    rng = np.random.default_rng(1)
+    # random points of the hexagon (|P . t_i| <= D/2 for the three arm planes)
+    xy = rng.uniform(-0.3, 0.3, (40000, 2))
+    theta = np.deg2rad([0.0, 120.0, 240.0])
+    t = np.column_stack([-np.sin(theta), np.cos(theta)])
+    xy = xy[np.all(np.abs(xy @ t.T) <= cf.D / 2 * (1 - 1e-9), axis=1)]
+    z = rng.uniform(cf.zb + 1e-9, cf.zh - 1e-9, len(xy))
+    assert clavel_valid(p, np.column_stack([xy, z])).all()
+    # the prism's top is touched under each arm axis, its bottom at the hexagon's corners
+    A = (p.ra - p.rb) * np.array([1.0, 0.0])
+    assert not clavel_valid(p, np.array([[*A, cf.zh + 1e-6]]))[0]
+    corner = cf.D / 2 / math.cos(math.pi / 6) * np.array([-0.5, math.sqrt(3) / 2])
+    assert not clavel_valid(p, np.array([[*corner * (1 - 1e-9), cf.zb - 1e-6]]))[0]
+
+
+def test_workspace_volume_converges_under_refinement():
+    p = pkdyn.load("delta", geometry=False).params
+    vols = [clavel_numeric(p, rays=n, fractions=n // 3, heights=60)[1] for n in (24, 48, 96)]
+    e1, e2 = abs(vols[1] - vols[0]), abs(vols[2] - vols[1])
+    assert e2 < 0.5 * e1
+    assert e2 / vols[2] < 5e-3
+
+
+def test_no_complete_prism():
+    """Hexagon corners beyond reach above the prism top: both give H = 0, the projection is
+    smaller than the hexagon (its corners cannot be reached)."""
+    g = _geometry(1.5, 3.0)
+    cf = clavel_closed_form(g)
+    nu, _ = clavel_numeric(g, rays=36, fractions=11, heights=60)
+    assert cf.H == 0.0 and nu.H == 0.0 and cf.V == 0.0
+    assert nu.S < cf.S and nu.D == pytest.approx(cf.D, abs=1e-8)
+
+
+def test_bad_limits():
+    with pytest.raises(pkdyn.PkdynError, match="gamma_max"):
+        clavel_closed_form(_geometry(0.6, 1.9), gamma_max=2.0)
+    with pytest.raises(pkdyn.PkdynError, match="alpha"):
+        clavel_closed_form(_geometry(0.6, 1.9), ab_min=-0.1)
+
+
+def test_cli_clavel_json(capsys):
+    from pkdyn.cli import main
+
+    code = main(["workspace", "delta", "--clavel", "--json", "--rays", "36"])
+    out, _ = capsys.readouterr()
+    assert code == 0
+    res = json.loads(out)
+    for part in ("closed_form", "numeric"):
+        assert set(res[part]) >= {"D", "S", "H", "Hmax", "V", "zh"}
+    assert res["numeric"]["H"] == pytest.approx(res["closed_form"]["H"], abs=1e-8)
+    assert res["limits"]["gamma_max"] == pytest.approx(GAMMA_MAX)
+    assert res["limits"]["ab_min"] == pytest.approx(AB_MIN)
+    code = main(["workspace", "gough_stewart", "--clavel"])
+    _, err = capsys.readouterr()
+    assert code == 1 and "clavel" in err.lower()
