@@ -31,7 +31,14 @@ from pkdyn.kinematics import platform_jacobian
 from pkdyn.pose import as_finite
 from pkdyn.robot import Robot
 from pkdyn.trajectory import JointTrajectory
-from solvers import Actuation, ForwardDynamics, ForwardResult, InverseDynamics, JointFriction
+from solvers import (
+    Actuation,
+    ClosureSet,
+    ForwardDynamics,
+    ForwardResult,
+    InverseDynamics,
+    JointFriction,
+)
 from solvers import InfeasibleError as _SolverInfeasible
 from solvers import SimulationError as _SolverSimulationError
 
@@ -166,6 +173,42 @@ def _wrench_series(robot: Robot, wrench: Any, n: int) -> np.ndarray | None:
     return W
 
 
+CONSISTENCY_TOL = 1e-7
+"""Largest closure error of a trajectory sample accepted by the inverse dynamics, relative to
+``max(1, |v|)`` for velocities and ``max(1, |a|)`` for accelerations [m, m/s, m/s^2]."""
+
+
+def _check_consistent(
+    cs: ClosureSet,
+    data: pin.Data,
+    k: int,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    a: np.ndarray,
+) -> None:
+    """Raise :class:`TrajectoryError` unless ``(q, v, a)`` satisfies the closures."""
+    if not cs.nc:
+        return
+    r, J = cs.residual_and_jacobian(data, q)
+    checks = (
+        ("configuration", r, 1.0),
+        ("velocity", J @ v, max(1.0, float(np.max(np.abs(v))))),
+        ("acceleration", J @ a + cs.drift(data, q, v), max(1.0, float(np.max(np.abs(a))))),
+    )
+    for what, err, scale in checks:
+        worst = float(np.max(np.abs(err)))
+        if not worst <= CONSISTENCY_TOL * scale:
+            per = cs.split(err)
+            name = max(per, key=lambda n: per[n])
+            raise TrajectoryError(
+                f"the {what} does not satisfy closure '{name}' (error {worst:.3g}); map task "
+                "trajectories with pkdyn.trajectory.map_task_trajectory",
+                sample=k,
+                time=t,
+            )
+
+
 def inverse_dynamics(
     robot: Robot,
     trajectory: JointTrajectory,
@@ -197,7 +240,8 @@ def inverse_dynamics(
     Raises:
         InfeasibleEffortError: No efforts within the limits realise a sample (names the sample
             and the actuator), or the motion is not dynamically consistent there.
-        TrajectoryError: The trajectory does not belong to this robot or is not finite.
+        TrajectoryError: The trajectory does not belong to this robot, is not finite, or does
+            not satisfy the closures (position, velocity or acceleration, :data:`CONSISTENCY_TOL`).
 
     """
     traj = trajectory
@@ -226,6 +270,7 @@ def inverse_dynamics(
         upper=upper,
         weights=weights,
     )
+    kin_data = robot.model.createData()
     tau = np.empty((N, len(robot.actuators)))
     lam = np.empty((N, solver.closure_set.nc))
     res = np.empty(N)
@@ -240,6 +285,7 @@ def inverse_dynamics(
         iterator = tqdm(iterator, desc="inverse dynamics", unit="sample")
     for k in iterator:
         q, v, a = traj.q[k], traj.v[k], traj.a[k]
+        _check_consistent(solver.closure_set, kin_data, k, float(traj.t[k]), q, v, a)
         f_ext = None
         if W is not None:
             f_ext = platform_jacobian(robot, q).T @ W[k]

@@ -413,7 +413,8 @@ def map_task_trajectory(
 
     Raises:
         TrajectoryError: A sample is out of reach, at a parallel singularity, or outside the
-            actuator limits (the message names the sample and the actuator).
+            actuator limits, or the trajectory crosses a singularity between two samples (the
+            message names the sample and the actuator).
 
     """
     if robot.platform_frame is None:
@@ -435,6 +436,7 @@ def map_task_trajectory(
 
         iterator = tqdm(iterator, desc=f"mapping {task.name}", unit="sample")
     names = robot.actuator_names
+    last_sign, last_sigma = 0.0, (0.0, 0.0)
     vel_limit = np.array([act.velocity for act in robot.actuators])
     for k in iterator:
         tk = float(task.t[k])
@@ -460,6 +462,24 @@ def map_task_trajectory(
                 sample=k,
                 time=tk,
             )
+        if km.A.shape[0] == km.B.shape[1]:
+            # det(J_inv) = det(A) / det(B) does not depend on the basis of A and B: a change of
+            # sign between samples means a singularity was crossed between them
+            sign = float(np.sign(np.linalg.det(np.linalg.lstsq(km.B, km.A, rcond=None)[0])))
+            if k and sign * last_sign < 0.0:
+                kind = (
+                    "parallel"
+                    if km.sigma_A[-1] + last_sigma[0] < km.sigma_B[-1] + last_sigma[1]
+                    else "serial"
+                )
+                raise TrajectoryError(
+                    f"the trajectory crosses a {kind} singularity after t = "
+                    f"{task.t[k - 1]:.6g} s (det J_inv changes sign)",
+                    sample=k,
+                    time=tk,
+                )
+            last_sign = sign
+            last_sigma = (float(km.sigma_A[-1]), float(km.sigma_B[-1]))
         xd, xdd = _task_rates(task.pose[k], task.pose_d[k], task.pose_dd[k])
         K = np.vstack([km.Jc, km.Jx])
         nc = km.Jc.shape[0]
