@@ -15,8 +15,12 @@ Vec = Sequence[float] | np.ndarray
 
 
 def _f(x: float) -> str:
-    s = f"{float(x):.10g}"
-    return "0" if s in ("-0", "0") else s
+    """Shortest text that reads back as the same double (no rounding of the geometry)."""
+    v = float(x)
+    if v == 0.0:
+        return "0"
+    s = repr(v)
+    return s[:-2] if s.endswith(".0") else s
 
 
 def _v(v: Vec) -> str:
