@@ -225,7 +225,7 @@ def reciprocal_screws(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarr
     prm = robot.params
     qa = qq[robot.actuated_q]
     M = robot.platform_placement(qq)
-    if isinstance(prm, delta.Params):
+    if isinstance(prm, delta.Params) and prm.arms == 3:
         A, B = delta_AB(prm, M.translation, qa)
     elif isinstance(prm, planar_3rrr.Params):
         phi = float(np.arctan2(M.rotation[1, 0], M.rotation[0, 0]))

@@ -241,6 +241,8 @@ def delta_map(
     """
     if plane not in _DELTA_AXES:
         raise ValueError(f"plane must be one of {', '.join(_DELTA_AXES)}, got {plane!r}")
+    if delta_cf.arm_angles(g).size != 3:
+        raise ValueError("Clavel's closed-form map needs a three-armed Delta")
     iu, iv, iw = _DELTA_AXES[plane]
     U, Vg = np.meshgrid(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
     P = np.empty((U.size, 3))

@@ -282,3 +282,58 @@ def test_demo_prints_the_sizing_table():
     out = proc.stdout
     assert "DELTA 580" in out and "arm1" in out and "power balance" in out
     assert "0.50s" in out
+
+
+# --------------------------------------------------------------------------- redundant actuation
+
+
+@pytest.fixture(scope="module")
+def quattro():
+    robot = pkdyn.load("delta", geometry=False, arms=4, bar_joint="universal")
+    return robot, named_trajectory(robot, "adept", cycle_time=0.6, dt=4e-3)
+
+
+def test_four_armed_delta_is_redundantly_actuated(quattro):
+    robot, jt = quattro
+    assert len(robot.actuators) == 4 and robot.dof() == 3
+    assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
+
+
+def test_redundant_efforts_are_the_least_weighted_norm_and_reproduce_the_motion(quattro):
+    """Four actuators for three DOF: the efforts realise the accelerations (forward dynamics)
+    and minimise sum(w tau^2) over all efforts that do (no weighted gradient along the
+    effort directions that move nothing)."""
+    robot, jt = quattro
+    ef = inverse_dynamics(robot, jt)
+    act = actuation(robot)
+    fd = ForwardDynamics(robot.model, list(robot.constraint_models), act, baumgarte=(0.0, 0.0))
+    w = 1.0 / np.array([a.effort for a in robot.actuators]) ** 2
+    data = robot.model.createData()
+    for k in range(0, jt.t.size, 15):
+        q, v = jt.q[k], jt.v[k]
+        a = fd.acceleration(q, v, act.generalized(ef.tau[k], robot.nv))
+        assert np.max(np.abs(a - jt.a[k])) < 1e-8 * max(1.0, np.max(np.abs(jt.a[k])))
+        # efforts that move nothing: S^T d in the range of Jc^T, i.e. Z^T S^T d = 0
+        J = robot.closure_set.jacobian(data, q)
+        _, s, Vt = np.linalg.svd(J)
+        Z = Vt[int(np.sum(s > 1e-9 * s[0])) :].T
+        G = Z.T @ act.matrix(robot.nv).T
+        _, sg, Vg = np.linalg.svd(G)
+        free = Vg[int(np.sum(sg > 1e-9 * sg[0])) :]
+        assert free.shape[0] == 1
+        assert abs(free @ (w * ef.tau[k])) < 1e-8 * max(1.0, np.max(np.abs(w * ef.tau[k])))
+
+
+def test_redundant_limits_are_respected_or_named(quattro):
+    robot, jt = quattro
+    free = inverse_dynamics(robot, jt)
+    peak = np.max(np.abs(free.tau))
+    # a limit below the least-norm peak but reachable by sharing: the QP keeps every effort in
+    limited = pkdyn.load("delta", geometry=False, arms=4, bar_joint="universal", effort=0.95 * peak)
+    ef = inverse_dynamics(limited, jt, limits=True)
+    assert np.max(np.abs(ef.tau)) <= 0.95 * peak + 1e-8
+    # far too low: named sample and actuator
+    weak = pkdyn.load("delta", geometry=False, arms=4, bar_joint="universal", effort=0.2 * peak)
+    with pytest.raises(InfeasibleEffortError) as info:
+        inverse_dynamics(weak, jt, limits=True)
+    assert info.value.sample is not None and info.value.actuator in weak.actuator_names

@@ -16,10 +16,23 @@ from typing import Protocol
 
 import numpy as np
 
-__all__ = ["THETA", "DeltaGeometry", "inverse", "forward", "elbow_points"]
+__all__ = ["THETA", "DeltaGeometry", "arm_angles", "elbow_points", "forward", "inverse"]
 
 THETA = np.deg2rad([0.0, 120.0, 240.0])
-"""Arm plane angles theta_i [rad]."""
+"""Arm plane angles theta_i [rad] of the three-armed Delta."""
+
+
+def arm_angles(g: object) -> np.ndarray:
+    """Arm plane angles of a geometry: its ``theta`` attribute if it has one, else :data:`THETA`.
+
+    Args:
+        g: Geometry (e.g. :class:`pkdyn.library.delta.Params`, whose ``arms`` may be 4).
+
+    Returns:
+        Angles (n_arms,) [rad].
+
+    """
+    return np.asarray(getattr(g, "theta", THETA), dtype=float)
 
 
 class DeltaGeometry(Protocol):
@@ -46,12 +59,13 @@ def inverse(g: DeltaGeometry, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         P: Nacelle centre positions (N, 3) or (3,) [m].
 
     Returns:
-        ``(alpha, valid)``: arm angles (N, 3) [rad] (NaN where unreachable) and mask (N,).
+        ``(alpha, valid)``: arm angles (N, n_arms) [rad] (NaN where unreachable) and mask (N,).
 
     """
     P = np.atleast_2d(np.asarray(P, dtype=float))
     R = g.ra - g.rb
-    c, s = np.cos(THETA), np.sin(THETA)
+    theta = arm_angles(g)
+    c, s = np.cos(theta), np.sin(theta)
     xr = P[:, :1] * c + P[:, 1:2] * s - R
     yt = -P[:, :1] * s + P[:, 1:2] * c
     z = P[:, 2:3]
@@ -69,11 +83,12 @@ def inverse(g: DeltaGeometry, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def elbow_points(g: DeltaGeometry, alpha: np.ndarray) -> np.ndarray:
-    """Points ``C'_i`` (N, 3, 3) [m] of eq. 1 for arm angles ``alpha`` (N, 3) [rad]."""
+    """Points ``C'_i`` (N, n_arms, 3) [m] of eq. 1 for arm angles ``alpha`` (N, n_arms) [rad]."""
     alpha = np.atleast_2d(np.asarray(alpha, dtype=float))
     R = g.ra - g.rb
     rad = R + g.la * np.cos(alpha)
-    return np.stack([rad * np.cos(THETA), rad * np.sin(THETA), -g.la * np.sin(alpha)], axis=-1)
+    theta = arm_angles(g)
+    return np.stack([rad * np.cos(theta), rad * np.sin(theta), -g.la * np.sin(alpha)], axis=-1)
 
 
 def forward(g: DeltaGeometry, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -81,22 +96,24 @@ def forward(g: DeltaGeometry, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
     Subtracting eq. 1 pairwise gives ``x`` and ``y`` linear in ``z`` (coefficients ``H1..H5``);
     eq. 1 for arm 1 then gives ``L z^2 + M z + N = 0``. The lower root (nacelle below the
-    base) is the working assembly mode.
+    base) is the working assembly mode. With more than three arms, the first three are used
+    (the others must agree with them for the input to be assemblable).
 
     Args:
         g: Geometry (ra, rb, la, lb) [m].
-        alpha: Arm angles (N, 3) or (3,) [rad].
+        alpha: Arm angles (N, n_arms) or (n_arms,) [rad].
 
     Returns:
         ``(P, valid)``: nacelle positions (N, 3) [m] (NaN where not assemblable) and mask (N,).
 
     """
-    alpha = np.atleast_2d(np.asarray(alpha, dtype=float))
+    alpha = np.atleast_2d(np.asarray(alpha, dtype=float))[:, :3]
+    theta = arm_angles(g)[:3]
     R, la, lb = g.ra - g.rb, g.la, g.lb
     ca = np.cos(alpha)
     D = -(lb**2) + la**2 + R**2 + 2 * R * la * ca
-    E = 2 * (R + la * ca) * np.cos(THETA)
-    F = 2 * (R + la * ca) * np.sin(THETA)
+    E = 2 * (R + la * ca) * np.cos(theta)
+    F = 2 * (R + la * ca) * np.sin(theta)
     G = -2 * la * np.sin(alpha)
     E1, E2, E3 = E.T
     F1, F2, F3 = F.T

@@ -68,6 +68,9 @@ class Params:
             with ``bar_joint``) or ``hinge`` (revolute-jointed parallelograms with a lower beam
             hinged to the nacelle, mobility 3; each beam has the mass and radius of a bar).
         cone_half_angle: Ball-joint cone limit about the home bar direction [rad].
+        arms: Number of arms, 3 (Clavel's Delta) or 4 (a redundantly actuated variant, arms
+            every 90 deg: 4 actuators for 3 degrees of freedom; the inverse dynamics then
+            shares the load by a weighted least-effort QP).
 
     """
 
@@ -90,6 +93,12 @@ class Params:
     bar_joint: str = "spherical"
     cone_half_angle: float = 0.8
     parallelogram: str = "ball"
+    arms: int = 3
+
+    @property
+    def theta(self) -> np.ndarray:
+        """Arm plane angles [rad], arm 1 along +x."""
+        return 2.0 * np.pi * np.arange(self.arms) / self.arms
 
     def __post_init__(self) -> None:
         positive(NAME, **{k: v for k, v in asdict(self).items() if k not in _SIGNED})
@@ -97,6 +106,8 @@ class Params:
         in_range(NAME, "alpha_max", self.alpha_max, self.alpha_min, np.pi)
         if self.bar_joint not in ("spherical", "universal"):
             raise ParameterError(NAME, "bar_joint", "must be 'spherical' or 'universal'")
+        if self.arms not in (3, 4):
+            raise ParameterError(NAME, "arms", f"must be 3 or 4, got {self.arms}")
         if self.parallelogram not in ("ball", "hinge"):
             raise ParameterError(NAME, "parallelogram", "must be 'ball' or 'hinge'")
         if self.ra <= self.rb:
@@ -110,7 +121,7 @@ class Params:
             )
 
 
-_SIGNED = {"z_home", "alpha_min", "alpha_max", "bar_joint", "parallelogram"}
+_SIGNED = {"z_home", "alpha_min", "alpha_max", "bar_joint", "parallelogram", "arms"}
 _PASSIVE_VELOCITY = 1e3
 """Velocity limit written on passive revolute joints [rad/s] (effort 0: they are not driven)."""
 
@@ -188,7 +199,7 @@ def build_urdf(p: Params) -> str:
     )
     alphas = home(p)
     P = np.array([0.0, 0.0, p.z_home])
-    for i, (theta, alpha) in enumerate(zip(cf.THETA, alphas, strict=True), start=1):
+    for i, (theta, alpha) in enumerate(zip(p.theta, alphas, strict=True), start=1):
         u = np.array([np.cos(theta), np.sin(theta), 0.0])
         t = np.array([-np.sin(theta), np.cos(theta), 0.0])
         arm = f"arm{i}"
