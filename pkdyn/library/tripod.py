@@ -59,6 +59,7 @@ length 0.686 m, ``q6_home`` = 37.4 deg), spindle tip 0.15 m below ``P_O``; nacel
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
@@ -72,6 +73,7 @@ from pkdyn.pose import pose_from_vector
 from pkdyn.urdf_writer import Shape, UrdfWriter, rod_inertia, segment_origin
 
 __all__ = [
+    "MOUNT_CLEARANCE",
     "NAME",
     "SUMMARY",
     "PHI",
@@ -80,6 +82,8 @@ __all__ = [
     "foothold_frames",
     "home",
     "home_nacelle_placement",
+    "lockable_coordinates",
+    "triangle_lengths",
     "virtual_joints",
 ]
 
@@ -88,6 +92,11 @@ SUMMARY = "Walking tripod (Yang et al.), 3 branches of 2 prismatic actuators, fe
 
 PHI = (0.0, 2.0 * np.pi / 3.0, 4.0 * np.pi / 3.0)
 """Angular position [rad] of branch ``i`` about the nacelle axis (branch 1 along +x)."""
+
+MOUNT_CLEARANCE = 0.08
+"""Length [m] of an actuator body next to its nacelle attachment (the clevis, inside the
+nacelle plate) left out of its collision cylinder, so that leg-to-nacelle distances measure
+interference, not the mount."""
 
 
 @dataclass(frozen=True)
@@ -335,6 +344,81 @@ def virtual_joints(
     return out
 
 
+def triangle_lengths(p: Params, s: np.ndarray) -> np.ndarray:
+    """Actuator lengths ``q_L = |A P_L|`` and ``q_R = |A P_R|`` from the virtual ``q4``, ``q5``.
+
+    With ``e = |P_L P_R|``: ``q_L^2 = q4^2 + e^2/4 - e q4 sin q5`` and
+    ``q_R^2 = q4^2 + e^2/4 + e q4 sin q5`` (the median ``A P_C`` makes the angle
+    ``pi/2 - q5`` with ``P_L P_R``).
+
+    Args:
+        p: Parameters.
+        s: Virtual coordinates (3, 6) or (6,) from :func:`virtual_joints`.
+
+    Returns:
+        ``(..., 2)`` array ``[q_L, q_R]`` [m].
+
+    """
+    s = np.asarray(s, dtype=float)
+    e = 2.0 * p.r_p * math.sin(p.theta)
+    q4, q5 = s[..., 3], s[..., 4]
+    base = q4**2 + 0.25 * e**2
+    return np.stack(
+        [np.sqrt(base - e * q4 * np.sin(q5)), np.sqrt(base + e * q4 * np.sin(q5))], axis=-1
+    )
+
+
+def _gamma_l(p: Params, s: np.ndarray) -> np.ndarray:
+    """Angle [rad] of the triangle at ``A`` between ``A P_C`` and ``A P_L``."""
+    e = 2.0 * p.r_p * math.sin(p.theta)
+    q4, q5 = s[..., 3], s[..., 4]
+    return np.arctan2(0.5 * e * np.cos(q5), q4 - 0.5 * e * np.sin(q5))
+
+
+@functools.lru_cache(maxsize=16)
+def _home_virtual(p: Params) -> tuple[np.ndarray, float]:
+    """Virtual coordinates of branch 1 at home and the triangle's angle ``gamma_L`` there."""
+    s0 = virtual_joints(p, home_nacelle_placement(p))[0]
+    s0.setflags(write=False)
+    return s0, float(_gamma_l(p, s0))
+
+
+def lockable_coordinates(p: Params, s: np.ndarray) -> np.ndarray:
+    """Model coordinates of the lockable passive joints from the virtual ``q1 .. q6``.
+
+    The model's passive joints are zero at home (default footholds, level nacelle), so the
+    paper's angles map to them with the home values ``s0`` of :func:`virtual_joints` as offsets:
+
+    - ``q1``: coordinate 1 of ``branch{i}_q2q1``, ``q1 - q1_home``;
+    - ``q2``: coordinate 0 of ``branch{i}_q2q1``, ``q2 - q2_home``;
+    - ``q3``: joint ``branch{i}_a`` (knuckle on rod ``L``), ``q3 - gamma_L(home) + gamma_L``:
+      the paper's ``q3`` is measured from the median ``A P_C``, which no body carries, the
+      model's joint from the rod ``A P_L``; ``gamma_L`` is the triangle's angle at ``A``
+      between them (a function of ``q4``, ``q5``);
+    - ``q6``: joint ``branch{i}_q6``, ``q6 - q6_home``.
+
+    Args:
+        p: Parameters.
+        s: Virtual coordinates (3, 6) (or (6,) for one branch, then branch 1's offsets
+            apply: the three branches have the same home values).
+
+    Returns:
+        ``(..., 4)`` array: model coordinates of ``q1, q2, q3, q6`` [rad].
+
+    """
+    s = np.asarray(s, dtype=float)
+    s0, g0 = _home_virtual(p)
+    return np.stack(
+        [
+            s[..., 0] - s0[0],
+            s[..., 1] - s0[1],
+            s[..., 2] - g0 + _gamma_l(p, s),
+            s[..., 5] - s0[5],
+        ],
+        axis=-1,
+    )
+
+
 # --- builder --------------------------------------------------------------------------------
 
 
@@ -439,7 +523,11 @@ def build_urdf(p: Params) -> str:
             axis_joint = "b" if side == "L" else "c"
             body, rod = f"{b}_cyl{side}", f"{b}_rod{side}"
             c_end = np.array([cyl_len, 0.0, 0.0])
-            vis, col = _cylinder_shapes(p.cylinder_radius, np.zeros(3), c_end, blue)
+            vis, _ = _cylinder_shapes(p.cylinder_radius, np.zeros(3), c_end, blue)
+            # the collision cylinder leaves out the clevis inside the nacelle plate
+            _, col = _cylinder_shapes(
+                p.cylinder_radius, np.array([MOUNT_CLEARANCE, 0.0, 0.0]), c_end, blue
+            )
             cyl = _rod(p.cylinder_mass, p.cylinder_radius, np.zeros(3), c_end)
             w.link(body, p.cylinder_mass, tuple(cyl.lever), cyl.inertia, [vis], [col])
             w.joint(

@@ -1,0 +1,121 @@
+"""Walking-tripod commands: ``pkdyn tripod scenario`` (seed 003, modes PP and BE)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from pkdyn.cli._common import Parser, params
+from pkdyn.exceptions import InvalidInputError, PkdynError
+
+__all__ = ["register"]
+
+
+def _text(out: dict[str, Any]) -> str:
+    lines = [
+        f"{'#':>2} {'phase':<15} {'mode':<4} {'br':>2} {'closure':>9} {'force N':>8} "
+        f"{'legs mm':>8} {'stroke mm':>9} {'1/cond':>7}"
+    ]
+    for k, ph in enumerate(out["phases"]):
+        lines.append(
+            f"{k:>2} {ph['name']:<15} {ph['mode']:<4} {ph['branch'] or '-':>2} "
+            f"{ph['max_closure_residual']:>9.1e} {ph['max_actuator_force']:>8.1f} "
+            f"{1e3 * ph['min_leg_distance']:>8.1f} {1e3 * ph['min_stroke_margin']:>9.1f} "
+            f"{ph['min_singularity_distance']:>7.3f}"
+        )
+    s = out["summary"]
+    lines.append(
+        f"{s['duration']:.1f} s, {s['samples']} samples; locks held to "
+        f"{s['max_lock_drift']:.1e} rad, feet to {s['max_support_drift']:.1e} m; "
+        + ("no violation" if not s["violations"] else "; ".join(s["violations"]))
+    )
+    return "\n".join(lines)
+
+
+def _cmd_scenario(args: argparse.Namespace) -> None:
+    import pkdyn
+    from pkdyn.tripod.analysis import run_scenario
+    from pkdyn.tripod.machining import MachiningPlan
+    from pkdyn.tripod.scenario import WalkPlan
+
+    overrides = params(args.param)
+    robot = pkdyn.load("tripod", geometry=True, **overrides)
+    if args.stride < 1:
+        raise InvalidInputError("--stride", f"must be >= 1, got {args.stride}")
+    plan = WalkPlan(
+        step=(args.step[0], args.step[1]),
+        cycles=args.cycles,
+        lift=args.lift,
+        tilt=args.tilt,
+        swing_time=args.swing_time,
+        reconfiguration_time=args.reconfiguration_time,
+        dt=args.dt,
+        machining=None if args.no_machining else MachiningPlan(),
+    )
+    report = run_scenario(robot, plan, stride=args.stride)
+    out = report.as_json()
+    if args.plot:
+        from pkdyn.plotting.tripod import plot_scenario
+
+        try:
+            plot_scenario(report, path=args.plot)
+        except (OSError, ValueError) as err:
+            raise PkdynError(f"cannot write the plot '{args.plot}': {err}") from None
+    if args.html:
+        _html(robot, report, args.html)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(_text(out))
+    bad = out["summary"]["violations"]
+    if bad:
+        more = f" (and {len(bad) - 1} more, see the report)" if len(bad) > 1 else ""
+        raise PkdynError(f"the scenario is not feasible: {bad[0]}{more}")
+
+
+def _html(robot: Any, report: Any, path: str) -> None:
+    try:
+        from pkdyn.viewer import animate, export_html
+    except ImportError as err:
+        raise PkdynError(f"--html needs the viewer (pkdyn.viewer): {err}") from None
+    try:
+        scene = animate(robot, report.t, report.q)
+        export_html(scene, path)
+    except OSError as err:
+        raise PkdynError(f"cannot write '{path}': {err.strerror}") from None
+
+
+def register(sub: Any) -> None:
+    """Add ``pkdyn tripod ...`` to the ``pkdyn`` parser."""
+    sp = sub.add_parser("tripod", help="walking tripod (Yang et al.): modes PP / BE, scenario")
+    tsub = sp.add_subparsers(dest="tripod_command", required=True, parser_class=Parser)
+    sc = tsub.add_parser(
+        "scenario",
+        help="machining, reconfiguration and swing of each branch, repeated; checks per phase",
+    )
+    sc.add_argument("--param", action="append", metavar="NAME=VALUE", help="builder parameter")
+    sc.add_argument("--cycles", type=int, default=2, help="walking cycles (default 2)")
+    sc.add_argument(
+        "--step",
+        nargs=2,
+        type=float,
+        default=[0.10, 0.0],
+        metavar=("DX", "DY"),
+        help="foot displacement per cycle [m] (default 0.10 0)",
+    )
+    sc.add_argument("--lift", type=float, default=0.03, help="foot lift [m] (default 0.03)")
+    sc.add_argument(
+        "--tilt", type=float, default=0.10, help="nacelle tilt at swing end [rad] (default 0.1)"
+    )
+    sc.add_argument("--swing-time", type=float, default=2.5, help="[s] (default 2.5)")
+    sc.add_argument("--reconfiguration-time", type=float, default=1.5, help="[s] (default 1.5)")
+    sc.add_argument("--dt", type=float, default=0.05, help="sample period [s] (default 0.05)")
+    sc.add_argument("--no-machining", action="store_true", help="walk only")
+    sc.add_argument(
+        "--stride", type=int, default=1, help="singularity margin every N samples (default 1)"
+    )
+    sc.add_argument("--json", action="store_true")
+    sc.add_argument("--plot", metavar="FILE", help="save the summary figure (png, pdf, svg)")
+    sc.add_argument("--html", metavar="FILE", help="save a meshcat animation (static HTML)")
+    sc.set_defaults(func=_cmd_scenario)

@@ -1,0 +1,109 @@
+"""Plots of the walking tripod's scenario (matplotlib Agg figures).
+
+:func:`plot_scenario` draws a :class:`pkdyn.tripod.analysis.ScenarioReport`: the walk seen from
+above (footholds, nacelle path), the actuator forces, the stroke margin and leg distances, and
+the singularity margin against time, with the phases shaded (PP machining, PP reconfiguration,
+BE swing of branch ``i``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["plot_scenario"]
+
+_PHASE_COLOURS = {"machining": "#d9e8f5", "reconfiguration": "#eeeeee", "swing": "#fde4c8"}
+_BRANCH_COLOURS = ("tab:red", "tab:green", "tab:blue")
+
+
+def _shade(ax: Any, report: Any) -> None:
+    for k, rep in enumerate(report.reports):
+        ax.axvspan(rep.t0, rep.t0 + rep.duration, color=_PHASE_COLOURS[rep.name], lw=0, zorder=0)
+        if rep.branch is not None and k < len(report.reports):
+            ax.text(
+                rep.t0 + 0.5 * rep.duration,
+                1.0,
+                f"BE{rep.branch}",
+                transform=ax.get_xaxis_transform(),
+                ha="center",
+                va="bottom",
+                fontsize=7,
+            )
+
+
+def plot_scenario(report: Any, path: str | Path | None = None, title: str | None = None) -> Any:
+    """Four panels summarising the scenario and its checks.
+
+    Args:
+        report: A :class:`pkdyn.tripod.analysis.ScenarioReport`.
+        path: Save the figure there (format from the suffix, e.g. ``.png``).
+        title: Figure title (default: duration and number of phases).
+
+    Returns:
+        The matplotlib Figure.
+
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    fig = Figure(figsize=(12.0, 8.5))
+    axes = fig.subplots(2, 2)
+    top, forces = axes[0]
+    margins, sing = axes[1]
+
+    # walk seen from above
+    for b in range(3):
+        feet = report.feet[:, b, :2]
+        top.plot(feet[:, 0], feet[:, 1], color=_BRANCH_COLOURS[b], lw=1.0, label=f"foot {b + 1}")
+        holds = [feet[0]] + [
+            feet[i] for i in range(1, len(feet)) if np.linalg.norm(feet[i] - feet[i - 1]) > 1e-9
+        ]
+        P = np.array(holds)
+        top.plot(P[:, 0], P[:, 1], "o", ms=3, color=_BRANCH_COLOURS[b])
+    top.plot(report.nacelle[:, 0], report.nacelle[:, 1], color="k", lw=1.0, label="nacelle P_O")
+    top.set_aspect("equal", adjustable="datalim")
+    top.set_xlabel("x [m]")
+    top.set_ylabel("y [m]")
+    top.set_title("walk seen from above")
+    top.legend(fontsize=7, loc="best")
+
+    t = report.t
+    for i, name in enumerate(report.actuators):
+        forces.plot(t, report.tau[:, i], lw=0.9, label=name)
+    _shade(forces, report)
+    forces.set_xlabel("t [s]")
+    forces.set_ylabel("actuator force [N]")
+    forces.set_title(f"inverse dynamics (limit {report.effort_limit:.0f} N)")
+    forces.legend(fontsize=6, ncol=3, loc="best")
+
+    margins.plot(t, 1e3 * report.stroke_margin, color="tab:purple", label="stroke margin")
+    margins.plot(t, 1e3 * report.leg_distance, color="tab:brown", label="leg distance")
+    margins.axhline(0.0, color="k", lw=0.6)
+    _shade(margins, report)
+    margins.set_xlabel("t [s]")
+    margins.set_ylabel("[mm]")
+    margins.set_title("stroke margin, smallest leg-leg / leg-nacelle distance")
+    margins.legend(fontsize=7, loc="best")
+
+    ok = np.isfinite(report.singularity_distance)
+    sing.plot(t[ok], report.singularity_distance[ok], color="tab:olive")
+    _shade(sing, report)
+    sing.set_ylim(bottom=0.0)
+    sing.set_xlabel("t [s]")
+    sing.set_ylabel("1 / cond")
+    sing.set_title("singularity margin (A and B of the mode)")
+    handles = [Patch(color=c, label=k) for k, c in _PHASE_COLOURS.items()]
+    sing.legend(handles=handles, fontsize=7, loc="best")
+
+    fig.suptitle(
+        title
+        if title is not None
+        else f"walking tripod: {len(report.reports)} phases, {float(t[-1]):.1f} s"
+    )
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(str(path), dpi=110)
+    return fig

@@ -1,0 +1,405 @@
+"""Checks of the tripod scenario, phase by phase (seed 003; issue 8, item 5).
+
+For every sample of every phase of :func:`pkdyn.tripod.scenario.plan_scenario`:
+
+- **actuator forces** from the inverse dynamics (:func:`pkdyn.dynamics.inverse_dynamics`, i.e.
+  :class:`solvers.InverseDynamics` with the phase's constraints: closures, clamps, locks), with
+  gravity and, while machining, the machining wrench at the tool (``f_ext = J_tool^T F``);
+- **stroke margins**: distance of each actuator length to its nearer stroke limit [m];
+- **distances** with coal between the legs (actuator bodies and rods) of different branches and
+  between each leg and the nacelle (plate and spindle) [m];
+- **singularity margin**: ``distance`` of :func:`pkdyn.singularity.classify` on the phase's
+  robot (``1 / cond`` of ``A`` and ``B``; 0 at a singularity);
+- **closure residuals** of the hinges and of the clamped feet (constraint residuals);
+- **locked joints**: largest departure of a locked coordinate from its locked value (read from
+  the joint coordinates, not from the lock constraints);
+- **support feet**: largest departure of a clamped foot frame (forward kinematics) from its
+  foothold.
+"""
+
+from __future__ import annotations
+
+import sys
+import warnings
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.collisions import CollisionChecker
+from pkdyn.dynamics import inverse_dynamics
+from pkdyn.robot import Robot
+from pkdyn.singularity import classify
+from pkdyn.tripod.modes import BRANCHES, foot_placement
+from pkdyn.tripod.scenario import Phase, WalkPlan, plan_scenario
+from solvers import ClosureSet
+
+__all__ = [
+    "LEGS",
+    "PhaseReport",
+    "ScenarioReport",
+    "analyse",
+    "leg_pairs",
+    "run_scenario",
+]
+
+LEGS = ("cylL", "rodL", "cylR", "rodR")
+"""Links of a branch that make its legs (actuator bodies and rods)."""
+
+
+def leg_pairs() -> tuple[list[tuple[str, str]], list[tuple[str, str]]]:
+    """Link pairs checked for interference: leg-to-leg (different branches), leg-to-nacelle.
+
+    Returns:
+        ``(leg_to_leg, leg_to_nacelle)`` lists of link-name pairs.
+
+    """
+    legs = [(b, f"branch{b}_{n}") for b in BRANCHES for n in LEGS]
+    leg_leg = [(a, c) for (ba, a) in legs for (bc, c) in legs if ba < bc]
+    leg_nacelle = [(a, "nacelle") for _, a in legs]
+    return leg_leg, leg_nacelle
+
+
+@dataclass
+class PhaseReport:
+    """Checks of one phase (worst values over its samples).
+
+    Attributes:
+        name: ``machining``, ``reconfiguration`` or ``swing``.
+        mode: ``PP`` or ``BE``.
+        branch: Swinging branch (BE) or ``None``.
+        locked: The paper's names of the locked joints.
+        t0: Start time [s].
+        duration: Duration [s].
+        samples: Number of samples.
+        max_closure_residual: Largest residual of the hinges and clamps [m or rad].
+        max_lock_drift: Largest departure of a locked coordinate from its value [rad]
+            (0 without locks).
+        max_support_drift: Largest departure of a clamped foot frame from its foothold
+            (position [m] or rotation angle [rad], the larger).
+        max_actuator_force: Largest ``|tau|`` [N].
+        max_actuator_speed: Largest actuator speed [m/s].
+        min_stroke_margin: Smallest distance of an actuator to its stroke limits [m]
+            (negative: out of stroke).
+        min_leg_distance: Smallest leg-to-leg or leg-to-nacelle distance [m] (negative:
+            penetration).
+        min_leg_to_leg: Smallest leg-to-leg distance [m].
+        min_leg_to_nacelle: Smallest leg-to-nacelle distance [m].
+        closest_pair: The two geometries at ``min_leg_distance``.
+        min_singularity_distance: Smallest ``1 / cond`` of the kinematic models (0: singular).
+        max_dynamics_residual: Largest residual of the inverse-dynamics equation [N].
+        end_error: Distance of the nacelle at the phase's end from its planned placement
+            (swings: ``x_end`` of ``B_iIKMX``; reconfigurations: ``x_re`` or the station home)
+            [m or rad, the larger], or ``None``.
+        lock_plan_error: Swings: largest difference between the engaged locks and ``b_i`` of
+            ``B_iIKMX`` [rad], or ``None``.
+
+    """
+
+    name: str
+    mode: str
+    branch: int | None
+    locked: list[str]
+    t0: float
+    duration: float
+    samples: int
+    max_closure_residual: float
+    max_lock_drift: float
+    max_support_drift: float
+    max_actuator_force: float
+    max_actuator_speed: float
+    min_stroke_margin: float
+    min_leg_distance: float
+    min_leg_to_leg: float
+    min_leg_to_nacelle: float
+    closest_pair: tuple[str, str]
+    min_singularity_distance: float
+    max_dynamics_residual: float
+    end_error: float | None
+    lock_plan_error: float | None
+
+    def as_json(self) -> dict[str, Any]:
+        """Plain-JSON form (the CLI's ``phases`` entries)."""
+        return {
+            "name": self.name,
+            "mode": self.mode,
+            "branch": self.branch,
+            "locked": list(self.locked),
+            "t0": self.t0,
+            "duration": self.duration,
+            "samples": self.samples,
+            "max_closure_residual": self.max_closure_residual,
+            "max_lock_drift": self.max_lock_drift,
+            "max_support_drift": self.max_support_drift,
+            "max_actuator_force": self.max_actuator_force,
+            "max_actuator_speed": self.max_actuator_speed,
+            "min_stroke_margin": self.min_stroke_margin,
+            "min_leg_distance": self.min_leg_distance,
+            "min_leg_to_leg": self.min_leg_to_leg,
+            "min_leg_to_nacelle": self.min_leg_to_nacelle,
+            "closest_pair": list(self.closest_pair),
+            "min_singularity_distance": self.min_singularity_distance,
+            "max_dynamics_residual": self.max_dynamics_residual,
+            "end_error": self.end_error,
+            "lock_plan_error": self.lock_plan_error,
+        }
+
+
+@dataclass
+class ScenarioReport:
+    """The scenario, its checks and the sampled series (samples of all phases in order).
+
+    Attributes:
+        phases: The planned phases.
+        reports: One :class:`PhaseReport` per phase.
+        t: Time of each sample (N,) [s] (phase boundaries appear twice).
+        phase: Phase index of each sample (N,).
+        q: Configurations (N, nq).
+        tau: Actuator forces (N, 6) [N].
+        stroke_margin: Smallest stroke margin per sample (N,) [m].
+        leg_distance: Smallest leg distance per sample (N,) [m].
+        singularity_distance: ``1 / cond`` per sample (N,) (NaN where not evaluated).
+        nacelle: Position of ``P_O`` per sample (N, 3) [m].
+        feet: Foot-frame origins ``A_i`` per sample (N, 3, 3) [m] (branch, xyz).
+        actuators: Actuator names.
+        effort_limit: Actuator force limit [N].
+
+    """
+
+    phases: list[Phase]
+    reports: list[PhaseReport]
+    t: np.ndarray
+    phase: np.ndarray
+    q: np.ndarray
+    tau: np.ndarray
+    stroke_margin: np.ndarray
+    leg_distance: np.ndarray
+    singularity_distance: np.ndarray
+    nacelle: np.ndarray
+    feet: np.ndarray
+    actuators: list[str]
+    effort_limit: float
+
+    def violations(self) -> list[str]:
+        """What the scenario breaks: strokes, interference, effort limit (empty: none)."""
+        out = []
+        for k, r in enumerate(self.reports):
+            where = f"phase {k} ({r.name}{'' if r.branch is None else f' {r.branch}'})"
+            if r.min_stroke_margin < 0.0:
+                out.append(
+                    f"{where}: an actuator leaves its stroke by {-r.min_stroke_margin:.4g} m"
+                )
+            if r.min_leg_distance < 0.0:
+                out.append(f"{where}: {r.closest_pair[0]} and {r.closest_pair[1]} interfere")
+            if r.max_actuator_force > self.effort_limit:
+                out.append(
+                    f"{where}: actuator force {r.max_actuator_force:.4g} N beyond the limit "
+                    f"{self.effort_limit:.4g} N"
+                )
+        return out
+
+    def as_json(self) -> dict[str, Any]:
+        """``{"phases": [...], "summary": {...}}`` (see :class:`PhaseReport`)."""
+        reps = self.reports
+        return {
+            "phases": [r.as_json() for r in reps],
+            "summary": {
+                "duration": float(self.t[-1]),
+                "samples": int(self.t.size),
+                "max_closure_residual": max(r.max_closure_residual for r in reps),
+                "max_lock_drift": max(r.max_lock_drift for r in reps),
+                "max_support_drift": max(r.max_support_drift for r in reps),
+                "max_actuator_force": max(r.max_actuator_force for r in reps),
+                "min_stroke_margin": min(r.min_stroke_margin for r in reps),
+                "min_leg_distance": min(r.min_leg_distance for r in reps),
+                "min_singularity_distance": min(r.min_singularity_distance for r in reps),
+                "effort_limit": self.effort_limit,
+                "violations": self.violations(),
+            },
+        }
+
+
+def _nacelle(robot: Robot, q: np.ndarray) -> pin.SE3:
+    pin.forwardKinematics(robot.model, robot.data, q)
+    return pin.SE3(robot.data.oMi[robot.model.getJointId("nacelle")])
+
+
+def _se3_error(a: pin.SE3, b: pin.SE3) -> float:
+    return max(
+        float(np.linalg.norm(a.translation - b.translation)),
+        float(np.linalg.norm(pin.log3(a.rotation.T @ b.rotation))),
+    )
+
+
+def _analyse_phase(
+    robot: Robot,
+    phase: Phase,
+    checkers: tuple[CollisionChecker, CollisionChecker],
+    stride: int,
+) -> tuple[PhaseReport, dict[str, np.ndarray]]:
+    r = phase.robot
+    jt = phase.trajectory
+    N = jt.t.size
+    lock_names = {lk.name for lk in phase.mode.locks}
+    closures = ClosureSet(
+        r.model,
+        [
+            cm
+            for cm, o in zip(r.constraint_models, r.constraint_owner, strict=True)
+            if o not in lock_names
+        ],
+    )
+    data = r.model.createData()
+    lo = r.model.lowerPositionLimit[r.actuated_q]
+    hi = r.model.upperPositionLimit[r.actuated_q]
+    clamped = [b for b in BRANCHES if b != phase.branch]
+    targets = phase.mode.lock_targets()
+    effort = inverse_dynamics(r, jt, wrench=phase.wrench, progress=False)
+    res = np.empty(N)
+    lock = np.zeros(N)
+    support = np.empty(N)
+    margin = np.empty(N)
+    d_ll = np.empty(N)
+    d_ln = np.empty(N)
+    sing = np.full(N, np.nan)
+    nacelle = np.empty((N, 3))
+    foot_xyz = np.empty((N, 3, 3))
+    nacelle_id = robot.model.getJointId("nacelle")
+    closest = ("", "")
+    best = np.inf
+    for k in range(N):
+        q = jt.q[k]
+        res[k] = float(np.max(np.abs(closures.residual(data, q))))
+        if targets.size:
+            d = phase.mode.lock_vector(robot, q) - targets
+            lock[k] = float(np.max(np.abs(np.arctan2(np.sin(d), np.cos(d)))))
+        feet = [foot_placement(robot, q, b) for b in BRANCHES]  # runs the kinematics
+        nacelle[k] = robot.data.oMi[nacelle_id].translation
+        foot_xyz[k] = [f.translation for f in feet]
+        support[k] = max(_se3_error(feet[b - 1], phase.stance.footholds[b - 1]) for b in clamped)
+        qa = q[r.actuated_q]
+        margin[k] = float(np.min(np.minimum(qa - lo, hi - qa)))
+        dist = [c.distances(q) for c in checkers]
+        d_ll[k], d_ln[k] = float(dist[0].min()), float(dist[1].min())
+        for c, dd in zip(checkers, dist, strict=True):
+            i = int(np.argmin(dd))
+            if dd[i] < best:
+                best, closest = float(dd[i]), c.names[i]
+        if k % stride == 0 or k == N - 1:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                sing[k] = classify(r, q).distance
+    end_error = None
+    if phase.planned_end is not None:
+        end_error = _se3_error(_nacelle(robot, jt.q[-1]), phase.planned_end)
+    lock_plan_error = None
+    if phase.planned_locks is not None:
+        b = phase.planned_locks  # [q1, q2, q3, q6, q1_j, q1_k]; locks: [q2, q1], q3, q6, ...
+        planned = np.array([b[1], b[0], b[2], b[3], b[4], b[5]])
+        lock_plan_error = float(np.max(np.abs(targets - planned)))
+    report = PhaseReport(
+        name=phase.name,
+        mode=phase.mode.kind,
+        branch=phase.branch,
+        locked=list(phase.mode.locked),
+        t0=phase.t0,
+        duration=float(jt.t[-1]),
+        samples=N,
+        max_closure_residual=float(res.max()),
+        max_lock_drift=float(lock.max()),
+        max_support_drift=float(support.max()),
+        max_actuator_force=float(np.max(np.abs(effort.tau))),
+        max_actuator_speed=float(np.max(np.abs(jt.qa_d))),
+        min_stroke_margin=float(margin.min()),
+        min_leg_distance=float(min(d_ll.min(), d_ln.min())),
+        min_leg_to_leg=float(d_ll.min()),
+        min_leg_to_nacelle=float(d_ln.min()),
+        closest_pair=closest,
+        min_singularity_distance=float(np.nanmin(sing)),
+        max_dynamics_residual=float(np.max(effort.residual)),
+        end_error=end_error,
+        lock_plan_error=lock_plan_error,
+    )
+    series = {
+        "tau": effort.tau,
+        "margin": margin,
+        "distance": np.minimum(d_ll, d_ln),
+        "singularity": sing,
+        "nacelle": nacelle,
+        "feet": foot_xyz,
+    }
+    return report, series
+
+
+def analyse(
+    robot: Robot, phases: list[Phase], stride: int = 1, progress: bool | None = None
+) -> ScenarioReport:
+    """Run every check on every phase.
+
+    Args:
+        robot: The library tripod, loaded with its collision geometry.
+        phases: From :func:`pkdyn.tripod.scenario.plan_scenario`.
+        stride: Evaluate the singularity margin every ``stride`` samples (and at each phase's
+            last sample).
+        progress: Show a progress bar over the phases (default: when stderr is a terminal).
+
+    Returns:
+        The report.
+
+    """
+    leg_leg, leg_nacelle = leg_pairs()
+    checkers = (CollisionChecker(robot, leg_leg), CollisionChecker(robot, leg_nacelle))
+    iterator: Any = phases
+    if progress is None:
+        progress = sys.stderr.isatty()
+    if progress:
+        from tqdm import tqdm
+
+        iterator = tqdm(phases, desc="checks", unit="phase")
+    reports: list[PhaseReport] = []
+    series: dict[str, list[np.ndarray]] = {
+        k: [] for k in ("tau", "margin", "distance", "singularity", "nacelle", "feet")
+    }
+    t, idx, Q = [], [], []
+    for k, phase in enumerate(iterator):
+        rep, s = _analyse_phase(robot, phase, checkers, max(1, int(stride)))
+        reports.append(rep)
+        for key, val in s.items():
+            series[key].append(val)
+        t.append(phase.t0 + phase.trajectory.t)
+        idx.append(np.full(phase.trajectory.t.size, k))
+        Q.append(phase.trajectory.q)
+    return ScenarioReport(
+        phases=phases,
+        reports=reports,
+        t=np.concatenate(t),
+        phase=np.concatenate(idx),
+        q=np.vstack(Q),
+        tau=np.vstack(series["tau"]),
+        stroke_margin=np.concatenate(series["margin"]),
+        leg_distance=np.concatenate(series["distance"]),
+        singularity_distance=np.concatenate(series["singularity"]),
+        nacelle=np.vstack(series["nacelle"]),
+        feet=np.concatenate(series["feet"]),
+        actuators=list(robot.actuator_names),
+        effort_limit=float(min(a.effort for a in robot.actuators)),
+    )
+
+
+def run_scenario(
+    robot: Robot, plan: WalkPlan | None = None, stride: int = 1, progress: bool | None = None
+) -> ScenarioReport:
+    """Plan the scenario (:func:`pkdyn.tripod.scenario.plan_scenario`) and check it.
+
+    Args:
+        robot: The library tripod, loaded with its collision geometry.
+        plan: Scenario parameters.
+        stride: Singularity-margin sampling stride (see :func:`analyse`).
+        progress: Progress bars (default: when stderr is a terminal).
+
+    Returns:
+        The report.
+
+    """
+    return analyse(robot, plan_scenario(robot, plan, progress=progress), stride, progress)

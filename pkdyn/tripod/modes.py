@@ -1,0 +1,312 @@
+"""Operating modes of the walking tripod (seed 003): PP (payload platform), BE (branch extremity).
+
+A *stance* gives the three foot frames ``R_Ai`` on the support; a *mode* says which feet are
+clamped and which passive joints are locked:
+
+- **PP**: the three feet are welded at their footholds, no lock; the robot is a 6-DOF parallel
+  machine and the platform is the spindle tip (the library model's ``platform``).
+- **BE** (branch ``i`` swinging): foot ``i`` is free (its weld is removed), the paper's
+  ``q1, q2, q3, q6`` of branch ``i`` and ``q1`` of the two support branches ``j, k`` are locked
+  (the paper's ``b_i``); the platform is the extremity of branch ``i`` (its foot frame, origin
+  ``A_i``). The six actuators then control the 6-DOF foot: the support branches with ``q1``
+  locked hold the nacelle with four actuators (4 DOF), the swinging branch's triangle adds 2.
+
+Locks are rigid constraint models (:mod:`pkdyn.tripod.locks`) added to the closures: the
+swinging branch's universal joint (``q1`` and ``q2``) is welded, ``q3`` (the knuckle on rod
+``L``, joint ``branch{i}_a``, see :func:`pkdyn.library.tripod.lockable_coordinates`) and ``q6``
+(joint ``branch{i}_q6``) are point locks, and ``q1`` of a support branch is the point lock of the
+universal joint's second coordinate. :func:`mode_robot` returns a :class:`pkdyn.Robot` with this
+constraint set and platform, so the general machinery (assembly, inverse geometry, kinematic
+models, singularities, inverse and forward dynamics) applies to either mode unchanged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.library import tripod
+from pkdyn.robot import Robot
+from pkdyn.tripod.locks import Lock, lock_constraint, lock_values
+from solvers import ClosureSet
+
+__all__ = [
+    "BRANCHES",
+    "LOCKABLE",
+    "Mode",
+    "Stance",
+    "be_mode",
+    "foot_frame",
+    "foot_placement",
+    "locked_names",
+    "mode_robot",
+    "pp_mode",
+    "support_branches",
+]
+
+BRANCHES = (1, 2, 3)
+"""Branch numbers (the paper's ``i``)."""
+
+LOCKABLE: dict[str, tuple[str, int]] = {
+    "q1": ("q2q1", 1),
+    "q2": ("q2q1", 0),
+    "q3": ("a", 0),
+    "q6": ("q6", 0),
+}
+"""The paper's lockable joints -> (model joint suffix, coordinate) in branch ``i``
+(joint ``branch{i}_<suffix>``)."""
+
+_FOOT_TURN = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, np.pi), np.zeros(3))
+"""The foot link frame is ``R_A`` turned half a turn about ``w_a`` (see the library module)."""
+
+
+def support_branches(branch: int) -> tuple[int, int]:
+    """The paper's ``(j, k)`` for swinging branch ``i``: (1: 2, 3), (2: 1, 3), (3: 1, 2)."""
+    _check_branch(branch)
+    j, k = (b for b in BRANCHES if b != branch)
+    return j, k
+
+
+def locked_names(branch: int) -> list[str]:
+    """The paper's ``b_i``: ``q1, q2, q3, q6`` of branch ``i``, ``q1`` of ``j`` and ``k``.
+
+    Args:
+        branch: Swinging branch ``i`` (1, 2 or 3).
+
+    Returns:
+        Names ``branch{n}_q{m}`` in the paper's order.
+
+    """
+    j, k = support_branches(branch)
+    own = [f"branch{branch}_{n}" for n in ("q1", "q2", "q3", "q6")]
+    return own + [f"branch{j}_q1", f"branch{k}_q1"]
+
+
+def _site(branch: int, name: str) -> tuple[str, list[int]]:
+    """Model joint and coordinate of the paper's lockable joint ``name`` of a branch."""
+    suffix, coord = LOCKABLE[name]
+    return f"branch{branch}_{suffix}", [coord]
+
+
+def _check_branch(branch: int) -> None:
+    if branch not in BRANCHES:
+        raise InvalidInputError("branch", f"expected 1, 2 or 3, got {branch!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class Stance:
+    """Foot frames ``R_Ai`` of the three branches, in the support frame ``R_B``.
+
+    Origin ``A_i`` at the universal-joint centre, ``w_a`` normal to the support.
+
+    Attributes:
+        footholds: Three placements.
+
+    """
+
+    footholds: tuple[pin.SE3, pin.SE3, pin.SE3]
+
+    def __post_init__(self) -> None:
+        if len(self.footholds) != 3 or not all(isinstance(f, pin.SE3) for f in self.footholds):
+            raise InvalidInputError("stance", "expected three pin.SE3 foot frames")
+
+    @classmethod
+    def default(cls, p: tripod.Params) -> Stance:
+        """The library model's footholds (:func:`pkdyn.library.tripod.foothold_frames`)."""
+        f = tripod.foothold_frames(p)
+        return cls((f[0], f[1], f[2]))
+
+    def moved(self, branch: int, foothold: pin.SE3) -> Stance:
+        """The same stance with foot ``branch`` on a new foothold."""
+        _check_branch(branch)
+        f = list(self.footholds)
+        f[branch - 1] = pin.SE3(foothold)
+        return Stance((f[0], f[1], f[2]))
+
+    def centroid(self) -> np.ndarray:
+        """Mean of the three foot-frame origins [m]."""
+        return np.mean([np.array(f.translation) for f in self.footholds], axis=0)
+
+
+@dataclass(frozen=True)
+class Mode:
+    """Which feet are clamped and which joints locked.
+
+    Attributes:
+        kind: ``"PP"`` or ``"BE"``.
+        branch: Swinging branch (BE), ``None`` for PP.
+        locks: Model-level locks (the swinging branch's ``q1`` and ``q2`` form one).
+        locked: The paper's names of the locked joints (:func:`locked_names`).
+
+    """
+
+    kind: str
+    branch: int | None = None
+    locks: tuple[Lock, ...] = ()
+    locked: tuple[str, ...] = ()
+
+    def lock_vector(self, robot: Robot, q: np.ndarray) -> np.ndarray:
+        """Current values of the locked coordinates at ``q``, in the order of ``locks``.
+
+        Args:
+            robot: The tripod.
+            q: Configuration (nq,).
+
+        Returns:
+            The values [rad], one per locked coordinate.
+
+        """
+        out: list[float] = []
+        for lk in self.locks:
+            out.extend(lock_values(robot.model, q, lk.joint, lk.coordinates))
+        return np.array(out)
+
+    def lock_targets(self) -> np.ndarray:
+        """Locked values [rad], in the order of :meth:`lock_vector`."""
+        return np.array([v for lk in self.locks for v in lk.values])
+
+
+def pp_mode() -> Mode:
+    """Mode PP: all feet clamped, no lock."""
+    return Mode("PP")
+
+
+def be_mode(
+    robot: Robot, q: np.ndarray, branch: int, values: Sequence[float] | None = None
+) -> Mode:
+    """Mode BE for swinging branch ``i``: the paper's ``b_i`` locked.
+
+    Args:
+        robot: The tripod.
+        q: Configuration (nq,) whose joint values are locked (unless ``values`` is given).
+        branch: Swinging branch ``i``.
+        values: Model coordinates of ``[q1_i, q2_i, q3_i, q6_i, q1_j, q1_k]`` [rad] (e.g. from
+            :func:`pkdyn.tripod.xfkmb.bikmx`); default: their values at ``q``.
+
+    Returns:
+        The mode, with one lock per model joint.
+
+    """
+    _check_branch(branch)
+    j, k = support_branches(branch)
+    names = locked_names(branch)
+    if values is None:
+        sites = [
+            (branch, "q1"),
+            (branch, "q2"),
+            (branch, "q3"),
+            (branch, "q6"),
+            (j, "q1"),
+            (k, "q1"),
+        ]
+        vals = [lock_values(robot.model, q, *_site(b, n))[0] for b, n in sites]
+    else:
+        vals = [float(v) for v in values]
+        if len(vals) != 6 or not np.all(np.isfinite(vals)):
+            raise InvalidInputError("values", f"expected 6 finite lock values, got {values!r}")
+    b = f"branch{branch}"
+    locks = (
+        Lock(f"{b}_q2q1", (0, 1), (vals[1], vals[0]), f"{b}_q1,{b}_q2"),
+        Lock(f"{b}_a", (0,), (vals[2],), f"{b}_q3"),
+        Lock(f"{b}_q6", (0,), (vals[3],), f"{b}_q6"),
+        Lock(f"branch{j}_q2q1", (1,), (vals[4],), f"branch{j}_q1"),
+        Lock(f"branch{k}_q2q1", (1,), (vals[5],), f"branch{k}_q1"),
+    )
+    return Mode("BE", branch, locks, tuple(names))
+
+
+def foot_frame(foothold: pin.SE3) -> pin.SE3:
+    """Placement of a foot link frame (the BE platform) clamped on foot frame ``R_A``."""
+    return pin.SE3(foothold) * _FOOT_TURN
+
+
+def foot_placement(robot: Robot, q: np.ndarray, branch: int) -> pin.SE3:
+    """Foot frame ``R_A`` of branch ``i`` at ``q`` (origin ``A_i``, ``w_a`` the sole normal).
+
+    Args:
+        robot: The tripod.
+        q: Configuration (nq,).
+        branch: Branch number.
+
+    Returns:
+        The placement in ``R_B``.
+
+    """
+    _check_branch(branch)
+    fid = robot.model.getFrameId(f"branch{branch}_foot")
+    pin.framesForwardKinematics(robot.model, robot.data, q)
+    return pin.SE3(robot.data.oMf[fid]) * _FOOT_TURN.inverse()
+
+
+def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = None) -> Robot:
+    """The tripod with the constraint set and platform of a mode on a stance.
+
+    Args:
+        robot: The library tripod (``pkdyn.load("tripod")``).
+        stance: Foot frames.
+        mode: :func:`pp_mode` or :func:`be_mode`.
+        q: Reference configuration kept as ``q_home`` of the result (default: the robot's).
+
+    Returns:
+        A :class:`pkdyn.Robot` sharing the model and geometry: closures = the three ``A``
+        hinges, the welds of the clamped feet at the stance's footholds, the locks; platform =
+        the spindle tip (PP) or the swinging foot frame (BE), all six pose components.
+
+    Raises:
+        PkdynError: ``robot`` is not the library tripod.
+
+    """
+    p = robot.params
+    if not isinstance(p, tripod.Params):
+        raise PkdynError(
+            f"{robot.name}: tripod modes need the library tripod (pkdyn.load('tripod')) "
+            "to know its footholds"
+        )
+    model = robot.model
+    default = tripod.foothold_frames(p)
+    cms: list[pin.RigidConstraintModel] = []
+    owner: list[str] = []
+    for cm, name in zip(robot.constraint_models, robot.constraint_owner, strict=True):
+        if name.endswith("_foothold"):
+            b = int(name[len("branch")])
+            if mode.kind == "BE" and b == mode.branch:
+                continue
+            M2 = stance.footholds[b - 1] * default[b - 1].inverse() * cm.joint2_placement
+            cm = pin.RigidConstraintModel(
+                cm.type,
+                model,
+                cm.joint1_id,
+                cm.joint1_placement,
+                cm.joint2_id,
+                M2,
+                pin.ReferenceFrame.LOCAL,
+            )
+            cm.name = name
+        cms.append(cm)
+        owner.append(name)
+    for lk in mode.locks:
+        cms.append(lock_constraint(model, lk))
+        owner.append(lk.name)
+    vec = pin.StdVec_RigidConstraintModel()
+    for cm in cms:
+        vec.append(cm)
+    if mode.kind == "BE":
+        assert mode.branch is not None
+        platform = model.getFrameId(f"branch{mode.branch}_foot")
+    else:
+        platform = robot.platform_frame
+    return dataclasses.replace(
+        robot,
+        name=f"{robot.name}[{mode.kind}{'' if mode.branch is None else mode.branch}]",
+        constraint_models=vec,
+        constraint_owner=owner,
+        closure_set=ClosureSet(model, cms),
+        platform_frame=platform,
+        task_rows=np.arange(6),
+        q_home=np.array(robot.q_home if q is None else q, dtype=float),
+    )

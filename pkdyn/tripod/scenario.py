@@ -1,0 +1,319 @@
+"""The machining-and-walking scenario of seed 003 (section 3.2), planned with PP and BE modes.
+
+One cycle of the walk, from a station where the nacelle is level above the centroid of the
+footholds (its *home*):
+
+1. **machining** (PP): the cycle of :mod:`pkdyn.tripod.machining` on the skin under the nacelle;
+2. for each branch ``i = 1, 2, 3`` in turn:
+
+   - **reconfiguration** (PP): the nacelle moves to the pose ``x_re`` at which the lockable
+     joints reach the values ``b_i`` wanted for the swing, then the locks engage;
+   - **swing** (BE, branch ``i``): foot ``i`` is released and carried by the six actuators to
+     its new foothold (moved by ``step`` on the support, lifted ``lift`` halfway), the
+     locks holding; it is clamped there;
+
+3. **reconfiguration** (PP): the nacelle returns level above the new centroid, the next station.
+
+Never more than one branch is detached. The wanted locked values come from the pose the nacelle
+should have when the swing ends, ``x_end``: above the new centroid, tilted by ``tilt`` about the
+horizontal axis normal to branch ``i``: ``b_i = B_iIKMX(x_end, new footholds)``. Then
+``x_re = XFKMB_i(b_i, old footholds)`` (the paper's two geometric models). The tilt matters: with
+a level nacelle every support edge ``P_L P_R`` is parallel to the support, so the locked ``q1``
+of the supports do not react to a nacelle translation and the nacelle can slide along the
+swinging branch's rod ``L`` with the foot at rest — a serial singularity of mode BE (the tests
+show it); a tilt of 0.1 rad keeps ``cond(B)`` below about 10.
+
+Each phase is mapped to joint space by :func:`pkdyn.trajectory.map_task_trajectory` on the
+mode's robot (:func:`pkdyn.tripod.modes.mode_robot`): the spindle tip is the platform in PP, the
+swinging foot in BE, and the locks are constraints of that robot, so ``(q, v, a)`` satisfy the
+closures, the clamps and the locks to second order.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import (
+    InvalidInputError,
+    JointLimitError,
+    PkdynError,
+    TrajectoryError,
+    UnreachablePoseError,
+)
+from pkdyn.library import tripod
+from pkdyn.pose import pose_to_vector
+from pkdyn.profiles import motion_law
+from pkdyn.robot import Robot
+from pkdyn.trajectory import JointTrajectory, TaskTrajectory, map_task_trajectory, point_to_point
+from pkdyn.tripod.machining import MachiningPlan, machining_task
+from pkdyn.tripod.modes import (
+    BRANCHES,
+    Mode,
+    Stance,
+    be_mode,
+    foot_frame,
+    mode_robot,
+    pp_mode,
+)
+from pkdyn.tripod.xfkmb import bikmx, xfkmb
+
+__all__ = ["Phase", "WalkPlan", "plan_scenario", "station_home", "swing_task", "tool_pose"]
+
+
+@dataclass(frozen=True)
+class WalkPlan:
+    """Parameters of the scenario (SI units).
+
+    Attributes:
+        step: Displacement of every foot per cycle on the support ``(dx, dy)`` [m].
+        cycles: Number of cycles (machining + three swings + return to level).
+        lift: Height of the swinging foot's arc above the straight path [m].
+        tilt: Nacelle tilt at the end of each swing [rad] (keeps mode BE away from its
+            serial singularity, see the module docstring).
+        swing_time: Duration of a swing [s].
+        reconfiguration_time: Duration of a reconfiguration move [s].
+        dt: Sample period [s].
+        machining: Machining cycle at each station (``None``: walk only).
+
+    """
+
+    step: tuple[float, float] = (0.10, 0.0)
+    cycles: int = 2
+    lift: float = 0.03
+    tilt: float = 0.10
+    swing_time: float = 2.5
+    reconfiguration_time: float = 1.5
+    dt: float = 0.05
+    machining: MachiningPlan | None = field(default_factory=MachiningPlan)
+
+    def __post_init__(self) -> None:
+        if len(self.step) != 2 or not np.all(np.isfinite(self.step)):
+            raise InvalidInputError("step", f"expected two finite numbers, got {self.step!r}")
+        if int(self.cycles) != self.cycles or self.cycles < 1:
+            raise InvalidInputError("cycles", f"must be a positive integer, got {self.cycles!r}")
+        for name in ("swing_time", "reconfiguration_time", "dt"):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value <= 0.0:
+                raise InvalidInputError(name, f"must be > 0, got {value!r}")
+        for name in ("lift", "tilt"):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value < 0.0:
+                raise InvalidInputError(name, f"must be >= 0, got {value!r}")
+
+
+@dataclass
+class Phase:
+    """One phase of the scenario, mapped to joint space.
+
+    Attributes:
+        name: ``machining``, ``reconfiguration`` or ``swing``.
+        mode: Mode (PP, or BE with its locks).
+        stance: Footholds during the phase (the swinging foot's is its start).
+        robot: The mode's robot (constraints and platform of the phase).
+        trajectory: Joint trajectory (times from 0).
+        t0: Start time of the phase in the scenario [s].
+        wrench: Machining wrench on the platform per sample (N, 6), or ``None``.
+        planned_locks: Lock values ``b_i`` from ``B_iIKMX`` (swings), in the order of
+            :func:`pkdyn.tripod.modes.be_mode`.
+        planned_end: Planned nacelle placement at the end of the phase (swings: ``x_end``;
+            reconfigurations: ``x_re`` or the station home), or ``None``.
+        landing: New foothold of the swinging foot (swings), or ``None``.
+
+    """
+
+    name: str
+    mode: Mode
+    stance: Stance
+    robot: Robot
+    trajectory: JointTrajectory
+    t0: float
+    wrench: np.ndarray | None = None
+    planned_locks: np.ndarray | None = None
+    planned_end: pin.SE3 | None = None
+    landing: pin.SE3 | None = None
+
+    @property
+    def branch(self) -> int | None:
+        """Swinging branch (BE), ``None`` in PP."""
+        return self.mode.branch
+
+
+def _params(robot: Robot) -> tripod.Params:
+    if not isinstance(robot.params, tripod.Params):
+        raise PkdynError(
+            f"{robot.name}: the scenario needs the library tripod (pkdyn.load('tripod'))"
+        )
+    return robot.params
+
+
+def station_home(p: tripod.Params, stance: Stance) -> pin.SE3:
+    """Level nacelle placement ``nacelle_height`` above the centroid of the footholds."""
+    c = stance.centroid()
+    return pin.SE3(np.eye(3), np.array([c[0], c[1], p.nacelle_height]))
+
+
+def tool_pose(p: tripod.Params, nacelle: pin.SE3) -> np.ndarray:
+    """Spindle-tip pose ``[x, y, z, roll, pitch, yaw]`` of a nacelle placement [m, rad]."""
+    M = nacelle * pin.SE3(np.eye(3), np.array([0.0, 0.0, -p.tool_offset]))
+    pos, rpy = pose_to_vector(M)
+    return np.concatenate([pos, rpy])
+
+
+def _pose(M: pin.SE3) -> np.ndarray:
+    pos, rpy = pose_to_vector(M)
+    return np.concatenate([pos, rpy])
+
+
+def swing_task(start: pin.SE3, end: pin.SE3, lift: float, T: float, dt: float) -> TaskTrajectory:
+    """Swinging-foot trajectory: straight from ``start`` to ``end`` plus a parabolic lift.
+
+    The foot frame's origin ``A`` follows ``A0 + s (A1 - A0) + 4 lift s (1 - s) w_a`` with the
+    quintic rest-to-rest law ``s(t)``; the foot keeps the orientation of ``start`` (footholds on
+    one plane, same heading).
+
+    Args:
+        start: Foot frame ``R_A`` at the old foothold.
+        end: Foot frame ``R_A`` at the new foothold.
+        lift: Height of the arc [m].
+        T: Duration [s].
+        dt: Sample period [s].
+
+    Returns:
+        The trajectory of the foot link frame (the BE platform).
+
+    """
+    n = max(2, int(round(T / dt)) + 1)
+    t = np.linspace(0.0, T, n)
+    s, sd, sdd = motion_law("quintic", T)(t)
+    A0, A1 = np.array(start.translation), np.array(end.translation)
+    w = np.array(start.rotation[:, 2])
+    d = A1 - A0
+    rpy = _pose(foot_frame(start))[3:]
+    pose = np.zeros((n, 6))
+    pose[:, :3] = A0 + np.outer(s, d) + np.outer(4.0 * lift * s * (1.0 - s), w)
+    pose[:, 3:] = rpy
+    dp = d + np.outer(4.0 * lift * (1.0 - 2.0 * s), w)  # dA/ds
+    pd = np.zeros((n, 6))
+    pd[:, :3] = dp * sd[:, None]
+    pdd = np.zeros((n, 6))
+    pdd[:, :3] = dp * sdd[:, None] + np.outer(-8.0 * lift * sd**2, w)
+    return TaskTrajectory(t, pose, pd, pdd, name="swing")
+
+
+def _tilted(p: tripod.Params, stance: Stance, branch: int, tilt: float) -> pin.SE3:
+    phi = tripod.PHI[branch - 1]
+    axis = np.array([-np.sin(phi), np.cos(phi), 0.0])
+    M = station_home(p, stance)
+    return pin.SE3(pin.exp3(tilt * axis), M.translation)
+
+
+def _nacelle(robot: Robot, q: np.ndarray) -> pin.SE3:
+    pin.forwardKinematics(robot.model, robot.data, q)
+    return pin.SE3(robot.data.oMi[robot.model.getJointId("nacelle")])
+
+
+def plan_scenario(
+    robot: Robot, plan: WalkPlan | None = None, progress: bool | None = None
+) -> list[Phase]:
+    """Plan the scenario and map every phase to joint space.
+
+    Args:
+        robot: The library tripod at its home configuration (``pkdyn.load("tripod")``).
+        plan: Scenario parameters (default :class:`WalkPlan`).
+        progress: Show a progress bar over the phases (default: when stderr is a terminal).
+
+    Returns:
+        The phases in order; each ends where the next starts, at rest.
+
+    Raises:
+        PkdynError: Not the library tripod.
+        TrajectoryError: ``XFKMB_i`` finds no reconfiguration pose within the strokes (step
+            too long), or a phase leaves the workspace or meets a parallel singularity.
+
+    """
+    plan = WalkPlan() if plan is None else plan
+    p = _params(robot)
+    stance = Stance.default(p)
+    q = np.array(robot.q_home)
+    phases: list[Phase] = []
+    t0 = 0.0
+    step = np.array([plan.step[0], plan.step[1], 0.0])
+    n_phases = plan.cycles * (8 if plan.machining is not None else 7)
+    bar: Any = None
+    if progress is None:
+        progress = sys.stderr.isatty()
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=n_phases, desc="tripod scenario", unit="phase")
+
+    def add(phase: Phase) -> np.ndarray:
+        nonlocal t0
+        phases.append(phase)
+        t0 += float(phase.trajectory.t[-1])
+        if bar is not None:
+            bar.update(1)
+        return np.array(phase.trajectory.q[-1])
+
+    def move_nacelle(target: pin.SE3, q: np.ndarray) -> np.ndarray:
+        r = mode_robot(robot, stance, pp_mode(), q)
+        task = point_to_point(
+            tool_pose(p, _nacelle(robot, q)),
+            tool_pose(p, target),
+            plan.reconfiguration_time,
+            dt=plan.dt,
+        )
+        jt = map_task_trajectory(r, task, q_init=q, check_limits=False, progress=False)
+        return add(Phase("reconfiguration", pp_mode(), stance, r, jt, t0, planned_end=target))
+
+    try:
+        for _ in range(plan.cycles):
+            if plan.machining is not None:
+                r = mode_robot(robot, stance, pp_mode(), q)
+                task, W = machining_task(
+                    plan.machining, tool_pose(p, station_home(p, stance)), dt=plan.dt
+                )
+                jt = map_task_trajectory(r, task, q_init=q, check_limits=False, progress=False)
+                q = add(Phase("machining", pp_mode(), stance, r, jt, t0, wrench=W))
+            for b in BRANCHES:
+                old = stance.footholds[b - 1]
+                new_foot = pin.SE3(old.rotation, old.translation + step)
+                landed = stance.moved(b, new_foot)
+                x_end = _tilted(p, landed, b, plan.tilt)
+                b_i = bikmx(p, x_end, landed, b)
+                try:
+                    x_re = xfkmb(p, b_i, stance, b, x_end).placement
+                except (JointLimitError, UnreachablePoseError) as err:
+                    raise TrajectoryError(
+                        f"swing of branch {b}: no reconfiguration pose keeps the locks the swing "
+                        f"needs ({err}); shorten the step or change the tilt"
+                    ) from None
+                q = move_nacelle(x_re, q)
+                mode = be_mode(robot, q, b)  # the locks engage where the joints stand
+                r = mode_robot(robot, stance, mode, q)
+                task = swing_task(old, new_foot, plan.lift, plan.swing_time, plan.dt)
+                jt = map_task_trajectory(r, task, q_init=q, check_limits=False, progress=False)
+                q = add(
+                    Phase(
+                        "swing",
+                        mode,
+                        stance,
+                        r,
+                        jt,
+                        t0,
+                        planned_locks=b_i,
+                        planned_end=x_end,
+                        landing=new_foot,
+                    )
+                )
+                stance = landed
+            q = move_nacelle(station_home(p, stance), q)
+    finally:
+        if bar is not None:
+            bar.close()
+    return phases

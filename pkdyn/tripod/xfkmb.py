@@ -1,0 +1,205 @@
+"""The paper's geometric models of mode BE (seed 003, section 4.1): ``B_iIKMX`` and ``XFKMB_i``.
+
+- ``B_iIKMX``: the locked joint values ``b_i`` from the nacelle pose ``x`` and the footholds, by
+  the vector projections of equations (1)-(8) (:func:`pkdyn.library.tripod.virtual_joints`),
+  as if the locks were released (mode PP). :func:`bikmx` returns them as the model's lock
+  coordinates (see :func:`pkdyn.library.tripod.lockable_coordinates`: the lock of ``q3`` holds
+  the knuckle on rod ``L``); :func:`bikmx_virtual` returns the paper's literal values.
+- ``XFKMB_i``: with the locks engaged, when the (swinging) foot frame moves, the nacelle pose
+  ``x`` that keeps every locked joint at its value: ``x = argmin |B_iKMX(x) - b_i|``, solved by
+  :func:`scipy.optimize.least_squares` (6 equations, 6 unknowns). The actuator lengths then
+  follow from the inverse geometric model (:func:`actuator_lengths`, closed form).
+
+Both are checked in the tests against the general constraint machinery (the mode robots of
+:mod:`pkdyn.tripod.modes` solved by :func:`pkdyn.inverse_geometry`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.optimize import least_squares
+
+from pkdyn.exceptions import InvalidInputError, JointLimitError, UnreachablePoseError
+from pkdyn.library import tripod
+from pkdyn.pose import pose_from_vector
+from pkdyn.tripod.modes import Stance, support_branches
+
+__all__ = [
+    "XfkmbResult",
+    "actuator_lengths",
+    "bikmx",
+    "bikmx_virtual",
+    "xfkmb",
+]
+
+
+def _footholds(stance: Stance | Sequence[pin.SE3]) -> list[pin.SE3]:
+    feet = list(stance.footholds) if isinstance(stance, Stance) else list(stance)
+    if len(feet) != 3:
+        raise InvalidInputError("footholds", f"expected 3 foot frames, got {len(feet)}")
+    return feet
+
+
+def bikmx_virtual(
+    p: tripod.Params,
+    x: pin.SE3 | Sequence[float] | np.ndarray,
+    stance: Stance | Sequence[pin.SE3],
+    branch: int,
+) -> np.ndarray:
+    """The paper's ``b_i = [q1_i, q2_i, q3_i, q6_i, q1_j, q1_k]`` (virtual joints, eqs. 1-8).
+
+    Args:
+        p: Tripod parameters.
+        x: Nacelle placement ``R_P`` in ``R_B`` (or ``[x, y, z, roll, pitch, yaw]``).
+        stance: Foot frames (the swinging foot's frame included).
+        branch: Swinging branch ``i``.
+
+    Returns:
+        (6,) [rad].
+
+    """
+    j, k = support_branches(branch)
+    s = tripod.virtual_joints(p, x, _footholds(stance))
+    i = branch - 1
+    return np.array([s[i, 0], s[i, 1], s[i, 2], s[i, 5], s[j - 1, 0], s[k - 1, 0]])
+
+
+def bikmx(
+    p: tripod.Params,
+    x: pin.SE3 | Sequence[float] | np.ndarray,
+    stance: Stance | Sequence[pin.SE3],
+    branch: int,
+) -> np.ndarray:
+    """``B_iIKMX`` in model coordinates: the values the locks of mode BE(i) take at ``x``.
+
+    Args:
+        p: Tripod parameters.
+        x: Nacelle placement ``R_P`` in ``R_B`` (or ``[x, y, z, roll, pitch, yaw]``).
+        stance: Foot frames (the swinging foot's frame included).
+        branch: Swinging branch ``i``.
+
+    Returns:
+        (6,) model coordinates of ``[q1_i, q2_i, q3_i, q6_i, q1_j, q1_k]`` [rad], the order of
+        :func:`pkdyn.tripod.modes.be_mode`'s ``values``.
+
+    """
+    j, k = support_branches(branch)
+    s = tripod.virtual_joints(p, x, _footholds(stance))
+    c = tripod.lockable_coordinates(p, s)  # (3, 4): q1, q2, q3, q6
+    i = branch - 1
+    return np.array([c[i, 0], c[i, 1], c[i, 2], c[i, 3], c[j - 1, 0], c[k - 1, 0]])
+
+
+def actuator_lengths(
+    p: tripod.Params,
+    x: pin.SE3 | Sequence[float] | np.ndarray,
+    stance: Stance | Sequence[pin.SE3],
+) -> np.ndarray:
+    """Inverse geometric model: ``[q_L1, q_R1, q_L2, q_R2, q_L3, q_R3] = |A_i P_Li|, |A_i P_Ri|``.
+
+    Args:
+        p: Tripod parameters.
+        x: Nacelle placement ``R_P`` in ``R_B``.
+        stance: Foot frames.
+
+    Returns:
+        (6,) actuator lengths [m], in actuator order.
+
+    """
+    s = tripod.virtual_joints(p, x, _footholds(stance))
+    return tripod.triangle_lengths(p, s).reshape(6)
+
+
+@dataclass
+class XfkmbResult:
+    """Solution of ``XFKMB_i``.
+
+    Attributes:
+        placement: Nacelle placement ``R_P`` in ``R_B``.
+        lengths: Actuator lengths at that pose (actuator order) [m].
+        residual: ``max |B_iKMX(x) - b_i|`` [rad].
+        evaluations: Number of ``B_iKMX`` evaluations.
+
+    """
+
+    placement: pin.SE3
+    lengths: np.ndarray
+    residual: float
+    evaluations: int
+
+
+def _pose(x0: pin.SE3, z: np.ndarray) -> pin.SE3:
+    """``x0`` moved by ``z = [dp (world), dtheta (world)]``."""
+    return pin.SE3(pin.exp3(z[3:]) @ x0.rotation, x0.translation + z[:3])
+
+
+def xfkmb(
+    p: tripod.Params,
+    b: Sequence[float] | np.ndarray,
+    stance: Stance | Sequence[pin.SE3],
+    branch: int,
+    x0: pin.SE3 | Sequence[float] | np.ndarray,
+    tol: float = 1e-12,
+    virtual: bool = False,
+    check_limits: bool = True,
+) -> XfkmbResult:
+    """``XFKMB_i``: the nacelle pose that keeps the locked joints of mode BE(i) at ``b``.
+
+    Minimises ``|B_iKMX(x) - b|`` over the nacelle pose ``x`` (6 unknowns, 6 equations) by
+    :func:`scipy.optimize.least_squares` (trust region, central-difference Jacobian), from
+    ``x0`` (e.g. the previous pose along a swing): the solution branch is the one connected to
+    ``x0``.
+
+    Args:
+        p: Tripod parameters.
+        b: Locked values: model coordinates from :func:`bikmx` (default), or the paper's
+            virtual values from :func:`bikmx_virtual` when ``virtual`` is set [rad].
+        stance: Foot frames, the swinging foot at its (new) pose.
+        branch: Swinging branch ``i``.
+        x0: Initial nacelle placement.
+        tol: Largest accepted ``|B_iKMX(x) - b|`` [rad].
+        virtual: Match the paper's virtual ``q3`` (measured from ``A P_C``) instead of the
+            model's lock of ``q3`` (joint ``branch{i}_a``).
+        check_limits: Raise if an actuator length falls outside the strokes.
+
+    Returns:
+        The nacelle pose and the actuator lengths.
+
+    Raises:
+        UnreachablePoseError: No pose keeps the locks within ``tol`` near ``x0``.
+        JointLimitError: The pose needs an actuator beyond its stroke (``check_limits``).
+
+    """
+    target = np.asarray(b, dtype=float).reshape(6)
+    start = pose_from_vector(x0)
+    feet = _footholds(stance)
+    model = bikmx_virtual if virtual else bikmx
+
+    def residual(z: np.ndarray) -> np.ndarray:
+        d = model(p, _pose(start, z), feet, branch) - target
+        return np.arctan2(np.sin(d), np.cos(d))
+
+    sol = least_squares(
+        residual, np.zeros(6), jac="3-point", method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15
+    )
+    M = _pose(start, sol.x)
+    err = float(np.max(np.abs(residual(sol.x))))
+    if not err <= tol:
+        raise UnreachablePoseError(
+            f"branch{branch}",
+            err,
+            f"XFKMB_{branch}: no nacelle pose near the start keeps the locked joints "
+            f"(residual {err:.3g} rad); the swinging foot is out of reach",
+        )
+    lengths = actuator_lengths(p, M, feet)
+    if check_limits:
+        bad = np.flatnonzero((lengths < p.stroke_min) | (lengths > p.stroke_max))
+        if bad.size:
+            k = int(bad[0])
+            name = f"branch{k // 2 + 1}_q{'LR'[k % 2]}"
+            raise JointLimitError(name, float(lengths[k]), p.stroke_min, p.stroke_max)
+    return XfkmbResult(M, lengths, err, int(sol.nfev))
