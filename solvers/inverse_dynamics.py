@@ -31,6 +31,16 @@ Method (null-space reduction, exact and well conditioned):
    closures take entirely (an actuator locked by a weld): they get the least effort;
 4. ``lambda`` is the minimum-norm solution of ``J^T lambda = M a + h - S^T tau``.
 
+Fast path (same solution, fewer operations): when the passive columns ``J_p`` of ``J`` have
+full row rank with a safe margin (estimated from ``(J_p J_p^T)^-1``), ``lambda`` is unique and
+solves the passive rows ``J_p^T lambda = b_p`` in the least-squares sense (semi-normal equations
+with one refinement step; their residual is the unreachable part of the equation), then
+``tau = (b_a - J_a^T lambda) / gains``. The margins guarantee that the general method would find
+the same ranks (``J`` of full row rank, ``G`` of rank ``n_a``); otherwise, or when the equation
+cannot be satisfied or a bound is violated, the general method runs (and raises). For point
+closures the Jacobian is Pinocchio's constraint Jacobian in world axes (``getConstraintsJacobian``
+of ``LOCAL_WORLD_ALIGNED`` copies of the constraint models), equal to :class:`ClosureSet`'s.
+
 The direct QP over ``(tau, lambda)`` with the full equation as its equality constraint and a
 tiny weight on ``lambda`` gives the same solution in the limit, but proxsuite does not converge
 on it for the Delta (its spin rows make the equality nearly degenerate); the reduction above
@@ -41,6 +51,7 @@ Units: SI; ``tau`` in the units of the actuation (joint-side N m or N with unit 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -50,6 +61,8 @@ from proxsuite import proxqp
 
 from solvers.closure import ClosureSet
 from solvers.forward_dynamics import Actuation
+
+_POINT = pin.ContactType.CONTACT_3D
 
 __all__ = ["InfeasibleError", "InverseDynamics", "InverseResult", "InverseTrajectory"]
 
@@ -191,6 +204,42 @@ class InverseDynamics:
         self._bounded = bool(np.any(np.isfinite(self.lower) | np.isfinite(self.upper)))
         self._qp: proxqp.dense.QP | None = None
         self._qp_rank = -1
+        self._va = actuation.v_index
+        self._vp = np.setdiff1d(np.arange(model.nv), self._va)
+        self._perm = np.concatenate([self._vp, self._va])
+        self._gmin = float(np.min(np.abs(actuation.gains)))
+        # Pinocchio's constraint Jacobian (C++), mapped to the ClosureSet convention (exactly,
+        # at any q): point rows of LOCAL_WORLD_ALIGNED copies are d(p1 - p2)/dt; a weld's LOCAL
+        # rows V (frame 1's velocity relative to frame 2's, in frame 1) give
+        # -Jlog6(c1Mc2) Ad(c2Mc1) V
+        self._pin_cms = pin.StdVec_RigidConstraintModel()
+        self._pin_cds = pin.StdVec_RigidConstraintData()
+        self._welds: list[tuple[pin.RigidConstraintData, int]] = []
+        for cm, o in zip(constraints, self.closure_set.offsets, strict=False):
+            point = cm.type == _POINT
+            frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED if point else pin.ReferenceFrame.LOCAL
+            c = pin.RigidConstraintModel(
+                cm.type, model, cm.joint1_id, cm.joint1_placement, cm.joint2_id,
+                cm.joint2_placement, frame,
+            )  # fmt: skip
+            self._pin_cms.append(c)
+            self._pin_cds.append(c.createData())
+            if not point:
+                self._welds.append((self._pin_cds[len(self._pin_cds) - 1], int(o)))
+        self._pin_pairs = list(zip(self._pin_cms, self._pin_cds, strict=True))
+
+    def _jacobian(self, q: np.ndarray) -> np.ndarray:
+        """Closure Jacobian (nc, nv) at ``q`` (:class:`ClosureSet` convention)."""
+        model, kin = self.model, self._kin
+        pin.computeJointJacobians(model, kin, q)
+        for cm, cd in self._pin_pairs:
+            cm.calc(model, kin, cd)
+        J = pin.getConstraintsJacobian(model, kin, self._pin_cms, self._pin_cds)
+        J = np.reshape(J, (self.closure_set.nc, model.nv))
+        for cd, o in self._welds:
+            M = cd.c1Mc2
+            J[o : o + 6] = -pin.Jlog6(M).dot(M.inverse().toActionMatrix()).dot(J[o : o + 6])
+        return J
 
     # ------------------------------------------------------------------ one state
 
@@ -225,7 +274,10 @@ class InverseDynamics:
             b -= np.asarray(f_ext, dtype=float).reshape(model.nv)
         cs = self.closure_set
         if cs.nc:
-            _, J = cs.residual_and_jacobian(self._kin, q)
+            J = self._jacobian(q)
+            fast = self._solve_unique(b, J)
+            if fast is not None:
+                return fast
             U, s, Vt = np.linalg.svd(J)
             r = int(np.sum(s > self.rank_tol * max(float(s[0]), 1e-300))) if s.size else 0
             Z = Vt[r:].T
@@ -268,6 +320,62 @@ class InverseDynamics:
         lam = U[:, :r] @ ((Vt[:r] @ y) / s[:r]) if r else np.zeros(cs.nc)
         residual = float(np.max(np.abs(y - J.T @ lam), initial=0.0))
         return InverseResult(tau, lam, residual, redundancy, iterations)
+
+    def _solve_unique(self, b: np.ndarray, J: np.ndarray) -> InverseResult | None:
+        """Fast path of :meth:`solve` (see the module doc), or ``None`` where it does not apply.
+
+        Args:
+            b: ``M a + h - f_ext`` (nv,).
+            J: Closure Jacobian (nc, nv).
+
+        Returns:
+            The solution, or ``None``: ``J_p`` not of full row rank with margin, actuation
+            redundant, equation not satisfiable, or a bound violated (the general path decides).
+
+        """
+        n_p = self._vp.size
+        nc = J.shape[0]
+        if n_p == 0:
+            return None
+        Jr = J[:, self._perm]  # passive columns, then actuated ones
+        Jp, Ja = Jr[:, :n_p], Jr[:, n_p:]
+        wide = nc <= n_p  # J_p of full row rank (else: of full column rank)
+        try:  # X: the pseudo-inverse of J_p^T (wide) or of J_p; |X|_2 = 1 / sigma_min(J_p)
+            X = np.linalg.solve(Jp.dot(Jp.T), Jp) if wide else np.linalg.solve(Jp.T.dot(Jp), Jp.T)
+        except np.linalg.LinAlgError:
+            return None
+        x2 = float(np.vdot(X, X))  # >= 1 / sigma_min(J_p)^2
+        jp2 = float(np.vdot(Jp, Jp))
+        ja2 = float(np.vdot(Ja, Ja))
+        if not x2 * jp2 < 1e8:  # cond(J_p)^2 small enough for the semi-normal equations
+            return None
+        s_lb = x2**-0.5  # lower bound of sigma_min(J_p), and of the rank-th singular value of J
+        j_norm = math.sqrt(jp2 + ja2)
+        if s_lb <= 1e3 * self.rank_tol * j_norm:  # rank(J) >= rank(J_p), with margin
+            return None
+        if not wide:  # rank(J) = rank(J_p) iff J_a lies in range(J_p); |J_a - J_p X J_a| bounds
+            E = Ja - Jp.dot(X.dot(Ja))  # the next singular value of J
+            if math.sqrt(float(np.vdot(E, E))) > 1e-3 * self.rank_tol * j_norm / math.sqrt(nc):
+                return None
+            X = X.T  # lambda = J_p (J_p^T J_p)^-1 b_p: the minimum-norm solution
+        # sigma_min(Z^T S^T) >= g_min s / (s + |J_a|): rank n_a, with margin
+        if self._gmin * s_lb <= 1e3 * self._g_tol * (s_lb + math.sqrt(ja2)):
+            return None
+        bp = b[self._vp]
+        lam = X.dot(bp)
+        lam += X.dot(bp - lam.dot(Jp))  # one step of iterative refinement
+        scale = max(1.0, float(np.abs(b).max()))
+        if float(np.abs(bp - lam.dot(Jp)).max()) > self.consistency_tol * scale:
+            return None
+        gains = self.actuation.gains
+        tau = (b[self._va] - lam.dot(Ja)) / gains
+        if self._bounded:
+            tol = self.eps * max(1.0, float(np.abs(tau).max()))
+            if (tau < self.lower - tol).any() or (tau > self.upper + tol).any():
+                return None
+        y = b - lam.dot(J)
+        y[self._va] -= gains * tau
+        return InverseResult(tau, lam, float(np.abs(y).max()), 0, 0)
 
     def _check_bounds(
         self, tau: np.ndarray, E: np.ndarray, f: np.ndarray, sample: int | None
