@@ -78,11 +78,115 @@ def _cmd_clavel(args: argparse.Namespace, robot: Any) -> None:
     emit(args, payload, "\n".join(lines))
 
 
+def _translation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], str]:
+    from pkdyn.workspace import translation_workspace
+
+    ws = translation_workspace(
+        robot,
+        rpy=args.rpy,
+        bounds=_box(args.bounds),
+        step=args.step,
+        samples=args.samples,
+        limits=args.limits,
+        margin=args.margin,
+        method=args.method,
+        progress=not args.json,
+    )
+    if args.plot:
+        from pkdyn.plotting.workspace import plot_translation_workspace
+
+        plot_translation_workspace(ws, path=args.plot)
+    return ws.as_json(), _text(ws.as_json())
+
+
+def _orientation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], str]:
+    from pkdyn.orientation_workspace import mel_study, orientation_workspace
+
+    if args.mel:
+        study = mel_study(
+            robot, args.center, args.vector, n1=args.n1, n2=args.n2, progress=not args.json
+        )
+        cases = {name: ow.as_json() for name, ow in study.items()}
+        payload = dict(list(cases.values())[-1])
+        payload["cases"] = cases
+        if args.plot:
+            from pkdyn.plotting.workspace import plot_mel_study
+
+            plot_mel_study(study, path=args.plot)
+        lines = [
+            f"{name:28s} {c['volume']:.4f} sr  (full circles {c['full_circles']})"
+            for name, c in cases.items()
+        ]
+        return payload, "\n".join(
+            ["MEL prototype study (Merlet ch. 3), allowed solid angle:", *lines]
+        )
+    ow = orientation_workspace(
+        robot,
+        center=args.center,
+        N=args.vector,
+        X1=args.x1,
+        X2=args.x2,
+        rpy0=args.rpy,
+        n1=args.n1,
+        n2=args.n2,
+        limits=args.limits,
+        margin=args.margin,
+        progress=not args.json,
+    )
+    if args.plot:
+        from pkdyn.plotting.workspace import plot_orientation_workspace
+
+        plot_orientation_workspace(ow, path=args.plot)
+    return ow.as_json(), _text(ow.as_json())
+
+
+def _dextrous(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], str]:
+    from pkdyn.dextrous_workspace import dextrous_json, dextrous_workspace
+
+    ws = dextrous_workspace(
+        robot,
+        bounds=_box(args.bounds),
+        step=args.step,
+        samples=args.samples,
+        joint_limits=args.joint_limits,
+        progress=not args.json,
+    )
+    if args.plot:
+        from pkdyn.plotting.workspace import plot_translation_workspace
+
+        plot_translation_workspace(
+            ws, path=args.plot, title=f"{ws.robot}: dextrous workspace, {ws.volume:.4g} m^3"
+        )
+    out = dextrous_json(ws)
+    return out, _text(out)
+
+
+def _box(values: list[float] | None) -> Any:
+    return None if values is None else [values[0:2], values[2:4], values[4:6]]
+
+
+def _text(out: dict[str, Any]) -> str:
+    unit = out.get("volume_unit", "m^3")
+    lines = [f"{out['kind']} workspace: volume {out['volume']:.6g} {unit}"]
+    if out["bounds"] is not None:
+        lines.append("bounds: " + ", ".join(f"[{a:.4f}, {b:.4f}]" for a, b in out["bounds"]))
+    lines.append(
+        f"samples: {out['samples']}, rejected by: "
+        + ", ".join(f"{k} {v}" for k, v in out["limits_hit"].items())
+    )
+    if out.get("touches_box"):
+        lines.append("note: reachable samples touch the sampled box; widen --bounds")
+    return "\n".join(lines)
+
+
 def _cmd_workspace(args: argparse.Namespace) -> None:
-    robot = load(args, geometry=False)
+    robot = load(args, geometry=True)
     if args.clavel:
         _cmd_clavel(args, robot)
         return
+    run = {"translation": _translation, "orientation": _orientation, "dextrous": _dextrous}
+    payload, text = run[args.kind](args, robot)
+    emit(args, payload, text)
 
 
 def register(sub: Any) -> None:
@@ -110,5 +214,65 @@ def register(sub: Any) -> None:
         "--ab-min", type=float, default=math.radians(30.0), help="Clavel's (alpha+beta)_min [rad]"
     )
     sp.add_argument("--rays", type=int, default=72, help="Clavel: directions sampled")
+    sp.add_argument(
+        "--kind", choices=("translation", "orientation", "dextrous"), default="translation"
+    )
+    sp.add_argument(
+        "--rpy",
+        nargs=3,
+        type=float,
+        default=[0.0, 0.0, 0.0],
+        metavar=("R", "P", "Y"),
+        help="platform orientation (translation) or reference orientation (orientation) [rad]",
+    )
+    sp.add_argument(
+        "--bounds",
+        nargs=6,
+        type=float,
+        metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
+        help="sampled box [m]",
+    )
+    sp.add_argument("--step", type=float, help="grid spacing [m]")
+    sp.add_argument("--samples", type=int, default=41, help="samples per axis (no --step)")
+    sp.add_argument(
+        "--limits",
+        nargs="*",
+        default=["stroke", "joint", "interference"],
+        choices=("stroke", "joint", "interference"),
+        help="limits checked besides reach",
+    )
+    sp.add_argument("--margin", type=float, default=0.0, help="interference safety distance [m]")
+    sp.add_argument("--method", choices=("auto", "closed", "numeric"), default="auto")
+    sp.add_argument("--center", nargs=3, type=float, help="orientation: fixed point C [m]")
+    sp.add_argument(
+        "--vector",
+        nargs=3,
+        type=float,
+        default=[0.0, 0.0, 1.0],
+        help="orientation: platform-fixed vector N",
+    )
+    sp.add_argument(
+        "--x1",
+        nargs=3,
+        type=float,
+        default=[1.0, 0.0, 0.0],
+        help="orientation: first rotation axis",
+    )
+    sp.add_argument(
+        "--x2",
+        nargs=3,
+        type=float,
+        default=[0.0, 0.0, 1.0],
+        help="orientation: second rotation axis",
+    )
+    sp.add_argument("--n1", type=int, default=180, help="orientation: theta1 samples")
+    sp.add_argument("--n2", type=int, default=360, help="orientation: theta2 samples")
+    sp.add_argument(
+        "--mel",
+        action="store_true",
+        help="orientation: Merlet's MEL study (strokes; + joints; + interference)",
+    )
+    sp.add_argument("--joint-limits", action="store_true", help="dextrous: base joint limits")
+    sp.add_argument("--plot", help="save a figure (png, pdf, svg)")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_workspace)

@@ -73,6 +73,9 @@ class Params:
         platform_mass: Platform mass [kg].
         platform_radius: Platform disc radius (display, inertia) [m].
         pyramid_half_angle: Half-angle of the square-hole pyramid at the base joints [rad].
+            The report gives no hole size; 0.3 rad is the tilt a 16 mm leg has in a 33 mm
+            square hole 25 mm above the joint centre, with which the base joints cut the
+            orientation workspace at the home point, as Merlet reports (chapter 3).
         effort: Actuator force limit [N].
         velocity: Actuator speed limit [m/s].
         reduction: Transmission ratio motor [rad] per leg length [m] (2 pi / screw lead).
@@ -93,7 +96,7 @@ class Params:
     rod_mass: float = 0.4
     platform_mass: float = 3.0
     platform_radius: float = 0.13
-    pyramid_half_angle: float = 0.6
+    pyramid_half_angle: float = 0.3
     effort: float = 800.0
     velocity: float = 0.25
     reduction: float = 2 * np.pi / 0.005
