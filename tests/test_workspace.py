@@ -198,3 +198,31 @@ def test_cli_translation_json_and_plot(capsys, tmp_path):
     assert set(res) >= {"volume", "bounds", "samples", "limits_hit"}
     assert res["samples"] == 21**3 and set(res["limits_hit"]) == set(ALL)
     assert png.stat().st_size > 10_000
+
+
+def test_cone_limited_hexapod_grid_and_numeric_agree():
+    """The same legs with cone limits at the base joints (edited description): grid path,
+    pointwise path and the general numeric path agree."""
+    import re
+
+    from pkdyn.library import gough_stewart as lib
+
+    p = lib.Params()
+    xml = re.sub(
+        r'<pkdyn:pyramid axis="0 0 1" ref="[^"]*" half_angles="[^"]*"/>',
+        '<pkdyn:cone axis="0 0 1" half_angle="0.25"/>',
+        lib.build_urdf(p),
+    )
+    assert xml.count("pkdyn:cone") == 6
+    robot = pkdyn.load_string(xml, "gs_cone", home=lib.home(p))
+    ev = HexapodEvaluator(robot)
+    R = pin.rpy.rpyToMatrix(0.1, 0.0, 0.05)
+    xs, ys, z = np.linspace(-0.3, 0.3, 41), np.linspace(-0.3, 0.3, 41), 0.56
+    grid = ev.grid(xs, ys, z, R, ALL, 0.0)
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    P = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, z)])
+    np.testing.assert_array_equal(grid.ravel(), ev.violations(P, R, ALL, 0.0))
+    assert (grid == LIMIT_KINDS.index("joint")).any() and (grid == REACHABLE).any()
+    idx = np.random.default_rng(5).choice(len(P), 120, replace=False)
+    num = NumericEvaluator(robot, warm_start=False).violations(P[idx], R, ALL, 0.0)
+    np.testing.assert_array_equal(num, grid.ravel()[idx])

@@ -1,0 +1,159 @@
+"""Workspace and collision benchmarks (issue 6).
+
+- Gough-Stewart translation workspace on a grid, poses/s: strokes and base-joint pyramids
+  (separable closed form), then with leg interference (analytic segment distances on the
+  positions that pass the first limits), and the interference check alone on every pose.
+- Vectorised leg interference against a per-pose coal loop (six capsules, fifteen
+  ``coal.distance`` calls per pose), on the same poses and with the same verdicts.
+- For context: the general numeric path (inverse model + coal per pose), the Delta closed form,
+  Clavel's numeric figures and Merlet's MEL study.
+
+Run ``python bench/workspace.py``; prints the rows as a markdown table.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+import pkdyn
+from pkdyn.closed_form.delta_workspace import clavel_numeric
+from pkdyn.orientation_workspace import mel_study
+from pkdyn.workspace import translation_workspace
+from pkdyn.workspace_hexapod import HexapodEvaluator
+from pkdyn.workspace_numeric import NumericEvaluator
+
+Row = tuple[str, str, str]
+
+
+def _median_s(fn: Callable[[], object], repeats: int = 5) -> float:
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def _coal_loop(legs, v: np.ndarray, margin: float) -> np.ndarray:
+    """Per-pose coal: a capsule per leg placed from its vector, fifteen distance calls."""
+    i_idx, j_idx = np.triu_indices(legs.n, 1)
+    req = coal.DistanceRequest()
+    res = coal.DistanceResult()
+    out = np.zeros(v.shape[0], dtype=bool)
+    for k in range(v.shape[0]):
+        shapes, tfs = [], []
+        for i in range(legs.n):
+            L = float(np.linalg.norm(v[k, i]))
+            R = pin.Quaternion.FromTwoVectors(np.array([0.0, 0.0, 1.0]), v[k, i] / L)
+            shapes.append(coal.Capsule(float(legs.radius[i]), L))
+            tfs.append(coal.Transform3s(R.toRotationMatrix(), legs.A[i] + 0.5 * v[k, i]))
+        for i, j in zip(i_idx, j_idx, strict=True):
+            res.clear()
+            if coal.distance(shapes[i], tfs[i], shapes[j], tfs[j], req, res) < margin:
+                out[k] = True
+                break
+    return out
+
+
+def gough_stewart_rows() -> list[Row]:
+    gs = pkdyn.load("gough_stewart")
+    n = 101
+    rows: list[Row] = []
+    for limits, target in (
+        (("stroke", "joint"), ">= 1e6/s"),
+        (("stroke", "joint", "interference"), ">= 1e5/s"),
+    ):
+        ws = translation_workspace(gs, samples=n, limits=limits, progress=False)
+        t = _median_s(
+            lambda lim=limits: translation_workspace(gs, samples=n, limits=lim, progress=False),
+            repeats=3,
+        )
+        rows.append(
+            (
+                f"Gough-Stewart translation workspace, {' + '.join(limits)}, {n}^3 grid",
+                f"{ws.samples / t:.3g} poses/s ({ws.samples} poses in {t:.2f} s, "
+                f"volume {ws.volume * 1e3:.2f} dm^3)",
+                target,
+            )
+        )
+    # interference alone, on every pose of a region where legs do interfere (yaw 0.16 rad)
+    ev = HexapodEvaluator(gs)
+    rng = np.random.default_rng(0)
+    m = 200_000
+    P = rng.uniform([-0.2, -0.2, 0.5], [0.2, 0.2, 0.68], (m, 3))
+    R = pin.rpy.rpyToMatrix(0.0, 0.0, 0.16)
+    v = ev.legs.leg_vectors(P, R)
+    margin = 0.002
+    t_vec = _median_s(lambda: ev.legs.interference_bad(v, margin), repeats=3)
+    hits = ev.legs.interference_bad(v, margin)
+    rows.append(
+        (
+            "Gough-Stewart leg interference alone (15 leg pairs), every pose",
+            f"{m / t_vec:.3g} poses/s ({hits.mean() * 100:.0f}% of poses interfere)",
+            ">= 1e5/s",
+        )
+    )
+    k = 1000
+    t0 = time.perf_counter()
+    coal_hits = _coal_loop(ev.legs, v[:k], margin)
+    t_coal = (time.perf_counter() - t0) / k
+    assert np.array_equal(coal_hits, hits[:k])
+    rows.append(
+        (
+            "... per-pose coal loop (6 capsules, 15 `coal.distance`), same poses and verdicts",
+            f"{1 / t_coal:.3g} poses/s: vectorised is {t_coal * m / t_vec:.0f}x faster",
+            "ratio",
+        )
+    )
+    num = NumericEvaluator(gs)
+    kinds = ("reach", "stroke", "joint", "interference")
+    Pn = P[:200]
+    t0 = time.perf_counter()
+    num.violations(Pn, R, kinds, margin)
+    t_num = (time.perf_counter() - t0) / len(Pn)
+    rows.append(
+        (
+            "... general numeric path (inverse model + joint limits + coal on the URDF geometry)",
+            f"{1 / t_num:.3g} poses/s",
+            "-",
+        )
+    )
+    return rows
+
+
+def other_rows() -> list[Row]:
+    delta = pkdyn.load("delta")
+    n = 101
+    ws = translation_workspace(delta, samples=n, progress=False)
+    t = _median_s(lambda: translation_workspace(delta, samples=n, progress=False), repeats=3)
+    rows: list[Row] = [
+        (
+            f"Delta translation workspace (Clavel inverse model), all limits, {n}^3 grid",
+            f"{ws.samples / t:.3g} poses/s",
+            "-",
+        )
+    ]
+    t = _median_s(lambda: clavel_numeric(delta.params), repeats=1)
+    rows.append(("Clavel's figures measured numerically (default sampling)", f"{t:.2f} s", "-"))
+    gs = pkdyn.load("gough_stewart")
+    t = _median_s(lambda: mel_study(gs, n1=180, n2=360, progress=False), repeats=1)
+    rows.append(
+        ("Merlet's MEL study (3 orientation maps, 180 x 360 samples each)", f"{t:.2f} s", "-")
+    )
+    return rows
+
+
+def rows() -> list[Row]:
+    return gough_stewart_rows() + other_rows()
+
+
+if __name__ == "__main__":
+    print("| benchmark | figure | target |\n|---|---|---|")
+    for r in rows():
+        print("| " + " | ".join(r) + " |")
