@@ -492,19 +492,28 @@ class ForwardDynamics:
         s = tab.stages
         K = np.empty((s, model.nv))
         A = np.empty((s, model.nv))
-        P = np.empty((s, 2))
+        P = np.zeros((s, 2))
         K[0], A[0], P[0] = v, first.a, (first.p_act, first.p_fric)
         qi, tau_a = q, first.tau
         ha = h * tab.a
+        # per-stage Python overhead matters (a stage costs little more than one dynamics
+        # evaluation): local names, and no force evaluation for a passive frictionless run
+        integrate, accel = pin.integrate, self._accel
+        ddiff = pin.dDifference if self._chart else None
+        forces = None if tau_fn is None and self.friction is None else self._forces
+        zero = self._zero_nv
         # (x[:i].T.dot(c) is the cheapest small linear combination of rows in numpy)
         for i in range(1, s):
             row = ha[i, :i]
-            qi = pin.integrate(model, q, K[:i].T.dot(row))
+            qi = integrate(model, q, K[:i].T.dot(row))
             vi = v + A[:i].T.dot(row)
-            tau_a, g, pa, pf = self._forces(t + tab.c[i] * h, qi, vi, tau_fn)
-            A[i] = self._accel(qi, vi, g)
-            K[i] = pin.dDifference(model, q, qi, _ARG1).dot(vi) if self._chart else vi
-            P[i] = pa, pf
+            if forces is None:
+                A[i] = accel(qi, vi, zero)
+            else:
+                tau_a, g, pa, pf = forces(t + tab.c[i] * h, qi, vi, tau_fn)
+                A[i] = accel(qi, vi, g)
+                P[i] = pa, pf
+            K[i] = vi if ddiff is None else ddiff(model, q, qi, _ARG1).dot(vi)
         return K, A, P, qi, tau_a
 
     def _evaluate(self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None) -> _Eval:
