@@ -234,6 +234,16 @@ def test_cli_scenario_json_and_plot(tmp_path, capsys):
     assert "swing" in capsys.readouterr().out
 
 
+def test_cli_html_animation(tmp_path):
+    pytest.importorskip("pkdyn.viewer")
+    html = tmp_path / "walk.html"
+    args = ["tripod", "scenario", "--cycles", "1", "--dt", "0.5", "--no-machining"]
+    assert main([*args, "--stride", "8", "--html", str(html)]) == 0
+    text = html.read_text()
+    assert text.lstrip().lower().startswith("<!doctype html") or "<html" in text[:500].lower()
+    assert len(text) > 10_000
+
+
 @pytest.mark.parametrize(
     ("args", "what"),
     [
@@ -242,7 +252,7 @@ def test_cli_scenario_json_and_plot(tmp_path, capsys):
         (["--param", "r_p=-1"], "r_p"),
         (["--stride", "0"], "stride"),
         (["--lift", "0.25", "--dt", "0.5"], "not feasible"),
-        (["--step", "0.45", "0", "--dt", "0.5"], "shorten the step"),
+        (["--step", "0.8", "0", "--dt", "0.5"], "shorten the step"),
     ],
 )
 def test_cli_errors_are_one_line(args, what, capsys):
@@ -250,6 +260,46 @@ def test_cli_errors_are_one_line(args, what, capsys):
     assert main([*base, *args]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and what in err[0]
+
+
+def test_walk_across_a_curved_support(robot):
+    """Cylinder of radius 3 m (axis y) crossed along x: the feet land with new attitudes."""
+    radius = 3.0
+    plan = WalkPlan(step=(0.1, 0.0), cycles=1, dt=0.25, machining=None, surface_radius=radius)
+    rep = run_scenario(robot, plan, stride=4, progress=False)
+    assert rep.violations() == []
+    for ph, r in zip(rep.phases, rep.reports, strict=True):
+        assert r.max_closure_residual < 1e-10 and r.max_support_drift < 1e-10
+        assert r.max_lock_drift < 1e-10
+        if ph.name == "swing":
+            foot = foot_placement(robot, ph.trajectory.q[-1], ph.branch)
+            # on the cylinder: the sole normal points away from the axis, A is foot_height out
+            axis_point = np.array([0.0, foot.translation[1], -radius])
+            n = foot.translation - axis_point
+            assert np.linalg.norm(n) == pytest.approx(radius + P.foot_height, abs=1e-9)
+            assert np.allclose(foot.rotation[:, 2], n / np.linalg.norm(n), atol=1e-9)
+            start = ph.stance.footholds[ph.branch - 1]
+            turn = np.linalg.norm(pin.log3(start.rotation.T @ foot.rotation))
+            assert turn == pytest.approx(0.1 / radius, abs=1e-9)  # arc step / radius
+
+
+def test_swing_task_turns_the_foot_with_consistent_rates():
+    from pkdyn.tripod.scenario import foothold, swing_task
+
+    a = foothold(P, 0.7, 0.0, 0.0, 2.0)
+    b = foothold(P, 0.8, 0.02, 0.1, 2.0)
+    task = swing_task(a, b, 0.03, 1.0, 0.002)
+    R = [pin.rpy.rpyToMatrix(x[3:]) for x in task.pose]
+    dt = task.t[1] - task.t[0]
+    for k in range(1, task.t.size - 1, 50):
+        w_fd = pin.log3(R[k - 1].T @ R[k + 1]) / (2 * dt)  # local angular velocity
+        E = pin.rpy.computeRpyJacobian(task.pose[k, 3:], pin.ReferenceFrame.LOCAL)
+        assert np.allclose(E @ task.pose_d[k, 3:], w_fd, atol=1e-5)
+        rd_fd = (task.pose_d[k + 1] - task.pose_d[k - 1]) / (2 * dt)
+        assert np.allclose(task.pose_dd[k], rd_fd, atol=1e-3)
+    assert np.allclose(task.pose[0, :3], a.translation) and np.allclose(
+        task.pose[-1, :3], b.translation
+    )
 
 
 def test_wrong_robot_and_plan_values():
@@ -260,3 +310,5 @@ def test_wrong_robot_and_plan_values():
         WalkPlan(step=(math.nan, 0.0))
     with pytest.raises(pkdyn.InvalidInputError):
         WalkPlan(tilt=-0.1)
+    with pytest.raises(pkdyn.InvalidInputError):
+        WalkPlan(surface_radius=0.5)

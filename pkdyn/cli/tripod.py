@@ -52,6 +52,7 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
         reconfiguration_time=args.reconfiguration_time,
         dt=args.dt,
         machining=None if args.no_machining else MachiningPlan(),
+        surface_radius=args.surface_radius,
     )
     report = run_scenario(robot, plan, stride=args.stride)
     out = report.as_json()
@@ -112,6 +113,13 @@ def register(sub: Any) -> None:
     sc.add_argument("--reconfiguration-time", type=float, default=1.5, help="[s] (default 1.5)")
     sc.add_argument("--dt", type=float, default=0.05, help="sample period [s] (default 0.05)")
     sc.add_argument("--no-machining", action="store_true", help="walk only")
+    sc.add_argument(
+        "--surface-radius",
+        type=float,
+        default=float("inf"),
+        metavar="R",
+        help="walk across a cylindrical support of radius R [m] (default: a plane)",
+    )
     sc.add_argument(
         "--stride", type=int, default=1, help="singularity margin every N samples (default 1)"
     )

@@ -202,6 +202,32 @@ def _perp(v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
     return _unit(v1 - (v1 @ v2) * v2)
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross products of (n, 3) arrays (cheaper than ``np.cross`` for small n)."""
+    return np.stack(
+        [
+            a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+            a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+            a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0],
+        ],
+        axis=1,
+    )
+
+
+def _units(v: np.ndarray) -> np.ndarray:
+    return v / np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
+
+
+def _angles(v1: np.ndarray, v2: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Equation (1), row-wise."""
+    return np.arctan2(np.einsum("ij,ij->i", n, _cross(v1, v2)), np.einsum("ij,ij->i", v1, v2))
+
+
+def _perps(v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
+    """Equation (2), row-wise."""
+    return _units(v1 - np.einsum("ij,ij->i", v1, v2)[:, None] * v2)
+
+
 def _attachments(p: Params, i: int) -> tuple[np.ndarray, np.ndarray]:
     """``P_L`` and ``P_R`` of branch ``i`` (0-based) in the nacelle frame ``R_P`` [m]."""
     a_l, a_r = PHI[i] + p.theta, PHI[i] - p.theta
@@ -321,27 +347,27 @@ def virtual_joints(
     feet = foothold_frames(p) if footholds is None else list(footholds)
     if len(feet) != 3 or not all(isinstance(f, pin.SE3) for f in feet):
         raise InvalidInputError("footholds", f"expected 3 pin.SE3 foot frames, got {footholds!r}")
-    out = np.empty((3, 6))
-    P_O = np.array(M.translation)
-    for i, foot in enumerate(feet):
-        P_L, P_R = (M.act(P) for P in _attachments(p, i))
-        P_C = 0.5 * (P_L + P_R)
-        A = np.array(foot.translation)
-        u_a, w_a = foot.rotation[:, 0], foot.rotation[:, 2]
-        u = _unit(P_R - P_L)
-        l_c = _unit(P_C - A)
-        v_c = _unit(P_O - P_C)
-        q6 = 0.5 * np.pi - _signed_angle(_perp(l_c, u), v_c, u)
-        q5 = 0.5 * np.pi - _signed_angle(u, l_c, _unit(np.cross(u, l_c)))
-        q4 = float(np.linalg.norm(P_C - A))
-        v3 = _unit(np.cross(l_c, u))
-        w_p = _perp(w_a, v3)
-        q3 = _signed_angle(l_c, w_p, v3)
-        x1 = _perp(v3, w_a)
-        q2 = _signed_angle(w_p, w_a, _unit(np.cross(x1, w_a)))
-        q1 = _signed_angle(u_a, x1, w_a)
-        out[i] = (q1, q2, q3, q4, q5, q6)
-    return out
+    # the three branches at once: rows of (3, 3) arrays
+    R, P_O = np.array(M.rotation), np.array(M.translation)
+    P_L = np.array([_attachments(p, i)[0] for i in range(3)]) @ R.T + P_O
+    P_R = np.array([_attachments(p, i)[1] for i in range(3)]) @ R.T + P_O
+    A = np.array([f.translation for f in feet])
+    u_a = np.array([f.rotation[:, 0] for f in feet])
+    w_a = np.array([f.rotation[:, 2] for f in feet])
+    P_C = 0.5 * (P_L + P_R)
+    u = _units(P_R - P_L)
+    l_c = _units(P_C - A)
+    v_c = _units(P_O - P_C)
+    q6 = 0.5 * np.pi - _angles(_perps(l_c, u), v_c, u)
+    q5 = 0.5 * np.pi - _angles(u, l_c, _units(_cross(u, l_c)))
+    q4 = np.linalg.norm(P_C - A, axis=1)
+    v3 = _units(_cross(l_c, u))
+    w_p = _perps(w_a, v3)
+    q3 = _angles(l_c, w_p, v3)
+    x1 = _perps(v3, w_a)
+    q2 = _angles(w_p, w_a, _units(_cross(x1, w_a)))
+    q1 = _angles(u_a, x1, w_a)
+    return np.column_stack([q1, q2, q3, q4, q5, q6])
 
 
 def triangle_lengths(p: Params, s: np.ndarray) -> np.ndarray:

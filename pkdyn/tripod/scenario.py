@@ -21,7 +21,15 @@ horizontal axis normal to branch ``i``: ``b_i = B_iIKMX(x_end, new footholds)``.
 a level nacelle every support edge ``P_L P_R`` is parallel to the support, so the locked ``q1``
 of the supports do not react to a nacelle translation and the nacelle can slide along the
 swinging branch's rod ``L`` with the foot at rest — a serial singularity of mode BE (the tests
-show it); a tilt of 0.1 rad keeps ``cond(B)`` below about 10.
+show it); a tilt of 0.1 rad keeps ``cond(B)`` below about 10 (on the plane). When that axis
+leaves less than :data:`SEARCH_MARGIN` of stroke at ``x_re`` or ``x_end``, the best of twelve
+horizontal tilt axes is used instead.
+
+The support is the plane ``z = 0`` or, as an option (``surface_radius``), a cylinder of axis
+``y`` cresting at the origin: walking along ``x`` across its curvature, each foot lands with a
+new sole attitude, and the swing turns the foot evenly from the old attitude to the new one.
+With the swinging foot rigid to rod ``L`` (locks), a turn of the foot needs a large motion of
+the nacelle (its sensitivity is the conditioning of mode BE), so the tilt axis matters there.
 
 Each phase is mapped to joint space by :func:`pkdyn.trajectory.map_task_trajectory` on the
 mode's robot (:func:`pkdyn.tripod.modes.mode_robot`): the spindle tip is the platform in PP, the
@@ -31,6 +39,7 @@ closures, the clamps and the locks to second order.
 
 from __future__ import annotations
 
+import math
 import sys
 from dataclasses import dataclass, field
 from typing import Any
@@ -38,13 +47,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import (
-    InvalidInputError,
-    JointLimitError,
-    PkdynError,
-    TrajectoryError,
-    UnreachablePoseError,
-)
+from pkdyn.assembly import inverse_geometry
+from pkdyn.exceptions import InvalidInputError, PkdynError, TrajectoryError, UnreachablePoseError
 from pkdyn.library import tripod
 from pkdyn.pose import pose_to_vector
 from pkdyn.profiles import motion_law
@@ -60,9 +64,17 @@ from pkdyn.tripod.modes import (
     mode_robot,
     pp_mode,
 )
-from pkdyn.tripod.xfkmb import bikmx, xfkmb
+from pkdyn.tripod.xfkmb import actuator_lengths, bikmx, xfkmb
 
-__all__ = ["Phase", "WalkPlan", "plan_scenario", "station_home", "swing_task", "tool_pose"]
+__all__ = [
+    "Phase",
+    "WalkPlan",
+    "foothold",
+    "plan_scenario",
+    "station_home",
+    "swing_task",
+    "tool_pose",
+]
 
 
 @dataclass(frozen=True)
@@ -79,6 +91,10 @@ class WalkPlan:
         reconfiguration_time: Duration of a reconfiguration move [s].
         dt: Sample period [s].
         machining: Machining cycle at each station (``None``: walk only).
+        surface_radius: Radius [m] of the support: ``inf`` for the plane ``z = 0``; otherwise
+            the cylinder of axis ``y`` cresting at ``z = 0`` above the origin (a surface of
+            moderate curvature crossed by a walk along ``x``: every step changes the feet's
+            attitude).
 
     """
 
@@ -90,8 +106,13 @@ class WalkPlan:
     reconfiguration_time: float = 1.5
     dt: float = 0.05
     machining: MachiningPlan | None = field(default_factory=MachiningPlan)
+    surface_radius: float = math.inf
 
     def __post_init__(self) -> None:
+        if not (self.surface_radius > 1.0):
+            raise InvalidInputError(
+                "surface_radius", f"must be > 1 m (inf: a plane), got {self.surface_radius!r}"
+            )
         if len(self.step) != 2 or not np.all(np.isfinite(self.step)):
             raise InvalidInputError("step", f"expected two finite numbers, got {self.step!r}")
         if int(self.cycles) != self.cycles or self.cycles < 1:
@@ -152,9 +173,43 @@ def _params(robot: Robot) -> tripod.Params:
 
 
 def station_home(p: tripod.Params, stance: Stance) -> pin.SE3:
-    """Level nacelle placement ``nacelle_height`` above the centroid of the footholds."""
+    """Level nacelle placement above the centroid of the footholds.
+
+    ``P_O`` is ``nacelle_height - foot_height`` above the centroid of the foot-frame origins
+    (``nacelle_height`` above the support on a plane).
+    """
     c = stance.centroid()
-    return pin.SE3(np.eye(3), np.array([c[0], c[1], p.nacelle_height]))
+    return pin.SE3(np.eye(3), np.array([c[0], c[1], c[2] + p.nacelle_height - p.foot_height]))
+
+
+def foothold(p: tripod.Params, x: float, y: float, heading: float, radius: float) -> pin.SE3:
+    """Foot frame ``R_A`` of a foot clamped at ``(x, y)`` on the support, sole normal ``w_a``.
+
+    Args:
+        p: Tripod parameters.
+        x: Position of the foothold along ``x`` [m].
+        y: Position along ``y`` [m].
+        heading: Angle of ``u_a`` about the normal [rad] (``phi_i``: radial at home).
+        radius: Support radius [m] (``inf``: the plane ``z = 0``; else the cylinder of axis
+            ``y`` through ``(0, 0, -radius)``, ``x`` measured along its surface).
+
+    Returns:
+        The frame: origin ``foot_height`` above the surface along its normal.
+
+    """
+    if math.isinf(radius):
+        R, point = np.eye(3), np.array([x, y, 0.0])
+    else:
+        alpha = x / radius  # arc length along the crest
+        R = pin.exp3(np.array([0.0, alpha, 0.0]))
+        point = np.array([radius * math.sin(alpha), y, radius * (math.cos(alpha) - 1.0)])
+    R = R @ pin.exp3(np.array([0.0, 0.0, heading]))
+    return pin.SE3(R, point + p.foot_height * R[:, 2])
+
+
+def _stance(p: tripod.Params, xy: np.ndarray, radius: float) -> Stance:
+    f = [foothold(p, xy[i, 0], xy[i, 1], tripod.PHI[i], radius) for i in range(3)]
+    return Stance((f[0], f[1], f[2]))
 
 
 def tool_pose(p: tripod.Params, nacelle: pin.SE3) -> np.ndarray:
@@ -170,11 +225,12 @@ def _pose(M: pin.SE3) -> np.ndarray:
 
 
 def swing_task(start: pin.SE3, end: pin.SE3, lift: float, T: float, dt: float) -> TaskTrajectory:
-    """Swinging-foot trajectory: straight from ``start`` to ``end`` plus a parabolic lift.
+    """Swinging-foot trajectory: straight from ``start`` to ``end`` plus a lift, turning evenly.
 
-    The foot frame's origin ``A`` follows ``A0 + s (A1 - A0) + 4 lift s (1 - s) w_a`` with the
-    quintic rest-to-rest law ``s(t)``; the foot keeps the orientation of ``start`` (footholds on
-    one plane, same heading).
+    With the quintic rest-to-rest law ``s(t)``, the foot frame's origin ``A`` follows
+    ``A0 + s (A1 - A0) + 4 lift s (1 - s) w`` (``w`` the mean of the two sole normals) and its
+    orientation ``R0 exp(s omega)`` with ``omega = log3(R0^T R1)`` (constant axis in the foot
+    frame), so the foot turns from the old sole attitude to the new one.
 
     Args:
         start: Foot frame ``R_A`` at the old foothold.
@@ -184,32 +240,93 @@ def swing_task(start: pin.SE3, end: pin.SE3, lift: float, T: float, dt: float) -
         dt: Sample period [s].
 
     Returns:
-        The trajectory of the foot link frame (the BE platform).
+        The trajectory of the foot link frame (the BE platform), in the pose-vector form of
+        :class:`pkdyn.trajectory.TaskTrajectory` (roll-pitch-yaw rates from the angular
+        velocity).
 
     """
     n = max(2, int(round(T / dt)) + 1)
     t = np.linspace(0.0, T, n)
     s, sd, sdd = motion_law("quintic", T)(t)
+    F0, F1 = foot_frame(start), foot_frame(end)
     A0, A1 = np.array(start.translation), np.array(end.translation)
-    w = np.array(start.rotation[:, 2])
+    w = np.array(start.rotation[:, 2] + end.rotation[:, 2])
+    w /= np.linalg.norm(w)
     d = A1 - A0
-    rpy = _pose(foot_frame(start))[3:]
+    omega = pin.log3(F0.rotation.T @ F1.rotation)  # foot-frame axis, constant
     pose = np.zeros((n, 6))
     pose[:, :3] = A0 + np.outer(s, d) + np.outer(4.0 * lift * s * (1.0 - s), w)
-    pose[:, 3:] = rpy
     dp = d + np.outer(4.0 * lift * (1.0 - 2.0 * s), w)  # dA/ds
     pd = np.zeros((n, 6))
     pd[:, :3] = dp * sd[:, None]
     pdd = np.zeros((n, 6))
     pdd[:, :3] = dp * sdd[:, None] + np.outer(-8.0 * lift * sd**2, w)
+    local = pin.ReferenceFrame.LOCAL
+    for k in range(n):
+        rpy = pin.rpy.matrixToRpy(F0.rotation @ pin.exp3(s[k] * omega))
+        E = pin.rpy.computeRpyJacobian(rpy, local)  # omega_local = E rpy_dot
+        rpy_d = np.linalg.solve(E, omega * sd[k])
+        Ed = pin.rpy.computeRpyJacobianTimeDerivative(rpy, rpy_d, local)
+        pose[k, 3:] = rpy
+        pd[k, 3:] = rpy_d
+        pdd[k, 3:] = np.linalg.solve(E, omega * sdd[k] - Ed @ rpy_d)
     return TaskTrajectory(t, pose, pd, pdd, name="swing")
 
 
-def _tilted(p: tripod.Params, stance: Stance, branch: int, tilt: float) -> pin.SE3:
-    phi = tripod.PHI[branch - 1]
-    axis = np.array([-np.sin(phi), np.cos(phi), 0.0])
-    M = station_home(p, stance)
-    return pin.SE3(pin.exp3(tilt * axis), M.translation)
+SEARCH_MARGIN = 0.05
+"""Stroke margin [m] below which the tilt axis of ``x_end`` is searched (see
+:func:`_swing_poses`)."""
+
+
+def _tilted(p: tripod.Params, stance: Stance, psi: float, tilt: float) -> pin.SE3:
+    """Station home turned by ``tilt`` about the horizontal axis at angle ``psi``."""
+    axis = np.array([math.cos(psi), math.sin(psi), 0.0])
+    return pin.SE3(pin.exp3(tilt * axis), station_home(p, stance).translation)
+
+
+def _stroke_margin(p: tripod.Params, lengths: np.ndarray) -> float:
+    return float(min(lengths.min() - p.stroke_min, p.stroke_max - lengths.max()))
+
+
+def _swing_poses(
+    p: tripod.Params, stance: Stance, landed: Stance, branch: int, tilt: float
+) -> tuple[pin.SE3, np.ndarray, pin.SE3]:
+    """``x_end``, ``b_i = B_iIKMX(x_end, landed)`` and ``x_re = XFKMB_i(b_i, stance)``.
+
+    ``x_end`` is the station home above ``landed`` tilted by ``tilt`` about the horizontal axis
+    normal to branch ``i``; if this leaves less than :data:`SEARCH_MARGIN` of stroke at
+    ``x_re`` or ``x_end`` (it happens on curved supports, where the swing turns the foot), the
+    best of twelve horizontal axes is taken (largest smallest stroke margin).
+    """
+    default = tripod.PHI[branch - 1] + 0.5 * math.pi
+    best: tuple[float, pin.SE3, np.ndarray, pin.SE3] | None = None
+    error: Exception | None = None
+    for psi in [default] + [default + k * math.pi / 6.0 for k in range(1, 12)]:
+        x_end = _tilted(p, landed, psi, tilt)
+        b_i = bikmx(p, x_end, landed, branch)
+        try:
+            res = xfkmb(p, b_i, stance, branch, x_end, check_limits=False)
+        except UnreachablePoseError as err:
+            error = err
+            continue
+        m = min(
+            _stroke_margin(p, res.lengths), _stroke_margin(p, actuator_lengths(p, x_end, landed))
+        )
+        if best is None or m > best[0]:
+            best = (m, x_end, b_i, res.placement)
+        if best[0] >= SEARCH_MARGIN:
+            break
+    if best is None or best[0] < 0.0:
+        why = (
+            f"the best leaves its stroke by {-best[0]:.4g} m"
+            if best is not None
+            else f"XFKMB_{branch} failed: {error}"
+        )
+        raise TrajectoryError(
+            f"swing of branch {branch}: no reconfiguration pose keeps the locks the swing needs "
+            f"within the strokes ({why}); shorten the step or change the tilt"
+        )
+    return best[1], best[2], best[3]
 
 
 def _nacelle(robot: Robot, q: np.ndarray) -> pin.SE3:
@@ -238,11 +355,16 @@ def plan_scenario(
     """
     plan = WalkPlan() if plan is None else plan
     p = _params(robot)
-    stance = Stance.default(p)
+    radius = plan.surface_radius
+    xy = np.array([np.array(f.translation[:2]) for f in tripod.foothold_frames(p)])
+    stance = _stance(p, xy, radius)
     q = np.array(robot.q_home)
+    if not math.isinf(radius):  # stand on the surface first: assemble the clamped robot there
+        r = mode_robot(robot, stance, pp_mode(), q)
+        q = inverse_geometry(r, tool_pose(p, station_home(p, stance)), q, check_limits=False).q
     phases: list[Phase] = []
     t0 = 0.0
-    step = np.array([plan.step[0], plan.step[1], 0.0])
+    step = np.array(plan.step, dtype=float)
     n_phases = plan.cycles * (8 if plan.machining is not None else 7)
     bar: Any = None
     if progress is None:
@@ -282,17 +404,10 @@ def plan_scenario(
                 q = add(Phase("machining", pp_mode(), stance, r, jt, t0, wrench=W))
             for b in BRANCHES:
                 old = stance.footholds[b - 1]
-                new_foot = pin.SE3(old.rotation, old.translation + step)
+                xy[b - 1] += step
+                new_foot = foothold(p, xy[b - 1, 0], xy[b - 1, 1], tripod.PHI[b - 1], radius)
                 landed = stance.moved(b, new_foot)
-                x_end = _tilted(p, landed, b, plan.tilt)
-                b_i = bikmx(p, x_end, landed, b)
-                try:
-                    x_re = xfkmb(p, b_i, stance, b, x_end).placement
-                except (JointLimitError, UnreachablePoseError) as err:
-                    raise TrajectoryError(
-                        f"swing of branch {b}: no reconfiguration pose keeps the locks the swing "
-                        f"needs ({err}); shorten the step or change the tilt"
-                    ) from None
+                x_end, b_i, x_re = _swing_poses(p, stance, landed, b, plan.tilt)
                 q = move_nacelle(x_re, q)
                 mode = be_mode(robot, q, b)  # the locks engage where the joints stand
                 r = mode_robot(robot, stance, mode, q)

@@ -146,6 +146,7 @@ def xfkmb(
     tol: float = 1e-12,
     virtual: bool = False,
     check_limits: bool = True,
+    max_evaluations: int = 600,
 ) -> XfkmbResult:
     """``XFKMB_i``: the nacelle pose that keeps the locked joints of mode BE(i) at ``b``.
 
@@ -165,6 +166,8 @@ def xfkmb(
         virtual: Match the paper's virtual ``q3`` (measured from ``A P_C``) instead of the
             model's lock of ``q3`` (joint ``branch{i}_a``).
         check_limits: Raise if an actuator length falls outside the strokes.
+        max_evaluations: Cap on the evaluations of ``B_iKMX`` (finite-difference Jacobians
+            included; a regular solve takes about 80).
 
     Returns:
         The nacelle pose and the actuator lengths.
@@ -184,7 +187,14 @@ def xfkmb(
         return np.arctan2(np.sin(d), np.cos(d))
 
     sol = least_squares(
-        residual, np.zeros(6), jac="3-point", method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15
+        residual,
+        np.zeros(6),
+        jac="3-point",
+        method="lm",
+        xtol=1e-15,
+        ftol=1e-15,
+        gtol=1e-15,
+        max_nfev=max_evaluations,
     )
     M = _pose(start, sol.x)
     err = float(np.max(np.abs(residual(sol.x))))
