@@ -241,8 +241,8 @@ def test_virtual_joints_accept_a_pose_vector():
 def test_virtual_joints_match_the_assembled_model(robot):
     """q1..q6 from equations (1)-(8) against joint values and frames of the assembled model.
 
-    The URDF stores 10 significant digits, so the model's geometry matches the parameters to
-    ~1e-11 m; 1e-9 leaves room for the amplification through the thin triangle.
+    The assembly is solved to 1e-12; 1e-9 leaves room for the amplification through the thin
+    triangle.
     """
     tol = 1e-9
     rng = np.random.default_rng(5)

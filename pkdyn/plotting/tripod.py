@@ -76,7 +76,7 @@ def plot_scenario(report: Any, path: str | Path | None = None, title: str | None
     _shade(forces, report)
     forces.set_xlabel("t [s]")
     forces.set_ylabel("actuator force [N]")
-    forces.set_title(f"inverse dynamics (limit {report.effort_limit:.0f} N)")
+    forces.set_title(f"inverse dynamics (limit {report.effort_limit:.0f} N)", pad=14)
     forces.legend(fontsize=6, ncol=3, loc="best")
 
     margins.plot(t, 1e3 * report.stroke_margin, color="tab:purple", label="stroke margin")
@@ -85,7 +85,7 @@ def plot_scenario(report: Any, path: str | Path | None = None, title: str | None
     _shade(margins, report)
     margins.set_xlabel("t [s]")
     margins.set_ylabel("[mm]")
-    margins.set_title("stroke margin, smallest leg-leg / leg-nacelle distance")
+    margins.set_title("stroke margin, smallest leg-leg / leg-nacelle distance", pad=14)
     margins.legend(fontsize=7, loc="best")
 
     ok = np.isfinite(report.singularity_distance)
@@ -94,7 +94,7 @@ def plot_scenario(report: Any, path: str | Path | None = None, title: str | None
     sing.set_ylim(bottom=0.0)
     sing.set_xlabel("t [s]")
     sing.set_ylabel("1 / cond")
-    sing.set_title("singularity margin (A and B of the mode)")
+    sing.set_title("singularity margin (A and B of the mode)", pad=14)
     handles = [Patch(color=c, label=k) for k, c in _PHASE_COLOURS.items()]
     sing.legend(handles=handles, fontsize=7, loc="best")
 
