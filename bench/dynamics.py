@@ -1,124 +1,135 @@
-"""Dynamics benchmarks: forward step cost against the raw Pinocchio call, inverse dynamics.
+"""Dynamics benchmarks against raw Pinocchio, per library robot.
 
-Run ``python bench/dynamics.py``; prints a markdown table (medians of repeated runs).
+- Forward dynamics, per dynamics evaluation: pkdyn's step against the raw
+  ``pin.constraintDynamics`` call on the same model, constraint models (Baumgarte gains) and
+  proximal settings. Euler makes one evaluation per step; ``rk4`` four; ``dopri5`` six per
+  accepted or rejected substep, counted from the integrator. The adaptive step also needs the
+  Lie-group maps of its Runge-Kutta-Munthe-Kaas stages (``pin.integrate``, ``pin.dDifference``):
+  its cost is given against the raw call alone and against raw call + those maps.
+- Inverse dynamics per sample: ``InverseDynamics.solve`` against a raw-Pinocchio solve
+  (``rnea``, ``getConstraintsJacobian``, one least-squares solve of ``[S^T J^T] x = b``).
+
+Run ``python bench/dynamics.py``; prints the rows as a markdown table.
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-
 import numpy as np
 import pinocchio as pin
+import raw_pinocchio
+from timing import ROBOTS, Row, consistent_state, median_us, paired, us
 
 import pkdyn
-from solvers.forward_dynamics import Actuation, ForwardDynamics
-from solvers.inverse_dynamics import InverseDynamics
+from solvers import Actuation, ForwardDynamics, InverseDynamics
 
-Row = tuple[str, str, float, str]
-
-
-def _time_us(fn: Callable[[], object], n: int) -> float:
-    t0 = time.perf_counter()
-    for _ in range(n):
-        fn()
-    return 1e6 * (time.perf_counter() - t0) / n
+_ARG1 = pin.ArgumentPosition.ARG1
+STEPS = 100
 
 
-def _median_us(fn: Callable[[], object], n: int, repeats: int = 7) -> float:
-    return float(np.median([_time_us(fn, n) for _ in range(repeats)]))
-
-
-def _ratio(
-    fn: Callable[[], object], ref: Callable[[], object], n: int, n_ref: int
-) -> tuple[float, float]:
-    """Median time of ``fn`` [us] and median of its ratio to ``ref``, timed alternately (the
-    machine load changes between runs)."""
-    pairs = [(_time_us(fn, n), _time_us(ref, n_ref)) for _ in range(9)]
-    return float(np.median([p[0] for p in pairs])), float(np.median([p[0] / p[1] for p in pairs]))
-
-
-def _state(robot: pkdyn.Robot, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Home configuration and a velocity in the null space of the closure Jacobian."""
-    q = robot.q_home
-    _, J = robot.closure_set.residual_and_jacobian(robot.model.createData(), q)
-    _, s, Vt = np.linalg.svd(J)
-    Z = Vt[int(np.sum(s > 1e-9 * s[0])) :].T
-    v = Z @ np.random.default_rng(seed).standard_normal(Z.shape[1])
-    return q, 0.3 * v / np.max(np.abs(v))
-
-
-def bench(name: str, n: int = 2000) -> list[Row]:
+def robot_rows(name: str, n: int = 1000) -> list[Row]:
     robot = pkdyn.load(name, geometry=False)
     model = robot.model
-    q, v = _state(robot)
-    act = Actuation(robot.actuated_v, names=robot.actuator_names)
-    zeros = np.zeros(act.n)
+    q, v = consistent_state(robot)
+    red = np.array([a.reduction for a in robot.actuators])
+    act = Actuation(robot.actuated_v, gains=red, names=robot.actuator_names)
+    tau0 = np.zeros(act.n)
 
     def torque(t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return zeros
-
-    # raw Pinocchio call on the same model and constraints, same proximal settings
-    data = model.createData()
-    cms = robot.constraint_models
-    cds = robot.constraint_data()
-    pin.initConstraintDynamics(model, data, cms, cds)
-    prox = pin.ProximalSettings(1e-12, 1e-12, 1e-6, 30)
-    tau = np.zeros(model.nv)
-
-    def raw_call() -> None:
-        pin.constraintDynamics(model, data, q, v, tau, cms, cds, prox)
-
-    raw = _median_us(raw_call, n)
-    rows: list[Row] = [(name, "raw `pin.constraintDynamics`", raw, "1.00")]
+        return tau0
 
     dt = 1e-3
-    for integ, evals in (("euler", 1), ("rk4", 4)):
-        fd = ForwardDynamics(model, cms, act, integrator=integ, project=False)
-        fd.step(0.0, q, v, dt, torque)
-        us, ratio = _ratio(lambda fd=fd: fd.step(0.0, q, v, dt, torque), raw_call, n // evals, n)
-        rows.append((name, f"`{integ}` step, Baumgarte only", us, f"{ratio / evals:.2f}"))
+    fd = ForwardDynamics(model, robot.constraint_models, act, integrator="euler", project=False)
+    data, cms, cds, prox = fd.data, fd.constraint_models, fd.constraint_datas, fd.prox
+    zero = np.zeros(model.nv)
 
-    # dopri5 within simulate (first same as last: 6 evaluations per accepted substep), with
-    # the closure-residual check after every step; recording decimated
-    fd = ForwardDynamics(model, cms, act, integrator="dopri5")
-    steps = 200
-    us, ratio = _ratio(
-        lambda: fd.simulate(q, v, steps * dt, dt, torque, record_every=steps), raw_call, 1, n
-    )
-    evals = 6.0 * (fd.steps + fd.rejected) / steps
+    def raw() -> None:
+        pin.constraintDynamics(model, data, q, v, zero, cms, cds, prox)
+
+    rows: list[Row] = []
+    t_euler, t_raw, r_euler = paired(lambda: fd.step(0.0, q, v, dt, torque), raw, n)
     rows.append(
         (
-            name,
-            "`dopri5` output step in `simulate` + projection check",
-            us / steps,
-            f"{ratio / (steps * evals):.2f} ({evals:.1f} eval./step)",
+            f"{name}: forward step, `euler` (1 evaluation) vs raw `pin.constraintDynamics`",
+            f"{us(t_euler)} vs {us(t_raw)}: {r_euler:.2f}x",
+            "<= 1.3x",
         )
     )
-    check = _median_us(lambda: fd.closure_set.residual(fd._kin, q), n)
-    rows.append((name, "projection check (closure residual)", check, "-"))
-    rng = np.random.default_rng(1)
-    q_off = pin.integrate(model, q, 1e-7 * rng.standard_normal(model.nv))
-    proj = _median_us(lambda: fd.project_state(q_off, v), n // 10)
-    rows.append((name, "projection of q (Gauss-Newton) and v (M-metric)", proj, "-"))
-
-    fd0 = ForwardDynamics(model, cms, act, baumgarte=(0.0, 0.0))
-    a = fd0.acceleration(q, v, act.generalized(np.ones(act.n), model.nv))
-    lim = np.array([x.effort for x in robot.actuators])
-    inv = InverseDynamics(model, cms, act, -lim, lim)
+    fdp = ForwardDynamics(model, robot.constraint_models, act, integrator="euler")
+    t_p, _, r_p = paired(lambda: fdp.step(0.0, q, v, dt, torque), raw, n)
     rows.append(
-        (name, "inverse dynamics, one sample", _median_us(lambda: inv.solve(q, v, a), n // 2), "-")
+        (
+            f"{name}: ... `euler` with the default `project=True` (an Euler step drifts past "
+            "`project_tol` = 1e-11: every step is projected)",
+            f"{us(t_p)}: {r_p:.2f}x",
+            "-",
+        )
+    )
+    fd5 = ForwardDynamics(model, robot.constraint_models, act, integrator="dopri5")
+    q2 = pin.integrate(model, q, 1e-3 * v)
+
+    def raw_rkmk() -> None:  # what one RKMK stage needs from Pinocchio
+        pin.integrate(model, q, v)
+        pin.constraintDynamics(model, data, q, v, zero, cms, cds, prox)
+        pin.dDifference(model, q, q2, _ARG1).dot(v)
+
+    def run() -> None:
+        fd5.simulate(q, v, STEPS * dt, dt, torque, record_every=STEPS)
+
+    run()
+    evals = 6 * (fd5.steps + fd5.rejected) + 1
+    t5, _, r5 = paired(run, raw, 1, n, repeats=7)
+    _, _, r_rk = paired(run, raw_rkmk, 1, n, repeats=7)
+    rows.append(
+        (
+            f"{name}: forward step, `dopri5` in `simulate` (with closure checks), per evaluation",
+            f"{us(t5 / evals)} ({evals / STEPS:.1f} eval./output step): {r5 / evals:.2f}x the "
+            f"raw call, {r_rk / evals:.2f}x raw call + `integrate` + `dDifference`",
+            "<= 1.3x, see notes",
+        )
+    )
+    fd4 = ForwardDynamics(model, robot.constraint_models, act, integrator="rk4", project=False)
+    t4, _, r4 = paired(lambda: fd4.step(0.0, q, v, dt, torque), raw, max(1, n // 4), n)
+    rows.append(
+        (
+            f"{name}: forward step, `rk4` (4 evaluations), per evaluation",
+            f"{us(t4 / 4)}: {r4 / 4:.2f}x",
+            "-",
+        )
+    )
+    check = median_us(lambda: fd5.closure_set.residual(fd5._kin, q), n)
+    rows.append((f"{name}: closure check (residual) after an output step", us(check), "-"))
+    # inverse dynamics on a consistent state
+    fd0 = ForwardDynamics(model, robot.constraint_models, act, baumgarte=(0.0, 0.0))
+    a = fd0.acceleration(q, v, act.generalized(np.ones(act.n), model.nv))
+    inv = InverseDynamics(model, robot.constraint_models, act)
+    closures = raw_pinocchio.RawClosures(model, robot.constraint_models)
+    S = act.matrix(model.nv)
+    kin = model.createData()
+    tau_raw = raw_pinocchio.inverse_dynamics(model, kin, closures, S, q, v, a)
+    assert np.allclose(inv.solve(q, v, a).tau, tau_raw, rtol=1e-8, atol=1e-9)
+    t_id, t_idr, r_id = paired(
+        lambda: inv.solve(q, v, a),
+        lambda: raw_pinocchio.inverse_dynamics(model, kin, closures, S, q, v, a),
+        max(1, n // 2),
+    )
+    rows.append(
+        (
+            f"{name}: inverse dynamics, one sample, vs raw Pinocchio (rnea + J + lstsq)",
+            f"{us(t_id)} vs {us(t_idr)}: {r_id:.2f}x",
+            "-",
+        )
     )
     return rows
 
 
-def main() -> None:
-    print("| robot | operation | time (us) | ratio to the raw call, per evaluation |")
-    print("|---|---|---|---|")
-    for name in ("delta", "gough_stewart"):
-        for robot, label, us, ratio in bench(name):
-            print(f"| {robot} | {label} | {us:.1f} | {ratio} |")
+def rows() -> list[Row]:
+    out: list[Row] = []
+    for name in ROBOTS:
+        out += robot_rows(name)
+    return out
 
 
 if __name__ == "__main__":
-    main()
+    print("| benchmark | figure | target |\n|---|---|---|")
+    for r in rows():
+        print("| " + " | ".join(r) + " |")

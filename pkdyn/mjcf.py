@@ -42,6 +42,7 @@ import warnings
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -49,7 +50,15 @@ import pinocchio as pin
 from pkdyn.exceptions import DescriptionError, PkdynError
 from pkdyn.robot import Robot
 
-__all__ = ["JointMap", "MjcfOptions", "StateMap", "to_mjcf", "write_mjcf"]
+__all__ = [
+    "JointMap",
+    "MjcfOptions",
+    "StateMap",
+    "actuator_efforts",
+    "mujoco_model",
+    "to_mjcf",
+    "write_mjcf",
+]
 
 _MESH_FORMATS = (".stl", ".obj", ".msh")
 _TAG_ORDER = {"inertial": 0, "joint": 1, "geom": 2, "site": 3, "body": 4}
@@ -641,3 +650,63 @@ def write_mjcf(
         Path(path).write_text(text)
     except OSError as err:
         raise PkdynError(f"cannot write '{path}': {err.strerror}") from None
+
+
+# ---------------------------------------------------------------------------------- MuJoCo side
+
+
+def mujoco_model(robot: Robot, options: MjcfOptions | None = None) -> Any:
+    """The export of ``robot`` compiled by MuJoCo.
+
+    Args:
+        robot: A loaded robot.
+        options: Simulation options.
+
+    Returns:
+        The ``mujoco.MjModel``.
+
+    Raises:
+        ImportError: MuJoCo is not installed (``pip install mujoco``).
+
+    """
+    try:
+        import mujoco
+    except ImportError as err:  # an optional dependency of the core
+        raise ImportError("MuJoCo is not installed: pip install mujoco") from err
+    return mujoco.MjModel.from_xml_string(to_mjcf(robot, options))
+
+
+def actuator_efforts(model: Any, data: Any) -> np.ndarray:
+    """Actuator forces that explain MuJoCo's inverse dynamics through the closures.
+
+    The least-squares solution of ``[moment^T  J_eq^T] [tau; lambda] = qfrc_inverse`` after
+    ``mujoco.mj_inverse``, with ``J_eq`` the rows of MuJoCo's constraint Jacobian that belong to
+    equality constraints (the closures) and ``moment`` the actuator moment arm (the gears).
+    Unique when the actuation is not redundant, whatever the redundancy of the closure rows.
+
+    Args:
+        model: The ``mujoco.MjModel``.
+        data: Its ``mujoco.MjData`` after ``mj_inverse``.
+
+    Returns:
+        Actuator forces (nu,) in actuation space (motor-side efforts for geared motors).
+
+    """
+    import mujoco
+
+    nv, nefc = model.nv, data.nefc
+    if mujoco.mj_isSparse(model):
+        J = np.zeros((nefc, nv))
+        mujoco.mju_sparse2dense(
+            J, data.efc_J, data.efc_J_rownnz, data.efc_J_rowadr, data.efc_J_colind
+        )
+    else:
+        J = np.asarray(data.efc_J).reshape(-1)[: nefc * nv].reshape(nefc, nv)
+    eq = np.asarray(data.efc_type[:nefc]) == mujoco.mjtConstraint.mjCNSTR_EQUALITY
+    moment = np.zeros((model.nu, nv))
+    mujoco.mju_sparse2dense(
+        moment, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind
+    )
+    A = np.hstack([moment.T, J[eq].T])
+    x = np.linalg.lstsq(A, data.qfrc_inverse, rcond=None)[0]
+    return np.asarray(x[: model.nu])

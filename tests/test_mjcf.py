@@ -31,7 +31,7 @@ import pytest
 import pkdyn
 from pkdyn.cli import main
 from pkdyn.exceptions import DescriptionError
-from pkdyn.mjcf import MjcfOptions, StateMap, to_mjcf
+from pkdyn.mjcf import MjcfOptions, StateMap, actuator_efforts, mujoco_model, to_mjcf
 from solvers import Actuation, ForwardDynamics, InverseDynamics
 
 mujoco = pytest.importorskip("mujoco")
@@ -321,7 +321,6 @@ def test_inverse_efforts_match_mujoco(case):
     fd = ForwardDynamics(robot.model, robot.constraint_models, act, baumgarte=(0.0, 0.0))
     inv = InverseDynamics(robot.model, robot.constraint_models, act)
     data = mujoco.MjData(model)
-    moment = np.zeros((model.nu, model.nv))
     for q, v, tau in case.states:
         a = fd.acceleration(q, v, act.generalized(tau, robot.nv))
         tau_pk = inv.solve(q, v, a).tau
@@ -329,18 +328,32 @@ def test_inverse_efforts_match_mujoco(case):
         data.qvel[:] = smap.qvel(q, v)
         data.qacc[:] = smap.qacc(q, v, a)
         mujoco.mj_inverse(model, data)
-        eq = data.efc_type[: data.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY
-        Jc = np.asarray(data.efc_J).reshape(-1)[: data.nefc * model.nv].reshape(data.nefc, -1)
-        mujoco.mju_sparse2dense(
-            moment, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind
-        )
-        A = np.hstack([moment.T, Jc[eq].T])
-        x, *_ = np.linalg.lstsq(A, data.qfrc_inverse, rcond=None)
-        tau_mj = x[: model.nu]
-        assert np.linalg.norm(A @ x - data.qfrc_inverse) < 1e-9 * np.linalg.norm(data.qfrc_inverse)
+        tau_mj = actuator_efforts(model, data)  # least squares on [moment^T J_eq^T]
         # observed 1e-15 .. 3e-13
         np.testing.assert_allclose(tau_mj, tau_pk, rtol=0, atol=1e-9 * np.max(np.abs(tau_pk)))
         np.testing.assert_allclose(tau_pk, tau, rtol=0, atol=1e-9 * np.max(np.abs(tau)))
+
+
+def test_actuator_efforts_with_a_sparse_jacobian():
+    """The projection reads MuJoCo's sparse constraint Jacobian as well as the dense one."""
+    robot = pkdyn.load("gough_stewart", geometry=False)
+    smap = StateMap(robot)
+    rng = np.random.default_rng(3)
+    q = pkdyn.project(robot, _random_q(robot, rng, 0.05))
+    v = _null_space(robot, robot.model.createData(), q) @ rng.standard_normal(6)
+    qacc = rng.standard_normal(smap.nv)
+    out = []
+    for jac in (mujoco.mjtJacobian.mjJAC_DENSE, mujoco.mjtJacobian.mjJAC_SPARSE):
+        model = mujoco_model(robot, MjcfOptions(contacts=False))
+        model.opt.jacobian = jac
+        data = mujoco.MjData(model)
+        data.qpos[:] = smap.qpos(q)
+        data.qvel[:] = smap.qvel(q, v)
+        data.qacc[:] = qacc
+        mujoco.mj_inverse(model, data)
+        out.append(actuator_efforts(model, data))
+    assert np.all(np.isfinite(out[0])) and np.any(out[0] != 0.0)
+    np.testing.assert_allclose(out[0], out[1], rtol=1e-10)
 
 
 def test_no_warnings_for_library_geometry():

@@ -1,0 +1,69 @@
+"""Timing helpers shared by the benchmark modules: medians of repeated batches, paired ratios.
+
+The machine is shared, so its load changes between runs: a ratio is the median of ratios
+measured on alternating batches of the two callables, not a ratio of two separate medians.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+import pinocchio as pin
+
+import pkdyn
+
+Row = tuple[str, str, str]
+"""One table row: benchmark, figure, target or comment."""
+
+ROBOTS = ("delta", "gough_stewart", "planar_3rrr", "five_bar", "tripod")
+
+
+def batch_us(fn: Callable[[], object], n: int) -> float:
+    """Mean time of ``n`` calls of ``fn`` [us]."""
+    t0 = time.perf_counter()
+    for _ in range(n):
+        fn()
+    return 1e6 * (time.perf_counter() - t0) / n
+
+
+def median_us(fn: Callable[[], object], n: int, repeats: int = 7) -> float:
+    """Median over ``repeats`` batches of the mean time of ``n`` calls [us]."""
+    fn()
+    return float(np.median([batch_us(fn, n) for _ in range(repeats)]))
+
+
+def paired(
+    fn: Callable[[], object],
+    ref: Callable[[], object],
+    n: int,
+    n_ref: int | None = None,
+    repeats: int = 9,
+) -> tuple[float, float, float]:
+    """Median times of ``fn`` and ``ref`` [us] and the median of their ratio, timed alternately."""
+    fn()
+    ref()
+    pairs = [(batch_us(fn, n), batch_us(ref, n_ref or n)) for _ in range(repeats)]
+    a = np.array(pairs)
+    return float(np.median(a[:, 0])), float(np.median(a[:, 1])), float(np.median(a[:, 0] / a[:, 1]))
+
+
+def consistent_state(
+    robot: pkdyn.Robot, seed: int = 0, spread: float = 0.05, speed: float = 0.3
+) -> tuple[np.ndarray, np.ndarray]:
+    """An assembled configuration near home and a velocity in the closures' null space."""
+    rng = np.random.default_rng(seed)
+    q = pkdyn.project(
+        robot, pin.integrate(robot.model, robot.q_home, spread * rng.standard_normal(robot.nv))
+    )
+    _, J = robot.closure_set.residual_and_jacobian(robot.model.createData(), q)
+    _, s, Vt = np.linalg.svd(J)
+    Z = Vt[int(np.sum(s > 1e-9 * s[0])) :].T
+    v = Z @ rng.standard_normal(Z.shape[1])
+    return q, speed * v / np.max(np.abs(v))
+
+
+def us(x: float) -> str:
+    """A time in microseconds, 3 significant figures."""
+    return f"{x:.3g} us" if x < 1e3 else f"{x / 1e3:.3g} ms"
