@@ -446,7 +446,9 @@ class ForwardDynamics:
         """Actuator efforts and their generalized force (friction excluded)."""
         if tau_fn is None:
             return self._zero_tau, self._zero_nv
-        tau_a = np.asarray(tau_fn(t, q, v), dtype=float)
+        tau_a = tau_fn(t, q, v)
+        if type(tau_a) is not np.ndarray or tau_a.dtype != np.float64:
+            tau_a = np.asarray(tau_a, dtype=float)
         if tau_a.shape != self._zero_tau.shape:
             tau_a = tau_a.reshape(-1)
             if tau_a.size != self.actuation.n:
@@ -621,7 +623,7 @@ class ForwardDynamics:
 
         """
         if self.integrator == "euler":
-            _, g = self._generalized(t, q, v, tau)
+            g = self._generalized(t, q, v, tau)[1]
             if self.friction is not None:
                 g = g + self.friction.force(v)
             v = v + dt * self._accel(q, v, g)
