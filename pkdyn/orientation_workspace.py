@@ -51,7 +51,8 @@ def _unit(name: str, v: Sequence[float]) -> np.ndarray:
     a = np.asarray(v, dtype=float)
     n = float(np.linalg.norm(a)) if a.shape == (3,) else 0.0
     if not n > 1e-12 or not np.all(np.isfinite(a)):
-        raise InvalidInputError(name, f"expected a non-zero 3-vector, got {list(np.ravel(a))}")
+        got = " ".join(f"{x:g}" for x in np.ravel(a))
+        raise InvalidInputError(name, f"expected a non-zero 3-vector, got [{got}]")
     return a / n
 
 

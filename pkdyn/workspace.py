@@ -209,6 +209,8 @@ def _grid_axes(
         if not hi > lo:
             raise InvalidInputError("bounds", f"{AXES[d]}: need min < max, got {lo}, {hi}")
         if step is None:
+            if n < 2:
+                raise InvalidInputError("samples", f"{n}: need at least 2 samples per axis")
             axes.append(np.linspace(lo, hi, n))
             continue
         k = int(np.floor((hi - lo) / step + 1e-9)) + 1

@@ -243,7 +243,13 @@ def register(sub: Any) -> None:
     )
     sp.add_argument("--margin", type=float, default=0.0, help="interference safety distance [m]")
     sp.add_argument("--method", choices=("auto", "closed", "numeric"), default="auto")
-    sp.add_argument("--center", nargs=3, type=float, help="orientation: fixed point C [m]")
+    sp.add_argument(
+        "--center",
+        nargs=3,
+        type=float,
+        metavar=("X", "Y", "Z"),
+        help="orientation: fixed point C [m]",
+    )
     sp.add_argument(
         "--vector",
         nargs=3,
