@@ -100,6 +100,7 @@ class JointMap:
             ``free``, ``planar``, or ``multi`` (several 1-dof MuJoCo joints: universal,
             translation, spherical ZYX; coordinates shared one to one).
         idx_q: First Pinocchio configuration index.
+        nq: Number of Pinocchio configuration coordinates.
         idx_v: First Pinocchio velocity index.
         nv: Number of velocity coordinates (equal in both).
         qpos: First MuJoCo ``qpos`` index.
@@ -111,6 +112,7 @@ class JointMap:
     name: str
     kind: str
     idx_q: int
+    nq: int
     idx_v: int
     nv: int
     qpos: int
@@ -126,14 +128,6 @@ class _MjJoint:
     type: str
     axis: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     range: tuple[float, float] | None = None
-
-
-@dataclass
-class _Body:
-    jid: int
-    name: str
-    joints: list[_MjJoint]
-    kind: str
 
 
 def _num(x: float) -> str:
@@ -282,12 +276,11 @@ class StateMap:
             jm = model.joints[j]
             names = tuple(e.name for e in els)
             joints.append(
-                JointMap(model.names[j], kind, jm.idx_q, jm.idx_v, jm.nv, qpos, dof, names)
+                JointMap(model.names[j], kind, jm.idx_q, jm.nq, jm.idx_v, jm.nv, qpos, dof, names)
             )
             qpos += {"free": 7, "ball": 4}.get(kind, len(els))
             dof += jm.nv
         self.joints = tuple(joints)
-        self.kinds = {jm.name: jm.kind for jm in joints}
         self.nq = qpos
         self.nv = dof
         self._dof_of_v = np.empty(model.nv, dtype=int)
@@ -298,7 +291,6 @@ class StateMap:
     def qpos(self, q: np.ndarray) -> np.ndarray:
         """MuJoCo ``qpos`` of a Pinocchio configuration ``q`` (nq,)."""
         out = np.empty(self.nq)
-        model = self.model
         for jm in self.joints:
             a, i = jm.qpos, jm.idx_q
             if jm.kind == "ball":
@@ -312,8 +304,7 @@ class StateMap:
             elif jm.kind == "planar":
                 out[a : a + 3] = q[i], q[i + 1], math.atan2(q[i + 3], q[i + 2])
             else:
-                n = model.joints[model.getJointId(jm.name)].nq
-                out[a : a + n] = q[i : i + n]
+                out[a : a + jm.nq] = q[i : i + jm.nq]
         return out
 
     def q(self, qpos: np.ndarray) -> np.ndarray:
@@ -336,8 +327,7 @@ class StateMap:
                 th = qpos[a + 2]
                 out[i : i + 4] = qpos[a], qpos[a + 1], math.cos(th), math.sin(th)
             else:
-                n = model.joints[model.getJointId(jm.name)].nq
-                out[i : i + n] = qpos[a : a + n]
+                out[i : i + jm.nq] = qpos[a : a + jm.nq]
         return out
 
     def _free_placement(self, jm: JointMap, q: np.ndarray) -> pin.SE3:

@@ -212,6 +212,53 @@ def test_plain_urdf_with_meshes_and_continuous_joints():
     np.testing.assert_allclose(smap.q(smap.qpos(q)), q, atol=1e-12)
 
 
+def test_other_joint_kinds_match_mujoco():
+    """Unaligned revolute and prismatic, translation and spherical ZYX joints (a hand-built
+    tree): body frames and body velocities agree with MuJoCo's."""
+    robot = pkdyn.load("five_bar", geometry=False)
+    model = pin.Model()
+    rng = np.random.default_rng(5)
+    parent = 0
+    joints = (
+        pin.JointModelRevoluteUnaligned(np.array([1.0, 2.0, 2.0]) / 3.0),
+        pin.JointModelPrismaticUnaligned(np.array([0.0, 0.6, 0.8])),
+        pin.JointModelTranslation(),
+        pin.JointModelSphericalZYX(),
+    )
+    for k, jm in enumerate(joints):
+        M = pin.SE3(pin.exp3(rng.standard_normal(3)), rng.standard_normal(3) * 0.2)
+        parent = model.addJoint(parent, jm, M, f"j{k}")
+        model.appendBodyToJoint(parent, pin.Inertia.FromBox(1.0, 0.1, 0.2, 0.3), pin.SE3.Identity())
+        model.addFrame(pin.Frame(f"link{k}", parent, pin.SE3.Identity(), pin.FrameType.BODY))
+    fake = dataclasses.replace(
+        robot,
+        model=model,
+        data=model.createData(),
+        constraint_models=pin.StdVec_RigidConstraintModel(),
+        actuators=(),
+        platform_frame=None,
+        q_home=pin.neutral(model),
+    )
+    smap = StateMap(fake)
+    mj = mujoco.MjModel.from_xml_string(to_mjcf(fake))
+    data = mujoco.MjData(mj)
+    q = pin.integrate(model, pin.neutral(model), rng.standard_normal(model.nv))
+    v = rng.standard_normal(model.nv)
+    data.qpos[:] = smap.qpos(q)
+    data.qvel[:] = smap.qvel(q, v)
+    mujoco.mj_forward(mj, data)
+    d = model.createData()
+    pin.forwardKinematics(model, d, q, v)
+    res = np.zeros(6)
+    for j in range(1, model.njoints):
+        b = _body(mj, smap.body_names[j])
+        np.testing.assert_allclose(data.xpos[b], d.oMi[j].translation, atol=1e-12)
+        np.testing.assert_allclose(data.xmat[b].reshape(3, 3), d.oMi[j].rotation, atol=1e-12)
+        mujoco.mj_objectVelocity(mj, data, mujoco.mjtObj.mjOBJ_XBODY, b, res, 1)
+        np.testing.assert_allclose(res, np.r_[d.v[j].angular, d.v[j].linear], atol=1e-12)
+    assert mj.nq == smap.nq == 1 + 1 + 3 + 3
+
+
 def test_unsupported_joint_names_it():
     robot = pkdyn.load("five_bar", geometry=False)
     model = pin.Model()
