@@ -297,6 +297,7 @@ def clavel_numeric(
     fractions: int = 21,
     heights: int = 100,
     tol: float = 1e-10,
+    refine: bool = True,
     progress: bool = False,
 ) -> tuple[ClavelFigures, float]:
     """Clavel's figures measured on the mechanism by sampling with the same limits.
@@ -318,6 +319,8 @@ def clavel_numeric(
         fractions: Radial samples per direction, from the axis to the projection's edge.
         heights: Height samples per column before bisection.
         tol: Bisection and pattern-search tolerance [m].
+        refine: Refine ``zh``, ``zb`` and the lowest point by pattern search (else: the best
+            column sample).
         progress: Show a progress bar.
 
     Returns:
@@ -369,6 +372,10 @@ def clavel_numeric(
         ("lowest", z_bot, np.argmin),
     ):
         i = int(pick(arr))
+        if not refine:
+            found.append(float(arr[i]))
+            bar.update()
+            continue
         found.append(
             smp.extremum(float(phi[i // fractions]), float(f[i % fractions]), dphi, df, which)
         )
