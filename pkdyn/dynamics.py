@@ -13,7 +13,6 @@ platform, force in world axes [N], moment in platform axes [N m]); gravity is ``
 from __future__ import annotations
 
 import dataclasses
-import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -29,6 +28,7 @@ from pkdyn.exceptions import (
 )
 from pkdyn.kinematics import platform_jacobian
 from pkdyn.pose import as_finite
+from pkdyn.progress import progress as progress_bar
 from pkdyn.robot import Robot
 from pkdyn.trajectory import JointTrajectory
 from solvers import (
@@ -276,13 +276,7 @@ def inverse_dynamics(
     res = np.empty(N)
     kin = np.empty(N)
     pot = np.empty(N)
-    iterator: Any = range(N)
-    if progress is None:
-        progress = N > 2000 and sys.stderr.isatty()
-    if progress:
-        from tqdm import tqdm
-
-        iterator = tqdm(iterator, desc="inverse dynamics", unit="sample")
+    iterator = progress_bar(range(N), "inverse dynamics", "sample", progress, min_items=2000)
     for k in iterator:
         q, v, a = traj.q[k], traj.v[k], traj.a[k]
         _check_consistent(solver.closure_set, kin_data, k, float(traj.t[k]), q, v, a)

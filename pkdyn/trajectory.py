@@ -48,6 +48,7 @@ from pkdyn.exceptions import (
 from pkdyn.kinematics import SINGULAR_TOL, kinematic_models
 from pkdyn.pose import pose_to_vector
 from pkdyn.profiles import MotionLaw, motion_law
+from pkdyn.progress import progress as progress_bar
 from pkdyn.robot import Robot
 
 __all__ = [
@@ -426,15 +427,7 @@ def map_task_trajectory(
     V = np.empty((N, robot.nv))
     A = np.empty((N, robot.nv))
     q = robot.q_home if q_init is None else np.asarray(q_init, dtype=float)
-    iterator: Any = range(N)
-    if progress is None:
-        import sys
-
-        progress = N > 2000 and sys.stderr.isatty()
-    if progress:
-        from tqdm import tqdm
-
-        iterator = tqdm(iterator, desc=f"mapping {task.name}", unit="sample")
+    iterator = progress_bar(range(N), f"mapping {task.name}", "sample", progress, min_items=2000)
     names = robot.actuator_names
     last_sign, last_sigma = 0.0, (0.0, 0.0)
     vel_limit = np.array([act.velocity for act in robot.actuators])

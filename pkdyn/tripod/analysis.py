@@ -19,7 +19,6 @@ For every sample of every phase of :func:`pkdyn.tripod.scenario.plan_scenario`:
 
 from __future__ import annotations
 
-import sys
 import warnings
 from dataclasses import dataclass
 from typing import Any
@@ -29,6 +28,7 @@ import pinocchio as pin
 
 from pkdyn.collisions import CollisionChecker
 from pkdyn.dynamics import inverse_dynamics
+from pkdyn.progress import progress as progress_bar
 from pkdyn.robot import Robot
 from pkdyn.singularity import classify
 from pkdyn.tripod.modes import BRANCHES, foot_placement
@@ -350,13 +350,7 @@ def analyse(
     """
     leg_leg, leg_nacelle = leg_pairs()
     checkers = (CollisionChecker(robot, leg_leg), CollisionChecker(robot, leg_nacelle))
-    iterator: Any = phases
-    if progress is None:
-        progress = sys.stderr.isatty()
-    if progress:
-        from tqdm import tqdm
-
-        iterator = tqdm(phases, desc="checks", unit="phase")
+    iterator = progress_bar(phases, "checks", "phase", progress)
     reports: list[PhaseReport] = []
     series: dict[str, list[np.ndarray]] = {
         k: [] for k in ("tau", "margin", "distance", "singularity", "nacelle", "feet")
