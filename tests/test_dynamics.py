@@ -337,3 +337,14 @@ def test_redundant_limits_are_respected_or_named(quattro):
     with pytest.raises(InfeasibleEffortError) as info:
         inverse_dynamics(weak, jt, limits=True)
     assert info.value.sample is not None and info.value.actuator in weak.actuator_names
+
+
+@pytest.mark.parametrize("params", [{"parallelogram": "hinge"}, {"arms": 4}])
+def test_overconstrained_closures_simulate(params):
+    """Hinge parallelograms (redundant hinge equations, hyperstatic) and a fourth arm (the
+    closures over-determine the nacelle): the proximal solver copes; energy and closures kept."""
+    robot = pkdyn.load("delta", geometry=False, **params)
+    res = simulate(robot, 1.0, 1e-3)
+    assert np.max(res.closure_residual) < 1e-8
+    assert res.energy_drift() < 1e-3
+    assert np.max(res.kinetic) > 0.1
