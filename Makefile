@@ -6,8 +6,9 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+CHROMIUM ?= /usr/bin/chromium
 
-.PHONY: demo test lint bench urdf clean
+.PHONY: demo test lint browser bench urdf clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -23,7 +24,17 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff format --check pkdyn solvers tests bench
 	$(VENV)/bin/mypy
 
-test: lint
+# Headless Chromium for the viewer's browser test (tests/test_viewer.py skips, saying why, when it
+# cannot be installed: not root, no apt-get, or no package repository reachable).
+browser:
+	@if [ ! -x $(CHROMIUM) ] && [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	  echo "installing Debian chromium (headless browser test of the viewer)"; \
+	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+	    --no-install-recommends chromium; } >/dev/null 2>&1 \
+	    || echo "chromium could not be installed: the browser test will be skipped"; \
+	fi
+
+test: lint browser
 	$(PY) -m pytest -q
 
 urdf: $(STAMP)

@@ -1,0 +1,138 @@
+"""The ``view`` command: a meshcat scene of a robot, served live or written as one HTML file."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pkdyn.cli._common import load, robot_command
+from pkdyn.exceptions import InvalidInputError
+
+__all__ = ["register"]
+
+
+def _read_points(path: str) -> np.ndarray:
+    """An (N, 3) point array [m] from ``.npy`` or a text file (comma or blank separated)."""
+    try:
+        if path.endswith(".npy"):
+            P = np.load(path, allow_pickle=False)
+        else:
+            text = Path(path).read_text().replace(",", " ")
+            P = np.loadtxt(text.splitlines(), ndmin=2)
+    except (OSError, ValueError) as err:
+        raise InvalidInputError("--points", f"cannot read '{path}': {err}") from None
+    P = np.asarray(P, dtype=float)
+    if P.ndim != 2 or P.shape[1] != 3:
+        raise InvalidInputError(
+            "--points", f"'{path}': expected N rows of x y z [m], got {P.shape}"
+        )
+    return P
+
+
+def _wait_for_stop() -> None:
+    """Block until Ctrl-C, SIGTERM or SIGHUP (the live scene's server is closed afterwards).
+
+    The handlers are installed explicitly: a process started in the background inherits an
+    ignored SIGINT, and meshcat's server runs in its own session, so it would outlive us.
+    """
+
+    def stop(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    signals = [signal.SIGINT, signal.SIGTERM, signal.SIGHUP]
+    previous = {s: signal.signal(s, stop) for s in signals}
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        print("pkdyn: viewer stopped", flush=True)
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def _configuration(robot: Any, args: argparse.Namespace) -> np.ndarray | None:
+    import pkdyn
+
+    if args.q is not None:
+        return pkdyn.forward_geometry(robot, args.q, check_limits=False).q
+    if args.pose is not None:
+        return pkdyn.inverse_geometry(robot, args.pose, check_limits=False).q
+    return None
+
+
+def _cmd_view(args: argparse.Namespace) -> None:
+    from pkdyn.viewer import Scene, chain
+
+    robot = load(args, geometry=True)
+    segments = []
+    if args.trajectory:
+        from pkdyn.trajectory import named_trajectory
+
+        for name in args.trajectory:
+            traj = named_trajectory(robot, name, check_limits=False)
+            segments.append((traj.t, traj.q))
+    q = _configuration(robot, args)
+    if q is None and segments:
+        q = segments[0][1][0]
+    scene = Scene(robot, q, collision=args.collision, serve=args.html is None)
+    try:
+        for k, path in enumerate(args.points or []):
+            scene.add_points(
+                f"points{k + 1}" if len(args.points) > 1 else "points", _read_points(path)
+            )
+        what = [f"{robot.name}"]
+        if segments:
+            t, Q = chain(segments)
+            keep = scene.animate(t, Q, singular=args.singular, closest=args.closest)
+            what.append(f"{' + '.join(args.trajectory)} ({t[-1]:.3g} s, {keep.size} keyframes)")
+        else:
+            if args.singular:
+                what.append(f"configuration {scene.highlight_singular()}")
+            if args.closest:
+                a, b, d = scene.highlight_closest()
+                what.append(f"closest {a} / {b} at {d * 1e3:.1f} mm")
+        if args.html is not None:
+            out = scene.save_html(args.html)
+            size = out.stat().st_size / 1e6
+            print(f"wrote {out} ({size:.1f} MB): {', '.join(what)}")
+            return
+        print(f"pkdyn: viewer at {scene.url} ({', '.join(what)}); Ctrl-C to stop", flush=True)
+        _wait_for_stop()
+    finally:
+        scene.close()
+
+
+def register(sub: Any) -> None:
+    """Add ``view`` to the ``pkdyn`` parser."""
+    sp = robot_command(sub, "view", "meshcat scene of a robot (live, or a self-contained HTML)")
+    where = sp.add_mutually_exclusive_group()
+    where.add_argument("--pose", nargs="+", type=float, help="X Y Z [ROLL PITCH YAW] (m, rad)")
+    where.add_argument("--q", nargs="+", type=float, help="actuated coordinates")
+    sp.add_argument(
+        "--trajectory",
+        nargs="+",
+        action="extend",
+        metavar="NAME",
+        help="animate built-in trajectories one after the other (adept, sine, p2p)",
+    )
+    sp.add_argument("--html", metavar="FILE", help="write a self-contained HTML file, no server")
+    sp.add_argument("--collision", action="store_true", help="draw the collision geometry")
+    sp.add_argument(
+        "--singular", action="store_true", help="colour singular (red), near-singular (pink)"
+    )
+    sp.add_argument(
+        "--closest", action="store_true", help="colour the two bodies closest to collision"
+    )
+    sp.add_argument(
+        "--points",
+        action="append",
+        metavar="FILE",
+        help="overlay a point cloud (N x 3 [m], .npy or text)",
+    )
+    sp.set_defaults(func=_cmd_view)

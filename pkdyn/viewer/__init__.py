@@ -1,0 +1,89 @@
+"""pkdyn's meshcat viewer: robot scenes, trajectory animation, overlays, static HTML export.
+
+The core never imports this package. Entry points take plain arrays::
+
+    from pkdyn.viewer import Scene, animate, view
+
+    scene = animate(robot, t, Q, singular=True)   # t (N,) [s], Q (N, nq)
+    scene.add_points("workspace", P)              # (N, 3) [m]
+    scene.save_html("delta.html")                 # opens without a server or network
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from pkdyn.robot import Robot
+from pkdyn.viewer.animation import chain, check_trajectory
+from pkdyn.viewer.camera import Camera, bounding_box, frame_box, project
+from pkdyn.viewer.highlight import closest_pair, singularity_labels
+from pkdyn.viewer.html import static_html
+from pkdyn.viewer.scene import Scene
+from pkdyn.viewer.window import OfflineWindow
+
+__all__ = [
+    "Camera",
+    "OfflineWindow",
+    "Scene",
+    "animate",
+    "bounding_box",
+    "chain",
+    "closest_pair",
+    "export_html",
+    "frame_box",
+    "project",
+    "singularity_labels",
+    "static_html",
+    "view",
+]
+
+
+def view(robot: Robot, q: np.ndarray | None = None, *, collision: bool = False) -> Scene:
+    """A scene of ``robot`` at ``q`` (default ``q_home``), recorded for export.
+
+    Args:
+        robot: Robot loaded with its geometry.
+        q: Configuration (nq,).
+        collision: Draw the collision geometry.
+
+    Returns:
+        The scene.
+
+    """
+    return Scene(robot, q, collision=collision)
+
+
+def animate(
+    robot: Robot,
+    t: np.ndarray,
+    Q: np.ndarray,
+    *,
+    singular: bool = False,
+    closest: bool = False,
+    collision: bool = False,
+) -> Scene:
+    """A scene of ``robot`` playing the trajectory ``(t, Q)`` in a loop.
+
+    Args:
+        robot: Robot loaded with its geometry.
+        t: Sample times (N,) [s].
+        Q: Assembled configurations (N, nq).
+        singular: Colour singular (red) and near-singular (pink) samples.
+        closest: Colour the two collision objects closest to each other.
+        collision: Draw the collision geometry.
+
+    Returns:
+        The scene (``save_html`` it, or add overlays first).
+
+    """
+    tt, QQ = check_trajectory(t, Q, robot.nq)
+    scene = Scene(robot, QQ[0], collision=collision)
+    scene.animate(tt, QQ, singular=singular, closest=closest)
+    return scene
+
+
+def export_html(scene: Scene, path: str | Path) -> Path:
+    """Write the scene as one self-contained HTML file (see :meth:`Scene.save_html`)."""
+    return scene.save_html(path)

@@ -1,0 +1,122 @@
+"""What the viewer highlights: singular configurations and the pair of legs closest to collision.
+
+The analyses come from the core (:mod:`pkdyn.singularity`, :mod:`pkdyn.collisions`); this module
+only turns their answers into per-configuration labels the scene can colour.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import warnings
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from pkdyn.exceptions import PkdynError
+from pkdyn.robot import Robot
+
+__all__ = [
+    "CLOSEST_COLOR",
+    "NEAR_COLOR",
+    "REGULAR",
+    "SINGULAR",
+    "SINGULAR_COLOR",
+    "NEAR",
+    "closest_pair",
+    "closest_pairs",
+    "singularity_labels",
+]
+
+REGULAR, NEAR, SINGULAR = 0, 1, 2
+"""Singularity labels: regular, near-singular (warning zone), singular (any kind)."""
+
+SINGULAR_COLOR = (0.90, 0.05, 0.05)
+"""Colour of the moving parts in a singular configuration."""
+
+NEAR_COLOR = (1.00, 0.55, 0.60)
+"""Colour of the moving parts in a near-singular configuration."""
+
+CLOSEST_COLOR = (0.85, 0.00, 0.85)
+"""Colour of the two geometry objects closest to collision."""
+
+
+def _progress(n: int, progress: bool | None) -> bool:
+    """Whether to show a progress bar: asked for, or long and on a terminal."""
+    if progress is None:
+        return n >= 200 and sys.stderr.isatty()
+    return progress
+
+
+def singularity_labels(
+    robot: Robot, Q: np.ndarray, progress: bool | None = None
+) -> tuple[np.ndarray, list[str]]:
+    """Classify each configuration of a trajectory (:func:`pkdyn.singularity.classify`).
+
+    Args:
+        robot: Robot with a platform.
+        Q: Assembled configurations (N, nq).
+        progress: Progress bar (default: for long runs on a terminal).
+
+    Returns:
+        Labels (N,) in ``REGULAR, NEAR, SINGULAR`` and the kind of each configuration
+        (``regular``, ``serial``, ``parallel``, ``both``).
+
+    """
+    from pkdyn.singularity import classify
+
+    labels = np.zeros(len(Q), dtype=int)
+    kinds: list[str] = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # near-singular warnings: reported as labels instead
+        for i, q in enumerate(tqdm(Q, disable=not _progress(len(Q), progress), desc="singular")):
+            rep = classify(robot, q)
+            kinds.append(rep.kind)
+            labels[i] = SINGULAR if rep.kind != "regular" else (NEAR if rep.near else REGULAR)
+    return labels, kinds
+
+
+def _collisions() -> Any:
+    """:mod:`pkdyn.collisions`, imported when a closest-legs highlight is asked for."""
+    try:
+        return importlib.import_module("pkdyn.collisions")
+    except ModuleNotFoundError as err:
+        if err.name != "pkdyn.collisions":
+            raise
+        raise PkdynError(
+            "closest-legs highlighting needs pkdyn.collisions, which this installation lacks"
+        ) from None
+
+
+def closest_pair(robot: Robot, q: np.ndarray) -> tuple[str, str, float]:
+    """The two collision objects closest to each other (:func:`pkdyn.collisions.distance_report`).
+
+    Args:
+        robot: Robot loaded with its geometry.
+        q: Assembled configuration (nq,).
+
+    Returns:
+        ``(a, b, distance)``: geometry object names and their signed distance [m] (negative
+        when they penetrate).
+
+    Raises:
+        PkdynError: No collision pair to check.
+
+    """
+    best = _collisions().distance_report(robot, q).pairs[0]  # sorted closest first
+    return str(best.a), str(best.b), float(best.distance)
+
+
+def closest_pairs(
+    robot: Robot, Q: np.ndarray, progress: bool | None = None
+) -> list[tuple[str, str, float]]:
+    """:func:`closest_pair` at each configuration (N, nq) of a trajectory."""
+    checker = _collisions().CollisionChecker(robot)
+    out = []
+    for q in tqdm(Q, disable=not _progress(len(Q), progress), desc="distances"):
+        d = checker.distances(q)
+        k = int(np.argmin(d))
+        a, b = checker.names[k]
+        out.append((str(a), str(b), float(d[k])))
+    return out
