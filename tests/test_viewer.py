@@ -778,18 +778,18 @@ def test_browser_singular_configuration_in_red(browser, rrr, work):
 
 
 def test_browser_served_viewer_matches_the_page_and_stops(browser, work):
-    """`pkdyn view delta` serves the scene; it shows what the exported page shows; SIGTERM
-    stops it and its meshcat server."""
-    scene = Scene(pkdyn.load("delta"))
-    n = len(scene.record.commands())
-    scene.save_html(work / "static.html")
-    static_tab = browser.open(str(work / "static.html"))
+    """`pkdyn view` serves the scene and its animation (replayed after the objects it colours);
+    it shows what the exported page shows; SIGTERM stops it and its meshcat server."""
+    args = ["view", "delta", "--trajectory", "adept", "--closest"]
+    assert main([*args, "--html", str(work / "served_static.html")]) == 0
+    n = len(page_commands((work / "served_static.html").read_text()))
+    static_tab = browser.open(str(work / "served_static.html"))
     assert_clean(static_tab, n)
+    static_tab.seek(0.2)
     static = static_tab.shot("delta_static")
+    assert magenta(static).sum() > 100
     exe = str(Path(sys.executable).with_name("pkdyn"))
-    proc = subprocess.Popen(
-        [exe, "view", "delta"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
-    )
+    proc = subprocess.Popen([exe, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         line = proc.stdout.readline() if proc.stdout else ""
         url = re.search(r"(http://127\.0\.0\.1:\d+)/static/", line)
@@ -802,6 +802,7 @@ def test_browser_served_viewer_matches_the_page_and_stops(browser, work):
         # meshcat's server has no favicon: the browser's own request for it is the only 404
         favicon = "404 (Not Found)" if f"{url[1]}/favicon.ico" in tab.requests() else "-"
         assert [p for p in tab.problems() if favicon not in p] == [], tab.requests()
+        tab.seek(0.2)
         diff = changed(tab.shot("delta_served"), static)
         assert diff.sum() < 0.001 * W * H, diff.sum()
         proc.send_signal(signal.SIGTERM)

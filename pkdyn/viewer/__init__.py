@@ -2,7 +2,7 @@
 
 The core never imports this package. Entry points take plain arrays::
 
-    from pkdyn.viewer import Scene, animate, view
+    from pkdyn.viewer import Scene, animate
 
     scene = animate(robot, t, Q, singular=True)   # t (N,) [s], Q (N, nq)
     scene.add_points("workspace", P)              # (N, 3) [m]
@@ -36,23 +36,7 @@ __all__ = [
     "project",
     "singularity_labels",
     "static_html",
-    "view",
 ]
-
-
-def view(robot: Robot, q: np.ndarray | None = None, *, collision: bool = False) -> Scene:
-    """A scene of ``robot`` at ``q`` (default ``q_home``), recorded for export.
-
-    Args:
-        robot: Robot loaded with its geometry.
-        q: Configuration (nq,).
-        collision: Draw the collision geometry.
-
-    Returns:
-        The scene.
-
-    """
-    return Scene(robot, q, collision=collision)
 
 
 def animate(

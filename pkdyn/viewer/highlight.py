@@ -7,14 +7,13 @@ only turns their answers into per-configuration labels the scene can colour.
 from __future__ import annotations
 
 import importlib
-import sys
 import warnings
 from typing import Any
 
 import numpy as np
-from tqdm import tqdm
 
 from pkdyn.exceptions import PkdynError
+from pkdyn.progress import progress as bar
 from pkdyn.robot import Robot
 
 __all__ = [
@@ -42,13 +41,6 @@ CLOSEST_COLOR = (0.85, 0.00, 0.85)
 """Colour of the two geometry objects closest to collision."""
 
 
-def _progress(n: int, progress: bool | None) -> bool:
-    """Whether to show a progress bar: asked for, or long and on a terminal."""
-    if progress is None:
-        return n >= 200 and sys.stderr.isatty()
-    return progress
-
-
 def singularity_labels(
     robot: Robot, Q: np.ndarray, progress: bool | None = None
 ) -> tuple[np.ndarray, list[str]]:
@@ -70,7 +62,7 @@ def singularity_labels(
     kinds: list[str] = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # near-singular warnings: reported as labels instead
-        for i, q in enumerate(tqdm(Q, disable=not _progress(len(Q), progress), desc="singular")):
+        for i, q in enumerate(bar(Q, "singularities", "sample", progress, min_items=200)):
             rep = classify(robot, q)
             kinds.append(rep.kind)
             labels[i] = SINGULAR if rep.kind != "regular" else (NEAR if rep.near else REGULAR)
@@ -114,7 +106,7 @@ def closest_pairs(
     """:func:`closest_pair` at each configuration (N, nq) of a trajectory."""
     checker = _collisions().CollisionChecker(robot)
     out = []
-    for q in tqdm(Q, disable=not _progress(len(Q), progress), desc="distances"):
+    for q in bar(Q, "distances", "sample", progress, min_items=200):
         d = checker.distances(q)
         k = int(np.argmin(d))
         a, b = checker.names[k]
