@@ -36,13 +36,16 @@ NOTES = """\
   `getConstraintsJacobian` and minimum-norm least-squares steps for assembly and IK; `rnea`,
   the constraint Jacobian and one least-squares solve for the inverse dynamics.
 - Forward step, per dynamics evaluation. The `euler` step makes one evaluation: its overhead is
-  the torque callback, the generalized force and the state update (~3 us of Python), hence
-  ~1.2-1.3x on the Delta and hexapod (14 us raw call), more on the 2- and 3-dof planar robots
-  (7-8 us raw call). The adaptive `dopri5` step is a Runge-Kutta-Munthe-Kaas scheme: each of
-  its stages also needs `pin.integrate`, `pin.dDifference` (a dense nv x nv chart Jacobian)
-  and two stage combinations, about as much Python-side work again as the raw call on these
-  small models, plus the error control and a closure check per output step; its ratio is
-  therefore ~2x per evaluation and cannot reach 1.3x without moving the integrator to C++.
+  the torque callback, the generalized force and the state update (~3 us of Python, of which
+  ~2 us for the update `v + dt a`, `integrate(q, dt v)` that any Euler step needs: against a
+  raw Euler step pkdyn costs ~1.15x), hence ~1.2-1.3x the bare call on the Delta and hexapod
+  (14 us raw call) and ~1.4-1.5x on the 2- and 3-dof planar robots (7-8 us raw call).
+- The adaptive `dopri5` step is a Runge-Kutta-Munthe-Kaas scheme: each of its stages also
+  needs `pin.integrate`, `pin.dDifference` (a dense nv x nv chart Jacobian) and two stage
+  combinations, about as much Python-side work again as the raw call on these small models,
+  plus the error control and a closure check per output step (a residual, ~10-15 us); its
+  ratio is therefore ~2-2.5x per evaluation (~1.4x on the tripod, whose raw call is 80 us) and
+  cannot reach 1.3x without moving the integrator to C++.
 - pkdyn vs MuJoCo, forward step: different physics (MuJoCo: soft closures solved by its
   Newton solver inside `mj_step`, all in C; pkdyn: hard closures, proximal solver, Python
   step), given for orientation.
