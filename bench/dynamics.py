@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import raw_pinocchio
-from timing import ROBOTS, Row, consistent_state, median_us, paired, us
+from timing import ROBOTS, Row, consistent_state, median_us, paired, print_table, us
 
 import pkdyn
 from solvers import Actuation, ForwardDynamics, InverseDynamics
@@ -137,6 +137,4 @@ def rows() -> list[Row]:
 
 
 if __name__ == "__main__":
-    print("| benchmark | figure | target |\n|---|---|---|")
-    for r in rows():
-        print("| " + " | ".join(r) + " |")
+    print_table(rows())

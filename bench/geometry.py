@@ -11,7 +11,7 @@ import time
 import numpy as np
 import pinocchio as pin
 from raw_pinocchio import RawClosures, RawPoseTask, gauss_newton
-from timing import ROBOTS, Row, us
+from timing import ROBOTS, Row, print_table, us
 
 import pkdyn
 from pkdyn.closed_form import delta as cf_delta
@@ -187,6 +187,4 @@ def rows() -> list[Row]:
 
 
 if __name__ == "__main__":
-    print("| benchmark | figure | target |\n|---|---|---|")
-    for r in rows():
-        print("| " + " | ".join(r) + " |")
+    print_table(rows())

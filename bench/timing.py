@@ -67,3 +67,10 @@ def consistent_state(
 def us(x: float) -> str:
     """A time in microseconds, 3 significant figures."""
     return f"{x:.3g} us" if x < 1e3 else f"{x / 1e3:.3g} ms"
+
+
+def print_table(rows: list[Row]) -> None:
+    """Print benchmark rows as a markdown table (a module run on its own)."""
+    print("| benchmark | figure | target |\n|---|---|---|")
+    for r in rows:
+        print("| " + " | ".join(r) + " |")

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
-from timing import ROBOTS, Row, consistent_state, paired, us
+from timing import ROBOTS, Row, consistent_state, paired, print_table, us
 
 import pkdyn
 from pkdyn.mjcf import MjcfOptions, StateMap, actuator_efforts, mujoco_model
@@ -146,6 +146,4 @@ def rows() -> list[Row]:
 
 
 if __name__ == "__main__":
-    print("| benchmark | figure | target |\n|---|---|---|")
-    for r in rows():
-        print("| " + " | ".join(r) + " |")
+    print_table(rows())
