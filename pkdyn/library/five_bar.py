@@ -31,6 +31,7 @@ import numpy as np
 
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
+from pkdyn.library._planar import write_rr_chain
 from pkdyn.urdf_writer import Shape, UrdfWriter
 
 __all__ = [
@@ -49,8 +50,6 @@ NAME = "five_bar"
 SUMMARY = "Planar five-bar, two actuated base revolutes, end-effector where the distal links meet"
 
 _MODES = ("+-", "-+", "++", "--")
-_PASSIVE_VELOCITY = 1e3
-"""Velocity limit written on passive joints [rad/s] (effort 0: they are not driven)."""
 
 
 @dataclass(frozen=True)
@@ -259,7 +258,7 @@ def build_urdf(p: Params) -> str:
 
     """
     w = UrdfWriter("five_bar")
-    grey, blue, orange = (0.6, 0.6, 0.65, 1.0), (0.2, 0.4, 0.8, 1.0), (0.9, 0.5, 0.1, 1.0)
+    grey = (0.6, 0.6, 0.65, 1.0)
     r = p.link_radius
     z_prox, z_dist = 0.0, 2.5 * r  # display layers; the kinematics is in z = 0
     A = p.base_xy
@@ -273,30 +272,16 @@ def build_urdf(p: Params) -> str:
     E = p.home_point
     for j in range(2):
         k = j + 1
-        prox, dist = f"proximal{k}", f"distal{k}"
         beta = math.atan2(E[1] - C[j, 1], E[0] - C[j, 0])
-        w.rod(prox, p.proximal_mass, r, (0, 0, z_prox), (p.l1, 0, z_prox), blue)
-        w.joint(
-            prox,
-            "revolute",
-            "base",
-            prox,
-            xyz=(float(A[j, 0]), float(A[j, 1]), 0.0),
-            axis=(0.0, 0.0, 1.0),
-            limit=(p.q_min, p.q_max, p.effort, p.velocity),
-        )
-        w.transmission(prox, f"motor{k}", p.reduction)
-        w.rod(dist, p.distal_mass, r, (0, 0, z_dist), (p.l2, 0, z_dist), orange)
-        # Joint frame turned by the home relative angle: neutral = home configuration.
-        w.joint(
-            dist,
-            "revolute",
-            prox,
-            dist,
-            xyz=(p.l1, 0.0, 0.0),
-            rpy=(0.0, 0.0, float(_wrap(np.array(beta - theta[j])))),
-            axis=(0.0, 0.0, 1.0),
-            limit=(-math.pi, math.pi, 0.0, _PASSIVE_VELOCITY),
+        # elbow frame turned by the home relative angle: neutral = home configuration
+        write_rr_chain(
+            w,
+            p,
+            k,
+            (float(A[j, 0]), float(A[j, 1])),
+            float(_wrap(np.array(beta - theta[j]))),
+            z_prox,
+            z_dist,
         )
     r_e = 1.5 * r
     I_e = np.eye(3) * 0.4 * p.effector_mass * r_e**2

@@ -26,6 +26,7 @@ import numpy as np
 from pkdyn.closed_form import planar_3rrr as cf
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
+from pkdyn.library._planar import write_rr_chain
 from pkdyn.urdf_writer import Shape, UrdfWriter
 
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
@@ -34,8 +35,6 @@ NAME = "planar_3rrr"
 SUMMARY = "Planar 3-RRR, three actuated base revolutes, triangular platform (Pasqui's 3R plan)"
 
 _ANGLES = (7.0 * math.pi / 6.0, 11.0 * math.pi / 6.0, math.pi / 2.0)
-_PASSIVE_VELOCITY = 1e3
-"""Velocity limit written on passive joints [rad/s] (effort 0: they are not driven)."""
 
 
 @dataclass(frozen=True)
@@ -172,7 +171,7 @@ def build_urdf(p: Params) -> str:
 
     """
     w = UrdfWriter("planar_3rrr")
-    grey, blue, orange = (0.6, 0.6, 0.65, 1.0), (0.2, 0.4, 0.8, 1.0), (0.9, 0.5, 0.1, 1.0)
+    grey = (0.6, 0.6, 0.65, 1.0)
     base = p.base_xy
     r = p.link_radius
     # Display layers (kinematics is in z = 0): proximal links, distal links, platform.
@@ -193,30 +192,10 @@ def build_urdf(p: Params) -> str:
     angles, _ = cf.chain_angles(p, p.home_pose, p.elbow)
     for i in range(3):
         k = i + 1
-        q1, q2, _ = (float(v) for v in angles[0, i])
-        prox, dist = f"proximal{k}", f"distal{k}"
-        w.rod(prox, p.proximal_mass, r, (0, 0, z_prox), (p.l1, 0, z_prox), blue)
-        w.joint(
-            prox,
-            "revolute",
-            "base",
-            prox,
-            xyz=(float(base[i, 0]), float(base[i, 1]), 0.0),
-            axis=(0.0, 0.0, 1.0),
-            limit=(p.q_min, p.q_max, p.effort, p.velocity),
-        )
-        w.transmission(prox, f"motor{k}", p.reduction)
-        w.rod(dist, p.distal_mass, r, (0, 0, z_dist), (p.l2, 0, z_dist), orange)
-        # Joint frame turned by the home elbow angle: coordinate q_2^i - q_2^i(home).
-        w.joint(
-            dist,
-            "revolute",
-            prox,
-            dist,
-            xyz=(p.l1, 0.0, 0.0),
-            rpy=(0.0, 0.0, q2),
-            axis=(0.0, 0.0, 1.0),
-            limit=(-math.pi, math.pi, 0.0, _PASSIVE_VELOCITY),
+        _, q2, _ = (float(v) for v in angles[0, i])
+        # elbow frame turned by the home elbow angle: coordinate q_2^i - q_2^i(home)
+        _, dist = write_rr_chain(
+            w, p, k, (float(base[i, 0]), float(base[i, 1])), q2, z_prox, z_dist
         )
         gamma = p.platform_angles[i]
         w.closure(
