@@ -51,7 +51,7 @@ NOTES = """\
   step), given for orientation.
 - Inverse dynamics: MuJoCo's `mj_inverse` is fast, but it gives generalized forces of the tree;
   the actuator efforts of a closed-loop robot need the projection through the closure Jacobian
-  (`pkdyn.mjcf.actuator_efforts`, a least-squares solve), which dominates its cost.
+  (`pkdyn.model.formats.mjcf.actuator_efforts`, a least-squares solve), which dominates its cost.
 - Agreement: MuJoCo's closures are soft; at its stiffest impedance (0.9999) the accelerations
   differ by O(1e-4 .. 1e-2) relative; the soft solution is smooth in eps = (1 - d) / d, and
   three MuJoCo runs extrapolated to eps = 0 agree with pkdyn to the figures given. The same

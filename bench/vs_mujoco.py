@@ -1,9 +1,9 @@
-"""pkdyn against MuJoCo on the exported models (``pkdyn.mjcf``), per library robot.
+"""pkdyn against MuJoCo on the exported models (``pkdyn.model.formats.mjcf``), per library robot.
 
 - Forward step: pkdyn's Euler step (one constrained-dynamics evaluation, Baumgarte) against
   ``mj_step`` (``implicitfast``, soft closures, contacts off), both at 1 ms.
 - Inverse dynamics, one sample: ``InverseDynamics.solve`` against ``mj_inverse`` plus the
-  projection onto the actuators (``pkdyn.mjcf.actuator_efforts``: least squares on
+  projection onto the actuators (``pkdyn.model.formats.mjcf.actuator_efforts``: least squares on
   ``[moment^T J_eq^T]``).
 - Agreement at random consistent states: forward accelerations (MuJoCo at the stiffest
   impedances, extrapolated to hard closures) and actuator efforts, relative errors.
@@ -19,7 +19,7 @@ import numpy as np
 from timing import ROBOTS, Row, consistent_state, paired, print_table, us
 
 import pkdyn
-from pkdyn.mjcf import MjcfOptions, StateMap, actuator_efforts, mujoco_model
+from pkdyn.model.formats.mjcf import MjcfOptions, StateMap, actuator_efforts, mujoco_model
 from solvers import Actuation, ForwardDynamics, InverseDynamics
 
 IMPEDANCES = (0.9999, 0.9998, 0.9996)

@@ -21,11 +21,11 @@ import numpy as np
 import pinocchio as pin
 
 import pkdyn
-from pkdyn.closed_form.delta_workspace import clavel_numeric
-from pkdyn.orientation_workspace import mel_study
-from pkdyn.workspace import translation_workspace
-from pkdyn.workspace_hexapod import HexapodEvaluator
-from pkdyn.workspace_numeric import NumericEvaluator
+from pkdyn.workspace.clavel import clavel_numeric
+from pkdyn.workspace.legs import HexapodEvaluator
+from pkdyn.workspace.numeric import NumericEvaluator
+from pkdyn.workspace.orientation import mel_study
+from pkdyn.workspace.translation import translation_workspace
 
 Row = tuple[str, str, str]
 

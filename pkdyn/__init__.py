@@ -1,13 +1,21 @@
-"""pkdyn: kinematics and dynamics of parallel and closed-loop robots, on Pinocchio 4."""
+"""pkdyn: kinematics and dynamics of parallel and closed-loop robots, on Pinocchio 4.
 
-from pkdyn.assembly import (
-    GeometryResult,
-    assembly_modes,
-    closure_residual,
-    forward_geometry,
-    inverse_geometry,
-    project,
-)
+The parts, each importing only the parts listed before it (``tests/test_layering.py``):
+
+- :mod:`pkdyn.exceptions`, :mod:`pkdyn.progress`: the error tree, progress bars;
+- :mod:`pkdyn.model`: description format, model building, :class:`Robot`, assembly, the family
+  registry, ``load``, other formats;
+- :mod:`pkdyn.closed_form`: closed-form models of the families (numpy);
+- :mod:`pkdyn.library`: the robot families (builders), registered with the model layer;
+- :mod:`pkdyn.analysis`: mobility, kinematic models, singularities, statics, collisions;
+- :mod:`pkdyn.dynamics` and :mod:`pkdyn.workspace` (side by side);
+- :mod:`pkdyn.tripod`: the walking tripod;
+- :mod:`pkdyn.viewer`, :mod:`pkdyn.plotting`, :mod:`pkdyn.cli`: never imported by the above.
+
+:mod:`solvers` (robot-agnostic algorithms) never imports pkdyn.
+"""
+
+from pkdyn import library as _library  # noqa: F401  (registers the families with the loader)
 from pkdyn.exceptions import (
     AssemblyError,
     DescriptionError,
@@ -19,8 +27,16 @@ from pkdyn.exceptions import (
     UnknownRobotError,
     UnreachablePoseError,
 )
-from pkdyn.loader import load, load_string
-from pkdyn.robot import Robot
+from pkdyn.model.assembly import (
+    GeometryResult,
+    assembly_modes,
+    closure_residual,
+    forward_geometry,
+    inverse_geometry,
+    project,
+)
+from pkdyn.model.loader import load, load_string
+from pkdyn.model.robot import Robot
 
 __all__ = [
     "AssemblyError",

@@ -6,7 +6,7 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
-from pkdyn.collisions import (
+from pkdyn.analysis.collisions import (
     CollisionChecker,
     collision_pairs,
     distance_report,

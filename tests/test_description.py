@@ -16,7 +16,7 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
-from pkdyn.description import ConeLimit
+from pkdyn.model.description import ConeLimit
 
 DATA = Path(__file__).parent / "data" / "closures"
 FOUR_BAR = DATA / "four_bar_hinge.urdf"

@@ -10,6 +10,8 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
+from pkdyn.analysis.kinematics import platform_jacobian
+from pkdyn.analysis.statics import static_equilibrium
 from pkdyn.cli import main
 from pkdyn.dynamics import (
     actuation,
@@ -18,11 +20,9 @@ from pkdyn.dynamics import (
     simulate,
     with_payload,
 )
+from pkdyn.dynamics.sizing import size
+from pkdyn.dynamics.trajectory import JointTrajectory, named_trajectory
 from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
-from pkdyn.kinematics import platform_jacobian
-from pkdyn.sizing import size
-from pkdyn.statics import static_equilibrium
-from pkdyn.trajectory import JointTrajectory, named_trajectory
 from solvers import ForwardDynamics
 
 CASES = {
@@ -272,7 +272,7 @@ def test_demo_prints_the_sizing_table():
         [
             sys.executable,
             "-c",
-            "from pkdyn.demo import run_sizing_demo as r; "
+            "from pkdyn.cli.demo import run_sizing_demo as r; "
             "r(cycle_times=(0.5,), payloads=(0.0, 1.0))",
         ],
         capture_output=True,

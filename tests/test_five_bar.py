@@ -5,6 +5,7 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
+from pkdyn.closed_form import five_bar as fb_cf
 from pkdyn.library import five_bar as fb
 
 
@@ -24,7 +25,7 @@ def _points(p, n, rng, radius=0.08):
         r = radius * np.sqrt(rng.uniform())
         t = rng.uniform(0, 2 * np.pi)
         E = np.array([p.x_home + r * np.cos(t), p.y_home + r * np.sin(t)])
-        q, ok = fb.inverse(p, E)
+        q, ok = fb_cf.inverse(p, E)
         if ok[0] and np.all((q > p.q_min) & (q < p.q_max)):
             out.append(E)
     return np.array(out)
@@ -61,7 +62,7 @@ def test_closed_form_ik_closes_the_loop(mode):
     """|C_j E| = l2 for both chains; the elbow side matches the working mode."""
     p = fb.Params(working_mode=mode)
     E = _points(fb.Params(), 1000, np.random.default_rng(20))
-    theta, ok = fb.inverse(p, E)
+    theta, ok = fb_cf.inverse(p, E)
     assert ok.all()
     C = _elbows(p, theta)
     np.testing.assert_allclose(np.linalg.norm(E[:, None] - C, axis=-1), p.l2, atol=1e-12)
@@ -69,14 +70,14 @@ def test_closed_form_ik_closes_the_loop(mode):
     u = E[:, None] - A  # A_j -> E
     v = C - A  # A_j -> C_j
     side = np.sign(u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0])  # + : C_j left of A_j -> E
-    np.testing.assert_array_equal(side, np.broadcast_to(fb.mode_signs(mode), side.shape))
+    np.testing.assert_array_equal(side, np.broadcast_to(fb_cf.mode_signs(mode), side.shape))
 
 
 def test_closed_form_fk_inverts_ik(robot):
     p = robot.params
     E = _points(p, 1000, np.random.default_rng(21))
-    theta, _ = fb.inverse(p, E)
-    E2, ok = fb.forward(p, theta)
+    theta, _ = fb_cf.inverse(p, E)
+    E2, ok = fb_cf.forward(p, theta)
     assert ok.all()
     np.testing.assert_allclose(E2, E, atol=1e-12)
 
@@ -84,7 +85,7 @@ def test_closed_form_fk_inverts_ik(robot):
 def test_closed_form_matches_inverse_geometry(robot):
     p = robot.params
     E = _points(p, 50, np.random.default_rng(22))
-    theta, _ = fb.inverse(p, E)
+    theta, _ = fb_cf.inverse(p, E)
     for k in range(len(E)):
         ik = pkdyn.inverse_geometry(robot, [E[k, 0], E[k, 1], 0.0])
         np.testing.assert_allclose(_wrap(ik.qa - theta[k]), 0.0, atol=1e-9)
@@ -97,7 +98,7 @@ def test_closed_form_derivative_matches_model_velocities(robot):
     model, data = robot.model, robot.data
     eps = 1e-6
     for E in _points(p, 10, np.random.default_rng(23)):
-        fk = pkdyn.forward_geometry(robot, fb.inverse(p, E)[0][0])
+        fk = pkdyn.forward_geometry(robot, fb_cf.inverse(p, E)[0][0])
         _, J = robot.closure_set.residual_and_jacobian(data, fk.q)
         _, s, Vt = np.linalg.svd(J)
         N = Vt[int(np.sum(s > 1e-9 * s[0])) :].T
@@ -108,7 +109,7 @@ def test_closed_form_derivative_matches_model_velocities(robot):
         model_jac = N[robot.actuated_v] @ np.linalg.inv(Jf[:2] @ N)
         fd = np.column_stack(
             [
-                _wrap(fb.inverse(p, E + d)[0][0] - fb.inverse(p, E - d)[0][0]) / (2 * eps)
+                _wrap(fb_cf.inverse(p, E + d)[0][0] - fb_cf.inverse(p, E - d)[0][0]) / (2 * eps)
                 for d in np.eye(2) * eps
             ]
         )
@@ -118,7 +119,7 @@ def test_closed_form_derivative_matches_model_velocities(robot):
 def test_assembly_from_random_actuator_inputs(robot):
     rng = np.random.default_rng(24)
     p = robot.params
-    theta, _ = fb.inverse(p, _points(p, 200, rng))
+    theta, _ = fb_cf.inverse(p, _points(p, 200, rng))
     theta += rng.uniform(-0.02, 0.02, theta.shape)
     for qa in theta:
         fk = pkdyn.forward_geometry(robot, qa)
@@ -133,7 +134,7 @@ def test_assembly_from_random_actuator_inputs(robot):
 def test_fk_of_closed_form_ik_round_trip_1000_points(robot):
     p = robot.params
     E = _points(p, 1000, np.random.default_rng(25))
-    theta, _ = fb.inverse(p, E)
+    theta, _ = fb_cf.inverse(p, E)
     worst = 0.0
     q_prev = robot.q_home
     for k in range(len(E)):
@@ -148,7 +149,9 @@ def test_assembly_modes_are_the_two_circle_intersections(robot):
     qa = robot.q_home[robot.actuated_q]
     modes = pkdyn.assembly_modes(robot, qa, starts=32, spread=2.5)
     found = np.array(sorted((m.position[:2] for m in modes), key=lambda e: e[1]))
-    expected = np.array(sorted((fb.forward(p, qa, s)[0][0] for s in (1, -1)), key=lambda e: e[1]))
+    expected = np.array(
+        sorted((fb_cf.forward(p, qa, s)[0][0] for s in (1, -1)), key=lambda e: e[1])
+    )
     assert found.shape == (2, 2)
     np.testing.assert_allclose(found, expected, atol=1e-9)
 
@@ -172,7 +175,7 @@ def test_bad_parameters_are_named(name, value):
 def test_unreachable_points(robot):
     p = robot.params
     for E in ([0.0, 0.6], [-0.1, 0.02]):  # beyond l1 + l2, inside |l1 - l2| of A_1
-        assert not fb.inverse(p, E)[1][0]
+        assert not fb_cf.inverse(p, E)[1][0]
         with pytest.raises(pkdyn.UnreachablePoseError):
             pkdyn.inverse_geometry(robot, [E[0], E[1], 0.0])
 
@@ -181,7 +184,7 @@ def test_actuator_limit_violation():
     r = pkdyn.load("five_bar", q_max=2.5, geometry=False)
     p = r.params
     E = np.array([-0.05, 0.28])
-    theta, ok = fb.inverse(p, E)
+    theta, ok = fb_cf.inverse(p, E)
     assert ok[0] and theta[0, 0] > p.q_max
     with pytest.raises(pkdyn.JointLimitError) as err:
         pkdyn.inverse_geometry(r, [E[0], E[1], 0.0])

@@ -5,8 +5,8 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
-from pkdyn import kinematics as kin
-from pkdyn import screws
+from pkdyn.analysis import kinematics as kin
+from pkdyn.analysis import screws
 
 ROBOTS = ["delta", "gough_stewart", "planar_3rrr", "five_bar"]
 # pose perturbation amplitudes (translation [m], rotation [rad]) for random reachable poses

@@ -31,7 +31,7 @@ import pytest
 import pkdyn
 from pkdyn.cli import main
 from pkdyn.exceptions import DescriptionError
-from pkdyn.mjcf import MjcfOptions, StateMap, actuator_efforts, mujoco_model, to_mjcf
+from pkdyn.model.formats.mjcf import MjcfOptions, StateMap, actuator_efforts, mujoco_model, to_mjcf
 from solvers import Actuation, ForwardDynamics, InverseDynamics
 
 mujoco = pytest.importorskip("mujoco")

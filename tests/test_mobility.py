@@ -14,9 +14,9 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
+from pkdyn.analysis.mobility import MobilityResult, format_mobility, mobility
 from pkdyn.closed_form import delta as clavel
-from pkdyn.mobility import MobilityResult, format_mobility, mobility
-from pkdyn.urdf_writer import UrdfWriter
+from pkdyn.model.formats.urdf_writer import UrdfWriter
 
 DATA = Path(__file__).resolve().parent / "data" / "mobility"
 

@@ -12,11 +12,12 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
-from pkdyn import dexterity, kinematics, singularity_map
+from pkdyn.analysis import dexterity, kinematics
+from pkdyn.analysis import maps as singularity_map
+from pkdyn.analysis.singularity import classify, singularity_json
+from pkdyn.analysis.statics import actuator_efforts
 from pkdyn.closed_form import delta as dcf
 from pkdyn.closed_form import planar_3rrr as rcf
-from pkdyn.singularity import classify, singularity_json
-from pkdyn.statics import actuator_efforts
 from solvers import solve_lm
 
 

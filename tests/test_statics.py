@@ -5,7 +5,7 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
-from pkdyn import kinematics, statics
+from pkdyn.analysis import kinematics, statics
 
 ROBOTS = ["delta", "gough_stewart", "planar_3rrr", "five_bar"]
 SPREAD = {"delta": (0.06, 0.0), "gough_stewart": (0.03, 0.08), "planar_3rrr": (0.05, 0.3)}
@@ -171,7 +171,7 @@ def test_efforts_from_seed_screws_gough_stewart(robots):
     tau = statics.actuator_efforts(robot, q, F)
     km = kinematics.kinematic_models(robot, q)
     # J_inv^T tau is the wrench applied by the legs on the platform (A^T tau with B = I)
-    from pkdyn.screws import reciprocal_screws
+    from pkdyn.analysis.screws import reciprocal_screws
 
     A, _ = reciprocal_screws(robot, q)
     np.testing.assert_allclose(A.T @ tau, -F, atol=1e-8)

@@ -5,9 +5,8 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
-from pkdyn.exceptions import InvalidInputError, TrajectoryError
-from pkdyn.profiles import motion_law
-from pkdyn.trajectory import (
+from pkdyn.dynamics.profiles import motion_law
+from pkdyn.dynamics.trajectory import (
     TaskTrajectory,
     adept_cycle,
     concatenate,
@@ -17,6 +16,7 @@ from pkdyn.trajectory import (
     point_to_point,
     sinusoid,
 )
+from pkdyn.exceptions import InvalidInputError, TrajectoryError
 
 LIBRARY = ("delta", "gough_stewart", "planar_3rrr", "five_bar", "tripod")
 

@@ -11,6 +11,7 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
+from pkdyn.closed_form import tripod as tripod_cf
 from pkdyn.library import tripod
 
 P = tripod.Params()
@@ -169,7 +170,7 @@ def test_actuator_lengths_are_geometric_distances(robot):
 
 
 def test_virtual_joints_at_home():
-    s = tripod.virtual_joints(P, pin.SE3(np.eye(3), np.array([0.0, 0.0, P.nacelle_height])))
+    s = tripod_cf.virtual_joints(P, pin.SE3(np.eye(3), np.array([0.0, 0.0, P.nacelle_height])))
     assert s.shape == (3, 6)
     for row in s:
         q1, q2, q3, q4, q5, q6 = row
@@ -203,7 +204,7 @@ def _virtual_chain(foot: pin.SE3, s: np.ndarray, i: int) -> pin.SE3:
 
 def test_virtual_chain_reproduces_nacelle_pose():
     rng = np.random.default_rng(4)
-    default = tripod.foothold_frames(P)
+    default = tripod_cf.foothold_frames(P)
     for k in range(100):
         M = pose_se3(
             np.r_[0.0, 0.0, P.nacelle_height, 0, 0, 0]
@@ -219,7 +220,7 @@ def test_virtual_chain_reproduces_nacelle_pose():
             ]
         else:
             feet = default
-        s = tripod.virtual_joints(P, M, feet)
+        s = tripod_cf.virtual_joints(P, M, feet)
         for i in range(3):
             Mi = _virtual_chain(feet[i], s[i], i)
             assert np.linalg.norm(Mi.translation - M.translation) < 1e-9
@@ -232,10 +233,10 @@ def test_virtual_chain_reproduces_nacelle_pose():
 def test_virtual_joints_accept_a_pose_vector():
     pose = np.array([0.02, -0.01, 0.63, 0.05, -0.03, 0.1])
     assert np.allclose(
-        tripod.virtual_joints(P, pose), tripod.virtual_joints(P, pose_se3(pose)), atol=1e-15
+        tripod_cf.virtual_joints(P, pose), tripod_cf.virtual_joints(P, pose_se3(pose)), atol=1e-15
     )
     with pytest.raises(pkdyn.InvalidInputError):
-        tripod.virtual_joints(P, pose, tripod.foothold_frames(P)[:2])
+        tripod_cf.virtual_joints(P, pose, tripod_cf.foothold_frames(P)[:2])
 
 
 def test_virtual_joints_match_the_assembled_model(robot):
@@ -251,7 +252,7 @@ def test_virtual_joints_match_the_assembled_model(robot):
         q = pkdyn.inverse_geometry(robot, pose).q
         pin.forwardKinematics(model, data, q)
         M = joint_placement(robot, "nacelle")
-        s = tripod.virtual_joints(P, pin.SE3(M))
+        s = tripod_cf.virtual_joints(P, pin.SE3(M))
         w_p = M.rotation[:, 2]
         for i in range(3):
             b = f"branch{i + 1}"

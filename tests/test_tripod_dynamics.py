@@ -1,7 +1,7 @@
 """Inverse dynamics of the tripod in modes PP and BE, checked by independent physics.
 
 - PP with the machining wrench: the wrench's share of the efforts equals ``-J^T F`` from the
-  kinematic models (statics by virtual work, :mod:`pkdyn.statics`);
+  kinematic models (statics by virtual work, :mod:`pkdyn.analysis.statics`);
 - BE (locks as constraints): the efforts fed to the constrained forward dynamics
   (``pin.constraintDynamics``) give back the accelerations; the actuators' power equals the rate
   of change of the mechanical energy (locks and clamps do no work);
@@ -15,10 +15,11 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
+from pkdyn.analysis.statics import actuator_efforts
+from pkdyn.closed_form import tripod as tripod_cf
 from pkdyn.dynamics import actuation, inverse_dynamics
+from pkdyn.dynamics.trajectory import map_task_trajectory
 from pkdyn.library import tripod
-from pkdyn.statics import actuator_efforts
-from pkdyn.trajectory import map_task_trajectory
 from pkdyn.tripod import Stance, be_mode, mode_robot, pp_mode
 from pkdyn.tripod.machining import MachiningPlan, machining_task, surface_pose
 from pkdyn.tripod.scenario import swing_task
@@ -38,7 +39,7 @@ def robot() -> pkdyn.Robot:
 def swing(robot):
     """Branch 2 swinging 6 cm forward (lift 2 cm) from a tilted nacelle, sampled at 5 ms."""
     st = Stance.default(P)
-    phi = tripod.PHI[1]
+    phi = tripod_cf.PHI[1]
     M = pin.SE3(pin.exp3(0.1 * np.array([-math.sin(phi), math.cos(phi), 0.0])), np.r_[0, 0, 0.6])
     pp = mode_robot(robot, st, pp_mode())
     q0 = pkdyn.inverse_geometry(pp, M * TOOL, check_limits=False).q
@@ -57,7 +58,7 @@ def test_machining_wrench_share_is_the_statics(robot):
     for y in (-0.06, 0.0, 0.05):
         pose = surface_pose(plan, HOME_TOOL, 0.03, y, -plan.depth)
         q = pkdyn.inverse_geometry(pp, pose, check_limits=False).q
-        traj = pkdyn.trajectory.JointTrajectory(
+        traj = pkdyn.dynamics.trajectory.JointTrajectory(
             np.zeros(1),
             q[None],
             np.zeros((1, robot.nv)),
@@ -144,7 +145,7 @@ def test_q6_lock_carries_the_swinging_branch_weight_moment(robot, swing):
     q = jt.q[0]
     model, data = robot.model, robot.data
     zero = np.zeros(robot.nv)
-    traj = pkdyn.trajectory.JointTrajectory(
+    traj = pkdyn.dynamics.trajectory.JointTrajectory(
         np.zeros(1), q[None], zero[None], zero[None], robot.actuated_q, robot.actuated_v
     )
     lam = inverse_dynamics(be, traj, progress=False).constraint_forces[0]

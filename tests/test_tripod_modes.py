@@ -14,8 +14,9 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
+from pkdyn.analysis.singularity import classify
+from pkdyn.closed_form import tripod as tripod_cf
 from pkdyn.library import tripod
-from pkdyn.singularity import classify
 from pkdyn.tripod import (
     BRANCHES,
     Stance,
@@ -41,7 +42,7 @@ def robot() -> pkdyn.Robot:
 def random_stance(rng: np.random.Generator, tilt: float = 0.0) -> Stance:
     """Footholds moved on the support (and tilted by up to ``tilt``)."""
     feet = []
-    for f in tripod.foothold_frames(P):
+    for f in tripod_cf.foothold_frames(P):
         R = f.rotation @ pin.exp3(np.array([0.0, 0.0, rng.uniform(-0.2, 0.2)]))
         if tilt:
             R = pin.exp3(np.r_[rng.uniform(-tilt, tilt, 2), 0.0]) @ R
@@ -91,7 +92,7 @@ def pp_configuration(robot, stance, M, q0=None):
 
 
 def tilted(stance: Stance, b: int, tilt: float = 0.1) -> pin.SE3:
-    phi = tripod.PHI[b - 1]
+    phi = tripod_cf.PHI[b - 1]
     c = stance.centroid()
     return pin.SE3(
         pin.exp3(tilt * np.array([-math.sin(phi), math.cos(phi), 0.0])),
@@ -203,13 +204,13 @@ def test_bikmx_virtual_q3_differs_by_the_triangle_angle(robot):
     M = nacelle_pose(rng, st)
     q = pp_configuration(robot, st, M)
     e = 2 * P.r_p * math.sin(P.theta)
-    s0 = tripod.virtual_joints(P, tripod.home_nacelle_placement(P))[0]
+    s0 = tripod_cf.virtual_joints(P, tripod_cf.home_nacelle_placement(P))[0]
     gamma_home = math.atan2(0.5 * e, s0[3])
     for b in BRANCHES:
         v = bikmx_virtual(P, M, st, b)
         m = bikmx(P, M, st, b)
         q_l = coordinate(robot, q, f"branch{b}_qL")
-        q4 = tripod.virtual_joints(P, M, st.footholds)[b - 1, 3]
+        q4 = tripod_cf.virtual_joints(P, M, st.footholds)[b - 1, 3]
         gamma = math.acos((q_l**2 + q4**2 - 0.25 * e**2) / (2 * q_l * q4))
         assert m[2] == pytest.approx(v[2] - gamma_home + gamma, abs=1e-10)
         assert m[0] == pytest.approx(v[0] - s0[0], abs=1e-12)
@@ -287,9 +288,9 @@ def test_be_is_serially_singular_with_a_level_nacelle(robot):
         assert rep.kind == "serial"
         # the motion: nacelle translating along A_1 P_L1, no rotation, keeps all constraints
         Jc = be.closure_set.jacobian(be.data, q)
-        J6 = pkdyn.kinematics.platform_jacobian(be, q)
+        J6 = pkdyn.analysis.kinematics.platform_jacobian(be, q)
         A = st.footholds[0].translation
-        P_L, _ = attachments(tripod.home_nacelle_placement(P), 0)
+        P_L, _ = attachments(tripod_cf.home_nacelle_placement(P), 0)
         d = (P_L - A) / np.linalg.norm(P_L - A)
         nacelle_v = np.zeros(robot.nv)
         nacelle_v[:3] = d  # free-flyer: local linear velocity (nacelle level: world axes)

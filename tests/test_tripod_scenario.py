@@ -13,8 +13,8 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
+from pkdyn.analysis.collisions import segment_distance
 from pkdyn.cli import main
-from pkdyn.collisions import segment_distance
 from pkdyn.library import tripod
 from pkdyn.tripod import BRANCHES, foot_placement
 from pkdyn.tripod.analysis import LEGS, run_scenario
@@ -148,7 +148,7 @@ def test_leg_distances_agree_with_segment_bounds(robot, report):
     for ph in report.phases[::2]:
         q = ph.trajectory.q[ph.trajectory.t.size // 2]
         seg = _leg_segments(robot, q)
-        rep = pkdyn.collisions.distance_report(
+        rep = pkdyn.analysis.collisions.distance_report(
             robot, q, pairs=[(a, b) for a in seg for b in seg if a[:7] < b[:7]]
         )
         for pair in rep.pairs:

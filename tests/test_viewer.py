@@ -400,7 +400,7 @@ def test_chain_holds_between_segments():
 
 def test_animation_moves_the_platform_along_the_task_trajectory(delta):
     """The platform triad's keyframes are the Adept cycle's task positions (from the task law)."""
-    from pkdyn.trajectory import named_task, named_trajectory
+    from pkdyn.dynamics.trajectory import named_task, named_trajectory
 
     task = named_task(delta, "adept")
     traj = named_trajectory(delta, "adept")
@@ -496,8 +496,8 @@ def test_singular_samples_turn_the_robot_red(rrr):
 @pytest.mark.parametrize("name", ["gough_stewart", "five_bar"])
 def test_closest_legs_are_coloured_at_every_keyframe(name, gough_stewart):
     """Changing pairs (hexapod legs) and a pair closest all along (five-bar base and link)."""
-    from pkdyn.collisions import distance_report
-    from pkdyn.trajectory import named_trajectory
+    from pkdyn.analysis.collisions import distance_report
+    from pkdyn.dynamics.trajectory import named_trajectory
 
     robot = gough_stewart if name == "gough_stewart" else pkdyn.load(name)
     traj = named_trajectory(robot, "sine", amplitude=0.03, frequency=0.5, dt=0.01)
@@ -683,7 +683,7 @@ def near(t: np.ndarray, Q: np.ndarray, time_: float) -> np.ndarray:
 
 
 def test_browser_delta_page_draws_and_animates_the_robot(browser, delta, work):
-    from pkdyn.trajectory import named_trajectory
+    from pkdyn.dynamics.trajectory import named_trajectory
 
     traj = named_trajectory(delta, "adept", cycle_time=2.0, dt=0.01)
     scene = animate(delta, traj.t, traj.q)

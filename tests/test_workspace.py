@@ -9,11 +9,11 @@ import pytest
 import pkdyn
 from pkdyn.closed_form import gough_stewart as gs_cf
 from pkdyn.closed_form import planar_3rrr as rrr_cf
-from pkdyn.workspace import translation_workspace
-from pkdyn.workspace_delta import DeltaEvaluator
-from pkdyn.workspace_hexapod import HexapodEvaluator, HexapodLegs
-from pkdyn.workspace_limits import LIMIT_KINDS, REACHABLE
-from pkdyn.workspace_numeric import NumericEvaluator, configuration_violation
+from pkdyn.workspace.delta import DeltaEvaluator
+from pkdyn.workspace.legs import HexapodEvaluator, HexapodLegs
+from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE
+from pkdyn.workspace.numeric import NumericEvaluator, configuration_violation
+from pkdyn.workspace.translation import translation_workspace
 
 ALL = ("reach", "stroke", "joint", "interference")
 

@@ -9,7 +9,7 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
-from pkdyn.closed_form.delta_workspace import (
+from pkdyn.workspace.clavel import (
     AB_MIN,
     GAMMA_MAX,
     clavel_angles,

@@ -7,10 +7,10 @@ import pinocchio as pin
 import pytest
 
 import pkdyn
-from pkdyn.dextrous_workspace import dextrous_violations, dextrous_workspace
-from pkdyn.workspace import translation_workspace
-from pkdyn.workspace_hexapod import HexapodEvaluator, HexapodLegs
-from pkdyn.workspace_limits import LIMIT_KINDS, REACHABLE, direction_margin, pyramid_normals
+from pkdyn.workspace.dextrous import dextrous_violations, dextrous_workspace
+from pkdyn.workspace.legs import HexapodEvaluator, HexapodLegs
+from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, direction_margin, pyramid_normals
+from pkdyn.workspace.translation import translation_workspace
 
 # longer strokes and wider holes than the MEL prototype, whose dextrous workspace is tiny
 WIDE = dict(rho_min=(0.45,) * 6, rho_max=(0.8,) * 6, pyramid_half_angle=0.6)

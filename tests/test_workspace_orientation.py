@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 
 import pkdyn
-from pkdyn.orientation_workspace import (
+from pkdyn.workspace.legs import HexapodEvaluator, HexapodLegs
+from pkdyn.workspace.limits import REACHABLE
+from pkdyn.workspace.orientation import (
     mel_study,
     orientation_workspace,
     rotations,
     stroke_roots,
 )
-from pkdyn.workspace_hexapod import HexapodEvaluator, HexapodLegs
-from pkdyn.workspace_limits import REACHABLE
 
 
 @pytest.fixture(scope="module")

@@ -60,8 +60,8 @@ def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _cmd_size(args: argparse.Namespace) -> None:
-    from pkdyn.sizing import size
-    from pkdyn.trajectory import named_trajectory
+    from pkdyn.dynamics.sizing import size
+    from pkdyn.dynamics.trajectory import named_trajectory
 
     robot = load(args)
     traj = named_trajectory(robot, args.trajectory, **_trajectory_options(args))

@@ -86,14 +86,14 @@ def _cmd_ik(args: argparse.Namespace) -> None:
 
 
 def _cmd_mobility(args: argparse.Namespace) -> None:
-    from pkdyn.mobility import format_mobility, mobility
+    from pkdyn.analysis.mobility import format_mobility, mobility
 
     result = mobility(load(args))
     emit(args, result.as_json(), format_mobility(result))
 
 
 def _cmd_jacobian(args: argparse.Namespace) -> None:
-    from pkdyn.kinematics import jacobian_json
+    from pkdyn.analysis.kinematics import jacobian_json
 
     robot, q = configuration(args)
     out = jacobian_json(robot, q)
@@ -102,7 +102,7 @@ def _cmd_jacobian(args: argparse.Namespace) -> None:
 
 
 def _cmd_singularity(args: argparse.Namespace) -> None:
-    from pkdyn.singularity import singularity_json
+    from pkdyn.analysis.singularity import singularity_json
 
     robot, q = configuration(args)
     out = singularity_json(robot, q)
@@ -114,7 +114,7 @@ def _cmd_singularity(args: argparse.Namespace) -> None:
 
 
 def _cmd_statics(args: argparse.Namespace) -> None:
-    from pkdyn.statics import statics_json
+    from pkdyn.analysis.statics import statics_json
 
     robot, q = configuration(args)
     out = statics_json(robot, q, args.wrench, gravity=args.gravity)

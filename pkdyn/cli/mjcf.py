@@ -13,7 +13,7 @@ __all__ = ["register"]
 
 
 def _cmd_mjcf(args: argparse.Namespace) -> None:
-    from pkdyn.mjcf import MjcfOptions, to_mjcf, write_mjcf
+    from pkdyn.model.formats.mjcf import MjcfOptions, to_mjcf, write_mjcf
 
     if not args.timestep > 0.0:
         raise PkdynError(f"--timestep must be > 0 s, got {args.timestep}")

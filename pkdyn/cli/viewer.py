@@ -72,7 +72,7 @@ def _cmd_view(args: argparse.Namespace) -> None:
     robot = load(args, geometry=True)
     segments = []
     if args.trajectory:
-        from pkdyn.trajectory import named_trajectory
+        from pkdyn.dynamics.trajectory import named_trajectory
 
         for name in args.trajectory:
             traj = named_trajectory(robot, name, check_limits=False)

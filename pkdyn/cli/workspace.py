@@ -22,7 +22,7 @@ def _posed_robot(args: argparse.Namespace) -> tuple[Any, Any]:
 
 
 def _cmd_collisions(args: argparse.Namespace) -> None:
-    from pkdyn.collisions import distance_report
+    from pkdyn.analysis.collisions import distance_report
     from pkdyn.exceptions import InvalidInputError
 
     robot, q = _posed_robot(args)
@@ -43,8 +43,8 @@ def _cmd_collisions(args: argparse.Namespace) -> None:
 
 
 def _cmd_clavel(args: argparse.Namespace, robot: Any) -> None:
-    from pkdyn.closed_form.delta_workspace import clavel_closed_form, clavel_numeric
     from pkdyn.exceptions import PkdynError
+    from pkdyn.workspace.clavel import clavel_closed_form, clavel_numeric
 
     p = robot.params
     if not all(hasattr(p, k) for k in ("ra", "rb", "la", "lb")):
@@ -79,7 +79,7 @@ def _cmd_clavel(args: argparse.Namespace, robot: Any) -> None:
 
 
 def _translation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], str]:
-    from pkdyn.workspace import translation_workspace
+    from pkdyn.workspace.translation import translation_workspace
 
     ws = translation_workspace(
         robot,
@@ -100,7 +100,7 @@ def _translation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], 
 
 
 def _orientation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], str]:
-    from pkdyn.orientation_workspace import mel_study, orientation_workspace
+    from pkdyn.workspace.orientation import mel_study, orientation_workspace
 
     if args.mel:
         study = mel_study(
@@ -141,7 +141,7 @@ def _orientation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], 
 
 
 def _dextrous(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], str]:
-    from pkdyn.dextrous_workspace import dextrous_json, dextrous_workspace
+    from pkdyn.workspace.dextrous import dextrous_json, dextrous_workspace
 
     ws = dextrous_workspace(
         robot,

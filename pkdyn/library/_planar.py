@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Protocol
 
-from pkdyn.urdf_writer import UrdfWriter
+from pkdyn.model.formats.urdf_writer import UrdfWriter
 
 __all__ = ["PASSIVE_VELOCITY", "write_rr_chain"]
 

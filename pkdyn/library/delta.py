@@ -19,7 +19,7 @@ the parallelogram plane; a lower beam ``beam{i}`` turns about ``n`` at the lower
 an axis parallel to the arm axis. Every hinge axis is a coordinate axis of both of its frames,
 so the parallel axes stay exactly parallel in the written file. Each parallelogram is a planar
 four-bar closed in space and the three legs all keep the nacelle's orientation, so Grübler's
-count (-6) misses redundant equations; the mobility is still 3 (see :mod:`pkdyn.mobility`).
+count (-6) misses redundant equations; the mobility is still 3 (see :mod:`pkdyn.analysis.mobility`).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ import pinocchio as pin
 from pkdyn.closed_form import delta as cf
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
-from pkdyn.urdf_writer import Shape, UrdfWriter, rpy_z_to
+from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rpy_z_to
 
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
 

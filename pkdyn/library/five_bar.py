@@ -6,7 +6,7 @@ from the elbows ``C_j = A_j + l1 (cos theta_j, sin theta_j)`` meet at the end-ef
 ``E = (x, y)``. Defaults: ``d = 0.2``, ``l1 = 0.2``, ``l2 = 0.3`` m, home ``E = (0, 0.3)`` in the
 working mode with both elbows outward (``working_mode = "+-"``).
 
-Closed forms (vectorised, see :func:`inverse` and :func:`forward`): with ``K = E - A_j``,
+Closed forms (vectorised, :mod:`pkdyn.closed_form.five_bar`): with ``K = E - A_j``,
 ``K_x cos theta_j + K_y sin theta_j = K_3 = (|K|^2 + l1^2 - l2^2) / (2 l1)``, hence
 ``theta_j = atan2(K_y, K_x) + s_j acos(K_3 / |K|)``, where ``s_j = +1`` puts elbow ``C_j`` on
 the left of ``A_j -> E`` (counter-clockwise) and ``-1`` on its right. ``E`` is the intersection
@@ -29,10 +29,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pkdyn.closed_form.five_bar import MODES, _wrap, elbow_points, inverse
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
 from pkdyn.library._planar import write_rr_chain
-from pkdyn.urdf_writer import Shape, UrdfWriter
+from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 
 __all__ = [
     "NAME",
@@ -40,16 +41,10 @@ __all__ = [
     "Params",
     "build_urdf",
     "home",
-    "inverse",
-    "forward",
-    "elbow_points",
-    "mode_signs",
 ]
 
 NAME = "five_bar"
 SUMMARY = "Planar five-bar, two actuated base revolutes, end-effector where the distal links meet"
-
-_MODES = ("+-", "-+", "++", "--")
 
 
 @dataclass(frozen=True)
@@ -109,11 +104,11 @@ class Params:
         )
         in_range(NAME, "x_home", self.x_home, -math.inf, math.inf)
         in_range(NAME, "y_home", self.y_home, -math.inf, math.inf)
-        if self.working_mode not in _MODES:
+        if self.working_mode not in MODES:
             raise ParameterError(
                 NAME,
                 "working_mode",
-                f"must be one of {', '.join(_MODES)}, got {self.working_mode!r}",
+                f"must be one of {', '.join(MODES)}, got {self.working_mode!r}",
             )
         in_range(NAME, "q_min", self.q_min, -math.pi, self.q_max)
         in_range(NAME, "q_max", self.q_max, self.q_min, math.pi)
@@ -142,103 +137,6 @@ class Params:
     def home_point(self) -> np.ndarray:
         """Home end-effector point ``(x, y)`` [m]."""
         return np.array([self.x_home, self.y_home])
-
-
-def mode_signs(working_mode: str) -> np.ndarray:
-    """Elbow signs ``(s_1, s_2)`` of a working mode string such as ``"+-"``.
-
-    Args:
-        working_mode: Two characters among ``+`` and ``-``.
-
-    Returns:
-        Array (2,) of +1 / -1.
-
-    """
-    if working_mode not in _MODES:
-        raise ValueError(f"working mode must be one of {', '.join(_MODES)}, got {working_mode!r}")
-    return np.array([1.0 if c == "+" else -1.0 for c in working_mode])
-
-
-def _wrap(a: np.ndarray) -> np.ndarray:
-    return np.pi - (np.pi - a) % (2.0 * np.pi)
-
-
-def inverse(
-    p: Params, E: np.ndarray, working_mode: str | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Inverse geometric model: actuated angles from end-effector points.
-
-    Per chain, ``K = E - A_j`` and ``K_3 = (|K|^2 + l1^2 - l2^2) / (2 l1)``; then
-    ``theta_j = atan2(K_y, K_x) + s_j acos(K_3 / |K|)`` when ``|K_3| <= |K|``.
-
-    Args:
-        p: Parameters (``d``, ``l1``, ``l2``; ``working_mode`` unless given).
-        E: End-effector points, shape (N, 2) or (2,) [m].
-        working_mode: Overrides ``p.working_mode``.
-
-    Returns:
-        ``(theta, valid)``: angles (N, 2) [rad] in ``(-pi, pi]`` (NaN where a chain cannot reach)
-        and mask (N,).
-
-    """
-    P = np.atleast_2d(np.asarray(E, dtype=float))
-    s = mode_signs(p.working_mode if working_mode is None else working_mode)
-    A = p.base_xy
-    Kx = P[:, :1] - A[:, 0]
-    Ky = P[:, 1:2] - A[:, 1]
-    rho = np.hypot(Kx, Ky)
-    K3 = (rho**2 + p.l1**2 - p.l2**2) / (2.0 * p.l1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = K3 / rho
-    ok = (np.abs(ratio) <= 1.0) & (rho > 0.0)
-    theta = np.arctan2(Ky, Kx) + s * np.arccos(np.clip(np.where(ok, ratio, 0.0), -1.0, 1.0))
-    theta = _wrap(theta)
-    theta[~ok] = np.nan
-    return theta, ok.all(axis=1)
-
-
-def elbow_points(p: Params, theta: np.ndarray) -> np.ndarray:
-    """Elbows ``C_j = A_j + l1 (cos theta_j, sin theta_j)``.
-
-    Args:
-        p: Parameters.
-        theta: Actuated angles, shape (N, 2) or (2,) [rad].
-
-    Returns:
-        Elbow points, shape (N, 2, 2) [m].
-
-    """
-    t = np.atleast_2d(np.asarray(theta, dtype=float))
-    A = p.base_xy
-    return np.stack([A[:, 0] + p.l1 * np.cos(t), A[:, 1] + p.l1 * np.sin(t)], axis=-1)
-
-
-def forward(p: Params, theta: np.ndarray, assembly: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """Direct geometric model: end-effector points from actuated angles.
-
-    ``E = M + s n sqrt(l2^2 - |C_1 C_2|^2 / 4)`` with ``M`` the midpoint of ``C_1 C_2`` and
-    ``n`` the unit normal on the left of ``C_1 -> C_2``.
-
-    Args:
-        p: Parameters.
-        theta: Actuated angles, shape (N, 2) or (2,) [rad].
-        assembly: ``s = +1`` (E on the left of ``C_1 -> C_2``; above the base for the default
-            robot) or ``-1``.
-
-    Returns:
-        ``(E, valid)``: points (N, 2) [m] (NaN where not assemblable) and mask (N,).
-
-    """
-    C = elbow_points(p, theta)
-    u = C[:, 1] - C[:, 0]
-    c = np.linalg.norm(u, axis=1)
-    h2 = p.l2**2 - 0.25 * c**2
-    ok = (h2 >= 0.0) & (c > 0.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        n = np.stack([-u[:, 1], u[:, 0]], axis=1) / c[:, None]
-    E = 0.5 * (C[:, 0] + C[:, 1]) + assembly * n * np.sqrt(np.where(ok, h2, 0.0))[:, None]
-    E[~ok] = np.nan
-    return E, ok
 
 
 def home(p: Params) -> list[float]:

@@ -23,7 +23,7 @@ import pinocchio as pin
 from pkdyn.closed_form.gough_stewart import leg_lengths
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
-from pkdyn.urdf_writer import Shape, UrdfWriter, rpy_z_to
+from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rpy_z_to
 
 __all__ = [
     "NAME",

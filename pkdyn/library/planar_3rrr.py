@@ -27,7 +27,7 @@ from pkdyn.closed_form import planar_3rrr as cf
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
 from pkdyn.library._planar import write_rr_chain
-from pkdyn.urdf_writer import Shape, UrdfWriter
+from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
 

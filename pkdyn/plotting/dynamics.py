@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.sizing import SizingResult
+from pkdyn.dynamics.sizing import SizingResult
 
 __all__ = ["plot_efforts"]
 
@@ -22,7 +22,7 @@ def plot_efforts(
     """Effort, speed and power of each actuator against time, with the effort limits.
 
     Args:
-        result: A sizing result (:func:`pkdyn.sizing.size`).
+        result: A sizing result (:func:`pkdyn.dynamics.sizing.size`).
         path: Save the figure there (format from the suffix, e.g. ``.png``).
         title: Figure title (default: robot, trajectory and payload).
         limits: Draw the effort limits as dashed lines (when finite and within 3x the peak).

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.singularity_map import ConditioningMap
+from pkdyn.analysis.maps import ConditioningMap
 
 __all__ = ["plot_conditioning_map"]
 
@@ -35,7 +35,7 @@ def plot_conditioning_map(
     """Colour map of a conditioning indicator with the singularity loci overlaid.
 
     Args:
-        cmap: A map from :func:`pkdyn.singularity_map.delta_map` or ``planar_3rrr_map``.
+        cmap: A map from :func:`pkdyn.analysis.maps.delta_map` or ``planar_3rrr_map``.
         field: ``lci``, ``cond_J``, ``cond_A``, ``cond_B`` or ``manipulability`` (condition
             numbers are drawn on a log scale).
         path: Save the figure there (format from the suffix, e.g. ``.png``).

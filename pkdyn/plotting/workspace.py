@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.orientation_workspace import OrientationWorkspace
-from pkdyn.workspace import AXES, TranslationWorkspace
-from pkdyn.workspace_limits import LIMIT_KINDS
+from pkdyn.workspace.limits import LIMIT_KINDS
+from pkdyn.workspace.orientation import OrientationWorkspace
+from pkdyn.workspace.translation import AXES, TranslationWorkspace
 
 __all__ = [
     "plot_translation_workspace",
@@ -221,7 +221,7 @@ def plot_mel_study(
     """Merlet's MEL prototype study (chapter 3): one row of sphere maps per set of limits.
 
     Args:
-        study: From :func:`pkdyn.orientation_workspace.mel_study`.
+        study: From :func:`pkdyn.workspace.orientation.mel_study`.
         path: Save the figure there.
 
     Returns:

@@ -8,7 +8,7 @@ For every sample of every phase of :func:`pkdyn.tripod.scenario.plan_scenario`:
 - **stroke margins**: distance of each actuator length to its nearer stroke limit [m];
 - **distances** with coal between the legs (actuator bodies and rods) of different branches and
   between each leg and the nacelle (plate and spindle) [m];
-- **singularity margin**: ``distance`` of :func:`pkdyn.singularity.classify` on the phase's
+- **singularity margin**: ``distance`` of :func:`pkdyn.analysis.singularity.classify` on the phase's
   robot (``1 / cond`` of ``A`` and ``B``; 0 at a singularity);
 - **closure residuals** of the hinges and of the clamped feet (constraint residuals);
 - **locked joints**: largest departure of a locked coordinate from its locked value (read from
@@ -26,11 +26,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.collisions import CollisionChecker
+from pkdyn.analysis.collisions import CollisionChecker
+from pkdyn.analysis.singularity import classify
 from pkdyn.dynamics import inverse_dynamics
+from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
-from pkdyn.robot import Robot
-from pkdyn.singularity import classify
 from pkdyn.tripod.modes import BRANCHES, foot_placement
 from pkdyn.tripod.scenario import Phase, WalkPlan, plan_scenario
 from solvers import ClosureSet

@@ -19,12 +19,12 @@ The machining cycle at a station (all moves rest-to-rest, quintic, in pose coord
 3. return to the station's home pose.
 
 The machining wrench is the one the workpiece applies to the tool (convention of
-:mod:`pkdyn.statics`: force in world axes [N], moment in platform axes [N m]): while drilling, a
-thrust ``thrust`` along ``+n`` and the cutting torque ``-torque`` about the spindle axis; while
-contouring, the cutting force ``-feed_force`` along the feed direction, ``normal_force`` along
-``+n`` and the milling torque ``-torque`` about the spindle axis. Plunges (the holes, and the
-entry of the contouring pass) carry the drilling wrench while the tip is below the skin;
-retracts and rapid moves carry no wrench.
+:mod:`pkdyn.analysis.statics`: force in world axes [N], moment in platform axes [N m]): while
+drilling, a thrust ``thrust`` along ``+n`` and the cutting torque ``-torque`` about the spindle
+axis; while contouring, the cutting force ``-feed_force`` along the feed direction,
+``normal_force`` along ``+n`` and the milling torque ``-torque`` about the spindle axis. Plunges
+(the holes, and the entry of the contouring pass) carry the drilling wrench while the tip is below
+the skin; retracts and rapid moves carry no wrench.
 """
 
 from __future__ import annotations
@@ -33,9 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pkdyn.dynamics.profiles import motion_law
+from pkdyn.dynamics.trajectory import TaskTrajectory, concatenate, point_to_point
 from pkdyn.exceptions import InvalidInputError
-from pkdyn.profiles import motion_law
-from pkdyn.trajectory import TaskTrajectory, concatenate, point_to_point
 
 __all__ = ["MachiningPlan", "machining_task", "surface_pose"]
 

@@ -13,7 +13,7 @@ clamped and which passive joints are locked:
 
 Locks are rigid constraint models (:mod:`pkdyn.tripod.locks`) added to the closures: the
 swinging branch's universal joint (``q1`` and ``q2``) is welded, ``q3`` (the knuckle on rod
-``L``, joint ``branch{i}_a``, see :func:`pkdyn.library.tripod.lockable_coordinates`) and ``q6``
+``L``, joint ``branch{i}_a``, see :func:`pkdyn.library.tripod_cf.lockable_coordinates`) and ``q6``
 (joint ``branch{i}_q6``) are point locks, and ``q1`` of a support branch is the point lock of the
 universal joint's second coordinate. :func:`mode_robot` returns a :class:`pkdyn.Robot` with this
 constraint set and platform, so the general machinery (assembly, inverse geometry, kinematic
@@ -29,9 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from pkdyn.closed_form import tripod as tripod_cf
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.library import tripod
-from pkdyn.robot import Robot
+from pkdyn.model.robot import Robot
 from pkdyn.tripod.locks import Lock, lock_constraint, lock_values
 from solvers import ClosureSet
 
@@ -117,8 +118,8 @@ class Stance:
 
     @classmethod
     def default(cls, p: tripod.Params) -> Stance:
-        """The library model's footholds (:func:`pkdyn.library.tripod.foothold_frames`)."""
-        f = tripod.foothold_frames(p)
+        """The library model's footholds (:func:`pkdyn.library.tripod_cf.foothold_frames`)."""
+        f = tripod_cf.foothold_frames(p)
         return cls((f[0], f[1], f[2]))
 
     def moved(self, branch: int, foothold: pin.SE3) -> Stance:
@@ -268,7 +269,7 @@ def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = 
             "to know its footholds"
         )
     model = robot.model
-    default = tripod.foothold_frames(p)
+    default = tripod_cf.foothold_frames(p)
     cms: list[pin.RigidConstraintModel] = []
     owner: list[str] = []
     for cm, name in zip(robot.constraint_models, robot.constraint_owner, strict=True):

@@ -31,7 +31,7 @@ new sole attitude, and the swing turns the foot evenly from the old attitude to 
 With the swinging foot rigid to rod ``L`` (locks), a turn of the foot needs a large motion of
 the nacelle (its sensitivity is the conditioning of mode BE), so the tilt axis matters there.
 
-Each phase is mapped to joint space by :func:`pkdyn.trajectory.map_task_trajectory` on the
+Each phase is mapped to joint space by :func:`pkdyn.dynamics.trajectory.map_task_trajectory` on the
 mode's robot (:func:`pkdyn.tripod.modes.mode_robot`): the spindle tip is the platform in PP, the
 swinging foot in BE, and the locks are constraints of that robot, so ``(q, v, a)`` satisfy the
 closures, the clamps and the locks to second order.
@@ -47,13 +47,19 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.assembly import inverse_geometry
+from pkdyn.closed_form import tripod as tripod_cf
+from pkdyn.dynamics.profiles import motion_law
+from pkdyn.dynamics.trajectory import (
+    JointTrajectory,
+    TaskTrajectory,
+    map_task_trajectory,
+    point_to_point,
+)
 from pkdyn.exceptions import InvalidInputError, PkdynError, TrajectoryError, UnreachablePoseError
 from pkdyn.library import tripod
-from pkdyn.pose import pose_to_vector
-from pkdyn.profiles import motion_law
-from pkdyn.robot import Robot
-from pkdyn.trajectory import JointTrajectory, TaskTrajectory, map_task_trajectory, point_to_point
+from pkdyn.model.assembly import inverse_geometry
+from pkdyn.model.pose import pose_to_vector
+from pkdyn.model.robot import Robot
 from pkdyn.tripod.machining import MachiningPlan, machining_task
 from pkdyn.tripod.modes import (
     BRANCHES,
@@ -208,7 +214,7 @@ def foothold(p: tripod.Params, x: float, y: float, heading: float, radius: float
 
 
 def _stance(p: tripod.Params, xy: np.ndarray, radius: float) -> Stance:
-    f = [foothold(p, xy[i, 0], xy[i, 1], tripod.PHI[i], radius) for i in range(3)]
+    f = [foothold(p, xy[i, 0], xy[i, 1], tripod_cf.PHI[i], radius) for i in range(3)]
     return Stance((f[0], f[1], f[2]))
 
 
@@ -241,7 +247,7 @@ def swing_task(start: pin.SE3, end: pin.SE3, lift: float, T: float, dt: float) -
 
     Returns:
         The trajectory of the foot link frame (the BE platform), in the pose-vector form of
-        :class:`pkdyn.trajectory.TaskTrajectory` (roll-pitch-yaw rates from the angular
+        :class:`pkdyn.dynamics.trajectory.TaskTrajectory` (roll-pitch-yaw rates from the angular
         velocity).
 
     """
@@ -298,7 +304,7 @@ def _swing_poses(
     ``x_re`` or ``x_end`` (it happens on curved supports, where the swing turns the foot), the
     best of twelve horizontal axes is taken (largest smallest stroke margin).
     """
-    default = tripod.PHI[branch - 1] + 0.5 * math.pi
+    default = tripod_cf.PHI[branch - 1] + 0.5 * math.pi
     best: tuple[float, pin.SE3, np.ndarray, pin.SE3] | None = None
     error: Exception | None = None
     for psi in [default] + [default + k * math.pi / 6.0 for k in range(1, 12)]:
@@ -356,7 +362,7 @@ def plan_scenario(
     plan = WalkPlan() if plan is None else plan
     p = _params(robot)
     radius = plan.surface_radius
-    xy = np.array([np.array(f.translation[:2]) for f in tripod.foothold_frames(p)])
+    xy = np.array([np.array(f.translation[:2]) for f in tripod_cf.foothold_frames(p)])
     stance = _stance(p, xy, radius)
     q = np.array(robot.q_home)
     if not math.isinf(radius):  # stand on the surface first: assemble the clamped robot there
@@ -405,7 +411,7 @@ def plan_scenario(
             for b in BRANCHES:
                 old = stance.footholds[b - 1]
                 xy[b - 1] += step
-                new_foot = foothold(p, xy[b - 1, 0], xy[b - 1, 1], tripod.PHI[b - 1], radius)
+                new_foot = foothold(p, xy[b - 1, 0], xy[b - 1, 1], tripod_cf.PHI[b - 1], radius)
                 landed = stance.moved(b, new_foot)
                 x_end, b_i, x_re = _swing_poses(p, stance, landed, b, plan.tilt)
                 q = move_nacelle(x_re, q)

@@ -1,9 +1,9 @@
 """The paper's geometric models of mode BE (seed 003, section 4.1): ``B_iIKMX`` and ``XFKMB_i``.
 
 - ``B_iIKMX``: the locked joint values ``b_i`` from the nacelle pose ``x`` and the footholds, by
-  the vector projections of equations (1)-(8) (:func:`pkdyn.library.tripod.virtual_joints`),
+  the vector projections of equations (1)-(8) (:func:`pkdyn.library.tripod_cf.virtual_joints`),
   as if the locks were released (mode PP). :func:`bikmx` returns them as the model's lock
-  coordinates (see :func:`pkdyn.library.tripod.lockable_coordinates`: the lock of ``q3`` holds
+  coordinates (see :func:`pkdyn.library.tripod_cf.lockable_coordinates`: the lock of ``q3`` holds
   the knuckle on rod ``L``); :func:`bikmx_virtual` returns the paper's literal values.
 - ``XFKMB_i``: with the locks engaged, when the (swinging) foot frame moves, the nacelle pose
   ``x`` that keeps every locked joint at its value: ``x = argmin |B_iKMX(x) - b_i|``, solved by
@@ -23,9 +23,10 @@ import numpy as np
 import pinocchio as pin
 from scipy.optimize import least_squares
 
+from pkdyn.closed_form import tripod as tripod_cf
 from pkdyn.exceptions import InvalidInputError, JointLimitError, UnreachablePoseError
 from pkdyn.library import tripod
-from pkdyn.pose import pose_from_vector
+from pkdyn.model.pose import pose_from_vector
 from pkdyn.tripod.modes import Stance, support_branches
 
 __all__ = [
@@ -63,7 +64,7 @@ def bikmx_virtual(
 
     """
     j, k = support_branches(branch)
-    s = tripod.virtual_joints(p, x, _footholds(stance))
+    s = tripod_cf.virtual_joints(p, x, _footholds(stance))
     i = branch - 1
     return np.array([s[i, 0], s[i, 1], s[i, 2], s[i, 5], s[j - 1, 0], s[k - 1, 0]])
 
@@ -88,8 +89,8 @@ def bikmx(
 
     """
     j, k = support_branches(branch)
-    s = tripod.virtual_joints(p, x, _footholds(stance))
-    c = tripod.lockable_coordinates(p, s)  # (3, 4): q1, q2, q3, q6
+    s = tripod_cf.virtual_joints(p, x, _footholds(stance))
+    c = tripod_cf.lockable_coordinates(p, s)  # (3, 4): q1, q2, q3, q6
     i = branch - 1
     return np.array([c[i, 0], c[i, 1], c[i, 2], c[i, 3], c[j - 1, 0], c[k - 1, 0]])
 
@@ -110,8 +111,8 @@ def actuator_lengths(
         (6,) actuator lengths [m], in actuator order.
 
     """
-    s = tripod.virtual_joints(p, x, _footholds(stance))
-    return tripod.triangle_lengths(p, s).reshape(6)
+    s = tripod_cf.virtual_joints(p, x, _footholds(stance))
+    return tripod_cf.triangle_lengths(p, s).reshape(6)
 
 
 @dataclass

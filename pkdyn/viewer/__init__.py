@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pkdyn.robot import Robot
+from pkdyn.model.robot import Robot
 from pkdyn.viewer.animation import chain, check_trajectory
 from pkdyn.viewer.camera import Camera, bounding_box, frame_box, project
 from pkdyn.viewer.highlight import closest_pair, singularity_labels

@@ -1,20 +1,19 @@
 """What the viewer highlights: singular configurations and the pair of legs closest to collision.
 
-The analyses come from the core (:mod:`pkdyn.singularity`, :mod:`pkdyn.collisions`); this module
-only turns their answers into per-configuration labels the scene can colour.
+The analyses come from the core (:mod:`pkdyn.analysis.singularity`,
+:mod:`pkdyn.analysis.collisions`); this module only turns their answers into per-configuration
+labels the scene can colour.
 """
 
 from __future__ import annotations
 
-import importlib
 import warnings
-from typing import Any
 
 import numpy as np
 
-from pkdyn.exceptions import PkdynError
+from pkdyn.analysis.collisions import CollisionChecker, distance_report
+from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as bar
-from pkdyn.robot import Robot
 
 __all__ = [
     "CLOSEST_COLOR",
@@ -44,7 +43,7 @@ CLOSEST_COLOR = (0.85, 0.00, 0.85)
 def singularity_labels(
     robot: Robot, Q: np.ndarray, progress: bool | None = None
 ) -> tuple[np.ndarray, list[str]]:
-    """Classify each configuration of a trajectory (:func:`pkdyn.singularity.classify`).
+    """Classify each configuration of a trajectory (:func:`pkdyn.analysis.singularity.classify`).
 
     Args:
         robot: Robot with a platform.
@@ -56,7 +55,7 @@ def singularity_labels(
         (``regular``, ``serial``, ``parallel``, ``both``).
 
     """
-    from pkdyn.singularity import classify
+    from pkdyn.analysis.singularity import classify
 
     labels = np.zeros(len(Q), dtype=int)
     kinds: list[str] = []
@@ -69,20 +68,8 @@ def singularity_labels(
     return labels, kinds
 
 
-def _collisions() -> Any:
-    """:mod:`pkdyn.collisions`, imported when a closest-legs highlight is asked for."""
-    try:
-        return importlib.import_module("pkdyn.collisions")
-    except ModuleNotFoundError as err:
-        if err.name != "pkdyn.collisions":
-            raise
-        raise PkdynError(
-            "closest-legs highlighting needs pkdyn.collisions, which this installation lacks"
-        ) from None
-
-
 def closest_pair(robot: Robot, q: np.ndarray) -> tuple[str, str, float]:
-    """The two collision objects closest to each other (:func:`pkdyn.collisions.distance_report`).
+    """The two collision objects closest to each other (coal, via ``distance_report``).
 
     Args:
         robot: Robot loaded with its geometry.
@@ -96,7 +83,7 @@ def closest_pair(robot: Robot, q: np.ndarray) -> tuple[str, str, float]:
         PkdynError: No collision pair to check.
 
     """
-    best = _collisions().distance_report(robot, q).pairs[0]  # sorted closest first
+    best = distance_report(robot, q).pairs[0]  # sorted closest first
     return str(best.a), str(best.b), float(best.distance)
 
 
@@ -104,7 +91,7 @@ def closest_pairs(
     robot: Robot, Q: np.ndarray, progress: bool | None = None
 ) -> list[tuple[str, str, float]]:
     """:func:`closest_pair` at each configuration (N, nq) of a trajectory."""
-    checker = _collisions().CollisionChecker(robot)
+    checker = CollisionChecker(robot)
     out = []
     for q in bar(Q, "distances", "sample", progress, min_items=200):
         d = checker.distances(q)

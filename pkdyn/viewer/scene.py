@@ -13,7 +13,7 @@ import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
-from pkdyn.robot import Robot
+from pkdyn.model.robot import Robot
 from pkdyn.viewer import highlight as hl
 from pkdyn.viewer.animation import AnimationCommand, Clip, check_trajectory, keyframes
 from pkdyn.viewer.camera import Camera, bounding_box, frame_box
@@ -297,7 +297,7 @@ class Scene:
         """Colour the two collision objects closest to each other at ``q`` (default: shown q).
 
         Returns:
-            ``(a, b, distance)`` from :func:`pkdyn.collisions.distance_report` [m].
+            ``(a, b, distance)`` from :func:`pkdyn.analysis.collisions.distance_report` [m].
 
         """
         qq = self.q if q is None else np.asarray(q, dtype=float)

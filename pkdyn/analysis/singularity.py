@@ -1,0 +1,239 @@
+"""Singularity classification of any loaded robot (seed 001; Clavel's Delta families, seed 000).
+
+With ``A x_dot = B q_dot_a`` (:mod:`pkdyn.analysis.kinematics`):
+
+- **serial** singularity, ``B`` rank-deficient: an actuator motion leaves the platform at rest
+  (a chain is stretched or folded, it loses a degree of freedom); the singular directions are
+  actuator-rate directions, the null space of ``B``.
+- **parallel** singularity, ``A`` rank-deficient: the platform can move with the actuators
+  locked (it gains an uncontrollable motion, forces are no longer transmitted in some
+  direction); the singular directions are platform twists, the null space of ``A``.
+- **both** at once.
+
+Robots with fewer than 6 controlled components (Delta, planar robots) are also checked on the
+full 6D platform twist: with the actuators locked, the platform must not gain *any* motion, not
+even in an uncontrolled component such as the Delta nacelle's orientation. The gained 6D twists
+are reported in ``platform_directions``; when they leave every task component at rest the
+singularity is parallel with ``constraint=True``. The 6D check uses the platform relations in
+the closure-force metric (continuous through the loss of a relation), with the number of
+relations of the robot at ``q_home`` as reference.
+
+When the hidden motion does move the task point (Clavel's family c: the nacelle turns about the
+line through the nacelle joints of the third parallelogram, so its centre moves normal to the
+nacelle plane), the task-level relations lose a dimension and ``A`` and ``B`` degenerate
+together: to first order the actuators could also move while the centre stays put, the nacelle
+turning. That is not a serial singularity (the platform is not at rest), so in this case the
+serial test and ``cond_B`` use the 6D relations.
+
+Measures: condition numbers (finite, capped at :data:`pkdyn.analysis.kinematics.COND_MAX`) and
+``distance``, the smallest of their inverses, in ``[0, 1]`` (0: exactly singular). Below
+:data:`pkdyn.analysis.kinematics.SINGULAR_TOL` a matrix is singular; below
+:data:`pkdyn.analysis.kinematics.NEAR_SINGULAR_TOL` the configuration is *near-singular*: ``kind``
+stays ``"regular"``, ``near`` is set and a
+:class:`pkdyn.analysis.kinematics.NearSingularityWarning` is issued.
+"""
+
+from __future__ import annotations
+
+import warnings
+import weakref
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pkdyn.analysis.kinematics import (
+    NEAR_SINGULAR_TOL,
+    SINGULAR_TOL,
+    KinematicModels,
+    NearSingularityWarning,
+    _cond,
+    _relations,
+    kinematic_models,
+)
+from pkdyn.model.robot import Robot
+
+__all__ = ["SingularityReport", "classify", "singularity_json"]
+
+_PLATFORM_RELATIONS: dict[int, int] = {}
+"""Number of 6D platform relations at ``q_home``, by ``id(robot)`` (dropped with the robot)."""
+
+
+@dataclass
+class SingularityReport:
+    """Singularity analysis of one configuration.
+
+    Attributes:
+        kind: ``"regular"``, ``"serial"``, ``"parallel"`` or ``"both"``.
+        cond_A: Condition number of the parallel matrix ``A`` (finite).
+        cond_B: Condition number of the serial matrix ``B`` (finite; of the 6D relations when
+            the task relations degenerate, see the module docstring).
+        cond_platform: Condition number of the 6D platform relations (robots with ``m < 6``;
+            equals ``cond_A`` otherwise).
+        distance: ``min(1 / cond_A, 1 / cond_B, 1 / cond_platform)`` in ``[0, 1]``.
+        near: Near-singular (within :data:`pkdyn.analysis.kinematics.NEAR_SINGULAR_TOL`), not
+        singular. constraint: The parallel singularity lets the platform move in uncontrolled
+            components (only these).
+        parallel_directions: (k, m) unit platform velocities (task components) in the
+            (near-)null space of ``A``.
+        serial_directions: (k, n_a) unit actuator rates in the (near-)null space of ``B``.
+        platform_directions: (k, 6) unit platform twists ``[v_world; omega_platform]`` the
+            locked actuators do not prevent (6D check, robots with ``m < 6``).
+        task: Controlled pose components.
+        actuators: Actuated joint names.
+
+    """
+
+    kind: str
+    cond_A: float
+    cond_B: float
+    cond_platform: float
+    distance: float
+    near: bool
+    constraint: bool
+    parallel_directions: np.ndarray
+    serial_directions: np.ndarray
+    platform_directions: np.ndarray
+    task: tuple[str, ...]
+    actuators: tuple[str, ...]
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dict (see :func:`singularity_json`)."""
+        return {
+            "kind": self.kind,
+            "cond_A": self.cond_A,
+            "cond_B": self.cond_B,
+            "cond_platform": self.cond_platform,
+            "distance": self.distance,
+            "near": self.near,
+            "constraint": self.constraint,
+            "directions": {
+                "parallel": self.parallel_directions.tolist(),
+                "serial": self.serial_directions.tolist(),
+                "platform": self.platform_directions.tolist(),
+            },
+            "task": list(self.task),
+            "actuators": list(self.actuators),
+        }
+
+
+def _null_dirs(M: np.ndarray, n: int, tol: float) -> tuple[float, np.ndarray]:
+    """Condition number of ``M`` (rank n expected) and right singular vectors below ``tol``."""
+    cols = M.shape[1]
+    if M.size == 0:
+        return 1.0, np.zeros((0, cols))
+    _, s, Vt = np.linalg.svd(M, full_matrices=True)
+    cond = _cond(s, n)
+    sfull = np.zeros(cols)
+    sfull[: s.size] = s
+    ratio = sfull / s[0] if s[0] > 0 else np.zeros(cols)
+    keep = np.flatnonzero(ratio[:n] < tol)
+    return cond, np.asarray(Vt[keep])
+
+
+def _platform_relations(robot: Robot, km: KinematicModels) -> np.ndarray:
+    """Rows ``[B6, -A6]`` of the 6D platform relations (W metric), as many as at ``q_home``."""
+    a, p = km.actuated_v, km.passive_v
+    rel = _relations(km.Jc, km.J6, a, p)
+    r6 = _PLATFORM_RELATIONS.get(id(robot))
+    if r6 is None:
+        home = kinematic_models(robot, robot.q_home)
+        ref = _relations(home.Jc, home.J6, a, p)
+        r6 = int(np.sum(ref.s > SINGULAR_TOL * max(float(ref.s[0]), 1e-300))) if ref.s.size else 0
+        _PLATFORM_RELATIONS[id(robot)] = r6
+        weakref.finalize(robot, _PLATFORM_RELATIONS.pop, id(robot), None)
+    if rel.R.size == 0:
+        return np.zeros((0, 6))
+    U, _, _ = np.linalg.svd(rel.R, full_matrices=True)
+    return np.asarray(U.T[:r6] @ rel.R)
+
+
+def classify(
+    robot: Robot,
+    q: Sequence[float] | np.ndarray,
+    tol: float = SINGULAR_TOL,
+    near_tol: float = NEAR_SINGULAR_TOL,
+) -> SingularityReport:
+    """Classify a configuration as regular, serial, parallel or both.
+
+    Args:
+        robot: Any loaded robot with a platform.
+        q: Assembled configuration (nq,).
+        tol: Singular-value ratio below which a matrix is singular.
+        near_tol: Ratio below which a configuration is flagged near-singular (warning).
+
+    Returns:
+        The report; condition numbers are finite.
+
+    Raises:
+        InvalidInputError: Malformed or unassembled ``q``, or no platform.
+
+    """
+    km = kinematic_models(robot, q)
+    m, n_a = km.m, km.n_a
+    cond_A, par = _null_dirs(km.A, m, near_tol)
+    cond_B, ser = _null_dirs(km.B, min(m, n_a), near_tol)
+    if m < 6:
+        rows = _platform_relations(robot, km)
+        A6 = -rows[:, n_a:]
+        cond_P, plat = _null_dirs(A6, A6.shape[0], near_tol)
+        if km.relation_gap < tol:
+            # The task relations lost a dimension: a hidden (uncontrolled-component) platform
+            # motion moves the task point, so A and B both degenerate. Whether an actuator
+            # motion leaves the *whole* platform at rest is decided on the 6D relations.
+            cond_B, ser = _null_dirs(rows[:, :n_a], min(rows.shape[0], n_a), near_tol)
+    else:
+        cond_P = cond_A
+        _, plat = _null_dirs(km.A, m, near_tol)
+    parallel_task = cond_A * tol >= 1.0
+    parallel_6d = cond_P * tol >= 1.0
+    parallel = parallel_task or parallel_6d
+    serial = cond_B * tol >= 1.0
+    kind = {
+        (False, False): "regular",
+        (False, True): "serial",
+        (True, False): "parallel",
+        (True, True): "both",
+    }[(parallel, serial)]
+    worst = max(cond_A, cond_B, cond_P)
+    near = kind == "regular" and worst * near_tol >= 1.0
+    if near:
+        which = "parallel" if max(cond_A, cond_P) >= cond_B else "serial"
+        warnings.warn(
+            f"{robot.name}: near a {which} singularity (condition number {worst:.3g}); "
+            "velocities and efforts are ill-conditioned here",
+            NearSingularityWarning,
+            stacklevel=2,
+        )
+    return SingularityReport(
+        kind=kind,
+        cond_A=cond_A,
+        cond_B=cond_B,
+        cond_platform=cond_P,
+        distance=1.0 / worst,
+        near=near,
+        constraint=parallel_6d and not parallel_task,
+        parallel_directions=par,
+        serial_directions=ser,
+        platform_directions=plat,
+        task=km.task,
+        actuators=km.actuators,
+    )
+
+
+def singularity_json(robot: Robot, q: Sequence[float] | np.ndarray) -> dict[str, Any]:
+    """JSON-ready singularity report for the CLI.
+
+    Args:
+        robot: The robot.
+        q: Assembled configuration (nq,).
+
+    Returns:
+        ``{"kind", "cond_A", "cond_B", "cond_platform", "distance", "near", "constraint",
+        "directions": {"parallel", "serial", "platform"}, "task", "actuators"}``.
+
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NearSingularityWarning)
+        return classify(robot, q).to_json()

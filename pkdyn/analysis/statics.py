@@ -1,0 +1,214 @@
+"""Statics of any loaded robot: actuator efforts, transmitted wrenches, closure reactions.
+
+Conventions (power conjugates of :mod:`pkdyn.analysis.kinematics`' velocities):
+
+- ``F`` is the wrench the **environment applies to the platform** at the platform frame origin:
+  force in world axes [N], moment in platform axes [N m], restricted to the task components
+  (``m`` values) or given in full (6 values: ``fx fy fz mx my mz``).
+- ``tau`` are the joint-side actuator efforts [N m or N], positive along the actuated joint
+  coordinate, that **hold the platform in equilibrium** against ``F``. Virtual work on every
+  motion compatible with the closures: ``tau . dq_a + F . dx = 0``, hence
+  ``tau = -J^T F`` (seed 001: ``tau = J^T f`` with ``f = -F`` the wrench the robot applies).
+- The wrench the actuators produce (applied by the platform on the environment) when they exert
+  ``tau`` is ``w = J^-T tau`` (:func:`platform_wrench`); holding ``F`` means ``w = -F``.
+
+Full equilibrium with closure reactions (:func:`static_equilibrium`): on the spanning tree,
+``S^T tau + Jc^T lambda + J6^T F = g(q)``, with ``S`` the actuator selection, ``Jc`` the closure
+Jacobian, ``J6`` the 6D platform Jacobian and ``g`` the generalised gravity (optional), solved in
+the least-squares sense (minimum norm in ``lambda`` when closure equations are redundant, e.g.
+hinges). ``lambda`` holds the closure forces, with the sign of the residual conventions of
+:mod:`solvers.closure`: for a ``point`` closure (residual ``p1 - p2``), the force [N] body 2
+exerts on body 1 at the contact point, world axes; for a 6D weld (residual
+``log6(oMc1^-1 oMc2)``), the wrench [N, N m] body 1 exerts on body 2, in the contact frame.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.analysis.kinematics import SINGULAR_TOL, NearSingularityWarning, kinematic_models
+from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
+from pkdyn.model.pose import as_finite
+from pkdyn.model.robot import Robot
+
+__all__ = [
+    "StaticsResult",
+    "actuator_efforts",
+    "platform_wrench",
+    "static_equilibrium",
+    "statics_json",
+]
+
+EQUILIBRIUM_TOL = 1e-8
+"""Relative residual of the equilibrium above which no static solution exists."""
+
+
+def _wrench6(robot: Robot, F: Sequence[float] | np.ndarray | None) -> np.ndarray:
+    out = np.zeros(6)
+    if F is None:
+        return out
+    arr = as_finite("F", F)
+    rows = np.asarray(robot.task_rows, dtype=int)
+    if arr.size == 6:
+        return arr
+    if arr.size != rows.size:
+        raise InvalidInputError(
+            "F", f"expected {rows.size} task components or 6 values, got {arr.size}"
+        )
+    out[rows] = arr
+    return out
+
+
+def actuator_efforts(
+    robot: Robot, q: Sequence[float] | np.ndarray, F: Sequence[float] | np.ndarray
+) -> np.ndarray:
+    """Actuator efforts holding the platform against an external wrench: ``tau = -J^T F``.
+
+    Args:
+        robot: The robot.
+        q: Assembled configuration (nq,).
+        F: Wrench on the platform, task components (m,) [N, N m].
+
+    Returns:
+        ``tau`` (n_a,) [N m or N], joint side.
+
+    Raises:
+        SingularConfigurationError: Parallel singularity (``J`` does not exist).
+
+    """
+    km = kinematic_models(robot, q)
+    return -km.J.T @ as_finite("F", F, km.m)
+
+
+def platform_wrench(
+    robot: Robot, q: Sequence[float] | np.ndarray, tau: Sequence[float] | np.ndarray
+) -> np.ndarray:
+    """Wrench the actuators produce on the environment through the platform: ``J^-T tau``.
+
+    Args:
+        robot: The robot.
+        q: Assembled configuration (nq,).
+        tau: Actuator efforts (n_a,) [N m or N].
+
+    Returns:
+        ``w`` (m,) task components [N, N m], with ``w . x_dot = tau . q_dot_a``.
+
+    Raises:
+        SingularConfigurationError: Serial singularity (``J_inv`` does not exist).
+
+    """
+    km = kinematic_models(robot, q)
+    return km.J_inv.T @ as_finite("tau", tau, km.n_a)
+
+
+@dataclass
+class StaticsResult:
+    """Static equilibrium of the whole mechanism.
+
+    Attributes:
+        tau: Actuator efforts (n_a,) [N m or N].
+        lambdas: Closure forces (nc,) [N, N m] (convention in the module docstring).
+        reactions: Closure forces by constraint name.
+        residual: Norm of the unbalanced generalised force [N m or N] (round-off when the
+            equilibrium exists).
+
+    """
+
+    tau: np.ndarray
+    lambdas: np.ndarray
+    reactions: dict[str, np.ndarray]
+    residual: float
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dict."""
+        return {
+            "tau": self.tau.tolist(),
+            "reactions": {k: v.tolist() for k, v in self.reactions.items()},
+            "residual": self.residual,
+        }
+
+
+def static_equilibrium(
+    robot: Robot,
+    q: Sequence[float] | np.ndarray,
+    F: Sequence[float] | np.ndarray | None = None,
+    gravity: bool = False,
+) -> StaticsResult:
+    """Actuator efforts and closure reactions balancing an external wrench (and gravity).
+
+    Args:
+        robot: The robot.
+        q: Assembled configuration (nq,).
+        F: Wrench on the platform (task components or all 6) [N, N m]; ``None``: zero.
+        gravity: Also balance the robot's weight (``model.gravity``).
+
+    Returns:
+        The efforts and reactions.
+
+    Raises:
+        SingularConfigurationError: The load cannot be balanced (parallel singularity with a
+            load along the uncontrollable direction) or the efforts are not unique.
+
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NearSingularityWarning)
+        km = kinematic_models(robot, q)
+    model, data = robot.model, robot.data
+    F6 = _wrench6(robot, F)
+    rhs = -km.J6.T @ F6
+    if gravity:
+        rhs += pin.computeGeneralizedGravity(model, data, km.q)
+    nv, n_a = robot.nv, km.n_a
+    S_T = np.zeros((nv, n_a))
+    S_T[km.actuated_v, np.arange(n_a)] = 1.0
+    K = np.hstack([S_T, km.Jc.T])
+    sol, *_ = np.linalg.lstsq(K, rhs, rcond=1e-12)
+    residual = float(np.linalg.norm(K @ sol - rhs))
+    scale = max(float(np.linalg.norm(rhs)), 1e-300)
+    if residual > EQUILIBRIUM_TOL * scale + 1e-12:
+        raise SingularConfigurationError(
+            "parallel",
+            f"{robot.name}: no static equilibrium: the load has a component along an "
+            f"uncontrollable platform motion (unbalanced {residual:.3g})",
+        )
+    if km.cond_A * SINGULAR_TOL >= 1.0:
+        raise SingularConfigurationError(
+            "parallel",
+            f"{robot.name}: parallel singularity: actuator efforts are not unique here",
+        )
+    tau, lam = sol[:n_a], sol[n_a:]
+    cs = robot.closure_set
+    reactions = {
+        name: lam[cs.offsets[k] : cs.offsets[k + 1]].copy() for k, name in enumerate(cs.names)
+    }
+    return StaticsResult(tau, lam, reactions, residual)
+
+
+def statics_json(
+    robot: Robot,
+    q: Sequence[float] | np.ndarray,
+    F: Sequence[float] | np.ndarray | None = None,
+    gravity: bool = False,
+) -> dict[str, Any]:
+    """JSON-ready statics for the CLI.
+
+    Args:
+        robot: The robot.
+        q: Assembled configuration (nq,).
+        F: Wrench on the platform (task components or 6 values) [N, N m].
+        gravity: Include the robot's weight.
+
+    Returns:
+        ``{"tau", "actuators", "reactions", "residual"}``.
+
+    """
+    res = static_equilibrium(robot, q, F, gravity)
+    out = res.to_json()
+    out["actuators"] = robot.actuator_names
+    return out

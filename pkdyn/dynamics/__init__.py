@@ -1,0 +1,27 @@
+"""Dynamics: motion laws, task trajectories, inverse and forward dynamics, motor sizing.
+
+Modules: :mod:`~pkdyn.dynamics.profiles` (rest-to-rest motion laws),
+:mod:`~pkdyn.dynamics.trajectory` (task paths mapped to closure-consistent joint trajectories),
+:mod:`~pkdyn.dynamics.actuation`, :mod:`~pkdyn.dynamics.payload`, :mod:`~pkdyn.dynamics.energy`,
+:mod:`~pkdyn.dynamics.inverse` (actuator efforts along a trajectory),
+:mod:`~pkdyn.dynamics.forward` (``simulate``), :mod:`~pkdyn.dynamics.sizing` (peak/RMS efforts,
+margins).
+
+Layering: may import :mod:`pkdyn.model`, :mod:`pkdyn.library`, :mod:`pkdyn.analysis` and
+:mod:`solvers`; never the workspace, tripod, design, viewer, plotting or CLI packages.
+"""
+
+from pkdyn.dynamics.actuation import actuation
+from pkdyn.dynamics.energy import mechanical_energy
+from pkdyn.dynamics.forward import simulate
+from pkdyn.dynamics.inverse import EffortTrajectory, inverse_dynamics
+from pkdyn.dynamics.payload import with_payload
+
+__all__ = [
+    "EffortTrajectory",
+    "actuation",
+    "inverse_dynamics",
+    "mechanical_energy",
+    "simulate",
+    "with_payload",
+]

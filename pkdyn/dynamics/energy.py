@@ -1,0 +1,28 @@
+"""Mechanical energy of the whole mechanism."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.model.robot import Robot
+
+__all__ = ["mechanical_energy"]
+
+
+def mechanical_energy(robot: Robot, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+    """Kinetic and gravitational potential energy of the whole mechanism.
+
+    Args:
+        robot: The robot.
+        q: Configuration (nq,).
+        v: Velocity (nv,).
+
+    Returns:
+        ``(kinetic, potential)`` [J] (potential relative to the world origin).
+
+    """
+    model, data = robot.model, robot.data
+    kinetic = float(pin.computeKineticEnergy(model, data, q, v))
+    potential = float(pin.computePotentialEnergy(model, data, q))
+    return kinetic, potential

@@ -1,0 +1,203 @@
+"""Inverse dynamics along joint trajectories, on :class:`solvers.InverseDynamics`.
+
+Conventions: efforts ``tau`` are joint-side [N m or N] (motor side: divide by the reduction);
+the platform wrench ``F`` is the one of :mod:`pkdyn.analysis.statics` (applied by the
+environment on the platform, force in world axes [N], moment in platform axes [N m]); gravity
+is ``model.gravity``. The solver's failures become typed pkdyn exceptions naming the sample and
+the actuator.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.analysis.kinematics import platform_jacobian
+from pkdyn.dynamics.actuation import actuation
+from pkdyn.dynamics.energy import mechanical_energy
+from pkdyn.dynamics.trajectory import JointTrajectory
+from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
+from pkdyn.model.robot import Robot
+from pkdyn.progress import progress as progress_bar
+from solvers import ClosureSet, InverseDynamics
+from solvers import InfeasibleError as _SolverInfeasible
+
+__all__ = ["CONSISTENCY_TOL", "EffortTrajectory", "inverse_dynamics"]
+
+
+@dataclass(frozen=True)
+class EffortTrajectory:
+    """Actuator efforts along a joint trajectory.
+
+    Attributes:
+        trajectory: The joint trajectory.
+        actuators: Actuator (joint) names.
+        tau: Joint-side efforts (N, n_a) [N m or N].
+        constraint_forces: Closure forces (N, nc) [N, N m] (convention of
+            :mod:`solvers.inverse_dynamics`).
+        residual: Residual of the dynamics equation per sample (N,) [N m or N].
+        kinetic: Kinetic energy (N,) [J].
+        potential: Gravitational potential energy (N,) [J].
+
+    """
+
+    trajectory: JointTrajectory
+    actuators: list[str]
+    tau: np.ndarray
+    constraint_forces: np.ndarray
+    residual: np.ndarray
+    kinetic: np.ndarray
+    potential: np.ndarray
+
+    @property
+    def t(self) -> np.ndarray:
+        """Sample times (N,) [s]."""
+        return self.trajectory.t
+
+    @property
+    def energy(self) -> np.ndarray:
+        """Mechanical energy, kinetic + potential (N,) [J]."""
+        return self.kinetic + self.potential
+
+    @property
+    def power(self) -> np.ndarray:
+        """Actuator powers ``tau * qd`` (N, n_a) [W]."""
+        return self.tau * self.trajectory.qa_d
+
+
+def _wrench_series(robot: Robot, wrench: Any, n: int) -> np.ndarray | None:
+    if wrench is None:
+        return None
+    W = np.asarray(wrench, dtype=float)
+    if W.shape == (6,):
+        W = np.broadcast_to(W, (n, 6))
+    if W.shape != (n, 6) or not np.all(np.isfinite(W)):
+        raise InvalidInputError("wrench", f"expected 6 finite values or ({n}, 6), got {W.shape}")
+    if robot.platform_frame is None:
+        raise InvalidInputError("wrench", f"{robot.name} declares no platform to apply it to")
+    return W
+
+
+CONSISTENCY_TOL = 1e-7
+"""Largest closure error of a trajectory sample accepted by the inverse dynamics, relative to
+``max(1, |v|)`` for velocities and ``max(1, |a|)`` for accelerations [m, m/s, m/s^2]."""
+
+
+def _check_consistent(
+    cs: ClosureSet,
+    data: pin.Data,
+    k: int,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    a: np.ndarray,
+) -> None:
+    """Raise :class:`TrajectoryError` unless ``(q, v, a)`` satisfies the closures."""
+    if not cs.nc:
+        return
+    r, J = cs.residual_and_jacobian(data, q)
+    checks = (
+        ("configuration", r, 1.0),
+        ("velocity", J @ v, max(1.0, float(np.max(np.abs(v))))),
+        ("acceleration", J @ a + cs.drift(data, q, v), max(1.0, float(np.max(np.abs(a))))),
+    )
+    for what, err, scale in checks:
+        worst = float(np.max(np.abs(err)))
+        if not worst <= CONSISTENCY_TOL * scale:
+            per = cs.split(err)
+            name = max(per, key=lambda n: per[n])
+            raise TrajectoryError(
+                f"the {what} does not satisfy closure '{name}' (error {worst:.3g}); map task "
+                "trajectories with pkdyn.dynamics.trajectory.map_task_trajectory",
+                sample=k,
+                time=t,
+            )
+
+
+def inverse_dynamics(
+    robot: Robot,
+    trajectory: JointTrajectory,
+    wrench: Sequence[float] | np.ndarray | None = None,
+    limits: bool = False,
+    weights: Sequence[float] | np.ndarray | None = None,
+    progress: bool | None = None,
+) -> EffortTrajectory:
+    """Actuator efforts (and closure forces) realising a trajectory, with gravity.
+
+    Non-redundant actuation gives the unique efforts; redundant actuation the efforts of least
+    weighted norm (proxsuite QP, warm-started along the trajectory), within the effort limits
+    when ``limits`` is set.
+
+    Args:
+        robot: The robot (add a payload with :func:`with_payload`).
+        trajectory: Joint trajectory consistent with the closures
+            (:func:`pkdyn.dynamics.trajectory.map_task_trajectory`).
+        wrench: Wrench on the platform, (6,) constant or (N, 6) per sample [N, N m]
+            (convention of :mod:`pkdyn.analysis.statics`); e.g. a machining force.
+        limits: Bound the efforts by the actuators' effort limits (URDF ``effort``).
+        weights: Effort weights for redundant actuation (default ``1 / effort_limit^2`` when
+            limits are finite, else ones).
+        progress: Show a progress bar (default: > 2000 samples and stderr is a terminal).
+
+    Returns:
+        Efforts, closure forces, residuals and energies per sample.
+
+    Raises:
+        InfeasibleEffortError: No efforts within the limits realise a sample (names the sample
+            and the actuator), or the motion is not dynamically consistent there.
+        TrajectoryError: The trajectory does not belong to this robot, is not finite, or does
+            not satisfy the closures (position, velocity or acceleration, :data:`CONSISTENCY_TOL`).
+
+    """
+    traj = trajectory
+    N = traj.t.size
+    if traj.q.shape != (N, robot.nq) or traj.v.shape != (N, robot.nv):
+        raise TrajectoryError(
+            f"trajectory of shape q {traj.q.shape}, v {traj.v.shape} does not fit {robot.name} "
+            f"(nq = {robot.nq}, nv = {robot.nv})"
+        )
+    for what, arr in (("q", traj.q), ("v", traj.v), ("a", traj.a)):
+        bad = np.flatnonzero(~np.isfinite(arr).all(axis=1))
+        if bad.size:
+            k = int(bad[0])
+            raise TrajectoryError(f"{what} is not finite", sample=k, time=float(traj.t[k]))
+    W = _wrench_series(robot, wrench, N)
+    effort = np.array([a.effort for a in robot.actuators])
+    lower = -effort if limits else None
+    upper = effort if limits else None
+    if weights is None and np.all(np.isfinite(effort)) and np.all(effort > 0.0):
+        weights = 1.0 / effort**2
+    solver = InverseDynamics(
+        robot.model,
+        list(robot.constraint_models),
+        actuation(robot),
+        lower=lower,
+        upper=upper,
+        weights=weights,
+    )
+    kin_data = robot.model.createData()
+    tau = np.empty((N, len(robot.actuators)))
+    lam = np.empty((N, solver.closure_set.nc))
+    res = np.empty(N)
+    kin = np.empty(N)
+    pot = np.empty(N)
+    iterator = progress_bar(range(N), "inverse dynamics", "sample", progress, min_items=2000)
+    for k in iterator:
+        q, v, a = traj.q[k], traj.v[k], traj.a[k]
+        _check_consistent(solver.closure_set, kin_data, k, float(traj.t[k]), q, v, a)
+        f_ext = None
+        if W is not None:
+            f_ext = platform_jacobian(robot, q).T @ W[k]
+        try:
+            out = solver.solve(q, v, a, sample=k, f_ext=f_ext)
+        except _SolverInfeasible as err:
+            raise InfeasibleEffortError(
+                f"t = {traj.t[k]:.6g} s: {err}", sample=k, actuator=err.name
+            ) from None
+        tau[k], lam[k], res[k] = out.tau, out.constraint_forces, out.residual
+        kin[k], pot[k] = mechanical_energy(robot, q, v)
+    return EffortTrajectory(traj, robot.actuator_names, tau, lam, res, kin, pot)

@@ -1,0 +1,52 @@
+"""Payloads rigidly attached to the platform."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.pose import as_finite
+from pkdyn.model.robot import Robot
+
+__all__ = ["with_payload"]
+
+
+def with_payload(
+    robot: Robot,
+    mass: float,
+    offset: Sequence[float] = (0.0, 0.0, 0.0),
+    inertia: Sequence[float] | np.ndarray | None = None,
+) -> Robot:
+    """A copy of ``robot`` carrying a payload rigidly attached to the platform.
+
+    Args:
+        robot: The robot (unchanged).
+        mass: Payload mass [kg] (>= 0).
+        offset: Payload centre of mass in the platform frame [m].
+        inertia: Rotational inertia about its centre of mass, platform axes (3, 3) [kg m^2]
+            (default: a point mass).
+
+    Returns:
+        A robot whose platform body includes the payload (same joints, closures and home).
+
+    Raises:
+        InvalidInputError: Negative or non-finite mass, or a robot without platform.
+
+    """
+    if not np.isfinite(mass) or mass < 0.0:
+        raise InvalidInputError("payload", f"payload mass must be >= 0 kg, got {mass}")
+    if robot.platform_frame is None:
+        raise InvalidInputError("robot", f"{robot.name} declares no platform to carry a payload")
+    c = as_finite("offset", offset, 3)
+    I3 = np.zeros((3, 3)) if inertia is None else np.asarray(inertia, dtype=float).reshape(3, 3)
+    model = pin.Model(robot.model)
+    frame = model.frames[robot.platform_frame]
+    joint = frame.parentJoint
+    # payload inertia expressed in the joint frame
+    body = pin.Inertia(float(mass), c, I3)
+    model.inertias[joint] = model.inertias[joint] + frame.placement.act(body)
+    return dataclasses.replace(robot, model=model, data=model.createData())

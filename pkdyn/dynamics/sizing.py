@@ -1,0 +1,235 @@
+"""Motor sizing: per-actuator efforts, speeds and powers along a trajectory, against the limits.
+
+For each actuator: peak and RMS effort (joint side, and motor side through the transmission's
+reduction ``r``: ``tau_motor = tau / r``, ``omega_motor = r qd``, an ideal transmission), peak
+speed, peak power ``|tau qd|``, and the margins against the URDF limits
+(``margin = 1 - peak / limit``: the fraction of the limit left; negative when exceeded).
+The RMS effort is the time RMS over the trajectory (trapezoidal rule), the figure that sizes a
+motor's continuous torque.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pkdyn.dynamics.inverse import EffortTrajectory, inverse_dynamics
+from pkdyn.dynamics.payload import with_payload
+from pkdyn.dynamics.trajectory import JointTrajectory
+from pkdyn.exceptions import PkdynError
+from pkdyn.model.robot import Robot
+
+__all__ = ["ActuatorSizing", "SizingResult", "size"]
+
+
+@dataclass(frozen=True)
+class ActuatorSizing:
+    """Sizing figures of one actuator.
+
+    Attributes:
+        name: Actuated joint name.
+        peak: Peak |effort|, joint side [N m or N].
+        rms: RMS effort over time, joint side [N m or N].
+        peak_speed: Peak |speed|, joint side [rad/s or m/s].
+        peak_power: Peak |effort x speed| [W].
+        limit: Effort limit, joint side (URDF ``effort``; ``inf`` when absent).
+        margin: ``1 - peak / limit`` (negative: limit exceeded).
+        speed_limit: Speed limit, joint side (URDF ``velocity``).
+        speed_margin: ``1 - peak_speed / speed_limit``.
+        reduction: Transmission reduction (motor speed = reduction x joint speed).
+        motor_peak: Peak |effort| on the motor side [N m or N].
+        motor_rms: RMS effort on the motor side [N m or N].
+        motor_peak_speed: Peak motor speed [rad/s or m/s].
+
+    """
+
+    name: str
+    peak: float
+    rms: float
+    peak_speed: float
+    peak_power: float
+    limit: float
+    margin: float
+    speed_limit: float
+    speed_margin: float
+    reduction: float
+    motor_peak: float
+    motor_rms: float
+    motor_peak_speed: float
+
+    def as_json(self) -> dict[str, Any]:
+        """JSON-ready dict (infinite limits as ``None``)."""
+        out: dict[str, Any] = {}
+        for k, v in self.__dict__.items():
+            out[k] = None if isinstance(v, float) and not math.isfinite(v) else v
+        return out
+
+
+@dataclass(frozen=True)
+class SizingResult:
+    """Sizing of every actuator along a trajectory.
+
+    Attributes:
+        robot: Robot name.
+        trajectory: Trajectory name.
+        payload: Payload mass [kg].
+        duration: Trajectory duration [s].
+        actuators: Per-actuator figures.
+        efforts: The underlying efforts, energies and trajectory.
+
+    """
+
+    robot: str
+    trajectory: str
+    payload: float
+    duration: float
+    actuators: list[ActuatorSizing]
+    efforts: EffortTrajectory
+
+    @property
+    def feasible(self) -> bool:
+        """All peaks within the effort and speed limits."""
+        return all(a.margin >= 0.0 and a.speed_margin >= 0.0 for a in self.actuators)
+
+    def as_json(self) -> dict[str, Any]:
+        """JSON-ready summary (``actuators``: list of per-actuator dicts)."""
+        return {
+            "robot": self.robot,
+            "trajectory": self.trajectory,
+            "payload": self.payload,
+            "duration": self.duration,
+            "feasible": self.feasible,
+            "actuators": [a.as_json() for a in self.actuators],
+        }
+
+    def table(self) -> str:
+        """A readable table of the figures."""
+        head = (
+            f"{'actuator':<10} {'peak':>9} {'rms':>9} {'limit':>8} {'margin':>7} "
+            f"{'speed':>8} {'v-margin':>8} {'power':>8} {'motor pk':>9} {'motor rms':>9}"
+        )
+        units = (
+            f"{'':<10} {'[N m]':>9} {'[N m]':>9} {'[N m]':>8} {'':>7} {'[rad/s]':>8} {'':>8} "
+            f"{'[W]':>8} {'[N m]':>9} {'[N m]':>9}"
+        )
+        rows = [head, units]
+        for a in self.actuators:
+            rows.append(
+                f"{a.name:<10} {a.peak:9.3f} {a.rms:9.3f} {a.limit:8.3g} {100 * a.margin:6.1f}% "
+                f"{a.peak_speed:8.3f} {100 * a.speed_margin:7.1f}% {a.peak_power:8.1f} "
+                f"{a.motor_peak:9.4f} {a.motor_rms:9.4f}"
+            )
+        return "\n".join(rows)
+
+    def write_csv(self, path: str | Path) -> None:
+        """Time series: ``t``, ``q_<a>``, ``qd_<a>``, ``tau_<a>`` per actuator, ``energy``.
+
+        Args:
+            path: Output file.
+
+        Raises:
+            PkdynError: The file cannot be written.
+
+        """
+        ef = self.efforts
+        traj = ef.trajectory
+        names = ef.actuators
+        header = (
+            ["t"]
+            + [f"q_{n}" for n in names]
+            + [f"qd_{n}" for n in names]
+            + [f"tau_{n}" for n in names]
+            + ["energy"]
+        )
+        table = np.column_stack([traj.t, traj.qa, traj.qa_d, ef.tau, ef.energy])
+        try:
+            with open(path, "w", newline="") as fh:
+                w = csv.writer(fh)
+                w.writerow(header)
+                for row in table:
+                    w.writerow([f"{x:.10g}" for x in row])
+        except OSError as err:
+            raise PkdynError(f"cannot write '{path}': {err.strerror}") from None
+
+
+def _rms(t: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Time RMS of the columns of ``x`` (trapezoidal rule)."""
+    T = float(t[-1] - t[0])
+    sq = x**2
+    return np.sqrt(np.sum(0.5 * (sq[1:] + sq[:-1]) * np.diff(t)[:, None], axis=0) / T)
+
+
+def _margin(peak: float, limit: float) -> float:
+    if not math.isfinite(limit):
+        return 1.0
+    if limit <= 0.0:
+        return -math.inf
+    return 1.0 - peak / limit
+
+
+def size(
+    robot: Robot,
+    trajectory: JointTrajectory,
+    payload: float = 0.0,
+    wrench: Any = None,
+    progress: bool | None = None,
+) -> SizingResult:
+    """Size the actuators of ``robot`` for a trajectory (inverse dynamics with gravity).
+
+    Args:
+        robot: The robot.
+        trajectory: Joint trajectory (:mod:`pkdyn.dynamics.trajectory`), consistent with the
+            closures.
+        payload: Point-mass payload at the platform frame origin [kg].
+        wrench: Platform wrench, see :func:`pkdyn.dynamics.inverse_dynamics`.
+        progress: Progress bar (see :func:`pkdyn.dynamics.inverse_dynamics`).
+
+    Returns:
+        The figures per actuator and the time series behind them.
+
+    Raises:
+        InfeasibleEffortError: The motion is not dynamically consistent at some sample.
+        InvalidInputError: Bad payload or wrench.
+
+    """
+    loaded = with_payload(robot, payload) if payload else robot
+    ef = inverse_dynamics(loaded, trajectory, wrench=wrench, progress=progress)
+    t = trajectory.t
+    tau, qd = ef.tau, trajectory.qa_d
+    peak = np.max(np.abs(tau), axis=0)
+    rms = _rms(t, tau)
+    speed = np.max(np.abs(qd), axis=0)
+    power = np.max(np.abs(tau * qd), axis=0)
+    out = []
+    for i, act in enumerate(robot.actuators):
+        r = act.reduction
+        out.append(
+            ActuatorSizing(
+                name=act.joint,
+                peak=float(peak[i]),
+                rms=float(rms[i]),
+                peak_speed=float(speed[i]),
+                peak_power=float(power[i]),
+                limit=float(act.effort),
+                margin=_margin(float(peak[i]), act.effort),
+                speed_limit=float(act.velocity),
+                speed_margin=_margin(float(speed[i]), act.velocity),
+                reduction=float(r),
+                motor_peak=float(peak[i] / r),
+                motor_rms=float(rms[i] / r),
+                motor_peak_speed=float(speed[i] * r),
+            )
+        )
+    return SizingResult(
+        robot=robot.name,
+        trajectory=trajectory.name,
+        payload=float(payload),
+        duration=float(t[-1] - t[0]),
+        actuators=out,
+        efforts=ef,
+    )

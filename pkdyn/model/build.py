@@ -1,0 +1,253 @@
+"""Build the Pinocchio model of a description: URDF tree, upgraded joints, constraint models."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from collections.abc import Iterator, Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import DescriptionError
+from pkdyn.model.description import ClosureSpec, FrameRef, JointSpec
+
+__all__ = ["HINGE_ARM", "build_tree", "build_geometry", "resolve_frame", "constraint_models"]
+
+HINGE_ARM = 0.1
+"""Distance [m] between the two point constraints a ``hinge`` closure is built from."""
+
+
+@contextlib.contextmanager
+def _quiet_stderr() -> Iterator[None]:
+    """Silence the C++ parser's own messages on stderr; pkdyn reports errors itself."""
+    try:
+        fd = sys.stderr.fileno()
+    except (AttributeError, ValueError, OSError):
+        yield
+        return
+    saved = os.dup(fd)
+    with open(os.devnull, "w") as devnull:
+        os.dup2(devnull.fileno(), fd)
+        try:
+            yield
+        finally:
+            os.dup2(saved, fd)
+            os.close(saved)
+
+
+def build_tree(xml: str, joints: Sequence[JointSpec], source: str) -> pin.Model:
+    """Parse the URDF tree and upgrade placeholder joints to spherical / universal.
+
+    Args:
+        xml: URDF document.
+        joints: Joint upgrades from the extension elements.
+        source: File or robot name, for error messages.
+
+    Returns:
+        The Pinocchio model. Without upgrades it is exactly ``pin.buildModelFromXML(xml)``.
+
+    Raises:
+        DescriptionError: The URDF is rejected, or an upgrade names a missing or unsuitable joint.
+
+    """
+    try:
+        with _quiet_stderr():
+            model = pin.buildModelFromXML(xml)
+    except (RuntimeError, ValueError) as err:
+        raise DescriptionError(source, "URDF", f"rejected by the URDF parser: {err}") from None
+    if not joints:
+        return model
+    specs = {j.name: j for j in joints}
+    for name in specs:
+        if not model.existJointName(name):
+            raise DescriptionError(
+                source, f"pkdyn:joint '{name}'", "no moving URDF joint of that name"
+            )
+        jm = model.joints[model.getJointId(name)]
+        # revolute shortnames: JointModelR{X,Y,Z}, JointModelRUB{X,Y,Z}, JointModelRevolute*
+        if jm.nv != 1 or not jm.shortname().startswith("JointModelR"):
+            raise DescriptionError(
+                source,
+                f"pkdyn:joint '{name}'",
+                "the placeholder must be a 'continuous' or 'revolute' URDF joint",
+            )
+        axis2 = specs[name].axis2
+        if axis2 is not None and abs(float(_axis_of(jm) @ axis2)) > 1e-9:
+            raise DescriptionError(
+                source,
+                f"pkdyn:joint '{name}' axis2",
+                "must be orthogonal to the placeholder joint's <axis>",
+            )
+    return _rebuild(model, specs)
+
+
+def _axis_of(jm: pin.JointModel) -> np.ndarray:
+    """Axis of a 1-DOF revolute joint model (aligned or not, bounded or not).
+
+    Read from the joint's motion subspace at its neutral configuration.
+    """
+    jd = jm.createData()
+    jm.calc(jd, pin.neutral(_single_joint_model(jm)))
+    S = np.reshape(np.asarray(jd.S), (6, -1))
+    axis = S[3:, 0]
+    return axis / np.linalg.norm(axis)
+
+
+def _single_joint_model(jm: pin.JointModel) -> pin.Model:
+    m = pin.Model()
+    m.addJoint(0, jm, pin.SE3.Identity(), "j")
+    return m
+
+
+def _rebuild(model: pin.Model, specs: dict[str, JointSpec]) -> pin.Model:
+    new = pin.Model()
+    new.name = model.name
+    new.gravity = model.gravity
+    for jid in range(1, model.njoints):
+        name = model.names[jid]
+        jm = model.joints[jid]
+        spec = specs.get(name)
+        if spec is None:
+            sl_q = slice(jm.idx_q, jm.idx_q + jm.nq)
+            sl_v = slice(jm.idx_v, jm.idx_v + jm.nv)
+            new_id = new.addJoint(
+                model.parents[jid],
+                jm,
+                model.jointPlacements[jid],
+                name,
+                model.effortLimit[sl_v],
+                model.velocityLimit[sl_v],
+                model.lowerPositionLimit[sl_q],
+                model.upperPositionLimit[sl_q],
+            )
+        else:
+            if spec.kind == "spherical":
+                njm: pin.JointModel = pin.JointModelSpherical()
+                nq, nv = 4, 3
+            else:
+                assert spec.axis2 is not None
+                njm = pin.JointModelUniversal(_axis_of(jm), spec.axis2)
+                nq, nv = 2, 2
+            big = np.full(nv, 1e3)
+            lo = np.full(nq, -np.pi if spec.kind == "universal" else -1.0)
+            new_id = new.addJoint(
+                model.parents[jid], njm, model.jointPlacements[jid], name, big, big, lo, -lo
+            )
+        new.appendBodyToJoint(new_id, model.inertias[jid], pin.SE3.Identity())
+    for f in model.frames:
+        if f.name == "universe" and f.parentJoint == 0 and f.type == pin.FrameType.FIXED_JOINT:
+            continue
+        if new.existFrame(f.name, f.type):
+            continue
+        new.addFrame(pin.Frame(f), False)
+    return new
+
+
+def build_geometry(
+    model: pin.Model, xml: str, kind: pin.GeometryType, package_dirs: Sequence[str], source: str
+) -> pin.GeometryModel:
+    """Visual or collision geometry of the URDF, attached to ``model``.
+
+    Args:
+        model: Model built by :func:`build_tree`.
+        xml: URDF document.
+        kind: ``pin.VISUAL`` or ``pin.COLLISION``.
+        package_dirs: Directories searched for ``package://`` and relative mesh paths.
+        source: File or robot name, for error messages.
+
+    Returns:
+        The geometry model (coal shapes).
+
+    Raises:
+        DescriptionError: A geometry cannot be parsed or a mesh file is missing.
+
+    """
+    try:
+        with _quiet_stderr():
+            return pin.buildGeomFromUrdfString(model, xml, kind, None, list(package_dirs))
+    except (RuntimeError, ValueError, IndexError) as err:
+        raise DescriptionError(source, f"{kind} geometry", str(err).splitlines()[0]) from None
+
+
+def resolve_frame(model: pin.Model, ref: FrameRef, source: str, what: str) -> tuple[int, pin.SE3]:
+    """Joint id and placement in that joint's frame of a frame attached to a link.
+
+    Args:
+        model: The model.
+        ref: Link (or frame) name and placement in it.
+        source: File or robot name, for error messages.
+        what: Element that refers to the frame, for error messages.
+
+    Returns:
+        ``(joint_id, jMf)``.
+
+    Raises:
+        DescriptionError: No link or frame of that name.
+
+    """
+    fid = None
+    for ftype in (pin.FrameType.BODY, None):
+        if ftype is None:
+            if model.existFrame(ref.link):
+                fid = model.getFrameId(ref.link)
+        elif model.existFrame(ref.link, ftype):
+            fid = model.getFrameId(ref.link, ftype)
+        if fid is not None:
+            break
+    if fid is None:
+        raise DescriptionError(source, what, f"names link '{ref.link}', which does not exist")
+    f = model.frames[fid]
+    return f.parentJoint, f.placement * ref.placement
+
+
+def constraint_models(
+    model: pin.Model, closures: Sequence[ClosureSpec], source: str
+) -> tuple[list[pin.RigidConstraintModel], list[str]]:
+    """Pinocchio rigid constraint models of the closures.
+
+    ``point`` gives one CONTACT_3D, ``weld`` one CONTACT_6D, ``hinge`` two CONTACT_3D: the frame
+    origins, and points :data:`HINGE_ARM` along the axis (6 equations of rank 5).
+
+    Args:
+        model: The model.
+        closures: Closure specifications.
+        source: File or robot name, for error messages.
+
+    Returns:
+        The constraint models and, for each, the name of its closure.
+
+    Raises:
+        DescriptionError: A closure names a missing link, or both frames are on one body.
+
+    """
+    out: list[pin.RigidConstraintModel] = []
+    owner: list[str] = []
+    local = pin.ReferenceFrame.LOCAL
+    for c in closures:
+        j1, M1 = resolve_frame(model, c.frame1, source, f"closure '{c.name}'")
+        j2, M2 = resolve_frame(model, c.frame2, source, f"closure '{c.name}'")
+        if j1 == j2:
+            raise DescriptionError(
+                source, f"closure '{c.name}'", "both frames are on the same body; nothing to close"
+            )
+        if c.kind == "weld":
+            cm = pin.RigidConstraintModel(pin.ContactType.CONTACT_6D, model, j1, M1, j2, M2, local)
+            cm.name = c.name
+            out.append(cm)
+            owner.append(c.name)
+            continue
+        cm = pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, j1, M1, j2, M2, local)
+        cm.name = c.name
+        out.append(cm)
+        owner.append(c.name)
+        if c.kind == "hinge":
+            off = pin.SE3(np.eye(3), HINGE_ARM * c.axis)
+            cm2 = pin.RigidConstraintModel(
+                pin.ContactType.CONTACT_3D, model, j1, M1 * off, j2, M2 * off, local
+            )
+            cm2.name = c.name + "/axis"
+            out.append(cm2)
+            owner.append(c.name)
+    return out, owner

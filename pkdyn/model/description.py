@@ -1,0 +1,444 @@
+"""The pkdyn description format: a URDF spanning tree plus namespaced extension elements.
+
+The extension elements live in the XML namespace :data:`NAMESPACE` (conventionally bound to the
+prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full reference.
+
+- ``<pkdyn:closure name type="point|hinge|weld" [axis]>`` with two ``<pkdyn:frame link xyz rpy>``
+  children: a loop closure between two frames on two links.
+- ``<pkdyn:joint name type="spherical|universal" [axis2]>``: upgrades the URDF placeholder joint
+  of that name (a ``continuous`` or ``revolute`` joint) to Pinocchio's spherical or universal
+  joint; optional ``<pkdyn:cone>`` or ``<pkdyn:pyramid>`` passive-joint limit.
+- ``<pkdyn:platform link xyz rpy task="x y z rx ry rz">``: the platform / end-effector frame and
+  which pose components the mechanism controls.
+- Actuation is the standard ``<transmission>`` element (SimpleTransmission,
+  ``mechanicalReduction``); effort and velocity limits come from the joint's ``<limit>``.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import DescriptionError
+
+__all__ = [
+    "NAMESPACE",
+    "TASK_COMPONENTS",
+    "FrameRef",
+    "ClosureSpec",
+    "ConeLimit",
+    "PyramidLimit",
+    "JointSpec",
+    "ActuatorSpec",
+    "PlatformSpec",
+    "Description",
+    "parse_description",
+]
+
+NAMESPACE = "urn:pkdyn:urdf:1"
+"""XML namespace of pkdyn's extension elements."""
+
+TASK_COMPONENTS = ("x", "y", "z", "rx", "ry", "rz")
+"""Names of the platform pose components, in the order of :func:`pkdyn.model.pose.pose_error`."""
+
+CLOSURE_KINDS = {"point": 3, "hinge": 5, "weld": 6}
+JOINT_KINDS = ("spherical", "universal")
+_NS = "{" + NAMESPACE + "}"
+
+
+@dataclass(frozen=True)
+class FrameRef:
+    """A frame rigidly attached to a link (or to any named Pinocchio frame).
+
+    Attributes:
+        link: Link or frame name.
+        placement: Placement of the frame in the link frame.
+
+    """
+
+    link: str
+    placement: pin.SE3 = field(default_factory=pin.SE3.Identity)
+
+
+@dataclass(frozen=True)
+class ClosureSpec:
+    """A loop closure between two frames.
+
+    Attributes:
+        name: Closure name.
+        kind: ``point`` (spherical joint, 3 equations), ``hinge`` (revolute joint about ``axis``,
+            5 equations) or ``weld`` (rigid, 6 equations).
+        frame1: First frame.
+        frame2: Second frame; at assembly its origin coincides with frame1's (and, for a weld,
+            its orientation too).
+        axis: Hinge axis, unit vector in the coordinates of each of the two frames.
+
+    """
+
+    name: str
+    kind: str
+    frame1: FrameRef
+    frame2: FrameRef
+    axis: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
+
+    @property
+    def equations(self) -> int:
+        """Number of independent scalar equations of this closure (3, 5 or 6)."""
+        return CLOSURE_KINDS[self.kind]
+
+
+@dataclass(frozen=True)
+class ConeLimit:
+    """Passive-joint limit: ``axis`` of the child may tilt at most ``half_angle`` [rad].
+
+    The tilt is the angle between the axis carried by the child body and the same axis in the
+    joint's parent frame.
+    """
+
+    axis: np.ndarray
+    half_angle: float
+
+    def margin(self, R: np.ndarray) -> float:
+        """Signed margin [rad] of a joint rotation ``R`` (3x3): positive inside the cone."""
+        c = float(np.clip(self.axis @ R @ self.axis, -1.0, 1.0))
+        return self.half_angle - math.acos(c)
+
+
+@dataclass(frozen=True)
+class PyramidLimit:
+    """Passive-joint limit of Merlet's pyramid (a square hole): four plane faces.
+
+    The direction ``d = R @ axis`` must satisfy ``|atan2(d.ref, d.axis)| <= half_angles[0]`` and
+    ``|atan2(d.(axis x ref), d.axis)| <= half_angles[1]``.
+    """
+
+    axis: np.ndarray
+    ref: np.ndarray
+    half_angles: tuple[float, float]
+
+    def margin(self, R: np.ndarray) -> float:
+        """Signed margin [rad] of a joint rotation ``R`` (3x3): positive inside the pyramid."""
+        d = R @ self.axis
+        a1 = math.atan2(float(d @ self.ref), float(d @ self.axis))
+        a2 = math.atan2(float(d @ np.cross(self.axis, self.ref)), float(d @ self.axis))
+        return min(self.half_angles[0] - abs(a1), self.half_angles[1] - abs(a2))
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """A tree joint URDF cannot express, mapped to a Pinocchio joint model.
+
+    Attributes:
+        name: Name of the URDF placeholder joint.
+        kind: ``spherical`` or ``universal``.
+        axis2: Second axis of a universal joint (in the frame after the first rotation).
+        limit: Optional passive-joint limit.
+
+    """
+
+    name: str
+    kind: str
+    axis2: np.ndarray | None = None
+    limit: ConeLimit | PyramidLimit | None = None
+
+
+@dataclass(frozen=True)
+class ActuatorSpec:
+    """One actuator, from a URDF ``<transmission>``.
+
+    Attributes:
+        name: Actuator name.
+        joint: Actuated joint name.
+        reduction: Mechanical reduction (joint speed x reduction = motor speed).
+        effort: Joint-side effort limit [N m or N] (``inf`` when absent).
+        velocity: Joint-side velocity limit [rad/s or m/s] (``inf`` when absent).
+
+    """
+
+    name: str
+    joint: str
+    reduction: float = 1.0
+    effort: float = math.inf
+    velocity: float = math.inf
+
+
+@dataclass(frozen=True)
+class PlatformSpec:
+    """The platform / end-effector frame and the pose components the mechanism controls."""
+
+    frame: FrameRef
+    task: tuple[str, ...] = TASK_COMPONENTS
+
+
+@dataclass(frozen=True)
+class Description:
+    """Everything a pkdyn description says beyond the URDF tree."""
+
+    name: str
+    closures: tuple[ClosureSpec, ...] = ()
+    joints: tuple[JointSpec, ...] = ()
+    actuators: tuple[ActuatorSpec, ...] = ()
+    platform: PlatformSpec | None = None
+    links: tuple[str, ...] = ()
+    joint_names: tuple[str, ...] = ()
+
+
+def _vec(source: str, el: ET.Element, attr: str, default: str, n: int = 3) -> np.ndarray:
+    text = el.get(attr, default)
+    try:
+        values = np.array([float(t) for t in text.split()], dtype=float)
+    except ValueError:
+        raise DescriptionError(
+            source, f"<{_tag(el)}> attribute {attr}='{text}'", "expected numbers"
+        ) from None
+    if values.shape != (n,) or not np.all(np.isfinite(values)):
+        raise DescriptionError(
+            source, f"<{_tag(el)}> attribute {attr}='{text}'", f"expected {n} finite numbers"
+        )
+    return values
+
+
+def _float(source: str, el: ET.Element, attr: str, default: float | None = None) -> float:
+    text = el.get(attr)
+    if text is None:
+        if default is None:
+            raise DescriptionError(source, f"<{_tag(el)}>", f"missing attribute '{attr}'")
+        return default
+    try:
+        value = float(text)
+    except ValueError:
+        raise DescriptionError(
+            source, f"<{_tag(el)}> attribute {attr}='{text}'", "expected a number"
+        ) from None
+    if math.isnan(value):
+        raise DescriptionError(source, f"<{_tag(el)}> attribute {attr}", "NaN is not allowed")
+    return value
+
+
+def _tag(el: ET.Element) -> str:
+    return el.tag.replace(_NS, "pkdyn:")
+
+
+def _unit(source: str, what: str, v: np.ndarray) -> np.ndarray:
+    n = float(np.linalg.norm(v))
+    if n < 1e-12:
+        raise DescriptionError(source, what, "axis must be a non-zero vector")
+    return v / n
+
+
+def _frame(source: str, el: ET.Element, links: set[str]) -> FrameRef:
+    link = el.get("link")
+    if not link:
+        raise DescriptionError(source, f"<{_tag(el)}>", "missing attribute 'link'")
+    xyz = _vec(source, el, "xyz", "0 0 0")
+    rpy = _vec(source, el, "rpy", "0 0 0")
+    return FrameRef(link, pin.SE3(pin.rpy.rpyToMatrix(rpy), xyz))
+
+
+def _closure(source: str, el: ET.Element, links: set[str]) -> ClosureSpec:
+    name = el.get("name")
+    if not name:
+        raise DescriptionError(source, "<pkdyn:closure>", "missing attribute 'name'")
+    kind = el.get("type", "")
+    if kind not in CLOSURE_KINDS:
+        raise DescriptionError(
+            source,
+            f"closure '{name}'",
+            f"unknown type '{kind}'; use one of {', '.join(CLOSURE_KINDS)}",
+        )
+    frames = el.findall(_NS + "frame")
+    if len(frames) != 2:
+        raise DescriptionError(
+            source, f"closure '{name}'", f"needs exactly two <pkdyn:frame>, found {len(frames)}"
+        )
+    f1, f2 = (_frame(source, f, links) for f in frames)
+    axis = _unit(source, f"closure '{name}' axis", _vec(source, el, "axis", "0 0 1"))
+    return ClosureSpec(name, kind, f1, f2, axis)
+
+
+def _joint(source: str, el: ET.Element) -> JointSpec:
+    name = el.get("name")
+    if not name:
+        raise DescriptionError(source, "<pkdyn:joint>", "missing attribute 'name'")
+    kind = el.get("type", "")
+    if kind not in JOINT_KINDS:
+        raise DescriptionError(
+            source,
+            f"pkdyn:joint '{name}'",
+            f"unknown type '{kind}'; use one of {', '.join(JOINT_KINDS)}",
+        )
+    axis2 = None
+    if kind == "universal":
+        if el.get("axis2") is None:
+            raise DescriptionError(source, f"pkdyn:joint '{name}'", "universal needs axis2")
+        axis2 = _unit(source, f"joint '{name}' axis2", _vec(source, el, "axis2", ""))
+    limit: ConeLimit | PyramidLimit | None = None
+    cone = el.find(_NS + "cone")
+    pyramid = el.find(_NS + "pyramid")
+    if cone is not None:
+        axis = _unit(source, f"joint '{name}' cone axis", _vec(source, cone, "axis", "0 0 1"))
+        half = _float(source, cone, "half_angle")
+        if not 0.0 < half <= math.pi:
+            raise DescriptionError(
+                source, f"pkdyn:joint '{name}' cone half_angle={half}", "must lie in (0, pi] rad"
+            )
+        limit = ConeLimit(axis, half)
+    elif pyramid is not None:
+        axis = _unit(source, f"joint '{name}' pyramid", _vec(source, pyramid, "axis", "0 0 1"))
+        ref = _vec(source, pyramid, "ref", "1 0 0")
+        ref = _unit(source, f"joint '{name}' pyramid ref", ref - (ref @ axis) * axis)
+        ha = _vec(source, pyramid, "half_angles", "", 2)
+        if not all(0.0 < h <= math.pi / 2 for h in ha):
+            raise DescriptionError(
+                source, f"pkdyn:joint '{name}' pyramid half_angles", "must lie in (0, pi/2] rad"
+            )
+        limit = PyramidLimit(axis, ref, (float(ha[0]), float(ha[1])))
+    return JointSpec(name, kind, axis2, limit)
+
+
+def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[ActuatorSpec]:
+    """Actuators of the ``SimpleTransmission`` elements (other transmission types are ignored).
+
+    With ``strict=False`` (a plain URDF, without pkdyn elements), ros_control transmissions
+    pkdyn cannot use (no joint, a joint absent from the URDF or not revolute / prismatic) are
+    skipped instead of raising.
+    """
+    limits: dict[str, tuple[float, float]] = {}
+    kinds: dict[str, str] = {}
+    for j in root.findall("joint"):
+        kinds[j.get("name", "")] = j.get("type", "")
+        lim = j.find("limit")
+        if lim is not None:
+            limits[j.get("name", "")] = (
+                _float(source, lim, "effort", math.inf),
+                _float(source, lim, "velocity", math.inf),
+            )
+    out = []
+    for t in root.findall("transmission"):
+        tname = t.get("name", "?")
+        ttype = t.findtext("type") or t.get("type") or "SimpleTransmission"
+        if not ttype.strip().endswith("SimpleTransmission"):
+            continue
+        joint = t.find("joint")
+        if not strict and (
+            joint is None or kinds.get(joint.get("name", "")) not in ("revolute", "prismatic")
+        ):
+            continue
+        if joint is None or not joint.get("name"):
+            raise DescriptionError(source, f"transmission '{tname}'", "needs a <joint name=...>")
+        act = t.find("actuator")
+        reduction = 1.0
+        aname = tname
+        red = t.find("mechanicalReduction")  # ROS 1 style: directly in the transmission
+        if act is not None:
+            aname = act.get("name", tname)
+            if act.find("mechanicalReduction") is not None:
+                red = act.find("mechanicalReduction")
+        if red is not None and red.text:
+            try:
+                reduction = float(red.text)
+            except ValueError:
+                reduction = math.nan
+            if not math.isfinite(reduction) or reduction == 0.0:
+                raise DescriptionError(
+                    source,
+                    f"transmission '{tname}' mechanicalReduction '{red.text.strip()}'",
+                    "expected a finite non-zero number",
+                )
+        jname = joint.get("name", "")
+        effort, velocity = limits.get(jname, (math.inf, math.inf))
+        out.append(ActuatorSpec(aname, jname, reduction, effort, velocity))
+    return out
+
+
+_URDF_NUMBERS = {
+    "origin": ("xyz", "rpy"),
+    "axis": ("xyz",),
+    "mass": ("value",),
+    "inertia": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
+    "limit": ("lower", "upper", "effort", "velocity"),
+}
+
+
+def _check_urdf_numbers(source: str, root: ET.Element) -> None:
+    """Reject NaN / infinite numbers in links and joints, naming where they are.
+
+    The URDF parser either rejects the whole document without saying where, or (inertials)
+    silently drops the element; other malformed numbers are left to it.
+    """
+    for kind in ("link", "joint"):
+        for owner in root.findall(kind):
+            for el in owner.iter():
+                for attr in _URDF_NUMBERS.get(str(el.tag), ()):
+                    text = el.get(attr)
+                    if text is None:
+                        continue
+                    for token in text.split():
+                        try:
+                            finite = math.isfinite(float(token))
+                        except ValueError:
+                            continue
+                        if not finite:
+                            raise DescriptionError(
+                                source,
+                                f"{kind} '{owner.get('name', '?')}' <{el.tag}> "
+                                f"attribute {attr}='{text}'",
+                                "NaN and infinite values are not allowed",
+                            )
+
+
+def parse_description(xml_text: str, source: str) -> Description:
+    """Parse the pkdyn extension elements of a URDF document.
+
+    Args:
+        xml_text: The URDF document.
+        source: Where it came from (file name or robot name), for error messages.
+
+    Returns:
+        The parsed description (closures, joints, actuators, platform).
+
+    Raises:
+        DescriptionError: Malformed XML or a malformed extension element.
+
+    """
+    try:
+        root = ET.fromstring(xml_text)
+    except ET.ParseError as err:
+        raise DescriptionError(source, "XML", f"malformed document ({err})") from None
+    if root.tag != "robot":
+        raise DescriptionError(source, f"<{root.tag}>", "the root element must be <robot>")
+    _check_urdf_numbers(source, root)
+    links = {el.get("name", "") for el in root.findall("link")}
+    joint_names = tuple(el.get("name", "") for el in root.findall("joint"))
+    closures = tuple(_closure(source, el, links) for el in root.findall(_NS + "closure"))
+    joints = tuple(_joint(source, el) for el in root.findall(_NS + "joint"))
+    extended = any(isinstance(el.tag, str) and el.tag.startswith(_NS) for el in root)
+    names = [c.name for c in closures]
+    for n in names:
+        if names.count(n) > 1:
+            raise DescriptionError(source, f"closure '{n}'", "closure names must be unique")
+    platform = None
+    pel = root.find(_NS + "platform")
+    if pel is not None:
+        task = tuple(pel.get("task", " ".join(TASK_COMPONENTS)).split())
+        bad = [t for t in task if t not in TASK_COMPONENTS]
+        if bad or not task:
+            raise DescriptionError(
+                source,
+                f"pkdyn:platform task '{' '.join(task)}'",
+                f"components must be among {' '.join(TASK_COMPONENTS)}",
+            )
+        platform = PlatformSpec(_frame(source, pel, links), task)
+    return Description(
+        name=root.get("name", source),
+        closures=closures,
+        joints=joints,
+        actuators=tuple(_actuators(source, root, strict=extended)),
+        platform=platform,
+        links=tuple(sorted(links)),
+        joint_names=joint_names,
+    )

@@ -1,0 +1,405 @@
+"""Deterministic writer of pkdyn descriptions (URDF + extension elements) for the builders."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkdyn.model.description import NAMESPACE
+
+__all__ = ["Shape", "UrdfWriter", "rod_inertia", "segment_origin", "rpy_z_to"]
+
+Vec = Sequence[float] | np.ndarray
+
+
+def _f(x: float) -> str:
+    """Shortest text that reads back as the same double (no rounding of the geometry)."""
+    v = float(x)
+    if v == 0.0:
+        return "0"
+    s = repr(v)
+    return s[:-2] if s.endswith(".0") else s
+
+
+def _v(v: Vec) -> str:
+    return " ".join(_f(x) for x in v)
+
+
+@dataclass(frozen=True)
+class Shape:
+    """A primitive shape: ``kind`` is ``cylinder`` (along local z), ``box`` or ``sphere``.
+
+    Attributes:
+        kind: Shape kind.
+        size: ``(radius, length)``, ``(sx, sy, sz)`` or ``(radius,)`` [m].
+        xyz: Origin in the link frame [m].
+        rpy: Orientation in the link frame [rad].
+        rgba: Display colour.
+
+    """
+
+    kind: str
+    size: tuple[float, ...]
+    xyz: tuple[float, ...] = (0.0, 0.0, 0.0)
+    rpy: tuple[float, ...] = (0.0, 0.0, 0.0)
+    rgba: tuple[float, ...] = (0.7, 0.7, 0.7, 1.0)
+
+    def geometry_xml(self) -> str:
+        """The ``<geometry>`` element."""
+        if self.kind == "cylinder":
+            return f'<cylinder radius="{_f(self.size[0])}" length="{_f(self.size[1])}"/>'
+        if self.kind == "box":
+            return f'<box size="{_v(self.size)}"/>'
+        return f'<sphere radius="{_f(self.size[0])}"/>'
+
+
+def rpy_z_to(d: Vec) -> tuple[float, float, float]:
+    """Roll-pitch-yaw [rad] of a rotation taking the z axis onto direction ``d``.
+
+    Args:
+        d: Direction (3,), not necessarily unit.
+
+    Returns:
+        ``(roll, pitch, yaw)``.
+
+    """
+    import pinocchio as pin
+
+    z = np.asarray(d, dtype=float)
+    z = z / np.linalg.norm(z)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    R = np.column_stack([x, y, z])
+    rpy = pin.rpy.matrixToRpy(R)
+    return (float(rpy[0]), float(rpy[1]), float(rpy[2]))
+
+
+def segment_origin(p0: Vec, p1: Vec) -> tuple[tuple[float, ...], tuple[float, float, float], float]:
+    """Origin, orientation and length of a cylinder spanning the segment ``p0 -> p1``.
+
+    Args:
+        p0: Segment start (3,) [m].
+        p1: Segment end (3,) [m].
+
+    Returns:
+        ``(xyz, rpy, length)`` for a :class:`Shape` of kind ``cylinder``.
+
+    """
+    a = np.asarray(p0, dtype=float)
+    b = np.asarray(p1, dtype=float)
+    mid = 0.5 * (a + b)
+    return tuple(float(x) for x in mid), rpy_z_to(b - a), float(np.linalg.norm(b - a))
+
+
+def rod_inertia(
+    mass: float, radius: float, p0: Vec, p1: Vec
+) -> tuple[tuple[float, ...], np.ndarray]:
+    """Centre of mass and inertia (about the COM, link axes) of a solid rod ``p0 -> p1``.
+
+    Args:
+        mass: Rod mass [kg].
+        radius: Rod radius [m].
+        p0: Rod start in the link frame [m].
+        p1: Rod end in the link frame [m].
+
+    Returns:
+        ``(com, I)`` with ``I`` a 3x3 inertia tensor [kg m^2].
+
+    """
+    a = np.asarray(p0, dtype=float)
+    b = np.asarray(p1, dtype=float)
+    L = float(np.linalg.norm(b - a))
+    d = (b - a) / L
+    i_ax = 0.5 * mass * radius**2
+    i_tr = mass * (3 * radius**2 + L**2) / 12.0
+    eye = np.eye(3)
+    inertia = i_tr * (eye - np.outer(d, d)) + i_ax * np.outer(d, d)
+    return tuple(float(x) for x in 0.5 * (a + b)), inertia
+
+
+class UrdfWriter:
+    """Accumulates links, joints and pkdyn extension elements; writes a stable document.
+
+    Args:
+        name: Robot name.
+
+    """
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self._parts: list[str] = []
+        self._ext: list[str] = []
+
+    def link(
+        self,
+        name: str,
+        mass: float = 0.0,
+        com: Vec = (0.0, 0.0, 0.0),
+        inertia: np.ndarray | None = None,
+        visuals: Sequence[Shape] = (),
+        collisions: Sequence[Shape] = (),
+    ) -> None:
+        """Add a link.
+
+        Args:
+            name: Link name.
+            mass: Mass [kg]; 0 writes no inertial element.
+            com: Centre of mass in the link frame [m].
+            inertia: 3x3 inertia about the COM in link axes [kg m^2].
+            visuals: Visual shapes.
+            collisions: Collision shapes.
+
+        """
+        out = [f'  <link name="{name}">']
+        if mass > 0:
+            I = np.zeros((3, 3)) if inertia is None else np.asarray(inertia)
+            out.append(
+                f'    <inertial><origin xyz="{_v(com)}" rpy="0 0 0"/><mass value="{_f(mass)}"/>'
+                f'<inertia ixx="{_f(I[0, 0])}" ixy="{_f(I[0, 1])}" ixz="{_f(I[0, 2])}" '
+                f'iyy="{_f(I[1, 1])}" iyz="{_f(I[1, 2])}" izz="{_f(I[2, 2])}"/></inertial>'
+            )
+        for s in visuals:
+            out.append(
+                f'    <visual><origin xyz="{_v(s.xyz)}" rpy="{_v(s.rpy)}"/>'
+                f"<geometry>{s.geometry_xml()}</geometry>"
+                f'<material name="{name}_mat"><color rgba="{_v(s.rgba)}"/></material></visual>'
+            )
+        for s in collisions:
+            out.append(
+                f'    <collision><origin xyz="{_v(s.xyz)}" rpy="{_v(s.rpy)}"/>'
+                f"<geometry>{s.geometry_xml()}</geometry></collision>"
+            )
+        out.append("  </link>")
+        self._parts.append("\n".join(out))
+
+    def rod(
+        self,
+        name: str,
+        mass: float,
+        radius: float,
+        p0: Vec,
+        p1: Vec,
+        rgba: tuple[float, ...] = (0.7, 0.7, 0.7, 1.0),
+        extra_visuals: Sequence[Shape] = (),
+    ) -> None:
+        """Add a link that is a solid rod ``p0 -> p1``: inertia, visual and collision cylinder.
+
+        Args:
+            name: Link name.
+            mass: Rod mass [kg].
+            radius: Rod radius [m].
+            p0: Rod start in the link frame [m].
+            p1: Rod end in the link frame [m].
+            rgba: Display colour.
+            extra_visuals: More visual shapes (e.g. an elbow).
+
+        """
+        com, inertia = rod_inertia(mass, radius, p0, p1)
+        xyz, rpy, length = segment_origin(p0, p1)
+        self.link(
+            name,
+            mass,
+            com,
+            inertia,
+            visuals=[Shape("cylinder", (radius, length), xyz, rpy, rgba), *extra_visuals],
+            collisions=[Shape("cylinder", (radius, length), xyz, rpy)],
+        )
+
+    def joint(
+        self,
+        name: str,
+        kind: str,
+        parent: str,
+        child: str,
+        xyz: Vec = (0.0, 0.0, 0.0),
+        rpy: Vec = (0.0, 0.0, 0.0),
+        axis: Vec | None = None,
+        limit: tuple[float, float, float, float] | None = None,
+    ) -> None:
+        """Add a URDF joint.
+
+        Args:
+            name: Joint name.
+            kind: URDF type (revolute, continuous, prismatic, fixed, floating, planar).
+            parent: Parent link.
+            child: Child link.
+            xyz: Joint origin in the parent link frame [m].
+            rpy: Joint orientation in the parent link frame [rad].
+            axis: Joint axis in the joint frame.
+            limit: ``(lower, upper, effort, velocity)`` [rad or m, N m or N, rad/s or m/s].
+
+        """
+        out = [
+            f'  <joint name="{name}" type="{kind}">',
+            f'    <parent link="{parent}"/><child link="{child}"/>',
+            f'    <origin xyz="{_v(xyz)}" rpy="{_v(rpy)}"/>',
+        ]
+        if axis is not None:
+            out.append(f'    <axis xyz="{_v(axis)}"/>')
+        if limit is not None:
+            lo, hi, eff, vel = limit
+            out.append(
+                f'    <limit lower="{_f(lo)}" upper="{_f(hi)}" effort="{_f(eff)}" '
+                f'velocity="{_f(vel)}"/>'
+            )
+        out.append("  </joint>")
+        self._parts.append("\n".join(out))
+
+    def spherical(
+        self,
+        name: str,
+        parent: str,
+        child: str,
+        xyz: Vec,
+        rpy: Vec = (0.0, 0.0, 0.0),
+        cone: tuple[Vec, float] | None = None,
+        pyramid: tuple[Vec, Vec, tuple[float, float]] | None = None,
+    ) -> None:
+        """Add a spherical joint: a ``continuous`` placeholder plus a ``pkdyn:joint``.
+
+        Args:
+            name: Joint name.
+            parent: Parent link.
+            child: Child link.
+            xyz: Joint centre in the parent link frame [m].
+            rpy: Joint frame orientation [rad].
+            cone: Optional ``(axis, half_angle)`` limit.
+            pyramid: Optional ``(axis, ref, (half_angle_1, half_angle_2))`` limit.
+
+        """
+        self.joint(name, "continuous", parent, child, xyz, rpy, axis=(0.0, 0.0, 1.0))
+        self._ext.append(self._pkdyn_joint(name, "spherical", None, cone, pyramid))
+
+    def universal(
+        self,
+        name: str,
+        parent: str,
+        child: str,
+        xyz: Vec,
+        rpy: Vec,
+        axis1: Vec,
+        axis2: Vec,
+        cone: tuple[Vec, float] | None = None,
+        pyramid: tuple[Vec, Vec, tuple[float, float]] | None = None,
+    ) -> None:
+        """Add a universal joint: a ``continuous`` placeholder about ``axis1`` + ``pkdyn:joint``.
+
+        Args:
+            name: Joint name.
+            parent: Parent link.
+            child: Child link.
+            xyz: Joint centre in the parent link frame [m].
+            rpy: Joint frame orientation [rad].
+            axis1: First axis (joint frame).
+            axis2: Second axis (frame after the first rotation).
+            cone: Optional ``(axis, half_angle)`` limit.
+            pyramid: Optional ``(axis, ref, (half_angle_1, half_angle_2))`` limit.
+
+        """
+        self.joint(name, "continuous", parent, child, xyz, rpy, axis=axis1)
+        self._ext.append(self._pkdyn_joint(name, "universal", axis2, cone, pyramid))
+
+    @staticmethod
+    def _pkdyn_joint(
+        name: str,
+        kind: str,
+        axis2: Vec | None,
+        cone: tuple[Vec, float] | None,
+        pyramid: tuple[Vec, Vec, tuple[float, float]] | None,
+    ) -> str:
+        extra = f' axis2="{_v(axis2)}"' if axis2 is not None else ""
+        head = f'  <pkdyn:joint name="{name}" type="{kind}"{extra}'
+        if cone is None and pyramid is None:
+            return head + "/>"
+        if cone is not None:
+            body = f'<pkdyn:cone axis="{_v(cone[0])}" half_angle="{_f(cone[1])}"/>'
+        else:
+            assert pyramid is not None
+            body = (
+                f'<pkdyn:pyramid axis="{_v(pyramid[0])}" ref="{_v(pyramid[1])}" '
+                f'half_angles="{_v(pyramid[2])}"/>'
+            )
+        return f"{head}>{body}</pkdyn:joint>"
+
+    def closure(
+        self,
+        name: str,
+        kind: str,
+        frame1: tuple[str, Vec, Vec],
+        frame2: tuple[str, Vec, Vec],
+        axis: Vec | None = None,
+    ) -> None:
+        """Add a loop closure.
+
+        Args:
+            name: Closure name.
+            kind: ``point``, ``hinge`` or ``weld``.
+            frame1: ``(link, xyz, rpy)`` of the first frame.
+            frame2: ``(link, xyz, rpy)`` of the second frame.
+            axis: Hinge axis in each frame's coordinates.
+
+        """
+        extra = f' axis="{_v(axis)}"' if axis is not None else ""
+        frames = "".join(
+            f'<pkdyn:frame link="{link}" xyz="{_v(xyz)}" rpy="{_v(rpy)}"/>'
+            for link, xyz, rpy in (frame1, frame2)
+        )
+        self._ext.append(
+            f'  <pkdyn:closure name="{name}" type="{kind}"{extra}>{frames}</pkdyn:closure>'
+        )
+
+    def transmission(self, joint: str, actuator: str, reduction: float) -> None:
+        """Add a SimpleTransmission driving ``joint``.
+
+        Args:
+            joint: Actuated joint name.
+            actuator: Actuator (motor) name.
+            reduction: Mechanical reduction (motor speed / joint speed).
+
+        """
+        self._parts.append(
+            f'  <transmission name="{joint}_transmission">\n'
+            "    <type>transmission_interface/SimpleTransmission</type>\n"
+            f'    <joint name="{joint}"><hardwareInterface>'
+            "hardware_interface/EffortJointInterface</hardwareInterface></joint>\n"
+            f'    <actuator name="{actuator}"><mechanicalReduction>{_f(reduction)}'
+            "</mechanicalReduction></actuator>\n"
+            "  </transmission>"
+        )
+
+    def platform(
+        self, link: str, task: Sequence[str], xyz: Vec = (0, 0, 0), rpy: Vec = (0, 0, 0)
+    ) -> None:
+        """Declare the platform / end-effector frame.
+
+        Args:
+            link: Link carrying the frame.
+            task: Controlled pose components among x y z rx ry rz.
+            xyz: Frame origin in the link frame [m].
+            rpy: Frame orientation in the link frame [rad].
+
+        """
+        self._ext.append(
+            f'  <pkdyn:platform link="{link}" xyz="{_v(xyz)}" rpy="{_v(rpy)}" '
+            f'task="{" ".join(task)}"/>'
+        )
+
+    def to_string(self, comment: str = "") -> str:
+        """The whole document.
+
+        Args:
+            comment: Text of a leading XML comment (e.g. the generating parameters).
+
+        Returns:
+            The URDF text, ending with a newline.
+
+        """
+        head = ['<?xml version="1.0"?>']
+        if comment:
+            head.append(f"<!-- {comment} -->")
+        head.append(f'<robot name="{self.name}" xmlns:pkdyn="{NAMESPACE}">')
+        return "\n".join(head + self._parts + self._ext + ["</robot>", ""])

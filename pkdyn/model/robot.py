@@ -1,0 +1,171 @@
+"""The loaded robot: Pinocchio model and data, geometry, closures, actuation, platform."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import PkdynError
+from pkdyn.model.description import ActuatorSpec, ClosureSpec, Description
+from solvers import ClosureSet
+
+__all__ = ["MODELLING_JOINTS", "Robot"]
+
+MODELLING_JOINTS = ("JointModelFreeFlyer", "JointModelPlanar")
+"""Joint models that place a platform or floating base: modelling devices, not hardware."""
+
+
+@dataclass
+class Robot:
+    """A closed-loop robot loaded by :func:`pkdyn.load`.
+
+    Attributes:
+        name: Robot name.
+        source: Library family name or file path it was loaded from.
+        model: Pinocchio model of the spanning tree.
+        data: Pinocchio data of ``model``.
+        visual_model: Visual geometry (coal shapes).
+        collision_model: Collision geometry (coal shapes).
+        description: The parsed extension elements.
+        constraint_models: Pinocchio rigid constraint models (a ``hinge`` gives two).
+        constraint_owner: Closure name of each constraint model.
+        closure_set: Residual / Jacobian evaluator of the closures.
+        actuators: Actuators in actuator order.
+        actuated_joints: Joint id of each actuator.
+        actuated_q: Configuration index of each actuator (nq indexing).
+        actuated_v: Velocity index of each actuator (nv indexing).
+        passive_v: Velocity indices of all non-actuated coordinates.
+        platform_frame: Frame id of the platform / end-effector frame, or ``None``.
+        task_rows: Controlled pose components as indices into (x, y, z, rx, ry, rz).
+        q_home: An assembled reference configuration (nq,).
+        params: Builder parameters for library robots, else ``None``.
+
+    """
+
+    name: str
+    source: str
+    model: pin.Model
+    data: pin.Data
+    visual_model: pin.GeometryModel
+    collision_model: pin.GeometryModel
+    description: Description
+    constraint_models: pin.StdVec_RigidConstraintModel
+    constraint_owner: list[str]
+    closure_set: ClosureSet
+    actuators: tuple[ActuatorSpec, ...]
+    actuated_joints: np.ndarray
+    actuated_q: np.ndarray
+    actuated_v: np.ndarray
+    passive_v: np.ndarray
+    platform_frame: int | None
+    task_rows: np.ndarray
+    q_home: np.ndarray
+    params: Any = None
+
+    @property
+    def nq(self) -> int:
+        """Size of the configuration vector."""
+        return int(self.model.nq)
+
+    @property
+    def nv(self) -> int:
+        """Size of the velocity vector."""
+        return int(self.model.nv)
+
+    @property
+    def closures(self) -> tuple[ClosureSpec, ...]:
+        """Loop closures of the description."""
+        return self.description.closures
+
+    @property
+    def actuator_names(self) -> list[str]:
+        """Names of the actuated joints, in actuator order."""
+        return [a.joint for a in self.actuators]
+
+    def components(self) -> list[int]:
+        """Connected component of each joint's body over physical edges (union-find).
+
+        Physical edges are the tree joints except free-flyer and planar joints (modelling devices
+        for a platform or a floating base, not hardware) and the loop closures.
+
+        Returns:
+            A representative joint id per joint id (0..njoints-1).
+
+        """
+        model = self.model
+        parent = list(range(model.njoints))
+
+        def find(i: int) -> int:
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        for a, b in self._physical_edges():
+            parent[find(a)] = find(b)
+        return [find(j) for j in range(model.njoints)]
+
+    def _physical_edges(self) -> list[tuple[int, int]]:
+        model = self.model
+        edges = [
+            (j, model.parents[j])
+            for j in range(1, model.njoints)
+            if model.joints[j].shortname() not in MODELLING_JOINTS
+        ]
+        owners = dict(zip(self.constraint_owner, self.constraint_models, strict=True))
+        edges += [(cm.joint1_id, cm.joint2_id) for cm in owners.values()]  # one per closure
+        return edges
+
+    @property
+    def loops(self) -> int:
+        """Number of independent kinematic loops of the mechanism (graph cyclomatic number).
+
+        Bodies are vertices (the ground included); physical joints and closures are edges (see
+        :meth:`components`). ``loops = edges - vertices + connected components``; for the Delta
+        with 12 ball joints it gives Clavel's 5.
+        """
+        return len(self._physical_edges()) - self.model.njoints + len(set(self.components()))
+
+    def constraint_data(self) -> pin.StdVec_RigidConstraintData:
+        """Fresh Pinocchio constraint data for ``constraint_models``."""
+        out = pin.StdVec_RigidConstraintData()
+        for cm in self.constraint_models:
+            out.append(cm.createData())
+        return out
+
+    def dof(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
+        """Mobility at ``q`` (default ``q_home``): nv minus the rank of the closure Jacobian.
+
+        Args:
+            q: Configuration (nq,).
+            tol: Relative singular-value threshold for the rank.
+
+        Returns:
+            Number of degrees of freedom, internal mobilities included.
+
+        """
+        qq = self.q_home if q is None else q
+        if self.closure_set.nc == 0:
+            return self.nv
+        _, J = self.closure_set.residual_and_jacobian(self.data, qq)
+        s = np.linalg.svd(J, compute_uv=False)
+        rank = int(np.sum(s > tol * max(1.0, s[0])))
+        return self.nv - rank
+
+    def platform_placement(self, q: np.ndarray) -> pin.SE3:
+        """World placement of the platform frame at ``q``.
+
+        Args:
+            q: Configuration (nq,).
+
+        Returns:
+            Platform placement (a copy).
+
+        """
+        if self.platform_frame is None:
+            raise PkdynError(f"{self.name} declares no platform frame (add a <pkdyn:platform>)")
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return pin.SE3(self.data.oMf[self.platform_frame])

@@ -1,0 +1,170 @@
+"""Closed-form limits of the Delta for workspace sampling (Clavel's inverse model, vectorised).
+
+For nacelle positions ``P`` the arm angles come from :func:`pkdyn.closed_form.delta.inverse`
+(working branch); the rest is read from the loaded model, so the checks are those of the
+description, not of the builder's parameters:
+
+- ``reach``: Clavel's inverse model has a solution;
+- ``stroke``: arm angles within the arm joints' limits;
+- ``joint``: each bar's upper ball (or universal) joint inside its cone: the bar direction
+  (from the elbow to its closure point on the nacelle) in the joint frame;
+- ``interference``: arms and bars as cylinders of their collision radius; bars of different
+  arms against each other and bars against the other arms.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.analysis.collisions import segment_distance
+from pkdyn.closed_form.delta import inverse
+from pkdyn.exceptions import PkdynError
+from pkdyn.model.description import ConeLimit, PyramidLimit
+from pkdyn.model.robot import Robot
+from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, direction_margin
+
+__all__ = ["DeltaEvaluator", "is_delta"]
+
+
+def is_delta(robot: Robot) -> bool:
+    """Whether the robot is a rotary Delta of the library family (ra, rb, la, lb known)."""
+    p = robot.params
+    names = set(robot.model.names)
+    return (
+        all(hasattr(p, k) for k in ("ra", "rb", "la", "lb"))
+        and len(robot.actuators) == 3
+        and {"arm1", "arm2", "arm3"} <= names
+    )
+
+
+def _rot_y(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    R = np.zeros(a.shape + (3, 3))
+    R[..., 0, 0], R[..., 0, 2], R[..., 1, 1], R[..., 2, 0], R[..., 2, 2] = c, s, 1.0, -s, c
+    return R
+
+
+class DeltaEvaluator(PoseEvaluator):
+    """Closed-form Delta limits (see the module docstring).
+
+    Args:
+        robot: A library Delta (``parallelogram="ball"``), with geometry for ``interference``.
+
+    Raises:
+        PkdynError: Not a library Delta with ball-jointed parallelograms.
+
+    """
+
+    method = "closed form (Clavel's inverse model)"
+
+    def __init__(self, robot: Robot) -> None:
+        super().__init__(robot)
+        if not is_delta(robot) or getattr(robot.params, "parallelogram", "ball") != "ball":
+            raise PkdynError(f"{robot.name}: the closed-form Delta workspace needs a library Delta")
+        model = robot.model
+        arms = [model.getJointId(f"arm{i}") for i in (1, 2, 3)]
+        if any(model.joints[j].shortname() != "JointModelRY" for j in arms):
+            raise PkdynError(f"{robot.name}: arms must turn about their y axis")
+        self.M_arm = [model.jointPlacements[j] for j in arms]
+        iq = [model.idx_qs[j] for j in arms]
+        self.lo = np.array(model.lowerPositionLimit[iq])
+        self.hi = np.array(model.upperPositionLimit[iq])
+        specs = {j.name: j for j in robot.description.joints}
+        nacelle = model.frames[robot.platform_frame].parentJoint if robot.platform_frame else -1
+        self.bars: list[tuple[int, pin.SE3, np.ndarray, ConeLimit | PyramidLimit | None]] = []
+        bar_joints = []
+        for cm in robot.constraint_models:
+            j1, j2 = int(cm.joint1_id), int(cm.joint2_id)
+            if j2 != nacelle or model.parents[j1] not in arms:
+                continue
+            arm = arms.index(int(model.parents[j1]))
+            spec = specs.get(model.names[j1])
+            bar_joints.append(j1)
+            self.bars.append(
+                (
+                    arm,
+                    model.jointPlacements[j1],
+                    np.array(cm.joint2_placement.translation),
+                    spec.limit if spec is not None else None,
+                )
+            )
+        self.lb = float(robot.params.lb)
+        radius = {
+            int(g.parentJoint): float(getattr(g.geometry, "radius", 0.0))
+            for g in robot.collision_model.geometryObjects
+        }
+        self.arm_r = np.array([radius.get(j, 0.0) for j in arms])
+        self.bar_r = max((radius.get(j, 0.0) for j in bar_joints), default=0.0)
+        self.la = float(robot.params.la)
+
+    def _elbows(self, alpha: np.ndarray) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
+        """Arm rotations (N, 3, 3, 3), bar joint centres per bar (N, 3), arm tips (N, 3, 3)."""
+        R_arm = np.stack([self.M_arm[k].rotation @ _rot_y(alpha[:, k]) for k in range(3)], axis=1)
+        O = np.array([m.translation for m in self.M_arm])
+        E = [O[k] + R_arm[:, k] @ Mb.translation for k, Mb, _, _ in self.bars]
+        tip = O[None] + R_arm @ np.array([self.la, 0.0, 0.0])
+        return R_arm, E, tip
+
+    def violations(
+        self, P: np.ndarray, R: np.ndarray, kinds: tuple[str, ...], margin: float
+    ) -> np.ndarray:
+        """See :meth:`PoseEvaluator.violations`; the nacelle keeps its orientation (R ignored)."""
+        P = np.atleast_2d(np.asarray(P, dtype=float))
+        alpha, ok = inverse(self.robot.params, P)
+        out = np.full(P.shape[0], REACHABLE, dtype=np.int8)
+        out[~ok] = LIMIT_KINDS.index("reach")
+        todo = np.flatnonzero(ok)
+        if todo.size == 0:
+            return out
+        a = alpha[todo]
+        if "stroke" in kinds:
+            bad = np.any((a < self.lo) | (a > self.hi), axis=1)
+            out[todo[bad]] = LIMIT_KINDS.index("stroke")
+            todo, a = todo[~bad], a[~bad]
+        if not ({"joint", "interference"} & set(kinds)) or todo.size == 0:
+            return out
+        R_arm, E, tip = self._elbows(a)
+        Pk = P[todo]
+        if "joint" in kinds:
+            bad = np.zeros(todo.size, dtype=bool)
+            for b, (k, Mb, p_nac, lim) in enumerate(self.bars):
+                if lim is None:
+                    continue
+                u = Pk + p_nac - E[b]
+                d = np.einsum("nji,nj->ni", R_arm[:, k] @ Mb.rotation, u)
+                bad |= direction_margin(lim, d) < 0.0
+            out[todo[bad]] = LIMIT_KINDS.index("joint")
+            todo, Pk, tip = todo[~bad], Pk[~bad], tip[~bad]
+            E = [e[~bad] for e in E]
+        if "interference" in kinds and todo.size:
+            bad = self._interference(Pk, E, tip, margin)
+            out[todo[bad]] = LIMIT_KINDS.index("interference")
+        return out
+
+    def _interference(
+        self, P: np.ndarray, E: list[np.ndarray], tip: np.ndarray, margin: float
+    ) -> np.ndarray:
+        if self.bar_r <= 0.0:
+            raise PkdynError(
+                f"{self.robot.name}: interference needs collision geometry (geometry=True)"
+            )
+        bad = np.zeros(P.shape[0], dtype=bool)
+        ends = [P + p_nac for _, _, p_nac, _ in self.bars]
+        O = np.array([m.translation for m in self.M_arm])
+        for b1, (k1, _, _, _) in enumerate(self.bars):
+            for b2 in range(b1 + 1, len(self.bars)):
+                if self.bars[b2][0] != k1:
+                    d, _, _ = segment_distance(E[b1], ends[b1], E[b2], ends[b2])
+                    bad |= d < 2 * self.bar_r + margin
+            for k in range(3):
+                if k != k1:
+                    d, _, _ = segment_distance(E[b1], ends[b1], O[k], tip[:, k])
+                    bad |= d < self.bar_r + self.arm_r[k] + margin
+        return bad
+
+    def default_bounds(self, R: np.ndarray) -> np.ndarray:
+        """Box reachable with arms and bars stretched: ``|x|, |y| <= ra + la + lb``, z below."""
+        p = self.robot.params
+        L = p.ra - p.rb + p.la + p.lb
+        return np.array([[-L, L], [-L, L], [-(p.la + p.lb), 0.0]])

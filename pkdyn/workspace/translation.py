@@ -1,0 +1,299 @@
+"""Constant-orientation (translation) workspace of any robot, sampled on a grid.
+
+:func:`translation_workspace` samples platform positions on a regular grid at a fixed
+platform orientation and classifies each one by the first limit it breaks (see
+:mod:`pkdyn.workspace.limits`: reach, actuator stroke or angle, passive-joint cone or pyramid,
+interference). The check is vectorised where a closed form exists (leg robots such as the
+Gough-Stewart platform: :mod:`pkdyn.workspace.legs`; the Delta: :mod:`pkdyn.workspace.delta`)
+and done pose by pose with the general inverse model and coal otherwise
+(:mod:`pkdyn.workspace.numeric`).
+
+The result (:class:`TranslationWorkspace`) gives the volume (sample count times cell volume; an
+area for planar robots), the bounding box, planar slices and the boundary samples.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.robot import Robot
+from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, check_kinds
+
+__all__ = ["TranslationWorkspace", "translation_workspace", "evaluator_for"]
+
+AXES = ("x", "y", "z")
+
+
+@dataclass
+class TranslationWorkspace:
+    """A sampled constant-orientation workspace.
+
+    Attributes:
+        robot: Robot name.
+        rpy: Platform orientation (roll, pitch, yaw) [rad].
+        axes: Grid coordinates along x, y, z [m] (one value on an axis the robot does not
+            control, e.g. z for a planar robot).
+        codes: First limit broken per sample (nx, ny, nz): index in
+            :data:`pkdyn.workspace.limits.LIMIT_KINDS`, or -1 where reachable.
+        kinds: Limit kinds checked.
+        margin: Safety distance used for interference [m].
+        method: How the samples were checked.
+
+    """
+
+    robot: str
+    rpy: np.ndarray
+    axes: tuple[np.ndarray, np.ndarray, np.ndarray]
+    codes: np.ndarray
+    kinds: tuple[str, ...]
+    margin: float
+    method: str
+    dims: tuple[int, ...] = field(default=(0, 1, 2))
+
+    @property
+    def reachable(self) -> np.ndarray:
+        """Boolean mask of the reachable samples (nx, ny, nz)."""
+        return self.codes == REACHABLE
+
+    @property
+    def step(self) -> np.ndarray:
+        """Grid spacing per axis [m] (0 on a single-sample axis)."""
+        return np.array([a[1] - a[0] if a.size > 1 else 0.0 for a in self.axes])
+
+    @property
+    def cell(self) -> float:
+        """Volume [m^3] (area [m^2] for planar robots) of one sample's cell."""
+        return float(np.prod([self.step[d] for d in self.dims]))
+
+    @property
+    def volume(self) -> float:
+        """Workspace volume [m^3] (area [m^2] for planar robots): reachable samples x cell."""
+        return float(np.count_nonzero(self.reachable)) * self.cell
+
+    @property
+    def samples(self) -> int:
+        """Number of samples."""
+        return int(self.codes.size)
+
+    @property
+    def limits_hit(self) -> dict[str, int]:
+        """Samples rejected per limit kind (each counted for the first kind it breaks)."""
+        return {k: int(np.count_nonzero(self.codes == LIMIT_KINDS.index(k))) for k in self.kinds}
+
+    @property
+    def bounds(self) -> np.ndarray | None:
+        """Bounding box of the reachable samples (3, 2) [m], or ``None`` if empty."""
+        idx = np.nonzero(self.reachable)
+        if idx[0].size == 0:
+            return None
+        return np.array([[a[i.min()], a[i.max()]] for a, i in zip(self.axes, idx, strict=True)])
+
+    @property
+    def touches_box(self) -> bool:
+        """Whether reachable samples lie on a face of the sampled box (the box may be small)."""
+        m = self.reachable
+        for d in self.dims:
+            if m.shape[d] > 1 and (np.take(m, 0, axis=d).any() or np.take(m, -1, axis=d).any()):
+                return True
+        return False
+
+    def points(self, mask: np.ndarray | None = None) -> np.ndarray:
+        """Positions (M, 3) [m] of the samples selected by ``mask`` (default: reachable)."""
+        idx = np.nonzero(self.reachable if mask is None else mask)
+        return np.column_stack([a[i] for a, i in zip(self.axes, idx, strict=True)])
+
+    def boundary_mask(self) -> np.ndarray:
+        """Reachable samples with an unreachable neighbour (or the box's edge) on a grid axis."""
+        m = self.reachable
+        inner = m.copy()
+        for d in self.dims:
+            if m.shape[d] == 1:
+                continue
+            padded = np.pad(m, [(1, 1) if k == d else (0, 0) for k in range(3)])
+            lo = np.take(padded, np.arange(0, m.shape[d]), axis=d)
+            hi = np.take(padded, np.arange(2, m.shape[d] + 2), axis=d)
+            inner &= lo & hi
+        return m & ~inner
+
+    def boundary(self) -> np.ndarray:
+        """Boundary samples (M, 3) [m] (see :meth:`boundary_mask`)."""
+        return self.points(self.boundary_mask())
+
+    def slice(self, axis: str, value: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Planar slice through the nearest grid plane.
+
+        Args:
+            axis: ``x``, ``y`` or ``z``: the slice is normal to it.
+            value: Coordinate of the slice [m].
+
+        Returns:
+            ``(u, v, codes)``: the coordinates of the two other axes and the (nu, nv) codes.
+
+        """
+        if axis not in AXES:
+            raise InvalidInputError("axis", f"'{axis}': use x, y or z")
+        d = AXES.index(axis)
+        k = int(np.argmin(np.abs(self.axes[d] - value)))
+        others = [i for i in range(3) if i != d]
+        return self.axes[others[0]], self.axes[others[1]], np.take(self.codes, k, axis=d)
+
+    def as_json(self) -> dict[str, Any]:
+        """``volume``, ``bounds``, ``samples``, ``limits_hit`` and the sampling description."""
+        b = self.bounds
+        return {
+            "kind": "translation",
+            "volume": self.volume,
+            "volume_unit": "m^3" if len(self.dims) == 3 else "m^2",
+            "bounds": None if b is None else b.tolist(),
+            "samples": self.samples,
+            "reachable": int(np.count_nonzero(self.reachable)),
+            "limits_hit": self.limits_hit,
+            "rpy": [float(x) for x in self.rpy],
+            "step": self.step.tolist(),
+            "box": [[float(a[0]), float(a[-1])] for a in self.axes],
+            "touches_box": self.touches_box,
+            "margin": self.margin,
+            "method": self.method,
+        }
+
+
+def evaluator_for(robot: Robot, method: str = "auto", progress: bool = False) -> PoseEvaluator:
+    """The pose evaluator of a robot.
+
+    Args:
+        robot: The robot.
+        method: ``auto`` (closed form when the robot has one), ``closed`` or ``numeric``.
+        progress: Progress bar for the numeric evaluator.
+
+    Returns:
+        A :class:`pkdyn.workspace.limits.PoseEvaluator`.
+
+    Raises:
+        InvalidInputError: Unknown method, or ``closed`` for a robot without a closed form.
+
+    """
+    from pkdyn.workspace.delta import DeltaEvaluator, is_delta
+    from pkdyn.workspace.legs import HexapodEvaluator, is_leg_robot
+    from pkdyn.workspace.numeric import NumericEvaluator
+
+    if method not in ("auto", "closed", "numeric"):
+        raise InvalidInputError("method", f"'{method}': use auto, closed or numeric")
+    if method != "numeric":
+        if is_leg_robot(robot):
+            return HexapodEvaluator(robot)
+        if is_delta(robot) and getattr(robot.params, "parallelogram", "ball") == "ball":
+            return DeltaEvaluator(robot)
+        if method == "closed":
+            raise InvalidInputError(
+                "method", f"{robot.name} has no closed-form workspace check; use numeric"
+            )
+    return NumericEvaluator(robot, progress=progress)
+
+
+def _grid_axes(
+    box: np.ndarray, step: float | None, n: int, dims: Sequence[int], home: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    axes = []
+    for d in range(3):
+        if d not in dims:
+            axes.append(np.array([home[d]]))
+            continue
+        lo, hi = float(box[d, 0]), float(box[d, 1])
+        if not hi > lo:
+            raise InvalidInputError("bounds", f"{AXES[d]}: need min < max, got {lo}, {hi}")
+        if step is None:
+            if n < 2:
+                raise InvalidInputError("samples", f"{n}: need at least 2 samples per axis")
+            axes.append(np.linspace(lo, hi, n))
+            continue
+        k = int(np.floor((hi - lo) / step + 1e-9)) + 1
+        if not step > 0 or k < 2:
+            raise InvalidInputError("step", f"{step} m leaves fewer than 2 samples along {AXES[d]}")
+        axes.append(lo + step * np.arange(k))
+    return axes[0], axes[1], axes[2]
+
+
+def translation_workspace(
+    robot: Robot,
+    rpy: Sequence[float] = (0.0, 0.0, 0.0),
+    bounds: np.ndarray | Sequence[Sequence[float]] | None = None,
+    step: float | None = None,
+    samples: int = 41,
+    limits: Sequence[str] = ("stroke", "joint", "interference"),
+    margin: float = 0.0,
+    method: str = "auto",
+    progress: bool = True,
+    evaluator: PoseEvaluator | None = None,
+) -> TranslationWorkspace:
+    """Sample the constant-orientation workspace on a grid.
+
+    Args:
+        robot: The robot (loaded with geometry for ``interference``).
+        rpy: Platform orientation (roll, pitch, yaw) [rad]; ignored by the Delta, whose
+            nacelle keeps its orientation.
+        bounds: Box to sample (3, 2) [m]; default: a box the evaluator knows contains it.
+        step: Grid spacing [m]; default: ``samples`` per axis.
+        samples: Samples per controlled axis when ``step`` is not given.
+        limits: Kinds checked besides reach: ``stroke``, ``joint``, ``interference``.
+        margin: Safety distance for interference [m].
+        method: ``auto``, ``closed`` or ``numeric`` (see :func:`evaluator_for`).
+        progress: Progress bar (on a terminal only).
+        evaluator: Use this evaluator instead of choosing one.
+
+    Returns:
+        The sampled workspace.
+
+    Raises:
+        InvalidInputError: Bad orientation, box, step, limit kind or method.
+        PkdynError: The robot has no platform frame.
+
+    """
+    from tqdm import tqdm
+
+    from pkdyn.workspace.legs import HexapodEvaluator
+
+    if robot.platform_frame is None:
+        raise PkdynError(f"{robot.name} declares no platform frame: no workspace to sample")
+    rpy_a = np.asarray(rpy, dtype=float)
+    if rpy_a.shape != (3,) or not np.all(np.isfinite(rpy_a)):
+        raise InvalidInputError("rpy", "expected 3 finite angles [rad]")
+    if not np.isfinite(margin):
+        raise InvalidInputError("margin", f"must be a finite distance [m], got {margin}")
+    kinds = check_kinds(limits)
+    ev = evaluator if evaluator is not None else evaluator_for(robot, method, progress)
+    R = pin.rpy.rpyToMatrix(rpy_a)
+    dims = tuple(int(d) for d in robot.task_rows if d < 3)
+    box = ev.default_bounds(R) if bounds is None else np.asarray(bounds, dtype=float)
+    if box.shape != (3, 2) or not np.all(np.isfinite(box)):
+        raise InvalidInputError("bounds", "expected 3 rows (min, max) of finite numbers [m]")
+    home = robot.platform_placement(robot.q_home).translation
+    xs, ys, zs = _grid_axes(box, step, samples, dims, home)
+    codes = np.empty((xs.size, ys.size, zs.size), dtype=np.int8)
+    show = progress and sys.stderr.isatty()
+    for k in tqdm(range(zs.size), desc="workspace", disable=not show, leave=False):
+        if isinstance(ev, HexapodEvaluator):
+            codes[:, :, k] = ev.grid(xs, ys, float(zs[k]), R, kinds, margin)
+            continue
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        Y[1::2] = Y[1::2, ::-1]  # snake order: neighbours follow each other (warm starts)
+        P = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, zs[k])])
+        c = ev.violations(P, R, kinds, margin).reshape(X.shape)
+        c[1::2] = c[1::2, ::-1]
+        codes[:, :, k] = c
+    return TranslationWorkspace(
+        robot=robot.name,
+        rpy=rpy_a,
+        axes=(xs, ys, zs),
+        codes=codes,
+        kinds=kinds,
+        margin=float(margin),
+        method=ev.method,
+        dims=dims,
+    )
