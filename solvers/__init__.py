@@ -2,17 +2,18 @@
 
 Nothing here knows about Deltas or hexapods: inputs are a ``pin.Model``, rigid constraint models
 (3D point or 6D weld) and index sets. Depends on pinocchio, numpy (and proxsuite) only.
+
+Modules: :mod:`~solvers.closure` (closure residuals, Jacobians, drift), :mod:`~solvers.lm`
+(Levenberg-Marquardt on the configuration manifold), :mod:`~solvers.pose_task`,
+:mod:`~solvers.actuation` (actuation selection, joint friction), :mod:`~solvers.integrators`
+(Runge-Kutta tableaux), :mod:`~solvers.projection` (state projection onto the closures),
+:mod:`~solvers.recording` (what a simulation records), :mod:`~solvers.forward_dynamics` (time
+stepping) and :mod:`~solvers.inverse_dynamics` (constrained inverse dynamics, proxsuite QP).
 """
 
+from solvers.actuation import Actuation, JointFriction
 from solvers.closure import ClosureSet
-from solvers.forward_dynamics import (
-    Actuation,
-    ForwardDynamics,
-    ForwardResult,
-    JointFriction,
-    SimulationError,
-    simulate,
-)
+from solvers.forward_dynamics import ForwardDynamics, SimulationError, simulate
 from solvers.inverse_dynamics import (
     InfeasibleError,
     InverseDynamics,
@@ -21,6 +22,7 @@ from solvers.inverse_dynamics import (
 )
 from solvers.lm import SolveResult, solve_lm
 from solvers.pose_task import FramePoseTask
+from solvers.recording import ForwardResult
 
 __all__ = [
     "Actuation",

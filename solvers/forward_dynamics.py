@@ -40,13 +40,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
+from solvers.actuation import Actuation, JointFriction
 from solvers.closure import ClosureSet
-from solvers.lm import solve_lm
+from solvers.integrators import COMMUTATIVE_JOINTS, DOPRI5, RK4, Tableau
+from solvers.projection import ProjectionError, project_state
+from solvers.recording import Evaluation, ForwardResult, Recorder
 
 __all__ = [
     "Actuation",
@@ -60,80 +62,6 @@ __all__ = [
 
 TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 """Actuator efforts ``tau(t [s], q (nq,), v (nv,)) -> (n_a,)`` [N m or N]."""
-
-_COMMUTATIVE = {
-    "JointModelRX",
-    "JointModelRY",
-    "JointModelRZ",
-    "JointModelRevoluteUnaligned",
-    "JointModelRUBX",
-    "JointModelRUBY",
-    "JointModelRUBZ",
-    "JointModelRevoluteUnboundedUnaligned",
-    "JointModelPX",
-    "JointModelPY",
-    "JointModelPZ",
-    "JointModelPrismaticUnaligned",
-    "JointModelTranslation",
-    "JointModelHX",
-    "JointModelHY",
-    "JointModelHZ",
-    "JointModelHelicalUnaligned",
-    "JointModelUniversal",
-    "JointModelSphericalZYX",
-}
-"""Joints whose configuration space is a commutative group (``dDifference`` is the identity);
-universal and ZYX-spherical joints are parametrised by angles added by ``integrate``."""
-
-
-@dataclass
-class _Eval:
-    """One dynamics evaluation: acceleration, actuator efforts, actuator and friction power."""
-
-    a: np.ndarray
-    tau: np.ndarray
-    p_act: float
-    p_fric: float
-
-
-@dataclass(frozen=True)
-class _Tableau:
-    """Butcher tableau of an explicit Runge-Kutta method (``e``: embedded error weights)."""
-
-    a: np.ndarray
-    b: np.ndarray
-    c: np.ndarray
-    e: np.ndarray
-
-    @property
-    def stages(self) -> int:
-        return int(self.b.size)
-
-
-_RK4 = _Tableau(
-    a=np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1.0, 0]]),
-    b=np.array([1 / 6, 1 / 3, 1 / 3, 1 / 6]),
-    c=np.array([0, 0.5, 0.5, 1.0]),
-    e=np.zeros(4),
-)
-
-_DOPRI5 = _Tableau(
-    a=np.array(
-        [
-            [0, 0, 0, 0, 0, 0, 0],
-            [1 / 5, 0, 0, 0, 0, 0, 0],
-            [3 / 40, 9 / 40, 0, 0, 0, 0, 0],
-            [44 / 45, -56 / 15, 32 / 9, 0, 0, 0, 0],
-            [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0, 0],
-            [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0, 0],
-            [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0],
-        ]
-    ),
-    b=np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0]),
-    c=np.array([0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1, 1]),
-    e=np.array([71 / 57600, 0, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40]),
-)
-"""Dormand-Prince 5(4), first same as last: the last stage is the new state."""
 
 _ARG1 = pin.ArgumentPosition.ARG1
 _POINT = pin.ContactType.CONTACT_3D
@@ -150,162 +78,6 @@ class SimulationError(RuntimeError):
     def __init__(self, t: float, message: str) -> None:
         self.t = t
         super().__init__(message)
-
-
-class Actuation:
-    """Actuated velocity coordinates and their transmission gains.
-
-    The generalized force of actuator efforts ``tau`` (n_a,) is ``S^T tau`` with
-    ``S[i, v_index[i]] = gains[i]``: ``gains`` are reductions when ``tau`` is a motor-side
-    effort, ones (default) when ``tau`` is the joint-side effort.
-
-    Args:
-        v_index: Velocity index of each actuator (n_a,), distinct.
-        gains: Transmission gain of each actuator (n_a,) (default: ones).
-        names: Actuator names, for error messages (default ``a0, a1, ...``).
-
-    Raises:
-        ValueError: Repeated or negative indices, or sizes that do not match.
-
-    """
-
-    def __init__(
-        self,
-        v_index: Sequence[int] | np.ndarray,
-        gains: Sequence[float] | np.ndarray | None = None,
-        names: Sequence[str] | None = None,
-    ) -> None:
-        self.v_index = np.asarray(v_index, dtype=int).reshape(-1)
-        n = self.v_index.size
-        if np.unique(self.v_index).size != n or np.any(self.v_index < 0):
-            raise ValueError(
-                f"actuated velocity indices must be distinct and >= 0: {self.v_index.tolist()}"
-            )
-        self.gains = np.ones(n) if gains is None else np.asarray(gains, dtype=float).reshape(-1)
-        if self.gains.size != n:
-            raise ValueError(f"{self.gains.size} gains for {n} actuators")
-        self.names = [f"a{i}" for i in range(n)] if names is None else list(names)
-        if len(self.names) != n:
-            raise ValueError(f"{len(self.names)} names for {n} actuators")
-
-    @property
-    def n(self) -> int:
-        """Number of actuators."""
-        return int(self.v_index.size)
-
-    def matrix(self, nv: int) -> np.ndarray:
-        """Selection matrix ``S`` (n_a, nv): the generalized force is ``S^T tau``.
-
-        Args:
-            nv: Size of the velocity vector.
-
-        Returns:
-            ``S``.
-
-        """
-        S = np.zeros((self.n, nv))
-        S[np.arange(self.n), self.v_index] = self.gains
-        return S
-
-    def generalized(self, tau: np.ndarray, nv: int) -> np.ndarray:
-        """Generalized force ``S^T tau`` (nv,) [N m or N] of actuator efforts ``tau`` (n_a,)."""
-        out = np.zeros(nv)
-        out[self.v_index] = self.gains * tau
-        return out
-
-    def velocity(self, v: np.ndarray) -> np.ndarray:
-        """Actuator-side velocities ``S v`` (n_a,) conjugate to ``tau`` [rad/s or m/s]."""
-        return self.gains * v[self.v_index]
-
-
-@dataclass
-class JointFriction:
-    """Viscous and smooth Coulomb friction on each velocity coordinate.
-
-    The generalized friction force is ``-(viscous v + coulomb tanh(v / smoothing))``. On a
-    multi-dof joint (spherical, free-flyer) it acts per velocity component.
-
-    Attributes:
-        viscous: Viscous coefficients, scalar or (nv,) [N m s/rad or N s/m].
-        coulomb: Coulomb (dry) friction levels, scalar or (nv,) [N m or N].
-        smoothing: Velocity at which ``tanh`` reaches 76 % of the Coulomb level [rad/s or m/s].
-
-    """
-
-    viscous: float | np.ndarray = 0.0
-    coulomb: float | np.ndarray = 0.0
-    smoothing: float = 1e-2
-
-    def __post_init__(self) -> None:
-        if not self.smoothing > 0.0:
-            raise ValueError(f"friction smoothing must be > 0, got {self.smoothing}")
-
-    def force(self, v: np.ndarray) -> np.ndarray:
-        """Generalized friction force (nv,) at velocity ``v`` [N m or N]."""
-        return -(self.viscous * v + self.coulomb * np.tanh(v / self.smoothing))
-
-
-@dataclass
-class ForwardResult:
-    """Time series of a simulation, one row per recorded sample.
-
-    Attributes:
-        t: Times (N,) [s].
-        q: Configurations (N, nq).
-        v: Velocities (N, nv).
-        a: Accelerations (N, nv) at the recorded states.
-        tau: Actuator efforts (N, n_a) at the recorded states [N m or N].
-        constraint_forces: Closure multipliers ``lambda`` (N, nc) at the recorded states
-            [N, N m], in the convention of the inverse dynamics (see the module docstring).
-        closure_residual: Largest closure residual component (N,) [m or rad].
-        kinetic: Kinetic energy (N,) [J].
-        potential: Gravitational potential energy (N,) [J].
-        work: Actuator work done since the start (N,) [J], integrated with the step's
-            quadrature (fifth order for ``dopri5``, fourth for ``rk4``, first for ``euler``).
-        dissipated: Energy dissipated by joint friction since the start (N,) [J].
-        projections: Number of output steps whose state was projected onto the closures.
-        extras: Integrator statistics (``substeps``, ``rejected`` for ``dopri5``).
-
-    """
-
-    t: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-    a: np.ndarray
-    tau: np.ndarray
-    constraint_forces: np.ndarray
-    closure_residual: np.ndarray
-    kinetic: np.ndarray
-    potential: np.ndarray
-    work: np.ndarray
-    dissipated: np.ndarray
-    projections: int = 0
-    extras: dict[str, float] = field(default_factory=dict)
-
-    @property
-    def energy(self) -> np.ndarray:
-        """Mechanical energy ``kinetic + potential`` (N,) [J]."""
-        return self.kinetic + self.potential
-
-    def energy_drift(self) -> float:
-        """Largest violation of the energy balance, relative to the energy exchanged.
-
-        ``max |E(t) - E(0) - work(t) + dissipated(t)|`` divided by the largest of the kinetic
-        energy, the actuator work and the dissipated energy along the run: for a passive
-        frictionless run, the relative drift of the mechanical energy. The potential energy is
-        not used as the scale because its origin is arbitrary.
-
-        Returns:
-            The relative drift (0 when nothing moves).
-
-        """
-        e = self.energy - self.energy[0] - self.work + self.dissipated
-        scale = max(
-            float(np.max(self.kinetic)),
-            float(np.max(np.abs(self.work))),
-            float(np.max(self.dissipated)),
-        )
-        return float(np.max(np.abs(e)) / scale) if scale > 0.0 else 0.0
 
 
 class ForwardDynamics:
@@ -399,7 +171,7 @@ class ForwardDynamics:
                 model, self.data, self.constraint_models, self.constraint_datas
             )
         self._chart = any(
-            model.joints[j].shortname() not in _COMMUTATIVE for j in range(1, model.njoints)
+            model.joints[j].shortname() not in COMMUTATIVE_JOINTS for j in range(1, model.njoints)
         )
         self._zero_tau = np.zeros(self.actuation.n)
         self._zero_nv = np.zeros(model.nv)
@@ -479,9 +251,9 @@ class ForwardDynamics:
         q: np.ndarray,
         v: np.ndarray,
         h: float,
-        tab: _Tableau,
+        tab: Tableau,
         tau_fn: TorqueFn | None,
-        first: _Eval,
+        first: Evaluation,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Stages of an explicit Runge-Kutta step in the exponential chart centred at ``q``.
 
@@ -518,9 +290,11 @@ class ForwardDynamics:
             K[i] = vi if ddiff is None else ddiff(model, q, qi, _ARG1).dot(vi)
         return K, A, P, qi, tau_a
 
-    def _evaluate(self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None) -> _Eval:
+    def _evaluate(
+        self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
+    ) -> Evaluation:
         tau_a, g, pa, pf = self._forces(t, q, v, tau_fn)
-        return _Eval(self.acceleration(q, v, g), tau_a, pa, pf)
+        return Evaluation(self.acceleration(q, v, g), tau_a, pa, pf)
 
     def _advance(
         self,
@@ -529,8 +303,8 @@ class ForwardDynamics:
         v: np.ndarray,
         dt: float,
         tau_fn: TorqueFn | None,
-        first: _Eval,
-    ) -> tuple[np.ndarray, np.ndarray, float, float, _Eval | None]:
+        first: Evaluation,
+    ) -> tuple[np.ndarray, np.ndarray, float, float, Evaluation | None]:
         """Advance the state by ``dt`` from (q, v), whose evaluation ``first`` is known.
 
         Returns:
@@ -543,8 +317,8 @@ class ForwardDynamics:
             v1 = v + dt * first.a
             return pin.integrate(model, q, dt * v1), v1, dt * first.p_act, dt * first.p_fric, None
         if self.integrator == "rk4":
-            K, A, P, _, _ = self._stages(t, q, v, dt, _RK4, tau_fn, first)
-            hb = dt * _RK4.b
+            K, A, P, _, _ = self._stages(t, q, v, dt, RK4, tau_fn, first)
+            hb = dt * RK4.b
             w = P.T.dot(hb)
             q1 = pin.integrate(model, q, K.T.dot(hb))
             return q1, v + A.T.dot(hb), float(w[0]), float(w[1]), None
@@ -557,11 +331,11 @@ class ForwardDynamics:
         v: np.ndarray,
         dt: float,
         tau_fn: TorqueFn | None,
-        first: _Eval,
-    ) -> tuple[np.ndarray, np.ndarray, float, float, _Eval]:
+        first: Evaluation,
+    ) -> tuple[np.ndarray, np.ndarray, float, float, Evaluation]:
         """Dormand-Prince 5(4) substeps with error control from ``t`` to ``t + dt``."""
         model = self.model
-        tab = _DOPRI5
+        tab = DOPRI5
         t_end = t + dt
         w_act = w_fric = 0.0
         while t_end - t > 1e-12 * dt:
@@ -583,7 +357,7 @@ class ForwardDynamics:
                 w_fric += float(w[1])
                 t += h
                 q, v = q_new, v_new
-                first = _Eval(A[-1], tau_new, float(P[-1, 0]), float(P[-1, 1]))
+                first = Evaluation(A[-1], tau_new, float(P[-1, 0]), float(P[-1, 1]))
                 self.steps += 1
                 # a step shortened to land on t_end says nothing about the next one
                 self._h = max(self._h, h * fac) if h < self._h else h * fac
@@ -665,10 +439,7 @@ class ForwardDynamics:
     def project_state(
         self, q: np.ndarray, v: np.ndarray, tol: float | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Project a state onto the closures: ``q`` by Gauss-Newton, ``v`` in the ``M`` metric.
-
-        ``v+`` minimises the kinetic energy of ``v+ - v`` under ``J v+ = 0`` (Euclidean norm
-        if the mass matrix is singular).
+        """Project a state onto the closures (:func:`solvers.projection.project_state`).
 
         Args:
             q: Configuration (nq,).
@@ -685,31 +456,12 @@ class ForwardDynamics:
         """
         if not self.nc:
             return q, v
-        cs, kin = self.closure_set, self._kin
-        sol = solve_lm(
-            self.model,
-            q,
-            lambda x: cs.residual(kin, x),
-            lambda x: cs.jacobian(kin, x),
-            tol=self.project_tol * 1e-2 if tol is None else tol,
-        )
-        if sol.error > (self.project_tol if tol is None else tol):
-            raise SimulationError(
-                float("nan"),
-                f"the closures cannot be restored (residual {sol.error:.3g} after projection)",
-            )
-        q = sol.q
-        J = cs.jacobian(kin, q)
-        M = pin.crba(self.model, kin, q)
-        M = np.triu(M) + np.triu(M, 1).T
+        aim = self.project_tol * 1e-2 if tol is None else tol
+        accept = self.project_tol if tol is None else tol
         try:
-            L = np.linalg.cholesky(M)
-        except np.linalg.LinAlgError:  # massless bodies: Euclidean projection instead
-            return q, v - np.linalg.pinv(J, rcond=1e-10) @ (J @ v)
-        # v+ = v - M^-1 J^T y with (J M^-1 J^T) y = J v (minimum-norm y for redundant closures)
-        B = np.linalg.solve(L, J.T)  # L^-1 J^T
-        y = np.linalg.lstsq(B.T @ B, J @ v, rcond=1e-12)[0]
-        return q, v - np.linalg.solve(L.T, B @ y)
+            return project_state(self.model, self._kin, self.closure_set, q, v, aim, accept)
+        except ProjectionError as err:
+            raise SimulationError(float("nan"), str(err)) from None
 
     def simulate(
         self,
@@ -747,7 +499,7 @@ class ForwardDynamics:
         model = self.model
         n_steps = int(round(duration / dt))
         n_rec = n_steps // record_every + 1 + (1 if n_steps % record_every else 0)
-        rec = _Recorder(n_rec, model.nq, model.nv, self.actuation.n, self.nc)
+        rec = Recorder(n_rec, model.nq, model.nv, self.actuation.n, self.nc)
         q = np.array(q0, dtype=float)
         v = np.array(v0, dtype=float)
         if self.project:
@@ -757,7 +509,7 @@ class ForwardDynamics:
         w_act = w_fric = 0.0
         projections = 0
         t = t0
-        ev: _Eval | None = None
+        ev: Evaluation | None = None
         for k in range(n_steps + 1):
             if ev is None:
                 ev = self._evaluate(t, q, v, tau)
@@ -785,68 +537,6 @@ class ForwardDynamics:
         out.extras["substeps"] = float(self.steps)
         out.extras["rejected"] = float(self.rejected)
         return out
-
-
-class _Recorder:
-    """Preallocated storage of a :class:`ForwardResult`."""
-
-    def __init__(self, n: int, nq: int, nv: int, na: int, nc: int) -> None:
-        self.k = 0
-        self.t = np.empty(n)
-        self.q = np.empty((n, nq))
-        self.v = np.empty((n, nv))
-        self.a = np.empty((n, nv))
-        self.tau = np.empty((n, na))
-        self.lam = np.empty((n, nc))
-        self.res = np.empty(n)
-        self.ke = np.empty(n)
-        self.pe = np.empty(n)
-        self.work = np.empty(n)
-        self.diss = np.empty(n)
-
-    def add(
-        self,
-        fd: ForwardDynamics,
-        t: float,
-        q: np.ndarray,
-        v: np.ndarray,
-        ev: _Eval,
-        work: float,
-        dissipated: float,
-    ) -> None:
-        k = self.k
-        model, kin = fd.model, fd._kin
-        self.t[k] = t
-        self.q[k] = q
-        self.v[k] = v
-        self.a[k] = ev.a
-        self.tau[k] = ev.tau
-        if fd.nc:  # the residual runs the kinematics the force conversion needs
-            self.res[k] = float(np.max(np.abs(fd.closure_set.residual(kin, q))))
-            self.lam[k] = fd.closure_forces(kin, fd.data.lambda_c)
-        else:
-            self.res[k] = 0.0
-        self.ke[k] = pin.computeKineticEnergy(model, kin, q, v)
-        self.pe[k] = pin.computePotentialEnergy(model, kin, q)
-        self.work[k] = work
-        self.diss[k] = dissipated
-        self.k = k + 1
-
-    def result(self) -> ForwardResult:
-        n = self.k
-        return ForwardResult(
-            self.t[:n],
-            self.q[:n],
-            self.v[:n],
-            self.a[:n],
-            self.tau[:n],
-            self.lam[:n],
-            self.res[:n],
-            self.ke[:n],
-            self.pe[:n],
-            self.work[:n],
-            self.diss[:n],
-        )
 
 
 def simulate(

@@ -59,8 +59,8 @@ import numpy as np
 import pinocchio as pin
 from proxsuite import proxqp
 
+from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
-from solvers.forward_dynamics import Actuation
 
 _POINT = pin.ContactType.CONTACT_3D
 

@@ -1,0 +1,70 @@
+"""Projection of a state onto the closures: ``q`` by Gauss-Newton, ``v`` in the mass metric.
+
+``q`` is moved by minimum-norm Gauss-Newton / Levenberg-Marquardt steps on a
+:class:`~solvers.closure.ClosureSet`; then ``v+`` minimises the kinetic energy of ``v+ - v``
+under ``J v+ = 0`` (the velocity after a perfectly inelastic impulse, which never adds
+energy; Euclidean norm if the mass matrix is singular).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from solvers.closure import ClosureSet
+from solvers.lm import solve_lm
+
+__all__ = ["ProjectionError", "project_state"]
+
+
+class ProjectionError(RuntimeError):
+    """The closures cannot be restored from the given configuration."""
+
+
+def project_state(
+    model: pin.Model,
+    data: pin.Data,
+    closure_set: ClosureSet,
+    q: np.ndarray,
+    v: np.ndarray,
+    aim: float,
+    accept: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Project ``(q, v)`` onto the closures.
+
+    Args:
+        model: The kinematic tree.
+        data: Scratch data of ``model``.
+        closure_set: The closures.
+        q: Configuration (nq,).
+        v: Velocity (nv,).
+        aim: Closure residual the Gauss-Newton iterations aim at [m or rad].
+        accept: Largest residual accepted [m or rad].
+
+    Returns:
+        The projected ``(q, v)``.
+
+    Raises:
+        ProjectionError: The residual stays above ``accept``.
+
+    """
+    cs = closure_set
+    sol = solve_lm(
+        model, q, lambda x: cs.residual(data, x), lambda x: cs.jacobian(data, x), tol=aim
+    )
+    if sol.error > accept:
+        raise ProjectionError(
+            f"the closures cannot be restored (residual {sol.error:.3g} after projection)"
+        )
+    q = sol.q
+    J = cs.jacobian(data, q)
+    M = pin.crba(model, data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    try:
+        L = np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:  # massless bodies: Euclidean projection instead
+        return q, v - np.linalg.pinv(J, rcond=1e-10) @ (J @ v)
+    # v+ = v - M^-1 J^T y with (J M^-1 J^T) y = J v (minimum-norm y for redundant closures)
+    B = np.linalg.solve(L, J.T)  # L^-1 J^T
+    y = np.linalg.lstsq(B.T @ B, J @ v, rcond=1e-12)[0]
+    return q, v - np.linalg.solve(L.T, B @ y)

@@ -1,0 +1,148 @@
+"""What a simulation records: one dynamics evaluation, the preallocated recorder, the result."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+__all__ = ["Evaluation", "ForwardResult", "Recorder"]
+
+
+@dataclass
+class Evaluation:
+    """One dynamics evaluation: acceleration, actuator efforts, actuator and friction power."""
+
+    a: np.ndarray
+    tau: np.ndarray
+    p_act: float
+    p_fric: float
+
+
+@dataclass
+class ForwardResult:
+    """Time series of a simulation, one row per recorded sample.
+
+    Attributes:
+        t: Times (N,) [s].
+        q: Configurations (N, nq).
+        v: Velocities (N, nv).
+        a: Accelerations (N, nv) at the recorded states.
+        tau: Actuator efforts (N, n_a) at the recorded states [N m or N].
+        constraint_forces: Closure multipliers ``lambda`` (N, nc) at the recorded states
+            [N, N m], in the convention of the inverse dynamics (see the module docstring).
+        closure_residual: Largest closure residual component (N,) [m or rad].
+        kinetic: Kinetic energy (N,) [J].
+        potential: Gravitational potential energy (N,) [J].
+        work: Actuator work done since the start (N,) [J], integrated with the step's
+            quadrature (fifth order for ``dopri5``, fourth for ``rk4``, first for ``euler``).
+        dissipated: Energy dissipated by joint friction since the start (N,) [J].
+        projections: Number of output steps whose state was projected onto the closures.
+        extras: Integrator statistics (``substeps``, ``rejected`` for ``dopri5``).
+
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    tau: np.ndarray
+    constraint_forces: np.ndarray
+    closure_residual: np.ndarray
+    kinetic: np.ndarray
+    potential: np.ndarray
+    work: np.ndarray
+    dissipated: np.ndarray
+    projections: int = 0
+    extras: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def energy(self) -> np.ndarray:
+        """Mechanical energy ``kinetic + potential`` (N,) [J]."""
+        return self.kinetic + self.potential
+
+    def energy_drift(self) -> float:
+        """Largest violation of the energy balance, relative to the energy exchanged.
+
+        ``max |E(t) - E(0) - work(t) + dissipated(t)|`` divided by the largest of the kinetic
+        energy, the actuator work and the dissipated energy along the run: for a passive
+        frictionless run, the relative drift of the mechanical energy. The potential energy is
+        not used as the scale because its origin is arbitrary.
+
+        Returns:
+            The relative drift (0 when nothing moves).
+
+        """
+        e = self.energy - self.energy[0] - self.work + self.dissipated
+        scale = max(
+            float(np.max(self.kinetic)),
+            float(np.max(np.abs(self.work))),
+            float(np.max(self.dissipated)),
+        )
+        return float(np.max(np.abs(e)) / scale) if scale > 0.0 else 0.0
+
+
+class Recorder:
+    """Preallocated storage of a :class:`ForwardResult`."""
+
+    def __init__(self, n: int, nq: int, nv: int, na: int, nc: int) -> None:
+        self.k = 0
+        self.t = np.empty(n)
+        self.q = np.empty((n, nq))
+        self.v = np.empty((n, nv))
+        self.a = np.empty((n, nv))
+        self.tau = np.empty((n, na))
+        self.lam = np.empty((n, nc))
+        self.res = np.empty(n)
+        self.ke = np.empty(n)
+        self.pe = np.empty(n)
+        self.work = np.empty(n)
+        self.diss = np.empty(n)
+
+    def add(
+        self,
+        fd: Any,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray,
+        ev: Evaluation,
+        work: float,
+        dissipated: float,
+    ) -> None:
+        """Store one sample (``fd``: the :class:`~solvers.ForwardDynamics` recording)."""
+        k = self.k
+        model, kin = fd.model, fd._kin
+        self.t[k] = t
+        self.q[k] = q
+        self.v[k] = v
+        self.a[k] = ev.a
+        self.tau[k] = ev.tau
+        if fd.nc:  # the residual runs the kinematics the force conversion needs
+            self.res[k] = float(np.max(np.abs(fd.closure_set.residual(kin, q))))
+            self.lam[k] = fd.closure_forces(kin, fd.data.lambda_c)
+        else:
+            self.res[k] = 0.0
+        self.ke[k] = pin.computeKineticEnergy(model, kin, q, v)
+        self.pe[k] = pin.computePotentialEnergy(model, kin, q)
+        self.work[k] = work
+        self.diss[k] = dissipated
+        self.k = k + 1
+
+    def result(self) -> ForwardResult:
+        """The samples recorded so far."""
+        n = self.k
+        return ForwardResult(
+            self.t[:n],
+            self.q[:n],
+            self.v[:n],
+            self.a[:n],
+            self.tau[:n],
+            self.lam[:n],
+            self.res[:n],
+            self.ke[:n],
+            self.pe[:n],
+            self.work[:n],
+            self.diss[:n],
+        )
