@@ -2,7 +2,8 @@
 
 The parts, each importing only the parts listed before it (``tests/test_layering.py``):
 
-- :mod:`pkdyn.exceptions`, :mod:`pkdyn.progress`: the error tree, progress bars;
+- :mod:`pkdyn.exceptions`, :mod:`pkdyn.progress`, :mod:`pkdyn.files`: the error tree, progress
+  bars, atomic output files;
 - :mod:`pkdyn.model`: description format, model building, :class:`Robot`, assembly, the family
   registry, ``load``, other formats;
 - :mod:`pkdyn.closed_form`: closed-form models of the families (numpy);

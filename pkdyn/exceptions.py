@@ -19,6 +19,7 @@ __all__ = [
     "TrajectoryError",
     "InfeasibleEffortError",
     "SimulationError",
+    "OutputError",
 ]
 
 
@@ -165,3 +166,16 @@ class SimulationError(PkdynError):
     def __init__(self, message: str, time: float) -> None:
         self.time = time
         super().__init__(f"t = {time:.6g} s: {message}")
+
+
+class OutputError(PkdynError):
+    """An output file cannot be written (missing directory, permissions, bad name or format).
+
+    Attributes:
+        path: The file pkdyn was asked to write.
+
+    """
+
+    def __init__(self, path: str, message: str) -> None:
+        self.path = path
+        super().__init__(f"cannot write '{path}': {message}")

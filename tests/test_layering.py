@@ -13,22 +13,23 @@ ROOT = Path(__file__).resolve().parents[1]
 
 RANK = {
     "exceptions": 0,
-    "progress": 0,
-    "model": 1,
-    "closed_form": 2,
-    "library": 3,
-    "analysis": 4,
-    "dynamics": 5,
-    "workspace": 5,
-    "tripod": 6,
-    "design": 7,
-    "viewer": 8,
-    "plotting": 8,
-    "cli": 9,
+    "progress": 1,
+    "files": 1,
+    "model": 2,
+    "closed_form": 3,
+    "library": 4,
+    "analysis": 5,
+    "dynamics": 6,
+    "workspace": 6,
+    "tripod": 7,
+    "design": 8,
+    "viewer": 9,
+    "plotting": 9,
+    "cli": 10,
 }
 """Rank of each part of pkdyn: a module may import its own part and parts of lower rank."""
 
-ROOT_PACKAGE_FROM = 3
+ROOT_PACKAGE_FROM = 4
 """``import pkdyn`` (the top-level package, which imports the model and the library) is allowed
 from this rank up."""
 
