@@ -33,6 +33,8 @@ round-off).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pinocchio as pin
 
@@ -52,6 +54,7 @@ __all__ = [
     "gough_stewart_AB",
     "five_bar_AB",
     "reciprocal_screws",
+    "RECIPROCAL_SCREWS",
 ]
 
 
@@ -209,11 +212,63 @@ def five_bar_AB(
     return d, np.einsum("nij,nij->ni", d, dC)[..., None] * np.eye(2)
 
 
+def _delta_screws(robot: Robot, q: np.ndarray, M: pin.SE3) -> tuple[np.ndarray, np.ndarray] | None:
+    prm: delta.Params = robot.params
+    if prm.arms != 3:
+        return None
+    return delta_AB(prm, M.translation, q[robot.actuated_q])
+
+
+def _planar_3rrr_screws(
+    robot: Robot, q: np.ndarray, M: pin.SE3
+) -> tuple[np.ndarray, np.ndarray] | None:
+    prm: planar_3rrr.Params = robot.params
+    phi = float(np.arctan2(M.rotation[1, 0], M.rotation[0, 0]))
+    pose = np.array([M.translation[0], M.translation[1], phi])
+    return planar_3rrr_AB(prm, planar_3rrr_chain_angles(prm, pose, q[robot.actuated_q]))
+
+
+def _gough_stewart_screws(
+    robot: Robot, q: np.ndarray, M: pin.SE3
+) -> tuple[np.ndarray, np.ndarray] | None:
+    prm: gough_stewart.Params = robot.params
+    data = robot.data
+    pin.forwardKinematics(robot.model, data, q)
+    Bw = np.array(
+        [
+            data.oMi[cm.joint2_id].act(cm.joint2_placement.translation)
+            for cm in robot.constraint_models
+        ]
+    )
+    return gough_stewart_AB(prm.a, Bw, M.translation, M.rotation)
+
+
+def _five_bar_screws(
+    robot: Robot, q: np.ndarray, M: pin.SE3
+) -> tuple[np.ndarray, np.ndarray] | None:
+    prm: five_bar.Params = robot.params
+    return five_bar_AB(prm, M.translation[:2], q[robot.actuated_q])
+
+
+ScrewModel = Callable[[Robot, np.ndarray, pin.SE3], "tuple[np.ndarray, np.ndarray] | None"]
+"""``(robot, q, platform placement) -> (A, B)`` with a leading axis of 1, or ``None`` when these
+parameters of the family have no reciprocal-screw model."""
+
+RECIPROCAL_SCREWS: dict[str, ScrewModel] = {
+    "delta": _delta_screws,
+    "planar_3rrr": _planar_3rrr_screws,
+    "gough_stewart": _gough_stewart_screws,
+    "five_bar": _five_bar_screws,
+}
+"""Reciprocal-screw models by family name (:attr:`pkdyn.Robot.family`)."""
+
+
 def reciprocal_screws(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pasqui's ``A`` and ``B`` of a library robot at configuration ``q`` (seed normalisation).
 
     Args:
-        robot: A ``delta``, ``planar_3rrr``, ``gough_stewart`` or ``five_bar`` library robot.
+        robot: A library robot of a family in :data:`RECIPROCAL_SCREWS` (``delta`` with three
+            arms, ``planar_3rrr``, ``gough_stewart``, ``five_bar``).
         q: Assembled configuration (nq,).
 
     Returns:
@@ -224,31 +279,13 @@ def reciprocal_screws(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
     """
     qq = as_finite("q", q, robot.nq)
-    prm = robot.params
-    qa = qq[robot.actuated_q]
-    M = robot.platform_placement(qq)
-    if isinstance(prm, delta.Params) and prm.arms == 3:
-        A, B = delta_AB(prm, M.translation, qa)
-    elif isinstance(prm, planar_3rrr.Params):
-        phi = float(np.arctan2(M.rotation[1, 0], M.rotation[0, 0]))
-        pose = np.array([M.translation[0], M.translation[1], phi])
-        A, B = planar_3rrr_AB(prm, planar_3rrr_chain_angles(prm, pose, qa))
-    elif isinstance(prm, gough_stewart.Params):
-        data = robot.data
-        pin.forwardKinematics(robot.model, data, qq)
-        Bw = np.array(
-            [
-                data.oMi[cm.joint2_id].act(cm.joint2_placement.translation)
-                for cm in robot.constraint_models
-            ]
-        )
-        A, B = gough_stewart_AB(prm.a, Bw, M.translation, M.rotation)
-    elif isinstance(prm, five_bar.Params):
-        A, B = five_bar_AB(prm, M.translation[:2], qa)
-    else:
+    model = RECIPROCAL_SCREWS.get(robot.family or "")
+    AB = None if model is None else model(robot, qq, robot.platform_placement(qq))
+    if AB is None:
         raise InvalidInputError(
             "robot",
             f"no reciprocal-screw model for {robot.name}; use "
             "pkdyn.analysis.kinematics.kinematic_models",
         )
+    A, B = AB
     return A[0], B[0]

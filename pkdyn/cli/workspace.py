@@ -46,11 +46,11 @@ def _cmd_clavel(args: argparse.Namespace, robot: Any) -> None:
     from pkdyn.exceptions import PkdynError
     from pkdyn.workspace.clavel import clavel_closed_form, clavel_numeric
 
-    p = robot.params
-    if not all(hasattr(p, k) for k in ("ra", "rb", "la", "lb")):
+    if robot.family != "delta":
         raise PkdynError(
             f"--clavel applies to the delta family (ra, rb, la, lb); {robot.name} is not one"
         )
+    p = robot.params
     cf = clavel_closed_form(p, args.gamma_max, args.ab_min)
     nu, v_ws = clavel_numeric(
         p, args.gamma_max, args.ab_min, rays=args.rays, progress=not args.json

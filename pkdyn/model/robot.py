@@ -10,6 +10,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import PkdynError
 from pkdyn.model.description import ActuatorSpec, ClosureSpec, Description
+from pkdyn.model.families import FAMILIES
 from solvers import ClosureSet
 
 __all__ = ["MODELLING_JOINTS", "Robot"]
@@ -74,6 +75,21 @@ class Robot:
     def nv(self) -> int:
         """Size of the velocity vector."""
         return int(self.model.nv)
+
+    @property
+    def family(self) -> str | None:
+        """Library family that built the robot, ``None`` for a robot its user described.
+
+        The family is ``robot.source`` for a robot built by :func:`pkdyn.load` from a family
+        name; a URDF file or string has none.
+
+        Code that has a closed form for some families keeps a registry keyed by this name (e.g.
+        :data:`pkdyn.analysis.screws.RECIPROCAL_SCREWS`); robots of no family take the general
+        path.
+        """
+        if self.params is None or self.source not in FAMILIES:
+            return None
+        return self.source
 
     @property
     def closures(self) -> tuple[ClosureSpec, ...]:

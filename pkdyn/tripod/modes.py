@@ -262,12 +262,12 @@ def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = 
         PkdynError: ``robot`` is not the library tripod.
 
     """
-    p = robot.params
-    if not isinstance(p, tripod.Params):
+    if robot.family != "tripod":
         raise PkdynError(
             f"{robot.name}: tripod modes need the library tripod (pkdyn.load('tripod')) "
             "to know its footholds"
         )
+    p: tripod.Params = robot.params
     model = robot.model
     default = tripod_cf.foothold_frames(p)
     cms: list[pin.RigidConstraintModel] = []

@@ -171,7 +171,7 @@ class Phase:
 
 
 def _params(robot: Robot) -> tripod.Params:
-    if not isinstance(robot.params, tripod.Params):
+    if robot.family != "tripod":
         raise PkdynError(
             f"{robot.name}: the scenario needs the library tripod (pkdyn.load('tripod'))"
         )

@@ -24,18 +24,7 @@ from pkdyn.model.description import ConeLimit, PyramidLimit
 from pkdyn.model.robot import Robot
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, direction_margin
 
-__all__ = ["DeltaEvaluator", "is_delta"]
-
-
-def is_delta(robot: Robot) -> bool:
-    """Whether the robot is a rotary Delta of the library family (ra, rb, la, lb known)."""
-    p = robot.params
-    names = set(robot.model.names)
-    return (
-        all(hasattr(p, k) for k in ("ra", "rb", "la", "lb"))
-        and len(robot.actuators) == 3
-        and {"arm1", "arm2", "arm3"} <= names
-    )
+__all__ = ["DeltaEvaluator"]
 
 
 def _rot_y(a: np.ndarray) -> np.ndarray:
@@ -58,9 +47,24 @@ class DeltaEvaluator(PoseEvaluator):
 
     method = "closed form (Clavel's inverse model)"
 
+    @staticmethod
+    def accepts(robot: Robot) -> bool:
+        """Whether this closed form covers the robot.
+
+        It needs a library Delta (``ra``, ``rb``, ``la``, ``lb`` known) with three arms
+        ``arm1..3`` and ball-jointed parallelograms.
+        """
+        p = robot.params
+        return (
+            robot.family == "delta"
+            and p.parallelogram == "ball"
+            and len(robot.actuators) == 3
+            and {"arm1", "arm2", "arm3"} <= set(robot.model.names)
+        )
+
     def __init__(self, robot: Robot) -> None:
         super().__init__(robot)
-        if not is_delta(robot) or getattr(robot.params, "parallelogram", "ball") != "ball":
+        if not self.accepts(robot):
             raise PkdynError(f"{robot.name}: the closed-form Delta workspace needs a library Delta")
         model = robot.model
         arms = [model.getJointId(f"arm{i}") for i in (1, 2, 3)]

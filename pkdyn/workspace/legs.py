@@ -32,7 +32,7 @@ from pkdyn.model.description import ConeLimit, PyramidLimit
 from pkdyn.model.robot import Robot
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, direction_margin
 
-__all__ = ["HexapodLegs", "HexapodEvaluator", "is_leg_robot"]
+__all__ = ["HexapodLegs", "HexapodEvaluator"]
 
 _PRISMATIC_AXES = {"PX": (1.0, 0.0, 0.0), "PY": (0.0, 1.0, 0.0), "PZ": (0.0, 0.0, 1.0)}
 
@@ -230,15 +230,6 @@ def _leg_radius(robot: Robot, *joints: int) -> float:
     return r
 
 
-def is_leg_robot(robot: Robot) -> bool:
-    """Whether :meth:`HexapodLegs.from_robot` accepts the robot."""
-    try:
-        HexapodLegs.from_robot(robot)
-    except PkdynError:
-        return False
-    return True
-
-
 class HexapodEvaluator(PoseEvaluator):
     """Closed-form limits of a leg robot, vectorised (see the module docstring).
 
@@ -248,6 +239,15 @@ class HexapodEvaluator(PoseEvaluator):
     """
 
     method = "closed form (leg vectors)"
+
+    @staticmethod
+    def accepts(robot: Robot) -> bool:
+        """Whether :meth:`HexapodLegs.from_robot` recognises the robot's legs."""
+        try:
+            HexapodLegs.from_robot(robot)
+        except PkdynError:
+            return False
+        return True
 
     def __init__(self, robot: Robot) -> None:
         super().__init__(robot)

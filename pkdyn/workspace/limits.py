@@ -100,6 +100,28 @@ class PoseEvaluator(ABC):
     def default_bounds(self, R: np.ndarray) -> np.ndarray:
         """A box (3, 2) [m] that contains the workspace at orientation ``R``."""
 
+    def grid(
+        self,
+        xs: np.ndarray,
+        ys: np.ndarray,
+        z: float,
+        R: np.ndarray,
+        kinds: tuple[str, ...],
+        margin: float,
+    ) -> np.ndarray:
+        """Violation codes on the plane grid ``xs x ys`` at height ``z`` (nx, ny).
+
+        The default visits the grid in snake order (neighbours follow each other, so that an
+        iterative evaluator warm-starts well) and calls :meth:`violations`; closed forms may
+        override it with a broadcast evaluation.
+        """
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        Y[1::2] = Y[1::2, ::-1]
+        P = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, z)])
+        c = self.violations(P, R, kinds, margin).reshape(X.shape)
+        c[1::2] = c[1::2, ::-1]
+        return c
+
 
 def classify(stages: Sequence[tuple[str, np.ndarray]], n: int) -> np.ndarray:
     """Combine per-kind violation masks into first-broken codes.

@@ -15,7 +15,7 @@ area for planar robots), the bounding box, planar slices and the boundary sample
 from __future__ import annotations
 
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -26,7 +26,12 @@ from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.robot import Robot
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, check_kinds
 
-__all__ = ["TranslationWorkspace", "translation_workspace", "evaluator_for"]
+__all__ = [
+    "CLOSED_FORM_EVALUATORS",
+    "TranslationWorkspace",
+    "evaluator_for",
+    "translation_workspace",
+]
 
 AXES = ("x", "y", "z")
 
@@ -164,13 +169,39 @@ class TranslationWorkspace:
         }
 
 
+def _delta_evaluator(robot: Robot) -> PoseEvaluator | None:
+    from pkdyn.workspace.delta import DeltaEvaluator
+
+    return DeltaEvaluator(robot) if DeltaEvaluator.accepts(robot) else None
+
+
+def _leg_evaluator(robot: Robot) -> PoseEvaluator | None:
+    from pkdyn.workspace.legs import HexapodEvaluator
+
+    return HexapodEvaluator(robot) if HexapodEvaluator.accepts(robot) else None
+
+
+CLOSED_FORM_EVALUATORS: dict[str | None, Callable[[Robot], PoseEvaluator | None]] = {
+    "delta": _delta_evaluator,
+    "gough_stewart": _leg_evaluator,
+    None: _leg_evaluator,
+}
+"""Closed-form pose evaluators by family name (:attr:`pkdyn.Robot.family`); the key ``None``
+serves robots of no family (described by their users), whose legs are recognised from the
+structure. A factory returns ``None`` when the robot's parameters or structure do not fit its
+closed form; the robot then takes the numeric path."""
+
+
 def evaluator_for(robot: Robot, method: str = "auto", progress: bool = False) -> PoseEvaluator:
     """The pose evaluator of a robot.
 
     Args:
         robot: The robot.
-        method: ``auto`` (closed form when the robot has one), ``closed`` or ``numeric``.
-        progress: Progress bar for the numeric evaluator.
+        method: ``auto`` (closed form when the robot has one, see
+            :data:`CLOSED_FORM_EVALUATORS`), ``closed`` or ``numeric``.
+        progress: Progress bar of the numeric evaluator over the poses: ``True`` / ``False``
+            force it on / off, ``None`` shows it when stderr is a terminal (default off: the
+            workspace samplers show their own).
 
     Returns:
         A :class:`pkdyn.workspace.limits.PoseEvaluator`.
@@ -179,17 +210,15 @@ def evaluator_for(robot: Robot, method: str = "auto", progress: bool = False) ->
         InvalidInputError: Unknown method, or ``closed`` for a robot without a closed form.
 
     """
-    from pkdyn.workspace.delta import DeltaEvaluator, is_delta
-    from pkdyn.workspace.legs import HexapodEvaluator, is_leg_robot
     from pkdyn.workspace.numeric import NumericEvaluator
 
     if method not in ("auto", "closed", "numeric"):
         raise InvalidInputError("method", f"'{method}': use auto, closed or numeric")
     if method != "numeric":
-        if is_leg_robot(robot):
-            return HexapodEvaluator(robot)
-        if is_delta(robot) and getattr(robot.params, "parallelogram", "ball") == "ball":
-            return DeltaEvaluator(robot)
+        factory = CLOSED_FORM_EVALUATORS.get(robot.family)
+        ev = None if factory is None else factory(robot)
+        if ev is not None:
+            return ev
         if method == "closed":
             raise InvalidInputError(
                 "method", f"{robot.name} has no closed-form workspace check; use numeric"
@@ -257,8 +286,6 @@ def translation_workspace(
     """
     from tqdm import tqdm
 
-    from pkdyn.workspace.legs import HexapodEvaluator
-
     if robot.platform_frame is None:
         raise PkdynError(f"{robot.name} declares no platform frame: no workspace to sample")
     rpy_a = np.asarray(rpy, dtype=float)
@@ -278,15 +305,7 @@ def translation_workspace(
     codes = np.empty((xs.size, ys.size, zs.size), dtype=np.int8)
     show = progress and sys.stderr.isatty()
     for k in tqdm(range(zs.size), desc="workspace", disable=not show, leave=False):
-        if isinstance(ev, HexapodEvaluator):
-            codes[:, :, k] = ev.grid(xs, ys, float(zs[k]), R, kinds, margin)
-            continue
-        X, Y = np.meshgrid(xs, ys, indexing="ij")
-        Y[1::2] = Y[1::2, ::-1]  # snake order: neighbours follow each other (warm starts)
-        P = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, zs[k])])
-        c = ev.violations(P, R, kinds, margin).reshape(X.shape)
-        c[1::2] = c[1::2, ::-1]
-        codes[:, :, k] = c
+        codes[:, :, k] = ev.grid(xs, ys, float(zs[k]), R, kinds, margin)
     return TranslationWorkspace(
         robot=robot.name,
         rpy=rpy_a,
