@@ -13,6 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 import pkdyn
+from solvers.numerics import null_space
 
 Row = tuple[str, str, str]
 """One table row: benchmark, figure, target or comment."""
@@ -58,8 +59,7 @@ def consistent_state(
         robot, pin.integrate(robot.model, robot.q_home, spread * rng.standard_normal(robot.nv))
     )
     _, J = robot.closure_set.residual_and_jacobian(robot.model.createData(), q)
-    _, s, Vt = np.linalg.svd(J)
-    Z = Vt[int(np.sum(s > 1e-9 * s[0])) :].T
+    Z = null_space(J, 1e-9)
     v = Z @ rng.standard_normal(Z.shape[1])
     return q, speed * v / np.max(np.abs(v))
 

@@ -8,7 +8,8 @@ Modules: :mod:`~solvers.closure` (closure residuals, Jacobians, drift), :mod:`~s
 :mod:`~solvers.actuation` (actuation selection, joint friction), :mod:`~solvers.integrators`
 (Runge-Kutta tableaux), :mod:`~solvers.projection` (state projection onto the closures),
 :mod:`~solvers.recording` (what a simulation records), :mod:`~solvers.forward_dynamics` (time
-stepping) and :mod:`~solvers.inverse_dynamics` (constrained inverse dynamics, proxsuite QP).
+stepping), :mod:`~solvers.inverse_dynamics` (constrained inverse dynamics, proxsuite QP) and
+:mod:`~solvers.numerics` (rank decisions, null spaces, least squares: the one cut-off rule).
 """
 
 from solvers.actuation import Actuation, JointFriction

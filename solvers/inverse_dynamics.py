@@ -59,6 +59,7 @@ import numpy as np
 import pinocchio as pin
 from proxsuite import proxqp
 
+from solvers import numerics
 from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
 
@@ -152,8 +153,9 @@ class InverseDynamics:
         upper: Upper effort bounds (n_a,) [N m or N] (default: none).
         weights: Weights ``w`` (n_a,) of the effort norm minimised under redundant actuation
             (default: ones; ``1 / effort_limit^2`` balances the actuators' loads).
-        rank_tol: Singular-value threshold for the ranks of ``J`` (relative to its largest
-            singular value) and of ``Z^T S^T`` (relative to the largest actuation gain).
+        rank_tol: Relative tolerance of the ranks (rule of :mod:`solvers.numerics`) of ``J``
+            (judged against itself) and of ``Z^T S^T`` (scale: the largest actuation gain, at
+            least 1).
         consistency_tol: Largest acceptable residual of the dynamics equation, relative to
             ``max(1, |M a + h|)``.
         eps: Absolute accuracy of the QP [N m or N].
@@ -200,7 +202,8 @@ class InverseDynamics:
         self.consistency_tol = consistency_tol
         self.eps = eps
         self.max_iter = max_iter
-        self._g_tol = rank_tol * max(1.0, float(np.max(np.abs(actuation.gains))))
+        self._g_scale = max(1.0, float(np.max(np.abs(actuation.gains))))
+        self._g_tol = rank_tol * self._g_scale
         self._bounded = bool(np.any(np.isfinite(self.lower) | np.isfinite(self.upper)))
         self._qp: proxqp.dense.QP | None = None
         self._qp_rank = -1
@@ -279,7 +282,7 @@ class InverseDynamics:
             if fast is not None:
                 return fast
             U, s, Vt = np.linalg.svd(J)
-            r = int(np.sum(s > self.rank_tol * max(float(s[0]), 1e-300))) if s.size else 0
+            r = numerics.rank_of(s, self.rank_tol)
             Z = Vt[r:].T
         else:
             J = np.zeros((0, model.nv))
@@ -288,9 +291,10 @@ class InverseDynamics:
         G = Z.T @ self.S.T  # (d, n_a)
         f0 = Z.T @ b
         Ug, sg, Vgt = np.linalg.svd(G, full_matrices=False)
-        # |G| <= max gain (Z has orthonormal columns): an absolute threshold, so that actuators
-        # that cannot move anything (all their effort taken by the closures) are recognised
-        rg = int(np.sum(sg > self._g_tol))
+        # |G| <= max gain (Z has orthonormal columns): judged against that scale, not against
+        # itself, so that actuators that cannot move anything (all their effort taken by the
+        # closures) are recognised
+        rg = numerics.rank_of(sg, self.rank_tol, scale=self._g_scale)
         # rank(G) independent equations E tau = f with orthonormal rows E
         E = Vgt[:rg]
         f = (Ug[:, :rg].T @ f0) / sg[:rg]
@@ -399,7 +403,7 @@ class InverseDynamics:
         center = np.where(both, 0.5 * (lo + hi), np.where(f_lo, lo, np.where(f_hi, hi, 0.0)))
         D = np.where(both, 0.5 * (hi - lo), 1.0)
         D = np.maximum(D, 1e-12 * max(1.0, float(np.max(np.abs(center)))))
-        s_opt = np.linalg.lstsq(E * D, f - E @ center, rcond=None)[0]
+        s_opt = numerics.lstsq(E * D, f - E @ center, numerics.machine_rtol(E))
         tau = center + D * s_opt
         rel = np.maximum(lo - tau, tau - hi) / D
         k = int(np.argmax(rel))

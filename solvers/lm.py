@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from solvers import numerics
+
 __all__ = ["SolveResult", "solve_lm"]
 
 ResidualFn = Callable[[np.ndarray], np.ndarray]
@@ -95,7 +97,7 @@ def solve_lm(
             try:
                 y = solve(A, g)
             except np.linalg.LinAlgError:  # exactly singular: the damping fell below round-off
-                y = np.linalg.lstsq(A, g, rcond=None)[0]
+                y = numerics.lstsq(A, g, numerics.machine_rtol(A))
             step = -(Jf.T @ y) if small else -y
             if idx is None:
                 dq = step

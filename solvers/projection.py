@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from solvers import numerics
 from solvers.closure import ClosureSet
 from solvers.lm import solve_lm
 
@@ -63,8 +64,8 @@ def project_state(
     try:
         L = np.linalg.cholesky(M)
     except np.linalg.LinAlgError:  # massless bodies: Euclidean projection instead
-        return q, v - np.linalg.pinv(J, rcond=1e-10) @ (J @ v)
+        return q, v - numerics.lstsq(J, J @ v, 1e-10)
     # v+ = v - M^-1 J^T y with (J M^-1 J^T) y = J v (minimum-norm y for redundant closures)
     B = np.linalg.solve(L, J.T)  # L^-1 J^T
-    y = np.linalg.lstsq(B.T @ B, J @ v, rcond=1e-12)[0]
+    y = numerics.lstsq(B.T @ B, J @ v, 1e-12)
     return q, v - np.linalg.solve(L.T, B @ y)

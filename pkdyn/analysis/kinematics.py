@@ -50,7 +50,7 @@ import pinocchio as pin
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
-from solvers import FramePoseTask
+from solvers import FramePoseTask, numerics
 
 __all__ = [
     "TASK_NAMES",
@@ -103,17 +103,6 @@ def _cond(s: np.ndarray, n: int) -> float:
     return float(s[0]) / smin
 
 
-def _left_null(M: np.ndarray, tol: float = 1e-10) -> np.ndarray:
-    """Orthonormal basis (rows, shape (k, r)) of the left null space of ``M`` (r x n)."""
-    r = M.shape[0]
-    if M.shape[1] == 0:
-        return np.eye(r)
-    U, s, _ = np.linalg.svd(M, full_matrices=True)
-    scale = float(s[0]) if s.size and s[0] > 0 else 1.0
-    rank = int(np.sum(s > tol * scale))
-    return np.asarray(U[:, rank:].T)
-
-
 def platform_jacobian(robot: Robot, q: np.ndarray) -> np.ndarray:
     """Full 6D platform Jacobian (6, nv) in the task convention, kinematics at ``q`` computed.
 
@@ -162,7 +151,7 @@ def _relations(Jc: np.ndarray, Jx: np.ndarray, a: np.ndarray, p: np.ndarray) -> 
     """Eliminate the passive velocities between closure and platform equations."""
     m = Jx.shape[0]
     M = np.vstack([Jc[:, p], Jx[:, p]])
-    W = _left_null(M)  # (k, nc + m)
+    W = numerics.left_null_space(M, 1e-10)  # (k, nc + m)
     nc = Jc.shape[0]
     Wc, Wx = W[:, :nc], W[:, nc:]
     R = np.hstack([Wc @ Jc[:, a] + Wx @ Jx[:, a], -Wx]) if W.size else np.zeros((0, a.size + m))
@@ -257,7 +246,7 @@ class KinematicModels:
         """
         if "J" not in self._cache:
             self._check("parallel")
-            self._cache["J"] = np.linalg.lstsq(self.A, self.B, rcond=None)[0]
+            self._cache["J"] = numerics.lstsq(self.A, self.B, numerics.machine_rtol(self.A))
         return np.array(self._cache["J"])
 
     @property
@@ -270,7 +259,7 @@ class KinematicModels:
         """
         if "J_inv" not in self._cache:
             self._check("serial")
-            self._cache["J_inv"] = np.linalg.lstsq(self.B, self.A, rcond=None)[0]
+            self._cache["J_inv"] = numerics.lstsq(self.B, self.A, numerics.machine_rtol(self.B))
         return np.array(self._cache["J_inv"])
 
     @property
@@ -292,7 +281,7 @@ class KinematicModels:
             V = np.zeros((nv, a.size))
             V[a, np.arange(a.size)] = 1.0
             if self.Jc.shape[0]:
-                V[p] = -np.linalg.lstsq(self.Jc[:, p], self.Jc[:, a], rcond=1e-10)[0]
+                V[p] = -numerics.lstsq(self.Jc[:, p], self.Jc[:, a], 1e-10)
             self._cache["V"] = V
         return np.array(self._cache["V"])
 
@@ -327,7 +316,7 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
         s, Vt = np.zeros(0), np.zeros((0, n_a + m))
     # relations beyond the numerical rank (a degenerate mobility) are left as zero rows, which
     # makes both A and B singular
-    k = min(m, int(np.sum(s > SINGULAR_TOL * s[0])) if s.size and s[0] > 0 else 0)
+    k = min(m, numerics.rank_of(s, SINGULAR_TOL))
     basis = np.zeros((m, n_a + m))
     basis[:k] = Vt[:k]
     B = basis[:, :n_a]

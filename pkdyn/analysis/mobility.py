@@ -35,7 +35,7 @@ from pkdyn.exceptions import AssemblyError, InvalidInputError
 from pkdyn.model.assembly import project
 from pkdyn.model.description import CLOSURE_KINDS
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
-from solvers import FramePoseTask
+from solvers import FramePoseTask, numerics
 
 __all__ = [
     "CLOSURE_FREEDOM",
@@ -176,7 +176,8 @@ def mobility(
             joint axes parallel to a normal ``n``, prismatic axes normal to it, every closure a
             hinge about ``n`` or a weld, platform task within the plane), else 6. A platform
             task with an out-of-plane component declares a spatial model.
-        tol: Relative singular-value threshold of the ranks.
+        tol: Relative tolerance of the ranks and null spaces (the rule of
+            :mod:`solvers.numerics`).
 
     Returns:
         The analysis; ``grubler`` and ``mobility`` differ when closure equations are redundant
@@ -206,11 +207,11 @@ def mobility(
         Jc = np.zeros((0, model.nv))
         pin.computeJointJacobians(model, data, qq)
     sv = np.linalg.svd(Jc, compute_uv=False) if Jc.size else np.zeros(0)
-    rank = _rank(sv, tol)
+    rank = numerics.rank_of(sv, tol)
     # Free-floating components: their modelling joint's coordinates stay free; fix them.
     float_v = _floating_velocity_indices(robot)
     A = np.vstack([Jc, np.eye(model.nv)[float_v]])
-    N = _null_space(A, tol)
+    N = numerics.null_space(A, tol)
     m = N.shape[1]
     if d is None:
         d = 3 if _plane_normal(robot, physical) is not None else 6
@@ -223,7 +224,7 @@ def mobility(
         task.target = pin.SE3(pin.updateFramePlacement(model, data, robot.platform_frame))
         T = task.residual_and_jacobian(data)[1]
         TN = T @ N
-        coeffs = _null_space(TN, tol, scale=_scale(T)) if TN.size else np.eye(m)
+        coeffs = numerics.null_space(TN, tol, scale=_scale(T)) if TN.size else np.eye(m)
         useful = m - coeffs.shape[1]
         V = N @ coeffs
     modes = _describe_internal(robot, V, tol)
@@ -291,29 +292,8 @@ def _is_modelling(model: pin.Model, j: int) -> bool:
     return bool(model.joints[j].shortname() in MODELLING_JOINTS)
 
 
-def _rank(sv: np.ndarray, tol: float) -> int:
-    if sv.size == 0 or sv[0] == 0.0:
-        return 0
-    return int(np.sum(sv > tol * sv[0]))
-
-
 def _scale(A: np.ndarray) -> float:
     return float(np.linalg.norm(A, 2)) if A.size else 0.0
-
-
-def _null_space(A: np.ndarray, tol: float, scale: float | None = None) -> np.ndarray:
-    """Orthonormal basis (n, k) of the null space of ``A`` (m, n), relative threshold ``tol``.
-
-    ``scale`` replaces the largest singular value of ``A`` as the reference (so that a small
-    block of a larger well-scaled matrix is not judged against itself).
-    """
-    n = A.shape[1]
-    if A.shape[0] == 0:
-        return np.eye(n)
-    _, s, Vt = np.linalg.svd(A)
-    ref = s[0] if scale is None else scale
-    r = int(np.sum(s > tol * ref)) if ref > 0 else 0
-    return np.ascontiguousarray(Vt[r:].T)
 
 
 def _generic_configuration(robot: Robot, seed: int) -> np.ndarray:
@@ -426,11 +406,11 @@ def _describe_internal(robot: Robot, V: np.ndarray, tol: float) -> tuple[Interna
             continue
         outside = np.ones(model.nv, dtype=bool)
         outside[jm.idx_v : jm.idx_v + jm.nv] = False
-        C = _null_space(V[outside], tol, scale=1.0)  # V is orthonormal: singular values <= 1
+        C = numerics.null_space(V[outside], tol, scale=1.0)  # V orthonormal: singular values <= 1
         found.extend(V @ C[:, c] for c in range(C.shape[1]))
     if found:
         F = np.column_stack(found)
-        R = _orth(V - F @ (F.T @ V), tol)
+        R = numerics.range_space(V - F @ (F.T @ V), tol, scale=1.0)  # singular values <= 1
     else:
         R = V
     if R.shape[1]:
@@ -438,12 +418,6 @@ def _describe_internal(robot: Robot, V: np.ndarray, tol: float) -> tuple[Interna
         B = R @ np.linalg.inv(R[piv[: R.shape[1]]])
         found.extend(B[:, c] / np.linalg.norm(B[:, c]) for c in range(B.shape[1]))
     return tuple(_describe_mode(robot, v * np.sign(v[np.argmax(np.abs(v))])) for v in found)
-
-
-def _orth(A: np.ndarray, tol: float) -> np.ndarray:
-    """Orthonormal basis of the range of ``A`` (singular values above ``tol``)."""
-    U, sv, _ = np.linalg.svd(A, full_matrices=False)
-    return U[:, : int(np.sum(sv > tol))]
 
 
 def _describe_mode(robot: Robot, v: np.ndarray) -> InternalMobility:

@@ -53,6 +53,7 @@ from pkdyn.analysis.kinematics import (
     kinematic_models,
 )
 from pkdyn.model.robot import Robot
+from solvers import numerics
 
 __all__ = ["SingularityReport", "classify", "singularity_json"]
 
@@ -127,9 +128,7 @@ def _null_dirs(M: np.ndarray, n: int, tol: float) -> tuple[float, np.ndarray]:
     cond = _cond(s, n)
     sfull = np.zeros(cols)
     sfull[: s.size] = s
-    ratio = sfull / s[0] if s[0] > 0 else np.zeros(cols)
-    keep = np.flatnonzero(ratio[:n] < tol)
-    return cond, np.asarray(Vt[keep])
+    return cond, np.asarray(Vt[min(n, numerics.rank_of(sfull, tol)) : n])
 
 
 def _platform_relations(robot: Robot, km: KinematicModels) -> np.ndarray:
@@ -140,7 +139,7 @@ def _platform_relations(robot: Robot, km: KinematicModels) -> np.ndarray:
     if r6 is None:
         home = kinematic_models(robot, robot.q_home)
         ref = _relations(home.Jc, home.J6, a, p)
-        r6 = int(np.sum(ref.s > SINGULAR_TOL * max(float(ref.s[0]), 1e-300))) if ref.s.size else 0
+        r6 = numerics.rank_of(ref.s, SINGULAR_TOL)
         _PLATFORM_RELATIONS[id(robot)] = r6
         weakref.finalize(robot, _PLATFORM_RELATIONS.pop, id(robot), None)
     if rel.R.size == 0:

@@ -36,6 +36,7 @@ from pkdyn.analysis.kinematics import SINGULAR_TOL, NearSingularityWarning, kine
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from solvers import numerics
 
 __all__ = [
     "StaticsResult",
@@ -168,7 +169,7 @@ def static_equilibrium(
     S_T = np.zeros((nv, n_a))
     S_T[km.actuated_v, np.arange(n_a)] = 1.0
     K = np.hstack([S_T, km.Jc.T])
-    sol, *_ = np.linalg.lstsq(K, rhs, rcond=1e-12)
+    sol = numerics.lstsq(K, rhs, 1e-12)
     residual = float(np.linalg.norm(K @ sol - rhs))
     scale = max(float(np.linalg.norm(rhs)), 1e-300)
     if residual > EQUILIBRIUM_TOL * scale + 1e-12:

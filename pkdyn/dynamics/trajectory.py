@@ -50,6 +50,7 @@ from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.pose import pose_to_vector
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
+from solvers import numerics
 
 __all__ = [
     "TRAJECTORIES",
@@ -382,10 +383,8 @@ def _platform_drift(robot: Robot, q: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 def _lstsq(K: np.ndarray, b: np.ndarray, tol: float) -> tuple[np.ndarray, float, np.ndarray]:
     """Minimum-norm solution, its residual and the null space of ``K``."""
-    U, s, Vt = np.linalg.svd(K)
-    r = int(np.sum(s > tol * max(float(s[0]), 1e-300))) if s.size else 0
-    x = Vt[:r].T @ ((U[:, :r].T @ b) / s[:r])
-    return x, float(np.max(np.abs(K @ x - b), initial=0.0)), Vt[r:].T
+    x, N = numerics.lstsq_null(K, b, tol)
+    return x, float(np.max(np.abs(K @ x - b), initial=0.0)), N
 
 
 def map_task_trajectory(
@@ -448,7 +447,7 @@ def map_task_trajectory(
                 km = kinematic_models(robot, q)
         except SingularConfigurationError as err:
             raise TrajectoryError(f"singular configuration: {err}", sample=k, time=tk) from None
-        if km.sigma_A.size and km.sigma_A[-1] <= SINGULAR_TOL * max(float(km.sigma_A[0]), 1.0):
+        if numerics.rank_of(km.sigma_A, SINGULAR_TOL, scale=1.0) < km.sigma_A.size:
             raise TrajectoryError(
                 f"parallel singularity (cond(A) = {km.cond_A:.3g}): the actuators cannot "
                 "control the platform here",
@@ -458,7 +457,8 @@ def map_task_trajectory(
         if km.A.shape[0] == km.B.shape[1]:
             # det(J_inv) = det(A) / det(B) does not depend on the basis of A and B: a change of
             # sign between samples means a singularity was crossed between them
-            sign = float(np.sign(np.linalg.det(np.linalg.lstsq(km.B, km.A, rcond=None)[0])))
+            J_inv = numerics.lstsq(km.B, km.A, numerics.machine_rtol(km.B))
+            sign = float(np.sign(np.linalg.det(J_inv)))
             if k and sign * last_sign < 0.0:
                 kind = (
                     "parallel"

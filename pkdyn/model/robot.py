@@ -12,6 +12,7 @@ from pkdyn.exceptions import PkdynError
 from pkdyn.model.description import ActuatorSpec, ClosureSpec, Description
 from pkdyn.model.families import FAMILIES
 from solvers import ClosureSet
+from solvers.numerics import rank
 
 __all__ = ["MODELLING_JOINTS", "Robot"]
 
@@ -157,7 +158,8 @@ class Robot:
 
         Args:
             q: Configuration (nq,).
-            tol: Relative singular-value threshold for the rank.
+            tol: Relative tolerance of the rank (:mod:`solvers.numerics` rule, scale 1: the
+                closure Jacobian's entries are of order one in SI units).
 
         Returns:
             Number of degrees of freedom, internal mobilities included.
@@ -167,9 +169,7 @@ class Robot:
         if self.closure_set.nc == 0:
             return self.nv
         _, J = self.closure_set.residual_and_jacobian(self.data, qq)
-        s = np.linalg.svd(J, compute_uv=False)
-        rank = int(np.sum(s > tol * max(1.0, s[0])))
-        return self.nv - rank
+        return self.nv - rank(J, tol, scale=1.0)
 
     def platform_placement(self, q: np.ndarray) -> pin.SE3:
         """World placement of the platform frame at ``q``.

@@ -49,6 +49,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError, PkdynError
 from pkdyn.model.robot import Robot
+from solvers.numerics import lstsq, machine_rtol
 
 __all__ = [
     "JointMap",
@@ -698,5 +699,5 @@ def actuator_efforts(model: Any, data: Any) -> np.ndarray:
         moment, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind
     )
     A = np.hstack([moment.T, J[eq].T])
-    x = np.linalg.lstsq(A, data.qfrc_inverse, rcond=None)[0]
+    x = lstsq(A, np.asarray(data.qfrc_inverse), machine_rtol(A))
     return np.asarray(x[: model.nu])

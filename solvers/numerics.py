@@ -1,0 +1,210 @@
+"""Rank decisions, null spaces and least squares: one cut-off rule for the whole project.
+
+**The rule.** A singular value ``s_i`` of a matrix ``A`` counts (is not zero) when
+
+    ``s_i > rtol * max(s_max, scale)``
+
+with ``s_max`` the largest singular value of ``A``. The numerical rank of ``A`` is the number of
+singular values that count; its null space is spanned by the right singular vectors of the
+others; least squares invert only the ones that count (minimum-norm solution).
+
+- ``rtol`` (relative tolerance) defaults to :data:`RTOL`; a caller that knows how accurate its
+  matrix is passes its own (the mobility analysis' ``tol``, ...) and documents it.
+- ``scale`` (default 0: the matrix is its own reference) is a magnitude the caller knows the
+  matrix is measured against: a well-scaled larger matrix this one is a block or a product of
+  (``|T|`` for ``T N`` with orthonormal ``N``), 1 for matrices of orthonormal columns or
+  Jacobians in SI units whose entries are of order one (so that a matrix that is all tiny
+  values has rank 0 instead of being judged against itself).
+- A matrix whose singular values are all zero has rank 0 (the cut-off is then 0 and no value
+  exceeds it).
+
+Everything that decides a rank (mobility, kinematic models, singularities, trajectory mapping,
+constrained inverse dynamics, state projection) goes through this module. Robot-agnostic (numpy
+only).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "RTOL",
+    "cutoff",
+    "left_null_space",
+    "lstsq",
+    "lstsq_null",
+    "machine_rtol",
+    "null_space",
+    "range_space",
+    "rank",
+    "rank_of",
+]
+
+RTOL = 1e-9
+"""Default relative tolerance of the cut-off rule (closure Jacobians assembled to ~1e-12 and of
+order one in SI units sit well above it; exact rank losses fall to ~1e-15 below it)."""
+
+
+def machine_rtol(A: np.ndarray) -> float:
+    """``eps * max(m, n)``: the relative tolerance of round-off alone (numpy's default).
+
+    Args:
+        A: Matrix (m, n).
+
+    Returns:
+        The tolerance.
+
+    """
+    return float(np.finfo(float).eps * max(A.shape[-2:], default=1))
+
+
+def cutoff(s: np.ndarray, rtol: float = RTOL, scale: float = 0.0) -> float:
+    """The threshold ``rtol * max(s_max, scale)`` of singular values ``s`` (see the module).
+
+    Args:
+        s: Singular values, largest first (k,).
+        rtol: Relative tolerance.
+        scale: Reference magnitude (0: ``s_max`` alone).
+
+    Returns:
+        Singular values above this count.
+
+    """
+    s_max = float(s[0]) if s.size else 0.0
+    return rtol * max(s_max, scale)
+
+
+def rank_of(s: np.ndarray, rtol: float = RTOL, scale: float = 0.0) -> int:
+    """Numerical rank from singular values ``s`` (largest first).
+
+    Args:
+        s: Singular values (k,).
+        rtol: Relative tolerance.
+        scale: Reference magnitude (0: ``s_max`` alone).
+
+    Returns:
+        The number of singular values above :func:`cutoff`.
+
+    """
+    if s.size == 0:
+        return 0
+    return int(np.count_nonzero(s > cutoff(s, rtol, scale)))
+
+
+def rank(A: np.ndarray, rtol: float = RTOL, scale: float = 0.0) -> int:
+    """Numerical rank of ``A`` (m, n).
+
+    Args:
+        A: Matrix (m, n).
+        rtol: Relative tolerance.
+        scale: Reference magnitude (0: ``s_max`` alone).
+
+    Returns:
+        The rank.
+
+    """
+    if A.size == 0:
+        return 0
+    return rank_of(np.linalg.svd(A, compute_uv=False), rtol, scale)
+
+
+def null_space(A: np.ndarray, rtol: float = RTOL, scale: float = 0.0) -> np.ndarray:
+    """Orthonormal basis of the null space of ``A`` (m, n).
+
+    Args:
+        A: Matrix (m, n); no rows gives the identity.
+        rtol: Relative tolerance.
+        scale: Reference magnitude (0: ``s_max`` alone).
+
+    Returns:
+        Basis (n, n - rank) as columns.
+
+    """
+    n = A.shape[1]
+    if A.shape[0] == 0:
+        return np.eye(n)
+    _, s, Vt = np.linalg.svd(A)
+    return np.ascontiguousarray(Vt[rank_of(s, rtol, scale) :].T)
+
+
+def left_null_space(A: np.ndarray, rtol: float = RTOL, scale: float = 0.0) -> np.ndarray:
+    """Orthonormal basis of the left null space of ``A`` (m, n): rows ``w`` with ``w A = 0``.
+
+    Args:
+        A: Matrix (m, n); no columns gives the identity.
+        rtol: Relative tolerance.
+        scale: Reference magnitude (0: ``s_max`` alone).
+
+    Returns:
+        Basis (m - rank, m) as rows.
+
+    """
+    m = A.shape[0]
+    if A.shape[1] == 0:
+        return np.eye(m)
+    U, s, _ = np.linalg.svd(A, full_matrices=True)
+    return np.asarray(U[:, rank_of(s, rtol, scale) :].T)
+
+
+def range_space(A: np.ndarray, rtol: float = RTOL, scale: float = 0.0) -> np.ndarray:
+    """Orthonormal basis of the range (column space) of ``A`` (m, n).
+
+    Args:
+        A: Matrix (m, n).
+        rtol: Relative tolerance.
+        scale: Reference magnitude (0: ``s_max`` alone).
+
+    Returns:
+        Basis (m, rank) as columns.
+
+    """
+    U, s, _ = np.linalg.svd(A, full_matrices=False)
+    return np.asarray(U[:, : rank_of(s, rtol, scale)])
+
+
+def lstsq(A: np.ndarray, b: np.ndarray, rtol: float = RTOL, scale: float = 0.0) -> np.ndarray:
+    """Minimum-norm least-squares solution of ``A x = b``, small singular values cut off.
+
+    Args:
+        A: Matrix (m, n).
+        b: Right-hand side (m,) or (m, k).
+        rtol: Relative tolerance.
+        scale: Reference magnitude (0: ``s_max`` alone).
+
+    Returns:
+        ``x`` (n,) or (n, k).
+
+    """
+    return _lstsq(A, b, rtol, scale, False)[0]
+
+
+def lstsq_null(
+    A: np.ndarray, b: np.ndarray, rtol: float = RTOL, scale: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`lstsq` and the null space of ``A`` from the same decomposition.
+
+    Args:
+        A: Matrix (m, n).
+        b: Right-hand side (m,) or (m, k).
+        rtol: Relative tolerance.
+        scale: Reference magnitude (0: ``s_max`` alone).
+
+    Returns:
+        ``(x, N)``: the solution and an orthonormal basis (n, n - rank) of the null space.
+
+    """
+    return _lstsq(A, b, rtol, scale, True)
+
+
+def _lstsq(
+    A: np.ndarray, b: np.ndarray, rtol: float, scale: float, full: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    n = A.shape[1]
+    bb = np.asarray(b, dtype=float)
+    if A.shape[0] == 0:
+        return np.zeros((n,) + bb.shape[1:]), np.eye(n)
+    U, s, Vt = np.linalg.svd(A, full_matrices=full)
+    r = rank_of(s, rtol, scale)
+    y = U[:, :r].T @ bb
+    y = y / (s[:r] if bb.ndim == 1 else s[:r, None])
+    return Vt[:r].T @ y, np.ascontiguousarray(Vt[r:].T)
