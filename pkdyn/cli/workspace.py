@@ -53,7 +53,7 @@ def _cmd_clavel(args: argparse.Namespace, robot: Any) -> None:
     p = robot.params
     cf = clavel_closed_form(p, args.gamma_max, args.ab_min)
     nu, v_ws = clavel_numeric(
-        p, args.gamma_max, args.ab_min, rays=args.rays, progress=not args.json
+        p, args.gamma_max, args.ab_min, rays=args.rays, progress=False if args.json else None
     )
     numeric = nu.as_json()
     numeric["V_workspace"] = v_ws
@@ -90,7 +90,7 @@ def _translation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], 
         limits=args.limits,
         margin=args.margin,
         method=args.method,
-        progress=not args.json,
+        progress=False if args.json else None,
     )
     if args.plot:
         from pkdyn.plotting.workspace import plot_translation_workspace
@@ -104,7 +104,12 @@ def _orientation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], 
 
     if args.mel:
         study = mel_study(
-            robot, args.center, args.vector, n1=args.n1, n2=args.n2, progress=not args.json
+            robot,
+            args.center,
+            args.vector,
+            n1=args.n1,
+            n2=args.n2,
+            progress=False if args.json else None,
         )
         cases = {name: ow.as_json() for name, ow in study.items()}
         payload = dict(list(cases.values())[-1])
@@ -131,7 +136,7 @@ def _orientation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], 
         n2=args.n2,
         limits=args.limits,
         margin=args.margin,
-        progress=not args.json,
+        progress=False if args.json else None,
     )
     if args.plot:
         from pkdyn.plotting.workspace import plot_orientation_workspace
@@ -149,7 +154,7 @@ def _dextrous(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], str
         step=args.step,
         samples=args.samples,
         joint_limits=args.joint_limits,
-        progress=not args.json,
+        progress=False if args.json else None,
     )
     if args.plot:
         from pkdyn.plotting.workspace import plot_translation_workspace

@@ -141,7 +141,8 @@ def inverse_dynamics(
         limits: Bound the efforts by the actuators' effort limits (URDF ``effort``).
         weights: Effort weights for redundant actuation (default ``1 / effort_limit^2`` when
             limits are finite, else ones).
-        progress: Show a progress bar (default: > 2000 samples and stderr is a terminal).
+        progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) shows
+            it when stderr is a terminal and there are more than 2000 samples.
 
     Returns:
         Efforts, closure forces, residuals and energies per sample.

@@ -187,7 +187,8 @@ def size(
             closures.
         payload: Point-mass payload at the platform frame origin [kg].
         wrench: Platform wrench, see :func:`pkdyn.dynamics.inverse_dynamics`.
-        progress: Progress bar (see :func:`pkdyn.dynamics.inverse_dynamics`).
+        progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) as
+            :func:`pkdyn.dynamics.inverse_dynamics` decides.
 
     Returns:
         The figures per actuator and the time series behind them.

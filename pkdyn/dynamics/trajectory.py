@@ -405,8 +405,8 @@ def map_task_trajectory(
         q_init: Configuration near the first sample, choosing the assembly mode (default:
             ``robot.q_home``).
         check_limits: Raise if an actuator leaves its position or velocity limits.
-        progress: Show a progress bar (default: when the trajectory has > 2000 samples and
-            stderr is a terminal).
+        progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) shows
+            it when stderr is a terminal and there are more than 2000 samples.
 
     Returns:
         The joint trajectory.

@@ -342,7 +342,8 @@ def analyse(
         phases: From :func:`pkdyn.tripod.scenario.plan_scenario`.
         stride: Evaluate the singularity margin every ``stride`` samples (and at each phase's
             last sample).
-        progress: Show a progress bar over the phases (default: when stderr is a terminal).
+        progress: Progress bar over the phases: ``True`` / ``False`` force it on / off, ``None``
+            (default) shows it when stderr is a terminal.
 
     Returns:
         The report.
@@ -390,7 +391,8 @@ def run_scenario(
         robot: The library tripod, loaded with its collision geometry.
         plan: Scenario parameters.
         stride: Singularity-margin sampling stride (see :func:`analyse`).
-        progress: Progress bars (default: when stderr is a terminal).
+        progress: Progress bars: ``True`` / ``False`` force them on / off, ``None`` (default)
+            shows them when stderr is a terminal.
 
     Returns:
         The report.

@@ -40,9 +40,7 @@ closures, the clamps and the locks to second order.
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -60,6 +58,7 @@ from pkdyn.library import tripod
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.pose import pose_to_vector
 from pkdyn.model.robot import Robot
+from pkdyn.progress import progress_steps
 from pkdyn.tripod.machining import MachiningPlan, machining_task
 from pkdyn.tripod.modes import (
     BRANCHES,
@@ -348,7 +347,8 @@ def plan_scenario(
     Args:
         robot: The library tripod at its home configuration (``pkdyn.load("tripod")``).
         plan: Scenario parameters (default :class:`WalkPlan`).
-        progress: Show a progress bar over the phases (default: when stderr is a terminal).
+        progress: Progress bar over the phases: ``True`` / ``False`` force it on / off, ``None``
+            (default) shows it when stderr is a terminal.
 
     Returns:
         The phases in order; each ends where the next starts, at rest.
@@ -372,20 +372,12 @@ def plan_scenario(
     t0 = 0.0
     step = np.array(plan.step, dtype=float)
     n_phases = plan.cycles * (8 if plan.machining is not None else 7)
-    bar: Any = None
-    if progress is None:
-        progress = sys.stderr.isatty()
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=n_phases, desc="tripod scenario", unit="phase")
 
     def add(phase: Phase) -> np.ndarray:
         nonlocal t0
         phases.append(phase)
         t0 += float(phase.trajectory.t[-1])
-        if bar is not None:
-            bar.update(1)
+        advance()
         return np.array(phase.trajectory.q[-1])
 
     def move_nacelle(target: pin.SE3, q: np.ndarray) -> np.ndarray:
@@ -399,7 +391,7 @@ def plan_scenario(
         jt = map_task_trajectory(r, task, q_init=q, check_limits=False, progress=False)
         return add(Phase("reconfiguration", pp_mode(), stance, r, jt, t0, planned_end=target))
 
-    try:
+    with progress_steps(n_phases, "tripod scenario", "phase", progress) as advance:
         for _ in range(plan.cycles):
             if plan.machining is not None:
                 r = mode_robot(robot, stance, pp_mode(), q)
@@ -434,7 +426,4 @@ def plan_scenario(
                 )
                 stance = landed
             q = move_nacelle(station_home(p, stance), q)
-    finally:
-        if bar is not None:
-            bar.close()
     return phases

@@ -48,7 +48,8 @@ def singularity_labels(
     Args:
         robot: Robot with a platform.
         Q: Assembled configurations (N, nq).
-        progress: Progress bar (default: for long runs on a terminal).
+        progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) shows
+            it when stderr is a terminal and there are at least 200 samples.
 
     Returns:
         Labels (N,) in ``REGULAR, NEAR, SINGULAR`` and the kind of each configuration
@@ -90,7 +91,18 @@ def closest_pair(robot: Robot, q: np.ndarray) -> tuple[str, str, float]:
 def closest_pairs(
     robot: Robot, Q: np.ndarray, progress: bool | None = None
 ) -> list[tuple[str, str, float]]:
-    """:func:`closest_pair` at each configuration (N, nq) of a trajectory."""
+    """:func:`closest_pair` at each configuration of a trajectory.
+
+    Args:
+        robot: The robot, loaded with geometry.
+        Q: Configurations (N, nq).
+        progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) shows
+            it when stderr is a terminal and there are at least 200 samples.
+
+    Returns:
+        ``(body_a, body_b, distance [m])`` per configuration.
+
+    """
     checker = CollisionChecker(robot)
     out = []
     for q in bar(Q, "distances", "sample", progress, min_items=200):

@@ -328,7 +328,9 @@ class Scene:
             closest: Colour the two collision objects closest to each other at each sample.
             max_rate: At most this many keyframes per second [1/s].
             loop: Repeat forever (else play once and stop on the last sample).
-            progress: Progress bar for the per-sample analyses (default: long runs on a tty).
+            progress: Progress bar of the per-sample analyses: ``True`` / ``False`` force it on /
+                off, ``None`` (default) shows it when stderr is a terminal and there are at least
+                200 samples.
 
         Returns:
             Indices of the samples used as keyframes.

@@ -29,7 +29,6 @@ of the workspace) and the complete prism from the samples by bisection.
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -37,6 +36,7 @@ import numpy as np
 
 from pkdyn.closed_form.delta import THETA, DeltaGeometry, elbow_points, inverse
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.progress import progress_steps
 
 __all__ = [
     "GAMMA_MAX",
@@ -298,7 +298,7 @@ def clavel_numeric(
     heights: int = 100,
     tol: float = 1e-10,
     refine: bool = True,
-    progress: bool = False,
+    progress: bool | None = None,
 ) -> tuple[ClavelFigures, float]:
     """Clavel's figures measured on the mechanism by sampling with the same limits.
 
@@ -321,7 +321,8 @@ def clavel_numeric(
         tol: Bisection and pattern-search tolerance [m].
         refine: Refine ``zh``, ``zb`` and the lowest point by pattern search (else: the best
             column sample).
-        progress: Show a progress bar.
+        progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default)
+            shows it when stderr is a terminal.
 
     Returns:
         ``(figures, V_workspace)``: the measured figures and the volume of the whole workspace
@@ -332,55 +333,52 @@ def clavel_numeric(
         PkdynError: No valid position on the axis.
 
     """
-    from tqdm import tqdm
-
     _check_limits(gamma_max, ab_min)
     if rays < 12 or fractions < 3 or heights < 20:
         raise InvalidInputError("sampling", "need rays >= 12, fractions >= 3, heights >= 20")
     smp = _Sampler(g, gamma_max, ab_min, heights, tol)
     if not smp.columns(np.zeros((1, 2))).any():
         raise PkdynError("no valid nacelle position on the axis with these limits")
-    bar = tqdm(total=5, desc="Clavel workspace", disable=not (progress and sys.stderr.isatty()))
-    phi = 2.0 * np.pi * np.arange(rays) / rays
-    r_edge = smp.edge_radius(phi)
-    bar.update()
-    x, y = r_edge * np.cos(phi), r_edge * np.sin(phi)
-    S = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
-    D = 2.0 * float(r_edge.min())
-    f = np.linspace(0.0, 1.0, fractions)
-    rad = r_edge[:, None] * f[None, :]
-    xy = np.stack([rad * np.cos(phi)[:, None], rad * np.sin(phi)[:, None]], axis=-1)
-    z_top, z_bot, runs = smp.interval(xy.reshape(-1, 2))
-    bar.update()
-    if np.any(runs > 1):
-        import warnings
+    with progress_steps(5, "Clavel workspace", "stage", progress) as advance:
+        phi = 2.0 * np.pi * np.arange(rays) / rays
+        r_edge = smp.edge_radius(phi)
+        advance()
+        x, y = r_edge * np.cos(phi), r_edge * np.sin(phi)
+        S = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+        D = 2.0 * float(r_edge.min())
+        f = np.linspace(0.0, 1.0, fractions)
+        rad = r_edge[:, None] * f[None, :]
+        xy = np.stack([rad * np.cos(phi)[:, None], rad * np.sin(phi)[:, None]], axis=-1)
+        z_top, z_bot, runs = smp.interval(xy.reshape(-1, 2))
+        advance()
+        if np.any(runs > 1):
+            import warnings
 
-        warnings.warn(
-            f"{int(np.sum(runs > 1))} columns have several valid height intervals; the workspace "
-            "volume counts their envelope",
-            stacklevel=2,
-        )
-    # whole-workspace volume: int dphi r(phi)^2 int f (z_top - z_bot) df (trapezoids)
-    length = (z_top - z_bot).reshape(rays, fractions)
-    inner = np.trapezoid(f[None, :] * length, f, axis=1)
-    V_ws = float(np.sum(r_edge**2 * inner) * 2.0 * np.pi / rays)
-    dphi, df = 2.0 * np.pi / rays, 1.0 / (fractions - 1)
-    found = []
-    for which, arr, pick in (
-        ("top", z_top, np.argmin),
-        ("bottom", z_bot, np.argmax),
-        ("lowest", z_bot, np.argmin),
-    ):
-        i = int(pick(arr))
-        if not refine:
-            found.append(float(arr[i]))
-            bar.update()
-            continue
-        found.append(
-            smp.extremum(float(phi[i // fractions]), float(f[i % fractions]), dphi, df, which)
-        )
-        bar.update()
-    bar.close()
+            warnings.warn(
+                f"{int(np.sum(runs > 1))} columns have several valid height intervals; the "
+                "workspace volume counts their envelope",
+                stacklevel=2,
+            )
+        # whole-workspace volume: int dphi r(phi)^2 int f (z_top - z_bot) df (trapezoids)
+        length = (z_top - z_bot).reshape(rays, fractions)
+        inner = np.trapezoid(f[None, :] * length, f, axis=1)
+        V_ws = float(np.sum(r_edge**2 * inner) * 2.0 * np.pi / rays)
+        dphi, df = 2.0 * np.pi / rays, 1.0 / (fractions - 1)
+        found = []
+        for which, arr, pick in (
+            ("top", z_top, np.argmin),
+            ("bottom", z_bot, np.argmax),
+            ("lowest", z_bot, np.argmin),
+        ):
+            i = int(pick(arr))
+            if not refine:
+                found.append(float(arr[i]))
+                advance()
+                continue
+            found.append(
+                smp.extremum(float(phi[i // fractions]), float(f[i % fractions]), dphi, df, which)
+            )
+            advance()
     zh, zb, z_low = found
     H = max(zh - zb, 0.0)
     return ClavelFigures(D=D, S=S, H=H, Hmax=zh - z_low, V=S * H, zh=zh, zb=zb, la=g.la), V_ws

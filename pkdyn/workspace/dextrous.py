@@ -17,7 +17,6 @@ needs). Leg interference is left out, as in the report ("plus délicate").
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Sequence
 from typing import Any
 
@@ -26,6 +25,7 @@ import numpy as np
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.description import ConeLimit, PyramidLimit
 from pkdyn.model.robot import Robot
+from pkdyn.progress import progress as progress_bar
 from pkdyn.workspace.legs import HexapodLegs
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, pyramid_normals
 from pkdyn.workspace.translation import TranslationWorkspace, _grid_axes
@@ -77,7 +77,7 @@ def dextrous_workspace(
     step: float | None = None,
     samples: int = 41,
     joint_limits: bool = False,
-    progress: bool = True,
+    progress: bool | None = None,
 ) -> TranslationWorkspace:
     """Sample Merlet's dextrous workspace on a grid.
 
@@ -88,7 +88,8 @@ def dextrous_workspace(
         step: Grid spacing [m]; default: ``samples`` per axis.
         samples: Samples per axis when ``step`` is not given.
         joint_limits: Also keep the base joints inside their cones or pyramids.
-        progress: Progress bar (on a terminal only).
+        progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default)
+            shows it when stderr is a terminal.
 
     Returns:
         A :class:`pkdyn.workspace.translation.TranslationWorkspace` whose reachable samples are the
@@ -99,8 +100,6 @@ def dextrous_workspace(
         InvalidInputError: Bad box or step.
 
     """
-    from tqdm import tqdm
-
     legs = HexapodLegs.from_robot(robot, "the dextrous workspace")
     rb = np.linalg.norm(legs.B, axis=1)
     if bounds is None:
@@ -118,8 +117,7 @@ def dextrous_workspace(
     xs, ys, zs = _grid_axes(box, step, samples, (0, 1, 2), np.zeros(3))
     codes = np.empty((xs.size, ys.size, zs.size), dtype=np.int8)
     X, Y = np.meshgrid(xs, ys, indexing="ij")
-    show = progress and sys.stderr.isatty()
-    for k in tqdm(range(zs.size), desc="dextrous workspace", disable=not show, leave=False):
+    for k in progress_bar(range(zs.size), "dextrous workspace", "plane", progress, leave=False):
         C = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, zs[k])])
         codes[:, :, k] = dextrous_violations(legs, C, joint_limits).reshape(X.shape)
     kinds = ("reach", "stroke", "joint") if joint_limits else ("reach", "stroke")

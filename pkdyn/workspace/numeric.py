@@ -11,8 +11,6 @@ against it.
 
 from __future__ import annotations
 
-import sys
-
 import numpy as np
 import pinocchio as pin
 
@@ -20,6 +18,7 @@ from pkdyn.analysis.collisions import CollisionChecker
 from pkdyn.exceptions import AssemblyError
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.robot import Robot
+from pkdyn.progress import progress as progress_bar
 from pkdyn.workspace.limits import (
     LIMIT_KINDS,
     REACHABLE,
@@ -70,14 +69,18 @@ class NumericEvaluator(PoseEvaluator):
 
     Args:
         robot: Any robot with a platform frame (with geometry for ``interference``).
-        progress: Show a progress bar over the poses (only on a terminal).
+        progress: Progress bar over the poses: ``True`` / ``False`` force it on / off,
+            ``None`` shows it when stderr is a terminal (default off: the workspace samplers
+            show their own).
         warm_start: Start each solve from the previous solution (then from ``q_home``).
 
     """
 
     method = "numeric (inverse geometric model and coal, pose by pose)"
 
-    def __init__(self, robot: Robot, progress: bool = False, warm_start: bool = True) -> None:
+    def __init__(
+        self, robot: Robot, progress: bool | None = False, warm_start: bool = True
+    ) -> None:
         super().__init__(robot)
         self.progress = progress
         self.warm_start = warm_start
@@ -121,12 +124,9 @@ class NumericEvaluator(PoseEvaluator):
         self, P: np.ndarray, R: np.ndarray, kinds: tuple[str, ...], margin: float
     ) -> np.ndarray:
         """See :meth:`PoseEvaluator.violations`."""
-        from tqdm import tqdm
-
         P = np.atleast_2d(np.asarray(P, dtype=float))
         out = np.full(P.shape[0], REACHABLE, dtype=np.int8)
-        show = self.progress and sys.stderr.isatty()
-        for k in tqdm(range(P.shape[0]), desc="poses", disable=not show, leave=False):
+        for k in progress_bar(range(P.shape[0]), "poses", "pose", self.progress, leave=False):
             out[k] = self.classify_pose(pin.SE3(R, P[k]), kinds, margin)
         return out
 

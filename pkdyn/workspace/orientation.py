@@ -23,7 +23,6 @@ but not the same platform orientations, hence Merlet's two sphere maps, for ``θ
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -34,6 +33,7 @@ import pinocchio as pin
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.description import PyramidLimit
 from pkdyn.model.robot import Robot
+from pkdyn.progress import progress as progress_bar
 from pkdyn.workspace.legs import HexapodLegs
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, check_kinds, pyramid_normals
 
@@ -244,7 +244,7 @@ def orientation_workspace(
     limits: Sequence[str] = ("stroke", "joint", "interference"),
     margin: float = 0.0,
     tol: float = 1e-10,
-    progress: bool = True,
+    progress: bool | None = None,
 ) -> OrientationWorkspace:
     """Merlet's orientation workspace of a leg robot at a fixed point.
 
@@ -261,7 +261,8 @@ def orientation_workspace(
         limits: Kinds checked: ``stroke``, ``joint``, ``interference``.
         margin: Safety distance for interference [m].
         tol: Bisection tolerance on the arc ends [rad].
-        progress: Progress bar (on a terminal only).
+        progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default)
+            shows it when stderr is a terminal.
 
     Returns:
         The orientation workspace.
@@ -271,8 +272,6 @@ def orientation_workspace(
         PkdynError: Not a leg robot, or interference without collision geometry.
 
     """
-    from tqdm import tqdm
-
     legs = HexapodLegs.from_robot(robot, "the orientation workspace")
     kinds = check_kinds(limits)
     if "interference" in kinds and not np.any(legs.radius > 0):
@@ -293,8 +292,7 @@ def orientation_workspace(
     t2 = 2 * math.pi * np.arange(n2) / n2
     codes = np.empty((n1, n2), dtype=np.int8)
     arcs: list[list[tuple[float, float]]] = []
-    show = progress and sys.stderr.isatty()
-    for i in tqdm(range(n1), desc="orientation workspace", disable=not show, leave=False):
+    for i in progress_bar(range(n1), "orientation workspace", "row", progress, leave=False):
         R = rotations(x1, x2, R0, np.full(n2, t1[i]), t2)
         codes[i] = _codes(legs, C, R, kinds, margin)
         arcs.append(_arcs(legs, C, x1, x2, R0, float(t1[i]), t2, kinds, margin, tol))
@@ -465,7 +463,7 @@ def mel_study(
     N: Sequence[float] = (0.0, 0.0, 1.0),
     n1: int = 90,
     n2: int = 360,
-    progress: bool = True,
+    progress: bool | None = None,
 ) -> dict[str, OrientationWorkspace]:
     """Merlet's MEL prototype study: the platform normal under rotations about x then z.
 
@@ -479,7 +477,8 @@ def mel_study(
         N: Platform-fixed vector (default the platform normal).
         n1: Samples of theta1.
         n2: Samples of theta2.
-        progress: Progress bar.
+        progress: Progress bars: ``True`` / ``False`` force them on / off, ``None`` (default)
+            shows them when stderr is a terminal.
 
     Returns:
         Case name -> orientation workspace, in the order of :data:`MEL_CASES`.

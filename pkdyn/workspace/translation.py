@@ -14,7 +14,6 @@ area for planar robots), the bounding box, planar slices and the boundary sample
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -24,6 +23,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.robot import Robot
+from pkdyn.progress import progress as progress_bar
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, check_kinds
 
 __all__ = [
@@ -192,7 +192,9 @@ structure. A factory returns ``None`` when the robot's parameters or structure d
 closed form; the robot then takes the numeric path."""
 
 
-def evaluator_for(robot: Robot, method: str = "auto", progress: bool = False) -> PoseEvaluator:
+def evaluator_for(
+    robot: Robot, method: str = "auto", progress: bool | None = False
+) -> PoseEvaluator:
     """The pose evaluator of a robot.
 
     Args:
@@ -258,7 +260,7 @@ def translation_workspace(
     limits: Sequence[str] = ("stroke", "joint", "interference"),
     margin: float = 0.0,
     method: str = "auto",
-    progress: bool = True,
+    progress: bool | None = None,
     evaluator: PoseEvaluator | None = None,
 ) -> TranslationWorkspace:
     """Sample the constant-orientation workspace on a grid.
@@ -273,7 +275,8 @@ def translation_workspace(
         limits: Kinds checked besides reach: ``stroke``, ``joint``, ``interference``.
         margin: Safety distance for interference [m].
         method: ``auto``, ``closed`` or ``numeric`` (see :func:`evaluator_for`).
-        progress: Progress bar (on a terminal only).
+        progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default)
+            shows it when stderr is a terminal.
         evaluator: Use this evaluator instead of choosing one.
 
     Returns:
@@ -284,8 +287,6 @@ def translation_workspace(
         PkdynError: The robot has no platform frame.
 
     """
-    from tqdm import tqdm
-
     if robot.platform_frame is None:
         raise PkdynError(f"{robot.name} declares no platform frame: no workspace to sample")
     rpy_a = np.asarray(rpy, dtype=float)
@@ -303,8 +304,7 @@ def translation_workspace(
     home = robot.platform_placement(robot.q_home).translation
     xs, ys, zs = _grid_axes(box, step, samples, dims, home)
     codes = np.empty((xs.size, ys.size, zs.size), dtype=np.int8)
-    show = progress and sys.stderr.isatty()
-    for k in tqdm(range(zs.size), desc="workspace", disable=not show, leave=False):
+    for k in progress_bar(range(zs.size), "workspace", "plane", progress, leave=False):
         codes[:, :, k] = ev.grid(xs, ys, float(zs[k]), R, kinds, margin)
     return TranslationWorkspace(
         robot=robot.name,
