@@ -24,20 +24,26 @@ def test_info_json_keys(capsys):
     info = json.loads(out)
     assert set(info) >= {"name", "nq", "nv", "dof", "actuated", "loops", "closures"}
     assert info["actuated"] == ["arm1", "arm2", "arm3"]
+    assert info["actuators"] == ["motor1", "motor2", "motor3"]
     assert info["loops"] == 5 and info["dof"] == 9
     assert {c["type"] for c in info["closures"]} == {"point"}
 
 
-def test_ik_then_fk_round_trip(capsys):
-    code, out, _ = run(capsys, "ik", "delta", "--pose", "0.05", "-0.02", "-0.4", "--json")
+@pytest.mark.parametrize(
+    ("inverse", "forward", "option"),
+    [("inverse-geometry", "forward-geometry", "--qa"), ("ik", "fk", "--q")],
+)
+def test_ik_then_fk_round_trip(capsys, inverse, forward, option):
+    code, out, _ = run(capsys, inverse, "delta", "--pose", "0.05", "-0.02", "-0.4", "--json")
     assert code == 0
-    q = json.loads(out)["q"]
+    qa = json.loads(out)["qa"]
     alpha, _ = cf.inverse(pkdyn.load("delta", geometry=False).params, np.array([0.05, -0.02, -0.4]))
-    np.testing.assert_allclose(q, alpha[0], atol=1e-9)
-    code, out, _ = run(capsys, "fk", "delta", "--q", *map(repr, q), "--json")
+    np.testing.assert_allclose(qa, alpha[0], atol=1e-9)
+    code, out, _ = run(capsys, forward, "delta", option, *map(repr, qa), "--json")
     fk = json.loads(out)
     np.testing.assert_allclose(fk["position"], [0.05, -0.02, -0.4], atol=1e-9)
-    assert set(fk) >= {"position", "rpy", "q_full"}
+    assert set(fk) >= {"position", "rpy", "q", "qa"}
+    assert len(fk["q"]) == pkdyn.load("delta", geometry=False).nq
 
 
 def test_param_override_changes_the_robot(capsys):

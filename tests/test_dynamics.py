@@ -72,7 +72,7 @@ def test_power_balance_along_the_trajectory(mapped, name):
     robot, jt = mapped[name]
     loaded = with_payload(robot, 1.0)
     ef = inverse_dynamics(loaded, jt)
-    work, idx = _simpson_work(jt.t, np.sum(ef.tau * jt.qa_d, axis=1))
+    work, idx = _simpson_work(jt.t, np.sum(ef.tau * jt.qa_dot, axis=1))
     dE = ef.energy[idx] - ef.energy[0]
     exchanged = max(float(np.max(np.abs(work))), float(np.max(ef.kinetic)))
     assert exchanged > 1e-3  # something moves
@@ -131,7 +131,7 @@ def test_wrench_does_the_work_it_should(mapped):
     robot, jt = mapped["gough_stewart"]
     F = np.array([15.0, -10.0, 40.0, 0.0, 0.0, 0.0])
     ef = inverse_dynamics(robot, jt, wrench=F)
-    work, idx = _simpson_work(jt.t, np.sum(ef.tau * jt.qa_d, axis=1))
+    work, idx = _simpson_work(jt.t, np.sum(ef.tau * jt.qa_dot, axis=1))
     pos = np.array([robot.platform_placement(q).translation for q in jt.q])
     w_force = (pos[idx] - pos[0]) @ F[:3]
     dE = ef.energy[idx] - ef.energy[0]
@@ -148,7 +148,7 @@ def test_wrench_does_the_work_it_should(mapped):
 def test_sizing_figures_from_the_efforts(mapped):
     robot, jt = mapped["delta"]
     res = size(robot, jt, payload=1.0)
-    tau, qd, t = res.efforts.tau, jt.qa_d, jt.t
+    tau, qd, t = res.efforts.tau, jt.qa_dot, jt.t
     fine = np.linspace(t[0], t[-1], 20001)  # RMS by an independent (interpolated) quadrature
     for i, a in enumerate(res.actuators):
         assert a.peak == pytest.approx(np.max(np.abs(tau[:, i])))
@@ -237,14 +237,15 @@ def test_cli_size_json_csv_plot(tmp_path, capsys):
     assert main(args) == 0
     out = json.loads(capsys.readouterr().out)
     acts = out["actuators"]
-    assert [a["name"] for a in acts] == ["arm1", "arm2", "arm3"]
+    assert [a["name"] for a in acts] == ["motor1", "motor2", "motor3"]
     for a in acts:
         assert {"name", "peak", "rms", "peak_speed", "peak_power", "limit", "margin"} <= set(a)
         assert 0 < a["rms"] < a["peak"] < a["limit"]
     with open(csv_path) as fh:
         rows = list(csv.reader(fh))
-    names = ["arm1", "arm2", "arm3"]
-    assert rows[0] == ["t"] + [f"{p}_{n}" for p in ("q", "qd", "tau") for n in names] + ["energy"]
+    names = ["motor1", "motor2", "motor3"]
+    prefixes = ("qa", "qa_dot", "tau")
+    assert rows[0] == ["t"] + [f"{p}_{n}" for p in prefixes for n in names] + ["energy"]
     assert len(rows) == 302 and float(rows[-1][0]) == pytest.approx(0.6)
     tau1 = np.array([float(r[7]) for r in rows[1:]])
     assert np.max(np.abs(tau1)) == pytest.approx(acts[0]["peak"], rel=1e-8)
@@ -280,7 +281,7 @@ def test_demo_prints_the_sizing_table():
         check=True,
     )
     out = proc.stdout
-    assert "DELTA 580" in out and "arm1" in out and "power balance" in out
+    assert "DELTA 580" in out and "motor1" in out and "power balance" in out
     assert "0.50s" in out
 
 

@@ -41,7 +41,8 @@ def test_loads_with_two_dof_at_home(robot):
     p = robot.params
     assert robot.dof() == 2
     assert robot.nv == 4
-    assert robot.actuator_names == ["proximal1", "proximal2"]
+    assert robot.actuated_joint_names == ["proximal1", "proximal2"]
+    assert robot.actuator_names == ["motor1", "motor2"]
     assert [c.kind for c in robot.closures] == ["hinge"]
     np.testing.assert_allclose(
         robot.platform_placement(robot.q_home).translation, [p.x_home, p.y_home, 0.0], atol=1e-9

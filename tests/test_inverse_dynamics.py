@@ -203,9 +203,9 @@ def test_infeasible_bounds_name_the_sample_and_the_actuator(robots):
     with pytest.raises(InfeasibleError) as err:
         inv.trajectory(Q, V, A)
     e = err.value
-    assert e.sample == 3 and e.actuator == expected and e.name == f"leg{expected + 1}"
+    assert e.sample == 3 and e.actuator == expected and e.name == f"motor{expected + 1}"
     assert e.required == pytest.approx(free.tau[3, expected])
-    assert f"sample 3: actuator 'leg{expected + 1}'" in str(e)
+    assert f"sample 3: actuator 'motor{expected + 1}'" in str(e)
 
 
 def test_infeasible_redundant_actuation_names_the_most_loaded_actuator(robots):

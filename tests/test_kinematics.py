@@ -54,7 +54,7 @@ def pose_error(robot, M0, M):
 
 
 def fd_jacobian(robot, q, h=1e-6):
-    """x_dot / q_dot_a by central differences of the direct geometric model (warm started)."""
+    """x_dot / qa_dot by central differences of the direct geometric model (warm started)."""
     qa0 = q[robot.actuated_q]
     M0 = robot.platform_placement(q)
     cols = []
@@ -70,7 +70,7 @@ def fd_jacobian(robot, q, h=1e-6):
 
 
 def fd_inverse_jacobian(robot, q, h=1e-6):
-    """q_dot_a / x_dot by central differences of the inverse geometric model."""
+    """qa_dot / x_dot by central differences of the inverse geometric model."""
     M0 = robot.platform_placement(q)
     cols = []
     for k in robot.task_rows:
@@ -113,7 +113,7 @@ def test_tripod_jacobian_matches_fk_differences(robots):
 
 @pytest.mark.parametrize("name", ROBOTS)
 def test_normalisation_and_relation(robots, name):
-    """[B, -A] has orthonormal rows, and A x_dot = B q_dot_a holds for FK differences."""
+    """[B, -A] has orthonormal rows, and A x_dot = B qa_dot holds for FK differences."""
     robot = robots[name]
     (q,) = random_configs(robot, 1, seed=14)
     km = kin.kinematic_models(robot, q)
@@ -129,13 +129,13 @@ def test_joint_velocities_respect_closures(robots, name):
     robot = robots[name]
     (q,) = random_configs(robot, 1, seed=15)
     km = kin.kinematic_models(robot, q)
-    qd_a = np.linspace(0.5, -0.3, km.n_a)
-    v = kin.joint_velocities(robot, q, qd_a)
-    np.testing.assert_allclose(v[robot.actuated_v], qd_a, atol=0)
+    qa_dot = np.linspace(0.5, -0.3, km.n_a)
+    v = kin.joint_velocities(robot, q, qa_dot)
+    np.testing.assert_allclose(v[robot.actuated_v], qa_dot, atol=0)
     if robot.closure_set.nc:
         np.testing.assert_allclose(km.Jc @ v, 0.0, atol=1e-10)
-    # the platform velocity of these joint velocities is J q_dot_a
-    np.testing.assert_allclose(km.Jx @ v, kin.platform_twist(robot, q, qd_a), atol=1e-10)
+    # the platform velocity of these joint velocities is J qa_dot
+    np.testing.assert_allclose(km.Jx @ v, kin.platform_twist(robot, q, qa_dot), atol=1e-10)
     # integrating them keeps the mechanism assembled to second order
     dt = 1e-4
     q2 = pin.integrate(robot.model, q, v * dt)
@@ -146,9 +146,9 @@ def test_joint_velocities_respect_closures(robots, name):
 def test_twist_and_rates_round_trip(robots, name):
     robot = robots[name]
     (q,) = random_configs(robot, 1, seed=16)
-    qd_a = np.random.default_rng(0).normal(size=len(robot.actuators))
-    x_dot = kin.platform_twist(robot, q, qd_a)
-    np.testing.assert_allclose(kin.actuator_rates(robot, q, x_dot), qd_a, atol=1e-9)
+    qa_dot = np.random.default_rng(0).normal(size=len(robot.actuators))
+    x_dot = kin.platform_twist(robot, q, qa_dot)
+    np.testing.assert_allclose(kin.actuator_rates(robot, q, x_dot), qa_dot, atol=1e-9)
 
 
 @pytest.mark.parametrize("name", ROBOTS)

@@ -54,7 +54,8 @@ def test_loads_with_three_dof_at_home(robot):
     p = robot.params
     assert robot.dof() == 3
     assert robot.nv == 9  # planar joint (3) + 3 x (actuated + elbow)
-    assert robot.actuator_names == ["proximal1", "proximal2", "proximal3"]
+    assert robot.actuated_joint_names == ["proximal1", "proximal2", "proximal3"]
+    assert robot.actuator_names == ["motor1", "motor2", "motor3"]
     assert [c.kind for c in robot.closures] == ["hinge"] * 3
     # the home configuration is the neutral one except for the actuated (absolute) angles
     q = robot.q_home.copy()

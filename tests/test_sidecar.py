@@ -66,7 +66,7 @@ def test_robot_yaml_next_to_the_urdf_is_picked_up():
 
 def test_actuators_from_name_mot():
     robot = pkdyn.load(FIVE_BAR, geometry=False)
-    assert robot.actuator_names == ["mot1", "mot2"]
+    assert robot.actuated_joint_names == ["mot1", "mot2"]
     assert list(robot.actuated_q) == [_idx(robot, "mot1"), _idx(robot, "mot2")]
     passive = sorted(_idx(robot, j, "idx_v") for j in ("passive1", "passive2"))
     assert sorted(robot.passive_v) == passive
@@ -106,7 +106,7 @@ def test_explicit_sidecar_6d_weld_and_regex(tmp_path):
     (cm,) = robot.constraint_models
     assert cm.type == pin.ContactType.CONTACT_6D
     assert robot.closure_set.nc == 6
-    assert robot.actuator_names == ["mot1", "mot2"]
+    assert robot.actuated_joint_names == ["mot1", "mot2"]
     A, B = _loop_frames(robot, robot.q_home)
     assert np.linalg.norm(A.translation - B.translation) < 1e-10
     np.testing.assert_allclose(A.rotation, B.rotation, atol=1e-10)
@@ -123,7 +123,7 @@ def test_yaml_with_the_urdf_stem_is_picked_up(tmp_path):
     )
     robot = pkdyn.load(path, geometry=False)
     assert [c.kind for c in robot.closures] == ["point"]
-    assert robot.actuator_names == ["mot2"]
+    assert robot.actuated_joint_names == ["mot2"]
 
 
 def test_without_sidecar_the_tree_stays_open(tmp_path):

@@ -81,7 +81,8 @@ def joint_placement(robot: pkdyn.Robot, name: str) -> pin.SE3:
 def test_loads_with_six_dof_and_actuator_order(robot):
     assert robot.nv == 6 + 3 * 8
     assert robot.dof() == 6
-    assert robot.actuator_names == [f"branch{i}_q{s}" for i in (1, 2, 3) for s in "LR"]
+    assert robot.actuated_joint_names == [f"branch{i}_q{s}" for i in (1, 2, 3) for s in "LR"]
+    assert robot.actuator_names == [f"{s}{i}" for i in (1, 2, 3) for s in "LR"]
     assert [a.name for a in robot.actuators] == ["L1", "R1", "L2", "R2", "L3", "R3"]
     for i in (1, 2, 3):
         jm = robot.model.joints[robot.model.getJointId(f"branch{i}_q2q1")]

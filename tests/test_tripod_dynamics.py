@@ -130,7 +130,7 @@ def test_be_efforts_reproduce_the_motion_in_forward_dynamics(robot, swing):
 def test_be_actuator_power_is_the_rate_of_mechanical_energy(robot, swing):
     be, jt = swing
     eff = inverse_dynamics(be, jt, progress=False)
-    power = np.sum(eff.tau * jt.qa_d, axis=1)
+    power = np.sum(eff.tau * jt.qa_dot, axis=1)
     E = eff.kinetic + eff.potential
     dt = jt.t[1] - jt.t[0]
     dE = (E[2:] - E[:-2]) / (2 * dt)

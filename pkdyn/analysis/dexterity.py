@@ -1,7 +1,7 @@
-"""Dexterity indices of the direct kinematic Jacobian ``J`` (``x_dot = J q_dot_a``).
+"""Dexterity indices of the direct kinematic Jacobian ``J`` (``x_dot = J qa_dot``).
 
 - manipulability (Yoshikawa): ``w = sqrt(det(J J^T))``, the volume of the velocity ellipsoid
-  ``{J q_dot_a : |q_dot_a| <= 1}`` [task units per actuator unit];
+  ``{J qa_dot : |qa_dot| <= 1}`` [task units per actuator unit];
 - condition number ``kappa = sigma_max / sigma_min`` of ``J`` (1: isotropic), capped at
   :data:`pkdyn.analysis.kinematics.COND_MAX`;
 - local conditioning index ``LCI = 1 / kappa`` in ``[0, 1]`` (0 at a singularity).

@@ -1,9 +1,9 @@
 """Kinematic models of any loaded robot: parallel and serial matrices, Jacobians (issue 4).
 
-Pasqui's form of a parallel robot (seed 001): ``A(x, q) x_dot = B(x, q) q_dot_a``, with ``A`` the
+Pasqui's form of a parallel robot (seed 001): ``A(x, q) x_dot = B(x, q) qa_dot``, with ``A`` the
 *parallel* matrix (``m x m``, ``m`` = number of controlled pose components) and ``B`` the
 *serial* matrix (``m x n_a``). Then ``J = A^-1 B`` (direct kinematic model,
-``x_dot = J q_dot_a``) and ``J_inv = B^-1 A`` (inverse kinematic model, ``q_dot_a = J_inv x_dot``).
+``x_dot = J qa_dot``) and ``J_inv = B^-1 A`` (inverse kinematic model, ``qa_dot = J_inv x_dot``).
 
 Task-space velocity convention (the one of :class:`solvers.FramePoseTask` at zero error):
 ``x_dot`` stacks, for the controlled components among ``(x, y, z, rx, ry, rz)``, the linear
@@ -17,17 +17,17 @@ General construction (no robot-specific code). With the closure Jacobian ``Jc`` 
 the platform task Jacobian ``Jx`` (``m x nv``), split into actuated (``_a``) and passive (``_p``)
 velocity columns, every motion satisfies::
 
-    [ Jc_a  Jc_p   0 ] [q_dot_a]
+    [ Jc_a  Jc_p   0 ] [qa_dot]
     [ Jx_a  Jx_p  -I ] [ v_p   ]  = 0
                        [ x_dot ]
 
 A left annihilator ``W = [W_c, W_x]`` of ``[Jc_p; Jx_p]`` (orthonormal basis of its left null
 space, from an SVD) eliminates the passive velocities: ``W_x x_dot = (W_c Jc_a + W_x Jx_a)
-q_dot_a``. The rows of ``W_x`` are the platform wrenches the chains can transmit (Pasqui's
+qa_dot``. The rows of ``W_x`` are the platform wrenches the chains can transmit (Pasqui's
 reciprocal screws) and those of ``W_c`` the matching closure forces. The stacked relation
 ``[B, -A] = [W_c Jc_a + W_x Jx_a, -W_x]`` may contain trivial (zero) rows, from redundant closure
 equations (e.g. planar hinges); it is compressed by a second SVD to an **orthonormal basis of its
-row space**, the ``m`` linear relations satisfied by every feasible ``(q_dot_a, x_dot)``.
+row space**, the ``m`` linear relations satisfied by every feasible ``(qa_dot, x_dot)``.
 
 Non-uniqueness: any ``(G A, G B)`` with ``G`` invertible describes the same robot. The
 normalisation used here (``[B, -A]`` with orthonormal rows, so ``A A^T + B B^T = I``) fixes
@@ -141,7 +141,7 @@ def _checked_q(robot: Robot, q: Sequence[float] | np.ndarray) -> np.ndarray:
 
 @dataclass
 class _Relations:
-    """Relations ``A x_dot = B q_dot_a`` of one row selection, before normalisation."""
+    """Relations ``A x_dot = B qa_dot`` of one row selection, before normalisation."""
 
     R: np.ndarray  # (k, n_a + m): [B, -A] rows in the W metric
     s: np.ndarray  # singular values of R
@@ -163,7 +163,7 @@ def _relations(Jc: np.ndarray, Jx: np.ndarray, a: np.ndarray, p: np.ndarray) -> 
 class KinematicModels:
     """Kinematic models of a robot at one configuration.
 
-    ``A x_dot = B q_dot_a`` with ``[B, -A]`` orthonormal rows (see the module docstring). ``J``
+    ``A x_dot = B qa_dot`` with ``[B, -A]`` orthonormal rows (see the module docstring). ``J``
     and ``J_inv`` are computed on request and raise at exactly singular configurations.
 
     Attributes:
@@ -238,7 +238,7 @@ class KinematicModels:
 
     @property
     def J(self) -> np.ndarray:
-        """Direct kinematic Jacobian (m, n_a): ``x_dot = J q_dot_a``.
+        """Direct kinematic Jacobian (m, n_a): ``x_dot = J qa_dot``.
 
         Raises:
             SingularConfigurationError: ``A`` is singular (parallel singularity).
@@ -251,7 +251,7 @@ class KinematicModels:
 
     @property
     def J_inv(self) -> np.ndarray:
-        """Inverse kinematic Jacobian (n_a, m): ``q_dot_a = J_inv x_dot``.
+        """Inverse kinematic Jacobian (n_a, m): ``qa_dot = J_inv x_dot``.
 
         Raises:
             SingularConfigurationError: ``B`` is singular (serial singularity).
@@ -264,7 +264,7 @@ class KinematicModels:
 
     @property
     def V(self) -> np.ndarray:
-        """Joint velocity map (nv, n_a): ``v = V q_dot_a`` (all coordinates, passive included).
+        """Joint velocity map (nv, n_a): ``v = V qa_dot`` (all coordinates, passive included).
 
         The passive velocities are the minimum-norm solution of the closure equations, so
         internal mobilities (e.g. the spin of the Delta's ball-jointed bars) stay at rest.
@@ -340,14 +340,14 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
 
 
 def platform_twist(
-    robot: Robot, q: Sequence[float] | np.ndarray, qd_a: Sequence[float] | np.ndarray
+    robot: Robot, q: Sequence[float] | np.ndarray, qa_dot: Sequence[float] | np.ndarray
 ) -> np.ndarray:
     """Direct kinematic model: platform velocity from actuator rates.
 
     Args:
         robot: The robot.
         q: Assembled configuration (nq,).
-        qd_a: Actuator rates in actuator order [rad/s or m/s].
+        qa_dot: Actuator rates in actuator order [rad/s or m/s].
 
     Returns:
         ``x_dot`` (m,) in the task convention (module docstring) [m/s, rad/s].
@@ -357,7 +357,7 @@ def platform_twist(
 
     """
     km = kinematic_models(robot, q)
-    return km.J @ as_finite("qd_a", qd_a, km.n_a)
+    return km.J @ as_finite("qa_dot", qa_dot, km.n_a)
 
 
 def actuator_rates(
@@ -371,7 +371,7 @@ def actuator_rates(
         x_dot: Platform velocity (m,) in the task convention [m/s, rad/s].
 
     Returns:
-        ``q_dot_a`` (n_a,) [rad/s or m/s].
+        ``qa_dot`` (n_a,) [rad/s or m/s].
 
     Raises:
         SingularConfigurationError: Serial singularity.
@@ -382,14 +382,14 @@ def actuator_rates(
 
 
 def joint_velocities(
-    robot: Robot, q: Sequence[float] | np.ndarray, qd_a: Sequence[float] | np.ndarray
+    robot: Robot, q: Sequence[float] | np.ndarray, qa_dot: Sequence[float] | np.ndarray
 ) -> np.ndarray:
     """All joint velocities (nv,) from actuator rates (passive ones minimum-norm).
 
     Args:
         robot: The robot.
         q: Assembled configuration (nq,).
-        qd_a: Actuator rates [rad/s or m/s].
+        qa_dot: Actuator rates [rad/s or m/s].
 
     Returns:
         ``v`` (nv,), with ``pin.integrate(model, q, v dt)`` staying assembled to first order.
@@ -399,7 +399,7 @@ def joint_velocities(
 
     """
     km = kinematic_models(robot, q)
-    return km.V @ as_finite("qd_a", qd_a, km.n_a)
+    return km.V @ as_finite("qa_dot", qa_dot, km.n_a)
 
 
 def _matrix(M: np.ndarray) -> list[list[float]]:

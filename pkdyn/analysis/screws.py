@@ -2,8 +2,8 @@
 
 For each chain ``i``, a screw ``$_perp`` reciprocal to the twists of the chain's passive joints
 (``$_perp . $_k = 0``) eliminates them from the platform twist ``V = sum_j q_dot_j $_j``:
-``$_perp . V = q_dot_a $_perp . $_a``. Stacking one such relation per actuator gives
-``A x_dot = B q_dot_a`` with explicit, vectorised ``A`` (rows: the reciprocal screws, i.e. the
+``$_perp . V = qa_dot $_perp . $_a``. Stacking one such relation per actuator gives
+``A x_dot = B qa_dot`` with explicit, vectorised ``A`` (rows: the reciprocal screws, i.e. the
 wrenches the chains transmit to the platform) and diagonal ``B`` (``$_perp . $_a``).
 
 Conventions are those of :mod:`pkdyn.analysis.kinematics`: ``x_dot`` lists the robot's task
@@ -59,7 +59,7 @@ __all__ = [
 
 
 def normalise(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Orthonormal form of ``A x_dot = B q_dot_a``: ``[B, -A]`` with orthonormal rows.
+    """Orthonormal form of ``A x_dot = B qa_dot``: ``[B, -A]`` with orthonormal rows.
 
     Args:
         A: Parallel matrices (..., m, m).
@@ -83,21 +83,21 @@ def normalise(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def delta_AB(
-    g: delta_cf.DeltaGeometry, P: np.ndarray, alpha: np.ndarray
+    g: delta_cf.DeltaGeometry, P: np.ndarray, qa: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Delta (Clavel's reduced model): ``A`` (N, 3, 3) and diagonal ``B`` (N, 3, 3).
 
     Args:
         g: Geometry (ra, rb, la, lb) [m].
         P: Nacelle centres (N, 3) or (3,) [m].
-        alpha: Arm angles (N, 3) or (3,) [rad].
+        qa: Actuator coordinates, the arm angles ``alpha`` (N, 3) or (3,) [rad].
 
     Returns:
         ``A`` rows ``(P - C'_i)`` [m] and ``B_ii = (P - C'_i) . dC'_i/dalpha_i`` [m^2/rad].
 
     """
     P = np.atleast_2d(np.asarray(P, dtype=float))
-    alpha = np.atleast_2d(np.asarray(alpha, dtype=float))
+    alpha = np.atleast_2d(np.asarray(qa, dtype=float))
     C = delta_cf.elbow_points(g, alpha)
     d = P[:, None, :] - C
     dC = np.stack(
@@ -113,7 +113,7 @@ def delta_AB(
 
 
 def planar_3rrr_chain_angles(
-    g: rrr_cf.Planar3RRRGeometry, pose: np.ndarray, q1: np.ndarray
+    g: rrr_cf.Planar3RRRGeometry, pose: np.ndarray, qa: np.ndarray
 ) -> np.ndarray:
     """Seed angles ``(q_1^i, q_2^i, q_3^i)`` of an assembly given its pose and actuated angles.
 
@@ -123,14 +123,14 @@ def planar_3rrr_chain_angles(
     Args:
         g: Geometry.
         pose: Platform poses ``(x, y, phi)`` (N, 3) or (3,) [m, m, rad].
-        q1: Actuated angles (N, 3) or (3,) [rad].
+        qa: Actuator coordinates, the angles ``q_1^i`` (N, 3) or (3,) [rad].
 
     Returns:
         Angles (N, 3, 3) [rad]: ``[n, i] = (q_1^i, q_2^i, q_3^i)``.
 
     """
     X = np.atleast_2d(np.asarray(pose, dtype=float))
-    q1 = np.atleast_2d(np.asarray(q1, dtype=float))
+    q1 = np.atleast_2d(np.asarray(qa, dtype=float))
     B = rrr_cf.platform_joints(g, X)
     O2 = rrr_cf.elbow_points(g, q1)
     t2 = np.arctan2(B[..., 1] - O2[..., 1], B[..., 0] - O2[..., 0])
@@ -190,22 +190,20 @@ def gough_stewart_AB(
     return A, np.broadcast_to(np.eye(6), A.shape).copy()
 
 
-def five_bar_AB(
-    p: five_bar.Params, E: np.ndarray, theta: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def five_bar_AB(p: five_bar.Params, E: np.ndarray, qa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Five-bar: rows ``(E - C_j)^T`` (N, 2, 2) and ``B_jj = (E - C_j) . dC_j/dtheta_j``.
 
     Args:
         p: Five-bar parameters (``l1``, ``base_xy``).
         E: End-effector points (N, 2) or (2,) [m].
-        theta: Actuated angles (N, 2) or (2,) [rad].
+        qa: Actuator coordinates, the angles ``theta`` (N, 2) or (2,) [rad].
 
     Returns:
         ``(A, B)`` [m, m^2].
 
     """
     Ep = np.atleast_2d(np.asarray(E, dtype=float))
-    t = np.atleast_2d(np.asarray(theta, dtype=float))
+    t = np.atleast_2d(np.asarray(qa, dtype=float))
     C = five_bar_cf.elbow_points(p, t)
     d = Ep[:, None, :] - C
     dC = p.l1 * np.stack([-np.sin(t), np.cos(t)], axis=-1)

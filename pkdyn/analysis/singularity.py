@@ -1,6 +1,6 @@
 """Singularity classification of any loaded robot (seed 001; Clavel's Delta families, seed 000).
 
-With ``A x_dot = B q_dot_a`` (:mod:`pkdyn.analysis.kinematics`):
+With ``A x_dot = B qa_dot`` (:mod:`pkdyn.analysis.kinematics`):
 
 - **serial** singularity, ``B`` rank-deficient: an actuator motion leaves the platform at rest
   (a chain is stretched or folded, it loses a degree of freedom); the singular directions are

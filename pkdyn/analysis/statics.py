@@ -98,7 +98,7 @@ def platform_wrench(
         tau: Actuator efforts (n_a,) [N m or N].
 
     Returns:
-        ``w`` (m,) task components [N, N m], with ``w . x_dot = tau . q_dot_a``.
+        ``w`` (m,) task components [N, N m], with ``w . x_dot = tau . qa_dot``.
 
     Raises:
         SingularConfigurationError: Serial singularity (``J_inv`` does not exist).

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any, NoReturn
 
 import numpy as np
@@ -19,10 +19,9 @@ __all__ = [
     "load",
     "params",
     "posed_command",
+    "qa_argument",
     "robot_command",
 ]
-
-Handler = Callable[[argparse.Namespace], None]
 
 
 class Parser(argparse.ArgumentParser):
@@ -60,28 +59,44 @@ def fmt(v: np.ndarray) -> str:
 
 
 def configuration(args: argparse.Namespace) -> tuple[Any, np.ndarray]:
-    """The robot and the assembled configuration named by ``--pose`` or ``--q``."""
+    """The robot and the assembled configuration named by ``--pose`` or ``--qa``."""
     import pkdyn
 
     robot = load(args)
-    if args.q is not None:
-        return robot, pkdyn.forward_geometry(robot, args.q, check_limits=False).q
+    if args.qa is not None:
+        return robot, pkdyn.forward_geometry(robot, args.qa, check_limits=False).q
     return robot, pkdyn.inverse_geometry(robot, args.pose, check_limits=False).q
 
 
-def robot_command(sub: Any, name: str, help_: str) -> argparse.ArgumentParser:
-    """A sub-command taking ``ROBOT`` and ``--param NAME=VALUE``."""
-    sp: argparse.ArgumentParser = sub.add_parser(name, help=help_)
+def qa_argument(parser: Any, required: bool = False) -> None:
+    """Add ``--qa QA...`` (actuator coordinates, in actuator order; ``--q`` is an alias)."""
+    parser.add_argument(
+        "--qa",
+        "--q",
+        dest="qa",
+        nargs="+",
+        type=float,
+        required=required,
+        metavar="QA",
+        help="actuator coordinates in actuator order (rad or m)",
+    )
+
+
+def robot_command(
+    sub: Any, name: str, help_: str, aliases: tuple[str, ...] = ()
+) -> argparse.ArgumentParser:
+    """A sub-command taking ``ROBOT`` and ``--param NAME=VALUE`` (also called ``aliases``)."""
+    sp: argparse.ArgumentParser = sub.add_parser(name, help=help_, aliases=list(aliases))
     sp.add_argument("robot", help="library family name or URDF path")
     sp.add_argument("--param", action="append", metavar="NAME=VALUE", help="builder parameter")
     return sp
 
 
 def posed_command(sub: Any, name: str, help_: str) -> argparse.ArgumentParser:
-    """A robot sub-command at one configuration given by ``--pose`` or ``--q``, with ``--json``."""
+    """A robot sub-command at one configuration given by ``--pose`` or ``--qa``, with ``--json``."""
     sp = robot_command(sub, name, help_)
     where = sp.add_mutually_exclusive_group(required=True)
     where.add_argument("--pose", nargs="+", type=float, help="X Y Z [ROLL PITCH YAW] (m, rad)")
-    where.add_argument("--q", nargs="+", type=float, help="actuated coordinates")
+    qa_argument(where)
     sp.add_argument("--json", action="store_true")
     return sp

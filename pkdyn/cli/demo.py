@@ -67,7 +67,7 @@ def run_sizing_demo(
     print(detail.table())
     # physical checks of that computation
     ef = detail.efforts
-    P = np.sum(ef.tau * traj.qa_d, axis=1)
+    P = np.sum(ef.tau * traj.qa_dot, axis=1)
     work = np.concatenate([[0.0], np.cumsum(0.5 * (P[1:] + P[:-1]) * np.diff(traj.t))])
     balance = float(np.max(np.abs(work - (ef.energy - ef.energy[0]))))
     scale = max(float(np.max(np.abs(work))), float(np.max(ef.kinetic)))

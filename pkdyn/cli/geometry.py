@@ -1,4 +1,8 @@
-"""Geometry and kinematic-analysis commands: info, urdf, fk, ik, mobility, jacobian, statics."""
+"""Geometry and kinematic-analysis commands: info, urdf, geometric models, analyses.
+
+Sub-commands: ``info``, ``urdf``, ``forward-geometry`` (alias ``fk``), ``inverse-geometry``
+(alias ``ik``), ``mobility``, ``jacobian``, ``singularity``, ``statics``.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +12,16 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import configuration, emit, fmt, load, params, posed_command, robot_command
+from pkdyn.cli._common import (
+    configuration,
+    emit,
+    fmt,
+    load,
+    params,
+    posed_command,
+    qa_argument,
+    robot_command,
+)
 from pkdyn.exceptions import PkdynError
 
 __all__ = ["register"]
@@ -17,18 +30,20 @@ __all__ = ["register"]
 def _cmd_info(args: argparse.Namespace) -> None:
     robot = load(args)
     closures = [{"name": c.name, "type": c.kind} for c in robot.closures]
+    joints, names = robot.actuated_joint_names, robot.actuator_names
     payload = {
         "name": robot.name,
         "nq": robot.nq,
         "nv": robot.nv,
         "dof": robot.dof(),
-        "actuated": robot.actuator_names,
+        "actuated": joints,
+        "actuators": names,
         "loops": robot.loops,
         "closures": closures,
     }
     lines = [
         f"{robot.name}: nq={robot.nq} nv={robot.nv} dof={payload['dof']} loops={robot.loops}",
-        "actuated: " + ", ".join(robot.actuator_names),
+        "actuated: " + ", ".join(f"{j} ({a})" for j, a in zip(joints, names, strict=True)),
         "closures: " + ", ".join(f"{c['name']} ({c['type']})" for c in closures),
     ]
     emit(args, payload, "\n".join(lines))
@@ -61,13 +76,14 @@ def _cmd_fk(args: argparse.Namespace) -> None:
     import pkdyn
 
     robot = load(args)
-    res = pkdyn.forward_geometry(robot, args.q)
+    res = pkdyn.forward_geometry(robot, args.qa)
     if res.placement is None:
         raise PkdynError(f"{robot.name} declares no platform frame; nothing to report")
     payload = {
         "position": res.position.tolist(),
         "rpy": res.rpy.tolist(),
-        "q_full": res.q.tolist(),
+        "q": res.q.tolist(),
+        "qa": res.qa.tolist(),
         "residual": res.residual,
     }
     text = f"position [m]: {fmt(res.position)}\nrpy [rad]:    {fmt(res.rpy)}"
@@ -80,7 +96,12 @@ def _cmd_ik(args: argparse.Namespace) -> None:
     robot = load(args)
     res = pkdyn.inverse_geometry(robot, args.pose)
     names = robot.actuator_names
-    payload = {"q": res.qa.tolist(), "actuators": names, "residual": res.residual}
+    payload = {
+        "qa": res.qa.tolist(),
+        "q": res.q.tolist(),
+        "actuators": names,
+        "residual": res.residual,
+    }
     text = "\n".join(f"{n}: {v:.9f}" for n, v in zip(names, res.qa, strict=True))
     emit(args, payload, text)
 
@@ -130,11 +151,15 @@ def register(sub: Any) -> None:
     sp = robot_command(sub, "urdf", "write the description")
     sp.add_argument("-o", "--output", help="output file (default: stdout)")
     sp.set_defaults(func=_cmd_urdf)
-    sp = robot_command(sub, "fk", "direct geometric model")
-    sp.add_argument("--q", nargs="+", type=float, required=True, help="actuated coordinates")
+    sp = robot_command(
+        sub, "forward-geometry", "direct geometric model (pkdyn.forward_geometry)", ("fk",)
+    )
+    qa_argument(sp, required=True)
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_fk)
-    sp = robot_command(sub, "ik", "inverse geometric model")
+    sp = robot_command(
+        sub, "inverse-geometry", "inverse geometric model (pkdyn.inverse_geometry)", ("ik",)
+    )
     sp.add_argument(
         "--pose", nargs="+", type=float, required=True, help="X Y Z [ROLL PITCH YAW] (m, rad)"
     )

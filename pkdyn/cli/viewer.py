@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import load, robot_command
+from pkdyn.cli._common import load, qa_argument, robot_command
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["register"]
@@ -59,8 +59,8 @@ def _wait_for_stop() -> None:
 def _configuration(robot: Any, args: argparse.Namespace) -> np.ndarray | None:
     import pkdyn
 
-    if args.q is not None:
-        return pkdyn.forward_geometry(robot, args.q, check_limits=False).q
+    if args.qa is not None:
+        return pkdyn.forward_geometry(robot, args.qa, check_limits=False).q
     if args.pose is not None:
         return pkdyn.inverse_geometry(robot, args.pose, check_limits=False).q
     return None
@@ -113,7 +113,7 @@ def register(sub: Any) -> None:
     sp = robot_command(sub, "view", "meshcat scene of a robot (live, or a self-contained HTML)")
     where = sp.add_mutually_exclusive_group()
     where.add_argument("--pose", nargs="+", type=float, help="X Y Z [ROLL PITCH YAW] (m, rad)")
-    where.add_argument("--q", nargs="+", type=float, help="actuated coordinates")
+    qa_argument(where)
     sp.add_argument(
         "--trajectory",
         nargs="+",

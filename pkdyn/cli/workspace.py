@@ -12,12 +12,12 @@ __all__ = ["register"]
 
 
 def _posed_robot(args: argparse.Namespace) -> tuple[Any, Any]:
-    """Robot with geometry and the configuration named by ``--pose`` or ``--q``."""
+    """Robot with geometry and the configuration named by ``--pose`` or ``--qa``."""
     import pkdyn
 
     robot = load(args, geometry=True)
-    if args.q is not None:
-        return robot, pkdyn.forward_geometry(robot, args.q, check_limits=False).q
+    if args.qa is not None:
+        return robot, pkdyn.forward_geometry(robot, args.qa, check_limits=False).q
     return robot, pkdyn.inverse_geometry(robot, args.pose, check_limits=False).q
 
 

@@ -59,7 +59,8 @@ def inverse(g: DeltaGeometry, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         P: Nacelle centre positions (N, 3) or (3,) [m].
 
     Returns:
-        ``(alpha, valid)``: arm angles (N, n_arms) [rad] (NaN where unreachable) and mask (N,).
+        ``(qa, valid)``: actuator coordinates, the arm angles ``alpha`` (N, n_arms) [rad] (NaN
+        where unreachable), and mask (N,).
 
     """
     P = np.atleast_2d(np.asarray(P, dtype=float))
@@ -82,16 +83,16 @@ def inverse(g: DeltaGeometry, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return alpha, ok.all(axis=1)
 
 
-def elbow_points(g: DeltaGeometry, alpha: np.ndarray) -> np.ndarray:
-    """Points ``C'_i`` (N, n_arms, 3) [m] of eq. 1 for arm angles ``alpha`` (N, n_arms) [rad]."""
-    alpha = np.atleast_2d(np.asarray(alpha, dtype=float))
+def elbow_points(g: DeltaGeometry, qa: np.ndarray) -> np.ndarray:
+    """Points ``C'_i`` (N, n_arms, 3) [m] of eq. 1 for arm angles ``qa`` (N, n_arms) [rad]."""
+    alpha = np.atleast_2d(np.asarray(qa, dtype=float))
     R = g.ra - g.rb
     rad = R + g.la * np.cos(alpha)
     theta = arm_angles(g)
     return np.stack([rad * np.cos(theta), rad * np.sin(theta), -g.la * np.sin(alpha)], axis=-1)
 
 
-def forward(g: DeltaGeometry, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def forward(g: DeltaGeometry, qa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Direct geometric model: nacelle position from arm angles (Clavel, eqs. 2-4).
 
     Subtracting eq. 1 pairwise gives ``x`` and ``y`` linear in ``z`` (coefficients ``H1..H5``);
@@ -101,13 +102,13 @@ def forward(g: DeltaGeometry, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
     Args:
         g: Geometry (ra, rb, la, lb) [m].
-        alpha: Arm angles (N, n_arms) or (n_arms,) [rad].
+        qa: Actuator coordinates, the arm angles ``alpha`` (N, n_arms) or (n_arms,) [rad].
 
     Returns:
         ``(P, valid)``: nacelle positions (N, 3) [m] (NaN where not assemblable) and mask (N,).
 
     """
-    alpha = np.atleast_2d(np.asarray(alpha, dtype=float))[:, :3]
+    alpha = np.atleast_2d(np.asarray(qa, dtype=float))[:, :3]
     theta = arm_angles(g)[:3]
     R, la, lb = g.ra - g.rb, g.la, g.lb
     ca = np.cos(alpha)

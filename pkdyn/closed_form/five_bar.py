@@ -52,8 +52,8 @@ def inverse(
         working_mode: Overrides ``p.working_mode``.
 
     Returns:
-        ``(theta, valid)``: angles (N, 2) [rad] in ``(-pi, pi]`` (NaN where a chain cannot reach)
-        and mask (N,).
+        ``(qa, valid)``: actuator coordinates, the angles ``theta`` (N, 2) [rad] in
+        ``(-pi, pi]`` (NaN where a chain cannot reach), and mask (N,).
 
     """
     P = np.atleast_2d(np.asarray(E, dtype=float))
@@ -72,23 +72,23 @@ def inverse(
     return theta, ok.all(axis=1)
 
 
-def elbow_points(p: Any, theta: np.ndarray) -> np.ndarray:
+def elbow_points(p: Any, qa: np.ndarray) -> np.ndarray:
     """Elbows ``C_j = A_j + l1 (cos theta_j, sin theta_j)``.
 
     Args:
         p: Parameters.
-        theta: Actuated angles, shape (N, 2) or (2,) [rad].
+        qa: Actuator coordinates, the angles ``theta`` (N, 2) or (2,) [rad].
 
     Returns:
         Elbow points, shape (N, 2, 2) [m].
 
     """
-    t = np.atleast_2d(np.asarray(theta, dtype=float))
+    t = np.atleast_2d(np.asarray(qa, dtype=float))
     A = p.base_xy
     return np.stack([A[:, 0] + p.l1 * np.cos(t), A[:, 1] + p.l1 * np.sin(t)], axis=-1)
 
 
-def forward(p: Any, theta: np.ndarray, assembly: int = 1) -> tuple[np.ndarray, np.ndarray]:
+def forward(p: Any, qa: np.ndarray, assembly: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Direct geometric model: end-effector points from actuated angles.
 
     ``E = M + s n sqrt(l2^2 - |C_1 C_2|^2 / 4)`` with ``M`` the midpoint of ``C_1 C_2`` and
@@ -96,7 +96,7 @@ def forward(p: Any, theta: np.ndarray, assembly: int = 1) -> tuple[np.ndarray, n
 
     Args:
         p: Parameters.
-        theta: Actuated angles, shape (N, 2) or (2,) [rad].
+        qa: Actuator coordinates, the angles ``theta`` (N, 2) or (2,) [rad].
         assembly: ``s = +1`` (E on the left of ``C_1 -> C_2``; above the base for the default
             robot) or ``-1``.
 
@@ -104,7 +104,7 @@ def forward(p: Any, theta: np.ndarray, assembly: int = 1) -> tuple[np.ndarray, n
         ``(E, valid)``: points (N, 2) [m] (NaN where not assemblable) and mask (N,).
 
     """
-    C = elbow_points(p, theta)
+    C = elbow_points(p, qa)
     u = C[:, 1] - C[:, 0]
     c = np.linalg.norm(u, axis=1)
     h2 = p.l2**2 - 0.25 * c**2

@@ -112,8 +112,9 @@ def inverse(
         elbow: ``+1`` (``sin q_2^i > 0``) or ``-1`` per chain: a scalar or shape (3,).
 
     Returns:
-        ``(q1, valid)``: actuated angles (N, 3) [rad] in ``(-pi, pi]`` (NaN where a chain cannot
-        reach its platform joint) and mask (N,) of the poses every chain reaches.
+        ``(qa, valid)``: actuator coordinates, the angles ``q_1^i`` (N, 3) [rad] in
+        ``(-pi, pi]`` (NaN where a chain cannot reach its platform joint), and mask (N,) of the
+        poses every chain reaches.
 
     """
     B = platform_joints(g, pose)
@@ -136,18 +137,18 @@ def inverse(
     return q1, ok.all(axis=1)
 
 
-def elbow_points(g: Planar3RRRGeometry, q1: np.ndarray) -> np.ndarray:
+def elbow_points(g: Planar3RRRGeometry, qa: np.ndarray) -> np.ndarray:
     """Elbow centres ``O_2^i = (a_i + l1 cos q_1^i, b_i + l1 sin q_1^i)``.
 
     Args:
         g: Geometry.
-        q1: Actuated angles, shape (N, 3) or (3,) [rad].
+        qa: Actuator coordinates, the angles ``q_1^i`` (N, 3) or (3,) [rad].
 
     Returns:
         Elbow points, shape (N, 3, 2) [m].
 
     """
-    q = np.atleast_2d(np.asarray(q1, dtype=float))
+    q = np.atleast_2d(np.asarray(qa, dtype=float))
     base = np.asarray(g.base_xy, dtype=float)
     return np.stack([base[:, 0] + g.l1 * np.cos(q), base[:, 1] + g.l1 * np.sin(q)], axis=-1)
 

@@ -66,7 +66,7 @@ class EffortTrajectory:
     @property
     def power(self) -> np.ndarray:
         """Actuator powers ``tau * qd`` (N, n_a) [W]."""
-        return self.tau * self.trajectory.qa_d
+        return self.tau * self.trajectory.qa_dot
 
 
 def _wrench_series(robot: Robot, wrench: Any, n: int) -> np.ndarray | None:

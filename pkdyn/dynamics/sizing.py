@@ -32,7 +32,7 @@ class ActuatorSizing:
     """Sizing figures of one actuator.
 
     Attributes:
-        name: Actuated joint name.
+        name: Actuator name (the transmission, e.g. ``motor1``).
         peak: Peak |effort|, joint side [N m or N].
         rms: RMS effort over time, joint side [N m or N].
         peak_speed: Peak |speed|, joint side [rad/s or m/s].
@@ -127,7 +127,9 @@ class SizingResult:
         return "\n".join(rows)
 
     def write_csv(self, path: str | Path) -> None:
-        """Time series: ``t``, ``q_<a>``, ``qd_<a>``, ``tau_<a>`` per actuator, ``energy``.
+        """Time series: ``t``, ``qa_<a>``, ``qa_dot_<a>``, ``tau_<a>`` per actuator, ``energy``.
+
+        ``<a>`` is the actuator's name (``robot.actuator_names``).
 
         Args:
             path: Output file.
@@ -141,12 +143,12 @@ class SizingResult:
         names = ef.actuators
         header = (
             ["t"]
-            + [f"q_{n}" for n in names]
-            + [f"qd_{n}" for n in names]
+            + [f"qa_{n}" for n in names]
+            + [f"qa_dot_{n}" for n in names]
             + [f"tau_{n}" for n in names]
             + ["energy"]
         )
-        table = np.column_stack([traj.t, traj.qa, traj.qa_d, ef.tau, ef.energy])
+        table = np.column_stack([traj.t, traj.qa, traj.qa_dot, ef.tau, ef.energy])
         try:
             with open(path, "w", newline="") as fh:
                 w = csv.writer(fh)
@@ -201,7 +203,7 @@ def size(
     loaded = with_payload(robot, payload) if payload else robot
     ef = inverse_dynamics(loaded, trajectory, wrench=wrench, progress=progress)
     t = trajectory.t
-    tau, qd = ef.tau, trajectory.qa_d
+    tau, qd = ef.tau, trajectory.qa_dot
     peak = np.max(np.abs(tau), axis=0)
     rms = _rms(t, tau)
     speed = np.max(np.abs(qd), axis=0)
@@ -211,7 +213,7 @@ def size(
         r = act.reduction
         out.append(
             ActuatorSizing(
-                name=act.joint,
+                name=act.name,
                 peak=float(peak[i]),
                 rms=float(rms[i]),
                 peak_speed=float(speed[i]),

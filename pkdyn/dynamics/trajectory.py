@@ -142,12 +142,12 @@ class JointTrajectory:
         return self.q[:, self.actuated_q]
 
     @property
-    def qa_d(self) -> np.ndarray:
+    def qa_dot(self) -> np.ndarray:
         """Actuator rates (N, n_a) [rad/s or m/s]."""
         return self.v[:, self.actuated_v]
 
     @property
-    def qa_dd(self) -> np.ndarray:
+    def qa_ddot(self) -> np.ndarray:
         """Actuator accelerations (N, n_a) [rad/s^2 or m/s^2]."""
         return self.a[:, self.actuated_v]
 

@@ -99,7 +99,12 @@ class Robot:
 
     @property
     def actuator_names(self) -> list[str]:
-        """Names of the actuated joints, in actuator order."""
+        """Names of the actuators (the transmissions, e.g. ``motor1``), in actuator order."""
+        return [a.name for a in self.actuators]
+
+    @property
+    def actuated_joint_names(self) -> list[str]:
+        """Names of the actuated joints (e.g. ``arm1``), in actuator order."""
         return [a.joint for a in self.actuators]
 
     def components(self) -> list[int]:

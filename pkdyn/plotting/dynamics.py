@@ -35,7 +35,7 @@ def plot_efforts(
 
     ef = result.efforts
     t = ef.t
-    qd = ef.trajectory.qa_d
+    qd = ef.trajectory.qa_dot
     fig = Figure(figsize=(8.0, 7.5))
     axes = fig.subplots(3, 1, sharex=True)
     for i, act in enumerate(result.actuators):

@@ -310,7 +310,7 @@ def _analyse_phase(
         max_lock_drift=float(lock.max()),
         max_support_drift=float(support.max()),
         max_actuator_force=float(np.max(np.abs(effort.tau))),
-        max_actuator_speed=float(np.max(np.abs(jt.qa_d))),
+        max_actuator_speed=float(np.max(np.abs(jt.qa_dot))),
         min_stroke_margin=float(margin.min()),
         min_leg_distance=float(min(d_ll.min(), d_ln.min())),
         min_leg_to_leg=float(d_ll.min()),
