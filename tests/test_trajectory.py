@@ -215,7 +215,7 @@ def test_out_of_reach_trajectory_names_the_sample(robots):
 
 def test_too_fast_trajectory_names_the_actuator(robots):
     robot = robots["delta"]
-    with pytest.raises(TrajectoryError, match=r"actuator 'motor\d' would move at .* velocity limit"):
+    with pytest.raises(TrajectoryError, match=r"actuator 'motor\d' would move at .* limit"):
         named_trajectory(robot, "adept", cycle_time=0.3)
     # without the limit check it maps (the sizing then reports a negative speed margin)
     jt = named_trajectory(robot, "adept", cycle_time=0.3, check_limits=False, dt=5e-3)
