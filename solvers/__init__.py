@@ -14,7 +14,7 @@ stepping), :mod:`~solvers.inverse_dynamics` (constrained inverse dynamics, proxs
 
 from solvers.actuation import Actuation, JointFriction
 from solvers.closure import ClosureSet
-from solvers.forward_dynamics import ForwardDynamics, SimulationError, simulate
+from solvers.forward_dynamics import ForwardDynamics, IntegrationError, simulate
 from solvers.inverse_dynamics import (
     InfeasibleError,
     InverseDynamics,
@@ -36,7 +36,7 @@ __all__ = [
     "InverseResult",
     "InverseTrajectory",
     "JointFriction",
-    "SimulationError",
+    "IntegrationError",
     "SolveResult",
     "simulate",
     "solve_lm",

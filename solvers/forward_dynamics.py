@@ -55,7 +55,7 @@ __all__ = [
     "JointFriction",
     "ForwardResult",
     "ForwardDynamics",
-    "SimulationError",
+    "IntegrationError",
     "TorqueFn",
     "simulate",
 ]
@@ -67,16 +67,19 @@ _ARG1 = pin.ArgumentPosition.ARG1
 _POINT = pin.ContactType.CONTACT_3D
 
 
-class SimulationError(RuntimeError):
-    """The simulation cannot go on: non-finite state or closures that cannot be restored.
+class IntegrationError(RuntimeError):
+    """The time stepping cannot go on: non-finite state or closures that cannot be restored.
+
+    An internal solver error: :mod:`pkdyn.dynamics` converts it into the user-facing
+    ``pkdyn.exceptions.SimulationError`` (same arguments: message, then time).
 
     Attributes:
-        t: Time at which it happened [s].
+        time: Time at which it happened [s] (NaN when unknown).
 
     """
 
-    def __init__(self, t: float, message: str) -> None:
-        self.t = t
+    def __init__(self, message: str, time: float) -> None:
+        self.time = time
         super().__init__(message)
 
 
@@ -365,7 +368,7 @@ class ForwardDynamics:
                 self.rejected += 1
                 self._h = h * max(0.1, fac)
                 if self._h < 1e-12 * dt:
-                    raise SimulationError(t, f"step size underflow at t = {t:.9g} s")
+                    raise IntegrationError(f"step size underflow at t = {t:.9g} s", t)
         self._h = min(self._h, dt)
         return q, v, w_act, w_fric, first
 
@@ -392,7 +395,7 @@ class ForwardDynamics:
             The state ``(q, v)`` at ``t + dt``.
 
         Raises:
-            SimulationError: The closures could not be restored, or the step size of
+            IntegrationError: The closures could not be restored, or the step size of
                 ``dopri5`` underflowed.
 
         """
@@ -411,8 +414,8 @@ class ForwardDynamics:
             if float(np.max(np.abs(r))) > self.project_tol:
                 try:
                     q, v = self.project_state(q, v)
-                except SimulationError as err:
-                    raise SimulationError(t + dt, f"t = {t + dt:.6g} s: {err}") from None
+                except IntegrationError as err:
+                    raise IntegrationError(f"t = {t + dt:.6g} s: {err}", t + dt) from None
         return q, v
 
     def closure_forces(self, kin: pin.Data, lambda_c: np.ndarray) -> np.ndarray:
@@ -451,7 +454,7 @@ class ForwardDynamics:
             The projected ``(q, v)``.
 
         Raises:
-            SimulationError: The closures cannot be restored.
+            IntegrationError: The closures cannot be restored.
 
         """
         if not self.nc:
@@ -461,7 +464,7 @@ class ForwardDynamics:
         try:
             return project_state(self.model, self._kin, self.closure_set, q, v, aim, accept)
         except ProjectionError as err:
-            raise SimulationError(float("nan"), str(err)) from None
+            raise IntegrationError(str(err), float("nan")) from None
 
     def simulate(
         self,
@@ -491,7 +494,7 @@ class ForwardDynamics:
 
         Raises:
             ValueError: Non-positive ``dt``, ``duration`` or ``record_every``.
-            SimulationError: The state became non-finite or the closures could not be restored.
+            IntegrationError: The state became non-finite or the closures could not be restored.
 
         """
         if not (dt > 0.0 and duration > 0.0 and record_every >= 1):
@@ -514,7 +517,7 @@ class ForwardDynamics:
             if ev is None:
                 ev = self._evaluate(t, q, v, tau)
             if not math.isfinite(float(ev.a @ ev.a)):
-                raise SimulationError(t, f"non-finite acceleration at t = {t:.6g} s")
+                raise IntegrationError(f"non-finite acceleration at t = {t:.6g} s", t)
             if k % record_every == 0 or k == n_steps:
                 rec.add(self, t, q, v, ev, w_act, w_fric)
             if k == n_steps:
@@ -528,8 +531,8 @@ class ForwardDynamics:
                 if float(np.max(np.abs(r))) > self.project_tol:
                     try:
                         q, v = self.project_state(q, v)
-                    except SimulationError as err:
-                        raise SimulationError(t, f"t = {t:.6g} s: {err}") from None
+                    except IntegrationError as err:
+                        raise IntegrationError(f"t = {t:.6g} s: {err}", t) from None
                     projections += 1
                     ev = None
         out = rec.result()

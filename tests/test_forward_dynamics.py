@@ -8,8 +8,8 @@ import pkdyn
 from solvers.forward_dynamics import (
     Actuation,
     ForwardDynamics,
+    IntegrationError,
     JointFriction,
-    SimulationError,
     simulate,
 )
 
@@ -250,11 +250,11 @@ def test_recording_and_api_errors(robots):
         ForwardDynamics(robot.model, robot.constraint_models, integrator="leapfrog")
     with pytest.raises(ValueError, match="distinct"):
         Actuation([0, 0])
-    with pytest.raises(SimulationError) as err:
+    with pytest.raises(IntegrationError) as err:
         fd.simulate(
             robot.q_home, np.zeros(robot.nv), 0.01, 1e-3, lambda t, q, v: np.full(2, np.nan)
         )
-    assert err.value.t == 0.0
+    assert err.value.time == 0.0
 
 
 def test_step_matches_simulate(robots):

@@ -239,3 +239,19 @@ def test_named_trajectory_rejects_unknown_names_and_options(robots):
         named_trajectory(robots["delta"], "circle")
     with pytest.raises(InvalidInputError, match="adept"):
         named_trajectory(robots["delta"], "adept", speed=3)
+
+
+@pytest.mark.parametrize(
+    ("name", "options", "needle"),
+    [
+        ("adept", {"cycle_time": "fast"}, "cycle_time"),
+        ("adept", {"cycles": 1.5}, "cycles"),
+        ("sine", {"frequency": 0.0}, "frequency"),
+        ("sine", {"amplitude": float("nan")}, "amplitude"),
+        ("p2p", {"duration": [1.0]}, "duration"),
+        ("p2p", {"profile": "bang"}, "profile"),
+    ],
+)
+def test_named_task_validates_its_options(robots, name, options, needle):
+    with pytest.raises(InvalidInputError, match=needle):
+        named_task(robots["delta"], name, **options)

@@ -37,6 +37,7 @@ from pkdyn.analysis.kinematics import COND_MAX, NEAR_SINGULAR_TOL, SINGULAR_TOL
 from pkdyn.analysis.screws import delta_AB, normalise, planar_3rrr_AB, planar_3rrr_chain_angles
 from pkdyn.closed_form import delta as delta_cf
 from pkdyn.closed_form import planar_3rrr as rrr_cf
+from pkdyn.exceptions import InvalidInputError
 
 __all__ = [
     "KIND_NAMES",
@@ -238,11 +239,18 @@ def delta_map(
     Returns:
         The map (grid shape ``(len(v), len(u))``).
 
+    Raises:
+        InvalidInputError: Unknown plane, or not a three-armed Delta.
+
     """
     if plane not in _DELTA_AXES:
-        raise ValueError(f"plane must be one of {', '.join(_DELTA_AXES)}, got {plane!r}")
+        raise InvalidInputError("plane", f"must be one of {', '.join(_DELTA_AXES)}, got {plane!r}")
     if delta_cf.arm_angles(g).size != 3:
-        raise ValueError("Clavel's closed-form map needs a three-armed Delta")
+        raise InvalidInputError(
+            "g",
+            f"Clavel's closed-form map needs a three-armed Delta, got "
+            f"{delta_cf.arm_angles(g).size} arms (use pkdyn.analysis.maps.conditioning)",
+        )
     iu, iv, iw = _DELTA_AXES[plane]
     U, Vg = np.meshgrid(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
     P = np.empty((U.size, 3))

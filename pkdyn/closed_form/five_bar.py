@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from pkdyn.exceptions import InvalidInputError
+
 __all__ = ["MODES", "elbow_points", "forward", "inverse", "mode_signs"]
 
 MODES = ("+-", "-+", "++", "--")
@@ -28,9 +30,14 @@ def mode_signs(working_mode: str) -> np.ndarray:
     Returns:
         Array (2,) of +1 / -1.
 
+    Raises:
+        InvalidInputError: Not one of :data:`MODES`.
+
     """
     if working_mode not in MODES:
-        raise ValueError(f"working mode must be one of {', '.join(MODES)}, got {working_mode!r}")
+        raise InvalidInputError(
+            "working_mode", f"must be one of {', '.join(MODES)}, got {working_mode!r}"
+        )
     return np.array([1.0 if c == "+" else -1.0 for c in working_mode])
 
 

@@ -36,6 +36,8 @@ from typing import Protocol
 
 import numpy as np
 
+from pkdyn.exceptions import InvalidInputError
+
 __all__ = [
     "Planar3RRRGeometry",
     "platform_joints",
@@ -81,7 +83,7 @@ def _wrap(a: np.ndarray) -> np.ndarray:
 def _poses(pose: np.ndarray) -> np.ndarray:
     arr = np.atleast_2d(np.asarray(pose, dtype=float))
     if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"poses must have shape (N, 3) (x, y, phi), got {arr.shape}")
+        raise InvalidInputError("pose", f"expected shape (N, 3) (x, y, phi), got {arr.shape}")
     return arr
 
 

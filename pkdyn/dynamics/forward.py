@@ -15,8 +15,7 @@ from pkdyn.dynamics.actuation import actuation
 from pkdyn.exceptions import InvalidInputError, SimulationError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
-from solvers import ForwardDynamics, ForwardResult, JointFriction
-from solvers import SimulationError as _SolverSimulationError
+from solvers import ForwardDynamics, ForwardResult, IntegrationError, JointFriction
 
 __all__ = ["TorqueFn", "simulate"]
 
@@ -92,5 +91,5 @@ def simulate(
 
     try:
         return fd.simulate(q, v, duration, dt, tau=tau_fn, record_every=record_every)
-    except _SolverSimulationError as err:
-        raise SimulationError(str(err), err.t) from None
+    except IntegrationError as err:
+        raise SimulationError(str(err), err.time) from None

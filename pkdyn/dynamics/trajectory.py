@@ -29,6 +29,7 @@ component about the home pose) and ``p2p`` (one straight point-to-point move).
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -582,45 +583,74 @@ def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:
         InvalidInputError: Unknown name or option.
 
     """
+    if name not in TRAJECTORIES:
+        raise InvalidInputError(
+            "trajectory", f"unknown trajectory {name!r} (one of {', '.join(TRAJECTORIES)})"
+        )
+    unknown = sorted(set(options) - set(_OPTIONS[name]) - {"dt"})
+    if unknown:
+        raise InvalidInputError(
+            "trajectory",
+            f"{name}: unexpected option {unknown[0]!r} (valid: {', '.join(_OPTIONS[name])}, dt)",
+        )
     home = _home_pose(robot)
     task_mask = np.zeros(6, dtype=bool)
     task_mask[robot.task_rows] = True
     opts = dict(options)
-    dt = float(opts.pop("dt", 1e-3))
+    dt = _number(name, opts, "dt", 1e-3)
+    if name == "adept":
+        cycles = _number(name, opts, "cycles", 1)
+        if cycles != int(cycles):
+            raise InvalidInputError("cycles", f"{name}: expected a whole number, got {cycles}")
+        depth = _number(name, opts, "depth", 0.05)
+        bottom = home[:3] - np.array([0.0, 0.0, depth])
+        one = adept_cycle(
+            bottom,
+            cycle_time=_number(name, opts, "cycle_time", 0.5),
+            up=_number(name, opts, "up", 0.025),
+            across=_number(name, opts, "across", 0.305),
+            direction=_number(name, opts, "direction", 0.0),
+            profile=str(opts.pop("profile", "quintic")),
+            overlap=_number(name, opts, "overlap", 0.0),
+            dt=dt,
+        )
+        return concatenate([one] * max(1, int(cycles)), name=one.name)
+    if name == "sine":
+        amp = _number(name, opts, "amplitude", 0.01)
+        ang = _number(name, opts, "angle", 0.02)
+        f = _number(name, opts, "frequency", 1.0)
+        if not f > 0.0:
+            raise InvalidInputError("frequency", f"{name}: must be > 0 Hz, got {f}")
+        duration = _number(name, opts, "duration", 1.0 / f)
+        A = np.where(task_mask, np.r_[[amp] * 3, [ang] * 3], 0.0)
+        # distinct frequencies per component so that the motion explores all directions
+        freqs = f * np.array([1.0, 1.0, 2.0, 1.0, 1.0, 2.0])
+        phases = np.array([0.0, 0.5 * np.pi, 0.0, 0.5 * np.pi, 0.0, 0.0])
+        return sinusoid(home.copy(), A, freqs, duration, phases, dt=dt)
+    default = np.where(task_mask, np.r_[0.05, 0.0, 0.0, 0.1, 0.1, 0.1], 0.0)
+    offset = _pose6(opts.pop("offset", default), "offset")
+    duration = _number(name, opts, "duration", 0.5)
+    profile = str(opts.pop("profile", "quintic"))
+    return point_to_point(home, home + offset, duration, profile, dt=dt)
+
+
+_OPTIONS = {
+    "adept": ("cycle_time", "depth", "up", "across", "direction", "profile", "overlap", "cycles"),
+    "sine": ("amplitude", "angle", "frequency", "duration"),
+    "p2p": ("offset", "duration", "profile"),
+}
+"""Options of each built-in trajectory besides ``dt``."""
+
+
+def _number(name: str, opts: dict[str, Any], key: str, default: float) -> float:
+    """Option ``key`` as a finite float (removed from ``opts``)."""
+    value = opts.pop(key, default)
+    if isinstance(value, bool) or not isinstance(value, int | float | np.number | str):
+        raise InvalidInputError(key, f"{name}: expected a number, got {value!r}")
     try:
-        if name == "adept":
-            cycles = int(opts.pop("cycles", 1))
-            depth = float(opts.pop("depth", 0.05))
-            bottom = home[:3] - np.array([0.0, 0.0, depth])
-            one = adept_cycle(bottom, dt=dt, **opts)
-            task = concatenate([one] * max(1, cycles), name=one.name)
-        elif name == "sine":
-            amp = float(opts.pop("amplitude", 0.01))
-            ang = float(opts.pop("angle", 0.02))
-            f = float(opts.pop("frequency", 1.0))
-            duration = float(opts.pop("duration", 1.0 / f))
-            A = np.where(task_mask, np.r_[[amp] * 3, [ang] * 3], 0.0)
-            # distinct frequencies per component so that the motion explores all directions
-            freqs = f * np.array([1.0, 1.0, 2.0, 1.0, 1.0, 2.0])
-            phases = np.array([0.0, 0.5 * np.pi, 0.0, 0.5 * np.pi, 0.0, 0.0])
-            center = home.copy()
-            task = sinusoid(center, A, freqs, duration, phases, dt=dt)
-            if opts:
-                raise TypeError(f"unexpected option {next(iter(opts))!r}")
-        elif name == "p2p":
-            default = np.where(task_mask, np.r_[0.05, 0.0, 0.0, 0.1, 0.1, 0.1], 0.0)
-            offset = _pose6(opts.pop("offset", default), "offset")
-            duration = float(opts.pop("duration", 0.5))
-            profile = str(opts.pop("profile", "quintic"))
-            if opts:
-                raise TypeError(f"unexpected option {next(iter(opts))!r}")
-            task = point_to_point(home, home + offset, duration, profile, dt=dt)
-        else:
-            raise InvalidInputError(
-                "trajectory", f"unknown trajectory {name!r} (one of {', '.join(TRAJECTORIES)})"
-            )
-    except TypeError as err:
-        raise InvalidInputError("trajectory", f"{name}: {err}") from None
-    except ValueError as err:
-        raise InvalidInputError("trajectory", f"{name}: {err}") from None
-    return task
+        x = float(value)
+    except ValueError:  # a string that is not a number
+        raise InvalidInputError(key, f"{name}: expected a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise InvalidInputError(key, f"{name}: expected a finite number, got {value!r}")
+    return x

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.analysis.maps import ConditioningMap
+from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["plot_conditioning_map"]
 
@@ -47,14 +48,17 @@ def plot_conditioning_map(
     Returns:
         The matplotlib Figure.
 
+    Raises:
+        InvalidInputError: Unknown field, or a map without data.
+
     """
     from matplotlib import colors
     from matplotlib.figure import Figure
 
     if field not in _LABELS:
-        raise ValueError(f"field must be one of {', '.join(_LABELS)}, got {field!r}")
+        raise InvalidInputError("field", f"must be one of {', '.join(_LABELS)}, got {field!r}")
     if cmap.data is None:
-        raise ValueError("empty map")
+        raise InvalidInputError("cmap", "the map holds no data (no sample was computed)")
     d = cmap.data
     values = np.ma.masked_invalid(np.asarray(getattr(d, field), dtype=float))
     if ax is None:
