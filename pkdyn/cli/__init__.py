@@ -29,13 +29,7 @@ def _parser() -> argparse.ArgumentParser:
     p = Parser(prog="pkdyn", description="Kinematics and dynamics of parallel robots.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
     for name in COMMAND_MODULES:
-        try:
-            module = importlib.import_module(f"pkdyn.cli.{name}")
-        except ModuleNotFoundError as err:
-            if err.name == f"pkdyn.cli.{name}":
-                continue  # a command group not built yet
-            raise
-        module.register(sub)
+        importlib.import_module(f"pkdyn.cli.{name}").register(sub)
     return p
 
 

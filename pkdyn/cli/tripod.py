@@ -76,10 +76,8 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
 
 
 def _html(robot: Any, report: Any, path: str) -> None:
-    try:
-        from pkdyn.viewer import animate, export_html
-    except ImportError as err:
-        raise PkdynError(f"--html needs the viewer (pkdyn.viewer): {err}") from None
+    from pkdyn.viewer import animate, export_html
+
     try:
         scene = animate(robot, report.t, report.q)
         export_html(scene, path)
