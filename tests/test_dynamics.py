@@ -8,6 +8,7 @@ import sys
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import simpson_work
 
 import pkdyn
 from pkdyn.analysis.kinematics import platform_jacobian
@@ -42,15 +43,6 @@ def mapped() -> dict[str, tuple[pkdyn.Robot, JointTrajectory]]:
     return out
 
 
-def _simpson_work(t: np.ndarray, power: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Cumulative integral of the power (Simpson) at every second sample, and those samples."""
-    if len(t) % 2 == 0:
-        t, power = t[:-1], power[:-1]
-    h = t[1] - t[0]
-    seg = h / 3.0 * (power[:-2:2] + 4.0 * power[1:-1:2] + power[2::2])
-    return np.concatenate([[0.0], np.cumsum(seg)]), np.arange(0, len(t), 2)
-
-
 @pytest.mark.parametrize("name", list(CASES))
 def test_inverse_then_forward_dynamics_reproduces_the_accelerations(mapped, name):
     """The efforts found, fed to pin.constraintDynamics (no Baumgarte), give back the
@@ -72,7 +64,7 @@ def test_power_balance_along_the_trajectory(mapped, name):
     robot, jt = mapped[name]
     loaded = with_payload(robot, 1.0)
     ef = inverse_dynamics(loaded, jt)
-    work, idx = _simpson_work(jt.t, np.sum(ef.tau * jt.qa_dot, axis=1))
+    work, idx = simpson_work(jt.t, np.sum(ef.tau * jt.qa_dot, axis=1))
     dE = ef.energy[idx] - ef.energy[0]
     exchanged = max(float(np.max(np.abs(work))), float(np.max(ef.kinetic)))
     assert exchanged > 1e-3  # something moves
@@ -131,7 +123,7 @@ def test_wrench_does_the_work_it_should(mapped):
     robot, jt = mapped["gough_stewart"]
     F = np.array([15.0, -10.0, 40.0, 0.0, 0.0, 0.0])
     ef = inverse_dynamics(robot, jt, wrench=F)
-    work, idx = _simpson_work(jt.t, np.sum(ef.tau * jt.qa_dot, axis=1))
+    work, idx = simpson_work(jt.t, np.sum(ef.tau * jt.qa_dot, axis=1))
     pos = np.array([robot.platform_placement(q).translation for q in jt.q])
     w_force = (pos[idx] - pos[0]) @ F[:3]
     dE = ef.energy[idx] - ef.energy[0]

@@ -3,6 +3,7 @@
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import null_space, simpson_work
 
 import pkdyn
 from solvers.forward_dynamics import (
@@ -21,28 +22,16 @@ def robots() -> dict[str, pkdyn.Robot]:
     return {name: pkdyn.load(name, geometry=False) for name in ROBOTS}
 
 
-def _null_space(J: np.ndarray) -> np.ndarray:
-    _, s, Vt = np.linalg.svd(J)
-    return Vt[int(np.sum(s > 1e-9 * s[0])) :].T
-
-
 def _tangent_velocity(robot: pkdyn.Robot, q: np.ndarray, vmax: float, seed: int = 0):
     """A velocity in the null space of the closure Jacobian, largest component ``vmax``."""
     J = robot.closure_set.jacobian(robot.model.createData(), q)
-    v = _null_space(J) @ np.random.default_rng(seed).standard_normal(robot.dof(q))
+    v = null_space(J) @ np.random.default_rng(seed).standard_normal(robot.dof(q))
     return vmax * v / np.max(np.abs(v))
 
 
 def _actuation(robot: pkdyn.Robot, gains: bool = False) -> Actuation:
     g = [a.reduction for a in robot.actuators] if gains else None
     return Actuation(robot.actuated_v, g, robot.actuator_names)
-
-
-def _simpson_work(t: np.ndarray, power: np.ndarray) -> np.ndarray:
-    """Cumulative integral of the power by Simpson's rule, at every second (uniform) sample."""
-    assert len(t) % 2 == 1 and np.allclose(np.diff(t), t[1] - t[0])
-    seg = (t[1] - t[0]) / 3.0 * (power[:-2:2] + 4.0 * power[1:-1:2] + power[2::2])
-    return np.concatenate([[0.0], np.cumsum(seg)])
 
 
 # --------------------------------------------------------------------------- passive runs
@@ -156,7 +145,7 @@ def test_actuator_work_equals_energy_change(robots, name, kp, kd, amplitude):
         robot.q_home, np.zeros(robot.nv), 1.0, 1e-3, _pd(robot, act, kp, kd, amplitude, 2.0)
     )
     power = np.sum(res.tau * act.gains * res.v[:, act.v_index], axis=1)
-    work = _simpson_work(res.t, power)
+    work, _ = simpson_work(res.t, power)
     dE = (res.energy - res.energy[0])[::2]
     scale = np.max(np.abs(work))
     assert scale > 0.05  # the actuators did work [J]
@@ -228,7 +217,7 @@ def test_projection_restores_closures_without_adding_energy(robots, name):
     # kinetic-energy metric: the removed velocity is M-orthogonal to the allowed motions
     M = pin.crba(model, data, qp)
     M = np.triu(M) + np.triu(M, 1).T
-    Z = _null_space(J)
+    Z = null_space(J)
     assert np.max(np.abs(Z.T @ M @ (v - vp))) < 1e-9 * np.max(np.abs(M @ v))
     assert vp @ M @ vp <= v @ M @ v
 

@@ -10,6 +10,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import scipy.linalg
+from conftest import simpson_work
 
 import pkdyn
 from solvers.forward_dynamics import Actuation, ForwardDynamics
@@ -60,13 +61,6 @@ def _closure_error(robot, q, dq):
 def _forward(robot, act, q, v, tau):
     fd = ForwardDynamics(robot.model, robot.constraint_models, act, baumgarte=(0.0, 0.0))
     return fd.acceleration(q, v, act.generalized(tau, robot.nv))
-
-
-def _simpson_work(t: np.ndarray, power: np.ndarray) -> np.ndarray:
-    """Cumulative integral of the power by Simpson's rule, at every second (uniform) sample."""
-    assert len(t) % 2 == 1 and np.allclose(np.diff(t), t[1] - t[0])
-    seg = (t[1] - t[0]) / 3.0 * (power[:-2:2] + 4.0 * power[1:-1:2] + power[2::2])
-    return np.concatenate([[0.0], np.cumsum(seg)])
 
 
 # --------------------------------------------------------------------------- round trips
@@ -255,7 +249,7 @@ def test_power_balance_along_a_simulated_trajectory(robots, name, kp, kd):
     lam_scale = np.max(np.abs(sim.constraint_forces))
     assert np.max(np.abs(out.constraint_forces - sim.constraint_forces)) < 1e-6 * lam_scale
     power = np.sum(out.tau * sim.v[:, act.v_index], axis=1)
-    work = _simpson_work(sim.t, power)
+    work, _ = simpson_work(sim.t, power)
     dE = (sim.energy - sim.energy[0])[::2]
     assert np.max(np.abs(work)) > 0.05
     assert np.max(np.abs(dE - work)) < 5e-3 * np.max(np.abs(work))

@@ -3,6 +3,7 @@
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import random_configs
 
 import pkdyn
 from pkdyn.analysis import kinematics as kin
@@ -27,24 +28,8 @@ def robots(delta, gough_stewart):
     return out
 
 
-def random_configs(robot, n, seed):
-    """Assembled configurations at random reachable poses around the home pose (IK)."""
-    rng = np.random.default_rng(seed)
-    dp, dr = SPREAD[robot.name]
-    M0 = robot.platform_placement(robot.q_home)
-    out = []
-    while len(out) < n:
-        d = np.zeros(6)
-        d[:3] = rng.uniform(-dp, dp, 3)
-        d[3:] = rng.uniform(-dr, dr, 3)
-        d6 = np.zeros(6)
-        d6[robot.task_rows] = d[robot.task_rows]
-        target = pin.SE3(M0.rotation @ pin.exp3(d6[3:]), M0.translation + d6[:3])
-        try:
-            out.append(pkdyn.inverse_geometry(robot, target, q_init=robot.q_home).q)
-        except pkdyn.PkdynError:
-            continue
-    return out
+def _configs(robot, n, seed):
+    return random_configs(robot, n, seed, SPREAD[robot.name])
 
 
 def pose_error(robot, M0, M):
@@ -87,7 +72,7 @@ def fd_inverse_jacobian(robot, q, h=1e-6):
 @pytest.mark.parametrize("name", ROBOTS)
 def test_direct_jacobian_matches_fk_differences(robots, name):
     robot = robots[name]
-    for q in random_configs(robot, 3, seed=11):
+    for q in _configs(robot, 3, 11):
         km = kin.kinematic_models(robot, q)
         J_fd = fd_jacobian(robot, q)
         np.testing.assert_allclose(km.J, J_fd, atol=1e-7 * max(1.0, np.abs(J_fd).max()))
@@ -96,7 +81,7 @@ def test_direct_jacobian_matches_fk_differences(robots, name):
 @pytest.mark.parametrize("name", ROBOTS)
 def test_inverse_jacobian_matches_ik_differences(robots, name):
     robot = robots[name]
-    for q in random_configs(robot, 3, seed=12):
+    for q in _configs(robot, 3, 12):
         km = kin.kinematic_models(robot, q)
         Ji_fd = fd_inverse_jacobian(robot, q)
         np.testing.assert_allclose(km.J_inv, Ji_fd, atol=1e-7 * max(1.0, np.abs(Ji_fd).max()))
@@ -106,7 +91,7 @@ def test_inverse_jacobian_matches_ik_differences(robots, name):
 def test_tripod_jacobian_matches_fk_differences(robots):
     """A 6-DOF robot with 6D weld closures and hinges: rotation rows included."""
     robot = robots["tripod"]
-    (q,) = random_configs(robot, 1, seed=13)
+    (q,) = _configs(robot, 1, 13)
     J_fd = fd_jacobian(robot, q)
     np.testing.assert_allclose(kin.kinematic_models(robot, q).J, J_fd, atol=1e-7 * 10)
 
@@ -115,7 +100,7 @@ def test_tripod_jacobian_matches_fk_differences(robots):
 def test_normalisation_and_relation(robots, name):
     """[B, -A] has orthonormal rows, and A x_dot = B qa_dot holds for FK differences."""
     robot = robots[name]
-    (q,) = random_configs(robot, 1, seed=14)
+    (q,) = _configs(robot, 1, 14)
     km = kin.kinematic_models(robot, q)
     R = np.hstack([km.B, -km.A])
     np.testing.assert_allclose(R @ R.T, np.eye(km.m), atol=1e-12)
@@ -127,7 +112,7 @@ def test_normalisation_and_relation(robots, name):
 @pytest.mark.parametrize("name", ROBOTS)
 def test_joint_velocities_respect_closures(robots, name):
     robot = robots[name]
-    (q,) = random_configs(robot, 1, seed=15)
+    (q,) = _configs(robot, 1, 15)
     km = kin.kinematic_models(robot, q)
     qa_dot = np.linspace(0.5, -0.3, km.n_a)
     v = kin.joint_velocities(robot, q, qa_dot)
@@ -145,7 +130,7 @@ def test_joint_velocities_respect_closures(robots, name):
 @pytest.mark.parametrize("name", ROBOTS)
 def test_twist_and_rates_round_trip(robots, name):
     robot = robots[name]
-    (q,) = random_configs(robot, 1, seed=16)
+    (q,) = _configs(robot, 1, 16)
     qa_dot = np.random.default_rng(0).normal(size=len(robot.actuators))
     x_dot = kin.platform_twist(robot, q, qa_dot)
     np.testing.assert_allclose(kin.actuator_rates(robot, q, x_dot), qa_dot, atol=1e-9)
@@ -155,7 +140,7 @@ def test_twist_and_rates_round_trip(robots, name):
 def test_reciprocal_screws_match_general_path(robots, name):
     """Pasqui's reciprocal-screw A, B (seed 001) give the J of the general elimination."""
     robot = robots[name]
-    for q in random_configs(robot, 3, seed=17):
+    for q in _configs(robot, 3, 17):
         km = kin.kinematic_models(robot, q)
         A, B = screws.reciprocal_screws(robot, q)
         np.testing.assert_allclose(np.linalg.solve(A, B), km.J, atol=1e-8)
@@ -169,7 +154,7 @@ def test_planar_3rrr_seed_matrices(robots):
     """Seed 001's B_ii = l1 l2 sin q_2^i, with q_2^i read from the model's joint frames."""
     robot = robots["planar_3rrr"]
     p = robot.params
-    (q,) = random_configs(robot, 1, seed=18)
+    (q,) = _configs(robot, 1, 18)
     _, B = screws.reciprocal_screws(robot, q)
     pin.framesForwardKinematics(robot.model, robot.data, q)
     for i in range(3):
@@ -183,7 +168,7 @@ def test_planar_3rrr_seed_matrices(robots):
 def test_gough_stewart_reciprocal_screws_are_leg_lines(robots):
     """A rows: unit leg directions and their moments about the platform origin; B = I."""
     robot = robots["gough_stewart"]
-    (q,) = random_configs(robot, 1, seed=19)
+    (q,) = _configs(robot, 1, 19)
     A, B = screws.reciprocal_screws(robot, q)
     np.testing.assert_allclose(np.linalg.norm(A[:, :3], axis=1), 1.0, atol=1e-12)
     np.testing.assert_allclose(B, np.eye(6), atol=0)

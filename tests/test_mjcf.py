@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import null_space
 
 import pkdyn
 from pkdyn.cli import main
@@ -325,8 +326,7 @@ def case(request):
 
 def _null_space(robot: pkdyn.Robot, kin: pin.Data, q: np.ndarray) -> np.ndarray:
     _, J = robot.closure_set.residual_and_jacobian(kin, q)
-    _, s, Vt = np.linalg.svd(J)
-    return Vt[int(np.sum(s > 1e-9 * s[0])) :].T
+    return null_space(J)
 
 
 def _mujoco_acceleration(case: _Case, q, v, tau, d_max: float) -> np.ndarray:

@@ -3,6 +3,7 @@
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import random_configs
 
 import pkdyn
 from pkdyn.analysis import kinematics, statics
@@ -19,22 +20,8 @@ def robots(delta, gough_stewart):
     return out
 
 
-def random_configs(robot, n, seed):
-    rng = np.random.default_rng(seed)
-    dp, dr = SPREAD.get(robot.name, (0.05, 0.0))
-    M0 = robot.platform_placement(robot.q_home)
-    out = []
-    while len(out) < n:
-        d = np.zeros(6)
-        d[robot.task_rows] = np.concatenate([rng.uniform(-dp, dp, 3), rng.uniform(-dr, dr, 3)])[
-            robot.task_rows
-        ]
-        target = pin.SE3(M0.rotation @ pin.exp3(d[3:]), M0.translation + d[:3])
-        try:
-            out.append(pkdyn.inverse_geometry(robot, target, q_init=robot.q_home).q)
-        except pkdyn.PkdynError:
-            continue
-    return out
+def _configs(robot, n, seed):
+    return random_configs(robot, n, seed, SPREAD.get(robot.name, (0.05, 0.0)))
 
 
 def small_motion(robot, q, dqa):
@@ -63,7 +50,7 @@ def test_efforts_satisfy_virtual_work(robots, name):
     """tau . dq_a + F . dx = 0 on small motions compatible with the closures."""
     robot = robots[name]
     rng = np.random.default_rng(21)
-    for q in random_configs(robot, 3, seed=22):
+    for q in _configs(robot, 3, 22):
         m = robot.task_rows.size
         F = rng.normal(scale=50.0, size=m)
         tau = statics.actuator_efforts(robot, q, F)
@@ -77,7 +64,7 @@ def test_efforts_satisfy_virtual_work(robots, name):
 @pytest.mark.parametrize("name", ROBOTS)
 def test_full_equilibrium_matches_jacobian_transpose(robots, name):
     robot = robots[name]
-    (q,) = random_configs(robot, 1, seed=23)
+    (q,) = _configs(robot, 1, 23)
     F = np.linspace(10.0, -20.0, robot.task_rows.size)
     res = statics.static_equilibrium(robot, q, F)
     np.testing.assert_allclose(res.tau, statics.actuator_efforts(robot, q, F), atol=1e-8)
@@ -91,7 +78,7 @@ def test_gravity_efforts_satisfy_virtual_work(robots, name):
     robot = robots[name]
     rng = np.random.default_rng(24)
     model, data = robot.model, robot.data
-    for q in random_configs(robot, 2, seed=25):
+    for q in _configs(robot, 2, 25):
         tau = statics.static_equilibrium(robot, q, gravity=True).tau
         dqa = 1e-5 * rng.normal(size=len(robot.actuators))
         qm, qp = small_motion(robot, q, dqa)
@@ -105,7 +92,7 @@ def test_gravity_efforts_satisfy_virtual_work(robots, name):
 def test_gough_stewart_legs_are_two_force_members(robots):
     """Without gravity each leg only carries its actuator force along its axis."""
     robot = robots["gough_stewart"]
-    (q,) = random_configs(robot, 1, seed=26)
+    (q,) = _configs(robot, 1, 26)
     F = np.array([30.0, -20.0, 400.0, 5.0, -8.0, 3.0])
     res = statics.static_equilibrium(robot, q, F)
     pin.forwardKinematics(robot.model, robot.data, q)
@@ -120,7 +107,7 @@ def test_gough_stewart_legs_are_two_force_members(robots):
 def test_delta_arms_do_not_feel_moments_on_the_nacelle(robots):
     """The parallelograms take any moment on the nacelle: the arm torques are unchanged."""
     robot = robots["delta"]
-    (q,) = random_configs(robot, 1, seed=27)
+    (q,) = _configs(robot, 1, 27)
     force = np.array([3.0, -4.0, 20.0])
     t_force = statics.static_equilibrium(robot, q, force).tau
     res = statics.static_equilibrium(robot, q, np.concatenate([force, [0.5, -0.7, 0.3]]))
@@ -131,7 +118,7 @@ def test_delta_arms_do_not_feel_moments_on_the_nacelle(robots):
 @pytest.mark.parametrize("name", ROBOTS)
 def test_platform_wrench_inverts_efforts(robots, name):
     robot = robots[name]
-    (q,) = random_configs(robot, 1, seed=28)
+    (q,) = _configs(robot, 1, 28)
     F = np.linspace(-5.0, 7.0, robot.task_rows.size)
     tau = statics.actuator_efforts(robot, q, F)
     np.testing.assert_allclose(statics.platform_wrench(robot, q, tau), -F, atol=1e-8)
@@ -166,7 +153,7 @@ def test_statics_json_and_input_checks(robots):
 def test_efforts_from_seed_screws_gough_stewart(robots):
     """Merlet's statics: tau_i is the leg force, F balanced by sum of tau_i along the legs."""
     robot = robots["gough_stewart"]
-    (q,) = random_configs(robot, 1, seed=29)
+    (q,) = _configs(robot, 1, 29)
     F = np.array([10.0, 20.0, -300.0, 1.0, 2.0, -3.0])
     tau = statics.actuator_efforts(robot, q, F)
     km = kinematics.kinematic_models(robot, q)
