@@ -266,9 +266,11 @@ def test_malformed_xml(tmp_path):
     assert "malformed" in str(err.value)
 
 
-def test_root_element_must_be_robot():
-    with pytest.raises(pkdyn.DescriptionError, match="<sdf>"):
-        _load_text("<sdf version='1.6'/>")
+def test_root_element_must_be_a_known_format():
+    with pytest.raises(pkdyn.DescriptionError, match="<scene>.*cannot tell the format"):
+        _load_text("<scene version='1.6'/>")
+    with pytest.raises(pkdyn.DescriptionError, match="found 0 models"):
+        _load_text("<sdf version='1.6'/>")  # an SDFormat file, but without a model
 
 
 def test_closure_naming_a_missing_link():

@@ -95,10 +95,11 @@ def test_forward_geometry_closes_the_loop():
     assert np.linalg.norm(A.translation - A0.translation) > 1e-3
 
 
-def test_explicit_sidecar_6d_weld_and_regex(tmp_path):
+def test_explicit_sidecar_6d_weld(tmp_path):
     side = tmp_path / "weld.yaml"
     side.write_text(
-        "closed_loop: [['closedloop1_A', 'closedloop1_B']]\ntype: ['6d']\nname_mot: ['^mot']\n"
+        "closed_loop: [['closedloop1_A', 'closedloop1_B']]\ntype: ['6d']\n"
+        "name_mot: ['mot1', 'mot2']\n"
     )
     robot = pkdyn.load(FIVE_BAR, sidecar=side, geometry=False)  # wins over robot.yaml
     (closure,) = robot.closures

@@ -1,25 +1,101 @@
-"""``pkdyn.load``: a library robot or a description file -> :class:`pkdyn.model.robot.Robot`."""
+"""``pkdyn.load``: a library robot or a description file -> :class:`pkdyn.model.robot.Robot`.
+
+Files are told apart by their root element, whatever their name: ``<robot>`` is a URDF (with
+pkdyn's extension elements, Drake's ``drake:ball_constraint``, onshape-to-robot's ``closing_``
+frames, a Gepetto YAML sidecar), ``<mujoco>`` an MJCF model
+(:mod:`~pkdyn.model.formats.mjcf_import`), ``<sdf>`` an SDFormat model
+(:mod:`~pkdyn.model.formats.sdf`). Anything else is refused with one
+:class:`~pkdyn.exceptions.DescriptionError`.
+
+The home configuration is then assembled by :func:`pkdyn.model.home.find_home` from the
+description's own pose (or ``home=``), within the assembly tolerance ``tol``.
+"""
 
 from __future__ import annotations
 
 import dataclasses
 import math
 import os
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
+from xml.parsers import expat
 
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import AssemblyError, DescriptionError, ParameterError, UnknownRobotError
+from pkdyn.exceptions import DescriptionError, InvalidInputError, ParameterError, UnknownRobotError
 from pkdyn.model.build import build_geometry, build_tree, constraint_models, resolve_frame
-from pkdyn.model.description import TASK_COMPONENTS, ActuatorSpec, Description, parse_description
+from pkdyn.model.description import (
+    TASK_COMPONENTS,
+    ActuatorSpec,
+    Description,
+    parse_description,
+)
 from pkdyn.model.families import FAMILIES
-from pkdyn.model.formats.gepetto import read_sidecar
+from pkdyn.model.formats import drake, onshape
+from pkdyn.model.formats.gepetto import Sidecar, apply_joint_types, loop_frames, read_sidecar
+from pkdyn.model.formats.graph import build
+from pkdyn.model.formats.mjcf_import import read_mjcf
+from pkdyn.model.formats.sdf import read_sdf
+from pkdyn.model.formats.xmldoc import read_text
+from pkdyn.model.home import ASSEMBLY_TOL, find_home
 from pkdyn.model.robot import Robot
-from solvers import ClosureSet, solve_lm
+from pkdyn.model.warn import warn
+from solvers import ClosureSet
 
-__all__ = ["load", "load_string"]
+__all__ = ["FORMATS", "detect_format", "load", "load_string"]
+
+FORMATS = {"robot": "urdf", "mujoco": "mjcf", "sdf": "sdf"}
+"""Root element -> description format."""
+
+
+class _RootFoundError(Exception):
+    def __init__(self, tag: str) -> None:
+        self.tag = tag
+
+
+def detect_format(text: str, source: str) -> str:
+    """Format of a description from its root element: ``urdf``, ``mjcf`` or ``sdf``.
+
+    Args:
+        text: The document.
+        source: File or name, for messages.
+
+    Returns:
+        The format.
+
+    Raises:
+        DescriptionError: Not XML, or a root element of none of the three formats.
+
+    """
+    parser = expat.ParserCreate()
+
+    def start(tag: str, _: dict[str, str]) -> None:
+        raise _RootFoundError(tag)
+
+    parser.StartElementHandler = start
+    try:
+        parser.Parse(text, True)
+    except _RootFoundError as root:
+        tag = root.tag.split(":")[-1]
+        if tag in FORMATS:
+            return FORMATS[tag]
+        raise DescriptionError(
+            source,
+            f"<{root.tag}>",
+            "cannot tell the format from this root element: pkdyn reads URDF (<robot>), MJCF "
+            "(<mujoco>) and SDFormat (<sdf>) descriptions",
+        ) from None
+    except expat.ExpatError as err:
+        raise DescriptionError(
+            source,
+            "file",
+            f"is not an XML document ({expat.errors.messages[err.code]}, line {err.lineno}): "
+            "pkdyn reads URDF, MJCF and SDFormat descriptions",
+        ) from None
+    raise DescriptionError(source, "file", "is empty: no XML element")
 
 
 def _package_dirs(path: Path | None) -> list[str]:
@@ -38,16 +114,25 @@ def load(
     sidecar: str | os.PathLike[str] | None = None,
     geometry: bool = True,
     package_dirs: list[str] | None = None,
+    *,
+    home: Sequence[float] | np.ndarray | None = None,
+    tol: float = ASSEMBLY_TOL,
     **params: Any,
 ) -> Robot:
-    """Load a robot: a library family name (``delta``, ``gough_stewart``...) or a URDF file.
+    """Load a robot: a library family name (``delta``, ``gough_stewart``...) or a file.
 
     Args:
-        name_or_path: Library family name or path to a pkdyn / plain URDF file.
-        sidecar: Gepetto-style YAML sidecar (``closed_loop``, ``type``, ``name_mot``); by default
-            ``<file>.yaml`` or ``robot.yaml`` next to the URDF when present.
+        name_or_path: Library family name, or path to a URDF (pkdyn or plain), MJCF or SDFormat
+            file (the format is read from the root element).
+        sidecar: Gepetto-style YAML sidecar (``closed_loop``, ``type``, ``name_mot``,
+            ``joint_name``/``joint_type``, ``free_flyer``, ``platform``); by default
+            ``<file>.yaml`` or ``robot.yaml`` next to the file when present.
         geometry: Build the visual and collision geometry models.
         package_dirs: Extra directories for mesh look-up.
+        home: Home configuration to assemble: actuator coordinates (n_a,) [rad or m], the
+            passive ones solved, or a full configuration (nq,) used as the starting guess.
+        tol: Assembly tolerance [m or rad]: closures a description misses by at most this much
+            (CAD rounding) are closed with a warning; beyond it, an error.
         **params: Builder parameters of a library family (SI units).
 
     Returns:
@@ -56,8 +141,9 @@ def load(
     Raises:
         UnknownRobotError: Neither a family nor an existing file.
         ParameterError: Unknown or invalid builder parameter, or parameters given for a file.
-        DescriptionError: Malformed description.
-        AssemblyError: The home configuration cannot be assembled.
+        InvalidInputError: Malformed ``home`` or ``tol``.
+        DescriptionError: Malformed description, or a format that cannot be told apart.
+        AssemblyError: No assembled home configuration found (names the closure).
 
     """
     name = str(name_or_path)
@@ -65,18 +151,22 @@ def load(
         fam = FAMILIES[name]
         p = fam.make_params(params)
         xml = fam.build_urdf(p)
-        home = fam.home(p)
-        return load_string(xml, name, geometry=geometry, params=p, home=home)
+        return load_string(
+            xml,
+            name,
+            geometry=geometry,
+            params=p,
+            home=fam.home(p) if home is None else home,
+            tol=tol,
+            user_home=home is not None,
+        )
     path = Path(name)
-    if not path.is_file():
+    if not path.exists() or path.is_dir():
         raise UnknownRobotError(name, list(FAMILIES))
     if params:
         first = next(iter(params))
         raise ParameterError(path.name, first, "builder parameters apply to library robots only")
-    try:
-        xml = path.read_text()
-    except (OSError, UnicodeDecodeError) as err:
-        raise DescriptionError(name, "file", f"cannot be read ({err})") from None
+    text = read_text(path, "description file")
     side = Path(sidecar) if sidecar is not None else None
     if side is None:
         for cand in (path.with_suffix(".yaml"), path.parent / "robot.yaml"):
@@ -84,7 +174,27 @@ def load(
                 side = cand
                 break
     dirs = _package_dirs(path) + list(package_dirs or [])
-    return load_string(xml, name, geometry=geometry, package_dirs=dirs, sidecar=side)
+    return load_string(
+        text,
+        name,
+        geometry=geometry,
+        package_dirs=dirs,
+        sidecar=side,
+        home=home,
+        tol=tol,
+        path=path,
+    )
+
+
+@dataclasses.dataclass
+class _Parts:
+    """A description turned into Pinocchio objects, before assembly."""
+
+    model: pin.Model
+    desc: Description
+    visual: pin.GeometryModel
+    collision: pin.GeometryModel
+    q_ref: np.ndarray
 
 
 def load_string(
@@ -94,77 +204,189 @@ def load_string(
     package_dirs: list[str] | None = None,
     sidecar: Path | None = None,
     params: Any = None,
-    home: list[float] | None = None,
+    home: Sequence[float] | np.ndarray | None = None,
+    tol: float = ASSEMBLY_TOL,
+    path: Path | None = None,
+    user_home: bool | None = None,
 ) -> Robot:
-    """Load a robot from the text of its description.
+    """Load a robot from the text of its description (URDF, MJCF or SDFormat).
 
     Args:
-        xml: URDF text with optional pkdyn extension elements.
+        xml: The description.
         source: Name used in messages and as ``Robot.source``.
         geometry: Build the visual and collision geometry models.
         package_dirs: Directories for mesh look-up.
         sidecar: Optional Gepetto YAML sidecar.
         params: Builder parameters to keep on the robot.
-        home: Actuated coordinates of the home configuration, if known.
+        home: Home configuration: actuator coordinates (n_a,) or a full configuration (nq,).
+        tol: Assembly tolerance [m or rad] (see :func:`load`).
+        path: File the text came from (relative includes and meshes).
+        user_home: ``home`` came from the user (default: whenever it is given).
 
     Returns:
         The loaded robot.
 
     """
-    desc = parse_description(xml, source)
-    model = build_tree(xml, desc.joints, source)
-    closures = list(desc.closures)
-    actuators = list(desc.actuators)
-    if sidecar is not None:
-        moving = [model.names[j] for j in range(1, model.njoints)]
-        extra_c, extra_a = read_sidecar(sidecar, moving)
-        closures += extra_c
-        for a in extra_a:  # effort and velocity limits from the joint's URDF <limit>
-            if a.joint not in [b.joint for b in actuators]:
-                iv = model.joints[model.getJointId(a.joint)].idx_v
-                eff, vel = float(model.effortLimit[iv]), float(model.velocityLimit[iv])
-                actuators.append(dataclasses.replace(a, effort=eff, velocity=vel))
-    desc = Description(
-        desc.name,
-        tuple(closures),
-        desc.joints,
-        tuple(actuators),
-        desc.platform,
-        desc.links,
-        desc.joint_names,
+    fmt = detect_format(xml, source)
+    side = read_sidecar(sidecar) if sidecar is not None else None
+    dirs = list(package_dirs or [])
+    if fmt == "urdf":
+        parts = _urdf(xml, source, geometry, dirs, side)
+    else:
+        reader = read_mjcf if fmt == "mjcf" else read_sdf
+        mech = reader(xml, source, path, geometry=geometry)
+        if side is not None and side.joint_types:
+            raise DescriptionError(
+                str(sidecar), "joint_name", "joint upgrades apply to URDF descriptions only"
+            )
+        built = build(mech)
+        q_ref = built.q_ref
+        if "home" in mech.home:
+            q_ref = built.configuration(mech.home["home"], q_ref)
+        desc = Description(
+            mech.name,
+            tuple(built.closures),
+            (),
+            tuple(mech.actuators),
+            None,
+            tuple(b for b, body in mech.bodies.items() if not body.virtual),
+            tuple(j.name for j in mech.joints),
+        )
+        parts = _Parts(built.model, desc, built.visual, built.collision, q_ref)
+        if not geometry:
+            parts.visual, parts.collision = pin.GeometryModel(), pin.GeometryModel()
+    parts = _with_sidecar(parts, side, source)
+    parts = _with_onshape(parts)
+    robot = _robot(parts, source, params)
+    return _assembled(
+        robot, parts, home, tol, user_home if user_home is not None else home is not None
     )
-    cms, owner = constraint_models(model, closures, source)
-    actuated_joints, actuated_q, actuated_v = _actuation(model, actuators, source)
-    platform_frame = None
-    task_rows = np.arange(6)
-    if desc.platform is not None:
-        j, M = resolve_frame(model, desc.platform.frame, source, "pkdyn:platform")
-        fname = "platform" if not model.existFrame("platform") else "pkdyn_platform"
-        platform_frame = model.addFrame(pin.Frame(fname, j, M, pin.FrameType.OP_FRAME), False)
-        task_rows = np.array([TASK_COMPONENTS.index(t) for t in desc.platform.task])
-    dirs = package_dirs or []
+
+
+def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar | None) -> _Parts:
+    desc = parse_description(xml, source)
+    root = ET.fromstring(xml)
+    extra = drake.urdf_constraints(root, source)
+    model = build_tree(xml, desc.joints, source)
+    if side is not None:
+        model = apply_joint_types(model, side, source)
+    if side is not None and side.free_flyer:
+        model = _with_free_flyer(model)
+    if side is None and not desc.closures and not extra:
+        pairs = loop_frames(model)
+        if pairs:
+            warn(
+                f"{source}: frames {', '.join(pairs[:3])}{' ...' if len(pairs) > 3 else ''} "
+                "look like Gepetto loop frames, but there is no robot.yaml sidecar: the "
+                "loops are left open"
+            )
     if geometry:
         visual = build_geometry(model, xml, pin.GeometryType.VISUAL, dirs, source)
         collision = build_geometry(model, xml, pin.GeometryType.COLLISION, dirs, source)
     else:
         visual, collision = pin.GeometryModel(), pin.GeometryModel()
+    desc = dataclasses.replace(desc, closures=desc.closures + tuple(extra))
+    return _Parts(model, desc, visual, collision, _guess(model))
+
+
+def _with_free_flyer(model: pin.Model) -> pin.Model:
+    """The model with a free-flyer root joint (Gepetto's ``free_flyer`` option)."""
+    new = pin.Model()
+    new.name = model.name
+    new.gravity = model.gravity
+    ff = new.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root_joint")
+    new.addFrame(pin.Frame("root_joint", ff, pin.SE3.Identity(), pin.JOINT), False)
+    ids = {0: ff}
+    for jid in range(1, model.njoints):
+        jm = model.joints[jid]
+        sl_q = slice(jm.idx_q, jm.idx_q + jm.nq)
+        sl_v = slice(jm.idx_v, jm.idx_v + jm.nv)
+        ids[jid] = new.addJoint(
+            ids[model.parents[jid]],
+            jm,
+            model.jointPlacements[jid],
+            model.names[jid],
+            model.effortLimit[sl_v],
+            model.velocityLimit[sl_v],
+            model.lowerPositionLimit[sl_q],
+            model.upperPositionLimit[sl_q],
+        )
+        new.appendBodyToJoint(ids[jid], model.inertias[jid], pin.SE3.Identity())
+    for f in model.frames:
+        if f.name == "universe":
+            continue
+        fr = pin.Frame(f)
+        fr.parentJoint = ids[f.parentJoint]
+        new.addFrame(fr, False)
+    new.appendBodyToJoint(ff, model.inertias[0], pin.SE3.Identity())
+    return new
+
+
+def _with_sidecar(parts: _Parts, side: Sidecar | None, source: str) -> _Parts:
+    if side is None:
+        return parts
+    model, desc = parts.model, parts.desc
+    closures = list(desc.closures) + side.closures
+    actuators = list(desc.actuators)
+    moving = {model.names[j] for j in range(1, model.njoints)}
+    for a in side.actuators:
+        if a.joint not in moving:
+            raise DescriptionError(
+                side.source,
+                f"name_mot '{a.joint}'",
+                "matches no joint (a moving joint of the model)",
+            )
+        if a.joint in [b.joint for b in actuators]:
+            continue
+        iv = model.joints[model.getJointId(a.joint)].idx_v
+        eff, vel = float(model.effortLimit[iv]), float(model.velocityLimit[iv])
+        actuators.append(dataclasses.replace(a, effort=eff, velocity=vel))
+    platform = desc.platform if side.platform is None else side.platform
+    parts.desc = dataclasses.replace(
+        desc, closures=tuple(closures), actuators=tuple(actuators), platform=platform
+    )
+    return parts
+
+
+def _with_onshape(parts: _Parts) -> _Parts:
+    used = {f.link for c in parts.desc.closures for f in (c.frame1, c.frame2)}
+    extra = [c for c in onshape.closing_closures(parts.model) if c.frame1.link not in used]
+    if extra:
+        parts.desc = dataclasses.replace(parts.desc, closures=parts.desc.closures + tuple(extra))
+    return parts
+
+
+def _robot(parts: _Parts, source: str, params: Any) -> Robot:
+    model, desc = parts.model, parts.desc
+    names = [c.name for c in desc.closures]
+    for n in names:
+        if names.count(n) > 1:
+            raise DescriptionError(source, f"closure '{n}'", "closure names must be unique")
+    cms, owner = constraint_models(model, desc.closures, source)
+    actuated_joints, actuated_q, actuated_v = _actuation(model, list(desc.actuators), source)
+    platform_frame = None
+    task_rows = np.arange(6)
+    if desc.platform is not None:
+        j, M = resolve_frame(model, desc.platform.frame, source, "platform")
+        fname = "platform" if not model.existFrame("platform") else "pkdyn_platform"
+        platform_frame = model.addFrame(pin.Frame(fname, j, M, pin.FrameType.OP_FRAME), False)
+        task_rows = np.array([TASK_COMPONENTS.index(t) for t in desc.platform.task])
     vec = pin.StdVec_RigidConstraintModel()
     for cm in cms:
         vec.append(cm)
-    data = model.createData()
     passive = np.setdiff1d(np.arange(model.nv), actuated_v)
-    robot = Robot(
+    return Robot(
         name=desc.name,
         source=source,
         model=model,
-        data=data,
-        visual_model=visual,
-        collision_model=collision,
+        data=model.createData(),
+        visual_model=parts.visual,
+        collision_model=parts.collision,
         description=desc,
         constraint_models=vec,
         constraint_owner=owner,
         closure_set=ClosureSet(model, cms),
-        actuators=tuple(actuators),
+        actuators=tuple(desc.actuators),
         actuated_joints=actuated_joints,
         actuated_q=actuated_q,
         actuated_v=actuated_v,
@@ -174,7 +396,41 @@ def load_string(
         q_home=pin.neutral(model),
         params=params,
     )
-    robot.q_home = _home(robot, home)
+
+
+def _assembled(
+    robot: Robot,
+    parts: _Parts,
+    home: Sequence[float] | np.ndarray | None,
+    tol: float,
+    user: bool,
+) -> Robot:
+    q0 = np.array(parts.q_ref, dtype=float)
+    qa = None
+    if home is not None:
+        try:
+            h = np.asarray(home, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise InvalidInputError("home", f"expected numbers, got {home!r}") from None
+        if not np.all(np.isfinite(h)):
+            raise InvalidInputError("home", "NaN and infinite values are not allowed")
+        n_a = len(robot.actuators)
+        if h.size == n_a and n_a > 0:
+            qa = h
+        elif h.size == robot.nq:
+            q0 = pin.normalize(robot.model, h)
+        else:
+            raise InvalidInputError(
+                "home",
+                f"{h.size} values; give the {n_a} actuator coordinates "
+                f"({', '.join(a.name for a in robot.actuators) or 'none'}) or a full "
+                f"configuration of {robot.nq} values",
+            )
+    res = find_home(robot, q0, qa, tol, user=user)
+    if res.moved:
+        parts.desc = dataclasses.replace(parts.desc, closures=tuple(res.closures))
+        robot = _robot(parts, robot.source, robot.params)
+    robot.q_home = res.q
     return robot
 
 
@@ -220,27 +476,3 @@ def _guess(model: pin.Model) -> np.ndarray:
         ):
             q[i] = 0.5 * (lo[i] + hi[i])
     return q
-
-
-def _home(robot: Robot, home: list[float] | None) -> np.ndarray:
-    q0 = _guess(robot.model)
-    if robot.closure_set.nc == 0:
-        return q0
-    free = None
-    if home is not None:
-        q0[robot.actuated_q] = home
-        free = robot.passive_v
-    cs, data = robot.closure_set, robot.data
-    sol = solve_lm(
-        robot.model, q0, lambda q: cs.residual(data, q), lambda q: cs.jacobian(data, q), free, 1e-12
-    )
-    if not sol.converged:
-        per = cs.split(sol.residual)
-        worst = max(per, key=lambda k: per[k])
-        raise AssemblyError(
-            worst,
-            per[worst],
-            f"{robot.source}: the home configuration cannot be assembled: closure "
-            f"'{worst}' keeps a residual of {per[worst]:.3g} (check lengths and closure frames)",
-        )
-    return sol.q

@@ -1,0 +1,129 @@
+"""Drake's loop-closing custom elements, in URDF and in SDFormat.
+
+- ``<drake:ball_constraint>`` (Drake's syntax): ``drake:ball_constraint_body_A``,
+  ``drake:ball_constraint_p_AP``, ``drake:ball_constraint_body_B``,
+  ``drake:ball_constraint_p_BQ`` -- in a URDF as ``name`` / ``value`` attributes, in SDFormat as
+  element text. Points P on A and Q on B coincide: a ``point`` closure.
+- ``<drake:weld_constraint>``: in SDFormat, ``<parent>`` and ``<child>`` frames that coincide
+  (the form of Drake's ``four_bar_weld.sdf``); in both formats, like the ball constraint,
+  ``drake:weld_constraint_body_A`` / ``_X_AP`` / ``_body_B`` / ``_X_BQ`` with poses
+  ``x y z roll pitch yaw``. A ``weld`` closure.
+
+Closures are named ``ball_constraint1``, ``weld_constraint1``... in file order.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from collections.abc import Callable
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import DescriptionError
+from pkdyn.model.description import ClosureSpec, FrameRef
+
+__all__ = ["closure", "urdf_constraints"]
+
+
+def _local(tag: str) -> str:
+    """Local name of a tag: ``{ns}name`` or ``prefix:name`` -> ``name``."""
+    return tag.rsplit("}", 1)[-1].rsplit(":", 1)[-1]
+
+
+def _is_drake(tag: str) -> bool:
+    return "drake" in tag.split("}")[0].lower() or tag.startswith("drake:")
+
+
+def _numbers(source: str, where: str, text: str | None, n: int) -> np.ndarray:
+    try:
+        v = np.array([float(t) for t in (text or "").split()], dtype=float)
+    except ValueError:
+        raise DescriptionError(source, where, f"expected {n} numbers, got '{text}'") from None
+    if v.shape != (n,) or not np.all(np.isfinite(v)):
+        raise DescriptionError(source, where, f"expected {n} finite numbers, got '{text}'")
+    return v
+
+
+def closure(
+    el: ET.Element,
+    k: int,
+    source: str,
+    where: str,
+    read: Callable[[ET.Element], str | None],
+    frames: Callable[[str, ET.Element], FrameRef] | None = None,
+) -> ClosureSpec:
+    """A Drake ball or weld constraint element as a closure.
+
+    Args:
+        el: The ``drake:ball_constraint`` or ``drake:weld_constraint`` element.
+        k: Its number (1-based) among elements of its kind, for the closure name.
+        source: File, for messages.
+        where: How messages name the element.
+        read: Value of a child element (text in SDFormat, ``name``/``value`` attribute in URDF).
+        frames: SDFormat only: resolves a frame name (``<parent>``/``<child>`` welds).
+
+    Returns:
+        The closure; frames name bodies (or SDFormat frames resolved by ``frames``).
+
+    Raises:
+        DescriptionError: Missing or malformed children.
+
+    """
+    kind = _local(el.tag)
+    prefix = "ball_constraint" if kind == "ball_constraint" else "weld_constraint"
+    children = {_local(c.tag): c for c in el}
+    if kind == "weld_constraint" and "parent" in children and frames is not None:
+        if "child" not in children:
+            raise DescriptionError(source, where, "needs <parent> and <child> frames")
+        f1 = frames((children["parent"].text or "").strip(), children["parent"])
+        f2 = frames((children["child"].text or "").strip(), children["child"])
+        return ClosureSpec(f"{prefix}{k}", "weld", f1, f2)
+    out = []
+    for body, offset in (
+        ("body_A", "p_AP" if kind == "ball_constraint" else "X_AP"),
+        ("body_B", "p_BQ" if kind == "ball_constraint" else "X_BQ"),
+    ):
+        b = children.get(f"{prefix}_{body}")
+        name = read(b).strip() if b is not None and read(b) else ""
+        if not name:
+            raise DescriptionError(source, where, f"missing drake:{prefix}_{body}")
+        o = children.get(f"{prefix}_{offset}")
+        if kind == "ball_constraint":
+            p = _numbers(source, f"{where} {offset}", read(o) if o is not None else "0 0 0", 3)
+            M = pin.SE3(np.eye(3), p)
+        else:
+            x = _numbers(
+                source, f"{where} {offset}", read(o) if o is not None else "0 0 0 0 0 0", 6
+            )
+            M = pin.SE3(pin.rpy.rpyToMatrix(x[3:]), x[:3])
+        out.append(FrameRef(name, M))
+    return ClosureSpec(f"{prefix}{k}", "point" if kind == "ball_constraint" else "weld", *out)
+
+
+def urdf_constraints(root: ET.Element, source: str) -> list[ClosureSpec]:
+    """Drake ball and weld constraints of a URDF (namespace-aware tree).
+
+    Args:
+        root: The ``<robot>`` element, parsed with namespaces.
+        source: File, for messages.
+
+    Returns:
+        The closures.
+
+    """
+    counts = {"ball_constraint": 0, "weld_constraint": 0}
+    out = []
+    for el in root:
+        if not isinstance(el.tag, str) or not _is_drake(el.tag):
+            continue
+        kind = _local(el.tag)
+        if kind not in counts:
+            continue
+        counts[kind] += 1
+
+        def read(c: ET.Element) -> str | None:
+            return c.get("name") if c.get("name") is not None else c.get("value")
+
+        out.append(closure(el, counts[kind], source, f"<drake:{kind}> #{counts[kind]}", read))
+    return out

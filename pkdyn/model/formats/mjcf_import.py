@@ -1,0 +1,584 @@
+"""MJCF import: a MuJoCo model with its equality constraints as a closed-loop robot.
+
+What is read (attributes with their default classes, see :mod:`~pkdyn.model.formats.mjcf_spec`):
+
+- the body tree under ``<worldbody>`` (every top-level body: several grounded branches and
+  free bodies), ``<frame>`` elements, ``<include>`` files; joints ``hinge``, ``slide``,
+  ``ball``, ``free`` (several joints in one body are chained as MuJoCo applies them), their
+  ``ref`` (``qpos0``): pkdyn's coordinates are MuJoCo's ``qpos`` (quaternions reordered to
+  Pinocchio's ``x y z w``), so ranges, keyframes and actuator positions carry over;
+- inertias from ``<inertial>``, or from the geoms when it is absent (``inertiafromgeom``),
+  with MuJoCo's formulas for primitive shapes (mesh volumes from the mesh file, exact);
+- geoms: primitives and meshes (``contype = conaffinity = 0`` ones are visual, the others
+  collision); a mesh file that cannot be found is left out with one warning naming the files;
+- ``<equality>``: ``connect`` -> ``point`` closure, ``weld`` -> ``weld`` closure, by bodies
+  (the second anchor / relative pose taken at ``qpos0``, as MuJoCo does) or by sites; named
+  after the equality (unnamed ones ``connect1``, ``weld2``...). ``joint``, ``tendon``,
+  ``distance`` and ``flex`` equalities are refused with a message naming them;
+- ``<actuator>`` on joints: ``gear`` -> reduction, joint-side effort limit from ``forcerange``
+  x gear (motors and proportional ``general`` actuators also from ``ctrlrange`` x gain x gear);
+  actuators on tendons, sites or bodies are left out with a warning;
+- ``<keyframe>``: the key named ``home`` gives the home configuration (else ``qpos0``);
+  ``<option gravity>``.
+
+Elements that change the mechanism and that pkdyn cannot represent (``composite``,
+``flexcomp``, ``replicate``, ``attach``, body plugins) are refused naming the element and its
+line.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.model.description import ActuatorSpec, ClosureSpec, FrameRef
+from pkdyn.model.formats import mjcf_spec as spec
+from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
+from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml, read_text
+from pkdyn.model.warn import warn
+
+__all__ = ["read_mjcf"]
+
+_REFUSED_IN_BODY = ("composite", "flexcomp", "replicate", "attach", "plugin")
+_IGNORED_IN_BODY = ("camera", "light")
+_MAX_INCLUDE_DEPTH = 8
+
+
+@dataclass
+class _Reader:
+    doc: XmlDoc
+    comp: spec.Compiler
+    defs: spec.Defaults
+    mech: Mechanism
+    meshes: dict[str, tuple[str, np.ndarray]] = field(default_factory=dict)
+    materials: dict[str, np.ndarray] = field(default_factory=dict)
+    missing: list[str] = field(default_factory=list)
+    mj_joints: list[tuple[str, str]] = field(default_factory=list)  # (name, type), qpos order
+    joint_types: dict[str, str] = field(default_factory=dict)
+    sites: dict[str, tuple[str, pin.SE3]] = field(default_factory=dict)
+    geometry: bool = True
+
+
+def _includes(doc: XmlDoc, el: ET.Element, base: Path | None, depth: int) -> None:
+    """Replace ``<include file>`` elements by the children of the included documents."""
+    for k, child in enumerate(list(el)):
+        if child.tag == "include":
+            if depth >= _MAX_INCLUDE_DEPTH:
+                raise doc.error(child, f"includes nested deeper than {_MAX_INCLUDE_DEPTH} levels")
+            name = child.get("file")
+            if not name:
+                raise doc.error(child, "missing attribute 'file'")
+            path = (base / name) if base is not None and not os.path.isabs(name) else Path(name)
+            if not path.is_file():
+                raise doc.error(child, f"included file '{path}' does not exist")
+            sub = parse_xml(read_text(path, "included file"), str(path), path)
+            if sub.root.tag != "mujoco":
+                raise doc.error(child, f"included file '{path}' is not an MJCF document")
+            _includes(sub, sub.root, path.parent, depth + 1)
+            doc.merge(sub)
+            el.remove(child)
+            for i, grandchild in enumerate(list(sub.root)):
+                el.insert(k + i, grandchild)
+            _includes(doc, el, base, depth)  # positions shifted: start over on this level
+            return
+        _includes(doc, child, base, depth)
+
+
+def _sections(root: ET.Element, tag: str) -> list[ET.Element]:
+    return [el for el in root if el.tag == tag]
+
+
+def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool = True) -> Mechanism:
+    """Read an MJCF document into a mechanism (see the module docstring).
+
+    Args:
+        text: The MJCF document.
+        source: File or name, for messages.
+        path: The file, for includes and mesh paths relative to it.
+        geometry: Read the geometry (mesh files); without it, only inertias use the geoms.
+
+    Returns:
+        The mechanism: bodies, joints, closures, actuators, ``home`` configurations
+        (``qpos0`` and the ``home`` keyframe when present).
+
+    Raises:
+        DescriptionError: Malformed or unsupported content, naming the element and its line.
+
+    """
+    doc = parse_xml(text, source, path)
+    root = doc.root
+    if root.tag != "mujoco":
+        raise doc.error(root, "the root element of an MJCF file must be <mujoco>")
+    base = path.parent if path is not None else None
+    _includes(doc, root, base, 0)
+    comp = spec.Compiler.read(doc, _sections(root, "compiler"))
+    defs = spec.Defaults(doc, _sections(root, "default"))
+    mech = Mechanism(root.get("model", "mujoco"), source)
+    r = _Reader(doc, comp, defs, mech, geometry=geometry)
+    for opt in _sections(root, "option"):
+        if "gravity" in opt.attrib:
+            mech.gravity = spec.vector(doc, opt, "gravity", opt.attrib["gravity"], 3)
+    meshdir = (base or Path(".")) / comp.meshdir
+    for asset in _sections(root, "asset"):
+        _assets(r, asset, meshdir)
+    worlds = _sections(root, "worldbody")
+    mech.add_body(Body("worldbody", pin.SE3.Identity()))  # world geoms and sites
+    for wb in worlds:
+        _children(r, wb, WORLD, "worldbody", pin.SE3.Identity(), pin.SE3.Identity(), "main")
+    if not mech.bodies["worldbody"].visuals + mech.bodies["worldbody"].collisions and not (
+        mech.bodies["worldbody"].frames
+    ):
+        del mech.bodies["worldbody"]
+    for eq in _sections(root, "equality"):
+        _equalities(r, eq)
+    for act in _sections(root, "actuator"):
+        _actuators(r, act)
+    for tendon in _sections(root, "tendon"):
+        limited = [t for t in tendon if "range" in t.attrib or t.get("limited") == "true"]
+        if limited:
+            warn(
+                f"{source}: tendon limits are not modelled ({doc.where(limited[0])}"
+                + (f" and {len(limited) - 1} more" if len(limited) > 1 else "")
+                + ")"
+            )
+    mech.home["qpos0"] = {}
+    for keys in _sections(root, "keyframe"):
+        for key in keys:
+            if key.tag == "key" and key.get("name") == "home" and "qpos" in key.attrib:
+                mech.home["home"] = _keyframe(r, key)
+    if r.missing:
+        names = sorted(set(r.missing))
+        warn(
+            f"{source}: {len(names)} mesh file(s) not found, their geometry is left out: "
+            + ", ".join(names[:5])
+            + (f" and {len(names) - 5} more" if len(names) > 5 else "")
+        )
+    return mech
+
+
+# ---------------------------------------------------------------------------------- assets
+
+
+def _assets(r: _Reader, asset: ET.Element, meshdir: Path) -> None:
+    doc = r.doc
+    for el in asset:
+        if el.tag == "mesh":
+            a = r.defs.attrs(el, "main")
+            file = a.get("file", "")
+            name = a.get("name") or Path(file).stem
+            if not name:
+                raise doc.error(el, "a mesh needs a name or a file")
+            scale = spec.vector(doc, el, "scale", a.get("scale", "1 1 1"), 3)
+            path = file if not file or os.path.isabs(file) else str(meshdir / file)
+            r.meshes[name] = (path, scale)
+        elif el.tag == "material" and el.get("name"):
+            a = r.defs.attrs(el, "main")
+            if "rgba" in a:
+                r.materials[el.get("name", "")] = spec.vector(doc, el, "rgba", a["rgba"], 4)
+
+
+# ---------------------------------------------------------------------------------- bodies
+
+
+def _children(
+    r: _Reader,
+    el: ET.Element,
+    parent: str,
+    owner: str,
+    oMf: pin.SE3,
+    bMf: pin.SE3,
+    cls: str,
+) -> None:
+    """Bodies, geoms, sites and frames under ``el`` (a body, the world body or a frame).
+
+    Args:
+        r: Reader state.
+        el: The element.
+        parent: Body that child bodies hang on (``world`` for the world body).
+        owner: Body that geoms and sites attach to.
+        oMf: World pose of ``el``'s frame (reference configuration).
+        bMf: Pose of ``el``'s frame in ``owner``'s frame.
+        cls: Default class for the children.
+
+    """
+    doc = r.doc
+    for child in el:
+        tag = child.tag
+        if tag == "body":
+            _body(r, child, parent, oMf, cls)
+        elif tag == "frame":
+            a = r.defs.attrs(child, cls) if "class" in child.attrib else dict(child.attrib)
+            M = spec.pose(doc, child, a, r.comp)
+            sub = child.get("childclass", cls)
+            r.defs.check(child, sub)
+            _children(r, child, parent, owner, oMf * M, bMf * M, sub)
+        elif tag == "geom":
+            _geom(r, child, owner, bMf, cls)
+        elif tag == "site":
+            a = r.defs.attrs(child, cls)
+            if a.get("name"):
+                M = spec.pose(doc, child, a, r.comp)
+                r.mech.bodies[owner].frames.append((a["name"], bMf * M))
+                r.sites[a["name"]] = (owner, bMf * M)
+        elif tag in ("joint", "freejoint"):
+            if el.tag == "body":
+                continue  # read by _body
+            if el.tag == "worldbody":
+                raise doc.error(child, "the world body cannot have joints")
+            raise doc.error(child, "a joint must be a direct child of its <body>")
+        elif tag in _REFUSED_IN_BODY:
+            raise doc.error(child, f"<{tag}> is not supported by pkdyn's MJCF import")
+        elif tag in _IGNORED_IN_BODY or tag == "inertial":
+            continue
+        else:
+            raise doc.error(child, f"unknown element <{tag}> in a body")
+
+
+def _body(r: _Reader, el: ET.Element, parent: str, oMp: pin.SE3, cls: str) -> None:
+    doc, mech = r.doc, r.mech
+    a = r.defs.attrs(el, cls) if "class" in el.attrib else dict(el.attrib)
+    name = el.get("name") or f"body{len(mech.bodies) + 1}"
+    oMb = oMp * spec.pose(doc, el, a, r.comp)
+    sub = el.get("childclass", cls)
+    r.defs.check(el, sub)
+    joints = [c for c in el if c.tag in ("joint", "freejoint")]
+    props = [spec.joint_props(doc, j, sub, r.defs, r.comp) for j in joints]
+    if any(p.type == "free" for p in props) and (len(props) > 1 or parent != WORLD):
+        bad = joints[[p.type for p in props].index("free")]
+        raise doc.error(bad, "a free joint must be the only joint of a top-level body")
+    prev = parent
+    for k, (jel, p) in enumerate(zip(joints, props, strict=True)):
+        last = k == len(props) - 1
+        child = name if last else f"{name}#{k + 1}"
+        jname = p.name or (f"{name}_joint" if len(props) == 1 else f"{name}_joint{k + 1}")
+        if jname in r.joint_types:
+            raise doc.error(jel, f"duplicate joint name '{jname}'")
+        if not last:
+            mech.add_body(Body(child, oMb, virtual=True), doc.where(el, name))
+        r.mj_joints.append((jname, p.type))
+        r.joint_types[jname] = p.type
+        mech.joints.append(_joint(r, jel, p, jname, prev, child, oMb))
+        prev = child
+    if not props:  # a body without joints is welded to its parent
+        mech.joints.append(
+            Joint(f"{name}_fixed", "fixed", parent, name, oMb, where=doc.where(el, name))
+        )
+    body = mech.add_body(Body(name, oMb), doc.where(el, name))
+    _children(r, el, name, name, oMb, pin.SE3.Identity(), sub)
+    inertial = [c for c in el if c.tag == "inertial"]
+    if len(inertial) > 1:
+        raise doc.error(inertial[1], "a body has at most one <inertial>")
+    use_geoms = r.comp.inertiafromgeom == "true" or (
+        r.comp.inertiafromgeom == "auto" and not inertial
+    )
+    if use_geoms:
+        body.inertia = _geom_inertia(r, el, sub)
+    elif inertial:
+        body.inertia = spec.inertial_props(doc, inertial[0], r.comp).inertia
+
+
+def _joint(
+    r: _Reader,
+    el: ET.Element,
+    p: spec.JointProps,
+    name: str,
+    parent: str,
+    child: str,
+    oMb: pin.SE3,
+) -> Joint:
+    where = r.doc.where(el, name)
+    if p.type == "free":
+        return Joint(name, "free", parent, child, oMb, q_ref=pin.SE3ToXYZQUAT(oMb), where=where)
+    oMj = oMb * pin.SE3(np.eye(3), p.pos)
+    kind = {"hinge": "revolute", "slide": "prismatic", "ball": "ball"}[p.type]
+    lo, hi = (-math.inf, math.inf) if p.range is None or p.type == "ball" else p.range
+    return Joint(
+        name,
+        kind,
+        parent,
+        child,
+        oMj,
+        axis=p.axis,
+        q_ref=np.array([p.ref]) if kind != "ball" else None,
+        lower=lo,
+        upper=hi,
+        damping=p.damping,
+        friction=p.frictionloss,
+        armature=p.armature,
+        where=where,
+    )
+
+
+def _shape(r: _Reader, el: ET.Element, g: spec.GeomProps) -> tuple[Any, str, np.ndarray] | None:
+    """Coal shape, mesh path and scale of a geom (``None``: nothing to draw or collide)."""
+    import coal
+
+    s = g.size
+    if g.type in ("plane", "hfield", "sdf"):
+        return None
+    if g.type == "mesh":
+        if g.mesh not in r.meshes:
+            raise r.doc.error(el, f"mesh '{g.mesh}' is not an asset of this model")
+        path, scale = r.meshes[g.mesh]
+        if not path or not os.path.isfile(path):
+            r.missing.append(path or g.mesh)
+            return None
+        try:
+            return coal.MeshLoader().load(path, scale), path, scale
+        except (RuntimeError, ValueError) as err:
+            raise r.doc.error(el, f"mesh file '{path}' cannot be read ({err})") from None
+    need = {"sphere": 1, "capsule": 2, "cylinder": 2, "box": 3, "ellipsoid": 3}
+    if g.type not in need:
+        raise r.doc.error(el, f"geom type '{g.type}' is not an MJCF geom type")
+    if np.any(s[: need[g.type]] <= 0.0):
+        raise r.doc.error(el, f"{g.type} size {s[: need[g.type]].tolist()} must be positive")
+    ones = np.ones(3)
+    if g.type == "sphere":
+        return coal.Sphere(s[0]), "", ones
+    if g.type == "capsule":
+        return coal.Capsule(s[0], 2.0 * s[1]), "", ones
+    if g.type == "cylinder":
+        return coal.Cylinder(s[0], 2.0 * s[1]), "", ones
+    if g.type == "box":
+        return coal.Box(2.0 * s[0], 2.0 * s[1], 2.0 * s[2]), "", ones
+    return coal.Ellipsoid(s[0], s[1], s[2]), "", ones
+
+
+def _geom(r: _Reader, el: ET.Element, owner: str, bMf: pin.SE3, cls: str) -> None:
+    g = spec.geom_props(r.doc, el, cls, r.defs, r.comp)
+    if not r.geometry:
+        return
+    shape = _shape(r, el, g)
+    if shape is None:
+        return
+    body = r.mech.bodies[owner]
+    k = len(body.visuals) + len(body.collisions)
+    name = g.name or f"{owner}_{k}"
+    rgba = g.rgba if "rgba" in r.defs.attrs(el, cls) else r.materials.get(g.material, g.rgba)
+    geom = Geometry(name, shape[0], bMf * g.placement, shape[1], shape[2], rgba)
+    (body.visuals if g.visual else body.collisions).append(geom)
+
+
+def _geom_inertia(r: _Reader, el: ET.Element, cls: str) -> pin.Inertia:
+    """Body inertia from its geoms (MuJoCo's volume formulas; meshes from their file)."""
+    total = pin.Inertia.Zero()
+    lo, hi = r.comp.inertiagrouprange
+    for child in el:
+        if child.tag != "geom":
+            continue
+        g = spec.geom_props(r.doc, child, el.get("childclass", cls), r.defs, r.comp)
+        if not lo <= g.group <= hi or g.type in ("plane", "hfield", "sdf"):
+            continue
+        I = _primitive_inertia(r, child, g)
+        if I is not None:
+            total += g.placement.act(I)
+    return total
+
+
+def _primitive_inertia(r: _Reader, el: ET.Element, g: spec.GeomProps) -> pin.Inertia | None:
+    s = g.size
+    if g.type == "mesh":
+        shape = _shape(r, el, g)
+        if shape is None:
+            return None
+        bvh = shape[0]
+        vol = float(bvh.computeVolume())
+        if vol <= 0.0:
+            return None
+        m = g.mass if g.mass is not None else g.density * vol
+        I = np.asarray(bvh.computeMomentofInertiaRelatedToCOM()) * (m / vol)
+        return pin.Inertia(m, np.asarray(bvh.computeCOM()), I)
+    if g.type == "sphere":
+        vol = 4.0 * math.pi * s[0] ** 3 / 3.0
+    elif g.type == "capsule":
+        vol = math.pi * (s[0] ** 2 * 2.0 * s[1] + 4.0 * s[0] ** 3 / 3.0)
+    elif g.type == "cylinder":
+        vol = math.pi * s[0] ** 2 * 2.0 * s[1]
+    elif g.type == "ellipsoid":
+        vol = 4.0 * math.pi * s[0] * s[1] * s[2] / 3.0
+    elif g.type == "box":
+        vol = 8.0 * s[0] * s[1] * s[2]
+    else:
+        return None
+    m = g.mass if g.mass is not None else g.density * vol
+    if g.type == "sphere":
+        d = np.full(3, 2.0 * m * s[0] ** 2 / 5.0)
+    elif g.type == "capsule":
+        rad, h = s[0], 2.0 * s[1]
+        ms = m * 4.0 * rad / (4.0 * rad + 3.0 * h)
+        mc = m - ms
+        ixx = mc * (3 * rad**2 + h**2) / 12 + 2 * ms * rad**2 / 5 + ms * h * (3 * rad + 2 * h) / 8
+        d = np.array([ixx, ixx, mc * rad**2 / 2 + 2 * ms * rad**2 / 5])
+    elif g.type == "cylinder":
+        rad, h = s[0], 2.0 * s[1]
+        ixx = m * (3 * rad**2 + h**2) / 12
+        d = np.array([ixx, ixx, m * rad**2 / 2])
+    elif g.type == "ellipsoid":
+        a2, b2, c2 = s**2
+        d = m * np.array([b2 + c2, a2 + c2, a2 + b2]) / 5.0
+    else:
+        a2, b2, c2 = (2.0 * s) ** 2
+        d = m * np.array([b2 + c2, a2 + c2, a2 + b2]) / 12.0
+    return pin.Inertia(m, np.zeros(3), np.diag(d))
+
+
+# ---------------------------------------------------------------------------------- equality
+
+
+def _unique(mech: Mechanism, name: str) -> str:
+    used = {c.name for c in mech.closures}
+    out, k = name, 1
+    while out in used:
+        out, k = f"{name}_{k}", k + 1
+    return out
+
+
+def _frame_of(r: _Reader, el: ET.Element, attr: str) -> FrameRef:
+    """Frame of a site (``site1``/``site2``) at the site."""
+    name = el.get(attr, "")
+    if name not in r.sites:
+        raise r.doc.error(el, f"{attr}='{name}' is not a site of this model")
+    body, M = r.sites[name]
+    return FrameRef(body if body != "worldbody" else "worldbody", M)
+
+
+def _pose_of(r: _Reader, body: str) -> pin.SE3:
+    return r.mech.bodies[body].pose if body != WORLD else pin.SE3.Identity()
+
+
+def _body_ref(r: _Reader, el: ET.Element, attr: str) -> str:
+    name = el.get(attr, WORLD)
+    if name != WORLD and (name not in r.mech.bodies or r.mech.bodies[name].virtual):
+        raise r.doc.error(el, f"{attr}='{name}' is not a body of this model")
+    return name
+
+
+def _link(body: str) -> str:
+    return "universe" if body == WORLD else body
+
+
+def _equalities(r: _Reader, eq: ET.Element) -> None:
+    doc, mech = r.doc, r.mech
+    counts: dict[str, int] = {}
+    for el in eq:
+        tag = el.tag
+        counts[tag] = counts.get(tag, 0) + 1
+        if tag in ("joint", "tendon", "distance", "flex"):
+            what = {
+                "joint": "polynomial joint couplings",
+                "tendon": "tendon couplings",
+                "distance": "distance constraints",
+                "flex": "flex constraints",
+            }[tag]
+            raise doc.error(el, f"{what} are not supported; remove this equality to load the model")
+        if tag not in ("connect", "weld"):
+            raise doc.error(el, f"unknown equality <{tag}>")
+        a = r.defs.attrs(el, "main")
+        if a.get("active", "true") == "false":
+            warn(f"{mech.source}: {doc.where(el)} is inactive (active='false'); not used")
+            continue
+        name = _unique(mech, a.get("name") or f"{tag}{counts[tag]}")
+        if "site1" in a or "site2" in a:
+            f1, f2 = _frame_of(r, el, "site1"), _frame_of(r, el, "site2")
+            if tag == "connect":  # only the origins meet: keep the frames' positions
+                f1 = FrameRef(f1.link, pin.SE3(np.eye(3), f1.placement.translation))
+                f2 = FrameRef(f2.link, pin.SE3(np.eye(3), f2.placement.translation))
+        else:
+            b1, b2 = _body_ref(r, el, "body1"), _body_ref(r, el, "body2")
+            o1, o2 = _pose_of(r, b1), _pose_of(r, b2)
+            if tag == "connect":
+                anchor = spec.vector(doc, el, "anchor", a.get("anchor", "0 0 0"), 3)
+                p1 = pin.SE3(np.eye(3), anchor)
+                f1 = FrameRef(_link(b1), p1)
+                f2 = FrameRef(_link(b2), pin.SE3(np.eye(3), o2.actInv(o1 * p1).translation))
+            else:
+                rel = spec.vector(doc, el, "relpose", a.get("relpose", "0 1 0 0 0 0 0"), 7)
+                if np.allclose(rel[3:], 0.0):  # relative pose of qpos0
+                    f1 = FrameRef(_link(b1), pin.SE3.Identity())
+                    f2 = FrameRef(_link(b2), o2.actInv(o1))
+                else:
+                    w, x, y, z = rel[3:] / np.linalg.norm(rel[3:])
+                    b1Mb2 = pin.SE3(pin.Quaternion(w, x, y, z).matrix(), rel[:3])
+                    f1 = FrameRef(_link(b1), b1Mb2)
+                    f2 = FrameRef(_link(b2), pin.SE3.Identity())
+        if f1.link == f2.link:
+            raise doc.error(el, "both sides are on the same body; nothing to close")
+        kind = "point" if tag == "connect" else "weld"
+        mech.closures.append(ClosureSpec(name, kind, f1, f2))
+
+
+# ---------------------------------------------------------------------------------- actuators
+
+
+def _actuators(r: _Reader, act: ET.Element) -> None:
+    doc, mech = r.doc, r.mech
+    skipped: list[str] = []
+    used: dict[str, str] = {}
+    for k, el in enumerate(act):
+        if el.tag not in spec.ACTUATOR_TAGS:
+            raise doc.error(el, f"unknown actuator <{el.tag}>")
+        p = spec.actuator_props(doc, el, r.defs, r.comp)
+        name = p.name or f"actuator{k + 1}"
+        if p.transmission not in ("joint", "jointinparent"):
+            skipped.append(f"{name} ({p.transmission})")
+            continue
+        if p.target not in r.joint_types:
+            raise doc.error(el, f"joint='{p.target}' is not a joint of this model", name)
+        if r.joint_types[p.target] not in ("hinge", "slide"):
+            skipped.append(f"{name} (on a {r.joint_types[p.target]} joint)")
+            continue
+        if p.target in used:
+            raise doc.error(
+                el,
+                f"joint '{p.target}' already carries actuator '{used[p.target]}'; pkdyn "
+                "takes one actuator per joint",
+                name,
+            )
+        if p.gear == 0.0:
+            raise doc.error(el, "gear 0 transmits nothing", name)
+        used[p.target] = name
+        effort = math.inf
+        if p.forcerange is not None:
+            effort = max(abs(p.forcerange[0]), abs(p.forcerange[1])) * abs(p.gear)
+        if p.gain is not None and p.ctrlrange is not None:
+            ctrl = max(abs(p.ctrlrange[0]), abs(p.ctrlrange[1])) * abs(p.gain * p.gear)
+            effort = min(effort, ctrl)
+        mech.actuators.append(ActuatorSpec(name, p.target, p.gear, effort, math.inf))
+    if skipped:
+        warn(
+            f"{mech.source}: {len(skipped)} actuator(s) not on a hinge or slide joint are left "
+            f"out: {', '.join(skipped[:5])}" + (" ..." if len(skipped) > 5 else "")
+        )
+
+
+# ---------------------------------------------------------------------------------- keyframes
+
+
+def _keyframe(r: _Reader, key: ET.Element) -> dict[str, np.ndarray]:
+    """Joint coordinates (Pinocchio convention) of a keyframe's ``qpos``."""
+    sizes = {"free": 7, "ball": 4, "hinge": 1, "slide": 1}
+    nq = sum(sizes[t] for _, t in r.mj_joints)
+    qpos = spec.vector(r.doc, key, "qpos", key.get("qpos", ""), None)
+    if qpos.size != nq:
+        raise r.doc.error(key, f"qpos has {qpos.size} values; the model has nq = {nq}")
+    out: dict[str, np.ndarray] = {}
+    i = 0
+    for name, t in r.mj_joints:
+        v = qpos[i : i + sizes[t]]
+        i += sizes[t]
+        if t == "free":
+            w = v[3:] / max(float(np.linalg.norm(v[3:])), 1e-300)
+            out[name] = np.concatenate([v[:3], w[1:], w[:1]])
+        elif t == "ball":
+            w = v / max(float(np.linalg.norm(v)), 1e-300)
+            out[name] = np.concatenate([w[1:], w[:1]])
+        else:
+            out[name] = v.copy()
+    return out

@@ -1,0 +1,312 @@
+"""The home configuration of a loaded robot: assembled, non-singular, found or explained.
+
+:func:`find_home` turns the configuration a description gives (its zero pose, MuJoCo's
+``qpos0`` or ``home`` keyframe, a library family's actuator values, or the user's ``home``)
+into an assembled one:
+
+1. Levenberg-Marquardt from that configuration (only the passive coordinates move when the
+   actuator values are imposed). Converged and not singular: done.
+2. **CAD-rounded descriptions.** When the closures cannot be closed exactly but the best
+   configuration misses them by at most the assembly tolerance ``tol`` (default
+   :data:`ASSEMBLY_TOL`), the description is inconsistent by a rounding error (an
+   overconstrained loop exported with six significant digits, say): the second frame of each
+   such closure is moved onto the first at that configuration, and one warning says by how
+   much. A description whose own pose misses the closures by less than ``tol`` but that
+   assembles exactly is assembled with a warning that gives the amount too.
+3. **Search.** Otherwise, and when the configuration reached is singular (a four-bar whose
+   zero pose is the straight line, where Levenberg-Marquardt cannot leave the line), seeded
+   random restarts within the joint limits look for an assembled configuration, then for a
+   non-singular one near it.
+4. Nothing found: :class:`~pkdyn.exceptions.AssemblyError` naming the closure that keeps the
+   largest residual at the best configuration, and what to try.
+
+**Singular** means: the rank of the closure Jacobian is below the rank found at nearby
+assembled configurations (moving along its null space), or, with actuators, the passive
+coordinates cannot absorb the closures (``rank J_passive < rank J``: the actuators do not
+determine the configuration). Ranks follow :data:`RANK_RTOL`: a singular value counts when it
+exceeds ``RANK_RTOL * max(1, s_max)`` (the rule :meth:`Robot.dof` uses; closure Jacobians are
+in SI units, entries of order one).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import AssemblyError, InvalidInputError
+from pkdyn.model.description import ClosureSpec, FrameRef
+from pkdyn.model.robot import Robot
+from pkdyn.model.warn import warn
+from solvers import SolveResult, solve_lm
+
+__all__ = ["ASSEMBLY_TOL", "EXACT_TOL", "RANK_RTOL", "HomeResult", "find_home", "rank"]
+
+ASSEMBLY_TOL = 1e-4
+"""Default assembly tolerance [m or rad]: the largest closure error of a description pkdyn
+absorbs (with a warning) instead of refusing it."""
+
+EXACT_TOL = 1e-9
+"""Closure residual [m or rad] below which a description's own pose counts as assembled."""
+
+RANK_RTOL = 1e-9
+"""Relative singular-value threshold of the rank decisions (see the module docstring)."""
+
+_SOLVE_TOL = 1e-12
+_RESTARTS = 48
+_SEARCH_SECONDS = 20.0
+
+
+def rank(J: np.ndarray, rtol: float = RANK_RTOL) -> int:
+    """Numerical rank: singular values above ``rtol * max(1, s_max)`` count.
+
+    Args:
+        J: Matrix (m, n).
+        rtol: Relative threshold.
+
+    Returns:
+        The rank.
+
+    """
+    if J.size == 0:
+        return 0
+    s = np.linalg.svd(J, compute_uv=False)
+    return int(np.count_nonzero(s > rtol * max(1.0, float(s[0]))))
+
+
+@dataclass
+class HomeResult:
+    """Outcome of :func:`find_home`.
+
+    Attributes:
+        q: The assembled home configuration (nq,).
+        closures: The closures, with second frames moved when CAD rounding was absorbed.
+        moved: Closures whose frame was moved, with the distance [m or rad].
+        searched: Whether the configuration came from the search (step 3).
+
+    """
+
+    q: np.ndarray
+    closures: list[ClosureSpec]
+    moved: dict[str, float]
+    searched: bool
+
+
+def _solve(robot: Robot, q0: np.ndarray, free: np.ndarray | None, max_iter: int) -> SolveResult:
+    cs, data = robot.closure_set, robot.data
+    return solve_lm(
+        robot.model,
+        q0,
+        lambda q: cs.residual(data, q),
+        lambda q: cs.jacobian(data, q),
+        free,
+        _SOLVE_TOL,
+        max_iter,
+    )
+
+
+def _per_closure(robot: Robot, residual: np.ndarray) -> dict[str, float]:
+    """Largest residual component per closure (a hinge's two point constraints together)."""
+    out: dict[str, float] = {}
+    cs = robot.closure_set
+    for name, owner, a, b in zip(
+        cs.names, robot.constraint_owner, cs.offsets[:-1], cs.offsets[1:], strict=True
+    ):
+        del name
+        out[owner] = max(out.get(owner, 0.0), float(np.max(np.abs(residual[a:b]), initial=0.0)))
+    return out
+
+
+def singular(robot: Robot, q: np.ndarray, rng: np.random.Generator | None = None) -> bool:
+    """Whether an assembled configuration is singular (see the module docstring).
+
+    Args:
+        robot: The robot.
+        q: Assembled configuration (nq,).
+        rng: Random generator for the nearby configurations (default: seeded).
+
+    Returns:
+        ``True`` when singular.
+
+    """
+    cs, data = robot.closure_set, robot.data
+    if cs.nc == 0:
+        return False
+    J = cs.jacobian(data, q)
+    r = rank(J)
+    if robot.actuated_v.size and rank(J[:, robot.passive_v]) < r:
+        return True
+    rng = rng or np.random.default_rng(0)
+    _, s, Vt = np.linalg.svd(J)
+    Z = Vt[r:].T
+    if Z.shape[1] == 0:
+        return False
+    for _ in range(2):
+        step = Z @ rng.standard_normal(Z.shape[1])
+        step *= 0.05 / max(float(np.max(np.abs(step))), 1e-300)
+        sol = _solve(robot, pin.integrate(robot.model, q, step), None, 60)
+        if sol.converged and rank(cs.jacobian(data, sol.q)) > r:
+            return True
+    return False
+
+
+def _random_start(
+    robot: Robot, q0: np.ndarray, rng: np.random.Generator, spread: float
+) -> np.ndarray:
+    """``q0`` moved by a random step, 1-coordinate joints kept inside their finite limits."""
+    model = robot.model
+    q = pin.integrate(model, q0, rng.uniform(-spread, spread, model.nv))
+    lo, hi = model.lowerPositionLimit, model.upperPositionLimit
+    for jid in range(1, model.njoints):
+        jm = model.joints[jid]
+        if jm.nq == 1:
+            i = jm.idx_q
+            if math.isfinite(lo[i]) and math.isfinite(hi[i]) and lo[i] < hi[i]:
+                q[i] = min(max(q[i], lo[i]), hi[i])
+    return q
+
+
+def _moved_closures(
+    robot: Robot, q: np.ndarray, per: dict[str, float], tol: float
+) -> tuple[list[ClosureSpec], dict[str, float]]:
+    """Closures whose second frame is moved onto the first at ``q`` when off by <= ``tol``."""
+    model, data = robot.model, robot.data
+    pin.framesForwardKinematics(model, data, q)
+    out: list[ClosureSpec] = []
+    moved: dict[str, float] = {}
+    cms = {cm.name: cm for cm in robot.constraint_models}
+    for c in robot.closures:
+        off = per.get(c.name, 0.0)
+        if off <= EXACT_TOL or off > tol:
+            out.append(c)
+            continue
+        cm = cms[c.name]
+        oM1 = data.oMi[cm.joint1_id] * cm.joint1_placement
+        oM2 = data.oMi[cm.joint2_id] * cm.joint2_placement
+        # frame2 placement in its link frame, so that frame2 coincides with frame1
+        link_pose = oM2 * c.frame2.placement.inverse()
+        new2 = link_pose.actInv(oM1)
+        if c.kind == "point":  # a point closure: the second frame keeps its orientation
+            new2 = pin.SE3(c.frame2.placement.rotation, new2.translation)
+        out.append(dataclasses.replace(c, frame2=FrameRef(c.frame2.link, new2)))
+        moved[c.name] = off
+    return out, moved
+
+
+def find_home(
+    robot: Robot,
+    q0: np.ndarray,
+    qa: Sequence[float] | np.ndarray | None = None,
+    tol: float = ASSEMBLY_TOL,
+    user: bool = False,
+) -> HomeResult:
+    """An assembled, non-singular home configuration (see the module docstring).
+
+    Args:
+        robot: The robot (its closures as described).
+        q0: Starting configuration (nq,): the description's own pose.
+        qa: Actuated coordinates to keep (only the passive ones move), or ``None``.
+        tol: Assembly tolerance [m or rad].
+        user: The start was given by the user: a singular home is kept (with a warning).
+
+    Returns:
+        The home configuration and the (possibly adjusted) closures.
+
+    Raises:
+        InvalidInputError: ``tol`` is not a positive number.
+        AssemblyError: No assembled configuration found; names the closure that keeps the
+            largest residual.
+
+    """
+    if not (isinstance(tol, int | float) and math.isfinite(tol) and tol > 0.0):
+        raise InvalidInputError(
+            "tol", f"the assembly tolerance must be a positive length, got {tol!r}"
+        )
+    closures = list(robot.closures)
+    q = np.array(q0, dtype=float)
+    free = None
+    if qa is not None:
+        q[robot.actuated_q] = qa
+        free = robot.passive_v
+    if robot.closure_set.nc == 0:
+        return HomeResult(q, closures, {}, False)
+    r_file = _per_closure(robot, robot.closure_set.residual(robot.data, q))
+    sol = _solve(robot, q, free, 100)
+    if sol.converged:
+        if not singular(robot, sol.q) or (user and free is not None):
+            _warn_file_pose(robot, r_file, sol.q, q, tol)
+            if user and singular(robot, sol.q):
+                warn(f"{robot.source}: the given home configuration is singular")
+            return HomeResult(sol.q, closures, {}, False)
+    else:
+        per = _per_closure(robot, sol.residual)
+        worst = max(per.values())
+        if worst <= tol:
+            new, moved = _moved_closures(robot, sol.q, per, tol)
+            name = max(moved, key=lambda k: moved[k])
+            warn(
+                f"{robot.source}: {len(moved)} closure(s) cannot be closed exactly (closure "
+                f"'{name}' is off by {moved[name]:.2g} at best: the description is inconsistent "
+                f"within the assembly tolerance {tol:g}, as CAD rounding makes it); their second "
+                "frames were moved onto the first ones"
+            )
+            return HomeResult(sol.q, new, moved, False)
+    found = _search(robot, q, free, sol)
+    if found is None:
+        best = sol
+        per = _per_closure(robot, best.residual)
+        name = max(per, key=lambda k: per[k])
+        spec = next(c for c in robot.closures if c.name == name)
+        raise AssemblyError(
+            name,
+            per[name],
+            f"{robot.source}: the home configuration cannot be assembled: closure '{name}' "
+            f"(between '{spec.frame1.link}' and '{spec.frame2.link}') keeps "
+            f"a residual of {per[name]:.3g} at best (from the description's pose and "
+            f"{_RESTARTS} random starts); check its frames and the joint types along its loop, "
+            "or give an assembled configuration (home=..., --home)",
+        )
+    return HomeResult(found, closures, {}, True)
+
+
+def _warn_file_pose(
+    robot: Robot, r_file: dict[str, float], q: np.ndarray, q0: np.ndarray, tol: float
+) -> None:
+    worst = max(r_file.values(), default=0.0)
+    if EXACT_TOL < worst <= tol:
+        name = max(r_file, key=lambda k: r_file[k])
+        dq = float(np.max(np.abs(pin.difference(robot.model, q0, q))))
+        warn(
+            f"{robot.source}: the description's pose misses the closures by up to {worst:.2g} "
+            f"(closure '{name}'; CAD rounding?); assembled by moving the joints by up to "
+            f"{dq:.2g}"
+        )
+
+
+def _search(
+    robot: Robot, q0: np.ndarray, free: np.ndarray | None, first: SolveResult
+) -> np.ndarray | None:
+    """Seeded random restarts: an assembled configuration, non-singular when one is near."""
+    rng = np.random.default_rng(0)
+    start = time.monotonic()
+    fallback: np.ndarray | None = first.q if first.converged else None
+    for k in range(_RESTARTS):
+        if time.monotonic() - start > _SEARCH_SECONDS:
+            break
+        spread = (0.3, 1.0, math.pi)[min(k // 16, 2)]
+        qs = _random_start(robot, q0, rng, spread)
+        if free is not None:
+            qs[robot.actuated_q] = q0[robot.actuated_q]
+        sol = _solve(robot, qs, free, 100)
+        if not sol.converged:
+            continue
+        if not singular(robot, sol.q, rng):
+            return sol.q
+        if fallback is None:
+            fallback = sol.q
+    return fallback
