@@ -85,7 +85,8 @@ def closure(
         ("body_B", "p_BQ" if kind == "ball_constraint" else "X_BQ"),
     ):
         b = children.get(f"{prefix}_{body}")
-        name = read(b).strip() if b is not None and read(b) else ""
+        value = read(b) if b is not None else None
+        name = value.strip() if value else ""
         if not name:
             raise DescriptionError(source, where, f"missing drake:{prefix}_{body}")
         o = children.get(f"{prefix}_{offset}")
@@ -98,7 +99,8 @@ def closure(
             )
             M = pin.SE3(pin.rpy.rpyToMatrix(x[3:]), x[:3])
         out.append(FrameRef(name, M))
-    return ClosureSpec(f"{prefix}{k}", "point" if kind == "ball_constraint" else "weld", *out)
+    kind_ = "point" if kind == "ball_constraint" else "weld"
+    return ClosureSpec(f"{prefix}{k}", kind_, out[0], out[1])
 
 
 def urdf_constraints(root: ET.Element, source: str) -> list[ClosureSpec]:

@@ -232,13 +232,13 @@ def _model(r: _Reader, m: ET.Element) -> Mechanism:
     for el in links:
         M, rel = _pose(r, el.find("pose"), default_rel)
         r.frames[el.get("name", "")] = _Frame(rel, M, el.get("name", ""), el)
-        for f in (f for f in el if f.tag == "frame"):  # SDFormat 1.5 link frames
-            FM, frel = _pose(r, f.find("pose"), el.get("name", ""))
-            r.frames[f.get("name", "")] = _Frame(frel, FM, el.get("name", ""), f)
+        for fel in (e for e in el if e.tag == "frame"):  # SDFormat 1.5 link frames
+            FM, frel = _pose(r, fel.find("pose"), el.get("name", ""))
+            r.frames[fel.get("name", "")] = _Frame(frel, FM, el.get("name", ""), fel)
     for el in joints:
-        child = _text(el.find("child"))
-        M, rel = _pose(r, el.find("pose"), child)
-        r.frames[el.get("name", "")] = _Frame(rel, M, child, el)
+        child_name = _text(el.find("child"))
+        M, rel = _pose(r, el.find("pose"), child_name)
+        r.frames[el.get("name", "")] = _Frame(rel, M, child_name, el)
     for el in (e for e in m if e.tag == "frame"):
         att = el.get("attached_to", "__model__")
         M, rel = _pose(r, el.find("pose"), att)
@@ -272,9 +272,9 @@ def _model(r: _Reader, m: ET.Element) -> Mechanism:
                     raise doc.error(fel, f"'{fname}' is not a frame of this model") from None
 
             c = drake.closure(el, counts[kind], doc.source, doc.where(el), _text, frames)
-            for f in (c.frame1, c.frame2):
-                if f.link not in mech.bodies and f.link != "universe":
-                    raise doc.error(el, f"names body '{f.link}', which is not a link")
+            for ref in (c.frame1, c.frame2):
+                if ref.link not in mech.bodies and ref.link != "universe":
+                    raise doc.error(el, f"names body '{ref.link}', which is not a link")
             mech.closures.append(c)
     if r.missing:
         names = sorted(set(r.missing))
