@@ -23,9 +23,9 @@ into an assembled one:
 **Singular** means: the rank of the closure Jacobian is below the rank found at nearby
 assembled configurations (moving along its null space), or, with actuators, the passive
 coordinates cannot absorb the closures (``rank J_passive < rank J``: the actuators do not
-determine the configuration). Ranks follow :data:`RANK_RTOL`: a singular value counts when it
-exceeds ``RANK_RTOL * max(1, s_max)`` (the rule :meth:`Robot.dof` uses; closure Jacobians are
-in SI units, entries of order one).
+determine the configuration). Ranks follow the project's one rule (:mod:`solvers.numerics`): a
+singular value counts when it exceeds ``RTOL * max(s_max, 1)`` (scale 1: closure Jacobians are
+in SI units with entries of order one), as :meth:`Robot.dof` decides.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ from pkdyn.exceptions import AssemblyError, InvalidInputError
 from pkdyn.model.description import ClosureSpec, FrameRef
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn
-from solvers import SolveResult, solve_lm
+from solvers import SolveResult, numerics, solve_lm
 
 __all__ = ["ASSEMBLY_TOL", "EXACT_TOL", "RANK_RTOL", "HomeResult", "find_home", "rank"]
 
@@ -54,29 +54,18 @@ absorbs (with a warning) instead of refusing it."""
 EXACT_TOL = 1e-9
 """Closure residual [m or rad] below which a description's own pose counts as assembled."""
 
-RANK_RTOL = 1e-9
-"""Relative singular-value threshold of the rank decisions (see the module docstring)."""
+RANK_RTOL = numerics.RTOL
+"""Relative tolerance of the rank decisions: :data:`solvers.numerics.RTOL` (the project's rule,
+with scale 1 as :meth:`Robot.dof` uses it)."""
 
 _SOLVE_TOL = 1e-12
 _RESTARTS = 48
 _SEARCH_SECONDS = 20.0
 
 
-def rank(J: np.ndarray, rtol: float = RANK_RTOL) -> int:
-    """Numerical rank: singular values above ``rtol * max(1, s_max)`` count.
-
-    Args:
-        J: Matrix (m, n).
-        rtol: Relative threshold.
-
-    Returns:
-        The rank.
-
-    """
-    if J.size == 0:
-        return 0
-    s = np.linalg.svd(J, compute_uv=False)
-    return int(np.count_nonzero(s > rtol * max(1.0, float(s[0]))))
+def rank(J: np.ndarray) -> int:
+    """Rank of a closure Jacobian (:func:`solvers.numerics.rank`, scale 1)."""
+    return numerics.rank(J, RANK_RTOL, 1.0)
 
 
 @dataclass
@@ -142,8 +131,7 @@ def singular(robot: Robot, q: np.ndarray, rng: np.random.Generator | None = None
     if robot.actuated_v.size and rank(J[:, robot.passive_v]) < r:
         return True
     rng = rng or np.random.default_rng(0)
-    _, s, Vt = np.linalg.svd(J)
-    Z = Vt[r:].T
+    Z = numerics.null_space(J, RANK_RTOL, 1.0)
     if Z.shape[1] == 0:
         return False
     for _ in range(2):
