@@ -38,7 +38,8 @@ test: lint browser
 	$(PY) -m pytest -q
 
 urdf: $(STAMP)
-	for r in delta gough_stewart planar_3rrr five_bar tripod; do $(VENV)/bin/pkdyn urdf $$r -o urdf/$$r.urdf; done
+	for r in $$($(PY) -c "import pkdyn.library as l; print(' '.join(l.FAMILIES))"); do \
+	  $(VENV)/bin/pkdyn urdf $$r -o urdf/$$r.urdf; done
 
 bench: $(STAMP)
 	$(PY) bench/run.py

@@ -16,5 +16,13 @@ from pkdyn.model.families import FAMILIES, Family, family, register
 
 __all__ = ["FAMILIES", "Family", "family"]
 
-for _name in ("delta", "gough_stewart", "planar_3rrr", "five_bar", "tripod"):
+for _name in (
+    "delta",
+    "gough_stewart",
+    "planar_3rrr",
+    "five_bar",
+    "tripod",
+    "parallel_ankle",
+    "four_bar_knee",
+):
     register(Family(_name, f"pkdyn.library.{_name}"))
