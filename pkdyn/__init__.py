@@ -44,6 +44,7 @@ from pkdyn.model.loader import load, load_string
 from pkdyn.model.robot import Robot
 
 __all__ = [
+    "ActuationMap",
     "AssemblyError",
     "DescriptionError",
     "GeometryResult",
@@ -59,6 +60,7 @@ __all__ = [
     "TrajectoryError",
     "UnknownRobotError",
     "UnreachablePoseError",
+    "actuation_map",
     "assembly_modes",
     "closure_residual",
     "forward_geometry",
@@ -68,3 +70,17 @@ __all__ = [
     "project",
 ]
 __version__ = "0.1.0"
+
+_LAZY = {
+    "ActuationMap": "pkdyn.analysis.actuation_map",
+    "actuation_map": "pkdyn.analysis.actuation_map",
+}
+
+
+def __getattr__(name: str) -> object:
+    """Analyses exported here, imported on first use (``import pkdyn`` stays light)."""
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'pkdyn' has no attribute {name!r}")
