@@ -225,41 +225,43 @@ def find_home(
         return HomeResult(q, closures, {}, False)
     r_file = _per_closure(robot, robot.closure_set.residual(robot.data, q))
     sol = _solve(robot, q, free, 100)
-    if sol.converged:
-        if not singular(robot, sol.q) or (user and free is not None):
-            _warn_file_pose(robot, r_file, sol.q, q, tol)
-            if user and singular(robot, sol.q):
-                warn(f"{robot.source}: the given home configuration is singular")
-            return HomeResult(sol.q, closures, {}, False)
-    else:
-        per = _per_closure(robot, sol.residual)
-        worst = max(per.values())
-        if worst <= tol:
-            new, moved = _moved_closures(robot, sol.q, per, tol)
-            name = max(moved, key=lambda k: moved[k])
-            warn(
-                f"{robot.source}: {len(moved)} closure(s) cannot be closed exactly (closure "
-                f"'{name}' is off by {moved[name]:.2g} at best: the description is inconsistent "
-                f"within the assembly tolerance {tol:g}, as CAD rounding makes it); their second "
-                "frames were moved onto the first ones"
-            )
-            return HomeResult(sol.q, new, moved, False)
-    found = _search(robot, q, free, sol)
-    if found is None:
-        best = sol
-        per = _per_closure(robot, best.residual)
-        name = max(per, key=lambda k: per[k])
-        spec = next(c for c in robot.closures if c.name == name)
-        raise AssemblyError(
-            name,
-            per[name],
-            f"{robot.source}: the home configuration cannot be assembled: closure '{name}' "
-            f"(between '{spec.frame1.link}' and '{spec.frame2.link}') keeps "
-            f"a residual of {per[name]:.3g} at best (from the description's pose and "
-            f"{_RESTARTS} random starts); check its frames and the joint types along its loop, "
-            "or give an assembled configuration (home=..., --home)",
+    if sol.converged and (not singular(robot, sol.q) or (user and free is not None)):
+        _warn_file_pose(robot, r_file, sol.q, q, tol)
+        if user and singular(robot, sol.q):
+            warn(f"{robot.source}: the given home configuration is singular")
+        return HomeResult(sol.q, closures, {}, False)
+    best = sol if not sol.converged else None
+    found = None
+    if sol.converged or _worst(robot, sol) > tol:
+        found, best = _search(robot, q, free, sol)
+    if found is not None:
+        return HomeResult(found, closures, {}, True)
+    assert best is not None
+    per = _per_closure(robot, best.residual)
+    name = max(per, key=lambda k: per[k])
+    if per[name] <= tol:  # an inconsistent description, within the tolerance
+        new, moved = _moved_closures(robot, best.q, per, tol)
+        warn(
+            f"{robot.source}: {len(moved)} closure(s) cannot be closed exactly (closure "
+            f"'{name}' is off by {per[name]:.2g} at best: the description is inconsistent "
+            f"within the assembly tolerance {tol:g}, as CAD rounding makes it); their second "
+            "frames were moved onto the first ones"
         )
-    return HomeResult(found, closures, {}, True)
+        return HomeResult(best.q, new, moved, False)
+    spec = next(c for c in robot.closures if c.name == name)
+    raise AssemblyError(
+        name,
+        per[name],
+        f"{robot.source}: the home configuration cannot be assembled: closure '{name}' "
+        f"(between '{spec.frame1.link}' and '{spec.frame2.link}') keeps "
+        f"a residual of {per[name]:.3g} at best (from the description's pose and "
+        f"{_RESTARTS} random starts); check its frames and the joint types along its loop, "
+        "or give an assembled configuration (home=..., --home)",
+    )
+
+
+def _worst(robot: Robot, sol: SolveResult) -> float:
+    return max(_per_closure(robot, sol.residual).values(), default=0.0)
 
 
 def _warn_file_pose(
@@ -278,11 +280,19 @@ def _warn_file_pose(
 
 def _search(
     robot: Robot, q0: np.ndarray, free: np.ndarray | None, first: SolveResult
-) -> np.ndarray | None:
-    """Seeded random restarts: an assembled configuration, non-singular when one is near."""
+) -> tuple[np.ndarray | None, SolveResult | None]:
+    """Seeded random restarts.
+
+    Returns:
+        An assembled configuration (non-singular when one was found, else ``None`` when none
+        converged) and the attempt with the smallest residual among those that did not
+        converge (``None`` when one did).
+
+    """
     rng = np.random.default_rng(0)
     start = time.monotonic()
     fallback: np.ndarray | None = first.q if first.converged else None
+    best: SolveResult | None = None if first.converged else first
     for k in range(_RESTARTS):
         if time.monotonic() - start > _SEARCH_SECONDS:
             break
@@ -292,9 +302,11 @@ def _search(
             qs[robot.actuated_q] = q0[robot.actuated_q]
         sol = _solve(robot, qs, free, 100)
         if not sol.converged:
+            if fallback is None and (best is None or _worst(robot, sol) < _worst(robot, best)):
+                best = sol
             continue
         if not singular(robot, sol.q, rng):
-            return sol.q
+            return sol.q, None
         if fallback is None:
             fallback = sol.q
-    return fallback
+    return fallback, (best if fallback is None else None)
