@@ -44,7 +44,12 @@ def params(items: Sequence[str] | None) -> dict[str, Any]:
 def load(args: argparse.Namespace, geometry: bool = False) -> Any:
     import pkdyn
 
-    return pkdyn.load(args.robot, geometry=geometry, **params(args.param))
+    extra: dict[str, Any] = {}
+    if getattr(args, "home", None) is not None:
+        extra["home"] = args.home
+    if getattr(args, "tol", None) is not None:
+        extra["tol"] = args.tol
+    return pkdyn.load(args.robot, geometry=geometry, **extra, **params(args.param))
 
 
 def emit(args: argparse.Namespace, payload: dict[str, Any], text: str) -> None:
@@ -87,8 +92,22 @@ def robot_command(
 ) -> argparse.ArgumentParser:
     """A sub-command taking ``ROBOT`` and ``--param NAME=VALUE`` (also called ``aliases``)."""
     sp: argparse.ArgumentParser = sub.add_parser(name, help=help_, aliases=list(aliases))
-    sp.add_argument("robot", help="library family name or URDF path")
+    sp.add_argument("robot", help="library family name, or a URDF, MJCF or SDFormat file")
     sp.add_argument("--param", action="append", metavar="NAME=VALUE", help="builder parameter")
+    sp.add_argument(
+        "--home",
+        nargs="+",
+        type=float,
+        metavar="Q",
+        help="home configuration to assemble: actuator coordinates, or a full configuration",
+    )
+    sp.add_argument(
+        "--tol",
+        type=float,
+        metavar="TOL",
+        help="assembly tolerance (m or rad): closure errors of a CAD-rounded description that "
+        "are absorbed with a warning (default 1e-4)",
+    )
     return sp
 
 

@@ -58,10 +58,18 @@ def _cmd_urdf(args: argparse.Namespace) -> None:
         text = fam.build_urdf(fam.make_params(overrides))
     else:
         import pkdyn
+        from pkdyn.model.formats.xmldoc import read_text
+        from pkdyn.model.loader import detect_format
 
-        pkdyn.load(args.robot, geometry=False, **overrides)  # validates the file
-        with open(args.robot) as fh:
-            text = fh.read()
+        load(args)  # validates the file
+        text = read_text(args.robot, "description file")
+        fmt = detect_format(text, args.robot)
+        if fmt != "urdf":
+            raise PkdynError(
+                f"{args.robot} is an {fmt.upper()} description; 'pkdyn urdf' writes library "
+                "robots and URDF files (use 'pkdyn mjcf' for a MuJoCo model)"
+            )
+        del pkdyn
     if args.output:
         try:
             with open(args.output, "w") as fh:
