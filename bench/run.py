@@ -25,6 +25,7 @@ MODULES = (
     ("dynamics", "Dynamics: forward step and inverse dynamics (pkdyn vs raw Pinocchio)"),
     ("vs_mujoco", "pkdyn vs MuJoCo (exported models): speed and agreement"),
     ("workspace", "Workspace throughput"),
+    ("actuation_map", "Closed-loop legs (actuation maps) and loading public models"),
 )
 
 NOTES = """\
