@@ -4,9 +4,11 @@ Modules: :mod:`~pkdyn.model.description` (parsing pkdyn's URDF extension element
 :mod:`~pkdyn.model.build` (Pinocchio model, geometry and constraint models from a description),
 :mod:`~pkdyn.model.robot` (:class:`Robot`), :mod:`~pkdyn.model.pose` (pose vectors),
 :mod:`~pkdyn.model.assembly` (closure residuals, direct and inverse geometric models,
-projection), :mod:`~pkdyn.model.families` (the registry the robot library fills),
-:mod:`~pkdyn.model.loader` (``load``) and :mod:`~pkdyn.model.formats` (URDF writer, Gepetto
-YAML, MJCF).
+projection), :mod:`~pkdyn.model.home` (the home search and the assembly tolerance),
+:mod:`~pkdyn.model.families` (the registry the robot library fills),
+:mod:`~pkdyn.model.loader` (``load``: URDF, MJCF, SDFormat) and :mod:`~pkdyn.model.formats`
+(URDF writer, MJCF export and import, SDFormat, Gepetto YAML, Drake elements, onshape-to-robot
+frames).
 
 Layering: imports only :mod:`pkdyn.exceptions`, :mod:`pkdyn.progress` and :mod:`solvers`.
 Library families are found through :mod:`pkdyn.model.families`, which :mod:`pkdyn.library`
