@@ -13,6 +13,7 @@ __all__ = [
     "ParameterError",
     "InvalidInputError",
     "AssemblyError",
+    "LoopClosureError",
     "UnreachablePoseError",
     "JointLimitError",
     "SingularConfigurationError",
@@ -84,6 +85,28 @@ class AssemblyError(PkdynError):
         self.closure = closure
         self.residual = residual
         super().__init__(message)
+
+
+class LoopClosureError(DescriptionError, AssemblyError):
+    """A description whose loops cannot be closed in any configuration found when loading.
+
+    Both a :class:`DescriptionError` (the description is at fault) and an
+    :class:`AssemblyError` (with the closure and its residual).
+
+    Attributes:
+        source: File or robot the description came from.
+        culprit: ``closure '<name>'``.
+        closure: Name of the closure with the largest residual.
+        residual: Its residual at the best configuration found [m or rad].
+
+    """
+
+    def __init__(self, source: str, closure: str, residual: float, message: str) -> None:
+        self.source = source
+        self.culprit = f"closure '{closure}'"
+        self.closure = closure
+        self.residual = residual
+        PkdynError.__init__(self, message)
 
 
 class UnreachablePoseError(AssemblyError):

@@ -17,7 +17,8 @@ into an assembled one:
    zero pose is the straight line, where Levenberg-Marquardt cannot leave the line), seeded
    random restarts within the joint limits look for an assembled configuration, then for a
    non-singular one near it.
-4. Nothing found: :class:`~pkdyn.exceptions.AssemblyError` naming the closure that keeps the
+4. Nothing found: :class:`~pkdyn.exceptions.LoopClosureError` (a ``DescriptionError`` and an
+   ``AssemblyError``) naming the closure that keeps the
    largest residual at the best configuration, and what to try.
 
 **Singular** means: the rank of the closure Jacobian is below the rank found at nearby
@@ -39,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import AssemblyError, InvalidInputError
+from pkdyn.exceptions import InvalidInputError, LoopClosureError
 from pkdyn.model.description import ClosureSpec, FrameRef
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn
@@ -207,8 +208,8 @@ def find_home(
 
     Raises:
         InvalidInputError: ``tol`` is not a positive number.
-        AssemblyError: No assembled configuration found; names the closure that keeps the
-            largest residual.
+        LoopClosureError: No assembled configuration found (a description error and an
+            assembly error); names the closure that keeps the largest residual.
 
     """
     if not (isinstance(tol, int | float) and math.isfinite(tol) and tol > 0.0):
@@ -249,7 +250,8 @@ def find_home(
         )
         return HomeResult(best.q, new, moved, False)
     spec = next(c for c in robot.closures if c.name == name)
-    raise AssemblyError(
+    raise LoopClosureError(
+        robot.source,
         name,
         per[name],
         f"{robot.source}: the home configuration cannot be assembled: closure '{name}' "

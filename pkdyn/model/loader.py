@@ -39,7 +39,7 @@ from pkdyn.model.formats.gepetto import Sidecar, apply_joint_types, loop_frames,
 from pkdyn.model.formats.graph import build
 from pkdyn.model.formats.mjcf_import import read_mjcf
 from pkdyn.model.formats.sdf import read_sdf
-from pkdyn.model.formats.xmldoc import read_text
+from pkdyn.model.formats.xmldoc import parse_xml, read_text
 from pkdyn.model.home import ASSEMBLY_TOL, find_home
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn
@@ -143,7 +143,8 @@ def load(
         ParameterError: Unknown or invalid builder parameter, or parameters given for a file.
         InvalidInputError: Malformed ``home`` or ``tol``.
         DescriptionError: Malformed description, or a format that cannot be told apart.
-        AssemblyError: No assembled home configuration found (names the closure).
+        LoopClosureError: No assembled home configuration found (names the closure; also an
+            ``AssemblyError`` and a ``DescriptionError``).
 
     """
     name = str(name_or_path)
@@ -263,7 +264,24 @@ def load_string(
     )
 
 
+_URDF_JOINTS = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+
+
+def _check_urdf_joints(xml: str, source: str) -> None:
+    """Name the joint and its line when its type is not a URDF joint type."""
+    doc = parse_xml(xml, source)
+    for el in doc.root.iter("joint"):
+        if el.get("type") is not None and el.get("type") not in _URDF_JOINTS:
+            raise doc.error(
+                el,
+                f"unknown joint type '{el.get('type')}'; URDF joints are "
+                f"{', '.join(_URDF_JOINTS)} (ball and universal joints: pkdyn:joint, see "
+                "urdf/README.md)",
+            )
+
+
 def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar | None) -> _Parts:
+    _check_urdf_joints(xml, source)
     desc = parse_description(xml, source)
     root = ET.fromstring(xml)
     extra = drake.urdf_constraints(root, source)
