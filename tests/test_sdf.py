@@ -331,3 +331,28 @@ def test_one_model_per_file(tmp_path):
     text = "<sdf version='1.9'><world name='w'><model name='a'/><model name='b'/></world></sdf>"
     with pytest.raises(pkdyn.DescriptionError, match="found 2 models"):
         _load(tmp_path, text)
+
+
+def test_universal_tree_joint(tmp_path):
+    text = """<sdf version="1.9"><model name="u">
+      <link name="base"/>
+      <link name="cross"><pose>0 0 1 0 0 0.3</pose>
+        <inertial><mass>1</mass><inertia><ixx>0.01</ixx><iyy>0.01</iyy><izz>0.01</izz>
+          <ixy>0</ixy><ixz>0</ixz><iyz>0</iyz></inertia></inertial></link>
+      <joint name="fix" type="fixed"><parent>world</parent><child>base</child></joint>
+      <joint name="u" type="universal"><parent>base</parent><child>cross</child>
+        <axis><xyz>1 0 0</xyz></axis><axis2><xyz>0 1 0</xyz></axis2></joint>
+    </model></sdf>"""
+    robot = _load(tmp_path, text)
+    jm = robot.model.joints[robot.model.getJointId("u")]
+    assert jm.shortname() == "JointModelUniversal" and jm.nq == 2
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, np.array([0.4, -0.7]))
+    R = data.oMf[robot.model.getFrameId("cross", pin.BODY)].rotation
+    R0 = pin.rpy.rpyToMatrix(0, 0, 0.3)  # the joint frame is the child's (yawed by 0.3)
+    expected = (
+        R0
+        @ pin.AngleAxis(0.4, np.array([1.0, 0, 0])).matrix()
+        @ pin.AngleAxis(-0.7, np.array([0, 1.0, 0])).matrix()
+    )
+    np.testing.assert_allclose(R, expected, atol=1e-12)
