@@ -5,14 +5,15 @@ Nothing here knows about Deltas or hexapods: inputs are a ``pin.Model``, rigid c
 
 Modules: :mod:`~solvers.closure` (closure residuals, Jacobians, drift), :mod:`~solvers.lm`
 (Levenberg-Marquardt on the configuration manifold), :mod:`~solvers.pose_task`,
-:mod:`~solvers.actuation` (actuation selection, joint friction), :mod:`~solvers.integrators`
+:mod:`~solvers.actuation` (actuation selection), :mod:`~solvers.passive` (springs, dampers,
+friction), :mod:`~solvers.integrators`
 (Runge-Kutta tableaux), :mod:`~solvers.projection` (state projection onto the closures),
 :mod:`~solvers.recording` (what a simulation records), :mod:`~solvers.forward_dynamics` (time
 stepping), :mod:`~solvers.inverse_dynamics` (constrained inverse dynamics, proxsuite QP) and
 :mod:`~solvers.numerics` (rank decisions, null spaces, least squares: the one cut-off rule).
 """
 
-from solvers.actuation import Actuation, JointFriction
+from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
 from solvers.forward_dynamics import ForwardDynamics, IntegrationError, simulate
 from solvers.inverse_dynamics import (
@@ -22,6 +23,7 @@ from solvers.inverse_dynamics import (
     InverseTrajectory,
 )
 from solvers.lm import SolveResult, solve_lm
+from solvers.passive import FrameSpring, PassiveForces
 from solvers.pose_task import FramePoseTask
 from solvers.recording import ForwardResult
 
@@ -31,12 +33,13 @@ __all__ = [
     "ForwardDynamics",
     "ForwardResult",
     "FramePoseTask",
+    "FrameSpring",
     "InfeasibleError",
     "InverseDynamics",
     "InverseResult",
     "InverseTrajectory",
-    "JointFriction",
     "IntegrationError",
+    "PassiveForces",
     "SolveResult",
     "simulate",
     "solve_lm",

@@ -1,13 +1,15 @@
-"""Actuation selection and joint friction, as generalized forces on the velocity coordinates."""
+"""Actuation selection: actuator efforts as generalized forces on the velocity coordinates.
+
+Joint friction, dampers and springs are :mod:`solvers.passive`.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Actuation", "JointFriction"]
+__all__ = ["Actuation"]
 
 
 class Actuation:
@@ -74,30 +76,3 @@ class Actuation:
     def velocity(self, v: np.ndarray) -> np.ndarray:
         """Actuator-side velocities ``S v`` (n_a,) conjugate to ``tau`` [rad/s or m/s]."""
         return self.gains * v[self.v_index]
-
-
-@dataclass
-class JointFriction:
-    """Viscous and smooth Coulomb friction on each velocity coordinate.
-
-    The generalized friction force is ``-(viscous v + coulomb tanh(v / smoothing))``. On a
-    multi-dof joint (spherical, free-flyer) it acts per velocity component.
-
-    Attributes:
-        viscous: Viscous coefficients, scalar or (nv,) [N m s/rad or N s/m].
-        coulomb: Coulomb (dry) friction levels, scalar or (nv,) [N m or N].
-        smoothing: Velocity at which ``tanh`` reaches 76 % of the Coulomb level [rad/s or m/s].
-
-    """
-
-    viscous: float | np.ndarray = 0.0
-    coulomb: float | np.ndarray = 0.0
-    smoothing: float = 1e-2
-
-    def __post_init__(self) -> None:
-        if not self.smoothing > 0.0:
-            raise ValueError(f"friction smoothing must be > 0, got {self.smoothing}")
-
-    def force(self, v: np.ndarray) -> np.ndarray:
-        """Generalized friction force (nv,) at velocity ``v`` [N m or N]."""
-        return -(self.viscous * v + self.coulomb * np.tanh(v / self.smoothing))

@@ -24,7 +24,9 @@ of a hinge closure. On top of it:
   :class:`~solvers.closure.ClosureSet`, then ``v`` by the kinetic-energy-metric projection onto
   the null space of the closure Jacobian (``v+ = argmin |v+ - v|_M  s.t.  J v+ = 0``, the
   velocity after a perfectly inelastic impulse, which never adds energy);
-- joint friction: viscous plus smooth Coulomb (``tanh``) per velocity coordinate;
+- passive elements (:class:`~solvers.passive.PassiveForces`): joint springs, viscous dampers,
+  smooth Coulomb friction and two-frame springs, a separate generalized-force term; the
+  springs' energy is recorded as ``elastic``, the dampers' and friction's as ``dissipated``;
 - actuation: efforts ``tau(t, q, v) -> (n_a,)`` mapped to generalized forces by an
   :class:`Actuation` selection.
 
@@ -44,15 +46,15 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pinocchio as pin
 
-from solvers.actuation import Actuation, JointFriction
+from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
 from solvers.integrators import COMMUTATIVE_JOINTS, DOPRI5, RK4, Tableau
+from solvers.passive import PassiveForces
 from solvers.projection import ProjectionError, project_state
 from solvers.recording import Evaluation, ForwardResult, Recorder
 
 __all__ = [
     "Actuation",
-    "JointFriction",
     "ForwardResult",
     "ForwardDynamics",
     "IntegrationError",
@@ -91,7 +93,7 @@ class ForwardDynamics:
         constraints: CONTACT_3D / CONTACT_6D rigid constraint models; copied (the Baumgarte
             gains are set on the copies).
         actuation: Actuated coordinates (default: none).
-        friction: Joint friction (default: none).
+        passive: Springs, dampers and friction (default: none).
         integrator: ``"dopri5"``, ``"rk4"`` or ``"euler"`` (see the module docstring).
         baumgarte: Baumgarte gains ``(Kp [1/s^2], Kd [1/s])`` of the closure error (default:
             critically damped at 50 rad/s; unstabilised, the closure error of a free Delta grows
@@ -119,7 +121,7 @@ class ForwardDynamics:
         constraints: Sequence[pin.RigidConstraintModel],
         actuation: Actuation | None = None,
         *,
-        friction: JointFriction | None = None,
+        passive: PassiveForces | None = None,
         integrator: str = "dopri5",
         baumgarte: tuple[float, float] = (2500.0, 100.0),
         project: bool = True,
@@ -144,7 +146,7 @@ class ForwardDynamics:
         self.actuation = actuation if actuation is not None else Actuation([])
         if self.actuation.n and int(self.actuation.v_index.max()) >= model.nv:
             raise ValueError(f"actuated velocity index out of range (nv = {model.nv})")
-        self.friction = friction
+        self.passive = None if passive is None or passive.empty else passive
         self.integrator = integrator
         self.project = project
         self.project_tol = project_tol
@@ -192,7 +194,7 @@ class ForwardDynamics:
         Args:
             q: Configuration (nq,).
             v: Velocity (nv,).
-            tau: Generalized forces (nv,) [N m or N] (actuation and friction included).
+            tau: Generalized forces (nv,) [N m or N] (actuation and passive forces included).
 
         Returns:
             Acceleration (nv,) (a copy).
@@ -218,7 +220,7 @@ class ForwardDynamics:
     def _generalized(
         self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Actuator efforts and their generalized force (friction excluded)."""
+        """Actuator efforts and their generalized force (passive forces excluded)."""
         if tau_fn is None:
             return self._zero_tau, self._zero_nv
         tau_a = tau_fn(t, q, v)
@@ -238,13 +240,13 @@ class ForwardDynamics:
     def _forces(
         self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
     ) -> tuple[np.ndarray, np.ndarray, float, float]:
-        """Actuator efforts, generalized force, actuator power [W], friction loss [W]."""
+        """Actuator efforts, generalized force, actuator power [W], dissipated power [W]."""
         tau_a, gen = self._generalized(t, q, v, tau_fn)
         p_act = 0.0 if tau_fn is None else float(gen @ v)
-        if self.friction is None:
+        if self.passive is None:
             return tau_a, gen, p_act, 0.0
-        f = self.friction.force(v)
-        return tau_a, gen + f, p_act, -float(f @ v)
+        f, p_diss = self.passive.evaluate(q, v)
+        return tau_a, gen + f, p_act, p_diss
 
     # ------------------------------------------------------------------ stepping
 
@@ -261,7 +263,7 @@ class ForwardDynamics:
         """Stages of an explicit Runge-Kutta step in the exponential chart centred at ``q``.
 
         Returns:
-            Chart velocities ``K`` (s, nv), accelerations ``A`` (s, nv), actuator and friction
+            Chart velocities ``K`` (s, nv), accelerations ``A`` (s, nv), actuator and dissipated
             powers ``P`` (s, 2), the last stage's configuration and actuator efforts.
 
         """
@@ -274,10 +276,10 @@ class ForwardDynamics:
         qi, tau_a = q, first.tau
         ha = h * tab.a
         # per-stage Python overhead matters (a stage costs little more than one dynamics
-        # evaluation): local names, and no force evaluation for a passive frictionless run
+        # evaluation): local names, and no force evaluation for a run without forces
         integrate, accel = pin.integrate, self._accel
         ddiff = pin.dDifference if self._chart else None
-        forces = None if tau_fn is None and self.friction is None else self._forces
+        forces = None if tau_fn is None and self.passive is None else self._forces
         zero = self._zero_nv
         # (x[:i].T.dot(c) is the cheapest small linear combination of rows in numpy)
         for i in range(1, s):
@@ -311,7 +313,7 @@ class ForwardDynamics:
         """Advance the state by ``dt`` from (q, v), whose evaluation ``first`` is known.
 
         Returns:
-            ``q+``, ``v+``, actuator work and friction loss over ``dt`` [J], and the evaluation
+            ``q+``, ``v+``, actuator work and dissipated energy over ``dt`` [J], and the evaluation
             at the new state when the scheme computed it (``dopri5``), else ``None``.
 
         """
@@ -401,8 +403,8 @@ class ForwardDynamics:
         """
         if self.integrator == "euler":
             g = self._generalized(t, q, v, tau)[1]
-            if self.friction is not None:
-                g = g + self.friction.force(v)
+            if self.passive is not None:
+                g = g + self.passive.force(q, v)
             v = v + dt * self._accel(q, v, g)
             q = pin.integrate(self.model, q, dt * v)
         else:

@@ -13,7 +13,7 @@ __all__ = ["Evaluation", "ForwardResult", "Recorder"]
 
 @dataclass
 class Evaluation:
-    """One dynamics evaluation: acceleration, actuator efforts, actuator and friction power."""
+    """One dynamics evaluation: acceleration, actuator efforts, actuator and dissipated power."""
 
     a: np.ndarray
     tau: np.ndarray
@@ -38,9 +38,10 @@ class ForwardResult:
         potential: Gravitational potential energy (N,) [J].
         work: Actuator work done since the start (N,) [J], integrated with the step's
             quadrature (fifth order for ``dopri5``, fourth for ``rk4``, first for ``euler``).
-        dissipated: Energy dissipated by joint friction since the start (N,) [J].
+        dissipated: Energy dissipated by the dampers and the friction since the start (N,) [J].
         projections: Number of output steps whose state was projected onto the closures.
         extras: Integrator statistics (``substeps``, ``rejected`` for ``dopri5``).
+        elastic: Potential energy of the springs (N,) [J] (zeros without springs).
 
     """
 
@@ -57,19 +58,25 @@ class ForwardResult:
     dissipated: np.ndarray
     projections: int = 0
     extras: dict[str, float] = field(default_factory=dict)
+    elastic: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.elastic is None:
+            self.elastic = np.zeros_like(self.kinetic)
 
     @property
     def energy(self) -> np.ndarray:
-        """Mechanical energy ``kinetic + potential`` (N,) [J]."""
-        return self.kinetic + self.potential
+        """Mechanical energy ``kinetic + potential + elastic`` (N,) [J]."""
+        assert self.elastic is not None
+        return self.kinetic + self.potential + self.elastic
 
     def energy_drift(self) -> float:
         """Largest violation of the energy balance, relative to the energy exchanged.
 
         ``max |E(t) - E(0) - work(t) + dissipated(t)|`` divided by the largest of the kinetic
         energy, the actuator work and the dissipated energy along the run: for a passive
-        frictionless run, the relative drift of the mechanical energy. The potential energy is
-        not used as the scale because its origin is arbitrary.
+        undamped run, the relative drift of the mechanical energy (springs included). The
+        potential energies are not used as the scale because their origin is arbitrary.
 
         Returns:
             The relative drift (0 when nothing moves).
@@ -100,6 +107,7 @@ class Recorder:
         self.pe = np.empty(n)
         self.work = np.empty(n)
         self.diss = np.empty(n)
+        self.el = np.zeros(n)
 
     def add(
         self,
@@ -126,6 +134,8 @@ class Recorder:
             self.res[k] = 0.0
         self.ke[k] = pin.computeKineticEnergy(model, kin, q, v)
         self.pe[k] = pin.computePotentialEnergy(model, kin, q)
+        if fd.passive is not None:
+            self.el[k] = fd.passive.potential(q)
         self.work[k] = work
         self.diss[k] = dissipated
         self.k = k + 1
@@ -145,4 +155,5 @@ class Recorder:
             self.pe[:n],
             self.work[:n],
             self.diss[:n],
+            elastic=self.el[:n],
         )

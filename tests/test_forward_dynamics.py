@@ -10,7 +10,7 @@ from solvers.forward_dynamics import (
     Actuation,
     ForwardDynamics,
     IntegrationError,
-    JointFriction,
+    PassiveForces,
     simulate,
 )
 
@@ -159,9 +159,9 @@ def test_actuator_work_equals_energy_change(robots, name, kp, kd, amplitude):
 
 def test_friction_only_dissipates(robots):
     robot = robots["five_bar"]
-    friction = JointFriction(viscous=0.02, coulomb=0.01, smoothing=0.01)
+    friction = PassiveForces(robot.model, damping=0.02, friction=0.01, smoothing=0.01)
     v0 = _tangent_velocity(robot, robot.q_home, 2.0)
-    fd = ForwardDynamics(robot.model, robot.constraint_models, friction=friction)
+    fd = ForwardDynamics(robot.model, robot.constraint_models, passive=friction)
     res = fd.simulate(robot.q_home, v0, 1.0, 1e-3)
     assert np.all(np.diff(res.energy) <= 1e-12)
     assert np.all(np.diff(res.dissipated) >= 0.0)
@@ -170,7 +170,7 @@ def test_friction_only_dissipates(robots):
     assert res.energy_drift() < 1e-6
     # the friction law: opposes the velocity, tanh-saturated Coulomb part
     v = np.array([-1.0, -1e-4, 0.0, 1.0])
-    f = friction.force(v)
+    f = friction.dissipative_force(v)
     assert np.all(f * v <= 0.0)
     assert f[-1] == pytest.approx(-(0.02 + 0.01 * np.tanh(100.0)))
 

@@ -14,7 +14,9 @@ Conventions (power conjugates of :mod:`pkdyn.analysis.kinematics`' velocities):
 
 Full equilibrium with closure reactions (:func:`static_equilibrium`): on the spanning tree,
 ``S^T tau + Jc^T lambda + J6^T F = g(q)``, with ``S`` the actuator selection, ``Jc`` the closure
-Jacobian, ``J6`` the 6D platform Jacobian and ``g`` the generalised gravity (optional), solved in
+Jacobian, ``J6`` the 6D platform Jacobian and ``g`` the generalised gravity (optional), plus the
+springs' generalized force ``f_s(q)`` on the left when the robot has springs (``robot.passive``;
+dampers and friction vanish at rest: the smooth friction model holds nothing), solved in
 the least-squares sense (minimum norm in ``lambda`` when closure equations are redundant, e.g.
 hinges). ``lambda`` holds the closure forces, with the sign of the residual conventions of
 :mod:`solvers.closure`: for a ``point`` closure (residual ``p1 - p2``), the force [N] body 2
@@ -140,6 +142,7 @@ def static_equilibrium(
     q: Sequence[float] | np.ndarray,
     F: Sequence[float] | np.ndarray | None = None,
     gravity: bool = False,
+    passive: bool = True,
 ) -> StaticsResult:
     """Actuator efforts and closure reactions balancing an external wrench (and gravity).
 
@@ -148,6 +151,7 @@ def static_equilibrium(
         q: Assembled configuration (nq,).
         F: Wrench on the platform (task components or all 6) [N, N m]; ``None``: zero.
         gravity: Also balance the robot's weight (``model.gravity``).
+        passive: Include the robot's springs (joint and two-frame springs).
 
     Returns:
         The efforts and reactions.
@@ -165,6 +169,8 @@ def static_equilibrium(
     rhs = -km.J6.T @ F6
     if gravity:
         rhs += pin.computeGeneralizedGravity(model, data, km.q)
+    if passive and robot.passive is not None:
+        rhs -= robot.passive.conservative_force(km.q)
     nv, n_a = robot.nv, km.n_a
     S_T = np.zeros((nv, n_a))
     S_T[km.actuated_v, np.arange(n_a)] = 1.0

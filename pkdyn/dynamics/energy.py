@@ -1,4 +1,4 @@
-"""Mechanical energy of the whole mechanism."""
+"""Mechanical energy of the whole mechanism: kinetic, gravitational and elastic (springs)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pinocchio as pin
 
 from pkdyn.model.robot import Robot
 
-__all__ = ["mechanical_energy"]
+__all__ = ["elastic_energy", "mechanical_energy"]
 
 
 def mechanical_energy(robot: Robot, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
@@ -26,3 +26,17 @@ def mechanical_energy(robot: Robot, q: np.ndarray, v: np.ndarray) -> tuple[float
     kinetic = float(pin.computeKineticEnergy(model, data, q, v))
     potential = float(pin.computePotentialEnergy(model, data, q))
     return kinetic, potential
+
+
+def elastic_energy(robot: Robot, q: np.ndarray) -> float:
+    """Potential energy of the robot's springs (joint and two-frame springs) at ``q``.
+
+    Args:
+        robot: The robot.
+        q: Configuration (nq,).
+
+    Returns:
+        The energy [J] (zero at the springs' rest positions; zero without springs).
+
+    """
+    return 0.0 if robot.passive is None else robot.passive.potential(q)

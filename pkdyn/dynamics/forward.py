@@ -2,7 +2,8 @@
 
 Built on :class:`solvers.ForwardDynamics`.
 Actuator efforts ``tau(t, q, v)`` are joint-side [N m or N]; gravity is ``model.gravity``; the
-solvers' failures become :class:`pkdyn.exceptions.SimulationError`.
+robot's passive elements (``robot.passive``: springs, dampers, friction) act unless
+``passive=False``; the solvers' failures become :class:`pkdyn.exceptions.SimulationError`.
 """
 
 from __future__ import annotations
@@ -13,9 +14,10 @@ import numpy as np
 
 from pkdyn.dynamics.actuation import actuation
 from pkdyn.exceptions import InvalidInputError, SimulationError
+from pkdyn.model.passive import FRICTION_SMOOTHING
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
-from solvers import ForwardDynamics, ForwardResult, IntegrationError, JointFriction
+from solvers import ForwardDynamics, ForwardResult, IntegrationError, PassiveForces
 
 __all__ = ["TorqueFn", "simulate"]
 
@@ -34,6 +36,7 @@ def simulate(
     coulomb: float | Sequence[float] = 0.0,
     integrator: str = "dopri5",
     record_every: int = 1,
+    passive: bool = True,
 ) -> ForwardResult:
     """Constrained forward dynamics of the robot under gravity and actuator efforts.
 
@@ -45,13 +48,17 @@ def simulate(
         v0: Initial velocity (default zero); projected onto the closures.
         torque: Joint-side actuator efforts ``torque(t, q, v) -> (n_a,)`` [N m or N]
             (default: none, the actuators are free).
-        viscous: Viscous friction coefficient(s) per velocity coordinate [N m s/rad or N s/m].
-        coulomb: Coulomb friction level(s) per velocity coordinate [N m or N].
+        viscous: Extra viscous damping per velocity coordinate, scalar or (nv,)
+            [N m s/rad or N s/m], added to the joints' own damping.
+        coulomb: Extra Coulomb friction per velocity coordinate, scalar or (nv,) [N m or N],
+            added to the joints' own friction.
         integrator: ``dopri5`` (adaptive, default), ``rk4`` or ``euler``.
         record_every: Record one sample every that many steps.
+        passive: Include the robot's own passive elements (``robot.passive``).
 
     Returns:
-        Time series: q, v, a, efforts, closure forces and residuals, energies and work.
+        Time series: q, v, a, efforts, closure forces and residuals, energies (the springs'
+        in ``elastic``), actuator work and the energy dissipated by dampers and friction.
 
     Raises:
         InvalidInputError: Non-positive duration or step, unknown integrator, bad sizes.
@@ -67,16 +74,11 @@ def simulate(
         raise InvalidInputError("record_every", f"must be >= 1, got {record_every}")
     q = robot.q_home if q0 is None else as_finite("q0", q0, robot.nq)
     v = np.zeros(robot.nv) if v0 is None else as_finite("v0", v0, robot.nv)
-    friction = None
-    if np.any(np.asarray(viscous) != 0.0) or np.any(np.asarray(coulomb) != 0.0):
-        friction = JointFriction(
-            viscous=np.asarray(viscous, dtype=float), coulomb=np.asarray(coulomb, dtype=float)
-        )
     fd = ForwardDynamics(
         robot.model,
         list(robot.constraint_models),
         actuation(robot),
-        friction=friction,
+        passive=_passive(robot, passive, viscous, coulomb),
         integrator=integrator,
     )
     tau_fn = torque
@@ -93,3 +95,34 @@ def simulate(
         return fd.simulate(q, v, duration, dt, tau=tau_fn, record_every=record_every)
     except IntegrationError as err:
         raise SimulationError(str(err), err.time) from None
+
+
+def _extra(name: str, x: float | Sequence[float], nv: int) -> np.ndarray:
+    arr = np.asarray(x, dtype=float)
+    if arr.ndim > 1 or arr.size not in (1, nv) or not np.all(np.isfinite(arr)):
+        raise InvalidInputError(name, f"expected one or {nv} finite values, got {arr.tolist()}")
+    if np.any(arr < 0.0):
+        raise InvalidInputError(name, f"must be >= 0, got {arr.tolist()}")
+    return np.array(np.broadcast_to(arr, (nv,)))
+
+
+def _passive(
+    robot: Robot, own: bool, viscous: float | Sequence[float], coulomb: float | Sequence[float]
+) -> PassiveForces | None:
+    """The robot's passive forces (if ``own``) with extra damping and friction."""
+    base = robot.passive if own else None
+    c = _extra("viscous", viscous, robot.nv)
+    f = _extra("coulomb", coulomb, robot.nv)
+    if not (np.any(c) or np.any(f)):
+        return base
+    if base is None:
+        return PassiveForces(robot.model, damping=c, friction=f, smoothing=FRICTION_SMOOTHING)
+    return PassiveForces(
+        robot.model,
+        stiffness=base.stiffness,
+        rest=base.rest,
+        damping=base.damping + c,
+        friction=base.friction + f,
+        smoothing=base.smoothing,
+        springs=base.springs,
+    )

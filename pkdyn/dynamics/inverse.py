@@ -3,7 +3,9 @@
 Conventions: efforts ``tau`` are joint-side [N m or N] (motor side: divide by the reduction);
 the platform wrench ``F`` is the one of :mod:`pkdyn.analysis.statics` (applied by the
 environment on the platform, force in world axes [N], moment in platform axes [N m]); gravity
-is ``model.gravity``. The solver's failures become typed pkdyn exceptions naming the sample and
+is ``model.gravity``; the robot's passive elements (``robot.passive``: springs, dampers,
+friction) enter as a generalized force ``f_passive(q, v)`` beside the platform wrench's, unless
+``passive=False``. The solver's failures become typed pkdyn exceptions naming the sample and
 the actuator.
 """
 
@@ -42,6 +44,10 @@ class EffortTrajectory:
         residual: Residual of the dynamics equation per sample (N,) [N m or N].
         kinetic: Kinetic energy (N,) [J].
         potential: Gravitational potential energy (N,) [J].
+        elastic: Potential energy of the springs (N,) [J] (zeros without springs).
+        dissipation: Power dissipated by the dampers and the friction (N,) [W] (>= 0).
+
+    With passive elements the actuators' power balances ``d(energy)/dt + dissipation``.
 
     """
 
@@ -52,6 +58,13 @@ class EffortTrajectory:
     residual: np.ndarray
     kinetic: np.ndarray
     potential: np.ndarray
+    elastic: np.ndarray | None = None
+    dissipation: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("elastic", "dissipation"):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.zeros_like(self.kinetic))
 
     @property
     def t(self) -> np.ndarray:
@@ -60,8 +73,9 @@ class EffortTrajectory:
 
     @property
     def energy(self) -> np.ndarray:
-        """Mechanical energy, kinetic + potential (N,) [J]."""
-        return self.kinetic + self.potential
+        """Mechanical energy, kinetic + potential + elastic (N,) [J]."""
+        assert self.elastic is not None
+        return self.kinetic + self.potential + self.elastic
 
     @property
     def power(self) -> np.ndarray:
@@ -125,6 +139,7 @@ def inverse_dynamics(
     limits: bool = False,
     weights: Sequence[float] | np.ndarray | None = None,
     progress: bool | None = None,
+    passive: bool = True,
 ) -> EffortTrajectory:
     """Actuator efforts (and closure forces) realising a trajectory, with gravity.
 
@@ -143,6 +158,7 @@ def inverse_dynamics(
             limits are finite, else ones).
         progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) shows
             it when stderr is a terminal and there are more than 2000 samples.
+        passive: Include the robot's springs, dampers and friction (``robot.passive``).
 
     Returns:
         Efforts, closure forces, residuals and energies per sample.
@@ -180,6 +196,8 @@ def inverse_dynamics(
         upper=upper,
         weights=weights,
     )
+    elements = robot.passive if passive else None
+    F_passive = None if elements is None else elements.forces(traj.q, traj.v)
     kin_data = robot.model.createData()
     tau = np.empty((N, len(robot.actuators)))
     lam = np.empty((N, solver.closure_set.nc))
@@ -190,9 +208,10 @@ def inverse_dynamics(
     for k in iterator:
         q, v, a = traj.q[k], traj.v[k], traj.a[k]
         _check_consistent(solver.closure_set, kin_data, k, float(traj.t[k]), q, v, a)
-        f_ext = None
+        f_ext = None if F_passive is None else F_passive[k]
         if W is not None:
-            f_ext = platform_jacobian(robot, q).T @ W[k]
+            f_w = platform_jacobian(robot, q).T @ W[k]
+            f_ext = f_w if f_ext is None else f_ext + f_w
         try:
             out = solver.solve(q, v, a, sample=k, f_ext=f_ext)
         except _SolverInfeasible as err:
@@ -201,4 +220,10 @@ def inverse_dynamics(
             ) from None
         tau[k], lam[k], res[k] = out.tau, out.constraint_forces, out.residual
         kin[k], pot[k] = mechanical_energy(robot, q, v)
-    return EffortTrajectory(traj, robot.actuator_names, tau, lam, res, kin, pot)
+    elastic = dissipation = None
+    if elements is not None:
+        elastic = elements.potentials(traj.q)
+        dissipation = elements.dissipations(traj.v)
+    return EffortTrajectory(
+        traj, robot.actuator_names, tau, lam, res, kin, pot, elastic, dissipation
+    )

@@ -180,6 +180,7 @@ def size(
     payload: float = 0.0,
     wrench: Any = None,
     progress: bool | None = None,
+    passive: bool = True,
 ) -> SizingResult:
     """Size the actuators of ``robot`` for a trajectory (inverse dynamics with gravity).
 
@@ -191,6 +192,8 @@ def size(
         wrench: Platform wrench, see :func:`pkdyn.dynamics.inverse_dynamics`.
         progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) as
             :func:`pkdyn.dynamics.inverse_dynamics` decides.
+        passive: Include the robot's springs, dampers and friction (``robot.passive``);
+            ``False`` gives the efforts without them.
 
     Returns:
         The figures per actuator and the time series behind them.
@@ -201,7 +204,7 @@ def size(
 
     """
     loaded = with_payload(robot, payload) if payload else robot
-    ef = inverse_dynamics(loaded, trajectory, wrench=wrench, progress=progress)
+    ef = inverse_dynamics(loaded, trajectory, wrench=wrench, progress=progress, passive=passive)
     t = trajectory.t
     tau, qd = ef.tau, trajectory.qa_dot
     peak = np.max(np.abs(tau), axis=0)

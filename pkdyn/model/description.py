@@ -12,6 +12,11 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
   which pose components the mechanism controls.
 - Actuation is the standard ``<transmission>`` element (SimpleTransmission,
   ``mechanicalReduction``); effort and velocity limits come from the joint's ``<limit>``.
+- Passive elements: the joint's standard ``<dynamics damping friction>``;
+  ``<pkdyn:passive joint stiffness rest damping friction>`` (per degree of freedom: a joint
+  spring about a rest position, and damping / friction overriding ``<dynamics>``);
+  ``<pkdyn:spring name stiffness rest_length>`` with two ``<pkdyn:frame>`` children: a linear
+  spring between two frames.
 """
 
 from __future__ import annotations
@@ -35,6 +40,8 @@ __all__ = [
     "JointSpec",
     "ActuatorSpec",
     "PlatformSpec",
+    "PassiveSpec",
+    "SpringSpec",
     "Description",
     "parse_description",
 ]
@@ -175,6 +182,58 @@ class PlatformSpec:
 
 
 @dataclass(frozen=True)
+class PassiveSpec:
+    """Passive elements of one joint, per degree of freedom (its velocity coordinates).
+
+    Each field holds no value (absent), one value (every degree of freedom) or one value per
+    degree of freedom.
+
+    Attributes:
+        joint: Joint name.
+        stiffness: Spring stiffness [N m/rad or N/m], >= 0.
+        rest: Rest position of the spring, as the joint's displacement from its zero
+            configuration [rad or m]: the angle or position of a revolute or prismatic joint,
+            the two angles of a universal joint, the rotation vector of a spherical joint
+            (default: zero).
+        damping: Viscous damping [N m s/rad or N s/m], >= 0.
+        friction: Coulomb friction [N m or N], >= 0.
+
+    """
+
+    joint: str
+    stiffness: tuple[float, ...] = ()
+    rest: tuple[float, ...] = ()
+    damping: tuple[float, ...] = ()
+    friction: tuple[float, ...] = ()
+
+    @property
+    def empty(self) -> bool:
+        """No non-zero stiffness, damping or friction."""
+        return not any(any(getattr(self, f)) for f in ("stiffness", "damping", "friction"))
+
+
+@dataclass(frozen=True)
+class SpringSpec:
+    """A linear spring between two frames on two bodies, along the line joining their origins.
+
+    Attributes:
+        name: Spring name.
+        frame1: First end.
+        frame2: Second end.
+        stiffness: Stiffness [N/m], >= 0.
+        rest_length: Free length [m], >= 0 (0: a zero-free-length spring); the tension is
+            ``stiffness * (length - rest_length)``.
+
+    """
+
+    name: str
+    frame1: FrameRef
+    frame2: FrameRef
+    stiffness: float
+    rest_length: float = 0.0
+
+
+@dataclass(frozen=True)
 class Description:
     """Everything a pkdyn description says beyond the URDF tree."""
 
@@ -185,6 +244,8 @@ class Description:
     platform: PlatformSpec | None = None
     links: tuple[str, ...] = ()
     joint_names: tuple[str, ...] = ()
+    passive: tuple[PassiveSpec, ...] = ()
+    springs: tuple[SpringSpec, ...] = ()
 
 
 def _vec(source: str, el: ET.Element, attr: str, default: str, n: int = 3) -> np.ndarray:
@@ -355,6 +416,80 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
     return out
 
 
+_PASSIVE_FIELDS = ("stiffness", "rest", "damping", "friction")
+
+
+def _values(source: str, culprit: str, text: str, signed: bool) -> tuple[float, ...]:
+    """Finite numbers of a passive-element attribute (>= 0 unless ``signed``)."""
+    try:
+        values = tuple(float(t) for t in text.split())
+    except ValueError:
+        raise DescriptionError(source, culprit, f"'{text}' is not a list of numbers") from None
+    if not values:
+        raise DescriptionError(source, culprit, "is empty; give one value or one per DOF")
+    for x in values:
+        if not math.isfinite(x):
+            raise DescriptionError(source, culprit, f"{x} is not finite")
+        if not signed and x < 0.0:
+            raise DescriptionError(source, culprit, f"{x:g} is negative; it must be >= 0")
+    return values
+
+
+def _passive(source: str, root: ET.Element) -> tuple[PassiveSpec, ...]:
+    """Passive elements per joint: ``<dynamics>`` overridden field by field by pkdyn:passive.
+
+    The ``<dynamics damping>`` of a fixed joint is dropped (URDF files reduced from moving
+    joints keep it; a locked joint damps nothing); its friction is kept, and refused later.
+    """
+    fields: dict[str, dict[str, tuple[float, ...]]] = {}
+    for j in root.findall("joint"):
+        dyn = j.find("dynamics")
+        name = j.get("name", "?")
+        if dyn is None:
+            continue
+        kept = ("friction",) if j.get("type") == "fixed" else ("damping", "friction")
+        for attr in kept:
+            text = dyn.get(attr)
+            if text is not None:
+                culprit = f"joint '{name}' <dynamics> {attr}"
+                fields.setdefault(name, {})[attr] = _values(source, culprit, text, False)
+    seen: set[str] = set()
+    for el in root.findall(_NS + "passive"):
+        name = el.get("joint", "")
+        if not name:
+            raise DescriptionError(source, "<pkdyn:passive>", "missing attribute 'joint'")
+        if name in seen:
+            raise DescriptionError(
+                source, f"pkdyn:passive joint '{name}'", "one <pkdyn:passive> per joint"
+            )
+        seen.add(name)
+        for attr in _PASSIVE_FIELDS:
+            text = el.get(attr)
+            if text is not None:
+                culprit = f"joint '{name}' {attr}"
+                fields.setdefault(name, {})[attr] = _values(source, culprit, text, attr == "rest")
+    return tuple(PassiveSpec(name, **f) for name, f in fields.items())
+
+
+def _spring(source: str, el: ET.Element, links: set[str]) -> SpringSpec:
+    name = el.get("name")
+    if not name:
+        raise DescriptionError(source, "<pkdyn:spring>", "missing attribute 'name'")
+    frames = el.findall(_NS + "frame")
+    if len(frames) != 2:
+        raise DescriptionError(
+            source, f"spring '{name}'", f"needs exactly two <pkdyn:frame>, found {len(frames)}"
+        )
+    f1, f2 = (_frame(source, f, links) for f in frames)
+    if el.get("stiffness") is None:
+        raise DescriptionError(source, f"spring '{name}'", "missing attribute 'stiffness'")
+    k = _values(source, f"spring '{name}' stiffness", el.get("stiffness", ""), False)
+    L0 = _values(source, f"spring '{name}' rest_length", el.get("rest_length", "0"), False)
+    if len(k) != 1 or len(L0) != 1:
+        raise DescriptionError(source, f"spring '{name}'", "stiffness and rest_length: 1 value")
+    return SpringSpec(name, f1, f2, k[0], L0[0])
+
+
 _URDF_NUMBERS = {
     "origin": ("xyz", "rpy"),
     "axis": ("xyz",),
@@ -433,6 +568,11 @@ def parse_description(xml_text: str, source: str) -> Description:
                 f"components must be among {' '.join(TASK_COMPONENTS)}",
             )
         platform = PlatformSpec(_frame(source, pel, links), task)
+    springs = tuple(_spring(source, el, links) for el in root.findall(_NS + "spring"))
+    spring_names = [sp.name for sp in springs]
+    for n in spring_names:
+        if spring_names.count(n) > 1:
+            raise DescriptionError(source, f"spring '{n}'", "spring names must be unique")
     return Description(
         name=root.get("name", source),
         closures=closures,
@@ -441,4 +581,6 @@ def parse_description(xml_text: str, source: str) -> Description:
         platform=platform,
         links=tuple(sorted(links)),
         joint_names=joint_names,
+        passive=_passive(source, root),
+        springs=springs,
     )

@@ -41,6 +41,7 @@ from pkdyn.model.formats.mjcf_import import read_mjcf
 from pkdyn.model.formats.sdf import read_sdf
 from pkdyn.model.formats.xmldoc import parse_xml, read_text
 from pkdyn.model.home import ASSEMBLY_TOL, find_home
+from pkdyn.model.passive import passive_forces
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn
 from solvers import ClosureSet
@@ -393,6 +394,9 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
     for cm in cms:
         vec.append(cm)
     passive = np.setdiff1d(np.arange(model.nv), actuated_v)
+    elements = passive_forces(
+        model, desc.passive, desc.springs, source, desc.joint_names, desc.joints
+    )
     return Robot(
         name=desc.name,
         source=source,
@@ -413,6 +417,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         task_rows=task_rows,
         q_home=pin.neutral(model),
         params=params,
+        passive=elements,
     )
 
 

@@ -11,7 +11,7 @@ import pinocchio as pin
 from pkdyn.exceptions import PkdynError
 from pkdyn.model.description import ActuatorSpec, ClosureSpec, Description
 from pkdyn.model.families import FAMILIES
-from solvers import ClosureSet
+from solvers import ClosureSet, PassiveForces
 from solvers.numerics import rank
 
 __all__ = ["MODELLING_JOINTS", "Robot"]
@@ -44,6 +44,8 @@ class Robot:
         task_rows: Controlled pose components as indices into (x, y, z, rx, ry, rz).
         q_home: An assembled reference configuration (nq,).
         params: Builder parameters for library robots, else ``None``.
+        passive: Springs, dampers and friction of the joints and the two-frame springs
+            (:mod:`pkdyn.model.passive`), or ``None`` when there are none.
 
     """
 
@@ -66,6 +68,7 @@ class Robot:
     task_rows: np.ndarray
     q_home: np.ndarray
     params: Any = None
+    passive: PassiveForces | None = None
 
     @property
     def nq(self) -> int:

@@ -21,10 +21,19 @@ between two sites placed at the Pinocchio contact frames (``<name>_1`` on ``join
 motor-side effort; ``ctrlrange`` and ``forcerange`` are the URDF (joint-side) effort limit
 divided by the reduction. A keyframe ``home`` holds the assembled home configuration.
 
-Not exported: the cone / pyramid limits of passive ball and universal joints (MuJoCo's ball
-``range`` bounds the rotation angle, not the tilt of an axis), velocity limits, meshes in
-formats MuJoCo cannot read (skipped with a warning). MuJoCo's equality constraints are soft
-(``solref``, ``solimp``); the defaults below make them stiff for the chosen time step.
+Passive elements: joint damping, friction (``frictionloss``: MuJoCo's dry friction is a
+constraint, pkdyn's a smooth ``tanh`` law) and armature; joint springs as ``stiffness`` and
+``springref`` (the rest position) on hinges and slides, ``stiffness`` on a ball joint whose spring
+is isotropic about the zero rotation (MuJoCo's ball spring: ``-k log(q_ref^-1 q)``, as pkdyn's);
+two-frame springs as spatial tendons between two sites (``<name>/1``, ``<name>/2``) with
+``stiffness`` and ``springlength`` (the free length).
+
+Not exported: ball-joint springs with a rest rotation or different stiffnesses per axis, and
+springs on free joints (a warning says so); the cone / pyramid limits of passive ball and
+universal joints (MuJoCo's ball ``range`` bounds the rotation angle, not the tilt of an axis),
+velocity limits, meshes in formats MuJoCo cannot read (skipped with a warning). MuJoCo's
+equality constraints are soft (``solref``, ``solimp``); the defaults below make them stiff for
+the chosen time step.
 
 :class:`StateMap` converts states: Pinocchio stores quaternions ``(x, y, z, w)``, MuJoCo
 ``(w, x, y, z)``; a free-flyer's Pinocchio velocity is the body's spatial velocity in its own
@@ -449,6 +458,54 @@ def _joint_attrs(model: pin.Model, jid: int, nv_index: int, k: int) -> dict[str,
     return out
 
 
+def _spring_attrs(robot: Robot, jid: int, kind: str, k: int) -> dict[str, str]:
+    """``stiffness`` and ``springref`` of MuJoCo joint ``k`` of Pinocchio joint ``jid``."""
+    passive = robot.passive
+    if passive is None:
+        return {}
+    jm = robot.model.joints[jid]
+    K = passive.stiffness[jm.idx_v : jm.idx_v + jm.nv]
+    rest = passive.rest[jm.idx_q : jm.idx_q + jm.nq]
+    if not np.any(K):
+        return {}
+    name = robot.model.names[jid]
+    if kind == "ball":
+        if np.all(K == K[0]) and np.allclose(rest, [0.0, 0.0, 0.0, 1.0], rtol=0.0, atol=1e-15):
+            return {"stiffness": _num(K[0])}
+    elif kind in ("hinge", "slide") and K.size == jm.nq:  # one MuJoCo joint per coordinate
+        return {"stiffness": _num(K[k]), "springref": _num(rest[k])}
+    elif kind == "hinge" and jm.nq == 2 and K.size == 1:  # unbounded revolute (cos, sin)
+        return {"stiffness": _num(K[0]), "springref": _num(math.atan2(rest[1], rest[0]))}
+    warnings.warn(
+        f"{robot.source}: the spring of joint '{name}' has no MuJoCo equivalent; not exported",
+        stacklevel=3,
+    )
+    return {}
+
+
+def _tendons(root: ET.Element, robot: Robot, elements: dict[int, ET.Element]) -> None:
+    """Two-frame springs as spatial tendons between two sites."""
+    springs = [] if robot.passive is None else list(robot.passive.springs)
+    if not springs:
+        return
+    tendon = _sub(root, "tendon")
+    for k, sp in enumerate(springs):
+        name = sp.name or f"spring{k}"
+        sites = []
+        for j, M, end in ((sp.joint1, sp.placement1, 1), (sp.joint2, sp.placement2, 2)):
+            sites.append(f"{name}/{end}")
+            _sub(elements[j], "site", name=sites[-1], **_pose_attrs(M))
+        el = _sub(
+            tendon,
+            "spatial",
+            name=name,
+            stiffness=_num(sp.stiffness),
+            springlength=_num(sp.rest_length),
+        )
+        for site in sites:
+            _sub(el, "site", site=site)
+
+
 def _geom(
     parent: ET.Element,
     assets: ET.Element,
@@ -549,6 +606,7 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
                     attrs["range"] = _fmt(e.range)
             if e.type in ("hinge", "slide") or k == 0:
                 attrs.update(_joint_attrs(model, j, jm.idx_v, k if e.type != "free" else 0))
+                attrs.update(_spring_attrs(robot, j, e.type, k))
             _sub(body, "joint", **attrs)
     mesh_names: dict[tuple[str, str], str] = {}
     for cls, gm, wanted in (
@@ -570,6 +628,7 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
         _sub(equality, tag, name=cm.name, site1=s1, site2=s2)
     if len(equality) == 0:
         root.remove(equality)
+    _tendons(root, robot, elements)
     if opt.contacts and opt.collision and len(robot.collision_model.geometryObjects):
         contact = _sub(root, "contact")
         for a, b in _excluded_pairs(robot):
