@@ -21,7 +21,8 @@ Per joint, per degree of freedom (the velocity coordinates of the joint):
   ``c v^2 + f_0 v \tanh(v / v_s) >= 0``.
 
 Between two frames on two bodies (:class:`FrameSpring`): a linear spring along the line
-joining the two points ``p_1``, ``p_2``, of stiffness ``k`` and free length ``L_0``: tension
+joining the two points ``p_1``, ``p_2``, of stiffness ``k`` and free length ``L_0`` (negative for
+an extension spring with initial tension): tension
 ``T = k (L - L_0)`` (positive: pulls the points together), potential
 ``\tfrac12 k (L - L_0)^2``, generalized force ``f = -T (\partial L / \partial q)^T`` with
 ``\dot L = u^T (\dot p_2 - \dot p_1)``, ``u = (p_2 - p_1) / L``. ``L_0 = 0`` gives the
@@ -53,7 +54,8 @@ class FrameSpring:
         joint2: Joint (body) id of the second point.
         placement2: Frame of the second point in that joint's frame.
         stiffness: ``k`` [N/m], >= 0.
-        rest_length: Free length ``L_0`` [m], >= 0.
+        rest_length: Free length ``L_0`` [m]; negative for an extension spring with an initial
+            tension ``T_i`` (free length ``L_f``): ``L_0 = L_f - T_i / k``.
         name: Name, for messages.
 
     """
@@ -130,9 +132,10 @@ class PassiveForces:
             for j in (s.joint1, s.joint2):
                 if not 0 <= j < model.njoints:
                     raise ValueError(f"spring '{s.name}': joint id {j} out of range")
-            for what, x in (("stiffness", s.stiffness), ("rest length", s.rest_length)):
-                if not (np.isfinite(x) and x >= 0.0):
-                    raise ValueError(f"spring '{s.name}': {what} must be finite and >= 0")
+            if not (np.isfinite(s.stiffness) and s.stiffness >= 0.0):
+                raise ValueError(f"spring '{s.name}': stiffness must be finite and >= 0")
+            if not np.isfinite(s.rest_length):
+                raise ValueError(f"spring '{s.name}': rest length must be finite")
         self.springs = tuple(springs)
         self._live = [s for s in self.springs if s.stiffness > 0.0]
         self._ends = [

@@ -378,7 +378,9 @@ BAD = {
     "pkdyn:passive joint 'nope'": '<pkdyn:passive joint="nope" damping="1"/>',
     "spring 's'": '<pkdyn:spring name="s" stiffness="3"><pkdyn:frame link="body"/>'
     '<pkdyn:frame link="body" xyz="0 0 1"/></pkdyn:spring>',
-    "spring 's' rest_length": '<pkdyn:spring name="s" stiffness="2" rest_length="-1">'
+    "spring 's' rest_length": '<pkdyn:spring name="s" stiffness="2" rest_length="inf">'
+    '<pkdyn:frame link="ground"/><pkdyn:frame link="body"/></pkdyn:spring>',
+    "spring 's' stiffness": '<pkdyn:spring name="s" stiffness="-2">'
     '<pkdyn:frame link="ground"/><pkdyn:frame link="body"/></pkdyn:spring>',
 }
 

@@ -221,8 +221,9 @@ class SpringSpec:
         frame1: First end.
         frame2: Second end.
         stiffness: Stiffness [N/m], >= 0.
-        rest_length: Free length [m], >= 0 (0: a zero-free-length spring); the tension is
-            ``stiffness * (length - rest_length)``.
+        rest_length: Free length [m] (0: a zero-free-length spring; negative: an extension
+            spring with initial tension ``T_i`` and free length ``L_f`` has
+            ``L_f - T_i / stiffness``); the tension is ``stiffness * (length - rest_length)``.
 
     """
 
@@ -484,7 +485,7 @@ def _spring(source: str, el: ET.Element, links: set[str]) -> SpringSpec:
     if el.get("stiffness") is None:
         raise DescriptionError(source, f"spring '{name}'", "missing attribute 'stiffness'")
     k = _values(source, f"spring '{name}' stiffness", el.get("stiffness", ""), False)
-    L0 = _values(source, f"spring '{name}' rest_length", el.get("rest_length", "0"), False)
+    L0 = _values(source, f"spring '{name}' rest_length", el.get("rest_length", "0"), True)
     if len(k) != 1 or len(L0) != 1:
         raise DescriptionError(source, f"spring '{name}'", "stiffness and rest_length: 1 value")
     return SpringSpec(name, f1, f2, k[0], L0[0])
