@@ -18,6 +18,8 @@ Proved by physics and independent references, not by re-running pkdyn:
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -416,3 +418,49 @@ def test_rest_rotation_outside_a_cone_limit():
     robot = pkdyn.load("delta", geometry=False)
     with pytest.raises(pkdyn.DescriptionError, match="joint 'bar1a_upper' rest"):
         with_passive(robot, [PassiveSpec("bar1a_upper", stiffness=(1.0,), rest=(1.2, 0.0, 0.0))])
+
+
+# ------------------------------------------------------------------------------ CLI
+
+SPRINGS = (
+    '<pkdyn:passive joint="arm1" stiffness="2" rest="0.3" friction="0.1"/>'
+    '<pkdyn:passive joint="bar1a_upper" damping="0.01"/>'
+    '<pkdyn:spring name="balance1" stiffness="150" rest_length="0.01">'
+    '<pkdyn:frame link="base" xyz="0.15 0 0.12"/><pkdyn:frame link="arm1" xyz="0.12 0 0"/>'
+    "</pkdyn:spring></robot>"
+)
+
+
+def test_cli_info_lists_passive_elements(tmp_path, capsys):
+    robot = pkdyn.load("delta", geometry=False)
+    path = tmp_path / "delta.urdf"
+    path.write_text(
+        pkdyn.model.families.FAMILIES["delta"].build_urdf(robot.params).replace("</robot>", SPRINGS)
+    )
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "joint arm1: stiffness 2 rest 0.3, friction 0.1" in out
+    assert "joint bar1a_upper: damping 0.01 0.01 0.01" in out
+    assert "spring balance1 (base - arm1): 150 N/m, free length 0.01 m" in out
+    assert main(["info", str(path), "--json"]) == 0
+    passive = json.loads(capsys.readouterr().out)["passive"]
+    assert passive["joints"][0] == {
+        "joint": "arm1",
+        "stiffness": [2.0],
+        "friction": [0.1],
+        "rest": [0.3],
+    }
+    s = passive["springs"][0]
+    assert s["tension"] == pytest.approx(150.0 * (s["length"] - 0.01))
+    assert main(["info", "delta"]) == 0
+    assert "passive: none" in capsys.readouterr().out
+    # size: with and without them
+    argv = ["size", str(path), "--cycle-time", "0.6", "--dt", "0.01", "--payload", "1"]
+    assert main([*argv, "--no-passive", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    with_p, without = out["actuators"], out["without_passive"]["actuators"]
+    assert abs(with_p[0]["peak"] - without[0]["peak"]) > 0.5  # [N m]: the spring on arm 1
+    assert with_p[1]["peak"] == pytest.approx(without[1]["peak"], rel=0.01)
+    assert main([*argv, "--no-passive"]) == 0
+    text = capsys.readouterr().out
+    assert "with passive elements:" in text and "without passive elements:" in text

@@ -79,7 +79,22 @@ def _cmd_size(args: argparse.Namespace) -> None:
         f"{robot.name}: {result.trajectory}, {result.duration:g} s, payload {args.payload:g} kg"
         + ("" if result.feasible else "  -- LIMITS EXCEEDED")
     )
-    emit(args, result.as_json(), head + "\n" + result.table())
+    payload = result.as_json()
+    text = head + "\n" + result.table()
+    if args.no_passive:  # the same without the springs, dampers and friction
+        bare = size(robot, traj, payload=args.payload, passive=False)
+        payload["without_passive"] = bare.as_json()
+        what = "without" if robot.passive is not None else "(the robot has none) without"
+        text = (
+            head
+            + "\nwith passive elements:\n"
+            + result.table()
+            + f"\n{what} passive elements:"
+            + ("" if bare.feasible else "  -- LIMITS EXCEEDED")
+            + "\n"
+            + bare.table()
+        )
+    emit(args, payload, text)
 
 
 def register(sub: Any) -> None:
@@ -106,5 +121,10 @@ def register(sub: Any) -> None:
         "--csv", metavar="FILE", help="write the time series (t, q_, qd_, tau_, energy)"
     )
     sp.add_argument("--plot", metavar="FILE.png", help="plot effort, speed, power vs time")
+    sp.add_argument(
+        "--no-passive",
+        action="store_true",
+        help="also report the efforts without the robot's springs, dampers and friction",
+    )
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_size)

@@ -41,12 +41,40 @@ def _cmd_info(args: argparse.Namespace) -> None:
         "loops": robot.loops,
         "closures": closures,
     }
+    from pkdyn.model.passive import passive_summary
+
+    passive = passive_summary(robot)
+    payload["passive"] = passive
     lines = [
         f"{robot.name}: nq={robot.nq} nv={robot.nv} dof={payload['dof']} loops={robot.loops}",
         "actuated: " + ", ".join(f"{j} ({a})" for j, a in zip(joints, names, strict=True)),
         "closures: " + ", ".join(f"{c['name']} ({c['type']})" for c in closures),
+        "passive: " + (_passive_text(passive) or "none"),
     ]
     emit(args, payload, "\n".join(lines))
+
+
+def _values(x: list[float]) -> str:
+    return " ".join(f"{v:.4g}" for v in x)
+
+
+def _passive_text(passive: dict[str, Any]) -> str:
+    """One line per passive element (SI units: stiffness N m/rad or N/m, rest rad or m, ...)."""
+    rows = []
+    for e in passive["joints"]:
+        parts = []
+        if "stiffness" in e:
+            parts.append(f"stiffness {_values(e['stiffness'])} rest {_values(e['rest'])}")
+        for k in ("damping", "friction"):
+            if k in e:
+                parts.append(f"{k} {_values(e[k])}")
+        rows.append(f"\n  joint {e['joint']}: " + ", ".join(parts))
+    for s in passive["springs"]:
+        rows.append(
+            f"\n  spring {s['name']} ({s['link1']} - {s['link2']}): {s['stiffness']:.4g} N/m, "
+            f"free length {s['rest_length']:.4g} m, tension at home {s['tension']:.4g} N"
+        )
+    return "".join(rows)
 
 
 def _cmd_urdf(args: argparse.Namespace) -> None:

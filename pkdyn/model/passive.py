@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -24,7 +25,13 @@ from pkdyn.model.description import JointSpec, PassiveSpec, SpringSpec
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
 from solvers import FrameSpring, PassiveForces
 
-__all__ = ["FRICTION_SMOOTHING", "passive_forces", "rest_configuration", "with_passive"]
+__all__ = [
+    "FRICTION_SMOOTHING",
+    "passive_forces",
+    "passive_summary",
+    "rest_configuration",
+    "with_passive",
+]
 
 FRICTION_SMOOTHING = 1e-2
 """Speed [rad/s or m/s] at which the smooth Coulomb friction reaches 76 % of its level."""
@@ -239,3 +246,60 @@ def with_passive(
     return dataclasses.replace(
         robot, model=model, data=model.createData(), description=desc, passive=forces
     )
+
+
+def _body_of(model: pin.Model, joint: int) -> str:
+    """Name of the link a joint carries (its first body frame; the root link for joint 0)."""
+    for f in model.frames:
+        if f.parentJoint == joint and f.type == pin.FrameType.BODY:
+            return str(f.name)
+    return str(model.names[joint])
+
+
+def passive_summary(robot: Robot) -> dict[str, list[dict[str, Any]]]:
+    """The robot's passive elements as they enter the physics, JSON-ready.
+
+    Args:
+        robot: The robot.
+
+    Returns:
+        ``{"joints": [...], "springs": [...]}``: per joint with any element, its non-zero
+        ``stiffness``, ``rest`` (displacement from the joint's zero configuration), ``damping``
+        and ``friction`` per degree of freedom; per two-frame spring its ``name``, the two links,
+        ``stiffness`` [N/m], ``rest_length`` [m] and ``length`` / ``tension`` at ``q_home``.
+
+    """
+    P = robot.passive
+    out: dict[str, list[dict[str, Any]]] = {"joints": [], "springs": []}
+    if P is None:
+        return out
+    model = robot.model
+    deviation_at_rest = pin.difference(model, pin.neutral(model), P.rest)
+    for j in range(1, model.njoints):
+        jm = model.joints[j]
+        iv = slice(jm.idx_v, jm.idx_v + jm.nv)
+        entry: dict[str, Any] = {"joint": str(model.names[j])}
+        for name, values in (
+            ("stiffness", P.stiffness[iv]),
+            ("damping", P.damping[iv]),
+            ("friction", P.friction[iv]),
+        ):
+            if np.any(values):
+                entry[name] = [float(x) for x in values]
+        if "stiffness" in entry:
+            entry["rest"] = [float(x) for x in deviation_at_rest[iv]]
+        if len(entry) > 1:
+            out["joints"].append(entry)
+    for s, (length, tension) in zip(P.springs, P.spring_state(robot.q_home), strict=True):
+        out["springs"].append(
+            {
+                "name": s.name,
+                "link1": _body_of(model, s.joint1),
+                "link2": _body_of(model, s.joint2),
+                "stiffness": float(s.stiffness),
+                "rest_length": float(s.rest_length),
+                "length": float(length),
+                "tension": float(tension),
+            }
+        )
+    return out
