@@ -83,14 +83,15 @@ def test_damped_spring_mass_matches_its_closed_form(kind):
     closed = r + (x0 - r) * np.exp(-zeta * wn * t) * (
         np.cos(wd * t) + zeta * wn / wd * np.sin(wd * t)
     )
-    assert np.max(np.abs(res.q[:, 0] - closed)) < 1e-7  # observed ~1e-9
+    assert np.max(np.abs(res.q[:, 0] - closed)) < 1e-10  # observed 6e-14 [m or rad]
     # period from the zero crossings, decay from successive peaks
     period = np.diff(_crossings(t, res.q[:, 0] - r))
-    np.testing.assert_allclose(period, 2 * np.pi / wd, rtol=1e-5)
+    np.testing.assert_allclose(period, 2 * np.pi / wd, rtol=1e-6)  # observed 7e-8
     Td = 2 * np.pi / wd
     peaks = [np.max(res.q[np.abs(t - n * Td) < 0.25 * Td, 0] - r) for n in (0, 4)]
     decrement = np.log(peaks[0] / peaks[1]) / 4  # per period
-    assert decrement == pytest.approx(2 * np.pi * zeta / np.sqrt(1 - zeta**2), rel=1e-3)
+    # observed 7e-6 (the peaks are read at the 1 ms samples)
+    assert decrement == pytest.approx(2 * np.pi * zeta / np.sqrt(1 - zeta**2), rel=1e-4)
     # energy: what the mechanism lost is what the damper dissipated
     assert res.energy_drift() < 1e-7
     assert res.elastic[0] == pytest.approx(0.5 * k * (x0 - r) ** 2)
@@ -111,9 +112,9 @@ def test_coulomb_friction_decays_linearly():
     t, x = res.t, res.q[:, 0]
     peaks = [np.max(x[(t >= (n - 0.25) * T) & (t < (n + 0.25) * T)]) for n in (1, 2)]
     drop = 4 * f0 / k
-    # the tanh smoothing (1 cm/s against peak speeds of 2 m/s) costs ~1 %
-    assert x0 - peaks[0] == pytest.approx(drop, rel=0.02)
-    assert peaks[0] - peaks[1] == pytest.approx(drop, rel=0.02)
+    # the tanh smoothing (1 cm/s against peak speeds of 2 m/s): observed 3e-5
+    assert x0 - peaks[0] == pytest.approx(drop, rel=1e-3)
+    assert peaks[0] - peaks[1] == pytest.approx(drop, rel=1e-3)
     assert res.energy_drift() < 1e-6
     assert np.all(np.diff(res.dissipated) >= -1e-15)
 
@@ -200,12 +201,12 @@ def _springy_five_bar() -> pkdyn.Robot:
 def test_undamped_run_with_springs_conserves_energy():
     """Closed loop, joint and two-frame springs, 10 s: total energy within 0.1 %."""
     robot = _springy_five_bar()
-    res = simulate(robot, 10.0, 2e-3, record_every=50)
+    res = simulate(robot, 10.0, 1e-2, record_every=10)
     assert np.ptp(res.elastic) > 0.05  # the springs exchanged energy with the motion [J]
     assert np.max(res.kinetic) > 0.05
     E = res.energy
     assert np.max(np.abs(E - E[0])) < 1e-3 * np.max(np.abs(E))
-    assert res.energy_drift() < 1e-3  # relative to the largest kinetic energy (observed 1e-8)
+    assert res.energy_drift() < 1e-6  # relative to the largest kinetic energy (observed 1e-9)
     assert np.max(res.closure_residual) < 1e-8
 
 

@@ -307,7 +307,7 @@ def balance_springs(
         upper[0::2] = max_stiffness
     x = _solve(metric, M, y0, w_rows, C, lower, upper)
     k, c = x[0::2], x[1::2]
-    L0 = np.where(k > 0.0, c / np.where(k > 0.0, k, 1.0), 0.0)
+    L0 = np.clip(np.where(k > 0.0, c / np.where(k > 0.0, k, 1.0), 0.0), L_min, L_max)
     chosen = tuple(
         SpringSpec(s.name, s.frame1, s.frame2, float(k[g]), float(L0[g]))
         for s, g in zip(springs, grp, strict=True)
