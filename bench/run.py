@@ -24,6 +24,7 @@ MODULES = (
     ("geometry", "Geometric models: closed forms, assembly / FK, IK (pkdyn vs raw Pinocchio)"),
     ("dynamics", "Dynamics: forward step and inverse dynamics (pkdyn vs raw Pinocchio)"),
     ("vs_mujoco", "pkdyn vs MuJoCo (exported models): speed and agreement"),
+    ("passive", "Passive elements: springs, dampers, friction in the dynamics"),
     ("workspace", "Workspace throughput"),
     ("actuation_map", "Closed-loop legs (actuation maps) and loading public models"),
 )

@@ -69,6 +69,10 @@ class FrameSpring:
     name: str = ""
 
 
+_WORLD = ([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], [0.0, 0.0, 0.0])
+"""Rotation rows and translation of the world frame (joint 0), as Python floats."""
+
+
 def _xyz(M: pin.SE3) -> list[float]:
     return [float(v) for v in M.translation]
 
@@ -141,6 +145,8 @@ class PassiveForces:
         self._ends = [
             (s.joint1, _xyz(s.placement1), s.joint2, _xyz(s.placement2)) for s in self._live
         ]
+        self._moving = sorted({j for s in self._live for j in (s.joint1, s.joint2) if j})
+        self._force_zero = pin.Force.Zero()
         self._zero = np.zeros(nv)
         self._fext = pin.StdVec_Force()
         for _ in range(model.njoints):
@@ -239,25 +245,31 @@ class PassiveForces:
 
         The generalized force of the end forces ``sum J_i^T F_i`` is ``-rnea(q, 0, 0, fext)``
         on a copy of the model without gravity (``fext``: the wrenches in the joints' frames).
-        The few 3-vectors of each spring are handled as Python floats: for a handful of
-        springs that is several times faster than numpy's small-array calls.
+        The few 3-vectors of each spring are handled as Python floats, unrolled: for a handful
+        of springs that is several times faster than numpy's small-array calls.
         """
         if not self._live:
             return 0.0
         pin.forwardKinematics(self.model, self.data, q)
         oMi = self.data.oMi
+        frames = {}  # joint -> (rotation rows, translation) as Python floats
+        for j in self._moving:
+            M = oMi[j]
+            frames[j] = (M.rotation.tolist(), M.translation.tolist())
+        world = _WORLD
         wrenches: dict[int, list[float]] = {}
         energy = 0.0
         for s, (j1, r1, j2, r2) in zip(self._live, self._ends, strict=True):
-            M1, M2 = oMi[j1], oMi[j2]
-            R1, t1 = M1.rotation.tolist(), M1.translation.tolist()
-            R2, t2 = M2.rotation.tolist(), M2.translation.tolist()
-            d = [
-                R2[i][0] * r2[0] + R2[i][1] * r2[1] + R2[i][2] * r2[2] + t2[i]
-                - R1[i][0] * r1[0] - R1[i][1] * r1[1] - R1[i][2] * r1[2] - t1[i]
-                for i in range(3)
-            ]  # fmt: skip
-            L = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+            (a, t1), (b, t2) = frames.get(j1, world), frames.get(j2, world)
+            x1, y1, z1 = r1
+            x2, y2, z2 = r2
+            p1x = a[0][0] * x1 + a[0][1] * y1 + a[0][2] * z1 + t1[0]
+            p1y = a[1][0] * x1 + a[1][1] * y1 + a[1][2] * z1 + t1[1]
+            p1z = a[2][0] * x1 + a[2][1] * y1 + a[2][2] * z1 + t1[2]
+            dx = b[0][0] * x2 + b[0][1] * y2 + b[0][2] * z2 + t2[0] - p1x
+            dy = b[1][0] * x2 + b[1][1] * y2 + b[1][2] * z2 + t2[1] - p1y
+            dz = b[2][0] * x2 + b[2][1] * y2 + b[2][2] * z2 + t2[2] - p1z
+            L = math.sqrt(dx * dx + dy * dy + dz * dz)
             stretch = L - s.rest_length
             energy += 0.5 * s.stiffness * stretch * stretch
             if L == 0.0:
@@ -265,27 +277,28 @@ class PassiveForces:
                     continue
                 raise ValueError(f"spring '{s.name}': both ends coincide, its direction is lost")
             c = s.stiffness * stretch / L
-            F = [c * d[0], c * d[1], c * d[2]]  # on body 1, towards the second end
-            for j, R, r, sign in ((j1, R1, r1, 1.0), (j2, R2, r2, -1.0)):
+            Fx, Fy, Fz = c * dx, c * dy, c * dz  # on body 1, towards the second end
+            for j, R, (rx, ry, rz), sign in ((j1, a, r1, 1.0), (j2, b, r2, -1.0)):
                 if not j:
                     continue
-                Fl = [sign * (R[0][i] * F[0] + R[1][i] * F[1] + R[2][i] * F[2]) for i in range(3)]
-                w = [
-                    Fl[0],
-                    Fl[1],
-                    Fl[2],
-                    r[1] * Fl[2] - r[2] * Fl[1],
-                    r[2] * Fl[0] - r[0] * Fl[2],
-                    r[0] * Fl[1] - r[1] * Fl[0],
-                ]
-                acc = wrenches.get(j)
-                wrenches[j] = w if acc is None else [a + b for a, b in zip(acc, w, strict=True)]
+                fx = sign * (R[0][0] * Fx + R[1][0] * Fy + R[2][0] * Fz)  # R^T F
+                fy = sign * (R[0][1] * Fx + R[1][1] * Fy + R[2][1] * Fz)
+                fz = sign * (R[0][2] * Fx + R[1][2] * Fy + R[2][2] * Fz)
+                w = wrenches.get(j)
+                if w is None:
+                    w = wrenches[j] = [0.0] * 6
+                w[0] += fx
+                w[1] += fy
+                w[2] += fz
+                w[3] += ry * fz - rz * fy
+                w[4] += rz * fx - rx * fz
+                w[5] += rx * fy - ry * fx
         fext = self._fext
         for j, w in wrenches.items():
             fext[j] = pin.Force(np.array(w))
         f -= pin.rnea(self._free_model, self._free_data, q, self._zero, self._zero, fext)
         for j in wrenches:
-            fext[j] = pin.Force.Zero()
+            fext[j] = self._force_zero
         return energy
 
     # ------------------------------------------------------------------ totals

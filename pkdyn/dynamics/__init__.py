@@ -5,14 +5,15 @@ Modules: :mod:`~pkdyn.dynamics.profiles` (rest-to-rest motion laws),
 :mod:`~pkdyn.dynamics.actuation`, :mod:`~pkdyn.dynamics.payload`, :mod:`~pkdyn.dynamics.energy`,
 :mod:`~pkdyn.dynamics.inverse` (actuator efforts along a trajectory),
 :mod:`~pkdyn.dynamics.forward` (``simulate``), :mod:`~pkdyn.dynamics.sizing` (peak/RMS efforts,
-margins).
+margins), :mod:`~pkdyn.dynamics.balancing` (spring balancing). The robot's passive elements
+(``robot.passive``: springs, dampers, friction) enter every one of them.
 
 Layering: may import :mod:`pkdyn.model`, :mod:`pkdyn.library`, :mod:`pkdyn.analysis` and
 :mod:`solvers`; never the workspace, tripod, design, viewer, plotting or CLI packages.
 """
 
 from pkdyn.dynamics.actuation import actuation
-from pkdyn.dynamics.energy import mechanical_energy
+from pkdyn.dynamics.energy import elastic_energy, mechanical_energy
 from pkdyn.dynamics.forward import simulate
 from pkdyn.dynamics.inverse import EffortTrajectory, inverse_dynamics
 from pkdyn.dynamics.payload import with_payload
@@ -20,6 +21,7 @@ from pkdyn.dynamics.payload import with_payload
 __all__ = [
     "EffortTrajectory",
     "actuation",
+    "elastic_energy",
     "inverse_dynamics",
     "mechanical_energy",
     "simulate",
