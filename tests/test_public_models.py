@@ -106,11 +106,14 @@ def test_inverse_dynamics_along_a_short_motion(model):
     assert np.all(np.isfinite(efforts.tau))
     assert np.max(np.abs(efforts.residual)) < 1e-8
     # power balance at every sample: sum tau_i qa_dot_i = dE/dt, dE/dt = v . (M a + C v + g)
-    # is the same as v^T (S^T tau) since closure forces do no work on closure-consistent v
+    # is the same as v^T (S^T tau) since closure forces do no work on closure-consistent v;
+    # with springs, dampers and friction (robot.passive): v . (M a + C v + g - f_passive)
     data = robot.model.createData()
     for k in range(len(t)):
         q, v, a = traj.q[k], traj.v[k], traj.a[k]
         rnea = pin.rnea(robot.model, data, q, v, a)
+        if robot.passive is not None:
+            rnea = rnea - robot.passive.force(q, v)
         assert efforts.tau[k] @ traj.qa_dot[k] == pytest.approx(
             v @ rnea, abs=1e-8 * max(1.0, np.abs(rnea).max())
         )

@@ -11,8 +11,9 @@ actuator space. At every sample:
 - ``v`` solves ``Jc v = 0`` with the actuator rates imposed, and ``a`` solves
   ``Jc a = -gamma`` (the closures' drift, :meth:`solvers.ClosureSet.drift`) with the actuator
   accelerations imposed;
-- the internal mobilities that no actuator moves (the spin of a ball-ended rod) have zero
-  momentum (``N^T M v = 0``) and move as the dynamics dictate (``N^T (M a + h) = 0``), so that
+- the internal mobilities that no actuator moves (the spin of a ball-ended rod, a leaf spring)
+  have zero momentum (``N^T M v = 0``) and move as the dynamics dictate
+  (``N^T (M a + h - f_passive) = 0``, with the robot's springs, dampers and friction), so that
   :func:`pkdyn.dynamics.inverse_dynamics` has an exact solution.
 """
 
@@ -138,6 +139,8 @@ def actuator_trajectory(
         a = numerics.lstsq(G, rhs_a, numerics.RTOL, 1.0)
         if Nm.shape[1]:
             h = pin.rnea(model, data, q, v, np.zeros(model.nv))
+            if robot.passive is not None:
+                h = h - robot.passive.force(q, v)
             a = a - Nm @ np.linalg.solve(K, Nm.T @ (M @ a + h))
         Q[k], V[k], A[k] = q, v, a
     return JointTrajectory(

@@ -253,6 +253,7 @@ def load_string(
             None,
             tuple(b for b, body in mech.bodies.items() if not body.virtual),
             tuple(j.name for j in mech.joints),
+            passive=tuple(built.passive),
         )
         parts = _Parts(built.model, desc, built.visual, built.collision, q_ref)
         if not geometry:

@@ -61,9 +61,16 @@ def rest_configuration(jm: pin.JointModel, rest: Sequence[float] | np.ndarray) -
     return np.asarray(pin.integrate(m, pin.neutral(m), np.asarray(rest, dtype=float)))
 
 
-def _per_dof(source: str, culprit: str, values: tuple[float, ...], nv: int) -> np.ndarray:
+def _per_dof(
+    source: str, culprit: str, values: tuple[float, ...], nv: int, signed: bool = False
+) -> np.ndarray:
     if not values:
         return np.zeros(nv)
+    for x in values:
+        if not math.isfinite(x):
+            raise DescriptionError(source, culprit, f"{x} is not finite")
+        if not signed and x < 0.0:
+            raise DescriptionError(source, culprit, f"{x:g} is negative; it must be >= 0")
     if len(values) not in (1, nv):
         dofs = "one degree of freedom (give 1 value)"
         if nv > 1:
@@ -165,7 +172,7 @@ def passive_forces(
         jm = model.joints[jid]
         iv = slice(jm.idx_v, jm.idx_v + jm.nv)
         values = {
-            f: _per_dof(source, f"joint '{name}' {f}", getattr(spec, f), jm.nv)
+            f: _per_dof(source, f"joint '{name}' {f}", getattr(spec, f), jm.nv, f == "rest")
             for f in ("stiffness", "damping", "friction", "rest")
         }
         if np.any(values["friction"]) and jm.shortname() in MODELLING_JOINTS:
@@ -185,6 +192,8 @@ def passive_forces(
     frame_springs = []
     for sp in springs:
         what = f"spring '{sp.name}'"
+        _per_dof(source, f"{what} stiffness", (sp.stiffness,), 1)
+        _per_dof(source, f"{what} rest_length", (sp.rest_length,), 1, signed=True)
         j1, M1 = resolve_frame(model, sp.frame1, source, what)
         j2, M2 = resolve_frame(model, sp.frame2, source, what)
         if j1 == j2:

@@ -33,7 +33,8 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
-from pkdyn.model.description import ActuatorSpec, ClosureSpec, FrameRef
+from pkdyn.model.description import ActuatorSpec, ClosureSpec, FrameRef, PassiveSpec
+from pkdyn.model.warn import warn
 
 __all__ = ["WORLD", "Body", "Geometry", "Joint", "Mechanism", "Built", "build"]
 
@@ -110,6 +111,9 @@ class Joint:
         damping: Viscous damping [N m s/rad or N s/m].
         friction: Dry friction [N m or N].
         armature: Armature (reflected rotor inertia) [kg m^2 or kg].
+        stiffness: Spring stiffness [N m/rad or N/m] (every degree of freedom).
+        spring_ref: Configuration where the spring rests (Pinocchio convention; default the
+            neutral configuration).
         where: How messages name the joint's element (tag and line).
 
     """
@@ -129,6 +133,8 @@ class Joint:
     damping: float = 0.0
     friction: float = 0.0
     armature: float = 0.0
+    stiffness: float = 0.0
+    spring_ref: np.ndarray | None = None
     where: str = ""
 
 
@@ -177,6 +183,8 @@ class Built:
         q_ref: Reference configuration (nq,): every body at its reference pose.
         joint_ids: Pinocchio joint id of each moving tree joint, by name.
         cut: Names of the joints that became closures.
+        passive: Springs, dampers and friction of the moving tree joints (the rest position as
+            the displacement from the joint's zero configuration).
 
     """
 
@@ -187,6 +195,7 @@ class Built:
     q_ref: np.ndarray
     joint_ids: dict[str, int]
     cut: list[str]
+    passive: list[PassiveSpec] = field(default_factory=list)
 
     def configuration(self, values: dict[str, np.ndarray], base: np.ndarray) -> np.ndarray:
         """A configuration with some joints set (joint name -> coordinates).
@@ -372,6 +381,13 @@ def build(mech: Mechanism) -> Built:
     q_ref: list[tuple[int, np.ndarray]] = []
     joint_ids: dict[str, int] = {}
     body_frames: dict[str, int] = {}
+    passive: list[PassiveSpec] = []
+    for j in cut:
+        if j.damping or j.friction or j.stiffness:
+            warn(
+                f"{mech.source}: joint '{j.name}' closes a loop (a closure): its damping, friction "
+                "and spring are left out"
+            )
 
     def pose(name: str) -> pin.SE3:
         return mech.bodies[name].pose if name != WORLD else pin.SE3.Identity()
@@ -405,6 +421,8 @@ def build(mech: Mechanism) -> Built:
         for attr, value in (("damping", j.damping), ("friction", j.friction)):
             getattr(model, attr)[sl_v] = value
         model.armature[sl_v] = j.armature
+        if j.damping or j.friction or j.stiffness:
+            passive.append(_passive(j, jm))
         model.addFrame(pin.Frame(j.name, jid, pin.SE3.Identity(), pin.JOINT), False)
         where[j.child] = (jid, jMc)
         q_ref.append((jm.idx_q, qr))
@@ -430,4 +448,21 @@ def build(mech: Mechanism) -> Built:
                 go.meshColor = np.asarray(g.rgba, dtype=float)
                 gm.addGeometryObject(go)
     closures = list(mech.closures) + [_cut_closure(mech, j) for j in cut]
-    return Built(model, visual, collision, closures, q, joint_ids, [j.name for j in cut])
+    return Built(model, visual, collision, closures, q, joint_ids, [j.name for j in cut], passive)
+
+
+def _passive(j: Joint, jm: pin.JointModel) -> PassiveSpec:
+    """The joint's damping, friction and spring (rest: displacement from zero)."""
+    rest: tuple[float, ...] = ()
+    if j.stiffness:
+        single = pin.Model()
+        single.addJoint(0, jm, pin.SE3.Identity(), "j")
+        qs = pin.neutral(single) if j.spring_ref is None else np.asarray(j.spring_ref, float)
+        rest = tuple(float(x) for x in pin.difference(single, pin.neutral(single), qs))
+    return PassiveSpec(
+        j.name,
+        stiffness=(float(j.stiffness),) if j.stiffness else (),
+        rest=rest,
+        damping=(float(j.damping),) if j.damping else (),
+        friction=(float(j.friction),) if j.friction else (),
+    )

@@ -7,6 +7,12 @@ What is read (attributes with their default classes, see :mod:`~pkdyn.model.form
   ``ball``, ``free`` (several joints in one body are chained as MuJoCo applies them), their
   ``ref`` (``qpos0``): pkdyn's coordinates are MuJoCo's ``qpos`` (quaternions reordered to
   Pinocchio's ``x y z w``), so ranges, keyframes and actuator positions carry over;
+- the joints' passive elements, on every joint type: ``damping``, ``frictionloss`` (pkdyn's
+  smooth Coulomb friction), ``armature`` (``model.armature``), ``stiffness`` about ``springref``
+  (hinge, slide: in ``qpos`` units, so ``ref`` needs no correction; ball and free joints: their
+  spring rests at ``qpos0``, as in MuJoCo) -> ``robot.passive`` (Pinocchio's own MJCF parser
+  keeps the armature only); a free joint's spring follows Pinocchio's SE(3) difference, not
+  MuJoCo's separate translation and rotation;
 - inertias from ``<inertial>``, or from the geoms when it is absent (``inertiafromgeom``),
   with MuJoCo's formulas for primitive shapes (mesh volumes from the mesh file, exact);
 - geoms: primitives and meshes (``contype = conaffinity = 0`` ones are visual, the others
@@ -295,7 +301,23 @@ def _joint(
 ) -> Joint:
     where = r.doc.where(el, name)
     if p.type == "free":
-        return Joint(name, "free", parent, child, oMb, q_ref=pin.SE3ToXYZQUAT(oMb), where=where)
+        q0 = pin.SE3ToXYZQUAT(oMb)
+        if el.tag == "freejoint":  # takes no defaults and no passive attributes in MuJoCo
+            return Joint(name, "free", parent, child, oMb, q_ref=q0, where=where)
+        return Joint(
+            name,
+            "free",
+            parent,
+            child,
+            oMb,
+            q_ref=q0,
+            damping=p.damping,
+            friction=p.frictionloss,
+            armature=p.armature,
+            stiffness=p.stiffness,
+            spring_ref=q0,  # MuJoCo: a free joint's spring rests at qpos0
+            where=where,
+        )
     oMj = oMb * pin.SE3(np.eye(3), p.pos)
     kind = {"hinge": "revolute", "slide": "prismatic", "ball": "ball"}[p.type]
     lo, hi = (-math.inf, math.inf) if p.range is None or p.type == "ball" else p.range
@@ -312,6 +334,9 @@ def _joint(
         damping=p.damping,
         friction=p.frictionloss,
         armature=p.armature,
+        stiffness=p.stiffness,
+        # hinge / slide: springref (qpos units, as pkdyn's q); ball: the identity (qpos0)
+        spring_ref=np.array([p.springref]) if kind != "ball" else None,
         where=where,
     )
 

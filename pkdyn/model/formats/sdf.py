@@ -9,7 +9,8 @@ One ``<model>`` per file (directly under ``<sdf>`` or in a ``<world>``). What is
   one warning), ``<frame>`` elements (``attached_to``);
 - joints ``revolute``, ``continuous``, ``prismatic``, ``ball``, ``universal``, ``fixed`` between
   links or frames, their pose (relative to the child by default), axes (``expressed_in``,
-  ``use_parent_model_frame``), limits and dynamics (damping, friction);
+  ``use_parent_model_frame``), limits and dynamics (damping, friction, ``spring_stiffness``
+  about ``spring_reference``: ``robot.passive``; a universal joint takes its first axis's);
 - the model's ``<pose>`` and ``<static>``;
 - Drake's ``drake:ball_constraint`` and ``drake:weld_constraint``
   (:mod:`~pkdyn.model.formats.drake`).
@@ -460,6 +461,7 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
     if kind == "universal" and axis2 is None:
         raise doc.error(el, "a universal joint needs <axis2>")
     lo, hi, effort, velocity, damping, friction = -math.inf, math.inf, math.inf, math.inf, 0.0, 0.0
+    stiffness, spring_ref = 0.0, 0.0
     if axis_el is not None:
         lim = axis_el.find("limit")
         if lim is not None and jtype != "continuous":
@@ -478,6 +480,8 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
         if dyn is not None:
             damping = _number(r, dyn, "damping", 0.0)
             friction = _number(r, dyn, "friction", 0.0)
+            stiffness = _number(r, dyn, "spring_stiffness", 0.0)
+            spring_ref = _number(r, dyn, "spring_reference", 0.0)
     return Joint(
         name,
         kind,
@@ -492,5 +496,7 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
         velocity=velocity,
         damping=damping,
         friction=friction,
+        stiffness=stiffness,
+        spring_ref=np.array([spring_ref]) if kind in ("revolute", "prismatic") else None,
         where=where,
     )
