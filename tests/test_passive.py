@@ -19,6 +19,8 @@ Proved by physics and independent references, not by re-running pkdyn:
 from __future__ import annotations
 
 import json
+import re
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -35,6 +37,7 @@ from pkdyn.model.passive import with_passive
 from solvers import FrameSpring, PassiveForces
 
 G = 9.81
+DATA = Path(__file__).parent / "data" / "public"
 
 
 def _slider_urdf(kind: str, mass: float, extra: str, limit: str = "-1 1") -> str:
@@ -465,3 +468,139 @@ def test_cli_info_lists_passive_elements(tmp_path, capsys):
     assert main([*argv, "--no-passive"]) == 0
     text = capsys.readouterr().out
     assert "with passive elements:" in text and "without passive elements:" in text
+
+
+# ------------------------------------------------------------------------------ real model
+
+
+def _menagerie_cassie_on_a_stand() -> str:
+    """Menagerie's Cassie MJCF (vendored, text only) with its pelvis held: no free joint, and
+    the ``home`` keyframe without the free joint's 7 coordinates."""
+    text = (DATA / "menagerie_cassie" / "cassie.xml").read_text()
+    key = re.search(r'<key name="home" qpos="([^"]*)"', text)
+    assert key is not None
+    home = " ".join(key.group(1).split()[7:])
+    return text.replace(key.group(0), f'<key name="home" qpos="{home}"').replace("<freejoint/>", "")
+
+
+def test_cassie_actuator_torques_match_mujoco_inverse():
+    """Fixed-base Cassie (MuJoCo Menagerie) along a closure-consistent motion: pkdyn's actuator
+    torques against MuJoCo's ``mj_inverse`` projected onto the actuators (least squares on
+    [actuator moments, equality Jacobian]), leaf springs (1500 and 1250 N m/rad), joint
+    damping (ball joints included), armature and ``ref`` (knee, tarsus) read from the MJCF.
+
+    MuJoCo's joint-limit constraints are disabled: pkdyn's dynamics do not enforce joint limits.
+    """
+    mujoco = pytest.importorskip("mujoco")
+    from pkdyn.dynamics.joint_motion import actuator_trajectory
+    from pkdyn.model.formats.mjcf import StateMap, actuator_efforts
+
+    text = _menagerie_cassie_on_a_stand()
+    robot = pkdyn.load_string(text, "cassie.xml")
+    model = robot.model
+    shin = model.joints[model.getJointId("left-shin")]
+    ball = model.joints[model.getJointId("left-achilles-rod")]
+    assert robot.passive.stiffness[shin.idx_v] == 1500.0
+    np.testing.assert_array_equal(robot.passive.damping[ball.idx_v : ball.idx_v + 3], [0.01] * 3)
+    mj = mujoco.MjModel.from_xml_string(text)
+    mj.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_LIMIT
+    smap = StateMap.by_name(robot, mj)
+    np.testing.assert_allclose(model.armature, smap.force(robot.q_home, mj.dof_armature))
+    n = len(robot.actuators)
+    t = np.linspace(0.0, 0.5, 11)
+    w = 2 * np.pi / 0.5
+    amp = 0.1 * np.linspace(0.5, 1.0, n)
+    qa0 = robot.q_home[robot.actuated_q]
+    traj = actuator_trajectory(
+        robot,
+        t,
+        qa0 + np.outer(np.sin(w * t), amp),
+        np.outer(w * np.cos(w * t), amp),
+        np.outer(-(w**2) * np.sin(w * t), amp),
+    )
+    tau = inverse_dynamics(robot, traj).tau
+    gear = np.array([a.reduction for a in robot.actuators])
+    order = [mj.actuator(a.name).id for a in robot.actuators]
+    data = mujoco.MjData(mj)
+    stiff = mj.jnt_stiffness.copy()
+    springless = []
+    for k in range(t.size):
+        q, v, a = traj.q[k], traj.v[k], traj.a[k]
+        data.qpos[:], data.qvel[:], data.qacc[:] = smap.qpos(q), smap.qvel(q, v), smap.qacc(q, v, a)
+        mujoco.mj_inverse(mj, data)
+        assert data.nefc == 12  # the four connect equalities only
+        np.testing.assert_allclose(smap.force(q, data.qfrc_passive), robot.passive.force(q, v))
+        tau_mj = gear * actuator_efforts(mj, data)[order]
+        # observed 1e-11 (the conditioning of the least squares)
+        np.testing.assert_allclose(tau_mj, tau[k], rtol=0, atol=1e-8 * np.max(np.abs(tau[k])))
+        # the same motion in MuJoCo without the leaf springs
+        mj.jnt_stiffness[:] = 0.0
+        mujoco.mj_inverse(mj, data)
+        mj.jnt_stiffness[:] = stiff
+        springless.append(gear * actuator_efforts(mj, data)[order])
+    # without them the torques would be 41 % off (RMS over the motion; armature: 1.6 %,
+    # ball-joint damping: 6e-5)
+    assert np.linalg.norm(np.array(springless) - tau) > 0.2 * np.linalg.norm(tau)
+
+
+PASSIVE_MJCF = """
+<mujoco model="passive">
+  <compiler angle="degree"/>
+  <default><joint damping="0.2"/></default>
+  <worldbody>
+    <body name="a" pos="0 0 1">
+      <inertial pos="0.1 0 0" mass="1" diaginertia="0.01 0.02 0.02"/>
+      <joint name="hinge" type="hinge" axis="0 1 0" ref="30" stiffness="40" springref="45"
+             armature="0.05" frictionloss="0.3"/>
+      <body name="b" pos="0.2 0 0">
+        <inertial pos="0 0 -0.1" mass="0.5" diaginertia="0.005 0.005 0.002"/>
+        <joint name="ball" type="ball" stiffness="3" damping="0.05"/>
+        <body name="c" pos="0 0 -0.2">
+          <inertial pos="0 0 0" mass="0.3" diaginertia="0.001 0.001 0.001"/>
+          <joint name="slide" type="slide" axis="1 0 0" ref="0.02" stiffness="500"
+                 springref="0.05"/>
+        </body>
+      </body>
+    </body>
+    <body name="d" pos="1 0 1">
+      <inertial pos="0 0 0" mass="0.3" diaginertia="0.001 0.001 0.001"/>
+      <joint name="free" type="free" damping="0.4"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_mjcf_passive_attributes_on_every_joint_type_match_mujoco():
+    """stiffness / springref / ref / damping / armature on hinge, ball, slide and free joints:
+    pkdyn's passive forces = MuJoCo's qfrc_passive at random states (friction aside: MuJoCo's
+    frictionloss is a constraint, pkdyn keeps its level as smooth Coulomb friction)."""
+    mujoco = pytest.importorskip("mujoco")
+    from pkdyn.model.formats.mjcf import StateMap
+
+    robot = pkdyn.load_string(PASSIVE_MJCF, "passive.xml")
+    mj = mujoco.MjModel.from_xml_string(PASSIVE_MJCF)
+    smap = StateMap.by_name(robot, mj)
+    hinge = robot.model.joints[robot.model.getJointId("hinge")]
+    assert robot.passive.friction[hinge.idx_v] == pytest.approx(0.3)
+    assert robot.passive.rest[hinge.idx_q] == pytest.approx(np.radians(45.0))
+    np.testing.assert_allclose(smap.qpos(robot.q_home), mj.qpos0, atol=1e-12)  # ref
+    np.testing.assert_allclose(robot.model.armature, smap.force(robot.q_home, mj.dof_armature))
+    no_friction = PassiveForces(
+        robot.model,
+        robot.passive.stiffness,
+        robot.passive.rest,
+        robot.passive.damping,
+    )
+    data = mujoco.MjData(mj)
+    rng = np.random.default_rng(2)
+    for _ in range(4):
+        q = pin.integrate(robot.model, robot.q_home, 0.4 * rng.standard_normal(robot.nv))
+        v = rng.standard_normal(robot.nv)
+        data.qpos[:], data.qvel[:] = smap.qpos(q), smap.qvel(q, v)
+        mujoco.mj_fwdPosition(mj, data)
+        mujoco.mj_fwdVelocity(mj, data)
+        f_mj = smap.force(q, data.qfrc_passive)
+        np.testing.assert_allclose(f_mj, no_friction.force(q, v), rtol=0, atol=1e-12)
+    with pytest.raises(pkdyn.DescriptionError, match="MuJoCo joint 'hinge'"):
+        StateMap.by_name(pkdyn.load("five_bar", geometry=False), mj)

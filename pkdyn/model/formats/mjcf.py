@@ -290,13 +290,67 @@ class StateMap:
             )
             qpos += {"free": 7, "ball": 4}.get(kind, len(els))
             dof += jm.nv
+        self._index(joints, qpos, dof)
+
+    def _index(self, joints: list[JointMap], nq: int, nv: int) -> None:
         self.joints = tuple(joints)
-        self.nq = qpos
-        self.nv = dof
-        self._dof_of_v = np.empty(model.nv, dtype=int)
+        self.nq = nq
+        self.nv = nv
+        self._dof_of_v = np.empty(self.model.nv, dtype=int)
         for jm_ in joints:
             self._dof_of_v[jm_.idx_v : jm_.idx_v + jm_.nv] = np.arange(jm_.dof, jm_.dof + jm_.nv)
         self._nonlinear = [jm for jm in joints if jm.kind in ("free", "planar")]
+
+    @classmethod
+    def by_name(cls, robot: Robot, mj_model: Any) -> StateMap:
+        """The map between a robot and a MuJoCo model of it pkdyn did not write.
+
+        For a robot loaded from an MJCF file and the ``mujoco.MjModel`` of that file: joints
+        are matched by name (each MuJoCo joint is a Pinocchio joint of the same name; the two
+        joint orders may differ), ``qpos`` / ``qvel`` addresses are MuJoCo's. Coordinates
+        then agree as pkdyn's MJCF importer writes them: a hinge or slide coordinate is
+        MuJoCo's ``qpos`` itself (``ref`` included: the importer places the joint so that
+        ``q = ref`` is the file's pose), a ball quaternion is reordered (MuJoCo ``w x y z``,
+        Pinocchio ``x y z w``), a free joint's linear velocity is turned from world axes
+        (MuJoCo) to the body's axes (Pinocchio).
+
+        Args:
+            robot: The robot.
+            mj_model: The ``mujoco.MjModel``.
+
+        Returns:
+            The map (``qpos``, ``qvel``, ``qacc``, ``force`` and their inverses).
+
+        Raises:
+            DescriptionError: A MuJoCo joint has no Pinocchio joint of that name and kind, or
+                a Pinocchio joint no MuJoCo one.
+
+        """
+        self = cls.__new__(cls)
+        model = robot.model
+        self.model = model
+        self.body_names, self.order, self.elements = [], [], {}
+        kinds = {0: ("free", 7, 6), 1: ("ball", 4, 3), 2: ("slide", 1, 1), 3: ("hinge", 1, 1)}
+        joints: list[JointMap] = []
+        for j in range(int(mj_model.njnt)):
+            name = str(mj_model.joint(j).name)
+            kind, nq, nv = kinds[int(mj_model.jnt_type[j])]
+            jid = model.getJointId(name) if model.existJointName(name) else model.njoints
+            jm = model.joints[jid] if jid < model.njoints else None
+            if jm is None or jm.nq != nq or jm.nv != nv:
+                raise DescriptionError(
+                    robot.source,
+                    f"MuJoCo joint '{name}'",
+                    f"no Pinocchio {kind} joint of that name",
+                )
+            qpos, dof = int(mj_model.jnt_qposadr[j]), int(mj_model.jnt_dofadr[j])
+            joints.append(JointMap(name, kind, jm.idx_q, nq, jm.idx_v, nv, qpos, dof, (name,)))
+        if sum(jm.nv for jm in joints) != model.nv:
+            raise DescriptionError(
+                robot.source, "MuJoCo model", "its joints do not cover the robot's coordinates"
+            )
+        self._index(joints, int(mj_model.nq), int(mj_model.nv))
+        return self
 
     def qpos(self, q: np.ndarray) -> np.ndarray:
         """MuJoCo ``qpos`` of a Pinocchio configuration ``q`` (nq,)."""
