@@ -65,7 +65,7 @@ def _passive_text(passive: dict[str, Any]) -> str:
         parts = []
         if "stiffness" in e:
             parts.append(f"stiffness {_values(e['stiffness'])} rest {_values(e['rest'])}")
-        for k in ("damping", "friction"):
+        for k in ("damping", "friction", "armature"):
             if k in e:
                 parts.append(f"{k} {_values(e[k])}")
         rows.append(f"\n  joint {e['joint']}: " + ", ".join(parts))

@@ -273,25 +273,29 @@ def passive_summary(robot: Robot) -> dict[str, list[dict[str, Any]]]:
 
     Returns:
         ``{"joints": [...], "springs": [...]}``: per joint with any element, its non-zero
-        ``stiffness``, ``rest`` (displacement from the joint's zero configuration), ``damping``
-        and ``friction`` per degree of freedom; per two-frame spring its ``name``, the two links,
+        ``stiffness``, ``rest`` (displacement from the joint's zero configuration), ``damping``,
+        ``friction`` and ``armature`` (``model.armature``, reflected rotor inertia [kg m^2 or
+        kg]) per degree of freedom; per two-frame spring its ``name``, the two links,
         ``stiffness`` [N/m], ``rest_length`` [m] and ``length`` / ``tension`` at ``q_home``.
 
     """
     P = robot.passive
     out: dict[str, list[dict[str, Any]]] = {"joints": [], "springs": []}
-    if P is None:
-        return out
     model = robot.model
-    deviation_at_rest = pin.difference(model, pin.neutral(model), P.rest)
+    if P is None and not np.any(model.armature):
+        return out
+    zero = np.zeros(model.nv)
+    rest = pin.neutral(model) if P is None else P.rest
+    deviation_at_rest = pin.difference(model, pin.neutral(model), rest)
     for j in range(1, model.njoints):
         jm = model.joints[j]
         iv = slice(jm.idx_v, jm.idx_v + jm.nv)
         entry: dict[str, Any] = {"joint": str(model.names[j])}
         for name, values in (
-            ("stiffness", P.stiffness[iv]),
-            ("damping", P.damping[iv]),
-            ("friction", P.friction[iv]),
+            ("stiffness", (zero if P is None else P.stiffness)[iv]),
+            ("damping", (zero if P is None else P.damping)[iv]),
+            ("friction", (zero if P is None else P.friction)[iv]),
+            ("armature", model.armature[iv]),
         ):
             if np.any(values):
                 entry[name] = [float(x) for x in values]
@@ -299,6 +303,8 @@ def passive_summary(robot: Robot) -> dict[str, list[dict[str, Any]]]:
             entry["rest"] = [float(x) for x in deviation_at_rest[iv]]
         if len(entry) > 1:
             out["joints"].append(entry)
+    if P is None:
+        return out
     for s, (length, tension) in zip(P.springs, P.spring_state(robot.q_home), strict=True):
         out["springs"].append(
             {
