@@ -21,6 +21,7 @@ __all__ = [
     "InfeasibleEffortError",
     "SimulationError",
     "OutputError",
+    "StudyError",
 ]
 
 
@@ -202,3 +203,16 @@ class OutputError(PkdynError):
     def __init__(self, path: str, message: str) -> None:
         self.path = path
         super().__init__(f"cannot write '{path}': {message}")
+
+
+class StudyError(PkdynError):
+    """A design study cannot run or conclude (see :mod:`pkdyn.design`).
+
+    Attributes:
+        culprit: What is at fault (a study file, a scheduler address, a requirement...).
+
+    """
+
+    def __init__(self, culprit: str, message: str) -> None:
+        self.culprit = culprit
+        super().__init__(f"{culprit}: {message}")

@@ -149,23 +149,47 @@ class DeltaEvaluator(PoseEvaluator):
     def _interference(
         self, P: np.ndarray, E: list[np.ndarray], tip: np.ndarray, margin: float
     ) -> np.ndarray:
+        return self._clearance(P, E, tip) < margin
+
+    def _clearance(self, P: np.ndarray, E: list[np.ndarray], tip: np.ndarray) -> np.ndarray:
         if self.bar_r <= 0.0:
             raise PkdynError(
                 f"{self.robot.name}: interference needs collision geometry (geometry=True)"
             )
-        bad = np.zeros(P.shape[0], dtype=bool)
+        out = np.full(P.shape[0], np.inf)
         ends = [P + p_nac for _, _, p_nac, _ in self.bars]
         O = np.array([m.translation for m in self.M_arm])
         for b1, (k1, _, _, _) in enumerate(self.bars):
             for b2 in range(b1 + 1, len(self.bars)):
                 if self.bars[b2][0] != k1:
                     d, _, _ = segment_distance(E[b1], ends[b1], E[b2], ends[b2])
-                    bad |= d < 2 * self.bar_r + margin
+                    out = np.minimum(out, d - 2 * self.bar_r)
             for k in range(3):
                 if k != k1:
                     d, _, _ = segment_distance(E[b1], ends[b1], O[k], tip[:, k])
-                    bad |= d < self.bar_r + self.arm_r[k] + margin
-        return bad
+                    out = np.minimum(out, d - self.bar_r - self.arm_r[k])
+        return out
+
+    def clearance(self, P: np.ndarray) -> np.ndarray:
+        """Smallest distance between the cylinders checked for ``interference`` [m].
+
+        Bars of different arms against each other and bars against the other arms, as
+        cylinders of their collision radius (negative: they overlap).
+
+        Args:
+            P: Nacelle positions (N, 3) [m].
+
+        Returns:
+            (N,) clearances [m]; NaN where the position is out of reach.
+
+        """
+        P = np.atleast_2d(np.asarray(P, dtype=float))
+        alpha, ok = inverse(self.robot.params, P)
+        out = np.full(P.shape[0], np.nan)
+        if ok.any():
+            _, E, tip = self._elbows(alpha[ok])
+            out[ok] = self._clearance(P[ok], E, tip)
+        return out
 
     def default_bounds(self, R: np.ndarray) -> np.ndarray:
         """Box reachable with arms and bars stretched: ``|x|, |y| <= ra + la + lb``, z below."""

@@ -1,0 +1,216 @@
+"""What metrics see: the study's conditions and, per design, the built robot and shared results.
+
+:class:`Conditions` holds what every design of a study is judged on (the required workspace,
+the duty cycle and payload, Clavel's limits, sampling densities). :class:`DesignContext` is
+made for each design: metrics call its methods for the expensive results several of them share
+(the required-workspace check, the duty-cycle figures, the translation workspace, Clavel's
+figures), computed once per design. A user metric can share its own with :meth:`cached`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, TypeVar
+
+import numpy as np
+
+from pkdyn.design.duty import DutyFigures, duty_figures
+from pkdyn.design.required import RequiredCheck, required_check
+from pkdyn.design.requirement import Requirement
+from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.robot import Robot
+from pkdyn.workspace.clavel import AB_MIN, GAMMA_MAX, ClavelFigures
+from pkdyn.workspace.translation import TranslationWorkspace
+
+__all__ = ["Conditions", "DesignContext"]
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class Conditions:
+    """What every design of a study is evaluated against.
+
+    Attributes:
+        requirement: Required workspace, or ``None``.
+        limits: Limit kinds a required pose must respect besides reach (``stroke``,
+            ``joint``); interference is measured apart (``interference_margin``).
+        length: Characteristic length for the angular rows of ``J`` [m] (robots with
+            rotations in their task); ``None``: unscaled.
+        trajectory: Duty cycle, a :func:`pkdyn.dynamics.trajectory.named_task` name.
+        trajectory_options: Its options (``cycle_time`` [s], ``depth`` [m], ``dt`` [s]...).
+        payload: Payload on the platform during the duty cycle [kg].
+        gamma_max: Clavel's limit 1 [rad].
+        ab_min: Clavel's limit 2, (alpha + beta)_min [rad].
+        workspace_samples: Grid samples per axis of the translation workspace (volume, GCI).
+        clavel_rays: Directions of the numeric Clavel measurement.
+
+    """
+
+    requirement: Requirement | None = None
+    limits: tuple[str, ...] = ("stroke", "joint")
+    length: float | None = None
+    trajectory: str = "adept"
+    trajectory_options: Mapping[str, Any] = field(default_factory=dict)
+    payload: float = 0.0
+    gamma_max: float = GAMMA_MAX
+    ab_min: float = AB_MIN
+    workspace_samples: int = 21
+    clavel_rays: int = 24
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "limits", tuple(self.limits))
+        object.__setattr__(self, "trajectory_options", dict(self.trajectory_options))
+        if not (math.isfinite(self.payload) and self.payload >= 0.0):
+            raise InvalidInputError("payload", f"must be >= 0 kg, got {self.payload}")
+        if self.length is not None and not (math.isfinite(self.length) and self.length > 0):
+            raise InvalidInputError("length", f"must be > 0 m, got {self.length}")
+        if self.workspace_samples < 3:
+            raise InvalidInputError("workspace_samples", "need at least 3 samples per axis")
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain form for study files."""
+        return {
+            "requirement": None if self.requirement is None else self.requirement.as_dict(),
+            "limits": list(self.limits),
+            "length": self.length,
+            "trajectory": self.trajectory,
+            "trajectory_options": dict(self.trajectory_options),
+            "payload": self.payload,
+            "gamma_max": self.gamma_max,
+            "ab_min": self.ab_min,
+            "workspace_samples": self.workspace_samples,
+            "clavel_rays": self.clavel_rays,
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Conditions:
+        """From the study-file form (see :meth:`as_dict`)."""
+        d = dict(data)
+        req = d.pop("requirement", None)
+        known = set(cls.__dataclass_fields__)
+        bad = [k for k in d if k not in known]
+        if bad:
+            raise InvalidInputError(
+                "conditions", f"unknown key '{bad[0]}' (use {', '.join(sorted(known))})"
+            )
+        return cls(requirement=None if req is None else Requirement.from_dict(req), **d)
+
+
+class DesignContext:
+    """One design being evaluated: its robot, the study's conditions, shared results.
+
+    Args:
+        robot: The built design.
+        conditions: The study's conditions.
+
+    """
+
+    def __init__(self, robot: Robot, conditions: Conditions) -> None:
+        self.robot = robot
+        self.conditions = conditions
+        self._memo: dict[str, Any] = {}
+
+    def cached(self, key: str, compute: Callable[[], T]) -> T:
+        """``compute()`` once per design under ``key`` (shared between metrics)."""
+        if key not in self._memo:
+            self._memo[key] = compute()
+        return self._memo[key]  # type: ignore[no-any-return]
+
+    def requirement(self) -> Requirement:
+        """The required workspace.
+
+        Raises:
+            InvalidInputError: The study has none.
+
+        """
+        if self.conditions.requirement is None:
+            raise InvalidInputError(
+                "requirement", "this metric needs a required workspace (--require KIND:...)"
+            )
+        return self.conditions.requirement
+
+    def required(self) -> RequiredCheck:
+        """The design on the required workspace (:func:`pkdyn.design.required.required_check`)."""
+        c = self.conditions
+        return self.cached(
+            "required",
+            lambda: required_check(self.robot, self.requirement(), c.limits, c.length),
+        )
+
+    def duty(self) -> DutyFigures:
+        """Actuator figures on the duty cycle (:func:`pkdyn.design.duty.duty_figures`)."""
+        c = self.conditions
+        return self.cached(
+            "duty",
+            lambda: duty_figures(self.robot, c.trajectory, c.trajectory_options, c.payload),
+        )
+
+    def translation(self) -> TranslationWorkspace:
+        """Constant-orientation workspace on a grid (the robot's own limits, interference too
+        when the robot has collision geometry).
+        """
+        from pkdyn.workspace.translation import translation_workspace
+
+        def run() -> TranslationWorkspace:
+            kinds = list(self.conditions.limits)
+            if len(self.robot.collision_model.geometryObjects):
+                kinds.append("interference")
+            return translation_workspace(
+                self.robot,
+                samples=self.conditions.workspace_samples,
+                limits=kinds,
+                progress=False,
+            )
+
+        return self.cached("translation", run)
+
+    def clavel(self) -> ClavelFigures:
+        """Clavel's closed-form figures with the study's limits (Delta)."""
+        from pkdyn.workspace.clavel import clavel_closed_form
+
+        c = self.conditions
+        return self.cached(
+            "clavel", lambda: clavel_closed_form(self._delta(), c.gamma_max, c.ab_min)
+        )
+
+    def clavel_numeric(self) -> ClavelFigures:
+        """Clavel's figures measured on the mechanism (Delta; slower)."""
+        from pkdyn.workspace.clavel import clavel_numeric
+
+        c = self.conditions
+        return self.cached(
+            "clavel_numeric",
+            lambda: clavel_numeric(
+                self._delta(),
+                c.gamma_max,
+                c.ab_min,
+                rays=c.clavel_rays,
+                fractions=5,
+                heights=40,
+                tol=1e-7,
+            )[0],
+        )
+
+    def _delta(self) -> Any:
+        p = self.robot.params
+        if p is None or not all(hasattr(p, k) for k in ("ra", "rb", "la", "lb")):
+            raise InvalidInputError(
+                "metric", f"Clavel's figures apply to the delta family, not {self.robot.name}"
+            )
+        return p
+
+    def gci(self) -> float:
+        """Global conditioning index: mean ``1 / cond(J)`` over the translation workspace."""
+
+        def run() -> float:
+            ws = self.translation()
+            P = ws.points()
+            if P.shape[0] == 0:
+                return 0.0
+            check = required_check(self.robot, P, (), self.conditions.length)
+            return float(np.mean(np.nan_to_num(check.inv_cond, nan=0.0)))
+
+        return self.cached("gci", run)

@@ -1,0 +1,123 @@
+"""Evaluating designs: build, measure, judge; never raise for a bad design.
+
+:func:`evaluate_design` builds one design of a study with its family's builder, computes every
+metric and checks the constraints. A design that cannot be built, assembled or evaluated (a
+parameter combination the builder refuses, a cycle out of reach, a singularity...) or that
+breaks a constraint comes back infeasible with its reason: it never stops the study.
+:func:`evaluate_designs` does a batch in a worker process (local or Dask); the study travels
+as a cloudpickle payload (user metrics may be lambdas) and is unpickled once per worker.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from pkdyn.design.context import DesignContext
+from pkdyn.design.study import Study
+from pkdyn.exceptions import PkdynError
+
+__all__ = ["Row", "evaluate_design", "evaluate_designs", "pack"]
+
+_REASON_LENGTH = 300
+"""Longest reason kept in the table [characters]."""
+
+
+@dataclass(frozen=True)
+class Row:
+    """One evaluated design.
+
+    Attributes:
+        index: Design number in the study.
+        x: Design variables (d,).
+        feasible: Built, evaluated and within every constraint.
+        reason: Why not (empty when feasible).
+        values: Metric values in the study's metric order (NaN where not computed).
+
+    """
+
+    index: int
+    x: tuple[float, ...]
+    feasible: bool
+    reason: str
+    values: tuple[float, ...]
+
+
+def _reason(err: BaseException, where: str = "") -> str:
+    text = f"{where}{type(err).__name__}: {err}".replace("\n", " ").replace("\r", " ")
+    return text if len(text) <= _REASON_LENGTH else text[: _REASON_LENGTH - 3] + "..."
+
+
+def evaluate_design(study: Study, index: int, x: Any) -> Row:
+    """Build and evaluate one design.
+
+    Args:
+        study: The study.
+        index: Design number.
+        x: Design variables (d,) in range order.
+
+    Returns:
+        The row (infeasible with a reason when the design fails or breaks a constraint).
+
+    """
+    import pkdyn
+
+    xs = tuple(float(v) for v in x)
+    metrics = study.metric_list
+    values = [float("nan")] * len(metrics)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        where = "build: "
+        try:
+            overrides = study.space.overrides(xs)
+            robot = pkdyn.load(study.family, geometry=study.geometry, **overrides)
+            ctx = DesignContext(robot, study.conditions)
+            for k, m in enumerate(metrics):
+                where = f"{m.name}: "
+                values[k] = m(robot, ctx)
+        except PkdynError as err:
+            return Row(index, xs, False, _reason(err, where), tuple(values))
+        except Exception as err:  # a user metric's bug, a numerical failure: record it
+            return Row(index, xs, False, _reason(err, where + "error: "), tuple(values))
+    by_name = dict(zip(study.metric_names, values, strict=True))
+    broken = [
+        f"{c.metric} = {by_name[c.metric]:.6g} breaks {c}"
+        for c in study.all_constraints
+        if c.violation(by_name[c.metric]) > 0.0
+    ]
+    return Row(index, xs, not broken, "; ".join(broken), tuple(values))
+
+
+def pack(study: Study) -> bytes:
+    """The study as a payload for workers (cloudpickle: user metrics may be closures)."""
+    import cloudpickle
+
+    return bytes(cloudpickle.dumps(study))
+
+
+@lru_cache(maxsize=4)
+def _unpack(payload: bytes) -> Study:
+    import cloudpickle
+
+    study = cloudpickle.loads(payload)
+    assert isinstance(study, Study)
+    return study
+
+
+def evaluate_designs(payload: bytes, items: list[tuple[int, list[float]]]) -> list[Row]:
+    """Evaluate a batch of designs (the function workers run).
+
+    Args:
+        payload: :func:`pack` of the study.
+        items: ``(index, x)`` pairs.
+
+    Returns:
+        The rows, in the order of ``items``.
+
+    """
+    study = _unpack(payload)
+    return [evaluate_design(study, i, np.asarray(x, dtype=float)) for i, x in items]

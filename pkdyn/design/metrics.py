@@ -1,0 +1,375 @@
+"""Metrics: small functions of a built design, each with a name and a unit.
+
+A metric is ``fn(robot, ctx) -> float`` (:class:`Metric`): ``robot`` the built design
+(:class:`pkdyn.Robot`), ``ctx`` its :class:`pkdyn.design.context.DesignContext`, whose methods
+share the expensive results between metrics (the required-workspace check, the duty-cycle
+figures...). A metric that cannot be evaluated raises a :class:`pkdyn.PkdynError`: the design is
+then recorded as infeasible with that reason.
+
+Adding one is one small function::
+
+    from pkdyn.design import Metric
+
+    def arm_ratio(robot, ctx):
+        return robot.params.lb / robot.params.la
+
+    study = Study(..., metrics=["peak_effort", Metric("arm_ratio", "-", arm_ratio)])
+
+or, to make it known by name (``--metric arm_ratio``), decorate it with :func:`metric`.
+
+Built-in metrics (:data:`METRICS`; groups of them: :data:`GROUPS`):
+
+- Clavel's workspace figures of the Delta, closed form with the study's limits:
+  ``clavel_D``, ``clavel_S``, ``clavel_H``, ``clavel_Hmax``, ``clavel_V``, ``clavel_zh`` [SI],
+  their dimensionless forms ``clavel_d, _s, _h, _hmax, _v, _z_h`` and ``clavel_r``,
+  ``clavel_b``; ``clavel_H_numeric`` / ``clavel_h_numeric``: the complete prism's height
+  measured on the mechanism;
+- ``workspace_volume`` [m^3] of the translation workspace at the identity orientation, ``gci``
+  (global conditioning index: mean ``1/cond(J)`` over it);
+- on the required workspace: ``contains`` (fraction of the required poses reached within the
+  limits; 1 = all), ``inv_cond_min`` and ``inv_cond_mean`` (worst and mean ``1/cond(J)``;
+  the mean is the GCI of the required region), ``interference_margin`` [m] (smallest
+  clearance between legs, negative when they overlap);
+- on the duty cycle: ``peak_effort``, ``rms_effort`` [N m or N], ``peak_speed`` [rad/s or
+  m/s], ``peak_power`` [W] (largest over the actuators), ``effort_margin``, ``speed_margin``
+  (smallest ``1 - peak / limit``), and per actuator ``peak_effort_<k>``, ``rms_effort_<k>``,
+  ``peak_speed_<k>`` (``k`` = 1, 2, ... in actuator order);
+- ``moving_mass`` [kg]: every body but the base.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pkdyn.design.context import DesignContext
+from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.robot import Robot
+
+__all__ = ["GROUPS", "METRICS", "Metric", "metric", "resolve_metrics"]
+
+MetricFn = Callable[[Robot, DesignContext], float]
+
+
+@dataclass(frozen=True)
+class Metric:
+    """A named figure of a design.
+
+    Attributes:
+        name: Column name in the results table.
+        unit: Unit (SI), ``-`` when dimensionless.
+        fn: ``fn(robot, ctx) -> float``.
+        summary: One line for listings.
+        geometry: The metric needs the robot's collision geometry.
+
+    """
+
+    name: str
+    unit: str
+    fn: MetricFn
+    summary: str = ""
+    geometry: bool = False
+
+    def __post_init__(self) -> None:
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.name):
+            raise InvalidInputError("metric", f"'{self.name}': names are identifiers")
+
+    def __call__(self, robot: Robot, ctx: DesignContext) -> float:
+        """The value for one design.
+
+        Raises:
+            PkdynError: The design cannot be evaluated (the design is then infeasible).
+            InvalidInputError: The function returned something that is not a finite number.
+
+        """
+        value = self.fn(robot, ctx)
+        try:
+            out = float(value)
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                f"metric '{self.name}'", f"returned {value!r}, not a number"
+            ) from None
+        if not math.isfinite(out):
+            raise InvalidInputError(f"metric '{self.name}'", f"is not finite ({out})")
+        return out
+
+
+METRICS: dict[str, Metric] = {}
+"""Metrics known by name (built-ins and those registered with :func:`metric`)."""
+
+
+def metric(
+    name: str, unit: str, summary: str = "", geometry: bool = False
+) -> Callable[[MetricFn], MetricFn]:
+    """Register a function as a metric known by name (decorator).
+
+    Args:
+        name: Column name.
+        unit: Unit (SI), ``-`` when dimensionless.
+        summary: One line.
+        geometry: Needs the collision geometry.
+
+    Returns:
+        The decorator (the function is returned unchanged).
+
+    """
+
+    def wrap(fn: MetricFn) -> MetricFn:
+        METRICS[name] = Metric(name, unit, fn, summary or (fn.__doc__ or "").strip(), geometry)
+        return fn
+
+    return wrap
+
+
+# ---------------------------------------------------------------------- Clavel's figures
+
+_CLAVEL_SI = {
+    "D": ("m", "inscribed cylinder diameter"),
+    "S": ("m^2", "hexagon area"),
+    "H": ("m", "complete prism height"),
+    "Hmax": ("m", "prism top to lowest point"),
+    "V": ("m^3", "prism volume S H"),
+    "zh": ("m", "prism top height"),
+}
+_CLAVEL_DIMLESS = {"d": "D", "s": "S", "h": "H", "hmax": "Hmax", "v": "V", "z_h": "zh"}
+
+
+def _clavel_si(key: str) -> MetricFn:
+    return lambda robot, ctx: float(getattr(ctx.clavel(), key))
+
+
+def _clavel_dimless(key: str) -> MetricFn:
+    return lambda robot, ctx: float(ctx.clavel().dimensionless()[key])
+
+
+for _k, (_u, _s) in _CLAVEL_SI.items():
+    METRICS[f"clavel_{_k}"] = Metric(f"clavel_{_k}", _u, _clavel_si(_k), f"Clavel: {_s}")
+for _k, _big in _CLAVEL_DIMLESS.items():
+    METRICS[f"clavel_{_k}"] = Metric(
+        f"clavel_{_k}", "-", _clavel_dimless(_k), f"Clavel: {_CLAVEL_SI[_big][1]} / la^n"
+    )
+
+
+@metric("clavel_r", "-", "Clavel's r = (ra - rb) / la")
+def _clavel_r(robot: Robot, ctx: DesignContext) -> float:
+    p = ctx._delta()
+    return float((p.ra - p.rb) / p.la)
+
+
+@metric("clavel_b", "-", "Clavel's b = lb / la")
+def _clavel_b(robot: Robot, ctx: DesignContext) -> float:
+    p = ctx._delta()
+    return float(p.lb / p.la)
+
+
+@metric("clavel_H_numeric", "m", "complete prism height measured on the mechanism")
+def _clavel_H_numeric(robot: Robot, ctx: DesignContext) -> float:
+    return float(ctx.clavel_numeric().H)
+
+
+@metric("clavel_h_numeric", "-", "complete prism height measured on the mechanism / la")
+def _clavel_h_numeric(robot: Robot, ctx: DesignContext) -> float:
+    f = ctx.clavel_numeric()
+    return float(f.H / f.la)
+
+
+# ---------------------------------------------------------------------- workspaces
+
+
+@metric("workspace_volume", "m^3", "translation workspace volume (grid)")
+def _workspace_volume(robot: Robot, ctx: DesignContext) -> float:
+    return ctx.translation().volume
+
+
+@metric("gci", "-", "global conditioning index: mean 1/cond(J) over the translation workspace")
+def _gci(robot: Robot, ctx: DesignContext) -> float:
+    return ctx.gci()
+
+
+@metric("contains", "-", "fraction of the required poses reached within the limits")
+def _contains(robot: Robot, ctx: DesignContext) -> float:
+    return ctx.required().fraction
+
+
+def _reached_inv_cond(ctx: DesignContext) -> np.ndarray:
+    chk = ctx.required()
+    v = chk.inv_cond[chk.reached]
+    return v if v.size else np.zeros(1)
+
+
+@metric("inv_cond_min", "-", "worst 1/cond(J) over the reached required poses")
+def _inv_cond_min(robot: Robot, ctx: DesignContext) -> float:
+    return float(np.min(_reached_inv_cond(ctx)))
+
+
+@metric("inv_cond_mean", "-", "mean 1/cond(J) over the reached required poses")
+def _inv_cond_mean(robot: Robot, ctx: DesignContext) -> float:
+    return float(np.mean(_reached_inv_cond(ctx)))
+
+
+@metric(
+    "interference_margin",
+    "m",
+    "smallest clearance between legs over the reached required poses",
+    geometry=True,
+)
+def _interference_margin(robot: Robot, ctx: DesignContext) -> float:
+    chk = ctx.required()
+    c = chk.clearance[chk.reached]
+    c = c[np.isfinite(c)]
+    if c.size == 0:
+        raise InvalidInputError("interference_margin", "no required pose reached")
+    return float(np.min(c))
+
+
+# ---------------------------------------------------------------------- duty cycle
+
+
+@metric("peak_effort", "N m or N", "largest peak actuator effort on the duty cycle")
+def _peak_effort(robot: Robot, ctx: DesignContext) -> float:
+    return float(np.max(ctx.duty().peak))
+
+
+@metric("rms_effort", "N m or N", "largest RMS actuator effort on the duty cycle")
+def _rms_effort(robot: Robot, ctx: DesignContext) -> float:
+    return float(np.max(ctx.duty().rms))
+
+
+@metric("peak_speed", "rad/s or m/s", "largest peak actuator speed on the duty cycle")
+def _peak_speed(robot: Robot, ctx: DesignContext) -> float:
+    return float(np.max(ctx.duty().peak_speed))
+
+
+@metric("peak_power", "W", "largest peak actuator power on the duty cycle")
+def _peak_power(robot: Robot, ctx: DesignContext) -> float:
+    return float(np.max(ctx.duty().peak_power))
+
+
+@metric("effort_margin", "-", "smallest 1 - peak effort / effort limit")
+def _effort_margin(robot: Robot, ctx: DesignContext) -> float:
+    d = ctx.duty()
+    with np.errstate(divide="ignore"):
+        return float(np.min(np.where(np.isfinite(d.effort_limit), 1 - d.peak / d.effort_limit, 1)))
+
+
+@metric("speed_margin", "-", "smallest 1 - peak speed / speed limit")
+def _speed_margin(robot: Robot, ctx: DesignContext) -> float:
+    d = ctx.duty()
+    with np.errstate(divide="ignore"):
+        return float(
+            np.min(np.where(np.isfinite(d.speed_limit), 1 - d.peak_speed / d.speed_limit, 1))
+        )
+
+
+_PER_ACTUATOR = {
+    "peak_effort": ("peak", "N m or N"),
+    "rms_effort": ("rms", "N m or N"),
+    "peak_speed": ("peak_speed", "rad/s or m/s"),
+}
+
+
+def _per_actuator(name: str) -> Metric | None:
+    m = re.fullmatch(r"(peak_effort|rms_effort|peak_speed)_([1-9][0-9]*)", name)
+    if m is None:
+        return None
+    attr, unit = _PER_ACTUATOR[m.group(1)]
+    k = int(m.group(2))
+
+    def fn(robot: Robot, ctx: DesignContext) -> float:
+        values = getattr(ctx.duty(), attr)
+        if k > len(values):
+            raise InvalidInputError(
+                f"metric '{name}'", f"{robot.name} has {len(values)} actuators, not {k}"
+            )
+        return float(values[k - 1])
+
+    return Metric(name, unit, fn, f"{m.group(1).replace('_', ' ')} of actuator {k}")
+
+
+@metric("moving_mass", "kg", "mass of every body but the base")
+def _moving_mass(robot: Robot, ctx: DesignContext) -> float:
+    return float(sum(robot.model.inertias[j].mass for j in range(1, robot.model.njoints)))
+
+
+GROUPS: dict[str, tuple[str, ...]] = {
+    "clavel": tuple(f"clavel_{k}" for k in _CLAVEL_SI),
+    "clavel_chart": (
+        "clavel_r",
+        "clavel_b",
+        "clavel_d",
+        "clavel_s",
+        "clavel_h",
+        "clavel_h_numeric",
+        "clavel_hmax",
+        "clavel_v",
+        "clavel_z_h",
+    ),
+    "required": ("contains", "inv_cond_min", "inv_cond_mean", "interference_margin"),
+    "sizing": (
+        "peak_effort",
+        "rms_effort",
+        "peak_speed",
+        "peak_power",
+        "effort_margin",
+        "speed_margin",
+    ),
+    "workspace": ("workspace_volume", "gci"),
+}
+"""Names that stand for several metrics (``--metric sizing``)."""
+
+
+def resolve_metrics(items: Sequence[str | Metric]) -> list[Metric]:
+    """Metrics from names, group names and :class:`Metric` objects, without repeats.
+
+    Args:
+        items: Metric names (built-in or registered), group names (:data:`GROUPS`), per-actuator
+            names (``peak_effort_2``), ``module:function`` of a registered-by-import metric, or
+            :class:`Metric` objects.
+
+    Returns:
+        The metrics, in order of first mention.
+
+    Raises:
+        InvalidInputError: An unknown name (the message lists the known ones).
+
+    """
+    out: dict[str, Metric] = {}
+    for item in items:
+        if isinstance(item, Metric):
+            out.setdefault(item.name, item)
+            continue
+        for name in GROUPS.get(item, (item,)):
+            m = METRICS.get(name) or _per_actuator(name) or _imported(name)
+            if m is None:
+                raise InvalidInputError(
+                    "metric",
+                    f"unknown metric '{name}'; known: {', '.join(sorted(METRICS))}, groups "
+                    f"{', '.join(GROUPS)}, per actuator peak_effort_<k> rms_effort_<k> "
+                    "peak_speed_<k>, or module:function",
+                )
+            out.setdefault(m.name, m)
+    return list(out.values())
+
+
+def _imported(name: str) -> Metric | None:
+    """``module:attribute`` naming a :class:`Metric` (or a function registered on import)."""
+    module, sep, attr = name.partition(":")
+    if not sep:
+        return None
+    import importlib
+
+    try:
+        obj: Any = getattr(importlib.import_module(module), attr)
+    except (ImportError, AttributeError):
+        return None
+    if isinstance(obj, Metric):
+        return obj
+    for m in METRICS.values():
+        if m.fn is obj:
+            return m
+    return None

@@ -1,0 +1,236 @@
+"""The results of a study: the table, the chosen design, the Pareto front, the study file."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pkdyn.design.pareto import non_dominated
+from pkdyn.design.study import Study
+from pkdyn.design.table import Table
+from pkdyn.exceptions import StudyError
+from pkdyn.files import atomic_write
+
+__all__ = ["StudyResult"]
+
+
+def _param_text(v: Any) -> str:
+    if isinstance(v, tuple | list):
+        return "(" + ",".join(_param_text(x) for x in v) + ("," if len(v) == 1 else "") + ")"
+    return repr(float(v)) if isinstance(v, float) else str(v)
+
+
+@dataclass
+class StudyResult:
+    """What a study found.
+
+    Attributes:
+        study: The study.
+        table: Every design, sorted by index.
+        seconds: Wall time of the run [s].
+        executor: Where the designs were evaluated.
+        paths: Files written (``csv``, ``parquet``, ``study``), empty when none.
+
+    """
+
+    study: Study
+    table: Table
+    seconds: float
+    executor: str
+    paths: dict[str, Path] = field(default_factory=dict)
+
+    # ------------------------------------------------------------------ selections
+
+    def objective_matrix(self) -> np.ndarray:
+        """Objectives of every row as minimised values (N, n_obj) (maximised ones negated)."""
+        cols = [o.sign() * self.table.column(o.metric) for o in self.study.objective_list]
+        return np.column_stack(cols) if cols else np.zeros((len(self.table), 0))
+
+    def pareto(self) -> np.ndarray:
+        """Positions (in the table) of the feasible designs on the Pareto front of the
+        objectives, sorted by the first objective.
+        """
+        feas = np.flatnonzero(self.table.feasible)
+        if feas.size == 0 or not self.study.objective_list:
+            return np.zeros(0, dtype=int)
+        F = self.objective_matrix()[feas]
+        front = feas[non_dominated(F)]
+        return front[np.lexsort(self.objective_matrix()[front].T[::-1])]
+
+    def best(self) -> int | None:
+        """Position of the chosen design: the feasible one best on the first objective (the
+        next objectives break ties); the first feasible design when there is no objective;
+        ``None`` when no design is feasible.
+        """
+        feas = np.flatnonzero(self.table.feasible)
+        if feas.size == 0:
+            return None
+        if not self.study.objective_list:
+            return int(feas[0])
+        F = self.objective_matrix()[feas]
+        return int(feas[np.lexsort(F.T[::-1])[0]])
+
+    def _row(self, i: int | None) -> int:
+        i = self.best() if i is None else i
+        if i is None:
+            raise StudyError(
+                "study",
+                f"no feasible design among {len(self.table)}; widen the ranges or relax "
+                "the constraints (see the reason column)",
+            )
+        return i
+
+    def record(self, i: int | None = None) -> dict[str, Any]:
+        """A row (default: the chosen design) as ``{column: value}``."""
+        return self.table.record(self._row(i))
+
+    def overrides(self, i: int | None = None) -> dict[str, Any]:
+        """Builder parameter overrides of a design (default: the chosen one)."""
+        return self.study.space.overrides(self.table.rows[self._row(i)].x)
+
+    def params(self, i: int | None = None) -> Any:
+        """Builder parameters of a design (default: the chosen one)."""
+        return self.study.space.params(self.table.rows[self._row(i)].x)
+
+    def robot(self, i: int | None = None, geometry: bool = True) -> Any:
+        """The built design (default: the chosen one)."""
+        import pkdyn
+
+        return pkdyn.load(self.study.family, geometry=geometry, **self.overrides(i))
+
+    def urdf(self, i: int | None = None) -> str:
+        """URDF text of a design (default: the chosen one), as ``pkdyn urdf`` writes it."""
+        fam = self.study.space.family_obj
+        return fam.build_urdf(self.params(i))
+
+    def write_urdf(self, path: str | os.PathLike[str], i: int | None = None) -> None:
+        """Write the URDF of a design (default: the chosen one), atomically."""
+        text = self.urdf(i)
+        with atomic_write(path) as fh:
+            fh.write(text)
+
+    def param_args(self, i: int | None = None) -> str:
+        """The design as ``--param`` arguments of the ordinary commands."""
+        return " ".join(
+            f"--param {k}={_param_text(v)}" for k, v in sorted(self.overrides(i).items())
+        )
+
+    def command(self, what: str = "urdf", i: int | None = None) -> str:
+        """The ordinary ``pkdyn`` command for a design: ``urdf``, ``size`` or ``workspace``."""
+        s = self.study
+        base = f"pkdyn {what} {s.family} {self.param_args(i)}"
+        if what == "size":
+            opts = s.trajectory_options
+            base += f" --trajectory {s.trajectory} --payload {s.payload:g}"
+            if "cycle_time" in opts:
+                base += f" --cycle-time {float(opts['cycle_time']):g}"
+        return base
+
+    # ------------------------------------------------------------------ reports
+
+    def counts(self) -> dict[str, int]:
+        """Designs evaluated, feasible, failed (could not be evaluated), constraint-broken."""
+        rows = self.table.rows
+        failed = sum(1 for r in rows if not all(np.isfinite(r.values)))
+        feasible = sum(1 for r in rows if r.feasible)
+        return {
+            "designs": len(rows),
+            "feasible": feasible,
+            "failed": failed,
+            "constrained": len(rows) - feasible - failed,
+        }
+
+    def as_json(self) -> dict[str, Any]:
+        """Summary: counts, timing, the chosen design, the Pareto front, the files."""
+        best = self.best()
+        front = self.pareto()
+        return {
+            "study": self.study.name or self.study.family,
+            "digest": self.study.digest(),
+            **self.counts(),
+            "seconds": self.seconds,
+            "designs_per_second": len(self.table) / self.seconds if self.seconds > 0 else None,
+            "executor": self.executor,
+            "best": None if best is None else _json_record(self.table.record(best)),
+            "best_params": None if best is None else _plain(self.overrides(best)),
+            "pareto": [_json_record(self.table.record(int(i))) for i in front],
+            "files": {k: str(v) for k, v in self.paths.items()},
+        }
+
+    def study_file(self) -> str:
+        """The study file written beside the table: the study, then a ``results`` summary."""
+        import yaml
+
+        data = self.study.as_dict()
+        best = self.best()
+        data["results"] = {
+            "digest": self.study.digest(),
+            **self.counts(),
+            "best_index": None if best is None else int(self.table.rows[best].index),
+            "best_params": None if best is None else _plain(self.overrides(best)),
+        }
+        return "# pkdyn design study: rerun with `pkdyn design --study THIS_FILE`\n" + str(
+            yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
+        )
+
+    def summary(self, top: int = 5) -> str:
+        """A readable report: counts, reasons, the chosen design, the front."""
+        c = self.counts()
+        s = self.study
+        lines = [
+            f"{s.name or s.family}: {c['designs']} designs in {self.seconds:.1f} s "
+            f"({c['designs'] / max(self.seconds, 1e-9):.1f} designs/s, {self.executor}); "
+            f"{c['feasible']} feasible, {c['constrained']} break a constraint, "
+            f"{c['failed']} could not be evaluated"
+        ]
+        reasons: dict[str, int] = {}
+        for r in self.table.rows:
+            if r.reason:
+                key = r.reason.split(":")[0] if not all(np.isfinite(r.values)) else "constraint"
+                if key == "constraint":
+                    key = "; ".join(sorted({p.split(" = ")[0] for p in r.reason.split("; ")}))
+                    key = f"breaks {key}"
+                reasons[key] = reasons.get(key, 0) + 1
+        for k, n in sorted(reasons.items(), key=lambda kv: -kv[1])[:top]:
+            lines.append(f"  {n:6d}  {k}")
+        best = self.best()
+        if best is None:
+            lines.append("no feasible design")
+            return "\n".join(lines)
+        rec = self.table.record(best)
+        obj = ", ".join(str(o) for o in s.objective_list) or "first feasible"
+        lines.append(f"chosen ({obj}): design {rec['index']}")
+        for name in s.space.names:
+            lines.append(f"  {name:>22s} = {rec[name]:.6g}")
+        units = self.table.units
+        for name in s.metric_names:
+            lines.append(f"  {name:>22s} = {rec[name]:.6g} {units.get(name, '')}")
+        front = self.pareto()
+        if s.objective_list and len(front):
+            lines.append(f"Pareto front: {len(front)} designs")
+        lines.append(f"check: {self.command('size' if s.trajectory else 'urdf', best)}")
+        return "\n".join(lines)
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {k: _plain(x) for k, x in v.items()}
+    if isinstance(v, tuple | list):
+        return [_plain(x) for x in v]
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def _json_record(rec: dict[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in rec.items():
+        if isinstance(v, float) and not np.isfinite(v):
+            out[k] = None
+        else:
+            out[k] = _plain(v)
+    return out

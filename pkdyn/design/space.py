@@ -1,0 +1,210 @@
+"""The design space of a study: a family, ranges of some parameters, the others fixed.
+
+A design is a point of the box spanned by the :class:`Range` s; :class:`DesignSpace` turns it
+into the family's builder parameters: the fixed values, the design variables, and, when the
+study names a *parametrisation* (:mod:`pkdyn.design.parametrisations`), the builder parameters
+it derives from variables that are not builder parameters themselves (Clavel's normalised
+``r, b``; the scale factors of a MEL-like hexapod).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from pkdyn.design.parametrisations import Parametrisation, parametrisation
+from pkdyn.exceptions import InvalidInputError, ParameterError
+from pkdyn.model.families import Family, family
+
+__all__ = ["DesignSpace", "Range"]
+
+
+@dataclass(frozen=True)
+class Range:
+    """The interval a design variable takes.
+
+    Attributes:
+        name: Builder parameter (or parametrisation input) name.
+        low: Lower bound (SI units of the parameter).
+        high: Upper bound, strictly above ``low``.
+
+    """
+
+    name: str
+    low: float
+    high: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.low) and math.isfinite(self.high)):
+            raise InvalidInputError(
+                f"range '{self.name}'", f"bounds must be finite, got {self.low}:{self.high}"
+            )
+        if self.high == self.low:
+            raise InvalidInputError(
+                f"range '{self.name}'",
+                f"empty ({self.low}:{self.high}); give low < high, or fix the parameter",
+            )
+        if self.high < self.low:
+            raise InvalidInputError(
+                f"range '{self.name}'",
+                f"inverted ({self.low}:{self.high}); write it {self.high}:{self.low}",
+            )
+
+    @classmethod
+    def parse(cls, text: str) -> Range:
+        """``NAME=LOW:HIGH`` (e.g. ``la=0.15:0.35``).
+
+        Raises:
+            InvalidInputError: Not of that form, or bounds that are not numbers.
+
+        """
+        name, sep, span = text.partition("=")
+        low, sep2, high = span.partition(":")
+        if not (sep and sep2 and name.strip()):
+            raise InvalidInputError("--range", f"'{text}': expected NAME=LOW:HIGH")
+        try:
+            return cls(name.strip(), float(low), float(high))
+        except ValueError:
+            raise InvalidInputError("--range", f"'{text}': bounds must be numbers") from None
+
+    def at(self, u: np.ndarray) -> np.ndarray:
+        """Values at fractions ``u`` in [0, 1] of the interval."""
+        return self.low + np.asarray(u, dtype=float) * (self.high - self.low)
+
+    def fraction(self, x: np.ndarray) -> np.ndarray:
+        """Fractions in [0, 1] of values ``x`` (inverse of :meth:`at`)."""
+        return (np.asarray(x, dtype=float) - self.low) / (self.high - self.low)
+
+
+@dataclass(frozen=True)
+class DesignSpace:
+    """A family, the ranges of its design variables and its fixed parameters.
+
+    Attributes:
+        family: Registered family name (:data:`pkdyn.model.families.FAMILIES`).
+        ranges: The design variables.
+        fixed: Fixed builder (or parametrisation) values, SI units.
+        parametrisation: Name (or ``module:function``) of a parametrisation, or ``None``.
+
+    Raises:
+        UnknownRobotError: Unknown family.
+        ParameterError: A variable or fixed value that is not a parameter of the family (nor
+            an input of the parametrisation), a range on a non-numeric parameter, or a
+            parameter both ranged and fixed.
+        InvalidInputError: No range at all.
+
+    """
+
+    family: str
+    ranges: tuple[Range, ...]
+    fixed: Mapping[str, Any] = field(default_factory=dict)
+    parametrisation: str | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "ranges", tuple(self.ranges))
+        object.__setattr__(self, "fixed", dict(self.fixed))
+        fam = self.family_obj
+        if not self.ranges:
+            raise InvalidInputError("ranges", "a study needs at least one --range NAME=LOW:HIGH")
+        fields = {f.name: f for f in dataclasses.fields(fam.params)}
+        inputs = set(self._mapping.names) if self._mapping else set()
+        names = [r.name for r in self.ranges]
+        for name in names + list(self.fixed):
+            if name not in fields and name not in inputs:
+                known = sorted(set(fields) | inputs)
+                raise ParameterError(
+                    fam.name, name, f"unknown; valid parameters: {', '.join(known)}"
+                )
+        dup = sorted({n for n in names if names.count(n) > 1} | (set(names) & set(self.fixed)))
+        if dup:
+            raise ParameterError(fam.name, dup[0], "given twice (ranged and/or fixed)")
+        default = fam.params()
+        for name in names:
+            if name in fields and not isinstance(getattr(default, name), int | float):
+                raise ParameterError(fam.name, name, "not a number: it cannot take a range")
+            if isinstance(getattr(default, name, 0.0), bool):
+                raise ParameterError(fam.name, name, "a flag: it cannot take a range")
+
+    @property
+    def family_obj(self) -> Family:
+        """The registered family."""
+        return family(self.family)
+
+    @property
+    def _mapping(self) -> Parametrisation | None:
+        return None if self.parametrisation is None else parametrisation(self.parametrisation)
+
+    @property
+    def names(self) -> list[str]:
+        """Design variable names, in range order."""
+        return [r.name for r in self.ranges]
+
+    @property
+    def dimension(self) -> int:
+        """Number of design variables."""
+        return len(self.ranges)
+
+    def values(self, u: np.ndarray) -> np.ndarray:
+        """Design variables (n, d) from unit-cube points (n, d); integer parameters rounded."""
+        u = np.atleast_2d(np.asarray(u, dtype=float))
+        if u.shape[1] != self.dimension:
+            raise InvalidInputError("samples", f"expected {self.dimension} columns, got {u.shape}")
+        x = np.column_stack([r.at(u[:, k]) for k, r in enumerate(self.ranges)])
+        default = self.family_obj.params()
+        for k, r in enumerate(self.ranges):
+            if isinstance(getattr(default, r.name, 0.0), int):
+                x[:, k] = np.round(x[:, k])
+        return x
+
+    def overrides(self, x: Sequence[float] | np.ndarray) -> dict[str, Any]:
+        """Builder parameter overrides of the design with variables ``x`` (d,).
+
+        Args:
+            x: One value per range [SI].
+
+        Returns:
+            ``{parameter: value}`` for :meth:`pkdyn.model.families.Family.make_params`.
+
+        """
+        vals: dict[str, Any] = dict(self.fixed)
+        vals.update({r.name: float(v) for r, v in zip(self.ranges, x, strict=True)})
+        mapping = self._mapping
+        if mapping is None:
+            return vals
+        fields = {f.name for f in dataclasses.fields(self.family_obj.params)}
+        out = {k: v for k, v in vals.items() if k in fields and k not in mapping.names}
+        out.update(mapping(vals, self.family_obj.params()))
+        return out
+
+    def params(self, x: Sequence[float] | np.ndarray) -> Any:
+        """The family's parameter dataclass of the design ``x`` (validated by the family).
+
+        Raises:
+            ParameterError: The family rejects the combination (e.g. an unreachable home).
+
+        """
+        return self.family_obj.make_params(self.overrides(x))
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain form for study files."""
+        out: dict[str, Any] = {
+            "family": self.family,
+            "ranges": {r.name: [r.low, r.high] for r in self.ranges},
+            "fixed": {k: _plain(v) for k, v in self.fixed.items()},
+        }
+        if self.parametrisation is not None:
+            out["parametrisation"] = self.parametrisation
+        return out
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, tuple | list):
+        return [_plain(x) for x in v]
+    if isinstance(v, np.generic):
+        return v.item()
+    return v

@@ -1,0 +1,306 @@
+"""A design study: a family, ranges, metrics, constraints, objectives, a runner; its study file.
+
+:class:`Study` is the whole definition of a study, reproducible from its YAML form
+(:meth:`Study.to_yaml`, :meth:`Study.load`)::
+
+    family: delta
+    ranges: {la: [0.15, 0.35], lb: [0.3, 0.6]}
+    fixed: {z_home: -0.35}
+    metrics: [clavel, sizing, required, moving_mass]
+    requirement: {kind: cylinder, D: 0.4, H: 0.1, center: [0, 0, -0.35]}
+    trajectory: adept
+    trajectory_options: {cycle_time: 0.5}
+    payload: 1.0
+    constraints: ["inv_cond_min>=0.2", "interference_margin>=0"]
+    objectives: ["min:peak_effort", "max:inv_cond_min"]
+    sampler: sobol          # grid | lhs | sobol | random | nsga2
+    n: 256                  # designs; grid: values per variable; nsga2: population
+    seed: 0
+
+A required workspace adds the constraint ``contains >= 1`` (every required pose reached).
+Metrics named by constraints and objectives are computed even if not listed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any, cast
+
+import numpy as np
+
+from pkdyn.design.context import Conditions
+from pkdyn.design.goals import Constraint, Objective
+from pkdyn.design.metrics import METRICS, Metric, resolve_metrics
+from pkdyn.design.requirement import Requirement
+from pkdyn.design.samplers import check_count, unit_points
+from pkdyn.design.space import DesignSpace, Range
+from pkdyn.exceptions import InvalidInputError, StudyError
+
+__all__ = ["Study"]
+
+_CONDITION_KEYS = ("limits", "length", "gamma_max", "ab_min", "workspace_samples", "clavel_rays")
+
+
+@dataclass(frozen=True)
+class Study:
+    """The definition of a design study (see the module docstring for its file form).
+
+    Attributes:
+        family: Registered family name.
+        ranges: Design variables: ``{name: (low, high)}`` or :class:`Range` s.
+        fixed: Fixed builder (or parametrisation) values.
+        metrics: Metric names, group names or :class:`Metric` objects.
+        constraints: ``"NAME>=VALUE"`` / ``"NAME<=VALUE"`` or :class:`Constraint` s.
+        objectives: ``"min:NAME"`` / ``"max:NAME"`` or :class:`Objective` s; the first chooses.
+        requirement: Required workspace (``"cylinder:D=0.4,H=0.1,z=-0.35"``, a dict or a
+            :class:`Requirement`), or ``None``.
+        trajectory: Duty cycle name (``adept``, ``sine``, ``p2p``).
+        trajectory_options: Its options (``cycle_time`` [s], ``depth`` [m], ``dt`` [s]...).
+        payload: Payload during the duty cycle [kg].
+        sampler: ``grid``, ``lhs``, ``sobol``, ``random`` or ``nsga2``.
+        n: Designs (``lhs``, ``sobol``, ``random``), values per variable (``grid``), or the
+            population (``nsga2``).
+        generations: NSGA-II generations.
+        seed: Seed of the sampler or of NSGA-II.
+        parametrisation: Name of a parametrisation (:mod:`pkdyn.design.parametrisations`).
+        settings: Other conditions: ``limits``, ``length`` [m], ``gamma_max``, ``ab_min`` [rad],
+            ``workspace_samples``, ``clavel_rays`` (see :class:`pkdyn.design.Conditions`).
+        name: A label for reports.
+
+    Raises:
+        PkdynError: Any bad input (:class:`~pkdyn.exceptions.InvalidInputError`,
+            :class:`~pkdyn.exceptions.ParameterError`, ...), named.
+
+    """
+
+    family: str
+    ranges: Any
+    fixed: Mapping[str, Any] = field(default_factory=dict)
+    metrics: Sequence[str | Metric] = ()
+    constraints: Sequence[str | Constraint] = ()
+    objectives: Sequence[str | Objective] = ()
+    requirement: Any = None
+    trajectory: str = "adept"
+    trajectory_options: Mapping[str, Any] = field(default_factory=dict)
+    payload: float = 0.0
+    sampler: str = "lhs"
+    n: int = 64
+    generations: int = 10
+    seed: int = 0
+    parametrisation: str | None = None
+    settings: Mapping[str, Any] = field(default_factory=dict)
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        ranges = self.ranges
+        if isinstance(ranges, Mapping):
+            items = []
+            for k, v in ranges.items():
+                try:
+                    lo, hi = (float(x) for x in v)
+                except (TypeError, ValueError):
+                    raise InvalidInputError(
+                        f"range '{k}'", f"expected [low, high], got {v!r}"
+                    ) from None
+                items.append(Range(str(k), lo, hi))
+            ranges = items
+        set_(self, "ranges", tuple(r if isinstance(r, Range) else Range.parse(r) for r in ranges))
+        set_(self, "fixed", dict(self.fixed))
+        set_(self, "metrics", tuple(self.metrics))
+        set_(
+            self,
+            "constraints",
+            tuple(
+                c if isinstance(c, Constraint) else Constraint.parse(c) for c in self.constraints
+            ),
+        )
+        set_(
+            self,
+            "objectives",
+            tuple(o if isinstance(o, Objective) else Objective.parse(o) for o in self.objectives),
+        )
+        req = self.requirement
+        if req is not None and not isinstance(req, Requirement):
+            req = Requirement.parse(req) if isinstance(req, str) else Requirement.from_dict(req)
+        set_(self, "requirement", req)
+        set_(self, "trajectory_options", dict(self.trajectory_options))
+        set_(self, "settings", dict(self.settings))
+        bad = [k for k in self.settings if k not in _CONDITION_KEYS]
+        if bad:
+            raise InvalidInputError(
+                "settings", f"unknown '{bad[0]}' (use {', '.join(_CONDITION_KEYS)})"
+            )
+        set_(self, "n", int(self.n))
+        set_(self, "generations", int(self.generations))
+        set_(self, "seed", int(self.seed))
+        if not (math.isfinite(self.payload) and self.payload >= 0.0):
+            raise InvalidInputError("payload", f"must be >= 0 kg, got {self.payload}")
+        # validate now: bad input fails before any design is evaluated
+        _ = self.space, self.conditions, self.metric_list
+        _ = self.total
+        if self.sampler == "nsga2" and not self.objectives:
+            raise InvalidInputError("objectives", "nsga2 needs at least one objective")
+
+    # ------------------------------------------------------------------ derived
+
+    @cached_property
+    def space(self) -> DesignSpace:
+        """The design space."""
+        return DesignSpace(self.family, self.ranges, self.fixed, self.parametrisation)
+
+    @cached_property
+    def conditions(self) -> Conditions:
+        """What the designs are evaluated against."""
+        return Conditions(
+            requirement=self.requirement,
+            trajectory=self.trajectory,
+            trajectory_options=self.trajectory_options,
+            payload=float(self.payload),
+            **self.settings,
+        )
+
+    @property
+    def objective_list(self) -> tuple[Objective, ...]:
+        """The objectives (parsed)."""
+        return cast("tuple[Objective, ...]", self.objectives)
+
+    @cached_property
+    def all_constraints(self) -> tuple[Constraint, ...]:
+        """The constraints, with ``contains >= 1`` when a workspace is required."""
+        given = cast("tuple[Constraint, ...]", self.constraints)
+        extra: tuple[Constraint, ...] = ()
+        if self.requirement is not None and not any(c.metric == "contains" for c in given):
+            extra = (Constraint("contains", ">=", 1.0),)
+        return extra + given
+
+    @cached_property
+    def metric_list(self) -> list[Metric]:
+        """Every metric computed, in column order (listed, then those goals name)."""
+        names: list[str | Metric] = list(self.metrics)
+        names += [c.metric for c in self.all_constraints]
+        names += [o.metric for o in self.objective_list]
+        if not names:
+            raise InvalidInputError("metrics", "a study needs at least one metric (--metric)")
+        metrics = resolve_metrics(names)
+        needs = {"contains", "inv_cond_min", "inv_cond_mean", "interference_margin"}
+        if self.requirement is None:
+            used = sorted(needs & {m.name for m in metrics})
+            if used:
+                raise InvalidInputError(
+                    f"metric '{used[0]}'", "needs a required workspace (--require KIND:...)"
+                )
+        return metrics
+
+    @property
+    def metric_names(self) -> list[str]:
+        """Column names of the metrics."""
+        return [m.name for m in self.metric_list]
+
+    @property
+    def geometry(self) -> bool:
+        """Whether designs are built with collision geometry."""
+        return any(m.geometry for m in self.metric_list) or any(
+            m.name in ("workspace_volume", "gci") for m in self.metric_list
+        )
+
+    @cached_property
+    def total(self) -> int:
+        """Number of designs the runner evaluates (NSGA-II: at most)."""
+        return check_count(self.sampler, self.n, self.space.dimension, self.generations)
+
+    def designs(self) -> np.ndarray:
+        """Design variables (N, d) of a sweep (grid, lhs, sobol, random), in index order."""
+        u = unit_points(self.sampler, self.n, self.space.dimension, self.seed)
+        return self.space.values(u)
+
+    # ------------------------------------------------------------------ file form
+
+    def as_dict(self) -> dict[str, Any]:
+        """The study-file form (YAML-ready; user metric objects by name)."""
+        out: dict[str, Any] = self.space.as_dict()
+        out.update(
+            {
+                "metrics": [m if isinstance(m, str) else m.name for m in self.metrics],
+                "constraints": [str(c) for c in self.constraints],
+                "objectives": [str(o) for o in self.objectives],
+                "requirement": None if self.requirement is None else self.requirement.as_dict(),
+                "trajectory": self.trajectory,
+                "trajectory_options": dict(self.trajectory_options),
+                "payload": float(self.payload),
+                "sampler": self.sampler,
+                "n": self.n,
+                "seed": self.seed,
+            }
+        )
+        if self.sampler == "nsga2":
+            out["generations"] = self.generations
+        if self.settings:
+            out["settings"] = dict(self.settings)
+        if self.name:
+            out["name"] = self.name
+        return out
+
+    def to_yaml(self) -> str:
+        """The study file text."""
+        import yaml
+
+        return str(yaml.safe_dump(self.as_dict(), sort_keys=False, default_flow_style=None))
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], source: str = "study") -> Study:
+        """A study from its file form.
+
+        Raises:
+            StudyError: Not a mapping, or unknown keys.
+
+        """
+        if not isinstance(data, Mapping):
+            raise StudyError(source, "a study file is a mapping (family, ranges, metrics...)")
+        known = set(cls.__dataclass_fields__)
+        bad = [k for k in data if k not in known]
+        if bad:
+            raise StudyError(source, f"unknown key '{bad[0]}' (use {', '.join(sorted(known))})")
+        if "family" not in data or "ranges" not in data:
+            raise StudyError(source, "a study needs 'family' and 'ranges'")
+        return cls(**dict(data))
+
+    @classmethod
+    def load(cls, path: str | Path) -> Study:
+        """Read a YAML study file.
+
+        Raises:
+            StudyError: Missing, unreadable or malformed file.
+
+        """
+        import yaml
+
+        try:
+            text = Path(path).read_text()
+        except OSError as err:
+            raise StudyError(str(path), f"cannot be read ({err.strerror or err})") from None
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as err:
+            raise StudyError(str(path), f"not valid YAML ({err})".replace("\n", " ")) from None
+        return cls.from_dict(data, str(path))
+
+    def digest(self) -> str:
+        """Fingerprint of everything that determines the results (16 hex digits).
+
+        Covers the study-file form, the metrics' units and the code of user metrics
+        (by module and name).
+        """
+        described = []
+        for m in self.metric_list:
+            builtin = METRICS.get(m.name) is m
+            where = "" if builtin else f"{getattr(m.fn, '__module__', '')}.{m.fn.__qualname__}"
+            described.append([m.name, m.unit, where])
+        text = json.dumps([self.as_dict(), described], sort_keys=True, default=str)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]

@@ -1,0 +1,340 @@
+"""Inverse dynamics of the library Delta along a platform trajectory, vectorised (closed form).
+
+The general path (:func:`pkdyn.dynamics.trajectory.map_task_trajectory` then
+:func:`pkdyn.dynamics.inverse_dynamics`) solves every sample with the numeric geometric models
+and the constrained inverse dynamics: about 3 ms per sample. For Clavel's Delta with ball-jointed
+parallelograms the same efforts follow in closed form for all samples at once (numpy), about a
+thousand times faster; design studies (:mod:`pkdyn.design`) size thousands of Deltas with it.
+
+Kinematics (seed 000, eq. 1): arm ``k`` turns by ``alpha_k`` about the fixed axis ``a_k``
+through ``O_k``; its two bars run from the elbow points ``E_b`` to the nacelle points
+``A_b = P + delta_b``, and both bars of arm ``k`` share the vector ``d_k = A_b - E_b`` with
+``|d_k| = lb``. With ``E'_k = a_k x (E_k - O_k)`` (``dE/d alpha``) and ``E''_k = a_k x E'_k``:
+
+    alpha_dot_k  = d_k . P_dot / (d_k . E'_k)
+    alpha_ddot_k = (d_k . P_ddot - alpha_dot_k^2 d_k . E''_k + |d_dot_k|^2) / (d_k . E'_k)
+
+with ``d_dot_k = P_dot - E'_k alpha_dot_k``. The nacelle translates; each bar, a solid of
+revolution about its axis ``u = d / lb`` with zero spin momentum (as the general mapping makes
+it, see :mod:`pkdyn.dynamics.trajectory`), turns at ``omega = u x u_dot`` and
+``omega_dot = u x u_ddot``, so its moment about its centre of mass is ``I_t omega_dot``.
+
+Efforts by virtual power: every body velocity is linear in ``P_dot`` (``alpha_dot = J_inv
+P_dot``, ``J_inv`` with rows ``d_k^T / (d_k . E'_k)``); with ``w`` the generalized force of the
+bars and the nacelle in ``P`` coordinates (inertia minus gravity) and ``Q_k`` that of arm ``k``
+about its axis, ``tau = Q + J_inv^-T w``. Masses, centres of mass, inertias, armatures, gravity
+and joint placements are read from the loaded model (so :func:`pkdyn.dynamics.with_payload`
+and edited masses count); the tests check the efforts against the general path to 1e-9.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.analysis.kinematics import SINGULAR_TOL
+from pkdyn.closed_form.delta import inverse
+from pkdyn.dynamics.trajectory import TaskTrajectory
+from pkdyn.exceptions import PkdynError, TrajectoryError
+from pkdyn.model.robot import Robot
+
+__all__ = ["ActuatorTrajectory", "DeltaDynamics", "delta_inverse_dynamics", "has_delta_dynamics"]
+
+
+@dataclass(frozen=True)
+class ActuatorTrajectory:
+    """Actuator motion and efforts along a trajectory.
+
+    Attributes:
+        t: Sample times (N,) [s].
+        actuators: Actuator (joint) names (n_a).
+        qa: Actuator positions (N, n_a) [rad].
+        qa_dot: Actuator rates (N, n_a) [rad/s].
+        qa_ddot: Actuator accelerations (N, n_a) [rad/s^2].
+        tau: Joint-side efforts (N, n_a) [N m].
+
+    """
+
+    t: np.ndarray
+    actuators: list[str]
+    qa: np.ndarray
+    qa_dot: np.ndarray
+    qa_ddot: np.ndarray
+    tau: np.ndarray
+
+    @property
+    def power(self) -> np.ndarray:
+        """Actuator powers ``tau * qa_dot`` (N, n_a) [W]."""
+        return self.tau * self.qa_dot
+
+
+def has_delta_dynamics(robot: Robot) -> bool:
+    """Whether :func:`delta_inverse_dynamics` applies: a library Delta, 3 arms, ball bars."""
+    p = robot.params
+    return (
+        p is not None
+        and all(hasattr(p, k) for k in ("ra", "rb", "la", "lb"))
+        and getattr(p, "arms", 3) == 3
+        and getattr(p, "parallelogram", "ball") == "ball"
+        and getattr(p, "bar_joint", "spherical") == "spherical"
+        and len(robot.actuators) == 3
+        and robot.platform_frame is not None
+    )
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of (..., 3) arrays (faster than ``np.cross`` on small rows)."""
+    return np.stack(
+        [
+            a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+            a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+            a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0],
+        ],
+        axis=-1,
+    )
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.einsum("...i,...i->...", a, b)
+
+
+@dataclass(frozen=True)
+class _Bar:
+    arm: int
+    elbow: np.ndarray  # ball centre in the arm frame [m]
+    nacelle: np.ndarray  # closure point on the nacelle, minus the platform frame offset [m]
+    mass: float
+    fraction: float  # centre of mass along the bar, from the elbow (0..1)
+    length: float  # ball centre to ball centre [m]
+    inertia_t: float  # transverse inertia about the centre of mass [kg m^2]
+
+
+class DeltaDynamics:
+    """The Delta's kinematic and inertial data read from a loaded model, for many trajectories.
+
+    Args:
+        robot: A library Delta with three arms and ball-jointed bars (:func:`has_delta_dynamics`),
+            possibly with a payload (:func:`pkdyn.dynamics.with_payload`).
+
+    Raises:
+        PkdynError: Not such a Delta, or a bar that is not a solid of revolution about its axis.
+
+    """
+
+    def __init__(self, robot: Robot) -> None:
+        if not has_delta_dynamics(robot):
+            raise PkdynError(
+                f"{robot.name}: the closed-form Delta dynamics needs a library Delta with three "
+                "arms and ball-jointed bars; use pkdyn.dynamics.inverse_dynamics"
+            )
+        model = robot.model
+        self.robot = robot
+        self.params = robot.params
+        arms = [int(j) for j in robot.actuated_joints]
+        self.arms = arms
+        self.O = np.array([model.jointPlacements[j].translation for j in arms])
+        self.R0 = np.array([model.jointPlacements[j].rotation for j in arms])
+        self.axis = self.R0[:, :, 1]  # arm axes a_k (world): joint y axes
+        iv = robot.actuated_v
+        arm_I = [model.inertias[j] for j in arms]
+        self.arm_mass = np.array([float(i.mass) for i in arm_I])
+        self.arm_lever = np.array([np.array(i.lever) for i in arm_I])  # arm frame
+        y = np.array([0.0, 1.0, 0.0])
+        self.arm_axial = (
+            np.array(
+                [
+                    float(i.inertia[1, 1])
+                    + float(i.mass) * float(np.sum(np.cross(y, i.lever) ** 2))
+                    for i in arm_I
+                ]
+            )
+            + np.asarray(model.armature)[iv]
+        )
+        self.gravity = np.array(model.gravity.linear)
+        frame = model.frames[robot.platform_frame]
+        nac = int(frame.parentJoint)
+        pin.framesForwardKinematics(model, robot.data, robot.q_home)
+        self.R_nacelle = np.array(robot.data.oMi[nac].rotation)
+        f_off = self.R_nacelle @ np.array(frame.placement.translation)
+        self.f_off = f_off  # platform frame origin minus nacelle centre, world axes [m]
+        self.nacelle_mass = float(model.inertias[nac].mass)
+        bars = []
+        for cm in robot.constraint_models:
+            j1, j2 = int(cm.joint1_id), int(cm.joint2_id)
+            if j2 != nac or int(model.parents[j1]) not in arms:
+                raise PkdynError(f"{robot.name}: closure on joint {model.names[j1]} is not a bar")
+            p_bar = np.array(cm.joint1_placement.translation)  # lower ball, bar frame
+            length = float(np.linalg.norm(p_bar))
+            inert = model.inertias[j1]
+            z = p_bar / length
+            lever = np.array(inert.lever)
+            Ic = np.array(inert.inertia)
+            It = float(Ic.trace() - z @ Ic @ z) / 2.0
+            Ia = float(z @ Ic @ z)
+            sym = It * (np.eye(3) - np.outer(z, z)) + Ia * np.outer(z, z)
+            if np.linalg.norm(np.cross(lever, z)) > 1e-12 or np.max(np.abs(Ic - sym)) > 1e-12 * (
+                1.0 + abs(It)
+            ):
+                raise PkdynError(
+                    f"{robot.name}: bar '{model.names[j1]}' is not a solid of revolution about "
+                    "its axis; use pkdyn.dynamics.inverse_dynamics"
+                )
+            bars.append(
+                _Bar(
+                    arm=arms.index(int(model.parents[j1])),
+                    elbow=np.array(model.jointPlacements[j1].translation),
+                    nacelle=self.R_nacelle @ np.array(cm.joint2_placement.translation) - f_off,
+                    mass=float(inert.mass),
+                    fraction=float(lever @ z) / length,
+                    length=length,
+                    inertia_t=It,
+                )
+            )
+        self.bars = bars
+        self.nacelle_lever = self.R_nacelle @ np.array(model.inertias[nac].lever) - f_off
+        self.lo = np.array(model.lowerPositionLimit[robot.actuated_q])
+        self.hi = np.array(model.upperPositionLimit[robot.actuated_q])
+        self.vmax = np.array([a.velocity for a in robot.actuators])
+        self.names = robot.actuator_names
+
+    def _arm_rotations(self, alpha: np.ndarray) -> np.ndarray:
+        """World rotations of the arms (N, 3, 3, 3) for angles (N, 3)."""
+        c, s = np.cos(alpha), np.sin(alpha)
+        Ry = np.zeros(alpha.shape + (3, 3))
+        Ry[..., 0, 0], Ry[..., 0, 2], Ry[..., 1, 1] = c, s, 1.0
+        Ry[..., 2, 0], Ry[..., 2, 2] = -s, c
+        return np.einsum("kij,nkjl->nkil", self.R0, Ry)
+
+    def solve(self, task: TaskTrajectory, check_limits: bool = True) -> ActuatorTrajectory:
+        """Actuator motion and efforts along a platform trajectory (see the module docstring).
+
+        Args:
+            task: Platform trajectory (positions, rates and accelerations of the platform
+                frame; the orientation columns are ignored: the nacelle keeps its own).
+            check_limits: Raise if an arm leaves its angle or speed limits (as
+                :func:`pkdyn.dynamics.trajectory.map_task_trajectory` does).
+
+        Returns:
+            Arm angles, rates, accelerations and joint-side torques.
+
+        Raises:
+            TrajectoryError: A sample is out of reach, at or across a singularity, or outside
+                the arm limits (the message names the sample).
+
+        """
+        t = task.t
+        P, Pd, Pdd = task.pose[:, :3], task.pose_d[:, :3], task.pose_dd[:, :3]
+        alpha, ok = inverse(self.params, P - self.f_off)
+        if not ok.all():
+            k = int(np.flatnonzero(~ok)[0])
+            raise TrajectoryError("pose out of reach of the arms", sample=k, time=float(t[k]))
+        if check_limits:
+            self._check_angles(t, alpha)
+        R = self._arm_rotations(alpha)  # (N, 3, 3, 3)
+        a = self.axis[None]  # (1, 3, 3)
+        # arm k's first bar gives d_k, E_k and its derivatives (both bars share them)
+        first = [next(b for b in self.bars if b.arm == k) for k in range(3)]
+        E = np.stack([self.O[k] + R[:, k] @ first[k].elbow for k in range(3)], axis=1)  # (N, 3, 3)
+        d = P[:, None, :] + np.stack([b.nacelle for b in first])[None] - E
+        E1 = _cross(a, E - self.O[None])  # dE/d alpha
+        E2 = _cross(a, E1)
+        g = _dot(d, E1)  # (N, 3)
+        self._check_singular(t, d, E1, g)
+        alpha_d = _dot(d, Pd[:, None, :]) / g
+        dd = Pd[:, None, :] - E1 * alpha_d[..., None]
+        alpha_dd = (_dot(d, Pdd[:, None, :]) - alpha_d**2 * _dot(d, E2) + _dot(dd, dd)) / g
+        if check_limits:
+            self._check_speeds(t, alpha_d)
+        d2 = Pdd[:, None, :] - E1 * alpha_dd[..., None] - E2 * (alpha_d**2)[..., None]
+        Jinv = d / g[..., None]  # (N, 3 arms, 3)
+        grav = self.gravity
+        # arms: Q_k = I_axis alpha_dd - m g . (a x r)
+        r_arm = np.einsum("nkij,kj->nki", R, self.arm_lever)
+        Q = self.arm_axial * alpha_dd - self.arm_mass * _dot(_cross(a, r_arm), grav[None, None])
+        # nacelle (translating): w = m (c_ddot - g)
+        w = self.nacelle_mass * (Pdd - grav)
+        for b in self.bars:
+            k, f, L = b.arm, b.fraction, b.length
+            c_dd = (1.0 - f) * (
+                E1[:, k] * alpha_dd[:, k, None] + E2[:, k] * alpha_d[:, k, None] ** 2
+            )
+            c_dd += f * Pdd
+            F = b.mass * (c_dd - grav)  # (N, 3)
+            u = d[:, k] / L
+            M = b.inertia_t * _cross(u, d2[:, k] / L)  # moment about the centre of mass
+            # velocities as linear maps of P_dot: V = (1-f) E1 (x) Jinv_k + f I, and
+            # Omega = [u]x (I - E1 (x) Jinv_k) / L; w += V^T F + Omega^T M
+            w += (1.0 - f) * Jinv[:, k] * _dot(E1[:, k], F)[:, None] + f * F
+            uxM = _cross(M, u)  # [u]x^T M = M x u
+            w += (uxM - Jinv[:, k] * _dot(E1[:, k], uxM)[:, None]) / L
+        tau = Q + np.linalg.solve(np.swapaxes(Jinv, 1, 2), w[..., None])[..., 0]
+        return ActuatorTrajectory(t.copy(), list(self.names), alpha, alpha_d, alpha_dd, tau)
+
+    def _check_angles(self, t: np.ndarray, alpha: np.ndarray) -> None:
+        bad = (alpha < self.lo - 1e-12) | (alpha > self.hi + 1e-12)
+        if bad.any():
+            k, i = (int(x[0]) for x in np.nonzero(bad))
+            raise TrajectoryError(
+                f"actuator joint '{self.names[i]}' would be at {alpha[k, i]:.6g}, outside its "
+                f"limits [{self.lo[i]:.6g}, {self.hi[i]:.6g}]",
+                sample=k,
+                time=float(t[k]),
+            )
+
+    def _check_speeds(self, t: np.ndarray, alpha_d: np.ndarray) -> None:
+        bad = np.abs(alpha_d) > self.vmax * (1.0 + 1e-9)
+        if bad.any():
+            k, i = (int(x[0]) for x in np.nonzero(bad))
+            raise TrajectoryError(
+                f"actuator '{self.names[i]}' would move at {alpha_d[k, i]:.4g}, beyond its "
+                f"velocity limit {self.vmax[i]:.4g} (slow the trajectory down)",
+                sample=k,
+                time=float(t[k]),
+            )
+
+    def _check_singular(self, t: np.ndarray, d: np.ndarray, E1: np.ndarray, g: np.ndarray) -> None:
+        """Serial (bar along the elbow's path) or parallel (bars dependent) singularities."""
+        scale = np.linalg.norm(d, axis=-1) * np.linalg.norm(E1, axis=-1)
+        serial = np.abs(g) <= SINGULAR_TOL * scale
+        U = d / np.linalg.norm(d, axis=-1, keepdims=True)
+        s = np.linalg.svd(U, compute_uv=False)
+        parallel = s[:, -1] <= SINGULAR_TOL * s[:, 0]
+        det = np.linalg.det(U) * np.prod(np.sign(g), axis=1)
+        crossed = np.zeros(t.size, dtype=bool)
+        crossed[1:] = det[1:] * det[:-1] < 0.0
+        for what, mask in (("serial", serial), ("parallel", parallel), ("crossed", crossed)):
+            if mask.any():
+                k = int(np.flatnonzero(mask)[0])
+                msg = (
+                    f"the trajectory crosses a singularity after t = {t[k - 1]:.6g} s "
+                    "(det J_inv changes sign)"
+                    if what == "crossed"
+                    else f"{what} singularity: the arms cannot control the nacelle here"
+                )
+                raise TrajectoryError(msg, sample=k, time=float(t[k]))
+
+
+def delta_inverse_dynamics(
+    robot: Robot, task: TaskTrajectory, check_limits: bool = True
+) -> ActuatorTrajectory:
+    """Arm angles, rates, accelerations and torques of a library Delta along a platform path.
+
+    The closed-form, vectorised equivalent of ``inverse_dynamics(robot,
+    map_task_trajectory(robot, task))`` (see the module docstring).
+
+    Args:
+        robot: A library Delta, three arms, ball-jointed bars (payload included if any).
+        task: Platform trajectory (positions [m] and their derivatives).
+        check_limits: Raise if an arm leaves its angle or speed limits.
+
+    Returns:
+        The actuator trajectory with joint-side torques [N m].
+
+    Raises:
+        PkdynError: Not such a Delta.
+        TrajectoryError: Out of reach, singular, or outside the arm limits.
+
+    """
+    return DeltaDynamics(robot).solve(task, check_limits)
