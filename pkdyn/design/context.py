@@ -149,8 +149,9 @@ class DesignContext:
         )
 
     def translation(self) -> TranslationWorkspace:
-        """Constant-orientation workspace on a grid (the robot's own limits, interference too
-        when the robot has collision geometry).
+        """Constant-orientation workspace on a grid.
+
+        The robot's own limits, with interference when it has collision geometry.
         """
         from pkdyn.workspace.translation import translation_workspace
 

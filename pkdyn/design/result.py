@@ -51,8 +51,9 @@ class StudyResult:
         return np.column_stack(cols) if cols else np.zeros((len(self.table), 0))
 
     def pareto(self) -> np.ndarray:
-        """Positions (in the table) of the feasible designs on the Pareto front of the
-        objectives, sorted by the first objective.
+        """Positions (in the table) of the feasible designs on the Pareto front.
+
+        Non-dominated on the objectives, sorted by the first objective.
         """
         feas = np.flatnonzero(self.table.feasible)
         if feas.size == 0 or not self.study.objective_list:
@@ -62,9 +63,10 @@ class StudyResult:
         return front[np.lexsort(self.objective_matrix()[front].T[::-1])]
 
     def best(self) -> int | None:
-        """Position of the chosen design: the feasible one best on the first objective (the
-        next objectives break ties); the first feasible design when there is no objective;
-        ``None`` when no design is feasible.
+        """Position (in the table) of the chosen design.
+
+        The feasible design best on the first objective (the next objectives break ties); the
+        first feasible design when there is no objective; ``None`` when none is feasible.
         """
         feas = np.flatnonzero(self.table.feasible)
         if feas.size == 0:
