@@ -22,7 +22,16 @@ from pkdyn.exceptions import PkdynError
 __all__ = ["main"]
 
 #: Command modules, in the order their commands appear in ``pkdyn --help``.
-COMMAND_MODULES = ("geometry", "dynamics", "workspace", "viewer", "mjcf", "tripod", "demo")
+COMMAND_MODULES = (
+    "geometry",
+    "dynamics",
+    "workspace",
+    "design",
+    "viewer",
+    "mjcf",
+    "tripod",
+    "demo",
+)
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -108,16 +108,16 @@ def _unpack(payload: bytes) -> Study:
     return study
 
 
-def evaluate_designs(payload: bytes, items: list[tuple[int, list[float]]]) -> list[Row]:
+def evaluate_designs(payload: bytes | Study, items: list[tuple[int, list[float]]]) -> list[Row]:
     """Evaluate a batch of designs (the function workers run).
 
     Args:
-        payload: :func:`pack` of the study.
+        payload: :func:`pack` of the study (the study itself in this process).
         items: ``(index, x)`` pairs.
 
     Returns:
         The rows, in the order of ``items``.
 
     """
-    study = _unpack(payload)
+    study = payload if isinstance(payload, Study) else _unpack(payload)
     return [evaluate_design(study, i, np.asarray(x, dtype=float)) for i, x in items]

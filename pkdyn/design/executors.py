@@ -26,7 +26,7 @@ from pkdyn.exceptions import InvalidInputError, StudyError
 
 __all__ = ["DaskExecutor", "Executor", "ProcessExecutor", "SerialExecutor", "make_executor"]
 
-ChunkFn = Callable[[bytes, list[Any]], list[Any]]
+ChunkFn = Callable[[Any, list[Any]], list[Any]]
 
 
 class Executor(ABC):
@@ -42,7 +42,7 @@ class Executor(ABC):
     name = ""
 
     @abstractmethod
-    def map_chunks(self, fn: ChunkFn, payload: bytes, chunks: Sequence[list[Any]]) -> Iterator[Any]:
+    def map_chunks(self, fn: ChunkFn, payload: Any, chunks: Sequence[list[Any]]) -> Iterator[Any]:
         """Yield ``fn(payload, chunk)`` for every chunk, as they complete."""
 
     def close(self) -> None:  # noqa: B027 (most executors hold nothing)
@@ -60,7 +60,7 @@ class SerialExecutor(Executor):
 
     name = "serial (this process)"
 
-    def map_chunks(self, fn: ChunkFn, payload: bytes, chunks: Sequence[list[Any]]) -> Iterator[Any]:
+    def map_chunks(self, fn: ChunkFn, payload: Any, chunks: Sequence[list[Any]]) -> Iterator[Any]:
         """See :meth:`Executor.map_chunks`."""
         for chunk in chunks:
             yield fn(payload, chunk)
@@ -88,7 +88,7 @@ class ProcessExecutor(Executor):
             )
         return self._pool
 
-    def map_chunks(self, fn: ChunkFn, payload: bytes, chunks: Sequence[list[Any]]) -> Iterator[Any]:
+    def map_chunks(self, fn: ChunkFn, payload: Any, chunks: Sequence[list[Any]]) -> Iterator[Any]:
         """See :meth:`Executor.map_chunks` (at most ``4 x workers`` chunks in flight)."""
         pool = self._get_pool()
         todo = list(chunks)[::-1]
@@ -150,7 +150,7 @@ class DaskExecutor(Executor):
         self.workers = max(1, sum(int(w.get("nthreads", 1)) for w in workers.values()))
         self.name = f"Dask cluster at {client.scheduler.address} ({len(workers)} workers)"
 
-    def map_chunks(self, fn: ChunkFn, payload: bytes, chunks: Sequence[list[Any]]) -> Iterator[Any]:
+    def map_chunks(self, fn: ChunkFn, payload: Any, chunks: Sequence[list[Any]]) -> Iterator[Any]:
         """See :meth:`Executor.map_chunks`."""
         from distributed import as_completed
 
@@ -170,7 +170,10 @@ class DaskExecutor(Executor):
 
 
 def make_executor(
-    workers: int | None = None, client: Any = None, scheduler: str | None = None
+    workers: int | None = None,
+    client: Any = None,
+    scheduler: str | None = None,
+    timeout: float = 10.0,
 ) -> Executor:
     """The executor for these options (see the module docstring).
 
@@ -178,6 +181,7 @@ def make_executor(
         workers: Local worker processes (1: serial; default: the machine's cores).
         client: A Dask client (takes precedence).
         scheduler: A Dask scheduler address.
+        timeout: How long to try to reach the scheduler [s].
 
     Raises:
         InvalidInputError: ``workers`` below 1.
@@ -185,7 +189,7 @@ def make_executor(
 
     """
     if client is not None or scheduler:
-        return DaskExecutor(client, scheduler)
+        return DaskExecutor(client, scheduler, timeout)
     n = (os.cpu_count() or 1) if workers is None else int(workers)
     if n < 1:
         raise InvalidInputError("workers", f"must be >= 1, got {workers}")

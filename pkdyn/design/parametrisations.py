@@ -61,8 +61,18 @@ def _get(values: Mapping[str, Any], defaults: Any, name: str) -> float:
 
 
 def _clavel(values: Mapping[str, Any], defaults: Any) -> dict[str, Any]:
+    from types import SimpleNamespace
+
+    from pkdyn.workspace.clavel import clavel_closed_form
+
     la, rb = _get(values, defaults, "la"), _get(values, defaults, "rb")
-    return {"ra": rb + float(values["r"]) * la, "lb": float(values["b"]) * la}
+    out: dict[str, Any] = {"ra": rb + float(values["r"]) * la, "lb": float(values["b"]) * la}
+    if "z_home" not in values:  # home in the middle of the complete prism (Clavel's limits)
+        g = SimpleNamespace(la=la, rb=rb, ra=out["ra"], lb=out["lb"])
+        kw = {k: float(values[k]) for k in ("gamma_max", "ab_min") if k in values}
+        f = clavel_closed_form(g, **kw)
+        out["z_home"] = f.zh - 0.5 * f.H
+    return out
 
 
 def _mel(values: Mapping[str, Any], defaults: Any) -> dict[str, Any]:
@@ -86,7 +96,8 @@ PARAMETRISATIONS: dict[str, Parametrisation] = {
         "clavel",
         ("r", "b"),
         _clavel,
-        "Delta by Clavel's normalised r = (ra - rb)/la and b = lb/la (la, rb fixed or default)",
+        "Delta by Clavel's normalised r = (ra - rb)/la and b = lb/la (la, rb fixed or default; "
+        "z_home, unless fixed, in the middle of Clavel's prism)",
     ),
     "mel": Parametrisation(
         "mel",

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.design.evaluate import Row, evaluate_designs, pack
-from pkdyn.design.executors import Executor, make_executor
+from pkdyn.design.executors import Executor, SerialExecutor, make_executor
 from pkdyn.design.optimize import nsga2_rows
 from pkdyn.design.result import StudyResult
 from pkdyn.design.study import Study
@@ -42,7 +42,7 @@ def _chunks(items: list[tuple[int, list[float]]], workers: int) -> list[list[Any
 
 def _evaluate(
     ex: Executor,
-    payload: bytes,
+    payload: Any,
     items: list[tuple[int, list[float]]],
     done: dict[int, Row],
     partial: PartialFile | None,
@@ -86,6 +86,7 @@ def run_study(
     resume: bool = True,
     progress: bool | None = None,
     executor: Executor | None = None,
+    scheduler_timeout: float = 10.0,
 ) -> StudyResult:
     """Evaluate every design of a study.
 
@@ -99,6 +100,7 @@ def run_study(
         resume: Skip the designs an earlier run of the same study at ``out`` finished.
         progress: Progress bar over designs (default: on a terminal).
         executor: An executor to use (overrides ``workers``, ``client``, ``scheduler``).
+        scheduler_timeout: How long to try to reach ``scheduler`` [s].
 
     Returns:
         The results.
@@ -111,12 +113,17 @@ def run_study(
     """
     t0 = time.perf_counter()
     variables = study.space.names
-    units = {m.name: m.unit for m in study.metric_list}
+    units = study.units
     empty = Table(variables, study.metric_names, units, [])
     header = empty.header()
     paths = output_paths(out) if out is not None else {}
     done: dict[int, Row] = {}
     partial = None
+    ex = (
+        executor
+        if executor is not None
+        else make_executor(workers, client, scheduler, scheduler_timeout)
+    )
     if paths:
         if not paths["csv"].parent.is_dir():
             raise StudyError(str(out), f"directory '{paths['csv'].parent}' does not exist")
@@ -126,8 +133,7 @@ def run_study(
             rows = complete if complete is not None else partial.load()
             done = {r.index: r for r in rows}
         partial.open(sorted(done.values(), key=lambda r: r.index))
-    ex = executor if executor is not None else make_executor(workers, client, scheduler)
-    payload = pack(study)
+    payload: Any = study if isinstance(ex, SerialExecutor) else pack(study)
     try:
         if study.sampler == "nsga2":
             stream = nsga2_rows(study, lambda items: _evaluate(ex, payload, items, done, partial))

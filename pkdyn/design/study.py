@@ -203,6 +203,30 @@ class Study:
         """Column names of the metrics."""
         return [m.name for m in self.metric_list]
 
+    @cached_property
+    def units(self) -> dict[str, str]:
+        """Unit of each metric; efforts and speeds resolved for the family's actuators.
+
+        ``N m or N`` becomes ``N m`` when every actuator of the family's default robot is
+        rotary (``N`` when every one is linear), and likewise for speeds.
+        """
+        units = {m.name: m.unit for m in self.metric_list}
+        if not any(" or " in u for u in units.values()):
+            return units
+        import pkdyn
+
+        try:
+            robot = pkdyn.load(self.family, geometry=False)
+        except Exception:  # the defaults do not build: keep the generic units
+            return units
+        kinds = {robot.model.joints[int(j)].shortname() for j in robot.actuated_joints}
+        rotary = all("Revolute" in k or k.startswith("JointModelR") for k in kinds)
+        linear = all("Prismatic" in k or k.startswith("JointModelP") for k in kinds)
+        pick = 0 if rotary else 1 if linear else None
+        if pick is None:
+            return units
+        return {k: u.split(" or ")[pick] if " or " in u else u for k, u in units.items()}
+
     @property
     def geometry(self) -> bool:
         """Whether designs are built with collision geometry."""
@@ -257,6 +281,9 @@ class Study:
     def from_dict(cls, data: Mapping[str, Any], source: str = "study") -> Study:
         """A study from its file form.
 
+        A ``results`` entry (the summary :func:`pkdyn.design.run_study` appends to the study
+        file it writes) is ignored.
+
         Raises:
             StudyError: Not a mapping, or unknown keys.
 
@@ -264,12 +291,13 @@ class Study:
         if not isinstance(data, Mapping):
             raise StudyError(source, "a study file is a mapping (family, ranges, metrics...)")
         known = set(cls.__dataclass_fields__)
+        data = {k: v for k, v in data.items() if k != "results"}  # a written study's summary
         bad = [k for k in data if k not in known]
         if bad:
             raise StudyError(source, f"unknown key '{bad[0]}' (use {', '.join(sorted(known))})")
         if "family" not in data or "ranges" not in data:
             raise StudyError(source, "a study needs 'family' and 'ranges'")
-        return cls(**dict(data))
+        return cls(**data)
 
     @classmethod
     def load(cls, path: str | Path) -> Study:

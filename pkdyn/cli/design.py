@@ -1,0 +1,255 @@
+"""``pkdyn design``: design studies from the command line (or from a YAML study file).
+
+Examples (one line each)::
+
+    pkdyn design delta --range la=0.15:0.35 lb=0.3:0.6 --fix z_home=-0.35
+      --require cylinder:D=0.4,H=0.1,z=-0.35 --trajectory adept --payload 1 --cycle-time 0.5
+      --constraint "inv_cond_min>=0.2" --minimize peak_effort --maximize inv_cond_min
+      --n 512 --out study.csv --plot pareto.png --urdf chosen.urdf
+    pkdyn design --study study.study.yaml --out again.csv      # the same study again
+    pkdyn design delta --clavel-chart --grid 5                  # Clavel's Tableau 21
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from pkdyn.cli._common import params
+from pkdyn.exceptions import InvalidInputError
+
+__all__ = ["register"]
+
+
+def _flat(items: list[list[str]] | None) -> list[str]:
+    return [x for group in items or [] for x in group]
+
+
+def _definition(args: argparse.Namespace) -> dict[str, Any]:
+    """Study keys given on the command line (those not given are left out)."""
+    from pkdyn.design.space import Range
+
+    d: dict[str, Any] = {}
+    if args.family:
+        d["family"] = args.family
+    if args.range:
+        d["ranges"] = {r.name: [r.low, r.high] for r in (Range.parse(t) for t in _flat(args.range))}
+    fixed = params(_flat(args.fix))
+    if fixed:
+        d["fixed"] = fixed
+    if args.metric:
+        d["metrics"] = _flat(args.metric)
+    if args.constraint:
+        d["constraints"] = _flat(args.constraint)
+    objectives = [f"min:{m}" for m in _flat(args.minimize)]
+    objectives += [f"max:{m}" for m in _flat(args.maximize)]
+    if objectives:
+        d["objectives"] = objectives
+    if args.require:
+        from pkdyn.design.requirement import Requirement
+
+        d["requirement"] = Requirement.parse(args.require, args.samples or 5).as_dict()
+    if args.trajectory:
+        d["trajectory"] = args.trajectory
+    opts = {
+        k: v
+        for k, v in (("cycle_time", args.cycle_time), ("depth", args.depth), ("dt", args.dt))
+        if v is not None
+    }
+    if opts:
+        d["trajectory_options"] = opts
+    if args.payload is not None:
+        d["payload"] = args.payload
+    if args.optimize:
+        d["sampler"] = args.optimize
+        if args.population is not None:
+            d["n"] = args.population
+        if args.generations is not None:
+            d["generations"] = args.generations
+    elif args.grid is not None:
+        d["sampler"], d["n"] = "grid", args.grid
+    elif args.n is not None or args.sampler:
+        d["sampler"] = args.sampler or "lhs"
+        if args.n is not None:
+            d["n"] = args.n
+    if args.seed is not None:
+        d["seed"] = args.seed
+    if args.parametrisation:
+        d["parametrisation"] = args.parametrisation
+    settings = {k: v for k, v in (("length", args.length),) if v is not None}
+    if settings:
+        d["settings"] = settings
+    return d
+
+
+def _study(args: argparse.Namespace) -> Any:
+    from pkdyn.design.study import Study
+
+    d = _definition(args)
+    if args.study:
+        base = Study.load(args.study).as_dict()
+        for key in ("ranges", "fixed", "trajectory_options", "settings"):
+            if key in d and key in base:
+                d[key] = {**base[key], **d[key]}
+        base.update(d)
+        return Study.from_dict(base, args.study)
+    if "family" not in d:
+        raise InvalidInputError("pkdyn design", "give a FAMILY (or --study FILE)")
+    if "ranges" not in d:
+        raise InvalidInputError("--range", "a study needs at least one --range NAME=LOW:HIGH")
+    if "metrics" not in d and "objectives" not in d and "constraints" not in d:
+        d["metrics"] = _default_metrics(d)
+    return Study.from_dict(d, "command line")
+
+
+def _default_metrics(d: dict[str, Any]) -> list[str]:
+    metrics = ["required"] if d.get("requirement") else []
+    metrics += ["sizing", "moving_mass"]
+    if d["family"] == "delta":
+        metrics.insert(0, "clavel")
+    return metrics
+
+
+def _clavel_chart(args: argparse.Namespace) -> None:
+    from pkdyn.design.clavel import clavel_chart_study, clavel_chart_text
+    from pkdyn.design.run import run_study
+    from pkdyn.design.space import Range
+
+    if args.family not in (None, "delta"):
+        raise InvalidInputError("--clavel-chart", "applies to the delta family")
+    spans = {"r": (0.4, 1.0), "b": (1.5, 3.0)}
+    for r in (Range.parse(t) for t in _flat(args.range)):
+        if r.name not in spans:
+            raise InvalidInputError("--range", f"the chart sweeps r and b, not '{r.name}'")
+        spans[r.name] = (r.low, r.high)
+    study = clavel_chart_study(
+        spans["r"], spans["b"], grid=args.grid or 4, **params(_flat(args.fix))
+    )
+    result = run_study(
+        study,
+        args.out,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        resume=not args.no_resume,
+        progress=None if not args.json else False,
+        scheduler_timeout=args.timeout,
+    )
+    if args.json:
+        print(
+            json.dumps({"rows": [_plain(result.table.record(i)) for i in range(len(result.table))]})
+        )
+    else:
+        print(clavel_chart_text(result))
+
+
+def _plain(rec: dict[str, Any]) -> dict[str, Any]:
+    import math
+
+    return {
+        k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in rec.items()
+    }
+
+
+def _cmd_design(args: argparse.Namespace) -> None:
+    if args.clavel_chart:
+        _clavel_chart(args)
+        return
+    from pkdyn.design.run import run_study
+
+    study = _study(args)
+    if args.save_study:
+        from pkdyn.files import atomic_write
+
+        with atomic_write(args.save_study) as fh:
+            fh.write(study.to_yaml())
+    result = run_study(
+        study,
+        args.out,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        resume=not args.no_resume,
+        progress=None if not args.json else False,
+        scheduler_timeout=args.timeout,
+    )
+    if args.plot:
+        from pkdyn.plotting.design import plot_pareto
+
+        plot_pareto(result, path=args.plot)
+    if args.urdf:
+        result.write_urdf(args.urdf)
+    if args.json:
+        print(json.dumps(result.as_json()))
+    else:
+        print(result.summary())
+
+
+def register(sub: Any) -> None:
+    """Add ``design`` to the ``pkdyn`` parser."""
+    sp = sub.add_parser(
+        "design",
+        help="design study: sweep or optimise a family's parameters (local processes or Dask)",
+        description="Design study over a family's parameters; see pkdyn.design.",
+    )
+    sp.add_argument("family", nargs="?", help="library family (any registered family)")
+    sp.add_argument("--study", metavar="FILE.yaml", help="study file (options given override it)")
+    sp.add_argument("--save-study", metavar="FILE.yaml", help="write the study file and run it")
+    sp.add_argument("--range", action="append", nargs="+", metavar="NAME=LOW:HIGH")
+    sp.add_argument(
+        "--fix",
+        "--param",
+        action="append",
+        nargs="+",
+        metavar="NAME=VALUE",
+        help="fixed builder parameter",
+    )
+    sp.add_argument(
+        "--parametrisation", help="clavel (r, b) or mel (scale factors), or module:attr"
+    )
+    sp.add_argument(
+        "--metric",
+        action="append",
+        nargs="+",
+        metavar="NAME",
+        help="metric or group (clavel, required, sizing, workspace, clavel_chart)",
+    )
+    sp.add_argument("--constraint", action="append", nargs="+", metavar="NAME>=VALUE")
+    sp.add_argument("--minimize", action="append", nargs="+", metavar="METRIC")
+    sp.add_argument("--maximize", action="append", nargs="+", metavar="METRIC")
+    sp.add_argument(
+        "--require",
+        metavar="KIND:K=V,...",
+        help="required workspace: cylinder:D=,H=,x=,y=,z= | box:dx=,dy=,dz=,... | "
+        "orientation:roll=,pitch=,yaw=,x=,y=,z=",
+    )
+    sp.add_argument("--samples", type=int, help="samples per axis of the required workspace")
+    sp.add_argument("--trajectory", choices=("adept", "sine", "p2p"), help="duty cycle")
+    sp.add_argument("--payload", type=float, help="payload on the duty cycle [kg]")
+    sp.add_argument("--cycle-time", type=float, help="duty cycle time [s]")
+    sp.add_argument("--depth", type=float, help="adept: pick line below home [m]")
+    sp.add_argument("--dt", type=float, help="duty cycle sample period [s]")
+    sp.add_argument("--length", type=float, help="characteristic length for 1/cond [m]")
+    how = sp.add_mutually_exclusive_group()
+    how.add_argument("--n", type=int, help="number of designs (lhs, sobol, random)")
+    how.add_argument("--grid", type=int, help="full grid, values per variable")
+    sp.add_argument("--sampler", choices=("lhs", "sobol", "random"))
+    sp.add_argument("--optimize", choices=("nsga2",), help="multi-objective optimisation")
+    sp.add_argument("--generations", type=int, help="nsga2 generations")
+    sp.add_argument("--population", type=int, help="nsga2 population")
+    sp.add_argument("--seed", type=int)
+    sp.add_argument("--workers", type=int, help="local worker processes (default: all cores)")
+    sp.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786")
+    sp.add_argument(
+        "--timeout", type=float, default=10.0, help="seconds to reach the scheduler (10)"
+    )
+    sp.add_argument("--out", metavar="FILE.csv", help="results table (.csv and .parquet)")
+    sp.add_argument("--no-resume", action="store_true", help="ignore earlier partial results")
+    sp.add_argument("--plot", metavar="FILE.png", help="Pareto front plot")
+    sp.add_argument("--urdf", metavar="FILE.urdf", help="URDF of the chosen design")
+    sp.add_argument(
+        "--clavel-chart",
+        action="store_true",
+        help="Clavel's Tableau 21: sweep r and b (--range r=.. b=.., --grid)",
+    )
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=_cmd_design)
