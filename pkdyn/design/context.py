@@ -197,7 +197,7 @@ class DesignContext:
 
     def _delta(self) -> Any:
         p = self.robot.params
-        if p is None or not all(hasattr(p, k) for k in ("ra", "rb", "la", "lb")):
+        if self.robot.family != "delta" or p is None:
             raise InvalidInputError(
                 "metric", f"Clavel's figures apply to the delta family, not {self.robot.name}"
             )

@@ -96,7 +96,7 @@ def duty_figures(
             warnings.simplefilter("ignore")
             traj = map_task_trajectory(robot, task)
             tau = size(robot, traj, payload=payload).efforts.tau
-        qd, method = traj.qa_d, "general"
+        qd, method = traj.qa_dot, "general"
     t = task.t
     return DutyFigures(
         actuators=robot.actuator_names,

@@ -34,7 +34,7 @@ from pkdyn.design.requirement import Requirement
 from pkdyn.exceptions import AssemblyError, PkdynError
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.robot import Robot
-from pkdyn.workspace.delta import DeltaEvaluator, is_delta
+from pkdyn.workspace.delta import DeltaEvaluator
 from pkdyn.workspace.legs import HexapodLegs
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, check_kinds
 from pkdyn.workspace.numeric import configuration_violation
@@ -259,12 +259,7 @@ def required_check(
     else:
         P = np.atleast_2d(np.asarray(requirement, dtype=float))
         R = np.broadcast_to(np.eye(3), (len(P), 3, 3)) if rotations is None else rotations
-    p = robot.params
-    if (
-        is_delta(robot)
-        and getattr(p, "parallelogram", "ball") == "ball"
-        and getattr(p, "arms", 3) == 3
-    ):
+    if DeltaEvaluator.accepts(robot):
         return _DeltaCheck(robot, P, R, kinds, length)
     if _leg_robot(robot):
         return _LegCheck(robot, P, R, kinds, length)

@@ -74,8 +74,7 @@ def has_delta_dynamics(robot: Robot) -> bool:
     """Whether :func:`delta_inverse_dynamics` applies: a library Delta, 3 arms, ball bars."""
     p = robot.params
     return (
-        p is not None
-        and all(hasattr(p, k) for k in ("ra", "rb", "la", "lb"))
+        robot.family == "delta"
         and getattr(p, "arms", 3) == 3
         and getattr(p, "parallelogram", "ball") == "ball"
         and getattr(p, "bar_joint", "spherical") == "spherical"
