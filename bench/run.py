@@ -3,9 +3,12 @@
 Runs every benchmark module of this directory that exists (each exposes ``rows()`` returning
 ``(benchmark, figure, target-or-comment)`` rows): ``geometry`` (closed forms, assembly / FK and
 IK against raw Pinocchio), ``dynamics`` (forward step and inverse dynamics against raw
-Pinocchio), ``vs_mujoco`` (forward step and inverse dynamics against MuJoCo, agreement) and
-``workspace`` (workspace throughput, when present). Figures are medians of repeated runs; ratios
-are medians of ratios measured on alternating batches, so that they hold under a varying load.
+Pinocchio), ``vs_mujoco`` (forward step and inverse dynamics against MuJoCo, agreement),
+``workspace`` (workspace throughput, when present), ``actuation_map`` (closed-loop legs, loading
+public models) and ``design`` (design-study throughput and a 10,000-design study: several
+minutes; ``PKDYN_BENCH_DESIGNS`` makes it smaller). Figures are
+medians of repeated runs; ratios are medians of ratios measured on alternating batches, so that
+they hold under a varying load.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ MODULES = (
     ("passive", "Passive elements: springs, dampers, friction in the dynamics"),
     ("workspace", "Workspace throughput"),
     ("actuation_map", "Closed-loop legs (actuation maps) and loading public models"),
+    ("design", "Design studies: designs/s on 1 and 2 workers, a 10,000-design Delta study"),
 )
 
 NOTES = """\

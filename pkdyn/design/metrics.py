@@ -34,6 +34,7 @@ Built-in metrics (:data:`METRICS`; groups of them: :data:`GROUPS`):
   m/s], ``peak_power`` [W] (largest over the actuators), ``effort_margin``, ``speed_margin``
   (smallest ``1 - peak / limit``), and per actuator ``peak_effort_<k>``, ``rms_effort_<k>``,
   ``peak_speed_<k>`` (``k`` = 1, 2, ... in actuator order);
+- ``base_radius`` [m]: largest distance of a base joint from the z axis (a footprint);
 - ``moving_mass`` [kg]: every body but the base.
 """
 
@@ -49,7 +50,7 @@ import numpy as np
 
 from pkdyn.design.context import DesignContext
 from pkdyn.exceptions import InvalidInputError
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import MODELLING_JOINTS, Robot
 
 __all__ = ["GROUPS", "METRICS", "Metric", "metric", "resolve_metrics"]
 
@@ -289,6 +290,16 @@ def _per_actuator(name: str) -> Metric | None:
         return float(values[k - 1])
 
     return Metric(name, unit, fn, f"{m.group(1).replace('_', ' ')} of actuator {k}")
+
+
+@metric("base_radius", "m", "largest distance from the z axis of a joint on the base")
+def _base_radius(robot: Robot, ctx: DesignContext) -> float:
+    model = robot.model
+    on_base = [j for j in range(1, model.njoints) if model.parents[j] == 0]
+    on_base = [j for j in on_base if model.joints[j].shortname() not in MODELLING_JOINTS]
+    if not on_base:
+        raise InvalidInputError("base_radius", f"{robot.name} has no joint on its base")
+    return float(max(np.hypot(*model.jointPlacements[j].translation[:2]) for j in on_base))
 
 
 @metric("moving_mass", "kg", "mass of every body but the base")

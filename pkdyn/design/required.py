@@ -28,8 +28,10 @@ import pinocchio as pin
 
 from pkdyn.analysis.collisions import CollisionChecker
 from pkdyn.analysis.dexterity import dexterity
-from pkdyn.analysis.maps import conditioning, delta_conditioning
-from pkdyn.analysis.screws import gough_stewart_AB
+from pkdyn.analysis.kinematics import COND_MAX
+from pkdyn.analysis.maps import conditioning
+from pkdyn.analysis.screws import delta_AB, gough_stewart_AB
+from pkdyn.closed_form import delta as delta_cf
 from pkdyn.design.requirement import Requirement
 from pkdyn.exceptions import AssemblyError, PkdynError
 from pkdyn.model.assembly import inverse_geometry
@@ -113,11 +115,18 @@ class _DeltaCheck(RequiredCheck):
 
     @cached_property
     def inv_cond(self) -> np.ndarray:
+        """``1 / cond(J)`` from Clavel's ``J^-1 = B^-1 A`` (rows ``d_i / B_ii``), one SVD."""
         ok = self.reached
         out = np.full(ok.size, np.nan)
         if ok.any():
             P = self.P[ok]
-            out[ok] = delta_conditioning(self.robot.params, P).lci
+            alpha, _ = delta_cf.inverse(self.robot.params, P)
+            A, B = delta_AB(self.robot.params, P, alpha)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                Jinv = A / np.einsum("nii->ni", B)[..., None]
+                s = np.linalg.svd(np.nan_to_num(Jinv, posinf=0.0, neginf=0.0), compute_uv=False)
+                lci = np.where(s[:, 0] > 0, s[:, -1] / s[:, 0], 0.0)
+            out[ok] = np.where(lci * COND_MAX > 1.0, lci, 0.0)
         return out
 
     @cached_property

@@ -156,19 +156,26 @@ class DeltaEvaluator(PoseEvaluator):
             raise PkdynError(
                 f"{self.robot.name}: interference needs collision geometry (geometry=True)"
             )
-        out = np.full(P.shape[0], np.inf)
         ends = [P + p_nac for _, _, p_nac, _ in self.bars]
         O = np.array([m.translation for m in self.M_arm])
+        p1, q1, p2, q2, radii = [], [], [], [], []
         for b1, (k1, _, _, _) in enumerate(self.bars):
             for b2 in range(b1 + 1, len(self.bars)):
-                if self.bars[b2][0] != k1:
-                    d, _, _ = segment_distance(E[b1], ends[b1], E[b2], ends[b2])
-                    out = np.minimum(out, d - 2 * self.bar_r)
+                if self.bars[b2][0] != k1:  # bars of different arms
+                    p1 += [E[b1]]
+                    q1 += [ends[b1]]
+                    p2 += [E[b2]]
+                    q2 += [ends[b2]]
+                    radii.append(2 * self.bar_r)
             for k in range(3):
-                if k != k1:
-                    d, _, _ = segment_distance(E[b1], ends[b1], O[k], tip[:, k])
-                    out = np.minimum(out, d - self.bar_r - self.arm_r[k])
-        return out
+                if k != k1:  # a bar and another arm
+                    p1 += [E[b1]]
+                    q1 += [ends[b1]]
+                    p2 += [np.broadcast_to(O[k], P.shape)]
+                    q2 += [tip[:, k]]
+                    radii.append(self.bar_r + self.arm_r[k])
+        d, _, _ = segment_distance(np.stack(p1), np.stack(q1), np.stack(p2), np.stack(q2))
+        return np.min(d - np.array(radii)[:, None], axis=0)
 
     def clearance(self, P: np.ndarray) -> np.ndarray:
         """Smallest distance between the cylinders checked for ``interference`` [m].
