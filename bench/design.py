@@ -85,8 +85,7 @@ def rows() -> list[Row]:
             f"{n}-design Delta study, 2 workers, wall time (target {TARGET_S / 60:.0f} min "
             "for 10,000)",
             f"{wall:.0f} s ({n / wall:.1f} designs/s)",
-            f"{c['feasible']} feasible, {c['constrained']} break a constraint, "
-            f"{c['failed']} fail",
+            f"{c['feasible']} feasible, {c['constrained']} break a constraint, {c['failed']} fail",
         )
     )
     return out
