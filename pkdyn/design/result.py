@@ -214,7 +214,7 @@ class StudyResult:
         front = self.pareto()
         if s.objective_list and len(front):
             lines.append(f"Pareto front: {len(front)} designs")
-        lines.append(f"check: {self.command('size' if s.trajectory else 'urdf', best)}")
+        lines.append(f"check: {self.command('size' if s.uses_duty else 'workspace', best)}")
         return "\n".join(lines)
 
 

@@ -13,6 +13,7 @@ import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -139,6 +140,11 @@ class DesignSpace:
     def _mapping(self) -> Parametrisation | None:
         return None if self.parametrisation is None else parametrisation(self.parametrisation)
 
+    @cached_property
+    def _defaults(self) -> Any:
+        """The family's default parameters (built once)."""
+        return self.family_obj.params()
+
     @property
     def names(self) -> list[str]:
         """Design variable names, in range order."""
@@ -155,7 +161,7 @@ class DesignSpace:
         if u.shape[1] != self.dimension:
             raise InvalidInputError("samples", f"expected {self.dimension} columns, got {u.shape}")
         x = np.column_stack([r.at(u[:, k]) for k, r in enumerate(self.ranges)])
-        default = self.family_obj.params()
+        default = self._defaults
         for k, r in enumerate(self.ranges):
             if isinstance(getattr(default, r.name, 0.0), int):
                 x[:, k] = np.round(x[:, k])
@@ -178,7 +184,7 @@ class DesignSpace:
             return vals
         fields = {f.name for f in dataclasses.fields(self.family_obj.params)}
         out = {k: v for k, v in vals.items() if k in fields and k not in mapping.names}
-        out.update(mapping(vals, self.family_obj.params()))
+        out.update(mapping(vals, self._defaults))
         return out
 
     def params(self, x: Sequence[float] | np.ndarray) -> Any:

@@ -228,6 +228,13 @@ class Study:
         return {k: u.split(" or ")[pick] if " or " in u else u for k, u in units.items()}
 
     @property
+    def uses_duty(self) -> bool:
+        """Whether a metric runs the duty cycle (the sizing metrics)."""
+        duty = {"peak_effort", "rms_effort", "peak_speed", "peak_power"}
+        duty |= {"effort_margin", "speed_margin"}
+        return any(m.name in duty or m.name.rsplit("_", 1)[0] in duty for m in self.metric_list)
+
+    @property
     def geometry(self) -> bool:
         """Whether designs are built with collision geometry."""
         return any(m.geometry for m in self.metric_list) or any(

@@ -70,13 +70,14 @@ class Family:
 
         """
         fields = {f.name: f for f in dataclasses.fields(self.params)}
+        defaults = self.params()  # once: a family's defaults may be costly to validate
         kwargs: dict[str, Any] = {}
         for key, value in overrides.items():
             if key not in fields:
                 raise ParameterError(
                     self.name, key, f"unknown; valid parameters: {', '.join(sorted(fields))}"
                 )
-            default = getattr(self.params(), key)
+            default = getattr(defaults, key)
             try:
                 if isinstance(default, bool):
                     kwargs[key] = (
