@@ -13,12 +13,17 @@ clearances, on 425 poses) and the 0.5 s Adept cycle with 1 kg (arm torques, spee
   start-up, streaming to the partial file, CSV and Parquet at the end). Set
   ``PKDYN_BENCH_DESIGNS`` to run a smaller one.
 
+The machine is shared: besides wall times, the CPU time of this process and of its worker
+processes is reported (``resource.getrusage``), with the load average, so that a run on a busy
+machine still tells what an idle one would do (CPU seconds per design, over 2 cores).
+
 Run ``python bench/design.py``; prints the rows as a markdown table.
 """
 
 from __future__ import annotations
 
 import os
+import resource
 import tempfile
 import time
 from pathlib import Path

@@ -59,6 +59,7 @@ class Conditions:
     ab_min: float = AB_MIN
     workspace_samples: int = 21
     clavel_rays: int = 24
+    _tasks: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "limits", tuple(self.limits))
@@ -90,7 +91,7 @@ class Conditions:
         """From the study-file form (see :meth:`as_dict`)."""
         d = dict(data)
         req = d.pop("requirement", None)
-        known = set(cls.__dataclass_fields__)
+        known = {k for k in cls.__dataclass_fields__ if not k.startswith("_")}
         bad = [k for k in d if k not in known]
         if bad:
             raise InvalidInputError(
@@ -145,7 +146,9 @@ class DesignContext:
         c = self.conditions
         return self.cached(
             "duty",
-            lambda: duty_figures(self.robot, c.trajectory, c.trajectory_options, c.payload),
+            lambda: duty_figures(
+                self.robot, c.trajectory, c.trajectory_options, c.payload, c._tasks
+            ),
         )
 
     def translation(self) -> TranslationWorkspace:

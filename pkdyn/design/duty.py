@@ -19,9 +19,8 @@ from typing import Any
 import numpy as np
 
 from pkdyn.dynamics.delta import delta_inverse_dynamics, has_delta_dynamics
-from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.sizing import size
-from pkdyn.dynamics.trajectory import map_task_trajectory, named_task
+from pkdyn.dynamics.trajectory import TaskTrajectory, map_task_trajectory, named_task
 from pkdyn.model.robot import Robot
 
 __all__ = ["DutyFigures", "duty_figures"]
@@ -66,6 +65,7 @@ def duty_figures(
     trajectory: str = "adept",
     options: Mapping[str, Any] | None = None,
     payload: float = 0.0,
+    tasks: dict[Any, TaskTrajectory] | None = None,
 ) -> DutyFigures:
     """Actuator figures of ``robot`` on a named trajectory with a payload.
 
@@ -74,6 +74,9 @@ def duty_figures(
         trajectory: ``adept``, ``sine`` or ``p2p`` (:func:`pkdyn.dynamics.trajectory.named_task`).
         options: Options of the trajectory (``cycle_time`` [s], ``depth`` [m], ``dt`` [s]...).
         payload: Point-mass payload at the platform frame [kg].
+        tasks: A cache of platform trajectories shared between designs: the trajectory only
+            depends on the home pose and the controlled components (a study's designs often
+            share them).
 
     Returns:
         The figures.
@@ -84,12 +87,26 @@ def duty_figures(
         InfeasibleEffortError: The motion is not dynamically consistent.
 
     """
-    task = named_task(robot, trajectory, **dict(options or {}))
+    opts = dict(options or {})
+    home = robot.platform_placement(robot.q_home)
+    key = (
+        trajectory,
+        repr(sorted(opts.items())),
+        home.translation.tobytes(),
+        home.rotation.tobytes(),
+        robot.task_rows.tobytes(),
+    )
+    task = None if tasks is None else tasks.get(key)
+    if task is None:
+        task = named_task(robot, trajectory, **opts)
+        if tasks is not None:
+            if len(tasks) > 64:
+                tasks.clear()
+            tasks[key] = task
     effort = np.array([a.effort for a in robot.actuators], dtype=float)
     speed = np.array([a.velocity for a in robot.actuators], dtype=float)
     if has_delta_dynamics(robot):
-        loaded = with_payload(robot, payload) if payload else robot
-        at = delta_inverse_dynamics(loaded, task)
+        at = delta_inverse_dynamics(robot, task, payload=payload)
         tau, qd, method = at.tau, at.qa_dot, "closed form"
     else:
         with warnings.catch_warnings():

@@ -10,18 +10,23 @@ as a cloudpickle payload (user metrics may be lambdas) and is unpickled once per
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from pkdyn.design.context import DesignContext
 from pkdyn.design.study import Study
 from pkdyn.exceptions import PkdynError
+from pkdyn.model.build import build_geometry
+from pkdyn.model.loader import load_string
+from pkdyn.model.robot import Robot
 
-__all__ = ["Row", "evaluate_design", "evaluate_designs", "pack"]
+__all__ = ["Row", "build", "evaluate_design", "evaluate_designs", "pack"]
 
 _REASON_LENGTH = 300
 """Longest reason kept in the table [characters]."""
@@ -52,6 +57,22 @@ def _reason(err: BaseException, where: str = "") -> str:
     return text if len(text) <= _REASON_LENGTH else text[: _REASON_LENGTH - 3] + "..."
 
 
+def build(study: Study, x: Any) -> Robot:
+    """The robot of design ``x``, as ``pkdyn.load(family, **overrides)`` builds it.
+
+    With collision geometry when a metric needs it, without the visual geometry (no metric
+    looks at it).
+    """
+    fam = study.space.family_obj
+    params = fam.make_params(study.space.overrides(x))
+    xml = fam.build_urdf(params)
+    robot = load_string(xml, fam.name, geometry=False, params=params, home=fam.home(params))
+    if study.geometry:
+        collision = build_geometry(robot.model, xml, pin.GeometryType.COLLISION, [], fam.name)
+        robot = dataclasses.replace(robot, collision_model=collision)
+    return robot
+
+
 def evaluate_design(study: Study, index: int, x: Any) -> Row:
     """Build and evaluate one design.
 
@@ -64,8 +85,6 @@ def evaluate_design(study: Study, index: int, x: Any) -> Row:
         The row (infeasible with a reason when the design fails or breaks a constraint).
 
     """
-    import pkdyn
-
     xs = tuple(float(v) for v in x)
     metrics = study.metric_list
     values = [float("nan")] * len(metrics)
@@ -73,8 +92,7 @@ def evaluate_design(study: Study, index: int, x: Any) -> Row:
         warnings.simplefilter("ignore")
         where = "build: "
         try:
-            overrides = study.space.overrides(xs)
-            robot = pkdyn.load(study.family, geometry=study.geometry, **overrides)
+            robot = build(study, xs)
             ctx = DesignContext(robot, study.conditions)
             for k, m in enumerate(metrics):
                 where = f"{m.name}: "

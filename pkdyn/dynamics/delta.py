@@ -29,6 +29,7 @@ and edited masses count); the tests check the efforts against the general path t
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -116,13 +117,15 @@ class DeltaDynamics:
     Args:
         robot: A library Delta with three arms and ball-jointed bars (:func:`has_delta_dynamics`),
             possibly with a payload (:func:`pkdyn.dynamics.with_payload`).
+        payload: A point mass added to the nacelle [kg] (the nacelle only translates: where it
+            sits does not matter; the same as ``with_payload(robot, payload)``).
 
     Raises:
         PkdynError: Not such a Delta, or a bar that is not a solid of revolution about its axis.
 
     """
 
-    def __init__(self, robot: Robot) -> None:
+    def __init__(self, robot: Robot, payload: float = 0.0) -> None:
         if not has_delta_dynamics(robot):
             raise PkdynError(
                 f"{robot.name}: the closed-form Delta dynamics needs a library Delta with three "
@@ -158,7 +161,9 @@ class DeltaDynamics:
         self.R_nacelle = np.array(robot.data.oMi[nac].rotation)
         f_off = self.R_nacelle @ np.array(frame.placement.translation)
         self.f_off = f_off  # platform frame origin minus nacelle centre, world axes [m]
-        self.nacelle_mass = float(model.inertias[nac].mass)
+        if not (np.isfinite(payload) and payload >= 0.0):
+            raise PkdynError(f"payload must be >= 0 kg, got {payload}")
+        self.nacelle_mass = float(model.inertias[nac].mass) + float(payload)
         bars = []
         for cm in robot.constraint_models:
             j1, j2 = int(cm.joint1_id), int(cm.joint2_id)
@@ -192,19 +197,40 @@ class DeltaDynamics:
                 )
             )
         self.bars = bars
-        self.nacelle_lever = self.R_nacelle @ np.array(model.inertias[nac].lever) - f_off
+        # per arm: elbow and nacelle points of its first bar (the bars of an arm share d, E',
+        # E'', u and their length), and the sums over its bars of the mass moments that the
+        # bars' generalized forces need (see solve)
+        first = [next(b for b in bars if b.arm == k) for k in range(3)]
+        for b in bars:
+            if abs(b.length - first[b.arm].length) > 1e-12:
+                raise PkdynError(f"{robot.name}: the bars of arm {b.arm + 1} differ in length")
+        self.elbow = np.array([b.elbow for b in first])
+        self.attach = np.array([b.nacelle for b in first])
+        self.length = np.array([b.length for b in first])
+
+        def per_arm(fn: Callable[[_Bar], float]) -> np.ndarray:
+            return np.array([sum(fn(b) for b in bars if b.arm == k) for k in range(3)])
+
+        self.m_ee = per_arm(lambda b: b.mass * (1.0 - b.fraction) ** 2)
+        self.m_ep = per_arm(lambda b: b.mass * b.fraction * (1.0 - b.fraction))
+        self.m_pp = per_arm(lambda b: b.mass * b.fraction**2)
+        self.m_e = per_arm(lambda b: b.mass * (1.0 - b.fraction))
+        self.m_p = per_arm(lambda b: b.mass * b.fraction)
+        self.inertia_t = per_arm(lambda b: b.inertia_t)
         self.lo = np.array(model.lowerPositionLimit[robot.actuated_q])
         self.hi = np.array(model.upperPositionLimit[robot.actuated_q])
         self.vmax = np.array([a.velocity for a in robot.actuators])
         self.names = robot.actuator_names
 
-    def _arm_rotations(self, alpha: np.ndarray) -> np.ndarray:
-        """World rotations of the arms (N, 3, 3, 3) for angles (N, 3)."""
-        c, s = np.cos(alpha), np.sin(alpha)
-        Ry = np.zeros(alpha.shape + (3, 3))
-        Ry[..., 0, 0], Ry[..., 0, 2], Ry[..., 1, 1] = c, s, 1.0
-        Ry[..., 2, 0], Ry[..., 2, 2] = -s, c
-        return np.einsum("kij,nkjl->nkil", self.R0, Ry)
+    def _in_world(self, c: np.ndarray, s: np.ndarray, e: np.ndarray) -> np.ndarray:
+        """Arm-frame vectors ``e`` (3 arms, 3) in world axes (N, 3, 3), elementwise.
+
+        ``R0_k Ry(alpha_k) e_k`` for arm angles of cosines ``c`` and sines ``s`` (N, 3).
+        """
+        x = c * e[:, 0] + s * e[:, 2]
+        z = c * e[:, 2] - s * e[:, 0]
+        R0 = self.R0
+        return x[..., None] * R0[:, :, 0] + e[:, 1, None] * R0[:, :, 1] + z[..., None] * R0[:, :, 2]
 
     def solve(self, task: TaskTrajectory, check_limits: bool = True) -> ActuatorTrajectory:
         """Actuator motion and efforts along a platform trajectory (see the module docstring).
@@ -231,14 +257,12 @@ class DeltaDynamics:
             raise TrajectoryError("pose out of reach of the arms", sample=k, time=float(t[k]))
         if check_limits:
             self._check_angles(t, alpha)
-        R = self._arm_rotations(alpha)  # (N, 3, 3, 3)
-        a = self.axis[None]  # (1, 3, 3)
-        # arm k's first bar gives d_k, E_k and its derivatives (both bars share them)
-        first = [next(b for b in self.bars if b.arm == k) for k in range(3)]
-        E = np.stack([self.O[k] + R[:, k] @ first[k].elbow for k in range(3)], axis=1)  # (N, 3, 3)
-        d = P[:, None, :] + np.stack([b.nacelle for b in first])[None] - E
+        c, s = np.cos(alpha), np.sin(alpha)
+        a = self.axis[None]  # (1, 3 arms, 3): arm axes
+        E = self.O[None] + self._in_world(c, s, self.elbow)  # elbow ball centres (N, 3, 3)
+        d = P[:, None, :] + self.attach[None] - E  # bar vectors, |d| = length
         E1 = _cross(a, E - self.O[None])  # dE/d alpha
-        E2 = _cross(a, E1)
+        E2 = _cross(a, E1)  # d2E/d alpha2
         g = _dot(d, E1)  # (N, 3)
         self._check_singular(t, d, E1, g)
         alpha_d = _dot(d, Pd[:, None, :]) / g
@@ -246,28 +270,28 @@ class DeltaDynamics:
         alpha_dd = (_dot(d, Pdd[:, None, :]) - alpha_d**2 * _dot(d, E2) + _dot(dd, dd)) / g
         if check_limits:
             self._check_speeds(t, alpha_d)
-        d2 = Pdd[:, None, :] - E1 * alpha_dd[..., None] - E2 * (alpha_d**2)[..., None]
+        Edd = E1 * alpha_dd[..., None] + E2 * (alpha_d**2)[..., None]  # elbow accelerations
         Jinv = d / g[..., None]  # (N, 3 arms, 3)
         grav = self.gravity
         # arms: Q_k = I_axis alpha_dd - m g . (a x r)
-        r_arm = np.einsum("nkij,kj->nki", R, self.arm_lever)
+        r_arm = self._in_world(c, s, self.arm_lever)
         Q = self.arm_axial * alpha_dd - self.arm_mass * _dot(_cross(a, r_arm), grav[None, None])
-        # nacelle (translating): w = m (c_ddot - g)
+        # nacelle (translating): w = m (P_ddot - g)
         w = self.nacelle_mass * (Pdd - grav)
-        for b in self.bars:
-            k, f, L = b.arm, b.fraction, b.length
-            c_dd = (1.0 - f) * (
-                E1[:, k] * alpha_dd[:, k, None] + E2[:, k] * alpha_d[:, k, None] ** 2
-            )
-            c_dd += f * Pdd
-            F = b.mass * (c_dd - grav)  # (N, 3)
-            u = d[:, k] / L
-            M = b.inertia_t * _cross(u, d2[:, k] / L)  # moment about the centre of mass
-            # velocities as linear maps of P_dot: V = (1-f) E1 (x) Jinv_k + f I, and
-            # Omega = [u]x (I - E1 (x) Jinv_k) / L; w += V^T F + Omega^T M
-            w += (1.0 - f) * Jinv[:, k] * _dot(E1[:, k], F)[:, None] + f * F
-            uxM = _cross(M, u)  # [u]x^T M = M x u
-            w += (uxM - Jinv[:, k] * _dot(E1[:, k], uxM)[:, None]) / L
+        # bars, summed per arm: centre c = E + f d; F = m (c_ddot - g) with
+        # c_ddot = (1 - f) E_ddot + f P_ddot; V = (1 - f) E' (x) Jinv_k + f I, so that
+        # sum V^T F = Jinv_k (E' . sum (1 - f) F) + sum f F; M = I_t u x u_ddot about c and
+        # Omega = [u]x (I - E' (x) Jinv_k) / L
+        Pdd3, g3 = Pdd[:, None, :], grav[None, None, :]
+        F_e = self.m_ee[:, None] * Edd + self.m_ep[:, None] * Pdd3 - self.m_e[:, None] * g3
+        F_p = self.m_ep[:, None] * Edd + self.m_pp[:, None] * Pdd3 - self.m_p[:, None] * g3
+        w += np.sum(Jinv * _dot(E1, F_e)[..., None] + F_p, axis=1)
+        L = self.length[None, :, None]
+        u = d / L
+        d2 = Pdd3 - Edd
+        M = self.inertia_t[None, :, None] * _cross(u, d2 / L)
+        uxM = _cross(M, u) / L  # [u]x^T M / L
+        w += np.sum(uxM - Jinv * _dot(E1, uxM)[..., None], axis=1)
         tau = Q + np.linalg.solve(np.swapaxes(Jinv, 1, 2), w[..., None])[..., 0]
         return ActuatorTrajectory(t.copy(), list(self.names), alpha, alpha_d, alpha_dd, tau)
 
@@ -298,9 +322,11 @@ class DeltaDynamics:
         scale = np.linalg.norm(d, axis=-1) * np.linalg.norm(E1, axis=-1)
         serial = np.abs(g) <= SINGULAR_TOL * scale
         U = d / np.linalg.norm(d, axis=-1, keepdims=True)
-        s = np.linalg.svd(U, compute_uv=False)
-        parallel = s[:, -1] <= SINGULAR_TOL * s[:, 0]
-        det = np.linalg.det(U) * np.prod(np.sign(g), axis=1)
+        # unit rows: det(U) = s1 s2 s3 with s1 in [1, sqrt 3]; a vanishing det is a vanishing
+        # smallest singular value (parallel singularity: the bars cannot hold the nacelle)
+        detU = np.linalg.det(U)
+        parallel = np.abs(detU) <= SINGULAR_TOL
+        det = detU * np.prod(np.sign(g), axis=1)
         crossed = np.zeros(t.size, dtype=bool)
         crossed[1:] = det[1:] * det[:-1] < 0.0
         for what, mask in (("serial", serial), ("parallel", parallel), ("crossed", crossed)):
@@ -316,7 +342,7 @@ class DeltaDynamics:
 
 
 def delta_inverse_dynamics(
-    robot: Robot, task: TaskTrajectory, check_limits: bool = True
+    robot: Robot, task: TaskTrajectory, check_limits: bool = True, payload: float = 0.0
 ) -> ActuatorTrajectory:
     """Arm angles, rates, accelerations and torques of a library Delta along a platform path.
 
@@ -327,6 +353,8 @@ def delta_inverse_dynamics(
         robot: A library Delta, three arms, ball-jointed bars (payload included if any).
         task: Platform trajectory (positions [m] and their derivatives).
         check_limits: Raise if an arm leaves its angle or speed limits.
+        payload: Point mass carried by the nacelle [kg] (as :func:`with_payload`, without the
+            copy of the model).
 
     Returns:
         The actuator trajectory with joint-side torques [N m].
@@ -336,4 +364,4 @@ def delta_inverse_dynamics(
         TrajectoryError: Out of reach, singular, or outside the arm limits.
 
     """
-    return DeltaDynamics(robot).solve(task, check_limits)
+    return DeltaDynamics(robot, payload).solve(task, check_limits)
