@@ -77,3 +77,13 @@ def test_limits_and_refusals():
     assert not has_delta_dynamics(pkdyn.load("delta", geometry=False, bar_joint="universal"))
     with pytest.raises(PkdynError, match="inverse_dynamics"):
         DeltaDynamics(pkdyn.load("gough_stewart", geometry=False))
+
+
+def test_payload_argument_equals_with_payload():
+    robot = pkdyn.load("delta", geometry=False)
+    task = named_task(robot, "adept", dt=1e-2)
+    a = delta_inverse_dynamics(with_payload(robot, 1.5, (0.02, 0.0, -0.01)), task)
+    b = delta_inverse_dynamics(robot, task, payload=1.5)
+    assert np.max(np.abs(a.tau - b.tau)) < 1e-12 * np.max(np.abs(a.tau))
+    with pytest.raises(PkdynError, match="payload"):
+        delta_inverse_dynamics(robot, task, payload=-1.0)
