@@ -423,3 +423,14 @@ def test_cli_study_with_plot_and_urdf(tmp_path, capsys):
     assert code == 0 and "chosen" in out and "pkdyn size delta" in out
     assert (tmp_path / "p.png").stat().st_size > 1000
     assert "<robot" in (tmp_path / "c.urdf").read_text()
+
+
+def test_committed_study_files_load():
+    from pathlib import Path
+
+    files = sorted((Path(__file__).resolve().parents[1] / "studies").glob("*.yaml"))
+    assert len(files) >= 2
+    for f in files:
+        s = Study.load(f)
+        assert s.total > 0 and s.metric_list
+        assert Study.from_dict(s.as_dict()).digest() == s.digest()

@@ -9,6 +9,7 @@ it derives from variables that are not builder parameters themselves (Clavel's n
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import math
 from collections.abc import Mapping, Sequence
@@ -125,6 +126,11 @@ class DesignSpace:
         if dup:
             raise ParameterError(fam.name, dup[0], "given twice (ranged and/or fixed)")
         default = fam.params()
+        object.__setattr__(
+            self,
+            "fixed",
+            {k: _coerce(fam.name, k, v, getattr(default, k, 0.0)) for k, v in self.fixed.items()},
+        )
         for name in names:
             if name in fields and not isinstance(getattr(default, name), int | float):
                 raise ParameterError(fam.name, name, "not a number: it cannot take a range")
@@ -206,6 +212,24 @@ class DesignSpace:
         if self.parametrisation is not None:
             out["parametrisation"] = self.parametrisation
         return out
+
+
+def _coerce(family: str, name: str, value: Any, default: Any) -> Any:
+    """A fixed value given as text (command line) in the type of the parameter's default."""
+    if not isinstance(value, str) or isinstance(default, str):
+        return value
+    try:
+        if isinstance(default, bool):
+            return value.strip().lower() in ("1", "true", "yes")
+        if isinstance(default, tuple):
+            return ast.literal_eval(value)
+        if isinstance(default, int):
+            return int(float(value))
+        return float(value)
+    except (ValueError, SyntaxError):
+        raise ParameterError(
+            family, name, f"cannot use {value!r} (expected {type(default).__name__})"
+        ) from None
 
 
 def _plain(v: Any) -> Any:

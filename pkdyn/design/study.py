@@ -144,6 +144,7 @@ class Study:
             raise InvalidInputError("payload", f"must be >= 0 kg, got {self.payload}")
         # validate now: bad input fails before any design is evaluated
         _ = self.space, self.conditions, self.metric_list
+        set_(self, "fixed", dict(self.space.fixed))  # text values converted by the space
         _ = self.total
         if self.sampler == "nsga2" and not self.objectives:
             raise InvalidInputError("objectives", "nsga2 needs at least one objective")
