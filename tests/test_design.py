@@ -434,3 +434,20 @@ def test_committed_study_files_load():
         s = Study.load(f)
         assert s.total > 0 and s.metric_list
         assert Study.from_dict(s.as_dict()).digest() == s.digest()
+
+
+def test_any_registered_family():
+    """A study runs on every registered family (here: a mass swept, moving mass measured)."""
+    import dataclasses
+
+    from pkdyn.model.families import FAMILIES
+
+    for name, fam in FAMILIES.items():
+        default = fam.params()
+        field = next(f.name for f in dataclasses.fields(default) if "mass" in f.name)
+        m0 = getattr(default, field)
+        s = Study(name, {field: (m0, 2 * m0)}, metrics=["moving_mass"], sampler="grid", n=2)
+        t = run_study(s, workers=1).table
+        assert t.feasible.all(), (name, [r.reason for r in t.rows])
+        mass = t.column("moving_mass")
+        assert mass[1] - mass[0] >= m0 - 1e-12, name  # at least one body carries it
