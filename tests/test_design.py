@@ -451,3 +451,18 @@ def test_any_registered_family():
         assert t.feasible.all(), (name, [r.reason for r in t.rows])
         mass = t.column("moving_mass")
         assert mass[1] - mass[0] >= m0 - 1e-12, name  # at least one body carries it
+
+
+def test_verify_picks_a_design_that_passes_a_denser_requirement():
+    """A minimum sits at the edge: the denser check may reject it, never a passing design."""
+    s = _delta_study(n=16, requirement="cylinder:D=0.36,H=0.1,z=-0.35", constraints=[])
+    res = run_study(s, workers=1)
+    first = res.best()
+    chosen = res.verify(samples=9)
+    assert chosen is not None and res.best() == chosen
+    dense = Requirement.parse("cylinder:D=0.36,H=0.1,z=-0.35", samples=9)
+    robot = res.robot()
+    assert required_check(robot, dense).fraction == 1.0
+    if chosen != first:  # the sweep's best misses a sliver of the cylinder
+        assert required_check(res.robot(first), dense).fraction < 1.0
+    assert "9 samples per axis" in res.summary()

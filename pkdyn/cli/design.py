@@ -172,6 +172,8 @@ def _cmd_design(args: argparse.Namespace) -> None:
         progress=None if not args.json else False,
         scheduler_timeout=args.timeout,
     )
+    if args.verify:
+        result.verify(args.verify)
     if args.plot:
         from pkdyn.plotting.design import plot_pareto
 
@@ -246,6 +248,12 @@ def register(sub: Any) -> None:
     sp.add_argument("--no-resume", action="store_true", help="ignore earlier partial results")
     sp.add_argument("--plot", metavar="FILE.png", help="Pareto front plot")
     sp.add_argument("--urdf", metavar="FILE.urdf", help="URDF of the chosen design")
+    sp.add_argument(
+        "--verify",
+        type=int,
+        metavar="SAMPLES",
+        help="choose the best design that passes the required workspace at SAMPLES per axis",
+    )
     sp.add_argument(
         "--clavel-chart",
         action="store_true",

@@ -69,7 +69,7 @@ class Requirement:
     size: dict[str, float]
     center: tuple[float, float, float] = (0.0, 0.0, 0.0)
     samples: int = 5
-    _cache: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+    _cache: dict[str, Any] = field(default_factory=dict, repr=False, compare=False, init=False)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:

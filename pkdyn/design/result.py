@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,6 +35,8 @@ class StudyResult:
         seconds: Wall time of the run [s].
         executor: Where the designs were evaluated.
         paths: Files written (``csv``, ``parquet``, ``study``), empty when none.
+        verified: Samples per axis of the denser check the chosen design passed (0: none,
+            see :meth:`verify`).
 
     """
 
@@ -42,6 +45,8 @@ class StudyResult:
     seconds: float
     executor: str
     paths: dict[str, Path] = field(default_factory=dict)
+    verified: int = 0
+    _chosen: int | None = field(default=None, repr=False)
 
     # ------------------------------------------------------------------ selections
 
@@ -68,6 +73,8 @@ class StudyResult:
         The feasible design best on the first objective (the next objectives break ties); the
         first feasible design when there is no objective; ``None`` when none is feasible.
         """
+        if self.verified:
+            return self._chosen
         feas = np.flatnonzero(self.table.feasible)
         if feas.size == 0:
             return None
@@ -75,6 +82,52 @@ class StudyResult:
             return int(feas[0])
         F = self.objective_matrix()[feas]
         return int(feas[np.lexsort(F.T[::-1])[0]])
+
+    def verified_best(self, samples: int = 15, candidates: int = 50) -> int | None:
+        """Position of the best feasible design that also passes a denser required workspace.
+
+        A required workspace is checked on samples (:mod:`pkdyn.design.requirement`); a design
+        at the edge of the feasible set (a minimum usually is) can lose a sliver between them.
+        The feasible designs are re-evaluated in the order of :meth:`best`, with the
+        requirement sampled ``samples`` per axis, until one passes every constraint.
+
+        Args:
+            samples: Samples per axis of the denser check.
+            candidates: How many designs to try at most.
+
+        Returns:
+            The position, or ``None`` if none of the candidates passes.
+
+        """
+        from pkdyn.design.evaluate import evaluate_design
+
+        req = self.study.requirement
+        if req is None:
+            return self.best()
+        dense = dataclasses.replace(
+            self.study, requirement=dataclasses.replace(req, samples=samples)
+        )
+        feas = np.flatnonzero(self.table.feasible)
+        if self.study.objective_list:
+            feas = feas[np.lexsort(self.objective_matrix()[feas].T[::-1])]
+        for i in feas[:candidates]:
+            r = self.table.rows[int(i)]
+            if evaluate_design(dense, r.index, r.x).feasible:
+                return int(i)
+        return None
+
+    def verify(self, samples: int = 15, candidates: int = 50) -> int | None:
+        """Choose the best design that passes a denser required workspace.
+
+        See :meth:`verified_best`; :meth:`best`, the URDF and the reports then use it.
+
+        Returns:
+            Its position, or ``None`` if no candidate passes.
+
+        """
+        chosen = self.verified_best(samples, candidates)
+        self._chosen, self.verified = chosen, int(samples)
+        return chosen
 
     def _row(self, i: int | None) -> int:
         i = self.best() if i is None else i
@@ -201,10 +254,15 @@ class StudyResult:
             lines.append(f"  {n:6d}  {k}")
         best = self.best()
         if best is None:
-            lines.append("no feasible design")
+            lines.append(
+                "no feasible design"
+                + (f" passes {self.verified} samples per axis" if self.verified else "")
+            )
             return "\n".join(lines)
         rec = self.table.record(best)
         obj = ", ".join(str(o) for o in s.objective_list) or "first feasible"
+        if self.verified:
+            obj += f"; passes the required workspace at {self.verified} samples per axis"
         lines.append(f"chosen ({obj}): design {rec['index']}")
         for name in s.space.names:
             lines.append(f"  {name:>22s} = {rec[name]:.6g}")
