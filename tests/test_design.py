@@ -246,8 +246,10 @@ def test_dask_local_cluster_gives_the_serial_table(tmp_path):
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                       dashboard_address=None) as cluster, Client(cluster) as client:  # fmt: skip
         res = run_study(s, tmp_path / "dask.csv", client=client)
-    assert "Dask" in res.executor
+        by_address = run_study(s, scheduler=cluster.scheduler_address)
+    assert "Dask" in res.executor and "Dask" in by_address.executor
     assert (tmp_path / "dask.csv").read_text() == serial
+    assert by_address.table.to_csv() == serial
 
 
 def test_files_study_file_and_rerun(tmp_path, capsys):

@@ -119,22 +119,22 @@ def run_study(
     paths = output_paths(out) if out is not None else {}
     done: dict[int, Row] = {}
     partial = None
+    if paths and not paths["csv"].parent.is_dir():
+        raise StudyError(str(out), f"directory '{paths['csv'].parent}' does not exist")
     ex = (
         executor
         if executor is not None
         else make_executor(workers, client, scheduler, scheduler_timeout)
     )
-    if paths:
-        if not paths["csv"].parent.is_dir():
-            raise StudyError(str(out), f"directory '{paths['csv'].parent}' does not exist")
-        partial = PartialFile(paths["partial"], study.digest(), header)
-        if resume:
-            complete = _complete(paths, study, header)
-            rows = complete if complete is not None else partial.load()
-            done = {r.index: r for r in rows}
-        partial.open(sorted(done.values(), key=lambda r: r.index))
-    payload: Any = study if isinstance(ex, SerialExecutor) else pack(study)
     try:
+        if paths:
+            partial = PartialFile(paths["partial"], study.digest(), header)
+            if resume:
+                complete = _complete(paths, study, header)
+                rows = complete if complete is not None else partial.load()
+                done = {r.index: r for r in rows}
+            partial.open(sorted(done.values(), key=lambda r: r.index))
+        payload: Any = study if isinstance(ex, SerialExecutor) else pack(study)
         if study.sampler == "nsga2":
             stream = nsga2_rows(study, lambda items: _evaluate(ex, payload, items, done, partial))
         else:
