@@ -5,7 +5,8 @@ library Delta is built (URDF, Pinocchio model, collision geometry), Clavel's fig
 required cylinder (D = 0.4 m, H = 0.1 m: reach and limits, worst and mean 1/cond, bar
 clearances, on 425 poses) and the 0.5 s Adept cycle with 1 kg (arm torques, speeds, powers on
 501 samples, closed form) are computed. Designs are Latin-hypercube samples of ``la``, ``lb``,
-``ra``; about a third of them fail early (unbuildable: home out of reach), as in a real study.
+``ra``; about half of them fail part-way (a fifth cannot be built: home out of reach; more leave
+the arm limits on the cycle), as in a real study.
 
 - designs/s: ``run_study`` on a warm executor (workers started), 1 worker (this process) and a
   pool of 2 processes, timed on alternating batches; scaling efficiency = rate(2) / (2 rate(1));
