@@ -4,7 +4,14 @@ Attachment points, foothold frames and the home nacelle placement the builder us
 paper's vector-projection solution of the virtual U-P-S chains (equations (1)-(8), the
 ``B_iIKMX`` model), the triangle's actuator lengths and the model coordinates of the lockable
 joints. Parameters are duck-typed (``r_p``, ``theta``, ``foothold_radius``, ``foot_height``,
-``nacelle_height``); all vectorised over the three branches.
+``nacelle_height`` and, optionally, ``branches``: 3 for the tripod, 4 for the four-branch walker,
+3 when absent); all vectorised over the branches.
+
+Branch ``i`` (0-based here) sits at ``phi_i = 2 pi i / n`` about the nacelle axis for ``n``
+branches (:func:`branch_angles`): the same branch design is repeated evenly, its attachment
+points ``phi_i +- theta`` on the same circle of radius ``r_p`` and its foothold on the same circle
+of radius ``foothold_radius``, so every branch of the walker sees exactly the geometry of a tripod
+branch at home.
 """
 
 from __future__ import annotations
@@ -23,6 +30,8 @@ from pkdyn.model.pose import pose_from_vector
 __all__ = [
     "PHI",
     "attachments",
+    "branch_angles",
+    "branch_count",
     "foothold_frames",
     "home_nacelle_placement",
     "lockable_coordinates",
@@ -33,7 +42,22 @@ __all__ = [
 ]
 
 PHI = (0.0, 2.0 * np.pi / 3.0, 4.0 * np.pi / 3.0)
-"""Angular position [rad] of branch ``i`` about the nacelle axis (branch 1 along +x)."""
+"""Angular position [rad] of branch ``i`` of the tripod about the nacelle axis (branch 1 along
++x); :func:`branch_angles` for any number of branches."""
+
+
+def branch_count(p: Any) -> int:
+    """Number of branches of a parameter set (``p.branches``, 3 when absent)."""
+    return int(getattr(p, "branches", 3))
+
+
+def branch_angles(p: Any) -> tuple[float, ...]:
+    """Angular positions ``phi_i = 2 pi i / n`` [rad] of the ``n`` branches (branch 1 along +x).
+
+    For the tripod they are :data:`PHI`.
+    """
+    n = branch_count(p)
+    return PHI if n == 3 else tuple(2.0 * np.pi * i / n for i in range(n))
 
 
 def unit_vector(v: np.ndarray) -> np.ndarray:
@@ -74,7 +98,8 @@ def _perps(v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
 
 def attachments(p: Any, i: int) -> tuple[np.ndarray, np.ndarray]:
     """``P_L`` and ``P_R`` of branch ``i`` (0-based) in the nacelle frame ``R_P`` [m]."""
-    a_l, a_r = PHI[i] + p.theta, PHI[i] - p.theta
+    phi = branch_angles(p)[i]
+    a_l, a_r = phi + p.theta, phi - p.theta
     P_L = p.r_p * np.array([math.cos(a_l), math.sin(a_l), 0.0])
     P_R = p.r_p * np.array([math.cos(a_r), math.sin(a_r), 0.0])
     return P_L, P_R
@@ -91,11 +116,11 @@ def foothold_frames(p: Any) -> list[pin.SE3]:
         p: Parameters.
 
     Returns:
-        The three foot placements.
+        The foot placements, one per branch.
 
     """
     out = []
-    for phi in PHI:
+    for phi in branch_angles(p):
         R = pin.rpy.rpyToMatrix(0.0, 0.0, phi)
         A = np.array([p.foothold_radius * math.cos(phi), p.foothold_radius * math.sin(phi), 0.0])
         A[2] = p.foot_height
@@ -157,25 +182,28 @@ def virtual_joints(
         nacelle_placement: Placement of ``R_P`` in ``R_B`` (``pin.SE3``), or
             ``[x, y, z, roll, pitch, yaw]`` [m, rad] with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (the
             paper's ``x = (x_P, y_P, z_P, alpha_P, beta_P, gamma_P)``).
-        footholds: Foot frames ``R_Ai`` (origin ``A_i``) in ``R_B``; default
+        footholds: Foot frames ``R_Ai`` (origin ``A_i``) in ``R_B``, one per branch; default
             :func:`foothold_frames`.
 
     Returns:
-        (3, 6) array: row ``i`` holds ``q1, q2, q3 [rad], q4 [m], q5, q6 [rad]`` of branch
+        (n, 6) array: row ``i`` holds ``q1, q2, q3 [rad], q4 [m], q5, q6 [rad]`` of branch
         ``i + 1``.
 
     Raises:
-        InvalidInputError: Malformed placement or not three footholds.
+        InvalidInputError: Malformed placement or not one foothold per branch.
 
     """
     M = pose_from_vector(nacelle_placement)
+    n = branch_count(p)
     feet = foothold_frames(p) if footholds is None else list(footholds)
-    if len(feet) != 3 or not all(isinstance(f, pin.SE3) for f in feet):
-        raise InvalidInputError("footholds", f"expected 3 pin.SE3 foot frames, got {footholds!r}")
-    # the three branches at once: rows of (3, 3) arrays
+    if len(feet) != n or not all(isinstance(f, pin.SE3) for f in feet):
+        raise InvalidInputError(
+            "footholds", f"expected {n} pin.SE3 foot frames (one per branch), got {footholds!r}"
+        )
+    # all branches at once: rows of (n, 3) arrays
     R, P_O = np.array(M.rotation), np.array(M.translation)
-    P_L = np.array([attachments(p, i)[0] for i in range(3)]) @ R.T + P_O
-    P_R = np.array([attachments(p, i)[1] for i in range(3)]) @ R.T + P_O
+    P_L = np.array([attachments(p, i)[0] for i in range(n)]) @ R.T + P_O
+    P_R = np.array([attachments(p, i)[1] for i in range(n)]) @ R.T + P_O
     A = np.array([f.translation for f in feet])
     u_a = np.array([f.rotation[:, 0] for f in feet])
     w_a = np.array([f.rotation[:, 2] for f in feet])
@@ -204,7 +232,7 @@ def triangle_lengths(p: Any, s: np.ndarray) -> np.ndarray:
 
     Args:
         p: Parameters.
-        s: Virtual coordinates (3, 6) or (6,) from :func:`virtual_joints`.
+        s: Virtual coordinates (n, 6) or (6,) from :func:`virtual_joints`.
 
     Returns:
         ``(..., 2)`` array ``[q_L, q_R]`` [m].
@@ -250,8 +278,8 @@ def lockable_coordinates(p: Any, s: np.ndarray) -> np.ndarray:
 
     Args:
         p: Parameters.
-        s: Virtual coordinates (3, 6) (or (6,) for one branch, then branch 1's offsets
-            apply: the three branches have the same home values).
+        s: Virtual coordinates (n, 6) (or (6,) for one branch, then branch 1's offsets
+            apply: all branches have the same home values).
 
     Returns:
         ``(..., 4)`` array: model coordinates of ``q1, q2, q3, q6`` [rad].

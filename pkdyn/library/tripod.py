@@ -50,6 +50,17 @@ no single joint: ``q4^2 = (q_L^2 + q_R^2) / 2 - e^2 / 4`` and
 ``sin q5 = (q_R^2 - q_L^2) / (2 e q4)`` with ``e = |P_L P_R| = 2 r_p sin theta``. See
 :func:`virtual_joints` for the paper's equations (1)-(8).
 
+**Four-branch walker** (``branches=4``, the paper's proposal in its conclusion): the same branch
+design repeated four times, evenly: branch ``i`` at ``phi_i = 90 (i - 1) deg`` with its attachment
+points at ``phi_i +- theta`` on the same nacelle circle ``r_p`` and its foothold on the same
+circle ``foothold_radius``. Every branch then sees exactly the geometry (home lengths, home passive
+angles) of a tripod branch, the nacelle and the spindle are unchanged, and the fourth branch adds
+its own mass (9.7 kg by default) and two actuators (``L4``, ``R4``): eight in all, a redundantly
+actuated 6-DOF machine in mode PP. Keeping the nacelle radius rather than, say, the gap between
+neighbouring branches is the conservative choice for interference: neighbouring legs are 90 deg
+apart instead of 120 deg (``theta`` must stay below ``pi / 4``, half the spacing, so that
+neighbouring attachment points do not cross). The robot is named ``walker``.
+
 Default dimensions: chosen for a bench-top machining tripod (the paper gives none): ``r_p = 0.3``,
 ``theta = 0.3 rad`` (17.2 deg), footholds on a circle of radius 0.7 m, nacelle 0.6 m above the
 support, universal-joint centres 0.06 m above the footholds, actuator strokes 0.5-0.9 m (home
@@ -88,7 +99,10 @@ __all__ = [
 ]
 
 NAME = "tripod"
-SUMMARY = "Walking tripod (Yang et al.), 3 branches of 2 prismatic actuators, feet welded (mode PP)"
+SUMMARY = (
+    "Walking tripod (Yang et al.), 3 branches of 2 prismatic actuators, feet welded (mode PP); "
+    "branches=4: the four-branch walker"
+)
 
 MOUNT_CLEARANCE = 0.08
 """Length [m] of an actuator body next to its nacelle attachment (the clevis, inside the
@@ -126,6 +140,8 @@ class Params:
             [rad/m] (motor angle per actuator length).
         passive_range: Limit of every passive revolute joint about its home value, and cone
             half-angle of the foot's universal joint about its home direction [rad].
+        branches: Number of branches: 3 (the tripod) or 4 (the four-branch walker the paper
+            proposes, see the module docstring).
 
     """
 
@@ -150,13 +166,21 @@ class Params:
     velocity: float = 0.25
     screw_lead: float = 0.005
     passive_range: float = 1.2
+    branches: int = 3
 
     def __post_init__(self) -> None:
+        if self.branches not in (3, 4):
+            raise ParameterError(
+                NAME, "branches", f"must be 3 (tripod) or 4 (walker), got {self.branches!r}"
+            )
         positive(NAME, **{k: v for k, v in asdict(self).items() if k != "tool_offset"})
         in_range(NAME, "tool_offset", self.tool_offset, 0.0, math.inf)
-        if self.theta >= np.pi / 3:
+        if self.theta >= np.pi / self.branches:
             raise ParameterError(
-                NAME, "theta", f"must be below pi/3 (branches would overlap), got {self.theta!r}"
+                NAME,
+                "theta",
+                f"must be below pi/{self.branches} with {self.branches} branches (neighbouring "
+                f"branches would overlap), got {self.theta!r}",
             )
         in_range(NAME, "passive_range", self.passive_range, 0.0, np.pi)
         if self.stroke_min >= self.stroke_max:
@@ -183,7 +207,7 @@ class Params:
 
 
 def home(p: Params) -> list[float]:
-    """Actuator lengths ``[q_L1, q_R1, q_L2, q_R2, q_L3, q_R3]`` [m] at home.
+    """Actuator lengths ``[q_L1, q_R1, q_L2, q_R2, ...]`` [m] at home (two per branch).
 
     Args:
         p: Parameters.
@@ -235,7 +259,7 @@ def _sphere(mass: float, radius: float) -> pin.Inertia:
 
 
 def build_urdf(p: Params) -> str:
-    """Write the pkdyn description of the tripod with its three feet welded to the support.
+    """Write the pkdyn description of the tripod (or walker) with its feet welded to the support.
 
     Args:
         p: Parameters.
@@ -244,7 +268,7 @@ def build_urdf(p: Params) -> str:
         URDF text with pkdyn extension elements.
 
     """
-    w = UrdfWriter("tripod")
+    w = UrdfWriter("tripod" if p.branches == 3 else "walker")
     grey, blue, orange, dark = (
         (0.6, 0.6, 0.65, 1.0),
         (0.2, 0.4, 0.8, 1.0),

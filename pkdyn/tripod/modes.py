@@ -1,6 +1,7 @@
 """Operating modes of the walking tripod (seed 003): PP (payload platform), BE (branch extremity).
 
-A *stance* gives the three foot frames ``R_Ai`` on the support; a *mode* says which feet are
+A *stance* gives the foot frames ``R_Ai`` on the support (three for the tripod, four for the
+four-branch walker, ``branches=4`` of :mod:`pkdyn.library.tripod`); a *mode* says which feet are
 clamped and which passive joints are locked:
 
 - **PP**: the three feet are welded at their footholds, no lock; the robot is a 6-DOF parallel
@@ -10,6 +11,18 @@ clamped and which passive joints are locked:
   (the paper's ``b_i``); the platform is the extremity of branch ``i`` (its foot frame, origin
   ``A_i``). The six actuators then control the 6-DOF foot: the support branches with ``q1``
   locked hold the nacelle with four actuators (4 DOF), the swinging branch's triangle adds 2.
+
+The **four-branch walker** in mode BE keeps the paper's locks of the swinging branch (``q1, q2,
+q3, q6``): they make the branch a rigid body from the foot to its triangle, whose two actuators
+give the foot 2 DOF with respect to the nacelle. The paper locks ``q1`` of the support branches
+only because two of them, with four actuators, cannot hold a 6-DOF nacelle; three support branches
+(six actuators) can, exactly as in mode PP, so the walker locks nothing on its support branches
+(locking their ``q1`` would leave the nacelle 3 DOF and the foot 5: it could not follow a 6-DOF
+path). The nacelle keeps its 6 DOF, the foot takes 6 of the mechanism's 8: the paper's
+"connectivity of eight", two degrees of freedom left to the nacelle while the foot follows its path
+(:mod:`pkdyn.tripod.redundancy` chooses them). In mode PP the walker's eight actuators drive a
+6-DOF nacelle: redundant actuation (the inverse dynamics distributes the forces, see
+:func:`pkdyn.dynamics.inverse_dynamics`).
 
 Locks are rigid constraint models (:mod:`pkdyn.tripod.locks`) added to the closures: the
 swinging branch's universal joint (``q1`` and ``q2``) is welded, ``q3`` (the knuckle on rod
@@ -42,6 +55,7 @@ __all__ = [
     "Mode",
     "Stance",
     "be_mode",
+    "branch_numbers",
     "foot_frame",
     "foot_placement",
     "locked_names",
@@ -51,7 +65,7 @@ __all__ = [
 ]
 
 BRANCHES = (1, 2, 3)
-"""Branch numbers (the paper's ``i``)."""
+"""Branch numbers of the tripod (the paper's ``i``); :func:`branch_numbers` for the walker."""
 
 LOCKABLE: dict[str, tuple[str, int]] = {
     "q1": ("q2q1", 1),
@@ -66,26 +80,41 @@ _FOOT_TURN = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, np.pi), np.zeros(3))
 """The foot link frame is ``R_A`` turned half a turn about ``w_a`` (see the library module)."""
 
 
-def support_branches(branch: int) -> tuple[int, int]:
-    """The paper's ``(j, k)`` for swinging branch ``i``: (1: 2, 3), (2: 1, 3), (3: 1, 2)."""
-    _check_branch(branch)
-    j, k = (b for b in BRANCHES if b != branch)
-    return j, k
+def branch_numbers(source: Robot | tripod.Params | int) -> tuple[int, ...]:
+    """Branch numbers ``1 .. n`` of a tripod or walker (its robot, its parameters or ``n``)."""
+    if isinstance(source, int):
+        n = source
+    else:
+        p = source.params if isinstance(source, Robot) else source
+        n = tripod_cf.branch_count(p)
+    return tuple(range(1, n + 1))
 
 
-def locked_names(branch: int) -> list[str]:
-    """The paper's ``b_i``: ``q1, q2, q3, q6`` of branch ``i``, ``q1`` of ``j`` and ``k``.
+def support_branches(branch: int, branches: int = 3) -> tuple[int, ...]:
+    """The support branches while branch ``i`` swings: the paper's ``(j, k)`` for the tripod
+    ((1: 2, 3), (2: 1, 3), (3: 1, 2)), the three others for the walker (``branches=4``)."""
+    _check_branch(branch, branches)
+    return tuple(b for b in branch_numbers(branches) if b != branch)
+
+
+def locked_names(branch: int, branches: int = 3) -> list[str]:
+    """The locked joints of mode BE(i), named ``branch{n}_q{m}`` in the paper's order.
+
+    The tripod's are the paper's ``b_i``: ``q1, q2, q3, q6`` of branch ``i``, ``q1`` of ``j``
+    and ``k``; the walker's (``branches=4``) are ``q1, q2, q3, q6`` of branch ``i`` only (see the
+    module docstring).
 
     Args:
-        branch: Swinging branch ``i`` (1, 2 or 3).
+        branch: Swinging branch ``i``.
+        branches: Number of branches (3 or 4).
 
     Returns:
-        Names ``branch{n}_q{m}`` in the paper's order.
+        The names.
 
     """
-    j, k = support_branches(branch)
+    supports = support_branches(branch, branches)
     own = [f"branch{branch}_{n}" for n in ("q1", "q2", "q3", "q6")]
-    return own + [f"branch{j}_q1", f"branch{k}_q1"]
+    return own + ([f"branch{b}_q1" for b in supports] if branches == 3 else [])
 
 
 def _site(branch: int, name: str) -> tuple[str, list[int]]:
@@ -94,43 +123,53 @@ def _site(branch: int, name: str) -> tuple[str, list[int]]:
     return f"branch{branch}_{suffix}", [coord]
 
 
-def _check_branch(branch: int) -> None:
-    if branch not in BRANCHES:
-        raise InvalidInputError("branch", f"expected 1, 2 or 3, got {branch!r}")
+def _check_branch(branch: int, branches: int = 3) -> None:
+    if branch not in branch_numbers(branches):
+        raise InvalidInputError(
+            "branch", f"expected 1 to {branches} ({branches} branches), got {branch!r}"
+        )
 
 
 @dataclass(frozen=True, eq=False)
 class Stance:
-    """Foot frames ``R_Ai`` of the three branches, in the support frame ``R_B``.
+    """Foot frames ``R_Ai`` of the branches (3 or 4), in the support frame ``R_B``.
 
     Origin ``A_i`` at the universal-joint centre, ``w_a`` normal to the support.
 
     Attributes:
-        footholds: Three placements.
+        footholds: One placement per branch.
 
     """
 
-    footholds: tuple[pin.SE3, pin.SE3, pin.SE3]
+    footholds: tuple[pin.SE3, ...]
 
     def __post_init__(self) -> None:
-        if len(self.footholds) != 3 or not all(isinstance(f, pin.SE3) for f in self.footholds):
-            raise InvalidInputError("stance", "expected three pin.SE3 foot frames")
+        if len(self.footholds) not in (3, 4) or not all(
+            isinstance(f, pin.SE3) for f in self.footholds
+        ):
+            raise InvalidInputError(
+                "stance", "expected three (tripod) or four (walker) pin.SE3 foot frames"
+            )
 
     @classmethod
     def default(cls, p: tripod.Params) -> Stance:
-        """The library model's footholds (:func:`pkdyn.library.tripod_cf.foothold_frames`)."""
-        f = tripod_cf.foothold_frames(p)
-        return cls((f[0], f[1], f[2]))
+        """The library model's footholds (:func:`pkdyn.closed_form.tripod.foothold_frames`)."""
+        return cls(tuple(tripod_cf.foothold_frames(p)))
+
+    @property
+    def branches(self) -> int:
+        """Number of feet."""
+        return len(self.footholds)
 
     def moved(self, branch: int, foothold: pin.SE3) -> Stance:
         """The same stance with foot ``branch`` on a new foothold."""
-        _check_branch(branch)
+        _check_branch(branch, self.branches)
         f = list(self.footholds)
         f[branch - 1] = pin.SE3(foothold)
-        return Stance((f[0], f[1], f[2]))
+        return Stance(tuple(f))
 
     def centroid(self) -> np.ndarray:
-        """Mean of the three foot-frame origins [m]."""
+        """Mean of the foot-frame origins [m]."""
         return np.mean([np.array(f.translation) for f in self.footholds], axis=0)
 
 
@@ -180,43 +219,41 @@ def pp_mode() -> Mode:
 def be_mode(
     robot: Robot, q: np.ndarray, branch: int, values: Sequence[float] | None = None
 ) -> Mode:
-    """Mode BE for swinging branch ``i``: the paper's ``b_i`` locked.
+    """Mode BE for swinging branch ``i``: the joints of :func:`locked_names` locked.
 
     Args:
-        robot: The tripod.
+        robot: The tripod or the walker.
         q: Configuration (nq,) whose joint values are locked (unless ``values`` is given).
         branch: Swinging branch ``i``.
-        values: Model coordinates of ``[q1_i, q2_i, q3_i, q6_i, q1_j, q1_k]`` [rad] (e.g. from
+        values: Model coordinates of ``[q1_i, q2_i, q3_i, q6_i, q1_j, q1_k]`` (tripod) or
+            ``[q1_i, q2_i, q3_i, q6_i]`` (walker) [rad] (e.g. from
             :func:`pkdyn.tripod.xfkmb.bikmx`); default: their values at ``q``.
 
     Returns:
         The mode, with one lock per model joint.
 
     """
-    _check_branch(branch)
-    j, k = support_branches(branch)
-    names = locked_names(branch)
+    n = len(branch_numbers(robot)) if robot.params is not None else 3
+    supports = support_branches(branch, n)
+    names = locked_names(branch, n)
+    held = supports if n == 3 else ()
     if values is None:
-        sites = [
-            (branch, "q1"),
-            (branch, "q2"),
-            (branch, "q3"),
-            (branch, "q6"),
-            (j, "q1"),
-            (k, "q1"),
-        ]
-        vals = [lock_values(robot.model, q, *_site(b, n))[0] for b, n in sites]
+        sites = [(branch, "q1"), (branch, "q2"), (branch, "q3"), (branch, "q6")]
+        sites += [(s, "q1") for s in held]
+        vals = [lock_values(robot.model, q, *_site(b, m))[0] for b, m in sites]
     else:
         vals = [float(v) for v in values]
-        if len(vals) != 6 or not np.all(np.isfinite(vals)):
-            raise InvalidInputError("values", f"expected 6 finite lock values, got {values!r}")
+        if len(vals) != len(names) or not np.all(np.isfinite(vals)):
+            raise InvalidInputError(
+                "values", f"expected {len(names)} finite lock values, got {values!r}"
+            )
     b = f"branch{branch}"
     locks = (
         Lock(f"{b}_q2q1", (0, 1), (vals[1], vals[0]), f"{b}_q1,{b}_q2"),
         Lock(f"{b}_a", (0,), (vals[2],), f"{b}_q3"),
         Lock(f"{b}_q6", (0,), (vals[3],), f"{b}_q6"),
-        Lock(f"branch{j}_q2q1", (1,), (vals[4],), f"branch{j}_q1"),
-        Lock(f"branch{k}_q2q1", (1,), (vals[5],), f"branch{k}_q1"),
+    ) + tuple(
+        Lock(f"branch{s}_q2q1", (1,), (vals[4 + m],), f"branch{s}_q1") for m, s in enumerate(held)
     )
     return Mode("BE", branch, locks, tuple(names))
 
@@ -230,7 +267,7 @@ def foot_placement(robot: Robot, q: np.ndarray, branch: int) -> pin.SE3:
     """Foot frame ``R_A`` of branch ``i`` at ``q`` (origin ``A_i``, ``w_a`` the sole normal).
 
     Args:
-        robot: The tripod.
+        robot: The tripod or the walker.
         q: Configuration (nq,).
         branch: Branch number.
 
@@ -238,7 +275,7 @@ def foot_placement(robot: Robot, q: np.ndarray, branch: int) -> pin.SE3:
         The placement in ``R_B``.
 
     """
-    _check_branch(branch)
+    _check_branch(branch, len(branch_numbers(robot)) if robot.params is not None else 3)
     fid = robot.model.getFrameId(f"branch{branch}_foot")
     pin.framesForwardKinematics(robot.model, robot.data, q)
     return pin.SE3(robot.data.oMf[fid]) * _FOOT_TURN.inverse()
@@ -248,13 +285,14 @@ def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = 
     """The tripod with the constraint set and platform of a mode on a stance.
 
     Args:
-        robot: The library tripod (``pkdyn.load("tripod")``).
+        robot: The library tripod (``pkdyn.load("tripod")``) or walker
+            (``pkdyn.load("tripod", branches=4)``).
         stance: Foot frames.
         mode: :func:`pp_mode` or :func:`be_mode`.
         q: Reference configuration kept as ``q_home`` of the result (default: the robot's).
 
     Returns:
-        A :class:`pkdyn.Robot` sharing the model and geometry: closures = the three ``A``
+        A :class:`pkdyn.Robot` sharing the model and geometry: closures = the ``A``
         hinges, the welds of the clamped feet at the stance's footholds, the locks; platform =
         the spindle tip (PP) or the swinging foot frame (BE), all six pose components.
 
@@ -270,6 +308,11 @@ def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = 
     p: tripod.Params = robot.params
     model = robot.model
     default = tripod_cf.foothold_frames(p)
+    if len(stance.footholds) != len(default):
+        raise InvalidInputError(
+            "stance",
+            f"{len(stance.footholds)} footholds for a robot of {len(default)} branches",
+        )
     cms: list[pin.RigidConstraintModel] = []
     owner: list[str] = []
     for cm, name in zip(robot.constraint_models, robot.constraint_owner, strict=True):

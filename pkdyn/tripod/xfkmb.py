@@ -12,6 +12,11 @@
 
 Both are checked in the tests against the general constraint machinery (the mode robots of
 :mod:`pkdyn.tripod.modes` solved by :func:`pkdyn.inverse_geometry`).
+
+For the four-branch walker (``branches=4``) :func:`bikmx` and :func:`bikmx_virtual` give the four
+locked values of the swinging branch (the walker locks nothing on its supports) and
+:func:`actuator_lengths` the eight lengths; ``XFKMB_i`` is the tripod's only: with the walker's
+locks the nacelle keeps two degrees of freedom, which :mod:`pkdyn.tripod.redundancy` chooses.
 """
 
 from __future__ import annotations
@@ -38,11 +43,24 @@ __all__ = [
 ]
 
 
-def _footholds(stance: Stance | Sequence[pin.SE3]) -> list[pin.SE3]:
+def _footholds(p: tripod.Params, stance: Stance | Sequence[pin.SE3]) -> list[pin.SE3]:
     feet = list(stance.footholds) if isinstance(stance, Stance) else list(stance)
-    if len(feet) != 3:
-        raise InvalidInputError("footholds", f"expected 3 foot frames, got {len(feet)}")
+    n = tripod_cf.branch_count(p)
+    if len(feet) != n:
+        raise InvalidInputError(
+            "footholds", f"expected {n} foot frames (one per branch), got {len(feet)}"
+        )
     return feet
+
+
+def _pick(p: tripod.Params, s: np.ndarray, c: np.ndarray, branch: int) -> np.ndarray:
+    """``[c_i[0..3], then column 0 of s of the tripod's support branches]``."""
+    n = tripod_cf.branch_count(p)
+    own = list(c[branch - 1])
+    if n != 3:
+        support_branches(branch, n)  # checks the branch number
+        return np.array(own)
+    return np.array(own + [s[b - 1, 0] for b in support_branches(branch)])
 
 
 def bikmx_virtual(
@@ -60,13 +78,11 @@ def bikmx_virtual(
         branch: Swinging branch ``i``.
 
     Returns:
-        (6,) [rad].
+        (6,) [rad]; the walker's (4,): ``[q1_i, q2_i, q3_i, q6_i]``.
 
     """
-    j, k = support_branches(branch)
-    s = tripod_cf.virtual_joints(p, x, _footholds(stance))
-    i = branch - 1
-    return np.array([s[i, 0], s[i, 1], s[i, 2], s[i, 5], s[j - 1, 0], s[k - 1, 0]])
+    s = tripod_cf.virtual_joints(p, x, _footholds(p, stance))
+    return _pick(p, s, s[:, [0, 1, 2, 5]], branch)
 
 
 def bikmx(
@@ -85,14 +101,13 @@ def bikmx(
 
     Returns:
         (6,) model coordinates of ``[q1_i, q2_i, q3_i, q6_i, q1_j, q1_k]`` [rad], the order of
-        :func:`pkdyn.tripod.modes.be_mode`'s ``values``.
+        :func:`pkdyn.tripod.modes.be_mode`'s ``values``; the walker's (4,):
+        ``[q1_i, q2_i, q3_i, q6_i]``.
 
     """
-    j, k = support_branches(branch)
-    s = tripod_cf.virtual_joints(p, x, _footholds(stance))
-    c = tripod_cf.lockable_coordinates(p, s)  # (3, 4): q1, q2, q3, q6
-    i = branch - 1
-    return np.array([c[i, 0], c[i, 1], c[i, 2], c[i, 3], c[j - 1, 0], c[k - 1, 0]])
+    s = tripod_cf.virtual_joints(p, x, _footholds(p, stance))
+    c = tripod_cf.lockable_coordinates(p, s)  # (n, 4): q1, q2, q3, q6
+    return _pick(p, c, c, branch)
 
 
 def actuator_lengths(
@@ -100,19 +115,19 @@ def actuator_lengths(
     x: pin.SE3 | Sequence[float] | np.ndarray,
     stance: Stance | Sequence[pin.SE3],
 ) -> np.ndarray:
-    """Inverse geometric model: ``[q_L1, q_R1, q_L2, q_R2, q_L3, q_R3] = |A_i P_Li|, |A_i P_Ri|``.
+    """Inverse geometric model: ``[q_L1, q_R1, q_L2, ...] = |A_i P_Li|, |A_i P_Ri|``.
 
     Args:
-        p: Tripod parameters.
+        p: Tripod (or walker) parameters.
         x: Nacelle placement ``R_P`` in ``R_B``.
         stance: Foot frames.
 
     Returns:
-        (6,) actuator lengths [m], in actuator order.
+        (2 n,) actuator lengths [m], in actuator order.
 
     """
-    s = tripod_cf.virtual_joints(p, x, _footholds(stance))
-    return tripod_cf.triangle_lengths(p, s).reshape(6)
+    s = tripod_cf.virtual_joints(p, x, _footholds(p, stance))
+    return tripod_cf.triangle_lengths(p, s).reshape(-1)
 
 
 @dataclass
@@ -176,11 +191,18 @@ def xfkmb(
     Raises:
         UnreachablePoseError: No pose keeps the locks within ``tol`` near ``x0``.
         JointLimitError: The pose needs an actuator beyond its stroke (``check_limits``).
+        InvalidInputError: The walker's parameters (its nacelle is not determined by the locks).
 
     """
+    if tripod_cf.branch_count(p) != 3:
+        raise InvalidInputError(
+            "p",
+            "XFKMB_i is the tripod's model: with the walker's locks the nacelle keeps two degrees "
+            "of freedom (see pkdyn.tripod.redundancy)",
+        )
     target = np.asarray(b, dtype=float).reshape(6)
     start = pose_from_vector(x0)
-    feet = _footholds(stance)
+    feet = _footholds(p, stance)
     model = bikmx_virtual if virtual else bikmx
 
     def residual(z: np.ndarray) -> np.ndarray:
