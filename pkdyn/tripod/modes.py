@@ -91,8 +91,11 @@ def branch_numbers(source: Robot | tripod.Params | int) -> tuple[int, ...]:
 
 
 def support_branches(branch: int, branches: int = 3) -> tuple[int, ...]:
-    """The support branches while branch ``i`` swings: the paper's ``(j, k)`` for the tripod
-    ((1: 2, 3), (2: 1, 3), (3: 1, 2)), the three others for the walker (``branches=4``)."""
+    """The support branches while branch ``i`` swings.
+
+    The paper's ``(j, k)`` for the tripod ((1: 2, 3), (2: 1, 3), (3: 1, 2)); the three others for
+    the walker (``branches=4``).
+    """
     _check_branch(branch, branches)
     return tuple(b for b in branch_numbers(branches) if b != branch)
 
