@@ -27,8 +27,12 @@ from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
 from solvers import ClosureSet, InverseDynamics
 from solvers import InfeasibleError as _SolverInfeasible
+from solvers.minmax_effort import MinMaxInverseDynamics
 
-__all__ = ["CONSISTENCY_TOL", "EffortTrajectory", "inverse_dynamics"]
+__all__ = ["ALLOCATIONS", "CONSISTENCY_TOL", "EffortTrajectory", "inverse_dynamics"]
+
+ALLOCATIONS = ("norm", "max")
+"""Effort distributions under redundant actuation: least weighted norm, least largest effort."""
 
 
 @dataclass(frozen=True)
@@ -140,12 +144,15 @@ def inverse_dynamics(
     weights: Sequence[float] | np.ndarray | None = None,
     progress: bool | None = None,
     passive: bool = True,
+    allocation: str = "norm",
 ) -> EffortTrajectory:
     """Actuator efforts (and closure forces) realising a trajectory, with gravity.
 
     Non-redundant actuation gives the unique efforts; redundant actuation the efforts of least
-    weighted norm (proxsuite QP, warm-started along the trajectory), within the effort limits
-    when ``limits`` is set.
+    weighted norm (proxsuite QP, warm-started along the trajectory), or with ``allocation="max"``
+    those of least largest scaled effort ``max |tau_i| sqrt(w_i)``
+    (:class:`solvers.minmax_effort.MinMaxInverseDynamics`), within the effort limits when
+    ``limits`` is set.
 
     Args:
         robot: The robot (add a payload with :func:`with_payload`).
@@ -159,6 +166,8 @@ def inverse_dynamics(
         progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) shows
             it when stderr is a terminal and there are more than 2000 samples.
         passive: Include the robot's springs, dampers and friction (``robot.passive``).
+        allocation: Redundant actuation: ``"norm"`` (least weighted norm) or ``"max"`` (least
+            largest effort relative to its limit, with the default weights).
 
     Returns:
         Efforts, closure forces, residuals and energies per sample.
@@ -183,12 +192,16 @@ def inverse_dynamics(
             k = int(bad[0])
             raise TrajectoryError(f"{what} is not finite", sample=k, time=float(traj.t[k]))
     W = _wrench_series(robot, wrench, N)
+    if allocation not in ALLOCATIONS:
+        raise InvalidInputError(
+            "allocation", f"expected one of {', '.join(ALLOCATIONS)}, got {allocation!r}"
+        )
     effort = np.array([a.effort for a in robot.actuators])
     lower = -effort if limits else None
     upper = effort if limits else None
     if weights is None and np.all(np.isfinite(effort)) and np.all(effort > 0.0):
         weights = 1.0 / effort**2
-    solver = InverseDynamics(
+    solver = (MinMaxInverseDynamics if allocation == "max" else InverseDynamics)(
         robot.model,
         list(robot.constraint_models),
         actuation(robot),

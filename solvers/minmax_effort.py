@@ -1,0 +1,88 @@
+"""Inverse dynamics that minimises the largest actuator effort under redundant actuation.
+
+:class:`MinMaxInverseDynamics` is :class:`~solvers.inverse_dynamics.InverseDynamics` with another
+effort distribution when the actuation is redundant: instead of the least weighted norm it
+minimises the largest scaled effort ``max_i |tau_i| / s_i``, with ``s_i = 1 / sqrt(w_i)`` (the
+effort limits with the weights ``1 / limit^2``, so that every actuator is loaded to the same
+fraction of its limit when possible). Everything else (the null-space reduction to ``E tau = f``,
+the bounds, the closure forces, the errors) is the parent's.
+
+In the scaled efforts ``u = tau / s`` the problem is the QP over ``(u, t)``::
+
+    minimise    t^2 + eps |u|^2
+    subject to  E S u = f,   -t <= u_i <= t,   lower_i / s_i <= u_i <= upper_i / s_i
+
+(``S = diag(s)``): ``t >= 0`` is implied and minimising ``t^2`` minimises ``t``; the small ``eps``
+(relative ``1e-6``) makes the QP strictly convex and picks, among the distributions of least
+maximum, the one of least norm. Solved by proxsuite, warm-started along a trajectory.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from proxsuite import proxqp
+
+from solvers.inverse_dynamics import InfeasibleError, InverseDynamics, _where
+
+__all__ = ["MINMAX_REGULARISATION", "MinMaxInverseDynamics"]
+
+MINMAX_REGULARISATION = 1e-6
+"""Weight ``eps`` of the norm of the scaled efforts beside the squared largest one."""
+
+
+class MinMaxInverseDynamics(InverseDynamics):
+    """:class:`~solvers.inverse_dynamics.InverseDynamics` minimising the largest scaled effort.
+
+    Same arguments as the parent; ``weights`` set the scales ``s = 1 / sqrt(weights)``.
+    """
+
+    def _qp_solve(
+        self, E: np.ndarray, f: np.ndarray, scale: float, sample: int | None
+    ) -> tuple[np.ndarray, int]:
+        """Efforts of least largest scaled value under ``E tau = f`` and the bounds."""
+        n = self.actuation.n
+        rg = E.shape[0]
+        s = 1.0 / np.sqrt(self.weights)
+        A = np.hstack([E * s, np.zeros((rg, 1))])
+        H = np.diag(np.r_[np.full(n, MINMAX_REGULARISATION), 1.0])
+        g = np.zeros(n + 1)
+        eye = np.eye(n)
+        ones = np.ones((n, 1))
+        rows = [np.hstack([eye, -ones]), np.hstack([eye, ones])]  # u - t <= 0 <= u + t
+        lo = [np.full(n, -1e20), np.zeros(n)]
+        hi = [np.zeros(n), np.full(n, 1e20)]
+        if self._bounded:
+            rows.append(np.hstack([eye, np.zeros((n, 1))]))
+            lo.append(np.where(np.isfinite(self.lower), self.lower / s, -1e20))
+            hi.append(np.where(np.isfinite(self.upper), self.upper / s, 1e20))
+        C, l_c, u_c = np.vstack(rows), np.concatenate(lo), np.concatenate(hi)
+        eps_abs = self.eps * scale / float(np.max(s))
+        qp = self._qp
+        if qp is None or self._qp_rank != rg:
+            qp = proxqp.dense.QP(n + 1, rg, C.shape[0])
+            qp.settings.eps_rel = 0.0
+            qp.settings.max_iter = self.max_iter
+            qp.settings.verbose = False
+            qp.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
+            qp.settings.eps_abs = eps_abs
+            qp.init(H, g, A, f, C, l_c, u_c)
+            self._qp, self._qp_rank = qp, rg
+        else:
+            qp.settings.eps_abs = eps_abs
+            qp.update(A=A, b=f)
+        qp.solve()
+        status = qp.results.info.status
+        tau = s * np.array(qp.results.x[:n])
+        ok = status == proxqp.QPSolverOutput.PROXQP_SOLVED
+        if ok and self._bounded:
+            tol = 1e3 * self.eps * scale
+            ok = bool(np.all(tau >= self.lower - tol) and np.all(tau <= self.upper + tol))
+        if not ok:
+            self._qp = None  # a failed solve is no warm start
+            if self._bounded:
+                self._raise_bounds(E, f, sample)
+            raise InfeasibleError(
+                f"{_where(sample)}the min-max effort QP did not converge ({status})",
+                sample=sample,
+            )
+        return tau, int(qp.results.info.iter)
