@@ -9,12 +9,21 @@ For every sample of every phase of :func:`pkdyn.tripod.scenario.plan_scenario`:
 - **distances** with coal between the legs (actuator bodies and rods) of different branches and
   between each leg and the nacelle (plate and spindle) [m];
 - **singularity margin**: ``distance`` of :func:`pkdyn.analysis.singularity.classify` on the phase's
-  robot (``1 / cond`` of ``A`` and ``B``; 0 at a singularity);
+  robot (``1 / cond`` of ``A`` and ``B``; 0 at a singularity); for the walker in mode PP (eight
+  actuators, 6 DOF: redundant actuation, whose eight relations ``A x_dot = B q_dot_a`` the square
+  models of :mod:`pkdyn.analysis.kinematics` truncate to six) the same measure on all eight
+  relations (:func:`redundant_singularity_distance`);
 - **closure residuals** of the hinges and of the clamped feet (constraint residuals);
 - **locked joints**: largest departure of a locked coordinate from its locked value (read from
   the joint coordinates, not from the lock constraints);
 - **support feet**: largest departure of a clamped foot frame (forward kinematics) from its
-  foothold.
+  foothold;
+- the walker's swings: the values of the redundancy resolution's objective
+  (:mod:`pkdyn.tripod.redundancy`), baseline and chosen path.
+
+The same checks run on the tripod and on the four-branch walker (``branches=4``); the effort
+distribution of the walker's redundant actuation in mode PP is the least weighted norm or, with
+``allocation="max"``, the least largest force (:func:`pkdyn.dynamics.inverse_dynamics`).
 """
 
 from __future__ import annotations
@@ -27,11 +36,12 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.analysis.collisions import CollisionChecker
+from pkdyn.analysis.kinematics import _cond, _relations, platform_jacobian
 from pkdyn.analysis.singularity import classify
 from pkdyn.dynamics import inverse_dynamics
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
-from pkdyn.tripod.modes import BRANCHES, foot_placement
+from pkdyn.tripod.modes import branch_numbers, foot_placement
 from pkdyn.tripod.scenario import Phase, WalkPlan, plan_scenario
 from solvers import ClosureSet
 
@@ -41,6 +51,7 @@ __all__ = [
     "ScenarioReport",
     "analyse",
     "leg_pairs",
+    "redundant_singularity_distance",
     "run_scenario",
 ]
 
@@ -48,14 +59,17 @@ LEGS = ("cylL", "rodL", "cylR", "rodR")
 """Links of a branch that make its legs (actuator bodies and rods)."""
 
 
-def leg_pairs() -> tuple[list[tuple[str, str]], list[tuple[str, str]]]:
+def leg_pairs(branches: int = 3) -> tuple[list[tuple[str, str]], list[tuple[str, str]]]:
     """Link pairs checked for interference: leg-to-leg (different branches), leg-to-nacelle.
+
+    Args:
+        branches: Number of branches (3: the tripod, 4: the walker).
 
     Returns:
         ``(leg_to_leg, leg_to_nacelle)`` lists of link-name pairs.
 
     """
-    legs = [(b, f"branch{b}_{n}") for b in BRANCHES for n in LEGS]
+    legs = [(b, f"branch{b}_{n}") for b in branch_numbers(branches) for n in LEGS]
     leg_leg = [(a, c) for (ba, a) in legs for (bc, c) in legs if ba < bc]
     leg_nacelle = [(a, "nacelle") for _, a in legs]
     return leg_leg, leg_nacelle
@@ -94,6 +108,8 @@ class PhaseReport:
             [m or rad, the larger], or ``None``.
         lock_plan_error: Swings: largest difference between the engaged locks and ``b_i`` of
             ``B_iIKMX`` [rad], or ``None``.
+        redundancy: The walker's swings: the objective's values
+            (:meth:`pkdyn.tripod.redundancy.SwingSolution.as_json`), else ``None``.
 
     """
 
@@ -118,6 +134,7 @@ class PhaseReport:
     max_dynamics_residual: float
     end_error: float | None
     lock_plan_error: float | None
+    redundancy: dict[str, Any] | None = None
 
     def as_json(self) -> dict[str, Any]:
         """Plain-JSON form (the CLI's ``phases`` entries)."""
@@ -143,6 +160,7 @@ class PhaseReport:
             "max_dynamics_residual": self.max_dynamics_residual,
             "end_error": self.end_error,
             "lock_plan_error": self.lock_plan_error,
+            "redundancy": self.redundancy,
         }
 
 
@@ -156,14 +174,15 @@ class ScenarioReport:
         t: Time of each sample (N,) [s] (phase boundaries appear twice).
         phase: Phase index of each sample (N,).
         q: Configurations (N, nq).
-        tau: Actuator forces (N, 6) [N].
+        tau: Actuator forces (N, n_a) [N] (6 for the tripod, 8 for the walker).
         stroke_margin: Smallest stroke margin per sample (N,) [m].
         leg_distance: Smallest leg distance per sample (N,) [m].
         singularity_distance: ``1 / cond`` per sample (N,) (NaN where not evaluated).
         nacelle: Position of ``P_O`` per sample (N, 3) [m].
-        feet: Foot-frame origins ``A_i`` per sample (N, 3, 3) [m] (branch, xyz).
+        feet: Foot-frame origins ``A_i`` per sample (N, n, 3) [m] (branch, xyz).
         actuators: Actuator names.
         effort_limit: Actuator force limit [N].
+        speed_limit: Actuator speed limit [m/s].
 
     """
 
@@ -180,9 +199,10 @@ class ScenarioReport:
     feet: np.ndarray
     actuators: list[str]
     effort_limit: float
+    speed_limit: float = float("inf")
 
     def violations(self) -> list[str]:
-        """What the scenario breaks: strokes, interference, effort limit (empty: none)."""
+        """What the scenario breaks: strokes, interference, speed and force limits (or nothing)."""
         out = []
         for k, r in enumerate(self.reports):
             where = f"phase {k} ({r.name}{'' if r.branch is None else f' {r.branch}'})"
@@ -192,6 +212,11 @@ class ScenarioReport:
                 )
             if r.min_leg_distance < 0.0:
                 out.append(f"{where}: {r.closest_pair[0]} and {r.closest_pair[1]} interfere")
+            if r.max_actuator_speed > self.speed_limit * (1.0 + 1e-9):
+                out.append(
+                    f"{where}: actuator speed {r.max_actuator_speed:.4g} m/s beyond the limit "
+                    f"{self.speed_limit:.4g} m/s"
+                )
             if r.max_actuator_force > self.effort_limit:
                 out.append(
                     f"{where}: actuator force {r.max_actuator_force:.4g} N beyond the limit "
@@ -215,6 +240,8 @@ class ScenarioReport:
                 "min_leg_distance": min(r.min_leg_distance for r in reps),
                 "min_singularity_distance": min(r.min_singularity_distance for r in reps),
                 "effort_limit": self.effort_limit,
+                "speed_limit": self.speed_limit,
+                "branches": int(self.feet.shape[1]),
                 "violations": self.violations(),
             },
         }
@@ -232,11 +259,45 @@ def _se3_error(a: pin.SE3, b: pin.SE3) -> float:
     )
 
 
+def redundant_singularity_distance(robot: Robot, q: np.ndarray) -> float:
+    """``1 / cond`` of ``A`` and ``B`` from all the relations ``A x_dot = B q_dot_a``.
+
+    For a redundantly actuated robot (more actuators than degrees of freedom, e.g. the walker in
+    mode PP) every actuator rate is tied to the platform twist: ``n_a`` relations, which
+    :func:`pkdyn.analysis.kinematics.kinematic_models` truncates to ``m``. Here the orthonormal
+    basis of all of them gives ``A`` (n_a, m) and ``B`` (n_a, n_a); the measure is the smaller of
+    ``1 / cond(A)`` (over its ``m`` singular values: 0 when the platform can move with the
+    actuators locked) and ``1 / cond(B)``. For a robot with as many relations as task components
+    it is :func:`pkdyn.analysis.singularity.classify`'s ``distance``.
+
+    Args:
+        robot: The robot (a mode robot of the walker).
+        q: Assembled configuration (nq,).
+
+    Returns:
+        The distance in ``[0, 1]``.
+
+    """
+    Jc = robot.closure_set.jacobian(robot.data, q)
+    rows = np.asarray(robot.task_rows, dtype=int)
+    Jx = platform_jacobian(robot, q)[rows]
+    a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)
+    rel = _relations(Jc, Jx, a, p)
+    _, s, Vt = np.linalg.svd(rel.R, full_matrices=False)
+    k = int(np.sum(s > 1e-12 * s[0]))
+    n_a, m = a.size, rows.size
+    B, A = Vt[:k, :n_a], -Vt[:k, n_a:]
+    cond_A = _cond(np.linalg.svd(A, compute_uv=False), m)
+    cond_B = _cond(np.linalg.svd(B, compute_uv=False), min(k, n_a))
+    return float(min(1.0 / cond_A, 1.0 / cond_B))
+
+
 def _analyse_phase(
     robot: Robot,
     phase: Phase,
     checkers: tuple[CollisionChecker, CollisionChecker],
     stride: int,
+    allocation: str,
 ) -> tuple[PhaseReport, dict[str, np.ndarray]]:
     r = phase.robot
     jt = phase.trajectory
@@ -253,9 +314,11 @@ def _analyse_phase(
     data = r.model.createData()
     lo = r.model.lowerPositionLimit[r.actuated_q]
     hi = r.model.upperPositionLimit[r.actuated_q]
-    clamped = [b for b in BRANCHES if b != phase.branch]
+    branches = branch_numbers(robot)
+    clamped = [b for b in branches if b != phase.branch]
     targets = phase.mode.lock_targets()
-    effort = inverse_dynamics(r, jt, wrench=phase.wrench, progress=False)
+    effort = inverse_dynamics(r, jt, wrench=phase.wrench, progress=False, allocation=allocation)
+    redundant = len(r.actuators) > r.dof(jt.q[0])
     res = np.empty(N)
     lock = np.zeros(N)
     support = np.empty(N)
@@ -264,7 +327,7 @@ def _analyse_phase(
     d_ln = np.empty(N)
     sing = np.full(N, np.nan)
     nacelle = np.empty((N, 3))
-    foot_xyz = np.empty((N, 3, 3))
+    foot_xyz = np.empty((N, len(branches), 3))
     nacelle_id = robot.model.getJointId("nacelle")
     closest = ("", "")
     best = np.inf
@@ -274,7 +337,7 @@ def _analyse_phase(
         if targets.size:
             d = phase.mode.lock_vector(robot, q) - targets
             lock[k] = float(np.max(np.abs(np.arctan2(np.sin(d), np.cos(d)))))
-        feet = [foot_placement(robot, q, b) for b in BRANCHES]  # runs the kinematics
+        feet = [foot_placement(robot, q, b) for b in branches]  # runs the kinematics
         nacelle[k] = robot.data.oMi[nacelle_id].translation
         foot_xyz[k] = [f.translation for f in feet]
         support[k] = max(_se3_error(feet[b - 1], phase.stance.footholds[b - 1]) for b in clamped)
@@ -287,6 +350,9 @@ def _analyse_phase(
             if dd[i] < best:
                 best, closest = float(dd[i]), c.names[i]
         if k % stride == 0 or k == N - 1:
+            if redundant:
+                sing[k] = redundant_singularity_distance(r, q)
+                continue
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 sing[k] = classify(r, q).distance
@@ -295,8 +361,8 @@ def _analyse_phase(
         end_error = _se3_error(_nacelle(robot, jt.q[-1]), phase.planned_end)
     lock_plan_error = None
     if phase.planned_locks is not None:
-        b = phase.planned_locks  # [q1, q2, q3, q6, q1_j, q1_k]; locks: [q2, q1], q3, q6, ...
-        planned = np.array([b[1], b[0], b[2], b[3], b[4], b[5]])
+        b = phase.planned_locks  # [q1, q2, q3, q6, (q1_j, q1_k)]; locks: [q2, q1], q3, q6, ...
+        planned = np.concatenate([[b[1], b[0], b[2], b[3]], b[4:]])
         lock_plan_error = float(np.max(np.abs(targets - planned)))
     report = PhaseReport(
         name=phase.name,
@@ -320,6 +386,7 @@ def _analyse_phase(
         max_dynamics_residual=float(np.max(effort.residual)),
         end_error=end_error,
         lock_plan_error=lock_plan_error,
+        redundancy=None if phase.redundancy is None else phase.redundancy.as_json(),
     )
     series = {
         "tau": effort.tau,
@@ -333,23 +400,29 @@ def _analyse_phase(
 
 
 def analyse(
-    robot: Robot, phases: list[Phase], stride: int = 1, progress: bool | None = None
+    robot: Robot,
+    phases: list[Phase],
+    stride: int = 1,
+    progress: bool | None = None,
+    allocation: str = "norm",
 ) -> ScenarioReport:
     """Run every check on every phase.
 
     Args:
-        robot: The library tripod, loaded with its collision geometry.
+        robot: The library tripod (or walker), loaded with its collision geometry.
         phases: From :func:`pkdyn.tripod.scenario.plan_scenario`.
         stride: Evaluate the singularity margin every ``stride`` samples (and at each phase's
             last sample).
         progress: Progress bar over the phases: ``True`` / ``False`` force it on / off, ``None``
             (default) shows it when stderr is a terminal.
+        allocation: Effort distribution of redundant actuation (the walker in PP): ``"norm"``
+            or ``"max"`` (see :func:`pkdyn.dynamics.inverse_dynamics`).
 
     Returns:
         The report.
 
     """
-    leg_leg, leg_nacelle = leg_pairs()
+    leg_leg, leg_nacelle = leg_pairs(len(branch_numbers(robot)))
     checkers = (CollisionChecker(robot, leg_leg), CollisionChecker(robot, leg_nacelle))
     iterator = progress_bar(phases, "checks", "phase", progress)
     reports: list[PhaseReport] = []
@@ -358,7 +431,7 @@ def analyse(
     }
     t, idx, Q = [], [], []
     for k, phase in enumerate(iterator):
-        rep, s = _analyse_phase(robot, phase, checkers, max(1, int(stride)))
+        rep, s = _analyse_phase(robot, phase, checkers, max(1, int(stride)), allocation)
         reports.append(rep)
         for key, val in s.items():
             series[key].append(val)
@@ -379,23 +452,31 @@ def analyse(
         feet=np.concatenate(series["feet"]),
         actuators=list(robot.actuator_names),
         effort_limit=float(min(a.effort for a in robot.actuators)),
+        speed_limit=float(min(a.velocity for a in robot.actuators)),
     )
 
 
 def run_scenario(
-    robot: Robot, plan: WalkPlan | None = None, stride: int = 1, progress: bool | None = None
+    robot: Robot,
+    plan: WalkPlan | None = None,
+    stride: int = 1,
+    progress: bool | None = None,
+    allocation: str = "norm",
 ) -> ScenarioReport:
     """Plan the scenario (:func:`pkdyn.tripod.scenario.plan_scenario`) and check it.
 
     Args:
-        robot: The library tripod, loaded with its collision geometry.
+        robot: The library tripod (or walker), loaded with its collision geometry.
         plan: Scenario parameters.
         stride: Singularity-margin sampling stride (see :func:`analyse`).
         progress: Progress bars: ``True`` / ``False`` force them on / off, ``None`` (default)
             shows them when stderr is a terminal.
+        allocation: Effort distribution of the walker's redundant actuation (see
+            :func:`analyse`).
 
     Returns:
         The report.
 
     """
-    return analyse(robot, plan_scenario(robot, plan, progress=progress), stride, progress)
+    phases = plan_scenario(robot, plan, progress=progress)
+    return analyse(robot, phases, stride, progress, allocation)

@@ -24,10 +24,18 @@ The quantities the redundancy resolution of the four-branch walker trades
   negative when the leg axis enters the nacelle;
 - **stroke margins**: the smallest distance of an actuator length ``|A P_L|``, ``|A P_R|`` to its
   stroke limits;
-- **support conditioning**: ``1 / cond`` of the inverse Jacobian of the support branches as a
-  Gough-Stewart platform (the tripod in mode PP is one: each actuator is a U-P-S leg from
-  ``P_L`` or ``P_R`` to ``A``): rows ``[e^T, ((P - P_O) x e)^T / r_p]`` (rotations scaled by the
-  nacelle radius), 0 at a parallel singularity of the supports.
+- **conditioning**, with every foot clamped (mode PP): ``1 / cond`` of the inverse Jacobian of the
+  branches as a Gough-Stewart platform (the tripod in mode PP is one: each actuator is a U-P-S
+  leg from ``P_L`` or ``P_R`` to ``A``), rows ``[e^T, ((P - P_O) x e)^T / r_p]`` (rotations scaled
+  by the nacelle radius), 0 at a parallel singularity; while a branch of the walker swings
+  (mode BE), the ``distance`` of :func:`pkdyn.analysis.singularity.classify` on the mode's robot,
+  in closed form: the three support branches give the nacelle twist ``xi_X = J_s^-1 qd_s``
+  (``J_s`` as above, unscaled), the locked swinging branch moves its foot about the triangle's
+  normal ``z`` through ``P_L`` (rate ``beta_dot``) and along its rod ``L``, so the foot twist is
+  ``xi_F = Ad(A - P_O) xi_X + G r_dot`` (``A x_dot = B q_dot_a`` with ``A = I``,
+  ``B = [Ad J_s^-1, G]``); as in :mod:`pkdyn.analysis.kinematics` the relations are
+  orthonormalised and the measure is the smaller of ``1 / cond(A)`` and ``1 / cond(B)`` (the
+  tests compare it with ``classify``).
 
 Capsules enclose the cylinders, so the leg-to-leg distances here are never larger than coal's on
 the collision model; the difference is at most a leg radius, at the rounded ends, and the legs of
@@ -37,7 +45,6 @@ different branches stay far apart (0.3 m or more on the default walk).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -70,6 +77,8 @@ class Clearances:
         singularity: ``1 / cond`` of the support branches' inverse Jacobian (N,).
         lengths: Actuator lengths (N, 2 n) [m], in actuator order.
         closest: Names of the two bodies at the smallest leg distance of each sample.
+        per_leg_to_nacelle: Distance of every leg body to the nacelle (N, 4 n) [m] (branch
+            order, ``cylL, rodL, cylR, rodR`` in each branch).
 
     """
 
@@ -79,6 +88,7 @@ class Clearances:
     singularity: np.ndarray
     lengths: np.ndarray
     closest: list[tuple[str, str]]
+    per_leg_to_nacelle: np.ndarray
 
     @property
     def distance(self) -> np.ndarray:
@@ -130,7 +140,7 @@ def _segment_to_cylinders(
     O: np.ndarray,
     w: np.ndarray,
     bodies: np.ndarray,
-    iterations: int = 20,
+    iterations: int = 16,
 ) -> np.ndarray:
     """Smallest signed distance from segments ``[a, b]`` (..., 3) to coaxial solid cylinders.
 
@@ -219,12 +229,65 @@ def _leg_to_nacelle(
     return side
 
 
+def _be_distance(
+    p: Any, P: np.ndarray, P_O: np.ndarray, A: np.ndarray, swinging: int
+) -> np.ndarray:
+    """``1 / cond`` of the walker's mode BE (see the module docstring), per sample (N,)."""
+    N, n = P.shape[:2]
+    i = swinging - 1
+    sup = [b for b in range(n) if b != i]
+    Ps = P[:, sup].reshape(N, -1, 3)  # (N, 6, 3): L, R of each support branch
+    e = np.repeat(A[:, sup], 2, axis=1) - Ps
+    e /= np.linalg.norm(e, axis=-1, keepdims=True)
+    Js = np.concatenate([e, np.cross(Ps - P_O[:, None, :], e)], axis=-1)  # qd_s = Js xi_X
+    a = A[:, i] - P_O
+    Ad = np.zeros((N, 6, 6))
+    Ad[:, :3, :3] = np.eye(3)
+    Ad[:, 3:, 3:] = np.eye(3)
+    Ad[:, 0, 4], Ad[:, 0, 5] = a[:, 2], -a[:, 1]  # v_A = v_O - [a]x omega
+    Ad[:, 1, 3], Ad[:, 1, 5] = -a[:, 2], a[:, 0]
+    Ad[:, 2, 3], Ad[:, 2, 4] = a[:, 1], -a[:, 0]
+    K_s = Ad @ np.linalg.pinv(Js)  # (the supports' J_s is square: 3 branches, 6 legs)
+    # the locked swinging branch: its foot turns about z through P_L and slides along rod L
+    P_L, P_R, A_i = P[:, i, 0], P[:, i, 1], A[:, i]
+    dL, dR = A_i - P_L, A_i - P_R
+    qL = np.linalg.norm(dL, axis=-1)
+    qR = np.linalg.norm(dR, axis=-1)
+    u = P_R - P_L
+    edge = np.linalg.norm(u, axis=-1)
+    z = np.cross(u, dL)
+    sin_b = np.linalg.norm(z, axis=-1) / (edge * qL)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z /= np.linalg.norm(z, axis=-1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        db_L = -(qL**2 - edge**2 + qR**2) / (2.0 * edge * qL**2) / sin_b
+        db_R = qR / (edge * qL) / sin_b
+    turn = np.cross(z, dL)
+    G = np.empty((N, 6, 2))
+    G[:, :3, 0] = db_L[:, None] * turn + dL / qL[:, None]
+    G[:, 3:, 0] = db_L[:, None] * z
+    G[:, :3, 1] = db_R[:, None] * turn
+    G[:, 3:, 1] = db_R[:, None] * z
+    order = [2 * b + k for b in sup for k in (0, 1)] + [2 * i, 2 * i + 1]
+    B = np.empty((N, 6, 2 * n))
+    B[:, :, order] = np.concatenate([K_s, G], axis=-1)
+    rel = np.concatenate([B, -np.broadcast_to(np.eye(6), (N, 6, 6))], axis=-1)
+    ok = np.isfinite(rel).all(axis=(1, 2))  # a flat triangle: singular (0)
+    rel[~ok] = 0.0
+    _, _, Vt = np.linalg.svd(rel, full_matrices=False)  # orthonormal basis of the relations
+    sA = np.linalg.svd(-Vt[:, :, 2 * n :], compute_uv=False)
+    sB = np.linalg.svd(Vt[:, :, : 2 * n], compute_uv=False)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.minimum(sA[:, -1] / sA[:, 0], sB[:, -1] / sB[:, 0])
+    return np.where(ok & np.isfinite(out), out, 0.0)
+
+
 def clearances(
     p: Any,
     R: np.ndarray,
     P_O: np.ndarray,
     A: np.ndarray,
-    supports: Sequence[int] | None = None,
+    swinging: int | None = None,
 ) -> Clearances:
     """Clearances of nacelle placements with the feet at ``A`` (see the module docstring).
 
@@ -233,7 +296,7 @@ def clearances(
         R: Nacelle orientations (N, 3, 3).
         P_O: Nacelle origins (N, 3) [m].
         A: Foot-frame origins (N, n, 3) [m] (branch order).
-        supports: Branch numbers of the support branches of the conditioning (default: all).
+        swinging: The walker's swinging branch (mode BE), or ``None`` (mode PP).
 
     Returns:
         The clearances per sample.
@@ -265,15 +328,16 @@ def clearances(
     # stroke margins
     L = np.linalg.norm(A[:, :, None, :] - P, axis=-1).reshape(N, 2 * n)
     margin = np.minimum(L - p.stroke_min, p.stroke_max - L).min(axis=1)
-    # conditioning of the supports' inverse Jacobian
-    sup = np.arange(n) if supports is None else np.asarray(supports, dtype=int) - 1
-    Ps = P[:, sup].reshape(N, -1, 3)
-    As = np.repeat(A[:, sup], 2, axis=1)
-    e = As - Ps
-    e /= np.linalg.norm(e, axis=-1, keepdims=True)
-    J = np.concatenate([e, np.cross(Ps - P_O[:, None, :], e) / p.r_p], axis=-1)
-    sv = np.linalg.svd(J, compute_uv=False)
-    sing = sv[:, -1] / sv[:, 0] if J.shape[1] >= 6 else np.zeros(N)
+    # conditioning
+    if swinging is None:
+        Ps = P.reshape(N, -1, 3)
+        e = np.repeat(A, 2, axis=1) - Ps
+        e /= np.linalg.norm(e, axis=-1, keepdims=True)
+        J = np.concatenate([e, np.cross(Ps - P_O[:, None, :], e) / p.r_p], axis=-1)
+        sv = np.linalg.svd(J, compute_uv=False)
+        sing = sv[:, 5] / sv[:, 0]
+    else:
+        sing = _be_distance(p, P, P_O, A, swinging)
     # closest bodies per sample
     closest: list[tuple[str, str]] = []
     kl, kn = np.argmin(d, axis=1), np.argmin(dn, axis=1)
@@ -283,4 +347,4 @@ def clearances(
             closest.append((names[ia[kl[k]]], names[ib[kl[k]]]))
         else:
             closest.append((names[kn[k]], "nacelle"))
-    return Clearances(dl, dnn, margin, sing, L, closest)
+    return Clearances(dl, dnn, margin, sing, L, closest, dn)

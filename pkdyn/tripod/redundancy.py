@@ -32,23 +32,27 @@ to the station home above the landed feet (least squares, position and ``r_p`` t
 two derivatives at both ends, so the swing still starts and ends at rest with continuous
 accelerations, and the landing pose ``delta`` moves with the rest). ``(c, delta)`` maximise the
 **objective**, the smallest leg-to-leg or leg-to-nacelle distance over the whole swing
-(:mod:`pkdyn.tripod.clearance`, every sample of the swing)::
+(:mod:`pkdyn.tripod.clearance`, every sample of the swing), penalised when the stroke margins
+fall below ``stroke_keep``::
 
-    Phi = min over the samples k of d_k
+    Phi = min_k d_k - stroke_weight * max(0, stroke_keep - min_k m_k)
 
-subject to, at every sample: the smallest stroke margin ``m_k`` at least ``stroke_keep`` (or the
-baseline's smallest, if smaller: the strokes and their margins are kept), the support branches'
-``1 / cond`` ``sigma_k`` at least ``singularity_keep`` (idem), every actuator's speed (finite
+(``m_k`` the smallest stroke margin at sample ``k``; with comfortable strokes, ``Phi`` is the
+smallest leg distance [m]; a path that leaves its strokes is first brought back into them),
+subject to, at every sample: the mode's ``1 / cond``
+``sigma_k`` (the ``distance`` of :func:`pkdyn.analysis.singularity.classify`, in closed form, see
+:mod:`pkdyn.tripod.clearance`) at least ``singularity_keep`` (idem), every actuator's speed (finite
 differences of its length) below ``speed_margin`` times its limit; with two secondary terms, a
 bonus ``singularity_weight * min_k sigma_k`` (moving away from singularities) and
 ``mean_weight * mean_k min(d_k, distance_cap)`` (which shapes the path where ``Phi`` is pinned,
 e.g. at the start, where the locks engaged). Solved by SLSQP (:func:`scipy.optimize.minimize`) in
-epigraph form (maximise ``t`` under ``d_k >= t``) on up to ``samples`` evenly spread samples,
-then checked on all. The result is accepted only if it does at least as well as the baseline on
-``Phi`` and meets the constraints on every sample; otherwise the baseline is kept: the optimised
-path is never worse than the baseline on the objective. The actuator forces
-are checked afterwards by the inverse dynamics (:mod:`pkdyn.tripod.scenario` scales the path back
-towards the baseline if a force limit is exceeded).
+epigraph form (maximise ``t`` under ``d_k >= t``) on up to ``samples`` evenly spread samples
+(with slightly stricter constraints), then checked on all. The result is accepted only if it does
+at least as well as the baseline on ``Phi`` and meets the constraints on every sample, else the
+largest fraction of its departure from the baseline that does (0.9, 0.75, 0.5, 0.25), else the
+baseline is kept: the optimised path is never worse than the baseline on the objective. The
+actuator forces are checked afterwards by the inverse dynamics (:mod:`pkdyn.tripod.scenario` scales
+the path back towards the baseline if a force limit is exceeded).
 """
 
 from __future__ import annotations
@@ -67,7 +71,7 @@ from pkdyn.dynamics.profiles import motion_law
 from pkdyn.dynamics.trajectory import TaskTrajectory
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.tripod.clearance import Clearances, clearances
-from pkdyn.tripod.modes import Stance, support_branches
+from pkdyn.tripod.modes import Stance
 
 __all__ = [
     "LockedBranch",
@@ -81,18 +85,23 @@ __all__ = [
 _TURN = pin.rpy.rpyToMatrix(0.0, 0.0, np.pi)
 """The foot link frame is ``R_A`` turned half a turn about ``w_a``."""
 
+_SAFETY = (0.002, 0.002, 0.02)
+"""Extra stroke margin [m], ``1 / cond`` and speed fraction the optimisation keeps on its
+subsampled swing, so that the whole swing meets the constraints."""
+
 
 @dataclass(frozen=True)
 class RedundancySettings:
     """Objective and solver settings of the redundancy resolution (see the module docstring).
 
     Attributes:
-        stroke_keep: Stroke margin the path must keep [m] (the baseline's smallest margin when
-            that is smaller).
-        singularity_keep: Support ``1 / cond`` the path must keep (the baseline's smallest when
-            that is smaller).
-        singularity_weight: Bonus per unit of the smallest support ``1 / cond`` [m]: moves the
-            path away from singularities (0.05: a gain of 0.1 is worth 5 mm of leg distance).
+        stroke_keep: Stroke margin the path should keep [m].
+        stroke_weight: Penalty per metre of stroke margin missing below ``stroke_keep`` in the
+            objective (10: a millimetre of margin is worth 10 mm of leg distance).
+        singularity_keep: ``1 / cond`` of mode BE the path must keep (the baseline's smallest
+            when that is smaller).
+        singularity_weight: Bonus per unit of the smallest ``1 / cond`` [m]: moves the path
+            away from singularities (0.1: a gain of 0.01 is worth 1 mm of leg distance).
         mean_weight: Weight of the mean leg distance (capped at ``distance_cap``) beside the
             smallest one, which shapes the path where the smallest is pinned.
         distance_cap: Cap of the per-sample leg distance in the mean [m].
@@ -106,8 +115,9 @@ class RedundancySettings:
     """
 
     stroke_keep: float = 0.08
-    singularity_keep: float = 0.08
-    singularity_weight: float = 0.05
+    stroke_weight: float = 10.0
+    singularity_keep: float = 0.1
+    singularity_weight: float = 0.1
     mean_weight: float = 0.1
     distance_cap: float = 0.1
     bumps: int = 2
@@ -121,7 +131,7 @@ class RedundancySettings:
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0.0):
                 raise InvalidInputError(name, f"must be > 0, got {value!r}")
-        for name in ("singularity_weight", "mean_weight"):
+        for name in ("singularity_weight", "mean_weight", "stroke_weight"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0.0):
                 raise InvalidInputError(name, f"must be >= 0, got {value!r}")
@@ -131,6 +141,15 @@ class RedundancySettings:
             value = getattr(self, name)
             if int(value) != value or value < (0 if name == "bumps" else 2):
                 raise InvalidInputError(name, f"must be a positive integer, got {value!r}")
+
+    def objective(self, c: Clearances) -> float:
+        """``Phi`` of a path's clearances [m] (see the module docstring).
+
+        The smallest leg distance, less ``stroke_weight`` times the stroke margin missing below
+        ``stroke_keep``.
+        """
+        missing = max(0.0, self.stroke_keep - float(c.stroke_margin.min()))
+        return float(c.distance.min()) - self.stroke_weight * missing
 
 
 def _se3_arrays(M: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
@@ -303,7 +322,8 @@ class SwingSolution:
         nacelle_p: Nacelle origins (N, 3) [m].
         baseline: Clearances of the baseline (every sample).
         clearances: Clearances of the chosen path (every sample).
-        objective_baseline: ``Phi`` of the baseline: its smallest leg distance [m].
+        objective_baseline: ``Phi`` of the baseline [m] (its smallest leg distance when its
+            stroke margins are comfortable).
         objective: ``Phi`` of the chosen path (>= the baseline's) [m].
         optimised: Whether the optimised path was kept (else the baseline).
         iterations: SLSQP iterations.
@@ -359,7 +379,7 @@ class SwingSolution:
             nacelle_R=R,
             nacelle_p=P,
             clearances=c,
-            objective=float(c.distance.min()),
+            objective=self.settings.objective(c),
             optimised=bool(fraction > 0.0 and self.optimised),
             coefficients=z,
             scale=fraction * self.scale,
@@ -404,11 +424,9 @@ class _Swing:
         self.phi, phid, phidd = bumps((self.t - self.t[0]) / T, settings.bumps)
         self.phid, self.phidd = phid / T, phidd / T**2
         self.R_F, self.p_F = foot_frames(task)
-        n = len(stance.footholds)
         A = np.array([f.translation for f in stance.footholds])
         self.A = np.repeat(A[None], self.t.size, axis=0)
         self.A[:, self.branch - 1] = self.p_F
-        self.supports = support_branches(self.branch, n)
         self.r0, self.r1 = locked.r0, np.asarray(r1, dtype=float)
         self.velocity = p.velocity
         self.K = settings.bumps
@@ -450,7 +468,12 @@ class _Swing:
         R_F = np.tile(self.R_F[idx], (B, 1, 1))
         p_F = np.tile(self.p_F[idx], (B, 1))
         R, P = self.locked.nacelle(R_F, p_F, r[..., 0].reshape(-1), r[..., 1].reshape(-1))
-        c = clearances(self.p, R, P, np.tile(self.A[idx], (B, 1, 1)), self.supports)
+        c = clearances(self.p, R, P, np.tile(self.A[idx], (B, 1, 1)), self.branch)
+        # lengths the triangle cannot take (|q_L - q_R| >= e): the nacelle formula clips them;
+        # count them as singular so that no accepted path uses them
+        flat = np.abs(r[..., 0] - r[..., 1]).reshape(-1) >= self.locked.edge
+        if flat.any():
+            c.singularity[flat] = 0.0
         t = self.t[idx]
         L = c.lengths.reshape(B, n_s, -1)
         speed = np.abs(np.gradient(L, t, axis=1)) if t.size > 2 else np.zeros_like(L)
@@ -494,9 +517,9 @@ def plan_swing(
     nz = 2 * settings.bumps + 2
     z0 = np.zeros(nz)
     base, base_speed, R0, P0 = sw.evaluate(z0)
-    phi0 = float(base.distance.min())
+    phi0 = settings.objective(base)
     keep = (
-        min(settings.stroke_keep, float(base.stroke_margin.min())),
+        settings.stroke_keep,
         min(settings.singularity_keep, float(base.singularity.min())),
         max(settings.speed_margin, float(base_speed.max())),
     )
@@ -509,18 +532,22 @@ def plan_swing(
         0,
     )
     if settings.optimise and nz:
-        z_opt, iterations = _optimise(sw, idx, settings, keep, phi0)
-        c, speed, R, P = sw.evaluate(z_opt)
-        phi = float(c.distance.min())
-        tol = 1e-9
-        ok = (
-            phi >= phi0
-            and c.stroke_margin.min() >= keep[0] - tol
-            and c.singularity.min() >= keep[1] - tol
-            and speed.max() <= keep[2] + tol
+        # the subsampled optimisation keeps a little more, so that every sample keeps enough
+        # (but no more than the baseline has on those samples: it must remain feasible)
+        sub, sub_speed, _, _ = sw.evaluate(z0, idx)
+        strict = (
+            keep[0] + _SAFETY[0],
+            min(keep[1] + _SAFETY[1], float(sub.singularity.min())),
+            max(keep[2] - _SAFETY[2], float(sub_speed.max())),
         )
-        if ok:
-            best = (z_opt, c, R, P, phi, iterations)
+        z_opt, iterations = _optimise(sw, idx, settings, strict)
+        for fraction in (1.0, 0.9, 0.75, 0.5, 0.25):  # back towards the baseline if need be
+            c, speed, R, P = sw.evaluate(fraction * z_opt)
+            phi = settings.objective(c)
+            ok = phi >= phi0 and c.singularity.min() >= keep[1] and speed.max() <= keep[2]
+            if ok:
+                best = (fraction * z_opt, c, R, P, phi, iterations)
+                break
     z, chosen, R, P, phi, iterations = best
     r, rd, rdd = sw.coordinates(z)
     return SwingSolution(
@@ -549,9 +576,11 @@ def _optimise(
     idx: np.ndarray,
     settings: RedundancySettings,
     keep: tuple[float, float, float],
-    phi0: float,
 ) -> tuple[np.ndarray, int]:
-    """SLSQP in epigraph form over ``x = (z, t)`` (see the module docstring).
+    """SLSQP in epigraph form over ``x = (z, t, s)`` (see the module docstring).
+
+    ``t`` bounds the leg distances from below, ``s <= 0`` the stroke margins' shortfall:
+    ``m_k >= stroke_keep + s``; the objective is ``t + stroke_weight s`` plus the bonuses.
 
     Values and forward-difference gradients come from batched evaluations: the point and its
     ``nz`` perturbations in one vectorised pass.
@@ -570,8 +599,9 @@ def _optimise(
         f = -bonus + 1e-3 * np.einsum("bi,bi->b", z, z)
         g = np.concatenate(
             [
-                d,
-                c.stroke_margin.reshape(B, -1) - keep[0],
+                c.leg_to_leg.reshape(B, -1),
+                c.per_leg_to_nacelle.reshape(B, -1),
+                c.stroke_margin.reshape(B, -1).min(axis=1, keepdims=True) - keep[0],
                 sing - keep[1],
                 keep[2] - speed.reshape(B, -1),
             ],
@@ -594,28 +624,34 @@ def _optimise(
                 cache[key] = (f, g[0])
         return cache[key]
 
-    n_s = idx.size
+    n_s = idx.size * (1 + 4 * len(sw.A[0]))  # leg-to-leg, then every leg to the nacelle
+    W = settings.stroke_weight
 
     def objective(x: np.ndarray) -> float:
-        return float(terms(x, False)[0][0]) - float(x[nz])
+        return float(terms(x, False)[0][0]) - float(x[nz]) - W * float(x[nz + 1])
 
     def objective_grad(x: np.ndarray) -> np.ndarray:
-        return np.concatenate([terms(x, True)[0], [-1.0]])
+        return np.concatenate([terms(x, True)[0], [-1.0, -W]])
 
     def constraints(x: np.ndarray) -> np.ndarray:
         g = terms(x, False)[1].copy()
         g[:n_s] -= x[nz]
+        g[n_s] -= x[nz + 1]
         return g
 
     def constraints_jac(x: np.ndarray) -> np.ndarray:
         J = terms(x, True)[1]
-        col = np.zeros((J.shape[0], 1))
-        col[:n_s] = -1.0
-        return np.hstack([J, col])
+        cols = np.zeros((J.shape[0], 2))
+        cols[:n_s, 0] = -1.0
+        cols[n_s, 1] = -1.0
+        return np.hstack([J, cols])
 
-    x0 = np.concatenate([np.zeros(nz), [phi0]])
+    c0, _, _, _ = sw.evaluate(np.zeros(nz), idx)
+    t0 = float(c0.distance.min())
+    s0 = min(0.0, float(c0.stroke_margin.min()) - keep[0])
+    x0 = np.concatenate([np.zeros(nz), [t0, s0]])
     span = 0.5 * (sw.p.stroke_max - sw.p.stroke_min)
-    bounds = [(-span, span)] * nz + [(None, None)]
+    bounds = [(-span, span)] * nz + [(None, None), (None, 0.0)]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = minimize(
@@ -625,7 +661,7 @@ def _optimise(
             method="SLSQP",
             bounds=bounds,
             constraints=[{"type": "ineq", "fun": constraints, "jac": constraints_jac}],
-            options={"maxiter": settings.max_iter, "ftol": 1e-10},
+            options={"maxiter": settings.max_iter, "ftol": 1e-7},
         )
     x = np.asarray(res.x, dtype=float)
     if not np.all(np.isfinite(x)):

@@ -35,6 +35,22 @@ Each phase is mapped to joint space by :func:`pkdyn.dynamics.trajectory.map_task
 mode's robot (:func:`pkdyn.tripod.modes.mode_robot`): the spindle tip is the platform in PP, the
 swinging foot in BE, and the locks are constraints of that robot, so ``(q, v, a)`` satisfy the
 closures, the clamps and the locks to second order.
+
+**The four-branch walker** (``pkdyn.load("tripod", branches=4)``) walks by the same plan, one
+branch after the other (four swings per cycle). Its locks leave the nacelle two degrees of
+freedom while a foot swings, so it needs no special pose for them: each reconfiguration brings the
+nacelle level above the centroid of the feet (the station home; ``tilt`` is the tripod's only), the
+locks engage there, and the swing's nacelle path is chosen by
+:func:`pkdyn.tripod.redundancy.plan_swing`, which keeps the legs apart (the phase's
+``redundancy``), then mapped with the swinging branch's two actuator lengths prescribed
+(:func:`pkdyn.dynamics.redundant.map_redundant_trajectory`). Should the chosen path ask an actuator
+for more than its force limit (inverse dynamics), its departure from the baseline is halved until
+it does not (down to the baseline). Its PP phases are mapped by the same function with nothing
+prescribed: eight actuators drive a 6-DOF nacelle, a redundant actuation that
+:func:`~pkdyn.dynamics.trajectory.map_task_trajectory`'s square kinematic models do not describe.
+A plan the walker cannot do stops with an error naming the phase, the branch and the limit: a new
+foothold out of reach (an actuator beyond its stroke at the landing), a swing whose legs would
+interfere whatever the nacelle does.
 """
 
 from __future__ import annotations
@@ -46,7 +62,9 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.closed_form import tripod as tripod_cf
+from pkdyn.dynamics.inverse import inverse_dynamics
 from pkdyn.dynamics.profiles import motion_law
+from pkdyn.dynamics.redundant import map_redundant_trajectory
 from pkdyn.dynamics.trajectory import (
     JointTrajectory,
     TaskTrajectory,
@@ -61,14 +79,15 @@ from pkdyn.model.robot import Robot
 from pkdyn.progress import progress_steps
 from pkdyn.tripod.machining import MachiningPlan, machining_task
 from pkdyn.tripod.modes import (
-    BRANCHES,
     Mode,
     Stance,
     be_mode,
+    branch_numbers,
     foot_frame,
     mode_robot,
     pp_mode,
 )
+from pkdyn.tripod.redundancy import RedundancySettings, SwingSolution, plan_swing
 from pkdyn.tripod.xfkmb import actuator_lengths, bikmx, xfkmb
 
 __all__ = [
@@ -100,6 +119,8 @@ class WalkPlan:
             the cylinder of axis ``y`` cresting at ``z = 0`` above the origin (a surface of
             moderate curvature crossed by a walk along ``x``: every step changes the feet's
             attitude).
+        redundancy: The walker's redundancy resolution while swinging
+            (:class:`pkdyn.tripod.redundancy.RedundancySettings`; unused by the tripod).
 
     """
 
@@ -112,6 +133,7 @@ class WalkPlan:
     dt: float = 0.05
     machining: MachiningPlan | None = field(default_factory=MachiningPlan)
     surface_radius: float = math.inf
+    redundancy: RedundancySettings = field(default_factory=RedundancySettings)
 
     def __post_init__(self) -> None:
         if not (self.surface_radius > 1.0):
@@ -149,6 +171,7 @@ class Phase:
         planned_end: Planned nacelle placement at the end of the phase (swings: ``x_end``;
             reconfigurations: ``x_re`` or the station home), or ``None``.
         landing: New foothold of the swinging foot (swings), or ``None``.
+        redundancy: The walker's swings: the chosen nacelle path and its objective, or ``None``.
 
     """
 
@@ -162,6 +185,7 @@ class Phase:
     planned_locks: np.ndarray | None = None
     planned_end: pin.SE3 | None = None
     landing: pin.SE3 | None = None
+    redundancy: SwingSolution | None = None
 
     @property
     def branch(self) -> int | None:
@@ -213,8 +237,8 @@ def foothold(p: tripod.Params, x: float, y: float, heading: float, radius: float
 
 
 def _stance(p: tripod.Params, xy: np.ndarray, radius: float) -> Stance:
-    f = [foothold(p, xy[i, 0], xy[i, 1], tripod_cf.PHI[i], radius) for i in range(3)]
-    return Stance((f[0], f[1], f[2]))
+    angles = tripod_cf.branch_angles(p)
+    return Stance(tuple(foothold(p, xy[i, 0], xy[i, 1], a, radius) for i, a in enumerate(angles)))
 
 
 def tool_pose(p: tripod.Params, nacelle: pin.SE3) -> np.ndarray:
@@ -339,13 +363,85 @@ def _nacelle(robot: Robot, q: np.ndarray) -> pin.SE3:
     return pin.SE3(robot.data.oMi[robot.model.getJointId("nacelle")])
 
 
+def _map(robot: Robot, task: TaskTrajectory, q: np.ndarray, redundant: bool) -> JointTrajectory:
+    """A PP phase to joint space (the walker's redundant actuation: nothing prescribed)."""
+    if not redundant:
+        return map_task_trajectory(robot, task, q_init=q, check_limits=False, progress=False)
+    none = np.zeros((task.t.size, 0))
+    return map_redundant_trajectory(robot, task, (), none, none, none, q, check_limits=False)
+
+
+def _actuator_name(k: int) -> str:
+    return f"branch{k // 2 + 1}_q{'LR'[k % 2]}"
+
+
+def _check_swing(p: tripod.Params, sol: SwingSolution, where: str, landing: bool = True) -> None:
+    """Stop a walker's swing that leaves a stroke or makes its legs interfere."""
+    c = sol.clearances
+    L = c.lengths
+    over = np.maximum(p.stroke_min - L, L - p.stroke_max)
+    k, i = np.unravel_index(int(np.argmax(over)), over.shape)
+    if over[k, i] > 0.0:
+        if k == L.shape[0] - 1:
+            what, at, fix = "the new foothold is out of reach", "at the landing", "shorten the step"
+        else:
+            what, fix = "the foot's path leaves the workspace", "lower the lift or shorten the step"
+            at = f"at t = {sol.t[k] - sol.t[0]:.3g} s of the swing"
+        raise TrajectoryError(
+            f"{where}: {what}: actuator '{_actuator_name(int(i))}' would need {L[k, i]:.4g} m "
+            f"{at}, beyond its stroke [{p.stroke_min}, {p.stroke_max}] m whatever the nacelle "
+            f"does; {fix}"
+        )
+    j = int(np.argmin(c.distance))
+    if c.distance[j] < 0.0:
+        a, b = c.closest[j]
+        raise TrajectoryError(
+            f"{where}: {a} and {b} would interfere (clearance {1e3 * c.distance[j]:.3g} mm < 0 "
+            f"at t = {sol.t[j] - sol.t[0]:.3g} s) even with the nacelle path optimised; change "
+            "the step, the lift or the dimensions"
+        )
+
+
+def _walker_swing(
+    robot: Robot,
+    plan: WalkPlan,
+    stance: Stance,
+    q: np.ndarray,
+    branch: int,
+    old: pin.SE3,
+    new_foot: pin.SE3,
+    target: pin.SE3,
+    where: str,
+) -> tuple[Mode, Robot, JointTrajectory, SwingSolution]:
+    """The walker's swing: locks engaged at ``q``, nacelle path chosen, mapped, forces checked."""
+    p = _params(robot)
+    mode = be_mode(robot, q, branch)  # the locks engage where the joints stand
+    r = mode_robot(robot, stance, mode, q)
+    task = swing_task(old, new_foot, plan.lift, plan.swing_time, plan.dt)
+    sol = plan_swing(p, stance, branch, _nacelle(robot, q), task, target, plan.redundancy)
+    _check_swing(p, sol, where)
+    effort = np.array([a.effort for a in robot.actuators])
+    while True:
+        jt = map_redundant_trajectory(
+            r, task, sol.joints, sol.r, sol.r_d, sol.r_dd, q, check_limits=False
+        )
+        if not sol.optimised:
+            break
+        tau = inverse_dynamics(r, jt, progress=False).tau
+        if np.all(np.abs(tau) <= effort):
+            break
+        sol = sol.rescaled(0.5 if sol.scale > 0.2 else 0.0)
+    return mode, r, jt, sol
+
+
 def plan_scenario(
     robot: Robot, plan: WalkPlan | None = None, progress: bool | None = None
 ) -> list[Phase]:
     """Plan the scenario and map every phase to joint space.
 
     Args:
-        robot: The library tripod at its home configuration (``pkdyn.load("tripod")``).
+        robot: The library tripod at its home configuration (``pkdyn.load("tripod")``), or the
+            walker (``pkdyn.load("tripod", branches=4)``).
         plan: Scenario parameters (default :class:`WalkPlan`).
         progress: Progress bar over the phases: ``True`` / ``False`` force it on / off, ``None``
             (default) shows it when stderr is a terminal.
@@ -356,13 +452,18 @@ def plan_scenario(
     Raises:
         PkdynError: Not the library tripod.
         TrajectoryError: ``XFKMB_i`` finds no reconfiguration pose within the strokes (step
-            too long), or a phase leaves the workspace or meets a parallel singularity.
+            too long), or a phase leaves the workspace or meets a parallel singularity; the
+            walker: a new foothold out of reach or legs that would interfere (the message names
+            the phase, the branch and the limit).
 
     """
     plan = WalkPlan() if plan is None else plan
     p = _params(robot)
+    branches = branch_numbers(p)
+    walker = len(branches) != 3
     radius = plan.surface_radius
     xy = np.array([np.array(f.translation[:2]) for f in tripod_cf.foothold_frames(p)])
+    angles = tripod_cf.branch_angles(p)
     stance = _stance(p, xy, radius)
     q = np.array(robot.q_home)
     if not math.isinf(radius):  # stand on the surface first: assemble the clamped robot there
@@ -371,7 +472,8 @@ def plan_scenario(
     phases: list[Phase] = []
     t0 = 0.0
     step = np.array(plan.step, dtype=float)
-    n_phases = plan.cycles * (8 if plan.machining is not None else 7)
+    per_cycle = 2 * len(branches) + (2 if plan.machining is not None else 1)
+    n_phases = plan.cycles * per_cycle
 
     def add(phase: Phase) -> np.ndarray:
         nonlocal t0
@@ -388,31 +490,50 @@ def plan_scenario(
             plan.reconfiguration_time,
             dt=plan.dt,
         )
-        jt = map_task_trajectory(r, task, q_init=q, check_limits=False, progress=False)
+        jt = _map(r, task, q, walker)
         return add(Phase("reconfiguration", pp_mode(), stance, r, jt, t0, planned_end=target))
 
     with progress_steps(n_phases, "tripod scenario", "phase", progress) as advance:
-        for _ in range(plan.cycles):
+        for cycle in range(plan.cycles):
             if plan.machining is not None:
                 r = mode_robot(robot, stance, pp_mode(), q)
                 task, W = machining_task(
                     plan.machining, tool_pose(p, station_home(p, stance)), dt=plan.dt
                 )
-                jt = map_task_trajectory(r, task, q_init=q, check_limits=False, progress=False)
+                jt = _map(r, task, q, walker)
                 q = add(Phase("machining", pp_mode(), stance, r, jt, t0, wrench=W))
-            for b in BRANCHES:
+            for b in branches:
                 old = stance.footholds[b - 1]
                 xy[b - 1] += step
-                new_foot = foothold(p, xy[b - 1, 0], xy[b - 1, 1], tripod_cf.PHI[b - 1], radius)
+                new_foot = foothold(p, xy[b - 1, 0], xy[b - 1, 1], angles[b - 1], radius)
                 landed = stance.moved(b, new_foot)
-                x_end, b_i, x_re = _swing_poses(p, stance, landed, b, plan.tilt)
-                q = move_nacelle(x_re, q)
-                mode = be_mode(robot, q, b)  # the locks engage where the joints stand
-                r = mode_robot(robot, stance, mode, q)
-                task = swing_task(old, new_foot, plan.lift, plan.swing_time, plan.dt)
-                jt = map_task_trajectory(r, task, q_init=q, check_limits=False, progress=False)
-                q = add(
-                    Phase(
+                if walker:
+                    home = station_home(p, stance)
+                    q = move_nacelle(home, q)
+                    where = f"phase {len(phases)} (cycle {cycle + 1}, swing of branch {b})"
+                    mode, r, jt, sol = _walker_swing(
+                        robot, plan, stance, q, b, old, new_foot, station_home(p, landed), where
+                    )
+                    phase = Phase(
+                        "swing",
+                        mode,
+                        stance,
+                        r,
+                        jt,
+                        t0,
+                        planned_locks=bikmx(p, home, stance, b),
+                        planned_end=sol.end(),
+                        landing=new_foot,
+                        redundancy=sol,
+                    )
+                else:
+                    x_end, b_i, x_re = _swing_poses(p, stance, landed, b, plan.tilt)
+                    q = move_nacelle(x_re, q)
+                    mode = be_mode(robot, q, b)  # the locks engage where the joints stand
+                    r = mode_robot(robot, stance, mode, q)
+                    task = swing_task(old, new_foot, plan.lift, plan.swing_time, plan.dt)
+                    jt = map_task_trajectory(r, task, q_init=q, check_limits=False, progress=False)
+                    phase = Phase(
                         "swing",
                         mode,
                         stance,
@@ -423,7 +544,7 @@ def plan_scenario(
                         planned_end=x_end,
                         landing=new_foot,
                     )
-                )
+                q = add(phase)
                 stance = landed
             q = move_nacelle(station_home(p, stance), q)
     return phases
