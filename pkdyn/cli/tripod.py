@@ -1,4 +1,9 @@
-"""Walking-tripod commands: ``pkdyn tripod scenario`` (seed 003, modes PP and BE)."""
+"""Walking-tripod commands: ``pkdyn tripod scenario`` (seed 003, modes PP and BE).
+
+``--branches 4`` runs the four-branch walker the paper proposes: the same plan, its swings with
+the nacelle path chosen by the redundancy resolution (:mod:`pkdyn.tripod.redundancy`); each swing's
+JSON entry adds ``redundancy`` (the objective's values, baseline and chosen path).
+"""
 
 from __future__ import annotations
 
@@ -12,17 +17,26 @@ from pkdyn.exceptions import InvalidInputError, PkdynError
 __all__ = ["register"]
 
 
+def _objective(ph: dict[str, Any]) -> str:
+    red = ph.get("redundancy")
+    if red is None:
+        return ""
+    return f"  {1e3 * red['objective_baseline']:.1f} -> {1e3 * red['objective']:.1f}"
+
+
 def _text(out: dict[str, Any]) -> str:
+    walker = out["summary"].get("branches", 3) != 3
     lines = [
         f"{'#':>2} {'phase':<15} {'mode':<4} {'br':>2} {'closure':>9} {'force N':>8} "
         f"{'legs mm':>8} {'stroke mm':>9} {'1/cond':>7}"
+        + ("  objective mm (baseline -> chosen)" if walker else "")
     ]
     for k, ph in enumerate(out["phases"]):
         lines.append(
             f"{k:>2} {ph['name']:<15} {ph['mode']:<4} {ph['branch'] or '-':>2} "
             f"{ph['max_closure_residual']:>9.1e} {ph['max_actuator_force']:>8.1f} "
             f"{1e3 * ph['min_leg_distance']:>8.1f} {1e3 * ph['min_stroke_margin']:>9.1f} "
-            f"{ph['min_singularity_distance']:>7.3f}"
+            f"{ph['min_singularity_distance']:>7.3f}" + _objective(ph)
         )
     s = out["summary"]
     lines.append(
@@ -40,6 +54,8 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
     from pkdyn.tripod.scenario import WalkPlan
 
     overrides = params(args.param)
+    if args.branches is not None:
+        overrides["branches"] = args.branches
     robot = pkdyn.load("tripod", geometry=True, **overrides)
     if args.stride < 1:
         raise InvalidInputError("--stride", f"must be >= 1, got {args.stride}")
@@ -54,7 +70,7 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
         machining=None if args.no_machining else MachiningPlan(),
         surface_radius=args.surface_radius,
     )
-    report = run_scenario(robot, plan, stride=args.stride)
+    report = run_scenario(robot, plan, stride=args.stride, allocation=args.allocation)
     out = report.as_json()
     if args.plot:
         from pkdyn.plotting.tripod import plot_scenario
@@ -94,6 +110,18 @@ def register(sub: Any) -> None:
         help="machining, reconfiguration and swing of each branch, repeated; checks per phase",
     )
     sc.add_argument("--param", action="append", metavar="NAME=VALUE", help="builder parameter")
+    sc.add_argument(
+        "--branches",
+        type=int,
+        choices=(3, 4),
+        help="3: the tripod (default); 4: the four-branch walker (redundancy while swinging)",
+    )
+    sc.add_argument(
+        "--allocation",
+        choices=("norm", "max"),
+        default="norm",
+        help="the walker's redundant actuation in PP: least norm (default) or least largest force",
+    )
     sc.add_argument("--cycles", type=int, default=2, help="walking cycles (default 2)")
     sc.add_argument(
         "--step",

@@ -59,6 +59,7 @@ def map_redundant_trajectory(
     accelerations: np.ndarray,
     q_init: np.ndarray | None = None,
     check_limits: bool = True,
+    tol: float = DEFAULT_TOL,
 ) -> JointTrajectory:
     """Joint trajectory following a platform trajectory and prescribed joint coordinates.
 
@@ -71,6 +72,8 @@ def map_redundant_trajectory(
         accelerations: Their accelerations (N, m) [rad/s^2 or m/s^2].
         q_init: Configuration near the first sample (default ``robot.q_home``).
         check_limits: Raise if an actuator leaves its velocity limit.
+        tol: Largest residual of the closures, the task and the prescribed coordinates at each
+            sample [m or rad].
 
     Returns:
         The joint trajectory.
@@ -116,7 +119,7 @@ def map_redundant_trajectory(
             h = tk - float(task.t[k - 1])
             q = pin.integrate(model, q, h * V[k - 1] + 0.5 * h * h * A[k - 1])
         pose_task.target = pose_from_vector(task.pose[k])
-        sol = solve_lm(model, q, functools.partial(residual, k=k), jacobian, tol=DEFAULT_TOL)
+        sol = solve_lm(model, q, functools.partial(residual, k=k), jacobian, tol=tol)
         if not sol.converged:
             raise TrajectoryError(
                 f"the platform pose and the prescribed {', '.join(joints)} cannot be reached "

@@ -1,9 +1,10 @@
 """Plots of the walking tripod's scenario (matplotlib Agg figures).
 
-:func:`plot_scenario` draws a :class:`pkdyn.tripod.analysis.ScenarioReport`: the walk seen from
-above (footholds, nacelle path), the actuator forces, the stroke margin and leg distances, and
-the singularity margin against time, with the phases shaded (PP machining, PP reconfiguration,
-BE swing of branch ``i``).
+:func:`plot_scenario` draws a :class:`pkdyn.tripod.analysis.ScenarioReport` (tripod or
+four-branch walker): the walk seen from above (footholds, nacelle path), the actuator forces, the
+stroke margin and leg distances, and the singularity margin against time, with the phases shaded
+(PP machining, PP reconfiguration, BE swing of branch ``i``). :func:`plot_comparison` draws a
+:class:`pkdyn.tripod.compare.Comparison`: the tripod against the walker, case by case.
 """
 
 from __future__ import annotations
@@ -13,10 +14,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["plot_scenario"]
+__all__ = ["plot_comparison", "plot_scenario"]
 
 _PHASE_COLOURS = {"machining": "#d9e8f5", "reconfiguration": "#eeeeee", "swing": "#fde4c8"}
-_BRANCH_COLOURS = ("tab:red", "tab:green", "tab:blue")
+_BRANCH_COLOURS = ("tab:red", "tab:green", "tab:blue", "tab:orange")
 
 
 def _shade(ax: Any, report: Any) -> None:
@@ -55,7 +56,7 @@ def plot_scenario(report: Any, path: str | Path | None = None, title: str | None
     margins, sing = axes[1]
 
     # walk seen from above
-    for b in range(3):
+    for b in range(report.feet.shape[1]):
         feet = report.feet[:, b, :2]
         top.plot(feet[:, 0], feet[:, 1], color=_BRANCH_COLOURS[b], lw=1.0, label=f"foot {b + 1}")
         holds = [feet[0]] + [
@@ -98,11 +99,72 @@ def plot_scenario(report: Any, path: str | Path | None = None, title: str | None
     handles = [Patch(color=c, label=k) for k, c in _PHASE_COLOURS.items()]
     sing.legend(handles=handles, fontsize=7, loc="best")
 
+    robot = "walking tripod" if report.feet.shape[1] == 3 else "four-branch walker"
     fig.suptitle(
         title
         if title is not None
-        else f"walking tripod: {len(report.reports)} phases, {float(t[-1]):.1f} s"
+        else f"{robot}: {len(report.reports)} phases, {float(t[-1]):.1f} s"
     )
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(str(path), dpi=110)
+    return fig
+
+
+_METRICS = (
+    ("min_leg_to_nacelle", 1e3, "smallest leg-to-nacelle distance [mm]"),
+    ("min_leg_to_leg", 1e3, "smallest leg-to-leg distance [mm]"),
+    ("min_stroke_margin", 1e3, "smallest stroke margin [mm]"),
+    ("min_singularity_distance", 1.0, "smallest 1 / cond"),
+    ("max_actuator_force", 1.0, "largest actuator force [N]"),
+    ("actuator_work", 1.0, "actuator work [J]"),
+)
+
+
+def plot_comparison(
+    comparison: Any, path: str | Path | None = None, title: str | None = None
+) -> Any:
+    """Bars of the comparison's figures, tripod against walker, for each case.
+
+    A case a robot cannot do is marked "cannot" instead of a bar; negative distances or margins
+    (interference, stroke left) fall below the zero line.
+
+    Args:
+        comparison: A :class:`pkdyn.tripod.compare.Comparison`.
+        path: Save the figure there (format from the suffix).
+        title: Figure title.
+
+    Returns:
+        The matplotlib Figure.
+
+    """
+    from matplotlib.figure import Figure
+
+    cases = list(dict.fromkeys(r.case for r in comparison.rows))
+    robots = ("tripod", "walker")
+    colours = {"tripod": "tab:blue", "walker": "tab:orange"}
+    fig = Figure(figsize=(13.0, 6.5))
+    axes = fig.subplots(2, 3).ravel()
+    x = np.arange(len(cases))
+    width = 0.38
+    for ax, (key, scale, label) in zip(axes, _METRICS, strict=True):
+        for j, robot in enumerate(robots):
+            for i, case in enumerate(cases):
+                row = comparison.row(robot, case)
+                pos = x[i] + (j - 0.5) * width
+                value = row.values().get(key)
+                if value is None:
+                    ax.text(pos, 0.0, "cannot", rotation=90, ha="center", va="bottom", fontsize=8)
+                    continue
+                ax.bar(
+                    pos, scale * value, width, color=colours[robot], label=robot if i == 0 else None
+                )
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_xticks(x, cases, fontsize=8)
+        ax.set_title(label, fontsize=9)
+        ax.grid(axis="y", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle(title if title is not None else "tripod against four-branch walker, same plans")
     fig.tight_layout()
     if path is not None:
         fig.savefig(str(path), dpi=110)

@@ -91,6 +91,7 @@ from pkdyn.tripod.redundancy import RedundancySettings, SwingSolution, plan_swin
 from pkdyn.tripod.xfkmb import actuator_lengths, bikmx, xfkmb
 
 __all__ = [
+    "WALKER_TOL",
     "Phase",
     "WalkPlan",
     "foothold",
@@ -363,12 +364,19 @@ def _nacelle(robot: Robot, q: np.ndarray) -> pin.SE3:
     return pin.SE3(robot.data.oMi[robot.model.getJointId("nacelle")])
 
 
+WALKER_TOL = 1e-13
+"""Closure, clamp, lock and task residual [m or rad] to which the walker's phases are mapped (its
+clamped feet then stay within 1e-12 m of their footholds)."""
+
+
 def _map(robot: Robot, task: TaskTrajectory, q: np.ndarray, redundant: bool) -> JointTrajectory:
     """A PP phase to joint space (the walker's redundant actuation: nothing prescribed)."""
     if not redundant:
         return map_task_trajectory(robot, task, q_init=q, check_limits=False, progress=False)
     none = np.zeros((task.t.size, 0))
-    return map_redundant_trajectory(robot, task, (), none, none, none, q, check_limits=False)
+    return map_redundant_trajectory(
+        robot, task, (), none, none, none, q, check_limits=False, tol=WALKER_TOL
+    )
 
 
 def _actuator_name(k: int) -> str:
@@ -423,7 +431,7 @@ def _walker_swing(
     effort = np.array([a.effort for a in robot.actuators])
     while True:
         jt = map_redundant_trajectory(
-            r, task, sol.joints, sol.r, sol.r_d, sol.r_dd, q, check_limits=False
+            r, task, sol.joints, sol.r, sol.r_d, sol.r_dd, q, check_limits=False, tol=WALKER_TOL
         )
         if not sol.optimised:
             break
