@@ -3,7 +3,12 @@
 - :mod:`pkdyn.tripod.locks`: lockable passive joints as rigid constraint models;
 - :mod:`pkdyn.tripod.modes`: stances, modes PP and BE, the constraint set of each mode;
 - :mod:`pkdyn.tripod.xfkmb`: the paper's ``B_iIKMX`` (locked values from the nacelle pose) and
-  ``XFKMB_i`` (nacelle pose keeping the locked values, an optimisation).
+  ``XFKMB_i`` (nacelle pose keeping the locked values, an optimisation);
+- :mod:`pkdyn.tripod.machining`, :mod:`pkdyn.tripod.scenario`, :mod:`pkdyn.tripod.analysis`: the
+  machining-and-walking scenario and its checks;
+- the four-branch walker the paper proposes (``pkdyn.load("tripod", branches=4)``):
+  :mod:`pkdyn.tripod.clearance` (closed-form clearances), :mod:`pkdyn.tripod.redundancy` (the
+  nacelle path chosen while a foot swings), :mod:`pkdyn.tripod.compare` (tripod against walker).
 
 The model itself is the library family :mod:`pkdyn.library.tripod`.
 """
@@ -15,6 +20,7 @@ from pkdyn.tripod.modes import (
     Mode,
     Stance,
     be_mode,
+    branch_numbers,
     foot_frame,
     foot_placement,
     locked_names,
@@ -31,6 +37,7 @@ __all__ = [
     "Mode",
     "Stance",
     "be_mode",
+    "branch_numbers",
     "foot_frame",
     "foot_placement",
     "lock_constraint",
