@@ -14,7 +14,9 @@ In the scaled efforts ``u = tau / s`` the problem is the QP over ``(u, t)``::
 
 (``S = diag(s)``): ``t >= 0`` is implied and minimising ``t^2`` minimises ``t``; the small ``eps``
 (relative ``1e-6``) makes the QP strictly convex and picks, among the distributions of least
-maximum, the one of least norm. Solved by proxsuite, warm-started along a trajectory.
+maximum, the one of least norm. Solved by proxsuite, warm-started along a trajectory (and solved
+again from scratch when the warm start fails: the rows of ``E``, a basis of the reduced
+equations, may turn from one sample to the next).
 """
 
 from __future__ import annotations
@@ -43,7 +45,9 @@ class MinMaxInverseDynamics(InverseDynamics):
         n = self.actuation.n
         rg = E.shape[0]
         s = 1.0 / np.sqrt(self.weights)
-        A = np.hstack([E * s, np.zeros((rg, 1))])
+        s_max = float(np.max(s))
+        A = np.hstack([E * (s / s_max), np.zeros((rg, 1))])  # rows scaled like u
+        b = f / s_max
         H = np.diag(np.r_[np.full(n, MINMAX_REGULARISATION), 1.0])
         g = np.zeros(n + 1)
         eye = np.eye(n)
@@ -56,33 +60,39 @@ class MinMaxInverseDynamics(InverseDynamics):
             lo.append(np.where(np.isfinite(self.lower), self.lower / s, -1e20))
             hi.append(np.where(np.isfinite(self.upper), self.upper / s, 1e20))
         C, l_c, u_c = np.vstack(rows), np.concatenate(lo), np.concatenate(hi)
-        eps_abs = self.eps * scale / float(np.max(s))
-        qp = self._qp
-        if qp is None or self._qp_rank != rg:
-            qp = proxqp.dense.QP(n + 1, rg, C.shape[0])
-            qp.settings.eps_rel = 0.0
-            qp.settings.max_iter = self.max_iter
-            qp.settings.verbose = False
-            qp.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
-            qp.settings.eps_abs = eps_abs
-            qp.init(H, g, A, f, C, l_c, u_c)
-            self._qp, self._qp_rank = qp, rg
-        else:
-            qp.settings.eps_abs = eps_abs
-            qp.update(A=A, b=f)
-        qp.solve()
-        status = qp.results.info.status
-        tau = s * np.array(qp.results.x[:n])
-        ok = status == proxqp.QPSolverOutput.PROXQP_SOLVED
-        if ok and self._bounded:
-            tol = 1e3 * self.eps * scale
-            ok = bool(np.all(tau >= self.lower - tol) and np.all(tau <= self.upper + tol))
-        if not ok:
-            self._qp = None  # a failed solve is no warm start
-            if self._bounded:
-                self._raise_bounds(E, f, sample)
-            raise InfeasibleError(
-                f"{_where(sample)}the min-max effort QP did not converge ({status})",
-                sample=sample,
-            )
-        return tau, int(qp.results.info.iter)
+        eps_abs = self.eps * scale / s_max  # the parent's accuracy on E tau = f
+        iterations = 0
+        status = None
+        # warm start from the previous sample, then (the rows of E are a basis of the reduced
+        # equations that may turn from one sample to the next) from scratch
+        previous = self._qp if self._qp_rank == rg else None
+        for qp in (previous, None) if previous is not None else (None,):
+            if qp is not None:
+                qp.settings.eps_abs = eps_abs
+                qp.update(A=A, b=b)
+            else:
+                qp = proxqp.dense.QP(n + 1, rg, C.shape[0])
+                qp.settings.eps_rel = 0.0
+                qp.settings.max_iter = max(self.max_iter, 1000)
+                qp.settings.verbose = False
+                qp.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
+                qp.settings.eps_abs = eps_abs
+                qp.init(H, g, A, b, C, l_c, u_c)
+                self._qp, self._qp_rank = qp, rg
+            qp.solve()
+            iterations += int(qp.results.info.iter)
+            status = qp.results.info.status
+            tau = s * np.array(qp.results.x[:n])
+            ok = status == proxqp.QPSolverOutput.PROXQP_SOLVED
+            if ok and self._bounded:
+                tol = 1e3 * self.eps * scale
+                ok = bool(np.all(tau >= self.lower - tol) and np.all(tau <= self.upper + tol))
+            if ok:
+                return tau, iterations
+        self._qp = None  # a failed solve is no warm start
+        if self._bounded:
+            self._raise_bounds(E, f, sample)
+        raise InfeasibleError(
+            f"{_where(sample)}the min-max effort QP did not converge ({status})",
+            sample=sample,
+        )

@@ -354,6 +354,20 @@ def test_forces_feasible_and_min_max_allocation(walker, report):
         assert np.max(np.abs(J.T @ lam - y)) < 1e-7
 
 
+def test_min_max_allocation_along_the_machining(report):
+    ph = report.phases[0]
+    norm = inverse_dynamics(ph.robot, ph.trajectory, wrench=ph.wrench, progress=False)
+    mm = inverse_dynamics(
+        ph.robot, ph.trajectory, wrench=ph.wrench, progress=False, allocation="max"
+    )
+    assert np.max(mm.residual) < 1e-7
+    peak_norm, peak_mm = np.max(np.abs(norm.tau), axis=1), np.max(np.abs(mm.tau), axis=1)
+    assert np.all(peak_mm <= peak_norm + 1e-7)
+    assert np.mean(peak_norm - peak_mm) > 0.1  # [N]: the least norm is not the least maximum
+    with pytest.raises(pkdyn.InvalidInputError, match="allocation"):
+        inverse_dynamics(ph.robot, ph.trajectory, progress=False, allocation="minmax")
+
+
 def test_inverse_then_forward_dynamics_reproduces_the_swing(walker, report):
     ph = next(p for p in report.phases if p.name == "swing" and p.branch == 3)
     be, jt = ph.robot, ph.trajectory
