@@ -10,7 +10,8 @@ non-redundant task: at every sample ``q`` solves the closures, the task and ``q[
 together (Levenberg-Marquardt, warm-started from a second-order prediction), ``v`` and ``a``
 solve ``[Jc; Jx; S_r] v = [0; x_dot; r_dot]`` and
 ``[Jc; Jx; S_r] a = [-gamma_c; x_ddot - gamma_x; r_ddot]`` exactly. Whoever chooses ``r(t)``
-(an optimisation, :mod:`pkdyn.tripod.redundancy`) decides the redundant motion.
+(an optimisation, :mod:`pkdyn.tripod.redundancy`) decides the redundant motion. The actuator
+limits are not checked here (the caller's analysis reports them).
 """
 
 from __future__ import annotations
@@ -58,7 +59,6 @@ def map_redundant_trajectory(
     rates: np.ndarray,
     accelerations: np.ndarray,
     q_init: np.ndarray | None = None,
-    check_limits: bool = True,
     tol: float = DEFAULT_TOL,
 ) -> JointTrajectory:
     """Joint trajectory following a platform trajectory and prescribed joint coordinates.
@@ -71,7 +71,6 @@ def map_redundant_trajectory(
         rates: Their rates (N, m) [rad/s or m/s].
         accelerations: Their accelerations (N, m) [rad/s^2 or m/s^2].
         q_init: Configuration near the first sample (default ``robot.q_home``).
-        check_limits: Raise if an actuator leaves its velocity limit.
         tol: Largest residual of the closures, the task and the prescribed coordinates at each
             sample [m or rad].
 
@@ -112,7 +111,6 @@ def map_redundant_trajectory(
     V = np.empty((N, robot.nv))
     A = np.empty((N, robot.nv))
     q = np.array(robot.q_home if q_init is None else q_init, dtype=float)
-    vel_limit = np.array([act.velocity for act in robot.actuators])
     for k in range(N):
         tk = float(task.t[k])
         if k:
@@ -152,16 +150,6 @@ def map_redundant_trajectory(
                 sample=k,
                 time=tk,
             )
-        if check_limits:
-            fast = np.flatnonzero(np.abs(v[robot.actuated_v]) > vel_limit * (1.0 + 1e-9))
-            if fast.size:
-                i = int(fast[0])
-                raise TrajectoryError(
-                    f"actuator '{robot.actuator_names[i]}' would move at "
-                    f"{v[robot.actuated_v][i]:.4g}, beyond its velocity limit {vel_limit[i]:.4g}",
-                    sample=k,
-                    time=tk,
-                )
         Q[k], V[k], A[k] = q, v, a
     return JointTrajectory(
         task.t.copy(), Q, V, A, robot.actuated_q, robot.actuated_v, task=task, name=task.name

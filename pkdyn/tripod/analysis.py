@@ -23,7 +23,8 @@ For every sample of every phase of :func:`pkdyn.tripod.scenario.plan_scenario`:
 
 The same checks run on the tripod and on the four-branch walker (``branches=4``); the effort
 distribution of the walker's redundant actuation in mode PP is the least weighted norm or, with
-``allocation="max"``, the least largest force (:func:`pkdyn.dynamics.inverse_dynamics`).
+``allocation="max"``, the least largest force (:func:`pkdyn.dynamics.inverse_dynamics`), within
+the force limits (the QP's bounds) when such a distribution exists.
 """
 
 from __future__ import annotations
@@ -39,6 +40,8 @@ from pkdyn.analysis.collisions import CollisionChecker
 from pkdyn.analysis.kinematics import _cond, _relations, platform_jacobian
 from pkdyn.analysis.singularity import classify
 from pkdyn.dynamics import inverse_dynamics
+from pkdyn.dynamics.inverse import EffortTrajectory
+from pkdyn.exceptions import InfeasibleEffortError
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
 from pkdyn.tripod.modes import branch_numbers, foot_placement
@@ -291,6 +294,23 @@ def redundant_singularity_distance(robot: Robot, q: np.ndarray) -> float:
     return float(min(1.0 / cond_A, 1.0 / cond_B))
 
 
+def _efforts(r: Robot, phase: Phase, allocation: str, redundant: bool) -> EffortTrajectory:
+    """Inverse dynamics of a phase; redundant actuation distributes within the force limits.
+
+    Where no distribution within the limits exists, the unbounded one is reported (its largest
+    force then exceeds the limit: a violation).
+    """
+    jt, W = phase.trajectory, phase.wrench
+    if redundant:
+        try:
+            return inverse_dynamics(
+                r, jt, wrench=W, limits=True, progress=False, allocation=allocation
+            )
+        except InfeasibleEffortError:
+            pass
+    return inverse_dynamics(r, jt, wrench=W, progress=False, allocation=allocation)
+
+
 def _analyse_phase(
     robot: Robot,
     phase: Phase,
@@ -316,8 +336,8 @@ def _analyse_phase(
     branches = branch_numbers(robot)
     clamped = [b for b in branches if b != phase.branch]
     targets = phase.mode.lock_targets()
-    effort = inverse_dynamics(r, jt, wrench=phase.wrench, progress=False, allocation=allocation)
     redundant = len(r.actuators) > r.dof(jt.q[0])
+    effort = _efforts(r, phase, allocation, redundant)
     res = np.empty(N)
     lock = np.zeros(N)
     support = np.empty(N)

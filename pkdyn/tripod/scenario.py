@@ -374,9 +374,7 @@ def _map(robot: Robot, task: TaskTrajectory, q: np.ndarray, redundant: bool) -> 
     if not redundant:
         return map_task_trajectory(robot, task, q_init=q, check_limits=False, progress=False)
     none = np.zeros((task.t.size, 0))
-    return map_redundant_trajectory(
-        robot, task, (), none, none, none, q, check_limits=False, tol=WALKER_TOL
-    )
+    return map_redundant_trajectory(robot, task, (), none, none, none, q, tol=WALKER_TOL)
 
 
 def _actuator_name(k: int) -> str:
@@ -431,7 +429,7 @@ def _walker_swing(
     effort = np.array([a.effort for a in robot.actuators])
     while True:
         jt = map_redundant_trajectory(
-            r, task, sol.joints, sol.r, sol.r_d, sol.r_dd, q, check_limits=False, tol=WALKER_TOL
+            r, task, sol.joints, sol.r, sol.r_d, sol.r_dd, q, tol=WALKER_TOL
         )
         if not sol.optimised:
             break
@@ -522,17 +520,10 @@ def plan_scenario(
                     mode, r, jt, sol = _walker_swing(
                         robot, plan, stance, q, b, old, new_foot, station_home(p, landed), where
                     )
-                    phase = Phase(
-                        "swing",
-                        mode,
-                        stance,
-                        r,
-                        jt,
-                        t0,
-                        planned_locks=bikmx(p, home, stance, b),
-                        planned_end=sol.end(),
-                        landing=new_foot,
-                        redundancy=sol,
+                    planned: tuple[np.ndarray, pin.SE3, SwingSolution | None] = (
+                        bikmx(p, home, stance, b),
+                        sol.end(),
+                        sol,
                     )
                 else:
                     x_end, b_i, x_re = _swing_poses(p, stance, landed, b, plan.tilt)
@@ -541,17 +532,19 @@ def plan_scenario(
                     r = mode_robot(robot, stance, mode, q)
                     task = swing_task(old, new_foot, plan.lift, plan.swing_time, plan.dt)
                     jt = map_task_trajectory(r, task, q_init=q, check_limits=False, progress=False)
-                    phase = Phase(
-                        "swing",
-                        mode,
-                        stance,
-                        r,
-                        jt,
-                        t0,
-                        planned_locks=b_i,
-                        planned_end=x_end,
-                        landing=new_foot,
-                    )
+                    planned = (b_i, x_end, None)
+                phase = Phase(
+                    "swing",
+                    mode,
+                    stance,
+                    r,
+                    jt,
+                    t0,
+                    planned_locks=planned[0],
+                    planned_end=planned[1],
+                    landing=new_foot,
+                    redundancy=planned[2],
+                )
                 q = add(phase)
                 stance = landed
             q = move_nacelle(station_home(p, stance), q)
