@@ -137,6 +137,32 @@ def _q1(robot, b):
     return robot.model.joints[robot.model.getJointId(f"branch{b}_q2q1")].idx_q + 1
 
 
+def test_walker_geometric_models_and_stances(walker):
+    from pkdyn.tripod.analysis import redundant_singularity_distance
+    from pkdyn.tripod.xfkmb import actuator_lengths, bikmx, xfkmb
+
+    st = Stance.default(P4)
+    x = station_home(P4, st)
+    q = walker.q_home
+    b = bikmx(P4, x, st, 2)  # the walker locks four joints of the swinging branch
+    assert np.allclose(b, be_mode(walker, q, 2).lock_targets()[[1, 0, 2, 3]], atol=1e-12)
+    assert np.allclose(actuator_lengths(P4, x, st), q[walker.actuated_q], atol=1e-12)
+    with pytest.raises(pkdyn.InvalidInputError, match="XFKMB"):
+        xfkmb(P4, np.zeros(6), st, 1, x)
+    with pytest.raises(pkdyn.InvalidInputError, match="4 branches"):
+        mode_robot(walker, Stance.default(tripod.Params()), pp_mode())
+    with pytest.raises(pkdyn.InvalidInputError, match="branch"):
+        be_mode(walker, q, 5)
+    # the singularity margin of redundant actuation: classify's for a square robot
+    tri = pkdyn.load("tripod", geometry=False)
+    pp3 = mode_robot(tri, Stance.default(tri.params), pp_mode())
+    assert redundant_singularity_distance(pp3, tri.q_home) == pytest.approx(
+        classify(pp3, tri.q_home).distance, abs=1e-9
+    )
+    pp4 = mode_robot(walker, st, pp_mode())
+    assert 0.1 < redundant_singularity_distance(pp4, q) < 1.0
+
+
 @pytest.mark.parametrize(("name", "value"), [("branches", 5), ("branches", 2), ("theta", 0.8)])
 def test_walker_bad_parameters(name, value):
     params = {"branches": 4, name: value}
