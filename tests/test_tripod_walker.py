@@ -36,8 +36,9 @@ from pkdyn.tripod import (
 from pkdyn.tripod.analysis import leg_pairs, run_scenario
 from pkdyn.tripod.clearance import clearances
 from pkdyn.tripod.compare import compare_walkers, default_cases
+from pkdyn.tripod.locked_branch import foot_frames
 from pkdyn.tripod.machining import MachiningPlan
-from pkdyn.tripod.redundancy import bumps, foot_frames
+from pkdyn.tripod.redundancy import bumps
 from pkdyn.tripod.scenario import WalkPlan, station_home
 from solvers import ForwardDynamics
 

@@ -37,7 +37,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.analysis.collisions import CollisionChecker
-from pkdyn.analysis.kinematics import _cond, _relations, platform_jacobian
+from pkdyn.analysis.kinematics import SINGULAR_TOL, _cond, _relations, platform_jacobian
 from pkdyn.analysis.singularity import classify
 from pkdyn.dynamics import inverse_dynamics
 from pkdyn.dynamics.inverse import EffortTrajectory
@@ -46,7 +46,7 @@ from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
 from pkdyn.tripod.modes import branch_numbers, foot_placement
 from pkdyn.tripod.scenario import Phase, WalkPlan, plan_scenario
-from solvers import ClosureSet
+from solvers import ClosureSet, numerics
 
 __all__ = [
     "LEGS",
@@ -286,7 +286,7 @@ def redundant_singularity_distance(robot: Robot, q: np.ndarray) -> float:
     a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)
     rel = _relations(Jc, Jx, a, p)
     _, s, Vt = np.linalg.svd(rel.R, full_matrices=False)
-    k = int(np.sum(s > 1e-12 * s[0]))
+    k = numerics.rank_of(s, SINGULAR_TOL)
     n_a, m = a.size, rows.size
     B, A = Vt[:k, :n_a], -Vt[:k, n_a:]
     cond_A = _cond(np.linalg.svd(A, compute_uv=False), m)

@@ -247,7 +247,10 @@ def _be_distance(
     Ad[:, 0, 4], Ad[:, 0, 5] = a[:, 2], -a[:, 1]  # v_A = v_O - [a]x omega
     Ad[:, 1, 3], Ad[:, 1, 5] = -a[:, 2], a[:, 0]
     Ad[:, 2, 3], Ad[:, 2, 4] = a[:, 1], -a[:, 0]
-    K_s = Ad @ np.linalg.pinv(Js)  # (the supports' J_s is square: 3 branches, 6 legs)
+    # the supports' J_s is square (3 branches, 6 legs); singular: a parallel singularity (0)
+    regular = np.abs(np.linalg.det(Js)) > 1e-300
+    K_s = np.zeros((N, 6, 6))
+    K_s[regular] = Ad[regular] @ np.linalg.solve(Js[regular], np.eye(6))
     # the locked swinging branch: its foot turns about z through P_L and slides along rod L
     P_L, P_R, A_i = P[:, i, 0], P[:, i, 1], A[:, i]
     dL, dR = A_i - P_L, A_i - P_R
@@ -272,7 +275,7 @@ def _be_distance(
     B = np.empty((N, 6, 2 * n))
     B[:, :, order] = np.concatenate([K_s, G], axis=-1)
     rel = np.concatenate([B, -np.broadcast_to(np.eye(6), (N, 6, 6))], axis=-1)
-    ok = np.isfinite(rel).all(axis=(1, 2))  # a flat triangle: singular (0)
+    ok = np.isfinite(rel).all(axis=(1, 2)) & regular  # a flat triangle: singular (0)
     rel[~ok] = 0.0
     _, _, Vt = np.linalg.svd(rel, full_matrices=False)  # orthonormal basis of the relations
     sA = np.linalg.svd(-Vt[:, :, 2 * n :], compute_uv=False)
