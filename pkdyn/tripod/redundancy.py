@@ -36,13 +36,17 @@ smallest leg distance [m]; a path that leaves its strokes is first brought back 
 subject to, at every sample: the mode's ``1 / cond``
 ``sigma_k`` (the ``distance`` of :func:`pkdyn.analysis.singularity.classify`, in closed form, see
 :mod:`pkdyn.tripod.clearance`) at least ``singularity_keep`` (idem), every actuator's speed (finite
-differences of its length) below ``speed_margin`` times its limit; with two secondary terms, a
+differences of its length) below ``speed_margin`` times its limit (or the baseline's speed, if
+faster); with two secondary terms, a
 bonus ``singularity_weight * min_k sigma_k`` (moving away from singularities) and
 ``mean_weight * mean_k min(d_k, distance_cap)`` (which shapes the path where ``Phi`` is pinned,
 e.g. at the start, where the locks engaged). Solved by SLSQP (:func:`scipy.optimize.minimize`) in
-epigraph form (maximise ``t`` under ``d_k >= t``) on up to ``samples`` evenly spread samples
-(with slightly stricter constraints), then checked on all. The result is accepted only if it does
-at least as well as the baseline on ``Phi`` and meets the constraints on every sample, else the
+epigraph form (maximise ``t + stroke_weight s`` under ``t`` below every leg-to-leg and every
+leg-to-nacelle distance of every sample and ``stroke_keep + s`` below the stroke margins,
+``s <= 0``), gradients by forward differences evaluated in one vectorised batch, on up to
+``samples`` evenly spread samples (with slightly stricter constraints), then checked on all.
+The result is accepted only if it does at least as well as the baseline on ``Phi`` and meets the
+constraints on every sample, else the
 largest fraction of its departure from the baseline that does (0.9, 0.75, 0.5, 0.25), else the
 baseline is kept: the optimised path is never worse than the baseline on the objective. The
 actuator forces are checked afterwards by the inverse dynamics (:mod:`pkdyn.tripod.scenario` scales
