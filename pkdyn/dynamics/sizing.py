@@ -28,7 +28,12 @@ from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import PkdynError
 from pkdyn.model.robot import Robot
 
-__all__ = ["ActuatorSizing", "SizingResult", "size", "sizing_from_efforts"]
+__all__ = ["FEASIBLE_TOL", "ActuatorSizing", "SizingResult", "size", "sizing_from_efforts"]
+
+
+FEASIBLE_TOL = 1e-6
+"""Relative excess of a limit still reported as feasible (rounding of a motion that uses its
+limits exactly, such as the fastest cycle)."""
 
 
 @dataclass(frozen=True)
@@ -111,8 +116,9 @@ class SizingResult:
 
     @property
     def feasible(self) -> bool:
-        """All peaks within the effort and speed limits."""
-        return all(a.margin >= 0.0 and a.speed_margin >= 0.0 for a in self.actuators)
+        """All peaks within the effort and speed limits (to :data:`FEASIBLE_TOL`)."""
+        tol = -FEASIBLE_TOL
+        return all(a.margin >= tol and a.speed_margin >= tol for a in self.actuators)
 
     def as_json(self) -> dict[str, Any]:
         """JSON-ready summary (``actuators``: list of per-actuator dicts)."""
