@@ -1,4 +1,4 @@
-"""Dynamics commands: ``simulate`` (passive dynamics) and ``size`` (sizing, motors, fastest cycle)."""
+"""Dynamics commands: ``simulate`` (passive dynamics), ``size`` (sizing, motors, fastest cycle)."""
 
 from __future__ import annotations
 
