@@ -107,11 +107,14 @@ class FastestResult:
         """Fraction of the samples where a torque or speed limit is active."""
         return float(np.mean(self.utilisation >= 1.0 - ACTIVE_TOL))
 
-    def joint_effort_at(self, t: float) -> np.ndarray:
+    def joint_effort_at(
+        self, t: float, q: np.ndarray | None = None, v: np.ndarray | None = None
+    ) -> np.ndarray:
         """Joint-side efforts (n_a,) of the time-optimal motion at time ``t`` [s].
 
         Between samples the path acceleration is constant; ``A``, ``B``, ``C`` are interpolated
-        linearly in ``s``. For a feed-forward simulation (:func:`pkdyn.dynamics.simulate`).
+        linearly in ``s``. A feed-forward torque function for :func:`pkdyn.dynamics.simulate`
+        (``q`` and ``v`` are ignored).
         """
         T = self.trajectory.t
         s = self.path.t

@@ -233,6 +233,10 @@ def _value(source: str, entry: str, f: Field, raw: Any, column_unit: str | None)
         sign = "> 0" if f.open_lo else ">= 0"
         raise CatalogError(source, entry, f.name, f"must be {sign}, got {raw!r}")
     if not low_ok or value > f.hi:
+        if f.unit == "1" and f.hi == 1.0:
+            raise CatalogError(
+                source, entry, f.name, f"{raw!r} is not a fraction in (0, 1]; write 0.9 or '90 %'"
+            )
         raise CatalogError(
             source,
             entry,
@@ -295,15 +299,20 @@ def _motor(source: str, index: int, raw: Any, units: Mapping[str, str] | None = 
             "(50 to 1e7); check the unit of rotor_inertia (plain numbers are kg m^2; write "
             "e.g. '0.4 kg cm^2')",
         )
-    power = d["rated_torque"] * d["rated_speed"] / d["mass"]
-    if power > 1e4:
-        raise CatalogError(
-            source,
-            entry,
-            "rated_speed",
-            f"rated power per mass = {power:.3g} W/kg is implausible (> 10 kW/kg); check the "
-            "units of rated_speed (plain numbers are rad/s; write e.g. '3000 rpm') and mass",
-        )
+    for key, torque, limit in (
+        ("rated_speed", "rated_torque", 3e3),
+        ("max_speed", "peak_torque", 8e3),
+    ):
+        power = d[torque] * d[key] / d["mass"]
+        if power > limit:
+            raise CatalogError(
+                source,
+                entry,
+                key,
+                f"{torque} x {key} / mass = {power:.3g} W/kg is implausible for a motor (above "
+                f"{limit / 1e3:g} kW/kg); check the units of {key} (plain numbers are rad/s; "
+                "write e.g. '3000 rpm') and of mass",
+            )
     if d.get("coulomb", 0.0) >= d["peak_torque"]:
         raise CatalogError(source, entry, "coulomb", "friction at or above the peak torque")
     return Motor(**d)
