@@ -130,7 +130,7 @@ def test_armature_equals_the_rotor_as_a_body(plain, cycle):
     aug = _augment(geared, big, cycle, N)
     ef = inverse_dynamics(geared, cycle)
     ef_big = inverse_dynamics(big, aug)
-    names = big.actuator_names
+    names = big.actuated_joint_names
     arms = [names.index(f"arm{i}") for i in (1, 2, 3)]
     rotors = [names.index(f"rotor{i}") for i in (1, 2, 3)]
     combined = ef_big.tau[:, arms] + N * ef_big.tau[:, rotors]

@@ -44,7 +44,7 @@ def test_inverse_dynamics_along_it_uses_the_limits(robot, fine):
     E = np.array([a.effort for a in robot.actuators])
     V = np.array([a.velocity for a in robot.actuators])
     torque = np.abs(ef.tau) / E
-    speed = np.abs(traj.qa_d) / V
+    speed = np.abs(traj.qa_dot) / V
     assert np.max(torque) <= 1.0 + 1e-3 and np.max(speed) <= 1.0 + 1e-3
     used = np.maximum(torque.max(axis=1), speed.max(axis=1))
     assert np.mean(used >= 1.0 - 1e-3) > 0.95
@@ -108,7 +108,7 @@ def test_payload_rotor_inertia_and_losses_slow_it_down(robot, coarse):
     assert res.cycle_time > with_rotor.cycle_time
     # the motor torques of the drive model, from pkdyn's inverse dynamics, are within the limit
     ef = inverse_dynamics(with_payload(lossy, 1.0), res.trajectory)
-    tau_m = motor_efforts(lossy, ef.tau, res.trajectory.qa_d)
+    tau_m = motor_efforts(lossy, ef.tau, res.trajectory.qa_dot)
     assert np.max(np.abs(20.0 * tau_m)) <= 40.0 * (1 + 1e-3)
     assert res.active_fraction > 0.9
     # limits from a catalog motor: its peak torque through the reduction, its speed

@@ -39,12 +39,12 @@ def test_a_pair_is_the_dynamics_with_that_drive(case):
         efficiency=g.efficiency,
     )
     ef = inverse_dynamics(with_payload(fitted, 1.0), traj)
-    tau_m = motor_efforts(fitted, ef.tau, traj.qa_d)
+    tau_m = motor_efforts(fitted, ef.tau, traj.qa_dot)
     assert np.allclose(tau_m[:, 0], cand.torque, rtol=0, atol=1e-9 * np.max(np.abs(tau_m)))
     assert cand.motor_peak == pytest.approx(np.max(np.abs(tau_m[:, 0])), rel=1e-9)
     sizing = size(fitted, traj, payload=1.0)
     assert cand.motor_rms == pytest.approx(sizing.actuators[0].motor_rms, rel=1e-9)
-    assert np.allclose(cand.speed, g.ratio * traj.qa_d[:, 0])
+    assert np.allclose(cand.speed, g.ratio * traj.qa_dot[:, 0])
 
 
 def test_feasible_pairs_pass_every_check_and_are_ranked(case):
@@ -79,7 +79,7 @@ def test_load_inertia_gives_the_kinetic_energy(case):
     loaded = with_payload(robot, 1.0)
     for k in range(5, traj.t.size, 17):
         Ma = actuator_inertia(loaded, traj.q[k])
-        qd = traj.qa_d[k]
+        qd = traj.qa_dot[k]
         ke = pin.computeKineticEnergy(loaded.model, loaded.data, traj.q[k], traj.v[k])
         assert 0.5 * qd @ Ma @ qd == pytest.approx(ke, rel=1e-9)
         assert np.allclose(Ma, Ma.T) and np.all(np.linalg.eigvalsh(Ma) > 0)
@@ -103,7 +103,7 @@ def test_optimal_ratio_minimises_the_rms_torque(case):
     best = by_ratio[int(np.argmin(rms))].reduction
     assert abs(best - ratio.optimal) <= (grid[1] - grid[0]) * 1.01
     assert float(np.min(rms)) == pytest.approx(ratio.rms_at_optimal, rel=1e-3)
-    assert ratio.speed_limited == pytest.approx(m.max_speed / np.max(np.abs(traj.qa_d[:, 0])))
+    assert ratio.speed_limited == pytest.approx(m.max_speed / np.max(np.abs(traj.qa_dot[:, 0])))
 
 
 def test_no_feasible_pair_names_the_closest_and_what_they_lack(case, capsys):
@@ -112,7 +112,7 @@ def test_no_feasible_pair_names_the_closest_and_what_they_lack(case, capsys):
     small = Catalog(cat.motors[:2], cat.gearboxes[:3], "small")
     sel = select_drives(robot, traj, small, payload=1.0)
     assert not sel.feasible
-    with pytest.raises(NoFeasibleDriveError, match="arm1") as err:
+    with pytest.raises(NoFeasibleDriveError, match="motor1") as err:
         sel.choice()
     assert len(err.value.closest) == 3 and all(" > " in c for c in err.value.closest)
     assert "NO FEASIBLE PAIR" in sel.table()

@@ -173,8 +173,9 @@ def joint_path(
     if bad.size:
         k, i = (int(x) for x in bad[0])
         raise TrajectoryError(
-            f"the path takes actuator '{robot.actuator_names[i]}' to {qa[k, i]:.6g}, outside its "
-            f"stroke [{lo[i]:.6g}, {hi[i]:.6g}]: no speed can follow it",
+            f"the path takes actuator '{robot.actuator_names[i]}' (joint "
+            f"'{robot.actuated_joint_names[i]}') to {qa[k, i]:.6g}, outside its stroke "
+            f"[{lo[i]:.6g}, {hi[i]:.6g}]: no speed can follow it",
             sample=k,
             time=float(path.t[k]),
         )
@@ -391,7 +392,7 @@ def fastest_trajectory(
     V = _limits(robot, "velocity", velocity, [a.velocity for a in robot.actuators])
     loaded = with_payload(robot, payload) if payload else robot
     s = path.t
-    qa1 = path.qa_d
+    qa1 = path.qa_dot
     A, B, C = _coefficients(loaded, path, progress)
     _static_check(robot, path, C, E)
     with np.errstate(divide="ignore"):
@@ -478,7 +479,7 @@ def _motion(
         )
     t = np.concatenate([[0.0], np.cumsum(dt)])
     d = drives(robot)
-    qa1 = path.qa_d
+    qa1 = path.qa_dot
     qd = qa1 * sd[:, None]
     right = np.append(sdd, sdd[-1])
     left = np.insert(sdd, 0, sdd[0])

@@ -172,7 +172,7 @@ class Candidate:
     """A motor (x gearbox) on one actuator along the trajectory.
 
     Attributes:
-        actuator: Actuator (joint) name.
+        actuator: Actuator name.
         motor: The motor.
         gearbox: The gearbox (``None``: the robot's own transmission).
         reduction: Total reduction ``N`` (motor speed / joint speed).
@@ -288,7 +288,7 @@ class ActuatorSelection:
     """Every candidate of one actuator.
 
     Attributes:
-        actuator: Actuator (joint) name.
+        actuator: Actuator name.
         load_inertia: Largest mechanism inertia seen by the joint along the trajectory
             [kg m^2 or kg] (rotor excluded).
         feasible: Feasible pairs, best first.
@@ -607,7 +607,7 @@ def select_drives(
     if efforts is None:
         efforts = inverse_dynamics(loaded, trajectory, wrench=wrench, progress=progress)
     t = trajectory.t
-    qd, qdd = trajectory.qa_d, trajectory.qa_dd
+    qd, qdd = trajectory.qa_dot, trajectory.qa_ddot
     own = drives(robot)
     tau_load = efforts.tau - own.armature * qdd
     idx = np.unique(np.linspace(0, t.size - 1, max(2, inertia_samples)).astype(int))
@@ -626,7 +626,7 @@ def select_drives(
             base = (act.reduction, act.efficiency, eta_b)
         pairs = [
             _evaluate(
-                act.joint, m, g, base, t, tau_load[:, i], qd[:, i], qdd[:, i], J_load[i], criterion
+                act.name, m, g, base, t, tau_load[:, i], qd[:, i], qdd[:, i], J_load[i], criterion
             )
             for m in catalog.motors
             for g in (catalog.gearboxes or (None,))
@@ -636,7 +636,7 @@ def select_drives(
         )
         bad = sorted((c for c in pairs if not c.feasible), key=lambda c: c.utilisation)
         ratios = [_ratio(m, t, tau_load[:, i], qd[:, i], qdd[:, i]) for m in catalog.motors]
-        out.append(ActuatorSelection(act.joint, float(J_load[i]), ok, bad, ratios))
+        out.append(ActuatorSelection(act.name, float(J_load[i]), ok, bad, ratios))
     return Selection(
         robot=robot.name,
         trajectory=trajectory.name,
