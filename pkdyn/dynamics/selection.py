@@ -50,6 +50,7 @@ from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InvalidInputError, NoFeasibleDriveError
 from pkdyn.model.robot import Robot
 from solvers import Drives
+from solvers.numerics import lstsq, null_space
 
 __all__ = [
     "CRITERIA",
@@ -92,14 +93,12 @@ def actuator_inertia(robot: Robot, q: np.ndarray, armature: bool = False) -> np.
         M -= np.diag(np.asarray(model.armature))
     if robot.closure_set.nc:
         _, J = robot.closure_set.residual_and_jacobian(data, q)
-        _, s, Vt = np.linalg.svd(J)
-        r = int(np.sum(s > 1e-10 * max(float(s[0]), 1e-300))) if s.size else 0
-        Z = Vt[r:].T
+        Z = null_space(J)
     else:
         Z = np.eye(model.nv)
     H = Z.T @ M @ Z
     SZ = Z[robot.actuated_v]
-    return np.linalg.inv(SZ @ np.linalg.pinv(H) @ SZ.T)
+    return np.linalg.inv(SZ @ lstsq(H, SZ.T))
 
 
 @dataclass(frozen=True)
