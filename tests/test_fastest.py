@@ -142,3 +142,14 @@ def test_cli_fastest(capsys):
     assert main(args + ["--dt", "4e-3"]) == 0
     text = capsys.readouterr().out
     assert text.startswith("fastest cycle:") and "LIMITS EXCEEDED" not in text
+
+
+def test_demo_prints_the_fastest_cycles(capsys):
+    from pkdyn.cli.demo import run_fastest_demo
+
+    out = run_fastest_demo(payloads=(1.0,), samples=126)
+    text = capsys.readouterr().out
+    assert "Fastest Adept cycle of the DELTA 580" in text and "check:" in text
+    with_rotor, without = out[(1.0, 5e-5)], out[(1.0, 0.0)]
+    assert with_rotor.cycle_time > without.cycle_time
+    assert max(float(np.max(r.torque_utilisation)) for r in out.values()) <= 1 + 1e-6
