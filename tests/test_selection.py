@@ -167,3 +167,27 @@ def test_cli_catalog_and_operating_points(tmp_path, capsys):
     assert "motor 'X1': field 'rated_speed': missing" in err
     assert main(["size", "delta", "--operating-points", str(png)]) == 1
     assert "--catalog" in capsys.readouterr().err
+
+
+def test_a_screw_keeps_its_reduction_and_may_go_without_gearbox():
+    hexapod = pkdyn.load("gough_stewart", geometry=False)
+    traj = named_trajectory(hexapod, "sine", dt=1e-2)
+    sel = select_drives(hexapod, traj, example_catalog())
+    screw = hexapod.actuators[0].reduction  # rad/m
+    a = sel.actuators[0]
+    every = a.feasible + a.rejected
+    direct = [c for c in every if c.gearbox is None]
+    assert len(direct) == 7 and all(c.reduction == pytest.approx(screw) for c in direct)
+    assert all(c.reduction == pytest.approx(c.gearbox.ratio * screw) for c in every if c.gearbox)
+    assert a.feasible and a.best.gearbox is None  # this gentle motion needs no gearbox
+
+
+def test_redundant_actuation_selects_and_has_a_load_inertia():
+    quattro = pkdyn.load("delta", geometry=False, arms=4, bar_joint="universal")
+    traj = named_trajectory(quattro, "adept", cycle_time=0.6, dt=1e-2)
+    sel = select_drives(quattro, traj, example_catalog(), payload=1.0)
+    assert len(sel.actuators) == 4 and sel.feasible
+    k = traj.t.size // 3
+    Ma = actuator_inertia(quattro, traj.q[k])  # pseudo-inverse: 4 rates, 3 dof
+    ke = pin.computeKineticEnergy(quattro.model, quattro.data, traj.q[k], traj.v[k])
+    assert 0.5 * traj.qa_dot[k] @ Ma @ traj.qa_dot[k] == pytest.approx(ke, rel=1e-8)

@@ -30,7 +30,7 @@ matching for a purely inertial load), with the largest ratio its maximum speed a
 With redundant actuation, ``tau_load`` is the least-norm sharing of the inverse dynamics and
 each motor accelerates its own rotor (a valid sharing, not re-optimised per pair). A prismatic
 actuator keeps its screw (its reduction in rad/m and efficiency), and the gearbox, in front of
-it, multiplies the reduction.
+it, multiplies the reduction; the motor on the screw alone is a candidate too.
 """
 
 from __future__ import annotations
@@ -74,7 +74,8 @@ def actuator_inertia(robot: Robot, q: np.ndarray, armature: bool = False) -> np.
 
     ``M_a = (S Z H^-1 Z^T S^T)^-1`` with ``Z`` a basis of the motions the closures allow and
     ``H = Z^T M Z``: the kinetic energy is ``0.5 qa_dot^T M_a qa_dot`` for the motion of least
-    energy (internal mobilities such as the Delta's bar spins at rest).
+    energy (internal mobilities such as the Delta's bar spins at rest). With redundant actuation
+    (dependent actuator rates) ``M_a`` is the pseudo-inverse, exact on the feasible rates.
 
     Args:
         robot: The robot (a payload included if any).
@@ -98,7 +99,8 @@ def actuator_inertia(robot: Robot, q: np.ndarray, armature: bool = False) -> np.
         Z = np.eye(model.nv)
     H = Z.T @ M @ Z
     SZ = Z[robot.actuated_v]
-    return np.linalg.inv(SZ @ lstsq(H, SZ.T))
+    K = SZ @ lstsq(H, SZ.T)  # the actuators' inverse inertia
+    return lstsq(K, np.eye(K.shape[0]))  # redundant actuation: the pseudo-inverse
 
 
 @dataclass(frozen=True)
@@ -480,7 +482,7 @@ def _evaluate(
 ) -> Candidate:
     """One actuator with one motor (x gearbox); ``base``: fixed stage (ratio, eta, eta_b)."""
     b, eta_s, eta_bs = base
-    if g is None:
+    if g is None:  # the motor on the fixed stage alone (the robot's transmission, or a screw)
         N, J, eta, eta_b = b, m.rotor_inertia, eta_s, eta_bs
     else:
         N = g.ratio * b
@@ -493,7 +495,8 @@ def _evaluate(
     tau_j = tau_load + d.armature[0] * qdd
     tau_m = d.motor_effort(tau_j[:, None], qd[:, None])[:, 0]
     omega = d.motor_speed(qd[:, None])[:, 0]
-    env = m.peak_torque_at(omega)
+    # the torque envelopes at speeds clipped to the maximum (the speed check judges the speed)
+    env = m.peak_torque_at(np.clip(omega, -m.max_speed, m.max_speed))
     with np.errstate(divide="ignore", invalid="ignore"):
         util = np.where(env > 0.0, np.abs(tau_m) / env, np.where(tau_m == 0.0, 0.0, np.inf))
     k = int(np.argmax(util))
@@ -503,7 +506,12 @@ def _evaluate(
     checks = [
         Check("peak torque", float(abs(tau_m[k])), float(env[k]), "N m", float(t[k]), omega[k]),
         Check(
-            "RMS torque", rms, float(m.continuous_torque_at(mean_speed)), "N m", None, mean_speed
+            "RMS torque",
+            rms,
+            float(m.continuous_torque_at(min(mean_speed, m.max_speed))),
+            "N m",
+            None,
+            mean_speed,
         ),
         Check("speed", float(abs(omega[kw])), m.max_speed, "rad/s", float(t[kw])),
     ]
@@ -623,12 +631,16 @@ def select_drives(
             base = (1.0, 1.0, 1.0)
         else:
             base = (act.reduction, act.efficiency, eta_b)
+        # a screw may also be driven directly: its motor alone is a candidate too
+        gears: tuple[Gearbox | None, ...] = catalog.gearboxes or (None,)
+        if catalog.gearboxes and prismatic:
+            gears = (None, *catalog.gearboxes)
         pairs = [
             _evaluate(
                 act.name, m, g, base, t, tau_load[:, i], qd[:, i], qdd[:, i], J_load[i], criterion
             )
             for m in catalog.motors
-            for g in (catalog.gearboxes or (None,))
+            for g in gears
         ]
         ok = sorted(
             (c for c in pairs if c.feasible), key=lambda c: (c.score, c.mass, c.utilisation)
