@@ -10,6 +10,7 @@ import re
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import simpson_work
 
 import pkdyn
 from pkdyn.dynamics import inverse_dynamics, mechanical_energy, simulate
@@ -175,8 +176,9 @@ def test_inverse_and_forward_dynamics_invert_each_other_through_the_drives():
 
 
 def _simpson(t: np.ndarray, p: np.ndarray) -> float:
-    h = t[1] - t[0]
-    return float(h / 3.0 * (p[0] + 4.0 * p[1:-1:2].sum() + 2.0 * p[2:-1:2].sum() + p[-1]))
+    """Integral of ``p`` over ``t`` (an odd number of uniform samples)."""
+    assert t.size % 2 == 1
+    return float(simpson_work(t, p)[0][-1])
 
 
 def test_motor_work_equals_energy_change_plus_losses():
