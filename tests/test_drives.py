@@ -277,3 +277,13 @@ def test_with_drives_and_parameters_are_checked(plain):
     back = with_drives(geared, rotor_inertia=0.0)
     assert np.all(back.model.armature == 0.0)
     assert pin.computeKineticEnergy(back.model, back.data, plain.q_home, np.zeros(plain.nv)) == 0
+
+
+def test_mjcf_armature_round_trip():
+    """MJCF carries the reflected inertia as the joint's armature: exported and read back, it
+    becomes the actuator's rotor inertia again (armature / gear^2), counted once."""
+    robot = pkdyn.load("delta", geometry=False, rotor_inertia=J_ROTOR)
+    back = load_string(to_mjcf(robot), "delta.xml", geometry=False)
+    assert [a.rotor_inertia for a in back.actuators] == pytest.approx([J_ROTOR] * 3)
+    assert np.allclose(back.model.armature[back.actuated_v], N**2 * J_ROTOR)
+    assert np.allclose(drives(back).armature, N**2 * J_ROTOR)
