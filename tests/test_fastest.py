@@ -79,7 +79,7 @@ def test_forward_simulation_follows_the_path(robot, fine):
     err = np.linalg.norm(got - target, axis=1)
     assert np.max(err) < 1e-3
     # the inverse dynamics is linear in (sdd, sd^2): tau = A sdd + B sd^2 + C at every sample
-    lin = res.A * res.s_ddot[:, None] + res.B * res.s_dot[:, None] ** 2 + res.C
+    lin = res.A * res.s_ddot[:, None] + res.B * res.s_dot[:, None] ** 2 + res.C + res.P
     assert np.max(np.abs(lin - res.efforts.tau)) < 1e-8 * np.max(np.abs(res.efforts.tau))
 
 
@@ -153,3 +153,25 @@ def test_demo_prints_the_fastest_cycles(capsys):
     with_rotor, without = out[(1.0, 5e-5)], out[(1.0, 0.0)]
     assert with_rotor.cycle_time > without.cycle_time
     assert max(float(np.max(r.torque_utilisation)) for r in out.values()) <= 1 + 1e-6
+
+
+def test_joint_springs_dampers_and_friction_are_honoured(robot, coarse):
+    """With the robot's own passive elements (arm dampers, friction and a spring), pkdyn's
+    inverse dynamics along the result (passive elements included) stays within the limits."""
+    from pkdyn.model.description import PassiveSpec
+    from pkdyn.model.passive import with_passive
+
+    elements = [
+        PassiveSpec(f"arm{i}", stiffness=(5.0,), rest=(0.6,), damping=(0.4,), friction=(0.5,))
+        for i in (1, 2, 3)
+    ]
+    damped = with_passive(robot, elements)
+    res = fastest_trajectory(damped, coarse, payload=1.0)
+    ef = inverse_dynamics(with_payload(damped, 1.0), res.trajectory)
+    assert np.max(np.abs(ef.tau)) <= 40.0 * (1 + 1e-3)
+    assert np.max(np.abs(res.P)) > 1.0 and res.iterations > 1  # the dampers matter here
+    assert res.active_fraction > 0.9
+    # dampers and friction alone cost time (the spring above helps against gravity)
+    lossy = [PassiveSpec(f"arm{i}", damping=(0.4,), friction=(0.5,)) for i in (1, 2, 3)]
+    slow = fastest_trajectory(with_passive(robot, lossy), coarse, payload=1.0)
+    assert slow.cycle_time > fastest_trajectory(robot, coarse, payload=1.0).cycle_time

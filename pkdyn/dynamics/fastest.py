@@ -11,14 +11,16 @@ quadratic in ``v``, the joint-side efforts are
     tau(s) = A(s) sdd + B(s) sd^2 + C(s),
     C = ID(q, 0, 0),  A = ID(q, 0, q') - C,  B = ID(q, q', q'') - C,
 
-three passes of pkdyn's own inverse dynamics (gravity, payload and reflected rotor inertia
-included). The limits: ``|N tau_m| <= effort`` with ``tau_m`` the motor torque of the drive
-model (:mod:`pkdyn.dynamics.actuation`; for a lossless drive ``|tau| <= effort``), i.e. bounds
-on ``tau`` that depend on the direction of motion (efficiency) and on the speed (friction), and
-``|q'_a sd| <= velocity``. toppra (reachability analysis, interpolation discretisation, Seidel
-LPs) gives the fastest ``sd(s)`` from rest to rest on the grid of the path's samples, with a
-constant ``sdd`` per segment; the rows of the torque constraint are normalised (the path's
-derivatives vanish at its rest points, which defeats the LP's absolute tolerances otherwise).
+three passes of pkdyn's own inverse dynamics (gravity, payload, springs and reflected rotor
+inertia included; the robot's dampers and friction, which depend on ``sd``, are updated from
+the previous solution like the drive losses). The limits: ``|N tau_m| <= effort`` with
+``tau_m`` the motor torque of the drive model (:mod:`pkdyn.dynamics.actuation`; for a lossless
+drive ``|tau| <= effort``), i.e. bounds on ``tau`` that depend on the direction of motion
+(efficiency) and on the speed (friction), and ``|q'_a sd| <= velocity``. toppra (reachability
+analysis, interpolation discretisation, Seidel LPs) gives the fastest ``sd(s)`` from rest to
+rest on the grid of the path's samples, with a constant ``sdd`` per segment; the rows of the
+torque constraint are normalised (the path's derivatives vanish at its rest points, which
+defeats the LP's absolute tolerances otherwise).
 With lossy drives the speed-dependent bounds are updated from the previous solution until the
 profile converges. At each sample the acceleration is the one of the adjacent segment that
 loads the actuators most (both satisfy the limits there); the result is checked by a fourth,
@@ -69,7 +71,8 @@ class FastestResult:
         segment_s_ddot: Constant path acceleration of each segment (N - 1,).
         A: Effort coefficient of ``sdd`` (N, n_a) [joint side].
         B: Effort coefficient of ``sd^2`` (N, n_a).
-        C: Effort at rest (N, n_a) (gravity, payload).
+        C: Effort at rest (N, n_a) (gravity, payload, springs).
+        P: Effort of the dampers and friction at the final speeds (N, n_a) (zero without).
         effort_limit: Limit of ``|N tau_m|`` per actuator (n_a,) [N m or N].
         velocity_limit: Joint-side speed limit per actuator (n_a,) [rad/s or m/s].
         efforts: Independent inverse dynamics along ``trajectory`` (the check; its sizing:
@@ -90,6 +93,7 @@ class FastestResult:
     A: np.ndarray
     B: np.ndarray
     C: np.ndarray
+    P: np.ndarray
     effort_limit: np.ndarray
     velocity_limit: np.ndarray
     efforts: EffortTrajectory
@@ -128,7 +132,7 @@ class FastestResult:
         def mix(X: np.ndarray) -> np.ndarray:
             return (1.0 - lam) * X[i] + lam * X[i + 1]
 
-        return mix(self.A) * u + mix(self.B) * sd * sd + mix(self.C)
+        return mix(self.A) * u + mix(self.B) * sd * sd + mix(self.C) + mix(self.P)
 
     def as_json(self) -> dict[str, Any]:
         """JSON-ready summary."""
@@ -195,17 +199,47 @@ def _limits(robot: Robot, what: str, given: Any, default: list[float]) -> np.nda
 def _coefficients(
     robot: Robot, path: JointTrajectory, progress: bool | None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``A``, ``B``, ``C`` of ``tau = A sdd + B sd^2 + C`` by three inverse-dynamics passes."""
+    """``A``, ``B``, ``C`` of ``tau = A sdd + B sd^2 + C`` by inverse-dynamics passes.
+
+    ``C`` includes the springs (position only); the dampers and friction, which depend on
+    ``sd`` otherwise, are left to :func:`_dissipative`.
+    """
     Z = np.zeros_like(path.v)
 
-    def run(v: np.ndarray, a: np.ndarray) -> np.ndarray:
+    def run(v: np.ndarray, a: np.ndarray, passive: bool) -> np.ndarray:
         jt = JointTrajectory(path.t, path.q, v, a, path.actuated_q, path.actuated_v, name="path")
-        return inverse_dynamics(robot, jt, progress=progress).tau
+        return inverse_dynamics(robot, jt, progress=progress, passive=passive).tau
 
-    C = run(Z, Z)
-    A = run(Z, path.v) - C
-    B = run(path.v, path.a) - C
+    bare = run(Z, Z, False)
+    C = bare if robot.passive is None else run(Z, Z, True)
+    A = run(Z, path.v, False) - bare
+    B = run(path.v, path.a, False) - bare
     return A, B, C
+
+
+def _has_dissipation(robot: Robot) -> bool:
+    p = robot.passive
+    return p is not None and bool(np.any(p.damping) or np.any(p.friction))
+
+
+def _dissipative(
+    robot: Robot,
+    path: JointTrajectory,
+    sd: np.ndarray,
+    u: np.ndarray,
+    A: np.ndarray,
+    B: np.ndarray,
+    C: np.ndarray,
+) -> np.ndarray:
+    """Efforts (N, n_a) of the dampers and friction at the path speeds ``sd``.
+
+    The inverse dynamics with the passive elements, minus ``A u + B sd^2 + C`` (the rest).
+    """
+    x = sd**2
+    v = path.v * sd[:, None]
+    a = path.v * u[:, None] + path.a * x[:, None]
+    jt = JointTrajectory(path.t, path.q, v, a, path.actuated_q, path.actuated_v, name="path")
+    return inverse_dynamics(robot, jt).tau - (A * u[:, None] + B * x[:, None] + C)
 
 
 def _bounds(
@@ -399,6 +433,8 @@ def fastest_trajectory(
         xmax = np.min(np.where(np.abs(qa1) > 0.0, (V / np.abs(qa1)) ** 2, _XMAX), axis=1)
     xmax = np.minimum(xmax, _XMAX)
     d = drives(robot)
+    damped = _has_dissipation(loaded)
+    P = np.zeros_like(C)  # dampers and friction at the current speed estimate
     x_est: np.ndarray | None = None
     slow: np.ndarray | None = None
     T_est = math.inf
@@ -406,7 +442,7 @@ def fastest_trajectory(
     solves = 0
     while True:
         lo, hi, slow = _bounds(robot, qa1, x_est, E * scale, slow)
-        out = _toppra(s, A, B, C, lo, hi, xmax)
+        out = _toppra(s, A, B, C + P, lo, hi, xmax)
         solves += 1
         if isinstance(out, int):
             raise InfeasibleEffortError(
@@ -417,12 +453,14 @@ def fastest_trajectory(
         sd, sdd = out
         x = sd**2
         T_new = _duration(s, sd)
-        converged = d.lossless or abs(T_new - T_est) <= 1e-7 * T_new
+        converged = (d.lossless and not damped) or abs(T_new - T_est) <= 1e-7 * T_new
         T_est = T_new
         if not converged and solves < max_iter:
             x_est = x
+            if damped:
+                P = _dissipative(loaded, path, sd, np.append(sdd, sdd[-1]), A, B, C)
             continue
-        traj, u, efforts, tu, su = _motion(loaded, robot, path, sd, sdd, A, B, C, E, V)
+        traj, u, efforts, tu, su = _motion(loaded, robot, path, sd, sdd, A, B, C + P, E, V)
         excess = float(np.max(tu))
         if excess <= 1.0 + 1e-7 or solves >= max_iter + 3:
             break
@@ -440,6 +478,7 @@ def fastest_trajectory(
         A=A,
         B=B,
         C=C,
+        P=P,
         effort_limit=E,
         velocity_limit=V,
         efforts=efforts,
