@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, robot_command
+from pkdyn.cli._common import emit, load, output_path, robot_command
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["register"]
@@ -72,6 +72,8 @@ def _cmd_size(args: argparse.Namespace) -> None:
     from pkdyn.dynamics.sizing import size, sizing_from_efforts
     from pkdyn.dynamics.trajectory import named_task, named_trajectory
 
+    output_path("--csv", args.csv)
+    output_path("--plot", args.plot, figure=True)
     robot = load(args)
     if args.payload < 0.0 or not np.isfinite(args.payload):
         raise InvalidInputError("--payload", f"must be >= 0 kg, got {args.payload}")
@@ -113,10 +115,7 @@ def _cmd_size(args: argparse.Namespace) -> None:
     if args.plot:
         from pkdyn.plotting.dynamics import plot_efforts
 
-        try:
-            plot_efforts(result, path=args.plot)
-        except (OSError, ValueError) as err:
-            raise InvalidInputError("--plot", f"cannot write '{args.plot}': {err}") from None
+        plot_efforts(result, path=args.plot)
     head = (
         f"{robot.name}: {result.trajectory}, {result.duration:.4g} s, payload {args.payload:g} kg"
         + ("" if result.feasible else "  -- LIMITS EXCEEDED")

@@ -48,7 +48,7 @@ from pkdyn.exceptions import (
     UnreachablePoseError,
 )
 from pkdyn.model.assembly import inverse_geometry
-from pkdyn.model.pose import pose_to_vector
+from pkdyn.model.pose import pose_from_vector, pose_to_vector
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
 from solvers import numerics
@@ -437,7 +437,9 @@ def map_task_trajectory(
             h = tk - float(task.t[k - 1])
             q = pin.integrate(model, q, h * V[k - 1] + 0.5 * h * h * A[k - 1])
         try:
-            q = inverse_geometry(robot, task.pose[k], q_init=q, check_limits=check_limits).q
+            # a placement: the task rows are imposed, the others are placeholders
+            target = pose_from_vector(task.pose[k])
+            q = inverse_geometry(robot, target, q_init=q, check_limits=check_limits).q
         except UnreachablePoseError as err:
             raise TrajectoryError(f"pose out of reach: {err}", sample=k, time=tk) from None
         except JointLimitError as err:
@@ -448,7 +450,7 @@ def map_task_trajectory(
                 km = kinematic_models(robot, q)
         except SingularConfigurationError as err:
             raise TrajectoryError(f"singular configuration: {err}", sample=k, time=tk) from None
-        if numerics.rank_of(km.sigma_A, SINGULAR_TOL, scale=1.0) < km.sigma_A.size:
+        if km.margin_A < SINGULAR_TOL:
             raise TrajectoryError(
                 f"parallel singularity (cond(A) = {km.cond_A:.3g}): the actuators cannot "
                 "control the platform here",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -70,6 +71,18 @@ class Robot:
     params: Any = None
     passive: PassiveForces | None = None
 
+    @functools.cached_property
+    def length_scale(self) -> float:
+        """Characteristic length [m]: the diagonal of the box of the joint origins at home.
+
+        Makes translations and rotations commensurate where a test compares them (singularity
+        margins, continuation steps), so that results do not depend on the robot's size.
+        """
+        data = self.model.createData()
+        pin.forwardKinematics(self.model, data, self.q_home)
+        P = np.array([M.translation for M in data.oMi])
+        return max(float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))), 1e-9)
+
     @property
     def nq(self) -> int:
         """Size of the configuration vector."""
@@ -99,6 +112,17 @@ class Robot:
     def closures(self) -> tuple[ClosureSpec, ...]:
         """Loop closures of the description."""
         return self.description.closures
+
+    @property
+    def actuator_prismatic(self) -> np.ndarray:
+        """Whether each actuator drives a prismatic joint (n_a,) bool.
+
+        Prismatic actuators have positions in m, speeds in m/s and efforts in N; revolute ones
+        rad, rad/s and N m.
+        """
+        return np.array(
+            [_prismatic(self.model.joints[int(j)]) for j in self.actuated_joints], dtype=bool
+        )
 
     @property
     def actuator_names(self) -> list[str]:
@@ -179,6 +203,55 @@ class Robot:
         _, J = self.closure_set.residual_and_jacobian(self.data, qq)
         return self.nv - rank(J, tol, scale=1.0)
 
+    def mobility_split(self, q: np.ndarray | None = None, tol: float = 1e-9) -> tuple[int, int]:
+        """Degrees of freedom of the platform and internal mobilities at ``q`` (default home).
+
+        The motions allowed by the closures (null space of the closure Jacobian) are split into
+        those that move the platform's controlled pose components (``dof``) and those that
+        leave them still (``internal``, e.g. the spin of a Delta's ball-jointed bars).
+        ``dof + internal == self.dof(q)``. A robot without a platform frame has no internal
+        mobility by this definition.
+
+        Args:
+            q: Configuration (nq,).
+            tol: Relative singular-value threshold of the ranks.
+
+        Returns:
+            ``(dof, internal)``.
+
+        """
+        qq = self.q_home if q is None else q
+        nv = self.nv
+        if self.closure_set.nc:
+            _, Jc = self.closure_set.residual_and_jacobian(self.data, qq)
+            _, s, Vt = np.linalg.svd(Jc)
+            rank = int(np.sum(s > tol * max(1.0, float(s[0]) if s.size else 0.0)))
+            N = Vt[rank:].T
+        else:
+            N = np.eye(nv)
+        total = N.shape[1]
+        if self.platform_frame is None or total == 0:
+            return total, 0
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, qq)
+        pin.updateFramePlacements(model, data)
+        lin = pin.getFrameJacobian(
+            model, data, self.platform_frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        )[:3]
+        ang = pin.getFrameJacobian(model, data, self.platform_frame, pin.ReferenceFrame.LOCAL)[3:]
+        Jx = np.vstack([lin, ang])[self.task_rows] @ N
+        sx = np.linalg.svd(Jx, compute_uv=False)
+        useful = int(np.sum(sx > tol * max(1.0, float(sx[0]) if sx.size else 0.0)))
+        return useful, total - useful
+
+    def __repr__(self) -> str:
+        task = " ".join(self.description.platform.task) if self.description.platform else "-"
+        return (
+            f"<Robot {self.name!r} from {self.source!r}: nq={self.nq} nv={self.nv}, "
+            f"{len(self.actuators)} actuators ({', '.join(a.name for a in self.actuators)}), "
+            f"{len(self.closures)} closures, {self.loops} loops, platform task: {task}>"
+        )
+
     def platform_placement(self, q: np.ndarray) -> pin.SE3:
         """World placement of the platform frame at ``q``.
 
@@ -193,3 +266,9 @@ class Robot:
             raise PkdynError(f"{self.name} declares no platform frame (add a <pkdyn:platform>)")
         pin.framesForwardKinematics(self.model, self.data, q)
         return pin.SE3(self.data.oMf[self.platform_frame])
+
+
+def _prismatic(jm: pin.JointModel) -> bool:
+    """A 1-DOF prismatic joint model (``JointModelP{X,Y,Z}``, ``JointModelPrismaticUnaligned``)."""
+    name = str(jm.shortname())
+    return name.startswith("JointModelP") and not name.startswith("JointModelPlanar")
