@@ -69,7 +69,7 @@ def test_param_errors_are_one_line(argv, culprit, capsys):
     [
         ([], "see pkdyn --help"),
         (["info"], "see pkdyn info --help"),
-        (["fk", "delta", "--q", "x"], "see pkdyn fk --help"),
+        (["fk", "delta", "--q", "x"], "see pkdyn forward-geometry --help"),
         (["nosuchcommand"], "see pkdyn --help"),
         (["tripod", "scenario", "--cycles", "x"], "see pkdyn tripod scenario --help"),
     ],
@@ -121,7 +121,7 @@ def test_info_reports_platform_dof_and_internal_mobilities_apart(capsys):
 
 def test_prismatic_actuators_in_newtons_and_metres_per_second(capsys):
     assert main(["info", "gough_stewart", "--json"]) == 0
-    acts = json.loads(capsys.readouterr().out)["actuators"]
+    acts = json.loads(capsys.readouterr().out)["actuation"]
     assert {a["type"] for a in acts} == {"prismatic"}
     assert acts[0]["units"] == {"position": "m", "velocity": "m/s", "effort": "N"}
     assert main(["info", "gough_stewart"]) == 0

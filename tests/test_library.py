@@ -141,6 +141,8 @@ LENGTHS = {
     ),
     "planar_3rrr": ("l1", "l2", "h", "base_radius", "link_radius"),
     "five_bar": ("d", "l1", "l2", "link_radius"),
+    "parallel_ankle": ("h", "d", "x_motor", "crank", "rod", "x_foot", "e", "z_foot", "rod_radius"),
+    "four_bar_knee": ("a", "x_motor", "r1", "r3", "shank_length", "link_radius"),
     "tripod": (
         "r_p",
         "foothold_radius",

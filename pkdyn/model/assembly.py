@@ -108,11 +108,9 @@ def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryRes
 
 
 def _family_of(robot: Robot) -> Family | None:
-    """The library family of a robot built from family parameters (by name or from a file)."""
-    if robot.params is None:
-        return None
-    spec = robot.description.family
-    return FAMILIES.get(spec.name if spec is not None else robot.source)
+    """The library family of a robot (:attr:`Robot.family`), or ``None``."""
+    name = robot.family
+    return None if name is None else FAMILIES[name]
 
 
 def _seeded(

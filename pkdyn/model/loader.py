@@ -307,7 +307,6 @@ def _check_urdf_joints(xml: str, source: str) -> None:
 
 def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar | None) -> _Parts:
     from pkdyn.model.formats import drake
-    from pkdyn.model.formats.gepetto import apply_joint_types, loop_frames
 
     _check_urdf_joints(xml, source)
     desc = parse_description(xml, source)
@@ -316,10 +315,14 @@ def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar 
     model = build_tree(xml, desc.joints, source)
     check_model_size(model, source)  # before any createData
     if side is not None:
+        from pkdyn.model.formats.gepetto import apply_joint_types
+
         model = apply_joint_types(model, side, source)
     if side is not None and side.free_flyer:
         model = _with_free_flyer(model)
     if side is None and not desc.closures and not extra:
+        from pkdyn.model.formats.gepetto import loop_frames
+
         pairs = loop_frames(model)
         if pairs:
             warn(

@@ -98,15 +98,18 @@ class Robot:
         """Library family that built the robot, ``None`` for a robot its user described.
 
         The family is ``robot.source`` for a robot built by :func:`pkdyn.load` from a family
-        name; a URDF file or string has none.
+        name, or the ``<pkdyn:family>`` of a file written by ``pkdyn urdf FAMILY`` (checked to
+        be the builder's output when loaded); other descriptions have none.
 
         Code that has a closed form for some families keeps a registry keyed by this name (e.g.
         :data:`pkdyn.analysis.screws.RECIPROCAL_SCREWS`); robots of no family take the general
         path.
         """
-        if self.params is None or self.source not in FAMILIES:
+        if self.params is None:
             return None
-        return self.source
+        spec = self.description.family
+        name = spec.name if spec is not None else self.source
+        return name if name in FAMILIES else None
 
     @property
     def closures(self) -> tuple[ClosureSpec, ...]:

@@ -6,7 +6,8 @@ what it cannot read (a geometry with a NaN size disappears from the collision ch
 model is built, :func:`check_urdf` raises one :class:`~pkdyn.exceptions.DescriptionError` naming
 the link, joint or element at fault:
 
-- every number of links and joints: a number (not text), finite; vectors of the right length;
+- every number of links and joints: a number (not text), finite; vectors of the right length
+  (``<dynamics>`` is read, and checked, with the passive elements: :mod:`pkdyn.model.passive`);
 - inertials: mass > 0 (a massless link has no ``<inertial>``; a plain URDF may give 0, as ROS
   descriptions do for frames), inertia tensor positive semi-definite (no negative principal
   moment; zero ones are the point-mass and thin-rod limits) and satisfying the triangle
@@ -122,7 +123,6 @@ _SCALARS = {
     "mass": ("value",),
     "inertia": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
     "limit": ("lower", "upper", "effort", "velocity"),
-    "dynamics": ("damping", "friction"),
     "cylinder": ("radius", "length"),
     "sphere": ("radius",),
     "capsule": ("radius", "length"),
