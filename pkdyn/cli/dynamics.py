@@ -43,6 +43,8 @@ def _cmd_simulate(args: argparse.Namespace) -> None:
 def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
     if args.cycle_time is not None and args.cycle_time <= 0.0:
         raise InvalidInputError("--cycle-time", f"must be > 0 s, got {args.cycle_time}")
+    if args.cycles < 1:
+        raise InvalidInputError("--cycles", f"must be a whole number >= 1, got {args.cycles}")
     opts: dict[str, Any] = {"dt": args.dt}
     if args.trajectory == "adept":
         opts["cycle_time"] = 0.5 if args.cycle_time is None else args.cycle_time

@@ -165,10 +165,43 @@ def _pose6(pose: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
     return p
 
 
-def _times(duration: float, dt: float) -> np.ndarray:
+MIN_SAMPLES_PER_MOVE = 10
+"""Fewest samples of the shortest move (or half period) a trajectory accepts: coarser, peak and
+RMS efforts would be missed (``size --dt 10`` used to report a 0.5 s cycle feasible)."""
+
+MAX_SAMPLES = 2_000_000
+"""Most samples of one trajectory (mapping to the joints takes ~1 ms each: about half an hour)."""
+
+
+def _times(duration: float, dt: float, shortest: float | None = None, what: str = "") -> np.ndarray:
+    """Sample times ``0..duration`` every ``dt``, refused when too coarse or too many.
+
+    Args:
+        duration: Duration [s].
+        dt: Sample period [s].
+        shortest: Duration of the shortest feature to resolve [s] (a move, a half period).
+        what: What that feature is, for messages.
+
+    """
     if not np.isfinite(dt) or dt <= 0.0:
         raise InvalidInputError("dt", f"sample period must be > 0 s, got {dt}")
-    n = max(2, int(round(duration / dt)) + 1)
+    shortest = duration if shortest is None else shortest
+    if dt > shortest / MIN_SAMPLES_PER_MOVE:
+        raise InvalidInputError(
+            "dt",
+            f"{dt:g} s samples the {shortest:.3g} s {what or 'motion'} fewer than "
+            f"{MIN_SAMPLES_PER_MOVE} times: peaks and RMS values would be missed; use dt <= "
+            f"{shortest / MIN_SAMPLES_PER_MOVE:.3g} s",
+        )
+    steps = duration / dt
+    if steps > MAX_SAMPLES:
+        raise InvalidInputError(
+            "dt",
+            f"{duration:g} s every {dt:g} s is {steps:.3g} samples (mapping them takes ~1 ms "
+            f"each: about {steps * 1e-3 / 3600:.2g} h); at most {MAX_SAMPLES:.0e}: use a longer "
+            "dt or a shorter duration",
+        )
+    n = max(2, int(round(steps)) + 1)
     return np.linspace(0.0, duration, n)
 
 
@@ -194,7 +227,7 @@ def point_to_point(
     """
     p0, p1 = _pose6(start, "start"), _pose6(end, "end")
     law = motion_law(profile, duration)
-    t = _times(duration, dt)
+    t = _times(duration, dt, duration, "move")
     return _segment(t, p0, p1, law, f"{profile} move")
 
 
@@ -289,7 +322,7 @@ def adept_cycle(
     rv, rh = np.sqrt(up), np.sqrt(across)
     Tv = half / (2.0 * rv * (1.0 - overlap) + rh) * rv
     Th = half - 2.0 * Tv * (1.0 - overlap)
-    t = _times(cycle_time, dt)
+    t = _times(cycle_time, dt, min(Tv, Th), "shortest move of the cycle")
     law_v, law_h = motion_law(profile, Tv), motion_law(profile, Th)
     pose = np.zeros((t.size, 6))
     pd = np.zeros((t.size, 6))
@@ -347,7 +380,9 @@ def sinusoid(
         raise InvalidInputError("sinusoid", "amplitudes, frequencies and phases must be finite")
     if not np.isfinite(duration) or duration <= 0.0:
         raise InvalidInputError("duration", f"must be > 0 s, got {duration}")
-    t = _times(duration, dt)
+    moving = f[(A != 0.0) & (f > 0.0)]
+    half = 0.5 / float(np.max(moving)) if moving.size else duration
+    t = _times(duration, dt, min(half, duration), "half period")
     w = 2.0 * np.pi * f
     arg = np.outer(t, w) + ph
     return TaskTrajectory(
@@ -602,8 +637,10 @@ def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:
     dt = _number(name, opts, "dt", 1e-3)
     if name == "adept":
         cycles = _number(name, opts, "cycles", 1)
-        if cycles != int(cycles):
-            raise InvalidInputError("cycles", f"{name}: expected a whole number, got {cycles}")
+        if cycles != int(cycles) or cycles < 1:
+            raise InvalidInputError(
+                "cycles", f"{name}: expected a whole number >= 1, got {cycles:g}"
+            )
         depth = _number(name, opts, "depth", 0.05)
         bottom = home[:3] - np.array([0.0, 0.0, depth])
         one = adept_cycle(
@@ -616,7 +653,13 @@ def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:
             overlap=_number(name, opts, "overlap", 0.0),
             dt=dt,
         )
-        return concatenate([one] * max(1, int(cycles)), name=one.name)
+        if int(cycles) * one.t.size > MAX_SAMPLES:
+            raise InvalidInputError(
+                "cycles",
+                f"{name}: {int(cycles)} cycles of {one.t.size} samples exceed {MAX_SAMPLES:.0e} "
+                "samples (about half an hour of mapping): fewer cycles or a longer dt",
+            )
+        return concatenate([one] * int(cycles), name=one.name)
     if name == "sine":
         amp = _number(name, opts, "amplitude", 0.01)
         ang = _number(name, opts, "angle", 0.02)
