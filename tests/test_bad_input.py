@@ -9,11 +9,17 @@ arguments of the analyses and of the dynamics, bounded work, simulation faults, 
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import pkdyn
 from pkdyn.exceptions import (
     DescriptionError,
+    InvalidInputError,
+    OutputError,
+    ParameterError,
+    SimulationError,
+    UnreachablePoseError,
 )
 
 # --------------------------------------------------------------------------------------------
@@ -182,3 +188,222 @@ def test_models_too_large_for_pinocchio_are_refused_before_it_runs(n, parent, cu
 def test_a_large_but_reasonable_chain_loads():
     robot = pkdyn.load_string(chain(120), "chain.urdf", geometry=False)
     assert robot.nv == 120
+
+
+# --------------------------------------------------------------------------------------------
+# builder parameters
+
+BAD_PARAMETERS = [
+    ("delta", {"la": -0.2}, "la"),
+    ("delta", {"lb": "long"}, "lb"),
+    ("delta", {"z_home": 0.5}, "z_home"),  # above the base
+    ("delta", {"z_home": -3.0}, "z_home"),  # out of reach
+    ("delta", {"arms": 5}, "arms"),
+    ("five_bar", {"y_home": 0.9}, "y_home"),
+    ("five_bar", {"q_max": -3.0}, "y_home"),  # no home within the limits
+    ("tripod", {"stroke_max": 0.62}, "nacelle_height"),
+    ("gough_stewart", {"rho_min": "(0.1,)"}, "rho_min"),
+    ("planar_3rrr", {"l1": 0.01, "l2": 0.01}, "x_home"),
+]
+
+
+@pytest.mark.parametrize("family, over, culprit", BAD_PARAMETERS)
+def test_bad_parameters_name_the_parameter(family, over, culprit):
+    with pytest.raises(ParameterError) as err:
+        pkdyn.load(family, geometry=False, **over)
+    assert f"parameter '{culprit}'" in str(err.value) and family in str(err.value)
+
+
+# --------------------------------------------------------------------------------------------
+# geometric models and analyses
+
+
+@pytest.fixture(scope="module")
+def delta():
+    return pkdyn.load("delta", geometry=False)
+
+
+@pytest.mark.parametrize(
+    "call, error, culprit",
+    [
+        (lambda r: pkdyn.inverse_geometry(r, [0, 0, -0.4, 0, 0, 0.2]), UnreachablePoseError, "yaw"),
+        (lambda r: pkdyn.inverse_geometry(r, [0, 0]), InvalidInputError, "pose"),
+        (lambda r: pkdyn.inverse_geometry(r, [0, np.nan, -0.4]), InvalidInputError, "pose"),
+        (lambda r: pkdyn.inverse_geometry(r, [0, 0, 0.2]), UnreachablePoseError, "0.2"),
+        (lambda r: pkdyn.forward_geometry(r, [0.1, 0.2]), InvalidInputError, "actuat"),
+        (lambda r: pkdyn.forward_geometry(r, [0, np.inf, 0]), InvalidInputError, "actuat"),
+        (lambda r: pkdyn.project(r, np.zeros(3)), InvalidInputError, "q"),
+    ],
+    ids=["yaw", "short pose", "nan pose", "above base", "2 of 3", "inf", "short q"],
+)
+def test_bad_geometric_inputs(delta, call, error, culprit):
+    with pytest.raises(error) as err:
+        call(delta)
+    assert culprit in str(err.value)
+
+
+def test_statics_refuses_an_overflowing_wrench(delta):
+    from pkdyn.analysis.statics import static_equilibrium
+
+    q = pkdyn.inverse_geometry(delta, [0, 0, -0.4]).q
+    for F in ([1e308, 0, 0], [0, 0, -1e200]):
+        with pytest.raises(InvalidInputError, match="F: wrench"):
+            static_equilibrium(delta, q, F)
+
+
+# --------------------------------------------------------------------------------------------
+# dynamics: numeric arguments, bounded work, faults
+
+
+@pytest.mark.parametrize(
+    "options, culprit",
+    [
+        ({"dt": 10.0}, "dt: 10 s samples"),
+        ({"dt": 0.03}, "dt: 0.03 s samples"),  # the 0.5 s cycle's 45 ms moves
+        ({"cycles": 0}, "cycles"),
+        ({"cycles": -1}, "cycles"),
+        ({"cycles": 2.5}, "cycles"),
+        ({"cycles": 10**6}, "cycles"),
+        ({"dt": 1e-9}, "dt"),
+        ({"dt": -1e-3}, "dt"),
+    ],
+)
+def test_trajectory_options_are_checked(delta, options, culprit):  # noqa: D103
+    from pkdyn.dynamics.trajectory import named_task
+
+    with pytest.raises(InvalidInputError) as err:
+        named_task(delta, "adept", **options)
+    assert culprit in str(err.value)
+
+
+def test_coarse_sampling_warns(delta):
+    from pkdyn.dynamics.trajectory import named_task
+
+    with pytest.warns(UserWarning, match="may be underestimated"):
+        named_task(delta, "adept", dt=0.01)
+
+
+@pytest.mark.parametrize(
+    "kwargs, error, culprit",
+    [
+        ({"duration": 1.0, "dt": 5.0}, InvalidInputError, "longer than the duration"),
+        ({"duration": 1e5, "dt": 1e-5}, InvalidInputError, "steps"),
+        ({"duration": -1.0, "dt": 1e-3}, InvalidInputError, "duration"),
+        ({"duration": 0.1, "dt": 1e-3, "viscous": -0.5}, InvalidInputError, "viscous"),
+        ({"duration": 0.1, "dt": 1e-3, "coulomb": [-1.0] * 4}, InvalidInputError, "coulomb"),
+        (
+            {"duration": 0.2, "dt": 1e-3, "torque": lambda t, q, v: [1e7, -1e7]},
+            SimulationError,
+            "blows up",
+        ),
+        (
+            {"duration": 0.1, "dt": 1e-3, "torque": lambda t, q, v: [np.nan, 0.0]},
+            SimulationError,
+            "torque function",
+        ),
+    ],
+    ids=[
+        "dt > duration",
+        "1e10 steps",
+        "negative duration",
+        "viscous",
+        "coulomb",
+        "blow-up",
+        "nan",
+    ],
+)
+def test_simulation_inputs_and_faults(kwargs, error, culprit):
+    from pkdyn.dynamics import simulate
+
+    robot = pkdyn.load("five_bar", geometry=False)
+    with pytest.raises(error) as err:
+        simulate(robot, **kwargs)
+    assert culprit in str(err.value)
+
+
+def test_adaptive_step_count_is_bounded():
+    """A state the error control cannot follow stops with a clear error, not a hang."""
+    from pkdyn.dynamics.actuation import actuation
+    from solvers import ForwardDynamics, IntegrationError
+
+    robot = pkdyn.load("five_bar", geometry=False)
+    fd = ForwardDynamics(
+        robot.model, list(robot.constraint_models), actuation(robot), max_substeps=5, atol=1e-16
+    )
+    with pytest.raises(IntegrationError, match="more than 5 substeps"):
+        fd.simulate(robot.q_home, np.full(robot.nv, 3.0), 0.2, 0.05)  # moving, 1e-16 tolerance
+
+
+def test_zero_energy_run_has_no_drift():
+    from pkdyn.dynamics import simulate
+
+    robot = pkdyn.load("five_bar", geometry=False)
+    robot.model.gravity.linear[:] = 0.0  # nothing moves: the energy is round-off
+    res = simulate(robot, 0.05, 1e-3)
+    assert res.energy_drift() < 1e-6
+
+
+@pytest.mark.parametrize(
+    "call, culprit",
+    [
+        (lambda r: _ws(r, samples=1000), "1000 x 1000 x 1000 grid"),
+        (lambda r: _ws(r, step=1e-5), "grid is"),
+        (lambda r: _ws(r, samples=1), "samples"),
+    ],
+    ids=["1e9 samples", "tiny step", "one sample"],
+)
+def test_workspace_grids_are_bounded(call, culprit):
+    robot = pkdyn.load("gough_stewart")
+    with pytest.raises(InvalidInputError) as err:
+        call(robot)
+    assert culprit in str(err.value)
+
+
+def _ws(robot, **kw):
+    from pkdyn.workspace import translation_workspace
+
+    return translation_workspace(robot, progress=False, **kw)
+
+
+def test_orientation_and_clavel_samplings_are_bounded():
+    from pkdyn.workspace import clavel_numeric, orientation_workspace
+
+    robot = pkdyn.load("gough_stewart")
+    with pytest.raises(InvalidInputError, match="orientations"):
+        orientation_workspace(robot, n1=10_000, n2=10_000, progress=False)
+    with pytest.raises(InvalidInputError, match="fewer rays"):
+        clavel_numeric(pkdyn.load("delta", geometry=False).params, 0.7, 0.5, rays=10**7)
+
+
+# --------------------------------------------------------------------------------------------
+# outputs
+
+
+@pytest.mark.parametrize(
+    "name, culprit",
+    [("plot", "no file extension"), ("plot.xyz", "unknown figure format '.xyz'")],
+)
+def test_figures_need_a_known_format(tmp_path, name, culprit):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from pkdyn.plotting._save import save_figure
+
+    with pytest.raises(OutputError) as err:
+        save_figure(Figure(), tmp_path / name, dpi=50)
+    assert culprit in str(err.value) and str(tmp_path / name) in str(err.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupted_write_keeps_the_previous_file(tmp_path):
+    from pkdyn.files import atomic_write
+
+    target = tmp_path / "out.csv"
+    target.write_text("old")
+    with pytest.raises(KeyboardInterrupt):
+        with atomic_write(target) as fh:
+            fh.write("half a new fi")
+            raise KeyboardInterrupt
+    assert target.read_text() == "old" and sorted(p.name for p in tmp_path.iterdir()) == ["out.csv"]

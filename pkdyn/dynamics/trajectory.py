@@ -165,15 +165,26 @@ def _pose6(pose: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
     return p
 
 
-MIN_SAMPLES_PER_MOVE = 10
-"""Fewest samples of the shortest move (or half period) a trajectory accepts: coarser, peak and
-RMS efforts would be missed (``size --dt 10`` used to report a 0.5 s cycle feasible)."""
+MIN_SAMPLES_PER_MOVE = 2
+"""Fewest samples of the shortest move (or half period) a trajectory accepts: coarser, the
+motion is not seen at all (``size --dt 10`` used to report a 0.5 s cycle feasible with
+0.05 N m)."""
+
+WARN_SAMPLES_PER_MOVE = 10
+"""Below this many samples of the shortest move a warning says that peaks may be missed (a
+quintic move's acceleration peaks at 21 % and 79 % of its duration)."""
 
 MAX_SAMPLES = 2_000_000
 """Most samples of one trajectory (mapping to the joints takes ~1 ms each: about half an hour)."""
 
 
-def _times(duration: float, dt: float, shortest: float | None = None, what: str = "") -> np.ndarray:
+def _times(
+    duration: float,
+    dt: float,
+    shortest: float | None = None,
+    what: str = "",
+    warn: bool = False,
+) -> np.ndarray:
     """Sample times ``0..duration`` every ``dt``, refused when too coarse or too many.
 
     Args:
@@ -181,6 +192,8 @@ def _times(duration: float, dt: float, shortest: float | None = None, what: str 
         dt: Sample period [s].
         shortest: Duration of the shortest feature to resolve [s] (a move, a half period).
         what: What that feature is, for messages.
+        warn: Warn below :data:`WARN_SAMPLES_PER_MOVE` samples of it (the built-in
+            trajectories of :func:`named_task`).
 
     """
     if not np.isfinite(dt) or dt <= 0.0:
@@ -190,8 +203,16 @@ def _times(duration: float, dt: float, shortest: float | None = None, what: str 
         raise InvalidInputError(
             "dt",
             f"{dt:g} s samples the {shortest:.3g} s {what or 'motion'} fewer than "
-            f"{MIN_SAMPLES_PER_MOVE} times: peaks and RMS values would be missed; use dt <= "
-            f"{shortest / MIN_SAMPLES_PER_MOVE:.3g} s",
+            f"{MIN_SAMPLES_PER_MOVE} times: the motion would be missed; use dt <= "
+            f"{shortest / WARN_SAMPLES_PER_MOVE:.3g} s",
+        )
+    if warn and dt > shortest / WARN_SAMPLES_PER_MOVE:
+        warnings.warn(
+            f"dt = {dt:g} s samples the {shortest:.3g} s {what or 'motion'} only "
+            f"{shortest / dt:.1f} times: peak and RMS values may be underestimated (dt <= "
+            f"{shortest / WARN_SAMPLES_PER_MOVE:.3g} s resolves them)",
+            UserWarning,
+            stacklevel=4,
         )
     steps = duration / dt
     if steps > MAX_SAMPLES:
@@ -211,6 +232,7 @@ def point_to_point(
     duration: float,
     profile: str = "quintic",
     dt: float = 1e-3,
+    warn_coarse: bool = False,
 ) -> TaskTrajectory:
     """A straight rest-to-rest move in pose coordinates.
 
@@ -219,7 +241,8 @@ def point_to_point(
         end: End pose, same form.
         duration: Duration [s].
         profile: Motion law, ``quintic`` or ``jerk`` (see :mod:`pkdyn.dynamics.profiles`).
-        dt: Sample period [s].
+        dt: Sample period [s] (at least 2 samples of the move).
+        warn_coarse: Warn when fewer than 10 samples resolve the move.
 
     Returns:
         The sampled move.
@@ -227,7 +250,7 @@ def point_to_point(
     """
     p0, p1 = _pose6(start, "start"), _pose6(end, "end")
     law = motion_law(profile, duration)
-    t = _times(duration, dt, duration, "move")
+    t = _times(duration, dt, duration, "move", warn_coarse)
     return _segment(t, p0, p1, law, f"{profile} move")
 
 
@@ -284,6 +307,7 @@ def adept_cycle(
     profile: str = "quintic",
     overlap: float = 0.0,
     dt: float = 1e-3,
+    warn_coarse: bool = False,
 ) -> TaskTrajectory:
     """The pick-and-place "Adept cycle": ``up`` up, ``across`` across, ``up`` down, and back.
 
@@ -304,7 +328,8 @@ def adept_cycle(
         direction: Direction of the horizontal move in the x-y plane [rad] (0: along x).
         profile: Motion law of each move, ``quintic`` or ``jerk``.
         overlap: Fraction of the vertical moves overlapped with the horizontal one.
-        dt: Sample period [s].
+        dt: Sample period [s] (at least 2 samples of the shortest move).
+        warn_coarse: Warn when fewer than 10 samples resolve the shortest move.
 
     Returns:
         The sampled cycle (one period; repeat by :func:`concatenate`).
@@ -322,7 +347,7 @@ def adept_cycle(
     rv, rh = np.sqrt(up), np.sqrt(across)
     Tv = half / (2.0 * rv * (1.0 - overlap) + rh) * rv
     Th = half - 2.0 * Tv * (1.0 - overlap)
-    t = _times(cycle_time, dt, min(Tv, Th), "shortest move of the cycle")
+    t = _times(cycle_time, dt, min(Tv, Th), "shortest move of the cycle", warn_coarse)
     law_v, law_h = motion_law(profile, Tv), motion_law(profile, Th)
     pose = np.zeros((t.size, 6))
     pd = np.zeros((t.size, 6))
@@ -356,6 +381,7 @@ def sinusoid(
     duration: float,
     phase: Sequence[float] | np.ndarray | float = 0.0,
     dt: float = 1e-3,
+    warn_coarse: bool = False,
 ) -> TaskTrajectory:
     """Sinusoidal motion of each pose component: ``center + amplitude sin(2 pi f t + phase)``.
 
@@ -365,7 +391,8 @@ def sinusoid(
         frequency: Frequencies (6,) or one for all [Hz].
         duration: Duration [s].
         phase: Phases (6,) or one for all [rad].
-        dt: Sample period [s].
+        dt: Sample period [s] (at least 2 samples per half period).
+        warn_coarse: Warn when fewer than 10 samples resolve a half period.
 
     Returns:
         The sampled motion (it starts in motion unless every phase is a multiple of pi and
@@ -382,7 +409,7 @@ def sinusoid(
         raise InvalidInputError("duration", f"must be > 0 s, got {duration}")
     moving = f[(A != 0.0) & (f > 0.0)]
     half = 0.5 / float(np.max(moving)) if moving.size else duration
-    t = _times(duration, dt, min(half, duration), "half period")
+    t = _times(duration, dt, min(half, duration), "half period", warn_coarse)
     w = 2.0 * np.pi * f
     arg = np.outer(t, w) + ph
     return TaskTrajectory(
@@ -652,6 +679,7 @@ def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:
             profile=str(opts.pop("profile", "quintic")),
             overlap=_number(name, opts, "overlap", 0.0),
             dt=dt,
+            warn_coarse=True,
         )
         if int(cycles) * one.t.size > MAX_SAMPLES:
             raise InvalidInputError(
@@ -671,12 +699,12 @@ def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:
         # distinct frequencies per component so that the motion explores all directions
         freqs = f * np.array([1.0, 1.0, 2.0, 1.0, 1.0, 2.0])
         phases = np.array([0.0, 0.5 * np.pi, 0.0, 0.5 * np.pi, 0.0, 0.0])
-        return sinusoid(home.copy(), A, freqs, duration, phases, dt=dt)
+        return sinusoid(home.copy(), A, freqs, duration, phases, dt=dt, warn_coarse=True)
     default = np.where(task_mask, np.r_[0.05, 0.0, 0.0, 0.1, 0.1, 0.1], 0.0)
     offset = _pose6(opts.pop("offset", default), "offset")
     duration = _number(name, opts, "duration", 0.5)
     profile = str(opts.pop("profile", "quintic"))
-    return point_to_point(home, home + offset, duration, profile, dt=dt)
+    return point_to_point(home, home + offset, duration, profile, dt=dt, warn_coarse=True)
 
 
 _OPTIONS = {
