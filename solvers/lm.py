@@ -22,7 +22,7 @@ ResidualFn = Callable[[np.ndarray], np.ndarray]
 JacobianFn = Callable[[np.ndarray], np.ndarray]
 
 
-@dataclass
+@dataclass(eq=False)  # numpy fields: no boolean ==
 class SolveResult:
     """Outcome of :func:`solve_lm`.
 

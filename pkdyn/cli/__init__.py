@@ -19,7 +19,6 @@ import importlib
 import os
 import signal
 import sys
-import threading
 import warnings
 from collections.abc import Sequence
 from typing import Any
@@ -128,8 +127,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         exit with 2 through ``SystemExit``.
 
     """
-    handlers = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGTERM, _on_sigterm) if handlers else None
+    try:  # (only the main thread may install handlers)
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+        handlers = True
+    except ValueError:
+        previous, handlers = None, False
     shown = warnings.showwarning
     filters = list(warnings.filters)
     try:

@@ -68,7 +68,7 @@ JOINT_KINDS = ("spherical", "universal")
 _NS = "{" + NAMESPACE + "}"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class FrameRef:
     """A frame rigidly attached to a link (or to any named Pinocchio frame).
 
@@ -82,7 +82,7 @@ class FrameRef:
     placement: pin.SE3 = field(default_factory=pin.SE3.Identity)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class ClosureSpec:
     """A loop closure between two frames.
 
@@ -109,7 +109,7 @@ class ClosureSpec:
         return CLOSURE_KINDS[self.kind]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class ConeLimit:
     """Passive-joint limit: ``axis`` of the child may tilt at most ``half_angle`` [rad].
 
@@ -126,7 +126,7 @@ class ConeLimit:
         return self.half_angle - math.acos(c)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class PyramidLimit:
     """Passive-joint limit of Merlet's pyramid (a square hole): four plane faces.
 
@@ -146,7 +146,7 @@ class PyramidLimit:
         return min(self.half_angles[0] - abs(a1), self.half_angles[1] - abs(a2))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class JointSpec:
     """A tree joint URDF cannot express, mapped to a Pinocchio joint model.
 
@@ -196,7 +196,7 @@ class ActuatorSpec:
     coulomb: float = 0.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class PlatformSpec:
     """The platform / end-effector frame and the pose components the mechanism controls."""
 
@@ -235,7 +235,7 @@ class PassiveSpec:
         return not any(any(getattr(self, f)) for f in ("stiffness", "damping", "friction"))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class SpringSpec:
     """A linear spring between two frames on two bodies, along the line joining their origins.
 
@@ -271,7 +271,7 @@ class FamilySpec:
     params: tuple[tuple[str, str], ...] = ()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class Description:
     """Everything a pkdyn description says beyond the URDF tree."""
 

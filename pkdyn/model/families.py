@@ -97,15 +97,18 @@ class Family:
             ParameterError: Unknown name or value that does not convert / validate.
 
         """
+        if not overrides:
+            return self.params()
         fields = {f.name: f for f in dataclasses.fields(self.params)}
-        defaults = self.params()  # once: a family's defaults may be costly to validate
         kwargs: dict[str, Any] = {}
         for key, value in overrides.items():
             if key not in fields:
                 raise ParameterError(
                     self.name, key, f"unknown; valid parameters: {', '.join(sorted(fields))}"
                 )
-            default = getattr(defaults, key)
+            f = fields[key]  # the field's default, without building (validating) an instance
+            factory: Any = f.default_factory
+            default = f.default if f.default is not dataclasses.MISSING else factory()
             try:
                 if default is None:  # derived unless given (a length or angle)
                     text = str(value).strip().lower()

@@ -196,7 +196,7 @@ def load(
     )
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(eq=False)
 class _Parts:
     """A description turned into Pinocchio objects, before assembly."""
 
@@ -290,8 +290,12 @@ def load_string(
 _URDF_JOINTS = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 
 
-def _check_urdf_joints(xml: str, source: str) -> None:
+def _check_urdf_joints(xml: str, source: str, root: ET.Element | None = None) -> None:
     """Name the joint and its line when its type is not a URDF joint type."""
+    if root is not None and all(
+        el.get("type") is None or el.get("type") in _URDF_JOINTS for el in root.iter("joint")
+    ):
+        return  # the common case, without parsing again for line numbers
     from pkdyn.model.formats.xmldoc import parse_xml
 
     doc = parse_xml(xml, source)
@@ -308,9 +312,15 @@ def _check_urdf_joints(xml: str, source: str) -> None:
 def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar | None) -> _Parts:
     from pkdyn.model.formats import drake
 
-    _check_urdf_joints(xml, source)
+    root = None
+    if "<!DOCTYPE" not in xml and "<!ENTITY" not in xml:  # else: xmldoc's guarded parser first
+        try:
+            root = ET.fromstring(xml)
+        except ET.ParseError:
+            root = None  # parse_description names the problem
+    _check_urdf_joints(xml, source, root)
     desc = parse_description(xml, source)
-    root = ET.fromstring(xml)
+    root = ET.fromstring(xml) if root is None else root
     extra = drake.urdf_constraints(root, source)
     model = build_tree(xml, desc.joints, source)
     check_model_size(model, source)  # before any createData

@@ -21,7 +21,7 @@ MODELLING_JOINTS = ("JointModelFreeFlyer", "JointModelPlanar")
 """Joint models that place a platform or floating base: modelling devices, not hardware."""
 
 
-@dataclass
+@dataclass(eq=False)  # identity: numpy and Pinocchio fields have no boolean ==
 class Robot:
     """A closed-loop robot loaded by :func:`pkdyn.load`.
 

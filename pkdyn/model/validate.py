@@ -182,14 +182,17 @@ def _check_numbers(source: str, root: ET.Element) -> None:
                     if n is False:
                         continue
                     values = _numbers(source, kind, owner, el, attr, n or None)
-                    where = _where(kind, owner, el, attr, el.get(attr, ""))
                     if (tag, attr) in _POSITIVE and not all(v > 0.0 for v in values):
                         raise DescriptionError(
-                            source, where, "sizes must be > 0 [m] (the body would vanish)"
+                            source,
+                            _where(kind, owner, el, attr, el.get(attr, "")),
+                            "sizes must be > 0 [m] (the body would vanish)",
                         )
                     if n is None and (len(values) not in (1, 3) or 0.0 in values):
                         raise DescriptionError(
-                            source, where, "a mesh scale is 1 or 3 non-zero numbers"
+                            source,
+                            _where(kind, owner, el, attr, el.get(attr, "")),
+                            "a mesh scale is 1 or 3 non-zero numbers",
                         )
 
 
