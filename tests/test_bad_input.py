@@ -276,9 +276,11 @@ def test_trajectory_options_are_checked(delta, options, culprit):  # noqa: D103
     assert culprit in str(err.value)
 
 
-def test_coarse_sampling_warns(delta):
+def test_coarse_sampling_warns(delta, monkeypatch):
+    from pkdyn.dynamics import trajectory
     from pkdyn.dynamics.trajectory import named_task
 
+    monkeypatch.setattr(trajectory, "_WARNED", [])  # once per process
     with pytest.warns(UserWarning, match="may be underestimated"):
         named_task(delta, "adept", dt=0.01)
 

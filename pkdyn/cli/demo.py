@@ -55,6 +55,7 @@ def run_fastest_demo(
     from pkdyn.dynamics.fastest import fastest_trajectory, joint_path
     from pkdyn.dynamics.sizing import sizing_from_efforts
     from pkdyn.dynamics.trajectory import named_task
+    from pkdyn.model.loader import load
 
     robot = load("delta", geometry=False)
     p = robot.params

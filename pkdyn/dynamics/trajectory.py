@@ -170,6 +170,8 @@ MIN_SAMPLES_PER_MOVE = 2
 motion is not seen at all (``size --dt 10`` used to report a 0.5 s cycle feasible with
 0.05 N m)."""
 
+_WARNED: list[bool] = []
+
 WARN_SAMPLES_PER_MOVE = 10
 """Below this many samples of the shortest move a warning says that peaks may be missed (a
 quintic move's acceleration peaks at 21 % and 79 % of its duration)."""
@@ -206,7 +208,8 @@ def _times(
             f"{MIN_SAMPLES_PER_MOVE} times: the motion would be missed; use dt <= "
             f"{shortest / WARN_SAMPLES_PER_MOVE:.3g} s",
         )
-    if warn and dt > shortest / WARN_SAMPLES_PER_MOVE:
+    if warn and dt > shortest / WARN_SAMPLES_PER_MOVE and not _WARNED:
+        _WARNED.append(True)  # once per process: a design study samples many robots alike
         warnings.warn(
             f"dt = {dt:g} s samples the {shortest:.3g} s {what or 'motion'} only "
             f"{shortest / dt:.1f} times: peak and RMS values may be underestimated (dt <= "
