@@ -103,6 +103,27 @@ def hyperfine(runs: int) -> dict[str, object]:
     return {"floor": floor, "commands": {"info delta": {"median": info, "ratio": info / floor}}}
 
 
+def rows(runs: int = 15) -> list[tuple[str, str, str]]:
+    """Rows for ``make bench`` (``bench/run.py``): CPU and wall ratios to the floor."""
+    res = measure(runs)
+    out = [
+        (
+            "floor: `python -c 'import pinocchio, numpy'`",
+            f"{1e3 * res['floor_cpu']:.0f} ms CPU, {1e3 * res['floor']:.0f} ms wall",  # type: ignore[operator]
+            "-",
+        )
+    ]
+    for k, v in res["commands"].items():  # type: ignore[attr-defined]
+        out.append(
+            (
+                f"`pkdyn {k}` / floor",
+                f"{v['cpu_ratio']:.2f}x CPU, {v['ratio']:.2f}x wall",
+                "1.2x" if k == "info delta" else "-",
+            )
+        )
+    return out
+
+
 def main() -> None:
     """Print the medians and ratios (markdown)."""
     ap = argparse.ArgumentParser(description=__doc__)
