@@ -115,3 +115,26 @@ def inverse_dynamics(
     J = closures.jacobian(data, q)
     x = np.linalg.lstsq(np.hstack([S.T, J.T]), b, rcond=1e-12)[0]
     return x[: S.shape[0]]
+
+
+def inverse_dynamics_floor(
+    model: pin.Model,
+    data: pin.Data,
+    closures: RawClosures,
+    va: np.ndarray,
+    vp: np.ndarray,
+    Q: np.ndarray,
+    V: np.ndarray,
+    A: np.ndarray,
+) -> np.ndarray:
+    """Actuator efforts along a trajectory (N, n_a), the plainest loop: per sample ``rnea``, the
+    C++ constraint Jacobian and the normal equations of the passive rows
+    (``J_p J_p^T lambda = J_p b_p``, ``tau = b_a - J_a^T lambda``; unit gains, no check)."""
+    tau = np.empty((Q.shape[0], va.size))
+    for k in range(Q.shape[0]):
+        b = pin.rnea(model, data, Q[k], V[k], A[k])
+        J = closures.jacobian(data, Q[k])
+        Jp = J[:, vp]
+        lam = np.linalg.solve(Jp @ Jp.T, Jp @ b[vp])
+        tau[k] = b[va] - J[:, va].T @ lam
+    return tau

@@ -9,7 +9,8 @@ Modules: :mod:`~solvers.closure` (closure residuals, Jacobians, drift), :mod:`~s
 friction), :mod:`~solvers.integrators`
 (Runge-Kutta tableaux), :mod:`~solvers.projection` (state projection onto the closures),
 :mod:`~solvers.recording` (what a simulation records), :mod:`~solvers.forward_dynamics` (time
-stepping), :mod:`~solvers.inverse_dynamics` (constrained inverse dynamics, proxsuite QP) and
+stepping), :mod:`~solvers.sampled` (kinematics and closure errors of many sampled states at once),
+:mod:`~solvers.inverse_dynamics` (constrained inverse dynamics, proxsuite QP) and
 :mod:`~solvers.numerics` (rank decisions, null spaces, least squares: the one cut-off rule).
 """
 
@@ -17,6 +18,7 @@ from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
 from solvers.forward_dynamics import ForwardDynamics, IntegrationError, simulate
 from solvers.inverse_dynamics import (
+    InconsistentMotionError,
     InfeasibleError,
     InverseDynamics,
     InverseResult,
@@ -26,6 +28,7 @@ from solvers.lm import SolveResult, solve_lm
 from solvers.passive import FrameSpring, PassiveForces
 from solvers.pose_task import FramePoseTask
 from solvers.recording import ForwardResult
+from solvers.sampled import SampledKinematics
 
 __all__ = [
     "Actuation",
@@ -34,12 +37,14 @@ __all__ = [
     "ForwardResult",
     "FramePoseTask",
     "FrameSpring",
+    "InconsistentMotionError",
     "InfeasibleError",
     "InverseDynamics",
     "InverseResult",
     "InverseTrajectory",
     "IntegrationError",
     "PassiveForces",
+    "SampledKinematics",
     "SolveResult",
     "simulate",
     "solve_lm",

@@ -91,6 +91,11 @@ class ClosureSet:
             None,
         )
 
+    @property
+    def items(self) -> list[tuple[bool, int, pin.SE3, int, pin.SE3]]:
+        """Per closure: ``(is_point, joint1, placement1, joint2, placement2)``."""
+        return self._items
+
     @staticmethod
     def _support_mask(model: pin.Model, j: int) -> np.ndarray:
         mask = np.zeros(model.nv)
