@@ -37,9 +37,8 @@ solves the passive rows ``J_p^T lambda = b_p`` in the least-squares sense (semi-
 with one refinement step; their residual is the unreachable part of the equation), then
 ``tau = (b_a - J_a^T lambda) / gains``. The margins guarantee that the general method would find
 the same ranks (``J`` of full row rank, ``G`` of rank ``n_a``); otherwise, or when the equation
-cannot be satisfied or a bound is violated, the general method runs (and raises). For point
-closures the Jacobian is Pinocchio's constraint Jacobian in world axes (``getConstraintsJacobian``
-of ``LOCAL_WORLD_ALIGNED`` copies of the constraint models), equal to :class:`ClosureSet`'s.
+cannot be satisfied or a bound is violated, the general method runs (and raises). The Jacobian
+is :class:`ClosureSet`'s (Pinocchio's C++ ``getConstraintsJacobian``).
 
 The direct QP over ``(tau, lambda)`` with the full equation as its equality constraint and a
 tiny weight on ``lambda`` gives the same solution in the limit, but proxsuite does not converge
@@ -242,46 +241,11 @@ class InverseDynamics:
         self._vp = np.setdiff1d(np.arange(model.nv), self._va)
         self._perm = np.concatenate([self._vp, self._va])
         self._gmin = float(np.min(np.abs(actuation.gains)))
-        # Pinocchio's constraint Jacobian (C++), mapped to the ClosureSet convention (exactly,
-        # at any q): point rows of LOCAL_WORLD_ALIGNED copies are d(p1 - p2)/dt; a weld's LOCAL
-        # rows V (frame 1's velocity relative to frame 2's, in frame 1) give
-        # -Jlog6(c1Mc2) Ad(c2Mc1) V
-        self._pin_cms = pin.StdVec_RigidConstraintModel()
-        self._pin_cds = pin.StdVec_RigidConstraintData()
-        self._welds: list[tuple[pin.RigidConstraintData, int]] = []
-        for cm, o in zip(constraints, self.closure_set.offsets, strict=False):
-            point = cm.type == _POINT
-            frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED if point else pin.ReferenceFrame.LOCAL
-            c = pin.RigidConstraintModel(
-                cm.type, model, cm.joint1_id, cm.joint1_placement, cm.joint2_id,
-                cm.joint2_placement, frame,
-            )  # fmt: skip
-            self._pin_cms.append(c)
-            self._pin_cds.append(c.createData())
-            if not point:
-                self._welds.append((self._pin_cds[len(self._pin_cds) - 1], int(o)))
-        self._pin_pairs = list(zip(self._pin_cms, self._pin_cds, strict=True))
         self._sampled: SampledKinematics | None = None
 
     def _jacobian(self, q: np.ndarray) -> np.ndarray:
-        """Closure Jacobian (nc, nv) at ``q`` (:class:`ClosureSet` convention)."""
-        model, kin = self.model, self._kin
-        pin.computeJointJacobians(model, kin, q)
-        for cm, cd in self._pin_pairs:
-            cm.calc(model, kin, cd)
-        J = pin.getConstraintsJacobian(model, kin, self._pin_cms, self._pin_cds)
-        J = np.reshape(J, (self.closure_set.nc, model.nv))
-        self._map_welds(J)
-        return J
-
-    def _map_welds(self, J: np.ndarray) -> None:
-        """Map the weld rows of Pinocchio's constraint Jacobian to the ClosureSet convention.
-
-        In place; the constraint datas hold the current placements.
-        """
-        for cd, o in self._welds:
-            M = cd.c1Mc2
-            J[o : o + 6] = -pin.Jlog6(M).dot(M.inverse().toActionMatrix()).dot(J[o : o + 6])
+        """Closure Jacobian (nc, nv) at ``q`` (:class:`ClosureSet`, Pinocchio's C++)."""
+        return self.closure_set.jacobian(self._kin, q)
 
     # ------------------------------------------------------------------ one state
 
@@ -630,8 +594,7 @@ class InverseDynamics:
         J = np.empty((n, nc, model.nv))
         rnea, jac = pin.rnea, pin.computeJointJacobians
         kinetic, potential = pin.computeKineticEnergy, pin.computePotentialEnergy
-        get_jacobian, cms, cds = pin.getConstraintsJacobian, self._pin_cms, self._pin_cds
-        pairs, welds, capture = self._pin_pairs, self._welds, kin.capture
+        jacobian_at, capture = self.closure_set.jacobian_at, kin.capture
         ke, pe = out.kinetic[s:], out.potential[s:]
         for i in range(n):
             b[i] = rnea(model, kd, q[i], v[i], a[i])  # also the joint velocities, accelerations
@@ -640,11 +603,7 @@ class InverseDynamics:
             pe[i] = potential(model, kd)
             if nc:
                 capture(i, kd)
-                for cm, cd in pairs:
-                    cm.calc(model, kd, cd)
-                J[i] = get_jacobian(model, kd, cms, cds)
-                if welds:
-                    self._map_welds(J[i])
+                J[i] = jacobian_at(kd)
         return b, J
 
     def _first_inconsistent(

@@ -20,6 +20,7 @@ __all__ = ["SolveResult", "solve_lm"]
 
 ResidualFn = Callable[[np.ndarray], np.ndarray]
 JacobianFn = Callable[[np.ndarray], np.ndarray]
+ResidualJacobianFn = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
 @dataclass
@@ -48,16 +49,22 @@ class SolveResult:
 def solve_lm(
     model: pin.Model,
     q0: np.ndarray,
-    residual: ResidualFn,
-    jacobian: JacobianFn,
+    residual: ResidualFn | None = None,
+    jacobian: JacobianFn | None = None,
     free: np.ndarray | None = None,
     tol: float = 1e-12,
     max_iter: int = 60,
+    *,
+    residual_and_jacobian: ResidualJacobianFn | None = None,
+    stall: float = 0.0,
 ) -> SolveResult:
     """Solve ``residual(q) = 0`` for ``q`` on the model's configuration manifold.
 
-    Trial steps evaluate only the residual; the Jacobian is evaluated at accepted points that
-    have not converged yet.
+    With ``residual`` and ``jacobian``, trial steps evaluate only the residual and the Jacobian
+    is evaluated at accepted points that have not converged yet. With ``residual_and_jacobian``
+    both come from one evaluation at every trial point (cheaper when a residual costs nearly as
+    much as both, as with Pinocchio's C++ constraint Jacobian: one evaluation per iteration when
+    the steps are accepted, the usual case near a solution).
 
     Args:
         model: Model whose ``integrate`` defines the manifold.
@@ -68,27 +75,46 @@ def solve_lm(
         free: Velocity indices allowed to move (default: all).
         tol: Convergence threshold on ``max |r|`` [m or rad].
         max_iter: Maximum number of iterations.
+        residual_and_jacobian: ``q -> (r, J)``, instead of ``residual`` and ``jacobian``.
+        stall: Stop early (not converged) when three accepted steps in a row each keep more than
+            this fraction of ``|r|^2`` (the iterations approach a least-squares minimum that is
+            not a solution, e.g. an unreachable pose); 0 disables the test.
 
     Returns:
         The solution attempt; check ``converged``.
 
+    Raises:
+        ValueError: Neither ``residual`` and ``jacobian`` nor ``residual_and_jacobian`` given.
+
     """
+    both = residual_and_jacobian
+    if both is None and (residual is None or jacobian is None):
+        raise ValueError("solve_lm needs residual and jacobian, or residual_and_jacobian")
     q = np.array(q0, dtype=float)
-    r = residual(q)
+    J: np.ndarray | None = None
+    if both is not None:
+        r, J = both(q)
+    else:
+        assert residual is not None
+        r = residual(q)
     nv = model.nv
     idx = None if free is None else np.asarray(free, dtype=int)
     it = 0
     err = float(np.abs(r).max()) if r.size else 0.0
     f = float(r @ r)
     mu = 1.0
+    slow = 0
     dq = np.zeros(nv)
     solve = np.linalg.solve
+    integrate = pin.integrate
     while err > tol and it < max_iter:
-        J = jacobian(q)
+        if J is None:
+            assert jacobian is not None
+            J = jacobian(q)
         Jf = J if idx is None else J[:, idx]
         small = Jf.shape[0] <= Jf.shape[1]
-        A = Jf @ Jf.T if small else Jf.T @ Jf
-        g = r if small else Jf.T @ r
+        A = Jf.dot(Jf.T) if small else Jf.T.dot(Jf)
+        g = r if small else Jf.T.dot(r)
         A0 = A.diagonal().copy()
         diag = A.reshape(-1)[:: A.shape[0] + 1]  # writable view of the diagonal
         accepted = False
@@ -98,16 +124,21 @@ def solve_lm(
                 y = solve(A, g)
             except np.linalg.LinAlgError:  # exactly singular: the damping fell below round-off
                 y = numerics.lstsq(A, g, numerics.machine_rtol(A))
-            step = -(Jf.T @ y) if small else -y
+            step = -Jf.T.dot(y) if small else -y
             if idx is None:
                 dq = step
             else:
                 dq[idx] = step
-            q_new = pin.integrate(model, q, dq)
-            r_new = residual(q_new)
+            q_new = integrate(model, q, dq)
+            if both is not None:
+                r_new, J_new = both(q_new)
+            else:
+                assert residual is not None
+                r_new, J_new = residual(q_new), None
             f_new = float(r_new @ r_new)
             if f_new < f:  # False for NaN
-                q, r, f = q_new, r_new, f_new
+                slow = slow + 1 if f_new > stall * f else 0
+                q, r, f, J = q_new, r_new, f_new, J_new
                 mu = max(mu * 0.3, 1e-3)
                 accepted = True
                 break
@@ -116,4 +147,6 @@ def solve_lm(
             break
         it += 1
         err = float(np.abs(r).max()) if r.size else 0.0
+        if stall > 0.0 and slow >= 3 and err > tol:
+            break
     return SolveResult(q, r, it, err <= tol)

@@ -51,7 +51,7 @@ def project_state(
     """
     cs = closure_set
     sol = solve_lm(
-        model, q, lambda x: cs.residual(data, x), lambda x: cs.jacobian(data, x), tol=aim
+        model, q, tol=aim, residual_and_jacobian=lambda x: cs.residual_and_jacobian(data, x)
     )
     if sol.error > accept:
         raise ProjectionError(

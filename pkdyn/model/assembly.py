@@ -31,6 +31,7 @@ __all__ = [
     "assembly_modes",
     "inverse_geometry",
     "closure_residual",
+    "solve_pose",
 ]
 
 DEFAULT_TOL = 1e-12
@@ -83,10 +84,9 @@ def _solve_closures(
     return solve_lm(
         robot.model,
         q0,
-        lambda q: cs.residual(data, q),
-        lambda q: cs.jacobian(data, q),
         free=free,
         tol=tol,
+        residual_and_jacobian=lambda q: cs.residual_and_jacobian(data, q),
     )
 
 
@@ -256,18 +256,9 @@ def inverse_geometry(
         raise UnreachablePoseError("-", 0.0, f"{robot.name} declares no platform frame")
     task = FramePoseTask(robot.model, robot.platform_frame, robot.task_rows)
     task.target = target
-    cs = robot.closure_set
-    data = robot.data
-
-    def residual(q: np.ndarray) -> np.ndarray:
-        return np.concatenate([cs.residual(data, q), task.residual(data)])
-
-    def jacobian(q: np.ndarray) -> np.ndarray:
-        _, J = cs.residual_and_jacobian(data, q)
-        return np.vstack([J, task.residual_and_jacobian(data)[1]])
-
     q0 = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
-    sol = solve_lm(robot.model, q0, residual, jacobian, tol=tol, max_iter=100)
+    cs = robot.closure_set
+    sol = solve_pose(robot, task, q0, tol)
     if not sol.converged:
         pos, rpy = pose_to_vector(target)
         name, res = _worst(robot, sol.q)
@@ -282,6 +273,46 @@ def inverse_geometry(
     if check_limits:
         check_actuator_limits(robot, sol.q)
     return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.nc]), initial=0.0)))
+
+
+def solve_pose(
+    robot: Robot,
+    task: FramePoseTask,
+    q0: np.ndarray,
+    tol: float = DEFAULT_TOL,
+    max_iter: int = 100,
+    stall: float = 0.0,
+) -> SolveResult:
+    """Closures and platform pose solved together (the inverse geometric model, unchecked).
+
+    The hot path of :func:`inverse_geometry` (no validation, no message): for callers that
+    solve many poses, e.g. the numeric workspace.
+
+    Args:
+        robot: The robot.
+        task: The platform pose task (its ``target`` set).
+        q0: Initial configuration (nq,).
+        tol: Residual threshold [m or rad].
+        max_iter: Iteration cap.
+        stall: Early stop of :func:`solvers.solve_lm` on a stalling residual (0: never).
+
+    Returns:
+        The solver's outcome: closure rows first, then the task rows.
+
+    """
+    cs, data = robot.closure_set, robot.data
+    nc = cs.nc
+
+    def both(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        r_c, J_c = cs.residual_and_jacobian(data, q)  # placements and joint Jacobians at q
+        r_t, J_t = task.residual_and_jacobian(data)
+        if not nc:
+            return r_t, J_t
+        return np.concatenate([r_c, r_t]), np.vstack([J_c, J_t])
+
+    return solve_lm(
+        robot.model, q0, tol=tol, max_iter=max_iter, residual_and_jacobian=both, stall=stall
+    )
 
 
 def check_actuator_limits(robot: Robot, q: np.ndarray) -> None:

@@ -23,7 +23,6 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.robot import Robot
-from pkdyn.progress import progress as progress_bar
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, check_kinds
 
 __all__ = [
@@ -303,9 +302,7 @@ def translation_workspace(
         raise InvalidInputError("bounds", "expected 3 rows (min, max) of finite numbers [m]")
     home = robot.platform_placement(robot.q_home).translation
     xs, ys, zs = _grid_axes(box, step, samples, dims, home)
-    codes = np.empty((xs.size, ys.size, zs.size), dtype=np.int8)
-    for k in progress_bar(range(zs.size), "workspace", "plane", progress, leave=False):
-        codes[:, :, k] = ev.grid(xs, ys, float(zs[k]), R, kinds, margin)
+    codes = ev.box_grid(xs, ys, zs, R, kinds, margin, progress)
     return TranslationWorkspace(
         robot=robot.name,
         rpy=rpy_a,
