@@ -72,6 +72,20 @@ class ClosureSet:
             )
         ]
         self._welds = [(int(o), cd) for is_point, o, _, cd in self._entries if not is_point]
+        # contact-frame (LOCAL) copies for the solvers (see local_residual)
+        self._loc_cms = pin.StdVec_RigidConstraintModel()
+        self._loc_cds = pin.StdVec_RigidConstraintData()
+        for is_point, j1, M1, j2, M2 in self._items:
+            kind = pin.ContactType.CONTACT_3D if is_point else pin.ContactType.CONTACT_6D
+            c = pin.RigidConstraintModel(kind, model, j1, M1, j2, M2, _LOCAL)
+            self._loc_cms.append(c)
+            self._loc_cds.append(c.createData())
+        self._loc_entries = [
+            (is_point, int(o), cm, cd)
+            for (is_point, *_), o, cm, cd in zip(
+                self._items, self.offsets[:-1], self._loc_cms, self._loc_cds, strict=True
+            )
+        ]
 
     @property
     def items(self) -> list[tuple[bool, int, pin.SE3, int, pin.SE3]]:
@@ -128,6 +142,66 @@ class ClosureSet:
         pin.computeJointJacobians(self.model, data, q)
         r = self._residual(data)
         return r, self._constraint_jacobian(data)
+
+    def local_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
+        """Closure residual in the contact frame of ``joint1`` (runs the forward kinematics).
+
+        For the solvers: a point's residual is ``R_c1^T (p1 - p2)`` (the world residual
+        rotated, same norm), a weld's ``log6(c2Mc1)``; with :meth:`local_jacobian_after_residual`
+        (Pinocchio's ``LOCAL`` constraint Jacobian) it is exact at closure, where
+        Newton's method needs it (its error is of the order of the residual: convergence stays
+        quadratic). Cheaper than :meth:`residual`: one copy per closure.
+
+        Args:
+            data: Pinocchio data of ``model``.
+            q: Configuration (nq,).
+
+        Returns:
+            Residual (nc,) [m, rad].
+
+        """
+        model = self.model
+        pin.forwardKinematics(model, data, q)
+        r = np.empty(self.nc)
+        for is_point, o, cm, cd in self._loc_entries:
+            cm.calc(model, data, cd)
+            if is_point:
+                r[o : o + 3] = cd.c1Mc2.translation
+            else:
+                r[o : o + 6] = pin.log6(cd.c1Mc2).vector
+        return np.negative(r, out=r)
+
+    def local_jacobian_after_residual(
+        self, data: pin.Data, q: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Jacobian (nc, nv) of :meth:`local_residual`, exact at closure.
+
+        At the configuration of the last :meth:`local_residual` call (``data`` untouched since;
+        see :meth:`jacobian_after_residual`); ``q``, that configuration, is not used (it lets a
+        solver call ``partial(local_jacobian_after_residual, data)(q)``).
+        """
+        model = self.model
+        pin.computeJointJacobians(model, data)
+        J = pin.getConstraintsJacobian(model, data, self._loc_cms, self._loc_cds)
+        return np.reshape(J, (self.nc, model.nv))
+
+    def jacobian_after_residual(self, data: pin.Data, q: np.ndarray | None = None) -> np.ndarray:
+        """Closure Jacobian (nc, nv) at the configuration of the last :meth:`residual` call.
+
+        Only the joint Jacobians (from the placements already in ``data``) and the constraint
+        Jacobian are computed: for solvers that evaluate the Jacobian where they have just
+        evaluated the residual (:func:`solvers.solve_lm` does).
+
+        Args:
+            data: The data the last :meth:`residual` call used, untouched since.
+            q: That call's configuration (not used: see :meth:`local_jacobian_after_residual`).
+
+        Returns:
+            Jacobian (nc, nv).
+
+        """
+        pin.computeJointJacobians(self.model, data)
+        return self._constraint_jacobian(data)
 
     def jacobian_at(self, data: pin.Data) -> np.ndarray:
         """Closure Jacobian (nc, nv) from ``data`` after ``pin.computeJointJacobians(q)``.

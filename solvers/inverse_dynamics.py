@@ -243,6 +243,24 @@ class InverseDynamics:
         self._gmin = float(np.min(np.abs(actuation.gains)))
         self._sampled: SampledKinematics | None = None
 
+    def passive_forces(self, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
+        """Generalized forces (nv,) of everything but the actuators, closures and wrenches.
+
+        The one place of the non-actuator force terms of the dynamics equation (``M a + h =
+        S^T tau + J^T lambda + f_ext + passive_forces``): none today (``None``); joint
+        springs, dampers, friction and motor terms belong here (as in
+        :meth:`solvers.ForwardDynamics.passive_forces`).
+
+        Args:
+            q: Configuration (nq,).
+            v: Velocity (nv,).
+
+        Returns:
+            The forces [N m or N], or ``None``.
+
+        """
+        return None
+
     def _jacobian(self, q: np.ndarray) -> np.ndarray:
         """Closure Jacobian (nc, nv) at ``q`` (:class:`ClosureSet`, Pinocchio's C++)."""
         return self.closure_set.jacobian(self._kin, q)
@@ -278,6 +296,9 @@ class InverseDynamics:
         b = np.array(pin.rnea(model, self.data, q, v, a))
         if f_ext is not None:
             b -= np.asarray(f_ext, dtype=float).reshape(model.nv)
+        f = self.passive_forces(q, v)
+        if f is not None:
+            b -= f
         J = self._jacobian(q) if self.closure_set.nc else np.zeros((0, model.nv))
         return self._solve_state(b, J, sample)
 
@@ -596,8 +617,12 @@ class InverseDynamics:
         kinetic, potential = pin.computeKineticEnergy, pin.computePotentialEnergy
         jacobian_at, capture = self.closure_set.jacobian_at, kin.capture
         ke, pe = out.kinetic[s:], out.potential[s:]
+        passive = self.passive_forces
         for i in range(n):
             b[i] = rnea(model, kd, q[i], v[i], a[i])  # also the joint velocities, accelerations
+            f = passive(q[i], v[i])
+            if f is not None:
+                b[i] -= f
             ke[i] = kinetic(model, kd)
             jac(model, kd, q[i])  # placements and world Jacobian
             pe[i] = potential(model, kd)

@@ -22,6 +22,11 @@ ResidualFn = Callable[[np.ndarray], np.ndarray]
 JacobianFn = Callable[[np.ndarray], np.ndarray]
 ResidualJacobianFn = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
+_NEWTON_DAMPING = 1e-3
+"""Below this damping (``mu |r|^2``, against ``|J|^2`` of order one: near a solution) a square
+system first tries the undamped Newton step (one linear solve instead of three products, and
+quadratic convergence); if it does not reduce the residual, the damped steps follow."""
+
 
 @dataclass
 class SolveResult:
@@ -32,6 +37,7 @@ class SolveResult:
         residual: Final residual vector.
         iterations: Number of accepted steps.
         converged: Whether ``max |residual| <= tol``.
+        error: Largest absolute residual component [m or rad] (computed when not given).
 
     """
 
@@ -39,11 +45,11 @@ class SolveResult:
     residual: np.ndarray
     iterations: int
     converged: bool
+    error: float = -1.0
 
-    @property
-    def error(self) -> float:
-        """Largest absolute residual component [m or rad]."""
-        return float(np.max(np.abs(self.residual))) if self.residual.size else 0.0
+    def __post_init__(self) -> None:
+        if self.error < 0.0:
+            self.error = float(np.abs(self.residual).max()) if self.residual.size else 0.0
 
 
 def solve_lm(
@@ -61,7 +67,9 @@ def solve_lm(
     """Solve ``residual(q) = 0`` for ``q`` on the model's configuration manifold.
 
     With ``residual`` and ``jacobian``, trial steps evaluate only the residual and the Jacobian
-    is evaluated at accepted points that have not converged yet. With ``residual_and_jacobian``
+    is evaluated at accepted points that have not converged yet, always right after the
+    residual at the same configuration (so ``jacobian`` may reuse what ``residual`` computed,
+    e.g. :meth:`solvers.ClosureSet.jacobian_after_residual`). With ``residual_and_jacobian``
     both come from one evaluation at every trial point (cheaper when a residual costs nearly as
     much as both, as with Pinocchio's C++ constraint Jacobian: one evaluation per iteration when
     the steps are accepted, the usual case near a solution).
@@ -98,7 +106,7 @@ def solve_lm(
         assert residual is not None
         r = residual(q)
     nv = model.nv
-    idx = None if free is None else np.asarray(free, dtype=int)
+    idx = None if free is None else np.asarray(free, dtype=np.intp)
     it = 0
     err = float(np.abs(r).max()) if r.size else 0.0
     f = float(r @ r)
@@ -112,19 +120,31 @@ def solve_lm(
             assert jacobian is not None
             J = jacobian(q)
         Jf = J if idx is None else J[:, idx]
-        small = Jf.shape[0] <= Jf.shape[1]
-        A = Jf.dot(Jf.T) if small else Jf.T.dot(Jf)
-        g = r if small else Jf.T.dot(r)
-        A0 = A.diagonal().copy()
-        diag = A.reshape(-1)[:: A.shape[0] + 1]  # writable view of the diagonal
+        rows, cols = Jf.shape
+        small = rows <= cols
+        A: np.ndarray | None = None
         accepted = False
-        for _ in range(12):
-            diag[:] = A0 + (mu * f + 1e-16)
-            try:
-                y = solve(A, g)
-            except np.linalg.LinAlgError:  # exactly singular: the damping fell below round-off
-                y = numerics.lstsq(A, g, numerics.machine_rtol(A))
-            step = -Jf.T.dot(y) if small else -y
+        for trial in range(12):
+            damping = mu * f + 1e-16
+            step = None
+            if rows == cols and trial == 0 and damping < _NEWTON_DAMPING:
+                # square and near a solution: Newton's step first (one solve)
+                try:
+                    step = -solve(Jf, r)
+                except np.linalg.LinAlgError:
+                    step = None
+            if step is None:
+                if A is None:
+                    A = Jf.dot(Jf.T) if small else Jf.T.dot(Jf)
+                    g = r if small else Jf.T.dot(r)
+                    A0 = A.diagonal().copy()
+                    diag = A.reshape(-1)[:: A.shape[0] + 1]  # writable view of the diagonal
+                diag[:] = A0 + damping
+                try:
+                    y = solve(A, g)
+                except np.linalg.LinAlgError:  # exactly singular: damping below round-off
+                    y = numerics.lstsq(A, g, numerics.machine_rtol(A))
+                step = -Jf.T.dot(y) if small else -y
             if idx is None:
                 dq = step
             else:
@@ -135,7 +155,7 @@ def solve_lm(
             else:
                 assert residual is not None
                 r_new, J_new = residual(q_new), None
-            f_new = float(r_new @ r_new)
+            f_new = float(r_new.dot(r_new))
             if f_new < f:  # False for NaN
                 slow = slow + 1 if f_new > stall * f else 0
                 q, r, f, J = q_new, r_new, f_new, J_new
@@ -149,4 +169,4 @@ def solve_lm(
         err = float(np.abs(r).max()) if r.size else 0.0
         if stall > 0.0 and slow >= 3 and err > tol:
             break
-    return SolveResult(q, r, it, err <= tol)
+    return SolveResult(q, r, it, err <= tol, err)

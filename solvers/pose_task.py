@@ -55,6 +55,18 @@ class FramePoseTask:
         """
         return self.error(pin.updateFramePlacement(self.model, data, self.frame_id))[self.rows]
 
+    def jacobian(self, data: pin.Data) -> np.ndarray:
+        """Jacobian of the selected rows; needs ``computeJointJacobians`` done.
+
+        Args:
+            data: Pinocchio data after ``pin.computeJointJacobians``.
+
+        Returns:
+            Jacobian (len(rows), nv).
+
+        """
+        return self.residual_and_jacobian(data)[1]
+
     def residual_and_jacobian(self, data: pin.Data) -> tuple[np.ndarray, np.ndarray]:
         """Selected error rows and their Jacobian; needs ``computeJointJacobians`` done.
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import pinocchio as pin
@@ -37,6 +38,11 @@ __all__ = [
 DEFAULT_TOL = 1e-12
 """Convergence threshold on the largest closure / pose residual component [m or rad]."""
 
+_LOCAL_TOL = 1.0
+"""The solvers work on the contact-frame closure residual (:meth:`solvers.ClosureSet.
+local_residual`, the world one rotated: same norm per closure); ``tol`` applies to its
+components."""
+
 
 @dataclass
 class GeometryResult:
@@ -46,7 +52,8 @@ class GeometryResult:
         q: Full assembled configuration (nq,).
         qa: Actuated coordinates in actuator order [rad or m].
         placement: Platform placement (``None`` if the robot has no platform).
-        residual: Largest closure residual component after the solve [m or rad].
+        residual: Largest closure residual component after the solve [m or rad] (in the
+            contact frames the solver works in: the world residual rotated).
         iterations: Solver iterations.
 
     """
@@ -84,9 +91,10 @@ def _solve_closures(
     return solve_lm(
         robot.model,
         q0,
+        partial(cs.local_residual, data),  # contact-frame residual: one copy per closure
+        partial(cs.local_jacobian_after_residual, data),  # at the last residual's q
         free=free,
-        tol=tol,
-        residual_and_jacobian=lambda q: cs.residual_and_jacobian(data, q),
+        tol=tol * _LOCAL_TOL,
     )
 
 
@@ -100,10 +108,14 @@ def _worst(robot: Robot, q: np.ndarray) -> tuple[str, float]:
 
 
 def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryResult:
-    placement = robot.platform_placement(sol.q) if robot.platform_frame is not None else None
-    return GeometryResult(
-        sol.q, sol.q[robot.actuated_q].copy(), placement, closure_error, sol.iterations
-    )
+    """The result of a converged solve.
+
+    The robot data holds the kinematics of ``sol.q``: the solver's last evaluation was there.
+    """
+    placement = None
+    if robot.platform_frame is not None:
+        placement = pin.SE3(pin.updateFramePlacement(robot.model, robot.data, robot.platform_frame))
+    return GeometryResult(sol.q, sol.q[robot.actuated_q], placement, closure_error, sol.iterations)
 
 
 def project(robot: Robot, q: np.ndarray, tol: float = DEFAULT_TOL) -> np.ndarray:
@@ -166,10 +178,13 @@ def forward_geometry(
 
     """
     qa = as_finite("actuated coordinates", qa, len(robot.actuators))
-    q0 = np.array(robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq))
+    q0 = robot.q_home.copy() if q_init is None else as_finite("q_init", q_init, robot.nq)
     q0[robot.actuated_q] = qa
     if check_limits:
-        check_actuator_limits(robot, q0)
+        iq = robot.actuated_q
+        lo, hi = robot.model.lowerPositionLimit[iq], robot.model.upperPositionLimit[iq]
+        if not ((qa >= lo - 1e-12) & (qa <= hi + 1e-12)).all():
+            check_actuator_limits(robot, q0)  # raises, naming the actuator
     sol = _solve_closures(robot, q0, robot.passive_v, tol)
     if not sol.converged:
         name, res = _worst(robot, sol.q)
@@ -303,15 +318,18 @@ def solve_pose(
     cs, data = robot.closure_set, robot.data
     nc = cs.nc
 
-    def both(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        r_c, J_c = cs.residual_and_jacobian(data, q)  # placements and joint Jacobians at q
-        r_t, J_t = task.residual_and_jacobian(data)
-        if not nc:
-            return r_t, J_t
-        return np.concatenate([r_c, r_t]), np.vstack([J_c, J_t])
+    def residual(q: np.ndarray) -> np.ndarray:
+        r_c = cs.local_residual(data, q)  # runs the kinematics
+        r_t = task.residual(data)
+        return np.concatenate([r_c, r_t]) if nc else r_t
+
+    def jacobian(q: np.ndarray) -> np.ndarray:  # at the last residual's configuration
+        J_c = cs.local_jacobian_after_residual(data)  # also the joint Jacobians of the task
+        J_t = task.jacobian(data)
+        return np.vstack([J_c, J_t]) if nc else J_t
 
     return solve_lm(
-        robot.model, q0, tol=tol, max_iter=max_iter, residual_and_jacobian=both, stall=stall
+        robot.model, q0, residual, jacobian, tol=tol * _LOCAL_TOL, max_iter=max_iter, stall=stall
     )
 
 
@@ -326,7 +344,9 @@ def check_actuator_limits(robot: Robot, q: np.ndarray) -> None:
     iq = robot.actuated_q
     lo = robot.model.lowerPositionLimit[iq]
     hi = robot.model.upperPositionLimit[iq]
-    bad = np.flatnonzero((q[iq] < lo - 1e-12) | (q[iq] > hi + 1e-12))
-    if bad.size:
+    qa = q[iq]
+    out = (qa < lo - 1e-12) | (qa > hi + 1e-12)
+    if out.any():
+        bad = np.flatnonzero(out)
         k = int(bad[0])
         raise JointLimitError(robot.actuators[k].joint, float(q[iq[k]]), float(lo[k]), float(hi[k]))
