@@ -133,7 +133,8 @@ def inverse_dynamics(
         weights: Effort weights for redundant actuation (default ``1 / effort_limit^2`` when
             limits are finite, else ones).
         progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) shows
-            it when stderr is a terminal and there are more than 2000 samples.
+            it when stderr is a terminal and there are more than 2048 samples (the samples go
+            to the solver by chunks of 2048).
         passive: Include the robot's springs, dampers and friction (``robot.passive``).
         allocation: Redundant actuation: ``"norm"`` (least weighted norm) or ``"max"`` (least
             largest effort relative to its limit, with the default weights).

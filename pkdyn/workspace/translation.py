@@ -5,7 +5,7 @@ platform orientation and classifies each one by the first limit it breaks (see
 :mod:`pkdyn.workspace.limits`: reach, actuator stroke or angle, passive-joint cone or pyramid,
 interference). The check is vectorised where a closed form exists (leg robots such as the
 Gough-Stewart platform: :mod:`pkdyn.workspace.legs`; the Delta: :mod:`pkdyn.workspace.delta`)
-and done pose by pose with the general inverse model and coal otherwise
+and done with the general inverse model and coal otherwise, by continuation over the grid
 (:mod:`pkdyn.workspace.numeric`).
 
 The result (:class:`TranslationWorkspace`) gives the volume (sample count times cell volume; an
