@@ -63,7 +63,6 @@ from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
 from solvers.sampled import SampledKinematics
 
-_POINT = pin.ContactType.CONTACT_3D
 _BATCH = 256  # samples per batch of :meth:`InverseDynamics.trajectory`
 
 __all__ = [
