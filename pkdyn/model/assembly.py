@@ -321,12 +321,12 @@ def solve_pose(
     def residual(q: np.ndarray) -> np.ndarray:
         r_c = cs.local_residual(data, q)  # runs the kinematics
         r_t = task.residual(data)
-        return np.concatenate([r_c, r_t]) if nc else r_t
+        return np.concatenate((r_c, r_t)) if nc else r_t
 
     def jacobian(q: np.ndarray) -> np.ndarray:  # at the last residual's configuration
         J_c = cs.local_jacobian_after_residual(data)  # also the joint Jacobians of the task
         J_t = task.jacobian(data)
-        return np.vstack([J_c, J_t]) if nc else J_t
+        return np.concatenate((J_c, J_t)) if nc else J_t
 
     return solve_lm(
         robot.model, q0, residual, jacobian, tol=tol * _LOCAL_TOL, max_iter=max_iter, stall=stall
