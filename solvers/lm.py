@@ -38,6 +38,8 @@ class SolveResult:
         iterations: Number of accepted steps.
         converged: Whether ``max |residual| <= tol``.
         error: Largest absolute residual component [m or rad] (computed when not given).
+        jacobian: The last Jacobian evaluated (at the last iterate but one when the solver
+            stopped on convergence; ``None`` when none was), all columns.
 
     """
 
@@ -46,6 +48,7 @@ class SolveResult:
     iterations: int
     converged: bool
     error: float = -1.0
+    jacobian: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.error < 0.0:
@@ -115,10 +118,12 @@ def solve_lm(
     dq = np.zeros(nv)
     solve = np.linalg.solve
     integrate = pin.integrate
+    J_last: np.ndarray | None = None
     while err > tol and it < max_iter:
         if J is None:
             assert jacobian is not None
             J = jacobian(q)
+        J_last = J
         Jf = J if idx is None else J[:, idx]
         rows, cols = Jf.shape
         small = rows <= cols
@@ -169,4 +174,4 @@ def solve_lm(
         err = float(np.abs(r).max()) if r.size else 0.0
         if stall > 0.0 and slow >= 3 and err > tol:
             break
-    return SolveResult(q, r, it, err <= tol, err)
+    return SolveResult(q, r, it, err <= tol, err, J_last)

@@ -12,17 +12,19 @@ What keeps it fast:
 
 - cheap rejection: before any solve, a position is ``reach``-rejected when a closure cannot be
   spanned: for each closure, the two contact points hang from bodies whose placement the pose
-  fixes (the base, the platform) through chains of bounded length (link offsets, rotary joints,
-  prismatic joints up to their limits), so the distance between the chains' anchor points must
-  not exceed the sum of the lengths (:class:`ReachBound`, vectorised over the grid);
+  fixes (the base, the platform) through chains of bounded length (link offsets and rotary
+  joints), so the distance between the chains' anchor points must not exceed the sum of the
+  lengths (:class:`ReachBound`, vectorised over the grid);
 - early stop: an unreachable pose makes the solver creep towards a least-squares minimum that is
   not a solution; it stops when three accepted steps in a row each keep more than 95 % of the
   squared residual; no message is formatted in the loop;
 - continuation: :meth:`NumericEvaluator.box_grid` solves the grid breadth first from the sample
-  nearest to the home pose, each sample warm-started from a solved neighbour (2 to 3 iterations
-  on a fine grid), retried from the home configuration when the solution breaks a limit (a
-  continuation may step into another assembly mode near a singularity; the home configuration
-  keeps the home mode, as the closed forms do);
+  nearest to the home pose, each sample warm-started from a solved neighbour's solution moved
+  along the grid line to first order (with the solver's last Jacobian), retried from that
+  solution itself then from the home configuration only when the solve fails, and kept in the
+  home assembly mode (the platform pose components the robot does not control, where they do
+  not move at home, are imposed at their home values; where they do move, a solution that
+  jumps is refused): the closed forms' classification on every sample of the test grids;
 - both cores: grids of at least :data:`PARALLEL_SAMPLES` samples are split in two and solved in
   two processes (``fork``; serial elsewhere).
 
@@ -64,6 +66,7 @@ PARALLEL_SAMPLES = 20_000
 _TOL = 1e-9  # convergence of the inverse geometric model [m or rad]
 _STALL = 0.95  # early stop: three accepted steps in a row each keeping this much of |r|^2
 _MAX_ITER = 50
+_JUMP = 0.2  # largest predicted change of a coordinate in one grid step [rad or m]
 _FREE_TOL = 1e-6  # uncontrolled pose components that do not move: their change allowed [m, rad]
 _FREE_JUMP = 0.5  # ... that do move: their largest change in one grid step [m or rad]
 _REVOLUTE = ("RX", "RY", "RZ", "RevoluteUnaligned")
@@ -250,6 +253,7 @@ class NumericEvaluator(PoseEvaluator):
         self.excluded_pairs: list[tuple[str, str]] = []
         self.q = robot.q_home.copy()
         assert robot.platform_frame is not None
+        self._jacobian: np.ndarray | None = None  # of the last solve (predictions)
         self._free_rows = np.setdiff1d(np.arange(6), robot.task_rows)
         self._home_placement = robot.platform_placement(robot.q_home)
         self._free_fixed = self._free_rows.size > 0 and _free_components_fixed(robot)
@@ -294,8 +298,33 @@ class NumericEvaluator(PoseEvaluator):
         sol = solve_pose(self.robot, self._task, q0, _TOL, _MAX_ITER, _STALL)
         if not sol.converged:
             return None
+        self._jacobian = sol.jacobian
         pin.forwardKinematics(self.robot.model, self.robot.data, sol.q)
         return sol.q
+
+    def _tangents(self) -> np.ndarray | None:
+        """Configuration increments (nv, 3) per unit platform displacement along x, y, z.
+
+        From the last solve's Jacobian: minimum-norm solutions of ``J dq = e`` (``None`` if
+        singular).
+        """
+        J = self._jacobian
+        if J is None:
+            return None
+        rows, cols = J.shape
+        E = np.zeros((rows, 3))
+        nc = self.robot.closure_set.nc
+        for i, axis in enumerate(self._task.rows.tolist()):
+            if axis < 3:
+                E[nc + i, axis] = 1.0  # d(p - p_target) = J dq - dp_target = 0
+        try:
+            if rows == cols:
+                return np.linalg.solve(J, E)
+            if rows < cols:
+                return J.T.dot(np.linalg.solve(J.dot(J.T), E))
+            return np.linalg.solve(J.T.dot(J), J.T.dot(E))
+        except np.linalg.LinAlgError:
+            return None
 
     def _limits(self, q: np.ndarray, kinds: tuple[str, ...], margin: float) -> int:
         """First limit an assembled ``q`` breaks (robot data: kinematics at ``q``)."""
@@ -357,7 +386,9 @@ class NumericEvaluator(PoseEvaluator):
         (:meth:`_mode_kept`: e.g. a Delta whose ball-jointed parallelograms cross and turn the
         nacelle).
         """
-        ref = self.robot.platform_placement(parent) if not self._free_fixed else None
+        ref = None
+        if self._free_rows.size and not self._free_fixed:
+            ref = self.robot.platform_placement(parent)
         home = self.robot.q_home
         starts = (q0, parent, home) if q0 is not parent else (parent, home)
         for start in starts:
@@ -505,7 +536,7 @@ class NumericEvaluator(PoseEvaluator):
                 if q is None:
                     continue
                 idx = np.unravel_index(s, shape)
-                ahead = None  # secant prediction one more step in the direction we came
+                tangents: np.ndarray | None | bool = False  # computed when a neighbour needs it
                 for d in range(3):
                     for step in (-1, 1):
                         c = idx[d] + step
@@ -513,15 +544,14 @@ class NumericEvaluator(PoseEvaluator):
                             nb = s + step * int(strides[d])
                             if not queued[nb]:
                                 queued[nb] = True
-                                q0 = q
-                                direction = step * (d + 1)
-                                if direction == came and parent is not None:
-                                    if ahead is None:
-                                        ahead = pin.integrate(
-                                            model, q, pin.difference(model, parent, q)
-                                        )
-                                    q0 = ahead
-                                warm[nb] = (q0, q, direction)
+                                if tangents is False:
+                                    tangents = self._tangents()
+                                q0 = q  # first-order prediction along the grid line
+                                if isinstance(tangents, np.ndarray):
+                                    dq = tangents[:, d] * (P[nb, d] - P[s, d])
+                                    if float(np.abs(dq).max()) < _JUMP:
+                                        q0 = pin.integrate(model, q, dq)
+                                warm[nb] = (q0, q, step * (d + 1))
                                 queue.append(nb)
 
     def default_bounds(self, R: np.ndarray) -> np.ndarray:
