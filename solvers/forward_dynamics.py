@@ -487,7 +487,6 @@ class ForwardDynamics:
                 ``dopri5`` underflowed.
 
         """
-        self._substeps = 1
         if self.integrator == "euler":
             if self._auto_gains and dt != self._gains_step:
                 self._euler_gains(dt)
@@ -496,6 +495,7 @@ class ForwardDynamics:
             v = v + dt * self._accel(q, v, g if f is None else g + f)
             q = pin.integrate(self.model, q, dt * v)
         else:
+            self._substeps = 1
             if self._h <= 0.0:
                 self._h = dt
             self._h_max = dt
