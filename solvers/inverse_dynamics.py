@@ -245,10 +245,11 @@ class InverseDynamics:
     def passive_forces(self, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
         """Generalized forces (nv,) of everything but the actuators, closures and wrenches.
 
-        The one place of the non-actuator force terms of the dynamics equation (``M a + h =
-        S^T tau + J^T lambda + f_ext + passive_forces``): none today (``None``); joint
-        springs, dampers, friction and motor terms belong here (as in
-        :meth:`solvers.ForwardDynamics.passive_forces`).
+        The hook for non-actuator force terms of the dynamics equation (``M a + h =
+        S^T tau + J^T lambda + f_ext + passive_forces``) the solver would evaluate itself: none
+        (``None``); pkdyn passes a robot's springs, dampers and friction
+        (:class:`solvers.PassiveForces`, evaluated on the whole trajectory at once) in
+        ``f_ext``.
 
         Args:
             q: Configuration (nq,).
