@@ -34,6 +34,7 @@ MODULES = (
     ("workspace", "Workspace throughput"),
     ("actuation_map", "Closed-loop legs (actuation maps) and loading public models"),
     ("design", "Design studies: designs/s on 1 and 2 workers, a 10,000-design Delta study"),
+    ("sizing", "Sizing: fastest cycle (toppra) and motor selection"),
 )
 
 NOTES = """\

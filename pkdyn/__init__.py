@@ -19,11 +19,13 @@ The parts, each importing only the parts listed before it (``tests/test_layering
 from pkdyn import library as _library  # noqa: F401  (registers the families with the loader)
 from pkdyn.exceptions import (
     AssemblyError,
+    CatalogError,
     DescriptionError,
     InfeasibleEffortError,
     InvalidInputError,
     JointLimitError,
     LoopClosureError,
+    NoFeasibleDriveError,
     OutputError,
     ParameterError,
     PkdynError,
@@ -48,12 +50,14 @@ from pkdyn.model.robot import Robot
 __all__ = [
     "ActuationMap",
     "AssemblyError",
+    "CatalogError",
     "DescriptionError",
     "GeometryResult",
     "InfeasibleEffortError",
     "InvalidInputError",
     "JointLimitError",
     "LoopClosureError",
+    "NoFeasibleDriveError",
     "OutputError",
     "ParameterError",
     "PkdynError",

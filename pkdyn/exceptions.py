@@ -22,6 +22,8 @@ __all__ = [
     "SimulationError",
     "OutputError",
     "StudyError",
+    "CatalogError",
+    "NoFeasibleDriveError",
 ]
 
 
@@ -216,3 +218,39 @@ class StudyError(PkdynError):
     def __init__(self, culprit: str, message: str) -> None:
         self.culprit = culprit
         super().__init__(f"{culprit}: {message}")
+
+
+class CatalogError(PkdynError):
+    """A motor or gearbox catalog is malformed: missing field, bad value, implausible unit.
+
+    Attributes:
+        source: Catalog file.
+        entry: The entry at fault (``motor 'M1'``, ``gearbox #3``), or ``None`` for the file.
+        field: The field at fault, or ``None``.
+
+    """
+
+    def __init__(self, source: str, entry: str | None, field: str | None, message: str) -> None:
+        self.source = source
+        self.entry = entry
+        self.field = field
+        where = source + "".join(f": {x}" for x in (entry, field and f"field '{field}'") if x)
+        super().__init__(f"{where}: {message}")
+
+
+class NoFeasibleDriveError(PkdynError):
+    """No motor (x gearbox) of the catalogs can drive an actuator along the trajectory.
+
+    Attributes:
+        actuator: The actuator.
+        closest: Descriptions of the closest candidates and what each lacks.
+
+    """
+
+    def __init__(self, actuator: str, closest: list[str]) -> None:
+        self.actuator = actuator
+        self.closest = closest
+        super().__init__(
+            f"no feasible motor x gearbox pair for actuator '{actuator}'; closest: "
+            + "; ".join(closest)
+        )

@@ -5,8 +5,8 @@ Nothing here knows about Deltas or hexapods: inputs are a ``pin.Model``, rigid c
 
 Modules: :mod:`~solvers.closure` (closure residuals, Jacobians, drift), :mod:`~solvers.lm`
 (Levenberg-Marquardt on the configuration manifold), :mod:`~solvers.pose_task`,
-:mod:`~solvers.actuation` (actuation selection), :mod:`~solvers.passive` (springs, dampers,
-friction), :mod:`~solvers.integrators`
+:mod:`~solvers.actuation` (actuation selection, drives), :mod:`~solvers.passive` (springs,
+dampers, friction), :mod:`~solvers.integrators`
 (Runge-Kutta tableaux), :mod:`~solvers.projection` (state projection onto the closures),
 :mod:`~solvers.recording` (what a simulation records), :mod:`~solvers.forward_dynamics` (time
 stepping), :mod:`~solvers.sampled` (kinematics and closure errors of many sampled states at once),
@@ -14,7 +14,7 @@ stepping), :mod:`~solvers.sampled` (kinematics and closure errors of many sample
 :mod:`~solvers.numerics` (rank decisions, null spaces, least squares: the one cut-off rule).
 """
 
-from solvers.actuation import Actuation
+from solvers.actuation import Actuation, Drives
 from solvers.closure import ClosureSet
 from solvers.forward_dynamics import ForwardDynamics, IntegrationError, simulate
 from solvers.inverse_dynamics import (
@@ -33,6 +33,7 @@ from solvers.sampled import SampledKinematics
 __all__ = [
     "Actuation",
     "ClosureSet",
+    "Drives",
     "ForwardDynamics",
     "ForwardResult",
     "FramePoseTask",

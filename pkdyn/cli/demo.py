@@ -1,6 +1,7 @@
 """``pkdyn demo`` (``make demo``): the main job on built-in defaults.
 
-Delta motor sizing on the Adept cycle, then every library robot's geometric models.
+Delta motor sizing on the Adept cycle, its fastest cycle (with and without the motors' rotor
+inertia), then every library robot's geometric models.
 """
 
 from __future__ import annotations
@@ -16,17 +17,93 @@ from pkdyn import library
 from pkdyn.model.assembly import closure_residual, forward_geometry, inverse_geometry
 from pkdyn.model.loader import load
 
-__all__ = ["register", "run_demo", "run_geometry_demo", "run_sizing_demo"]
+__all__ = ["register", "run_demo", "run_fastest_demo", "run_geometry_demo", "run_sizing_demo"]
 
 CYCLE_TIMES = (0.4, 0.5, 0.6, 0.8)
 PAYLOADS = (0.0, 0.5, 1.0, 2.0)
+FASTEST_PAYLOADS = (0.0, 1.0, 2.0)
+ROTOR_INERTIA = 5e-5
+"""Rotor plus gearbox-input inertia of the demo's motors [kg m^2] (a 400 W servo class)."""
 
 
 def run_demo() -> None:
-    """The main job on built-in defaults: Delta motor sizing, then the geometric models."""
+    """The main job on built-in defaults: Delta sizing, fastest cycle, geometric models."""
     run_sizing_demo()
     print()
+    run_fastest_demo()
+    print()
     run_geometry_demo(samples=50)
+
+
+def run_fastest_demo(
+    payloads: tuple[float, ...] = FASTEST_PAYLOADS,
+    rotor_inertia: float = ROTOR_INERTIA,
+    samples: int = 501,
+) -> dict[tuple[float, float], Any]:
+    """Print the DELTA 580's fastest Adept cycle per payload, without and with rotor inertia.
+
+    The Adept path is traversed as fast as the joint-side limits allow (toppra on pkdyn's
+    closed-loop inverse dynamics), once with the mechanism alone and once with motors whose
+    rotor inertia ``rotor_inertia`` the arms see multiplied by the reduction squared; each
+    result is checked by an independent inverse-dynamics pass along it.
+
+    Args:
+        payloads: Payloads [kg].
+        rotor_inertia: Motor-side rotor inertia [kg m^2].
+        samples: Samples of the path (the toppra grid).
+
+    Returns:
+        ``{(payload, rotor_inertia): FastestResult}``.
+
+    """
+    from pkdyn.dynamics.actuation import with_drives
+    from pkdyn.dynamics.fastest import fastest_trajectory, joint_path
+    from pkdyn.dynamics.sizing import sizing_from_efforts
+    from pkdyn.dynamics.trajectory import named_task
+
+    robot = load("delta", geometry=False)
+    p = robot.params
+    path = joint_path(
+        robot, named_task(robot, "adept", cycle_time=1.0, dt=1.0 / max(2, samples - 1))
+    )
+    reflected = p.reduction**2 * rotor_inertia
+    print(
+        f"Fastest Adept cycle of the DELTA 580 (toppra on the closed-loop inverse dynamics, "
+        f"{path.t.size} path samples; limits {p.effort:g} N m and {p.velocity:g} rad/s per arm):"
+    )
+    print(
+        f"{'payload':>8} | {'no rotor inertia':^27} | "
+        f"{f'rotor {rotor_inertia:g} kg m^2 (arm: {reflected:.3g})':^40}"
+    )
+    print(
+        f"{'[kg]':>8} | {'cycle [s]':>9} {'rms [N m]':>9} {'active':>7} | "
+        f"{'cycle [s]':>9} {'slower':>7} {'rms [N m]':>9} {'rotor pk':>9} {'active':>3}"
+    )
+    geared = with_drives(robot, rotor_inertia=rotor_inertia)
+    out: dict[tuple[float, float], Any] = {}
+    worst = 0.0
+    for m in payloads:
+        row = []
+        for J, rob in ((0.0, robot), (rotor_inertia, geared)):
+            res = fastest_trajectory(rob, path, payload=m)
+            out[(m, J)] = res
+            worst = max(worst, float(np.max(res.torque_utilisation)))
+            rms = max(a.rms for a in sizing_from_efforts(rob, res.efforts, m).actuators)
+            qdd = res.trajectory.qa_ddot
+            rotor_peak = float(np.max(np.abs(reflected * qdd))) if J else 0.0
+            row.append((res.cycle_time, rms, res.active_fraction, rotor_peak))
+        (t0, r0, a0, _), (t1, r1, a1, rp) = row
+        print(
+            f"{m:8g} | {t0:9.4f} {r0:9.2f} {100 * a0:6.0f}% | {t1:9.4f} "
+            f"{100 * (t1 / t0 - 1):6.1f}% {r1:9.2f} {rp:9.2f} {100 * a1:3.0f}%"
+        )
+    print(
+        f"check: pkdyn's inverse dynamics along each fastest cycle stays within the torque limit "
+        f"({100 * worst:.4f} % at most); 'active': samples where a torque or speed limit is "
+        "reached; rms: time RMS torque of the most loaded arm; 'rotor pk': the peak torque that "
+        "accelerates the rotor, arm side"
+    )
+    return out
 
 
 def run_sizing_demo(

@@ -1,4 +1,4 @@
-"""Dynamics commands: ``simulate`` (passive constrained dynamics) and ``size`` (motor sizing)."""
+"""Dynamics commands: ``simulate`` (passive dynamics), ``size`` (sizing, motors, fastest cycle)."""
 
 from __future__ import annotations
 
@@ -59,13 +59,55 @@ def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
     return opts
 
 
+def _fastest_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The path's nominal parametrisation: ``cycle_time / dt`` samples (default 1 s)."""
+    opts = _trajectory_options(args)
+    if args.trajectory == "adept":
+        opts["cycle_time"] = 1.0 if args.cycle_time is None else args.cycle_time
+        opts["cycles"] = 1
+    return opts
+
+
 def _cmd_size(args: argparse.Namespace) -> None:
-    from pkdyn.dynamics.sizing import size
-    from pkdyn.dynamics.trajectory import named_trajectory
+    from pkdyn.dynamics.sizing import size, sizing_from_efforts
+    from pkdyn.dynamics.trajectory import named_task, named_trajectory
 
     robot = load(args)
-    traj = named_trajectory(robot, args.trajectory, **_trajectory_options(args))
-    result = size(robot, traj, payload=args.payload)
+    if args.payload < 0.0 or not np.isfinite(args.payload):
+        raise InvalidInputError("--payload", f"must be >= 0 kg, got {args.payload}")
+    if args.operating_points and not args.catalog:
+        raise InvalidInputError("--operating-points", "needs --catalog (the motors to plot)")
+    fast = None
+    if args.fastest:
+        from pkdyn.dynamics.fastest import fastest_trajectory
+
+        task = named_task(robot, args.trajectory, **_fastest_options(args))
+        fast = fastest_trajectory(robot, task, payload=args.payload)
+        traj = fast.trajectory
+        result = sizing_from_efforts(robot, fast.efforts, args.payload)
+    else:
+        traj = named_trajectory(robot, args.trajectory, **_trajectory_options(args))
+        result = size(robot, traj, payload=args.payload)
+    selection = None
+    if args.catalog:
+        from pkdyn.dynamics.motors import load_catalog
+        from pkdyn.dynamics.selection import select_drives
+
+        catalog = load_catalog(args.catalog)
+        if args.gearboxes:
+            catalog = catalog + load_catalog(args.gearboxes)
+        selection = select_drives(
+            robot,
+            traj,
+            catalog,
+            payload=args.payload,
+            criterion=args.criterion,
+            efforts=result.efforts,
+        )
+    if args.operating_points and selection is not None:
+        from pkdyn.plotting.motors import plot_operating_points
+
+        plot_operating_points(selection, path=args.operating_points)
     if args.csv:
         result.write_csv(args.csv)
     if args.plot:
@@ -76,25 +118,36 @@ def _cmd_size(args: argparse.Namespace) -> None:
         except (OSError, ValueError) as err:
             raise InvalidInputError("--plot", f"cannot write '{args.plot}': {err}") from None
     head = (
-        f"{robot.name}: {result.trajectory}, {result.duration:g} s, payload {args.payload:g} kg"
+        f"{robot.name}: {result.trajectory}, {result.duration:.4g} s, payload {args.payload:g} kg"
         + ("" if result.feasible else "  -- LIMITS EXCEEDED")
     )
     payload = result.as_json()
-    text = head + "\n" + result.table()
+    text = [head, result.table()]
     if args.no_passive:  # the same without the springs, dampers and friction
         bare = size(robot, traj, payload=args.payload, passive=False)
         payload["without_passive"] = bare.as_json()
         what = "without" if robot.passive is not None else "(the robot has none) without"
-        text = (
-            head
-            + "\nwith passive elements:\n"
-            + result.table()
-            + f"\n{what} passive elements:"
-            + ("" if bare.feasible else "  -- LIMITS EXCEEDED")
-            + "\n"
-            + bare.table()
+        text = [
+            head,
+            "with passive elements:",
+            result.table(),
+            f"{what} passive elements:" + ("" if bare.feasible else "  -- LIMITS EXCEEDED"),
+            bare.table(),
+        ]
+    if fast is not None:
+        payload["fastest"] = fast.as_json()
+        text.insert(
+            0,
+            f"fastest cycle: {fast.cycle_time:.4g} s (toppra on {traj.t.size} samples; a torque "
+            f"or speed limit active on {100 * fast.active_fraction:.0f} % of them; inverse "
+            f"dynamics along it: {100 * float(np.max(fast.torque_utilisation)):.3f} % of the "
+            f"torque limit, {100 * float(np.max(fast.speed_utilisation)):.3f} % of the speed "
+            "limit)",
         )
-    emit(args, payload, text)
+    if selection is not None:
+        payload["selection"] = selection.as_json()
+        text.append(selection.table(show=args.show))
+    emit(args, payload, "\n".join(text))
 
 
 def register(sub: Any) -> None:
@@ -126,6 +179,30 @@ def register(sub: Any) -> None:
         "--no-passive",
         action="store_true",
         help="also report the efforts without the robot's springs, dampers and friction",
+    )
+    sp.add_argument(
+        "--fastest",
+        action="store_true",
+        help="traverse the trajectory's path as fast as the torque and speed limits allow "
+        "(toppra); --cycle-time / --dt then set the path's sampling (default 1 s / 1 ms)",
+    )
+    sp.add_argument(
+        "--catalog",
+        metavar="FILE",
+        help="motor (and gearbox) catalog, YAML or CSV, or 'example': select motors",
+    )
+    sp.add_argument("--gearboxes", metavar="FILE", help="gearbox catalog (YAML, CSV, 'example')")
+    sp.add_argument(
+        "--criterion",
+        choices=("rated_torque", "mass", "price"),
+        default="rated_torque",
+        help="ranking of the feasible motor x gearbox pairs (smallest first)",
+    )
+    sp.add_argument("--show", type=int, default=5, help="pairs listed per actuator")
+    sp.add_argument(
+        "--operating-points",
+        metavar="FILE.png",
+        help="plot the chosen motors' operating points over their envelopes (with --catalog)",
     )
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_size)

@@ -2,11 +2,15 @@
 
 Modules: :mod:`~pkdyn.dynamics.profiles` (rest-to-rest motion laws),
 :mod:`~pkdyn.dynamics.trajectory` (task paths mapped to closure-consistent joint trajectories),
-:mod:`~pkdyn.dynamics.actuation`, :mod:`~pkdyn.dynamics.payload`, :mod:`~pkdyn.dynamics.energy`,
+:mod:`~pkdyn.dynamics.actuation` (actuation and drives: rotor inertia, efficiency, motor
+friction), :mod:`~pkdyn.dynamics.payload`, :mod:`~pkdyn.dynamics.energy`,
 :mod:`~pkdyn.dynamics.inverse` (actuator efforts along a trajectory),
 :mod:`~pkdyn.dynamics.forward` (``simulate``), :mod:`~pkdyn.dynamics.sizing` (peak/RMS efforts,
-margins), :mod:`~pkdyn.dynamics.balancing` (spring balancing). The robot's passive elements
-(``robot.passive``: springs, dampers, friction) enter every one of them.
+margins), :mod:`~pkdyn.dynamics.balancing` (spring balancing),
+:mod:`~pkdyn.dynamics.motors` (motor and gearbox catalogs), :mod:`~pkdyn.dynamics.selection`
+(motor x gearbox selection), :mod:`~pkdyn.dynamics.fastest` (the fastest motion along a path,
+toppra). The robot's passive elements (``robot.passive``: springs, dampers, friction) enter
+every one of them.
 
 Layering: may import :mod:`pkdyn.model`, :mod:`pkdyn.library`, :mod:`pkdyn.analysis` and
 :mod:`solvers`; never the workspace, tripod, design, viewer, plotting or CLI packages.

@@ -1,9 +1,12 @@
 """Constrained forward dynamics of a loaded robot: ``simulate``.
 
 Built on :class:`solvers.ForwardDynamics`.
-Actuator efforts ``tau(t, q, v)`` are joint-side [N m or N]; gravity is ``model.gravity``; the
-robot's passive elements (``robot.passive``: springs, dampers, friction) act unless
-``passive=False``; the solvers' failures become :class:`pkdyn.exceptions.SimulationError`.
+Actuator efforts ``tau(t, q, v)`` are joint-side [N m or N], or motor torques
+``motor_torque(t, q, v)`` [N m] mapped through the robot's drives (reduction, gearbox efficiency,
+motor friction: :mod:`pkdyn.dynamics.actuation`); the rotor inertia is in the model's armature
+either way; gravity is ``model.gravity``; the robot's passive elements (``robot.passive``:
+springs, dampers, friction) act unless ``passive=False``; the solvers' failures become
+:class:`pkdyn.exceptions.SimulationError`.
 """
 
 from __future__ import annotations
@@ -12,7 +15,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from pkdyn.dynamics.actuation import actuation
+from pkdyn.dynamics.actuation import actuation, drives
 from pkdyn.exceptions import InvalidInputError, SimulationError
 from pkdyn.model.passive import FRICTION_SMOOTHING
 from pkdyn.model.pose import as_finite
@@ -38,6 +41,7 @@ def simulate(
     record_every: int = 1,
     passive: bool = True,
     step: float | None = None,
+    motor_torque: TorqueFn | None = None,
 ) -> ForwardResult:
     """Constrained forward dynamics of the robot under gravity and actuator efforts.
 
@@ -60,10 +64,16 @@ def simulate(
         step: Integration step [s] of ``euler`` and ``rk4`` (``dt`` is divided into a whole
             number of steps), largest substep of ``dopri5`` (default: ``dt``). ``euler`` keeps
             the energy of a passive Delta to 0.1 % over 10 s at ``step=1e-5``.
+        motor_torque: Motor torques ``motor_torque(t, q, v) -> (n_a,)`` [N m] instead of
+            ``torque``: the joint-side efforts are ``Drives.joint_effort(tau_m, qa_dot)``
+            (efficiency and motor friction included). Without either, the motors are free: zero
+            motor torque, so the motor friction and the back-driven gearbox still act.
 
     Returns:
-        Time series: q, v, a, efforts, closure forces and residuals, energies (the springs'
-        in ``elastic``), actuator work and the energy dissipated by dampers and friction.
+        Time series: q, v, a, efforts (joint side), closure forces and residuals, energies (the
+        springs' in ``elastic``), the work of the joint-side efforts and the energy dissipated
+        by dampers and friction (the losses in the drives are outside the mechanism:
+        ``Drives.losses``).
 
     Raises:
         InvalidInputError: Non-positive duration or step, unknown integrator, bad sizes.
@@ -88,6 +98,11 @@ def simulate(
         passive=_passive(robot, passive, viscous, coulomb),
         integrator=integrator,
     )
+    if torque is not None and motor_torque is not None:
+        raise InvalidInputError("motor_torque", "give either torque or motor_torque, not both")
+    drv = drives(robot)
+    if torque is None and (motor_torque is not None or not drv.lossless):
+        torque = _through_drives(robot, motor_torque)
     tau_fn = torque
     if torque is not None:
         n_a = len(robot.actuators)
@@ -133,3 +148,24 @@ def _passive(
         smoothing=base.smoothing,
         springs=base.springs,
     )
+
+
+def _through_drives(robot: Robot, motor_torque: TorqueFn | None) -> TorqueFn:
+    """Joint-side efforts of motor torques (zero when ``motor_torque`` is ``None``)."""
+    drv = drives(robot)
+    va = robot.actuated_v
+    n_a = len(robot.actuators)
+    zero = np.zeros(n_a)
+
+    def joint_side(t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        if motor_torque is None:
+            tau_m = zero
+        else:
+            tau_m = np.asarray(motor_torque(t, q, v), dtype=float).reshape(-1)
+            if tau_m.size != n_a or not np.all(np.isfinite(tau_m)):
+                raise SimulationError(
+                    f"motor torque function returned {tau_m!r} ({n_a} finite values)", t
+                )
+        return drv.joint_effort(tau_m, v[va])
+
+    return joint_side

@@ -1,11 +1,14 @@
 """Motor sizing: per-actuator efforts, speeds and powers along a trajectory, against the limits.
 
-For each actuator: peak and RMS effort (joint side, and motor side through the transmission's
-reduction ``r``: ``tau_motor = tau / r``, ``omega_motor = r qd``, an ideal transmission), peak
-speed, peak power ``|tau qd|``, and the margins against the URDF limits
-(``margin = 1 - peak / limit``: the fraction of the limit left; negative when exceeded).
+For each actuator: peak and RMS effort (joint side, and motor side through the drive model of
+:mod:`pkdyn.dynamics.actuation`: ``omega_motor = N qd``, ``tau_motor = f(omega) + tau / (N
+kappa)``, i.e. ``tau / N`` for a lossless transmission of reduction ``N``), peak speed, peak
+power ``|tau qd|``, the share of the reflected rotor inertia, and the margins against the URDF
+limits (``margin = 1 - peak / limit``: the fraction of the limit left; negative when exceeded).
+The effort limit is read as the motor's peak torque seen through the reduction: the torque
+margin compares ``|N| x motor peak`` with it (the joint-side peak for a lossless drive).
 The RMS effort is the time RMS over the trajectory (trapezoidal rule), the figure that sizes a
-motor's continuous torque.
+motor's continuous torque. Joint-side efforts include the reflected rotor inertia (armature).
 """
 
 from __future__ import annotations
@@ -18,13 +21,19 @@ from typing import Any
 
 import numpy as np
 
+from pkdyn.dynamics.actuation import drives
 from pkdyn.dynamics.inverse import EffortTrajectory, inverse_dynamics
 from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import PkdynError
 from pkdyn.model.robot import Robot
 
-__all__ = ["ActuatorSizing", "SizingResult", "size"]
+__all__ = ["FEASIBLE_TOL", "ActuatorSizing", "SizingResult", "size", "sizing_from_efforts"]
+
+
+FEASIBLE_TOL = 1e-6
+"""Relative excess of a limit still reported as feasible (rounding of a motion that uses its
+limits exactly, such as the fastest cycle)."""
 
 
 @dataclass(frozen=True)
@@ -45,6 +54,13 @@ class ActuatorSizing:
         motor_peak: Peak |effort| on the motor side [N m or N].
         motor_rms: RMS effort on the motor side [N m or N].
         motor_peak_speed: Peak motor speed [rad/s or m/s].
+        reflected_inertia: Rotor inertia seen by the joint, ``N^2 J`` [kg m^2 or kg].
+        rotor_peak: Peak |effort| that accelerates the rotor, ``N^2 J |qa_ddot|``, joint side
+            [N m or N].
+        efficiency: Gearbox efficiency when driving.
+        motor_mean_speed: Time mean of the motor's |speed| [rad/s] (with ``motor_rms``: the
+            RMS operating point).
+        loss: Mean power lost in the drive, motor friction and gearbox [W].
 
     """
 
@@ -61,6 +77,11 @@ class ActuatorSizing:
     motor_peak: float
     motor_rms: float
     motor_peak_speed: float
+    reflected_inertia: float = 0.0
+    rotor_peak: float = 0.0
+    efficiency: float = 1.0
+    motor_mean_speed: float = 0.0
+    loss: float = 0.0
 
     def as_json(self) -> dict[str, Any]:
         """JSON-ready dict (infinite limits as ``None``)."""
@@ -81,6 +102,7 @@ class SizingResult:
         duration: Trajectory duration [s].
         actuators: Per-actuator figures.
         efforts: The underlying efforts, energies and trajectory.
+        motor_tau: Motor torques (N, n_a) [N m] (drive model; ``None``: not computed).
 
     """
 
@@ -90,11 +112,13 @@ class SizingResult:
     duration: float
     actuators: list[ActuatorSizing]
     efforts: EffortTrajectory
+    motor_tau: np.ndarray | None = None
 
     @property
     def feasible(self) -> bool:
-        """All peaks within the effort and speed limits."""
-        return all(a.margin >= 0.0 and a.speed_margin >= 0.0 for a in self.actuators)
+        """All peaks within the effort and speed limits (to :data:`FEASIBLE_TOL`)."""
+        tol = -FEASIBLE_TOL
+        return all(a.margin >= tol and a.speed_margin >= tol for a in self.actuators)
 
     def as_json(self) -> dict[str, Any]:
         """JSON-ready summary (``actuators``: list of per-actuator dicts)."""
@@ -205,12 +229,39 @@ def size(
     """
     loaded = with_payload(robot, payload) if payload else robot
     ef = inverse_dynamics(loaded, trajectory, wrench=wrench, progress=progress, passive=passive)
+    return sizing_from_efforts(robot, ef, payload)
+
+
+def sizing_from_efforts(robot: Robot, ef: EffortTrajectory, payload: float = 0.0) -> SizingResult:
+    """The sizing figures of efforts already computed (see :func:`size`).
+
+    Args:
+        robot: The robot (its drives and limits).
+        ef: Efforts along a trajectory (:func:`pkdyn.dynamics.inverse_dynamics`).
+        payload: Payload mass the efforts were computed with [kg] (reported only).
+
+    Returns:
+        The figures per actuator.
+
+    """
+    trajectory = ef.trajectory
     t = trajectory.t
-    tau, qd = ef.tau, trajectory.qa_dot
+    tau, qd, qdd = ef.tau, trajectory.qa_dot, trajectory.qa_ddot
+    drv = drives(robot)
+    tau_m = drv.motor_effort(tau, qd)
+    omega = drv.motor_speed(qd)
+    p_fric, p_gear = drv.losses(tau_m, qd)
+    loss = p_fric + p_gear
     peak = np.max(np.abs(tau), axis=0)
     rms = _rms(t, tau)
     speed = np.max(np.abs(qd), axis=0)
     power = np.max(np.abs(tau * qd), axis=0)
+    m_peak = np.max(np.abs(tau_m), axis=0)
+    m_rms = _rms(t, tau_m)
+    T = float(t[-1] - t[0])
+    m_mean = _mean(t, np.abs(omega))
+    mean_loss = _mean(t, loss)
+    rotor = np.max(np.abs(drv.armature * qdd), axis=0)
     out = []
     for i, act in enumerate(robot.actuators):
         r = act.reduction
@@ -222,20 +273,32 @@ def size(
                 peak_speed=float(speed[i]),
                 peak_power=float(power[i]),
                 limit=float(act.effort),
-                margin=_margin(float(peak[i]), act.effort),
+                margin=_margin(float(abs(r) * m_peak[i]), act.effort),
                 speed_limit=float(act.velocity),
                 speed_margin=_margin(float(speed[i]), act.velocity),
                 reduction=float(r),
-                motor_peak=float(peak[i] / r),
-                motor_rms=float(rms[i] / r),
-                motor_peak_speed=float(speed[i] * r),
+                motor_peak=float(m_peak[i]),
+                motor_rms=float(m_rms[i]),
+                motor_peak_speed=float(speed[i] * abs(r)),
+                reflected_inertia=float(drv.armature[i]),
+                rotor_peak=float(rotor[i]),
+                efficiency=float(act.efficiency),
+                motor_mean_speed=float(m_mean[i]),
+                loss=float(mean_loss[i]),
             )
         )
     return SizingResult(
         robot=robot.name,
         trajectory=trajectory.name,
         payload=float(payload),
-        duration=float(t[-1] - t[0]),
+        duration=T,
         actuators=out,
         efforts=ef,
+        motor_tau=tau_m,
     )
+
+
+def _mean(t: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Time mean of the columns of ``x`` (trapezoidal rule)."""
+    T = float(t[-1] - t[0])
+    return np.sum(0.5 * (x[1:] + x[:-1]) * np.diff(t)[:, None], axis=0) / T

@@ -61,6 +61,9 @@ class Params:
         effort: Joint-side actuator torque limit [N m].
         velocity: Joint-side actuator speed limit [rad/s].
         reduction: Gear reduction between motor and arm.
+        rotor_inertia: Motor rotor (plus gearbox input) inertia, motor side [kg m^2] (default 0:
+            not modelled); the arm sees ``reduction^2 rotor_inertia``.
+        efficiency: Gearbox efficiency, driving and back-driven (default 1: lossless).
         bar_joint: ``spherical`` (12 ball joints, mobility 9 of which 6 internal) or
             ``universal`` (universal joint at the upper end of each bar, mobility 3).
             Ignored when ``parallelogram="hinge"`` (the upper joints are then universal).
@@ -90,6 +93,8 @@ class Params:
     effort: float = 40.0
     velocity: float = 15.0
     reduction: float = 20.0
+    rotor_inertia: float = 0.0
+    efficiency: float = 1.0
     bar_joint: str = "spherical"
     cone_half_angle: float = 0.8
     parallelogram: str = "ball"
@@ -102,6 +107,9 @@ class Params:
 
     def __post_init__(self) -> None:
         positive(NAME, **{k: v for k, v in asdict(self).items() if k not in _SIGNED})
+        in_range(NAME, "rotor_inertia", self.rotor_inertia, 0.0, 1.0)
+        if not 0.0 < self.efficiency <= 1.0:
+            raise ParameterError(NAME, "efficiency", f"must lie in (0, 1], got {self.efficiency}")
         in_range(NAME, "alpha_min", self.alpha_min, -np.pi, self.alpha_max)
         in_range(NAME, "alpha_max", self.alpha_max, self.alpha_min, np.pi)
         if self.bar_joint not in ("spherical", "universal"):
@@ -121,7 +129,16 @@ class Params:
             )
 
 
-_SIGNED = {"z_home", "alpha_min", "alpha_max", "bar_joint", "parallelogram", "arms"}
+_SIGNED = {
+    "z_home",
+    "alpha_min",
+    "alpha_max",
+    "bar_joint",
+    "parallelogram",
+    "arms",
+    "rotor_inertia",
+    "efficiency",
+}
 _PASSIVE_VELOCITY = 1e3
 """Velocity limit written on passive revolute joints [rad/s] (effort 0: they are not driven)."""
 
@@ -221,7 +238,7 @@ def build_urdf(p: Params) -> str:
             axis=(0.0, 1.0, 0.0),
             limit=(p.alpha_min, p.alpha_max, p.effort, p.velocity),
         )
-        w.transmission(arm, f"motor{i}", p.reduction)
+        w.transmission(arm, f"motor{i}", p.reduction, p.rotor_inertia, p.efficiency)
         R_arm = _arm_rotation(theta, alpha)
         O = p.ra * u
         hinged = p.parallelogram == "hinge"

@@ -11,7 +11,9 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
 - ``<pkdyn:platform link xyz rpy task="x y z rx ry rz">``: the platform / end-effector frame and
   which pose components the mechanism controls.
 - Actuation is the standard ``<transmission>`` element (SimpleTransmission,
-  ``mechanicalReduction``); effort and velocity limits come from the joint's ``<limit>``.
+  ``mechanicalReduction``); effort and velocity limits come from the joint's ``<limit>``. Its
+  ``<actuator>`` may hold ``<pkdyn:rotor_inertia value>`` [kg m^2, motor side],
+  ``<pkdyn:efficiency value [backdrive]>`` and ``<pkdyn:motor_friction viscous coulomb>``.
 - Passive elements: the joint's standard ``<dynamics damping friction>``;
   ``<pkdyn:passive joint stiffness rest damping friction>`` (per degree of freedom: a joint
   spring about a rest position, and damping / friction overriding ``<dynamics>``);
@@ -163,6 +165,13 @@ class ActuatorSpec:
         reduction: Mechanical reduction (joint speed x reduction = motor speed).
         effort: Joint-side effort limit [N m or N] (``inf`` when absent).
         velocity: Joint-side velocity limit [rad/s or m/s] (``inf`` when absent).
+        rotor_inertia: Rotor (and gearbox input) inertia, motor side [kg m^2]; reflected on
+            the joint as ``reduction^2 rotor_inertia`` (``pkdyn:rotor_inertia``).
+        efficiency: Gearbox efficiency when the motor drives (``pkdyn:efficiency value``).
+        backdrive_efficiency: Efficiency when the joint drives the motor
+            (``pkdyn:efficiency backdrive``; default ``efficiency``).
+        viscous: Motor viscous friction [N m s/rad] (``pkdyn:motor_friction viscous``).
+        coulomb: Motor Coulomb friction [N m] (``pkdyn:motor_friction coulomb``).
 
     """
 
@@ -171,6 +180,11 @@ class ActuatorSpec:
     reduction: float = 1.0
     effort: float = math.inf
     velocity: float = math.inf
+    rotor_inertia: float = 0.0
+    efficiency: float = 1.0
+    backdrive_efficiency: float | None = None
+    viscous: float = 0.0
+    coulomb: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -413,7 +427,39 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
                 )
         jname = joint.get("name", "")
         effort, velocity = limits.get(jname, (math.inf, math.inf))
-        out.append(ActuatorSpec(aname, jname, reduction, effort, velocity))
+        drive = _drive(source, f"transmission '{tname}'", t if act is None else act)
+        out.append(ActuatorSpec(aname, jname, reduction, effort, velocity, **drive))
+    return out
+
+
+def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
+    """Rotor inertia, efficiency and motor friction of an ``<actuator>`` (pkdyn elements)."""
+    out: dict[str, float] = {}
+    fields = (
+        ("rotor_inertia", "value", "rotor_inertia", 0.0, math.inf),
+        ("efficiency", "value", "efficiency", 0.0, 1.0),
+        ("efficiency", "backdrive", "backdrive_efficiency", 0.0, 1.0),
+        ("motor_friction", "viscous", "viscous", 0.0, math.inf),
+        ("motor_friction", "coulomb", "coulomb", 0.0, math.inf),
+    )
+    for tag, attr, key, lo, hi in fields:
+        child = el.find(_NS + tag)
+        if child is None or (child.get(attr) is None and attr != "value"):
+            continue
+        try:
+            value = _float(source, child, attr)
+        except DescriptionError as err:
+            msg = str(err).split(": ")[-1]
+            raise DescriptionError(source, f"{where} {err.culprit}", msg) from None
+        ok = lo < value <= hi if key.endswith("efficiency") else lo <= value < hi
+        if not ok:
+            interval = "(0, 1]" if key.endswith("efficiency") else "[0, inf)"
+            raise DescriptionError(
+                source,
+                f"{where} <pkdyn:{tag}> {attr}='{child.get(attr)}'",
+                f"must lie in {interval}",
+            )
+        out[key] = value
     return out
 
 

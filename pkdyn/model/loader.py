@@ -384,6 +384,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
             raise DescriptionError(source, f"closure '{n}'", "closure names must be unique")
     cms, owner = constraint_models(model, desc.closures, source)
     actuated_joints, actuated_q, actuated_v = _actuation(model, list(desc.actuators), source)
+    desc = dataclasses.replace(desc, actuators=_reflected(model, desc.actuators, actuated_v))
     platform_frame = None
     task_rows = np.arange(6)
     if desc.platform is not None:
@@ -420,6 +421,26 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         params=params,
         passive=elements,
     )
+
+
+def _reflected(
+    model: pin.Model, actuators: tuple[ActuatorSpec, ...], actuated_v: np.ndarray
+) -> tuple[ActuatorSpec, ...]:
+    """Rotor inertias into the model's armature (``N^2 J``), or out of it.
+
+    A described rotor inertia is added to the armature of its coordinate; a format that gives
+    the reflected inertia itself (MJCF ``armature``) sets the actuator's rotor inertia to
+    ``armature / N^2``, so that the drive model and the model agree.
+    """
+    out = []
+    for a, iv in zip(actuators, actuated_v, strict=True):
+        existing = float(model.armature[iv])
+        if a.rotor_inertia:
+            model.armature[iv] = existing + a.reduction**2 * a.rotor_inertia
+        elif existing > 0.0:
+            a = dataclasses.replace(a, rotor_inertia=existing / a.reduction**2)
+        out.append(a)
+    return tuple(out)
 
 
 def _assembled(

@@ -352,22 +352,37 @@ class UrdfWriter:
             f'  <pkdyn:closure name="{name}" type="{kind}"{extra}>{frames}</pkdyn:closure>'
         )
 
-    def transmission(self, joint: str, actuator: str, reduction: float) -> None:
+    def transmission(
+        self,
+        joint: str,
+        actuator: str,
+        reduction: float,
+        rotor_inertia: float = 0.0,
+        efficiency: float = 1.0,
+    ) -> None:
         """Add a SimpleTransmission driving ``joint``.
 
         Args:
             joint: Actuated joint name.
             actuator: Actuator (motor) name.
             reduction: Mechanical reduction (motor speed / joint speed).
+            rotor_inertia: Motor-side rotor inertia [kg m^2] (``pkdyn:rotor_inertia``, written
+                when non-zero).
+            efficiency: Gearbox efficiency (``pkdyn:efficiency``, written when below 1).
 
         """
+        drive = ""
+        if rotor_inertia:
+            drive += f'<pkdyn:rotor_inertia value="{_f(rotor_inertia)}"/>'
+        if efficiency != 1.0:
+            drive += f'<pkdyn:efficiency value="{_f(efficiency)}"/>'
         self._parts.append(
             f'  <transmission name="{joint}_transmission">\n'
             "    <type>transmission_interface/SimpleTransmission</type>\n"
             f'    <joint name="{joint}"><hardwareInterface>'
             "hardware_interface/EffortJointInterface</hardwareInterface></joint>\n"
             f'    <actuator name="{actuator}"><mechanicalReduction>{_f(reduction)}'
-            "</mechanicalReduction></actuator>\n"
+            f"</mechanicalReduction>{drive}</actuator>\n"
             "  </transmission>"
         )
 
