@@ -115,3 +115,72 @@ def inverse_dynamics(
     J = closures.jacobian(data, q)
     x = np.linalg.lstsq(np.hstack([S.T, J.T]), b, rcond=1e-12)[0]
     return x[: S.shape[0]]
+
+
+def inverse_dynamics_floor(
+    model: pin.Model,
+    data: pin.Data,
+    closures: RawClosures,
+    va: np.ndarray,
+    vp: np.ndarray,
+    Q: np.ndarray,
+    V: np.ndarray,
+    A: np.ndarray,
+) -> np.ndarray:
+    """Actuator efforts along a trajectory (N, n_a), the plainest loop: per sample ``rnea``, the
+    C++ constraint Jacobian and the normal equations of the passive rows
+    (``J_p J_p^T lambda = J_p b_p``, ``tau = b_a - J_a^T lambda``; unit gains, no check)."""
+    tau = np.empty((Q.shape[0], va.size))
+    for k in range(Q.shape[0]):
+        b = pin.rnea(model, data, Q[k], V[k], A[k])
+        J = closures.jacobian(data, Q[k])
+        Jp = J[:, vp]
+        lam = np.linalg.solve(Jp @ Jp.T, Jp @ b[vp])
+        tau[k] = b[va] - J[:, va].T @ lam
+    return tau
+
+
+class LeanNewton:
+    """The leanest direct geometric model: Newton on the passive coordinates.
+
+    Per iteration one ``computeJointJacobians`` (kinematics and joint Jacobians), the constraint
+    datas, one ``getConstraintsJacobian`` (C++), the point residuals copied into a preallocated
+    vector and one linear solve (square passive Jacobian: ``solve``; else the minimum-norm step
+    from the normal equations). Point closures only; no damping, no checks.
+    """
+
+    def __init__(self, model: pin.Model, constraints, actuated_q, passive_v) -> None:
+        self.model = model
+        self.data = model.createData()
+        self.closures = RawClosures(model, constraints)
+        self.iq = np.asarray(actuated_q)
+        self.vp = np.asarray(passive_v)
+        self.r = np.empty(self.closures.nc)
+        self.dq = np.zeros(model.nv)
+        self.pts = [(3 * k, cd) for k, (point, _, cd) in enumerate(self.closures.pairs) if point]
+        assert len(self.pts) == len(self.closures.pairs), "point closures only"
+
+    def solve(
+        self, q0: np.ndarray, qa: np.ndarray, tol: float = 1e-12, max_iter: int = 50
+    ) -> tuple[np.ndarray, int]:
+        model, data, cl = self.model, self.data, self.closures
+        r, dq, vp = self.r, self.dq, self.vp
+        q = q0.copy()
+        q[self.iq] = qa
+        square = cl.nc == vp.size
+        for it in range(max_iter):
+            pin.computeJointJacobians(model, data, q)
+            for _, c, cd in cl.pairs:
+                c.calc(model, data, cd)
+            for o, cd in self.pts:
+                r[o : o + 3] = cd.oMc1.translation
+                r[o : o + 3] -= cd.oMc2.translation
+            if np.abs(r).max() < tol:
+                return q, it
+            Jp = pin.getConstraintsJacobian(model, data, cl.cms, cl.cds)[:, vp]
+            if square:
+                dq[vp] = -np.linalg.solve(Jp, r)
+            else:
+                dq[vp] = -Jp.T @ np.linalg.solve(Jp @ Jp.T, r)
+            q = pin.integrate(model, q, dq)
+        return q, max_iter

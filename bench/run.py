@@ -1,15 +1,16 @@
 """pkdyn benchmark suite (``make bench``): writes ``bench/results.md``.
 
 Runs every benchmark module of this directory that exists (each exposes ``rows()`` returning
-``(benchmark, figure, target-or-comment)`` rows): ``geometry`` (closed forms, assembly / FK and
+``(benchmark, figure, target-or-comment)`` rows): ``public`` (the public functions as users
+call them against the raw-Pinocchio floor: inverse dynamics, simulation, assembly, numeric
+workspace), ``geometry`` (closed forms, assembly / FK and
 IK against raw Pinocchio), ``dynamics`` (forward step and inverse dynamics against raw
 Pinocchio), ``vs_mujoco`` (forward step and inverse dynamics against MuJoCo, agreement),
 ``workspace`` (workspace throughput, when present), ``actuation_map`` (closed-loop legs, loading
 public models), ``cli_latency`` (command start-up against the bare imports) and ``design``
 (design-study throughput and a 10,000-design study: several minutes; ``PKDYN_BENCH_DESIGNS``
-makes it smaller). Figures are
-medians of repeated runs; ratios are medians of ratios measured on alternating batches, so that
-they hold under a varying load.
+makes it smaller). Figures are medians of repeated runs; ratios are medians of ratios measured on
+alternating batches (CPU time of the process), so that they hold under a varying load.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "results.md"
 MODULES = (
+    ("public", "Public functions as users call them, beside the core and the floor (issue 14)"),
     ("geometry", "Geometric models: closed forms, assembly / FK, IK (pkdyn vs raw Pinocchio)"),
     ("dynamics", "Dynamics: forward step and inverse dynamics (pkdyn vs raw Pinocchio)"),
     ("vs_mujoco", "pkdyn vs MuJoCo (exported models): speed and agreement"),

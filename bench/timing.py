@@ -1,7 +1,8 @@
 """Timing helpers shared by the benchmark modules: medians of repeated batches, paired ratios.
 
 The machine is shared, so its load changes between runs: a ratio is the median of ratios
-measured on alternating batches of the two callables, not a ratio of two separate medians.
+measured on alternating batches of the two callables, not a ratio of two separate medians, and
+batches are timed in CPU time of the process (not wall time, which counts the waits for a core).
 """
 
 from __future__ import annotations
@@ -22,11 +23,16 @@ ROBOTS = ("delta", "gough_stewart", "planar_3rrr", "five_bar", "tripod")
 
 
 def batch_us(fn: Callable[[], object], n: int) -> float:
-    """Mean time of ``n`` calls of ``fn`` [us]."""
-    t0 = time.perf_counter()
+    """Mean CPU time of ``n`` calls of ``fn`` [us].
+
+    CPU time of this process (``time.process_time``): on a shared machine the wall time also
+    counts the waits for a core, which other processes' load varies; both sides of a ratio are
+    timed alike.
+    """
+    t0 = time.process_time()
     for _ in range(n):
         fn()
-    return 1e6 * (time.perf_counter() - t0) / n
+    return 1e6 * (time.process_time() - t0) / n
 
 
 def median_us(fn: Callable[[], object], n: int, repeats: int = 7) -> float:

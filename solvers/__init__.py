@@ -9,7 +9,8 @@ Modules: :mod:`~solvers.closure` (closure residuals, Jacobians, drift), :mod:`~s
 dampers, friction), :mod:`~solvers.integrators`
 (Runge-Kutta tableaux), :mod:`~solvers.projection` (state projection onto the closures),
 :mod:`~solvers.recording` (what a simulation records), :mod:`~solvers.forward_dynamics` (time
-stepping), :mod:`~solvers.inverse_dynamics` (constrained inverse dynamics, proxsuite QP) and
+stepping), :mod:`~solvers.sampled` (kinematics and closure errors of many sampled states at once),
+:mod:`~solvers.inverse_dynamics` (constrained inverse dynamics, proxsuite QP) and
 :mod:`~solvers.numerics` (rank decisions, null spaces, least squares: the one cut-off rule).
 """
 
@@ -23,6 +24,7 @@ if TYPE_CHECKING:
     from solvers.actuation import Actuation, Drives
     from solvers.forward_dynamics import ForwardDynamics, IntegrationError, simulate
     from solvers.inverse_dynamics import (
+        InconsistentMotionError,
         InfeasibleError,
         InverseDynamics,
         InverseResult,
@@ -30,6 +32,7 @@ if TYPE_CHECKING:
     )
     from solvers.passive import FrameSpring, PassiveForces
     from solvers.recording import ForwardResult
+    from solvers.sampled import SampledKinematics
 
 _LAZY = {
     "Actuation": "solvers.actuation",
@@ -37,6 +40,7 @@ _LAZY = {
     "ForwardDynamics": "solvers.forward_dynamics",
     "IntegrationError": "solvers.forward_dynamics",
     "simulate": "solvers.forward_dynamics",
+    "InconsistentMotionError": "solvers.inverse_dynamics",
     "InfeasibleError": "solvers.inverse_dynamics",
     "InverseDynamics": "solvers.inverse_dynamics",
     "InverseResult": "solvers.inverse_dynamics",
@@ -44,6 +48,7 @@ _LAZY = {
     "FrameSpring": "solvers.passive",
     "PassiveForces": "solvers.passive",
     "ForwardResult": "solvers.recording",
+    "SampledKinematics": "solvers.sampled",
 }
 """Names imported on first use (dynamics and proxsuite stay out of a geometry-only import)."""
 
@@ -70,12 +75,14 @@ __all__ = [
     "ForwardResult",
     "FramePoseTask",
     "FrameSpring",
+    "InconsistentMotionError",
     "InfeasibleError",
     "InverseDynamics",
     "InverseResult",
     "InverseTrajectory",
     "IntegrationError",
     "PassiveForces",
+    "SampledKinematics",
     "SolveResult",
     "simulate",
     "solve_lm",

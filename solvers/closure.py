@@ -28,13 +28,13 @@ __all__ = ["ClosureSet"]
 _LOCAL = pin.ReferenceFrame.LOCAL
 
 
-def _joint_jacobian(model: pin.Model, data: pin.Data, j: int) -> np.ndarray:
-    """Local joint Jacobian (6, nv), also when nv == 1 (eigenpy would return a vector)."""
-    return np.reshape(pin.getJointJacobian(model, data, j, _LOCAL), (6, model.nv))
-
-
 class ClosureSet:
     """Closure equations of rigid constraint models, evaluated on a Pinocchio model.
+
+    Residuals and Jacobians are computed by Pinocchio's C++ constraint models (copies with
+    ``LOCAL_WORLD_ALIGNED`` point rows, ``d(p1 - p2)/dt``, and ``LOCAL`` weld rows mapped to the
+    convention of this module by ``-Jlog6(c1Mc2) Ad(c2Mc1)``): one ``getConstraintsJacobian``
+    call and a few copies per evaluation.
 
     Args:
         model: The kinematic tree.
@@ -57,39 +57,40 @@ class ClosureSet:
             self.sizes.append(3 if is_point else 6)
         self.offsets = np.concatenate([[0], np.cumsum(self.sizes)]).astype(int)
         self.nc = int(self.offsets[-1])
-        # Point constraints are evaluated together: each distinct joint placement is fetched
-        # once, contact points are mapped in one batch, and point Jacobians come from the world
-        # Jacobian data.J restricted (masked) to each joint's support.
-        pts = [k for k, it in enumerate(self._items) if it[0]]
-        self._pt_rows = (
-            np.concatenate([np.arange(self.offsets[k], self.offsets[k] + 3) for k in pts])
-            if pts
-            else np.zeros(0, dtype=int)
-        )
-        joints = sorted({it[j] for k in pts for j in (1, 3) for it in (self._items[k],)})
-        self._pt_joints = joints
-        slot = {j: n for n, j in enumerate(joints)}
-        self._pt_slot = np.array(
-            [[slot[self._items[k][1]] for k in pts], [slot[self._items[k][3]] for k in pts]],
-            dtype=int,
-        ).reshape(2, len(pts))
-        self._pt_local = np.array(
-            [
-                [self._items[k][2].translation for k in pts],
-                [self._items[k][4].translation for k in pts],
-            ]
-        ).reshape(2, len(pts), 3)
-        self._pt_mask = np.zeros((2, len(pts), 1, model.nv))
-        for n, k in enumerate(pts):
-            for side, j in enumerate((self._items[k][1], self._items[k][3])):
-                self._pt_mask[side, n, 0] = self._support_mask(model, j)
-        self._welds = [k for k, it in enumerate(self._items) if not it[0]]
-        self._n_pts = len(pts)
-        self._cache: tuple[np.ndarray | None, pin.Data | None, np.ndarray | None] = (
-            None,
-            None,
-            None,
-        )
+        self._cms = pin.StdVec_RigidConstraintModel()
+        self._cds = pin.StdVec_RigidConstraintData()
+        for is_point, j1, M1, j2, M2 in self._items:
+            kind = pin.ContactType.CONTACT_3D if is_point else pin.ContactType.CONTACT_6D
+            frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED if is_point else _LOCAL
+            c = pin.RigidConstraintModel(kind, model, j1, M1, j2, M2, frame)
+            self._cms.append(c)
+            self._cds.append(c.createData())
+        self._entries = [
+            (is_point, int(o), cm, cd)
+            for (is_point, *_), o, cm, cd in zip(
+                self._items, self.offsets[:-1], self._cms, self._cds, strict=True
+            )
+        ]
+        self._welds = [(int(o), cd) for is_point, o, _, cd in self._entries if not is_point]
+        # contact-frame (LOCAL) copies for the solvers (see local_residual)
+        self._loc_cms = pin.StdVec_RigidConstraintModel()
+        self._loc_cds = pin.StdVec_RigidConstraintData()
+        for is_point, j1, M1, j2, M2 in self._items:
+            kind = pin.ContactType.CONTACT_3D if is_point else pin.ContactType.CONTACT_6D
+            c = pin.RigidConstraintModel(kind, model, j1, M1, j2, M2, _LOCAL)
+            self._loc_cms.append(c)
+            self._loc_cds.append(c.createData())
+        self._loc_entries = [
+            (is_point, int(o), cm, cd)
+            for (is_point, *_), o, cm, cd in zip(
+                self._items, self.offsets[:-1], self._loc_cms, self._loc_cds, strict=True
+            )
+        ]
+
+    @property
+    def items(self) -> list[tuple[bool, int, pin.SE3, int, pin.SE3]]:
+        """Per closure: ``(is_point, joint1, placement1, joint2, placement2)``."""
+        return self._items
 
     @staticmethod
     def _support_mask(model: pin.Model, j: int) -> np.ndarray:
@@ -112,25 +113,19 @@ class ClosureSet:
 
         """
         pin.forwardKinematics(self.model, data, q)
-        P = self._points(data) if self._n_pts else None
-        self._cache = (q.copy(), data, P)
-        return self._residual(data, P)
+        return self._residual(data)
 
-    def _points(self, data: pin.Data) -> np.ndarray:
-        """World positions (2, n, 3) of the two contact points of each point constraint."""
-        oMi = data.oMi
-        H = np.array([oMi[j].homogeneous for j in self._pt_joints])[self._pt_slot]
-        return np.einsum("snij,snj->sni", H[..., :3, :3], self._pt_local) + H[..., :3, 3]
-
-    def _residual(self, data: pin.Data, P: np.ndarray | None = None) -> np.ndarray:
+    def _residual(self, data: pin.Data) -> np.ndarray:
+        """Residual from the joint placements of ``data`` (updates the constraint datas)."""
+        model = self.model
         r = np.empty(self.nc)
-        if self._n_pts:
-            P = self._points(data) if P is None else P
-            r[self._pt_rows] = (P[0] - P[1]).reshape(-1)
-        for k in self._welds:
-            _, j1, M1, j2, M2 = self._items[k]
-            o = self.offsets[k]
-            r[o : o + 6] = pin.log6((data.oMi[j1] * M1).actInv(data.oMi[j2] * M2)).vector
+        for is_point, o, cm, cd in self._entries:
+            cm.calc(model, data, cd)
+            if is_point:
+                r[o : o + 3] = cd.oMc1.translation
+                r[o : o + 3] -= cd.oMc2.translation
+            else:
+                r[o : o + 6] = pin.log6(cd.c1Mc2).vector
         return r
 
     def residual_and_jacobian(self, data: pin.Data, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -144,36 +139,92 @@ class ClosureSet:
             Residual (nc,) [m, rad] and Jacobian (nc, nv).
 
         """
-        model = self.model
-        pin.computeJointJacobians(model, data, q)
-        P = self._points(data) if self._n_pts else None
-        return self._residual(data, P), self._jacobian(data, P)
+        pin.computeJointJacobians(self.model, data, q)
+        r = self._residual(data)
+        return r, self._constraint_jacobian(data)
 
-    def _jacobian(self, data: pin.Data, P: np.ndarray | None) -> np.ndarray:
+    def local_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
+        """Closure residual in the contact frame of ``joint1`` (runs the forward kinematics).
+
+        For the solvers: a point's residual is ``R_c1^T (p1 - p2)`` (the world residual
+        rotated, same norm), a weld's ``log6(c2Mc1)``; with :meth:`local_jacobian_after_residual`
+        (Pinocchio's ``LOCAL`` constraint Jacobian) it is exact at closure, where
+        Newton's method needs it (its error is of the order of the residual: convergence stays
+        quadratic). Cheaper than :meth:`residual`: one copy per closure.
+
+        Args:
+            data: Pinocchio data of ``model``.
+            q: Configuration (nq,).
+
+        Returns:
+            Residual (nc,) [m, rad].
+
+        """
         model = self.model
-        J = np.zeros((self.nc, model.nv))
-        if P is not None:
-            Jw = data.J.reshape(6, model.nv)  # eigenpy returns (6,) when nv == 1
-            # velocity of a point p on a joint's support: v_O + w x p = v_O - [p]x w
-            S = np.zeros(P.shape + (3,))
-            S[..., 0, 1], S[..., 0, 2] = -P[..., 2], P[..., 1]
-            S[..., 1, 0], S[..., 1, 2] = P[..., 2], -P[..., 0]
-            S[..., 2, 0], S[..., 2, 1] = -P[..., 1], P[..., 0]
-            Jp = (Jw[:3] - S @ Jw[3:]) * self._pt_mask  # (2, n, 3, nv)
-            J[self._pt_rows] = (Jp[0] - Jp[1]).reshape(3 * self._n_pts, model.nv)
-        for k in self._welds:
-            _, j1, M1, j2, M2 = self._items[k]
-            o = self.offsets[k]
-            oMc1 = data.oMi[j1] * M1
-            oMc2 = data.oMi[j2] * M2
-            c1Mc2 = oMc1.actInv(oMc2)
-            nu = np.zeros((6, model.nv))
-            if j2 != 0:
-                nu += M2.toActionMatrixInverse() @ _joint_jacobian(model, data, j2)
-            if j1 != 0:
-                J1 = M1.toActionMatrixInverse() @ _joint_jacobian(model, data, j1)
-                nu -= c1Mc2.toActionMatrixInverse() @ J1
-            J[o : o + 6] = pin.Jlog6(c1Mc2) @ nu
+        pin.forwardKinematics(model, data, q)
+        r = np.empty(self.nc)
+        for is_point, o, cm, cd in self._loc_entries:
+            cm.calc(model, data, cd)
+            if is_point:
+                r[o : o + 3] = cd.c1Mc2.translation
+            else:
+                r[o : o + 6] = pin.log6(cd.c1Mc2).vector
+        return np.negative(r, out=r)
+
+    def local_jacobian_after_residual(
+        self, data: pin.Data, q: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Jacobian (nc, nv) of :meth:`local_residual`, exact at closure.
+
+        At the configuration of the last :meth:`local_residual` call (``data`` untouched since;
+        see :meth:`jacobian_after_residual`); ``q``, that configuration, is not used (it lets a
+        solver call ``partial(local_jacobian_after_residual, data)(q)``).
+        """
+        model = self.model
+        pin.computeJointJacobians(model, data)
+        J = pin.getConstraintsJacobian(model, data, self._loc_cms, self._loc_cds)
+        return np.reshape(J, (self.nc, model.nv))
+
+    def jacobian_after_residual(self, data: pin.Data, q: np.ndarray | None = None) -> np.ndarray:
+        """Closure Jacobian (nc, nv) at the configuration of the last :meth:`residual` call.
+
+        Only the joint Jacobians (from the placements already in ``data``) and the constraint
+        Jacobian are computed: for solvers that evaluate the Jacobian where they have just
+        evaluated the residual (:func:`solvers.solve_lm` does).
+
+        Args:
+            data: The data the last :meth:`residual` call used, untouched since.
+            q: That call's configuration (not used: see :meth:`local_jacobian_after_residual`).
+
+        Returns:
+            Jacobian (nc, nv).
+
+        """
+        pin.computeJointJacobians(self.model, data)
+        return self._constraint_jacobian(data)
+
+    def jacobian_at(self, data: pin.Data) -> np.ndarray:
+        """Closure Jacobian (nc, nv) from ``data`` after ``pin.computeJointJacobians(q)``.
+
+        Args:
+            data: Pinocchio data whose placements and joint Jacobians are those of ``q``.
+
+        Returns:
+            Jacobian (nc, nv).
+
+        """
+        model = self.model
+        for _, _, cm, cd in self._entries:
+            cm.calc(model, data, cd)
+        return self._constraint_jacobian(data)
+
+    def _constraint_jacobian(self, data: pin.Data) -> np.ndarray:
+        """Pinocchio's constraint Jacobian (constraint datas up to date) in this convention."""
+        J = pin.getConstraintsJacobian(self.model, data, self._cms, self._cds)
+        J = np.reshape(J, (self.nc, self.model.nv))
+        for o, cd in self._welds:
+            M = cd.c1Mc2
+            J[o : o + 6] = -pin.Jlog6(M).dot(M.toActionMatrixInverse()).dot(J[o : o + 6])
         return J
 
     def jacobian(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
@@ -187,12 +238,8 @@ class ClosureSet:
             Jacobian (nc, nv).
 
         """
-        q_last, data_last, P = self._cache
-        if q_last is not None and data_last is data and np.array_equal(q_last, q):
-            # kinematics at q already known: only the joint Jacobians are missing
-            pin.computeJointJacobians(self.model, data, q)
-            return self._jacobian(data, P)
-        return self.residual_and_jacobian(data, q)[1]
+        pin.computeJointJacobians(self.model, data, q)
+        return self.jacobian_at(data)
 
     def drift(self, data: pin.Data, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Acceleration drift ``gamma`` (nc,): ``d^2 r/dt^2 = J a + gamma`` (runs the kinematics).
@@ -211,7 +258,6 @@ class ClosureSet:
         """
         model = self.model
         pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
-        self._cache = (None, None, None)
         g = np.zeros(self.nc)
         zero = pin.Motion.Zero()
         for k, (is_point, j1, M1, j2, M2) in enumerate(self._items):

@@ -40,9 +40,8 @@ solves the passive rows ``J_p^T lambda = b_p`` in the least-squares sense (semi-
 with one refinement step; their residual is the unreachable part of the equation), then
 ``tau = (b_a - J_a^T lambda) / gains``. The margins guarantee that the general method would find
 the same ranks (``J`` of full row rank, ``G`` of rank ``n_a``); otherwise, or when the equation
-cannot be satisfied or a bound is violated, the general method runs (and raises). For point
-closures the Jacobian is Pinocchio's constraint Jacobian in world axes (``getConstraintsJacobian``
-of ``LOCAL_WORLD_ALIGNED`` copies of the constraint models), equal to :class:`ClosureSet`'s.
+cannot be satisfied or a bound is violated, the general method runs (and raises). The Jacobian
+is :class:`ClosureSet`'s (Pinocchio's C++ ``getConstraintsJacobian``).
 
 The direct QP over ``(tau, lambda)`` with the full equation as its equality constraint and a
 tiny weight on ``lambda`` gives the same solution in the limit, but proxsuite does not converge
@@ -65,10 +64,17 @@ from proxsuite import proxqp
 from solvers import numerics
 from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
+from solvers.sampled import SampledKinematics
 
-_POINT = pin.ContactType.CONTACT_3D
+_BATCH = 256  # samples per batch of :meth:`InverseDynamics.trajectory`
 
-__all__ = ["InfeasibleError", "InverseDynamics", "InverseResult", "InverseTrajectory"]
+__all__ = [
+    "InconsistentMotionError",
+    "InfeasibleError",
+    "InverseDynamics",
+    "InverseResult",
+    "InverseTrajectory",
+]
 
 
 class InfeasibleError(Exception):
@@ -109,6 +115,25 @@ class InfeasibleError(Exception):
         super().__init__(message)
 
 
+class InconsistentMotionError(Exception):
+    """A trajectory sample does not satisfy the closures (position, velocity or acceleration).
+
+    Attributes:
+        sample: Index of the sample.
+        what: ``configuration``, ``velocity`` or ``acceleration``.
+        closure: Name of the closure with the largest error there.
+        error: Largest error component [m, m/s, m/s^2 or rad, rad/s, rad/s^2].
+
+    """
+
+    def __init__(self, message: str, sample: int, what: str, closure: str, error: float) -> None:
+        self.sample = sample
+        self.what = what
+        self.closure = closure
+        self.error = error
+        super().__init__(message)
+
+
 @dataclass
 class InverseResult:
     """Solution of the inverse dynamics at one state.
@@ -137,12 +162,16 @@ class InverseTrajectory:
         tau: Actuator efforts (N, n_a) [N m or N].
         constraint_forces: Closure multipliers (N, nc) [N, N m].
         residual: Dynamics equation residual per sample (N,) [N m or N].
+        kinetic: Kinetic energy per sample (N,) [J].
+        potential: Gravitational potential energy per sample (N,) [J] (``model.gravity``).
 
     """
 
     tau: np.ndarray
     constraint_forces: np.ndarray
     residual: np.ndarray
+    kinetic: np.ndarray
+    potential: np.ndarray
 
 
 class InverseDynamics:
@@ -214,38 +243,30 @@ class InverseDynamics:
         self._vp = np.setdiff1d(np.arange(model.nv), self._va)
         self._perm = np.concatenate([self._vp, self._va])
         self._gmin = float(np.min(np.abs(actuation.gains)))
-        # Pinocchio's constraint Jacobian (C++), mapped to the ClosureSet convention (exactly,
-        # at any q): point rows of LOCAL_WORLD_ALIGNED copies are d(p1 - p2)/dt; a weld's LOCAL
-        # rows V (frame 1's velocity relative to frame 2's, in frame 1) give
-        # -Jlog6(c1Mc2) Ad(c2Mc1) V
-        self._pin_cms = pin.StdVec_RigidConstraintModel()
-        self._pin_cds = pin.StdVec_RigidConstraintData()
-        self._welds: list[tuple[pin.RigidConstraintData, int]] = []
-        for cm, o in zip(constraints, self.closure_set.offsets, strict=False):
-            point = cm.type == _POINT
-            frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED if point else pin.ReferenceFrame.LOCAL
-            c = pin.RigidConstraintModel(
-                cm.type, model, cm.joint1_id, cm.joint1_placement, cm.joint2_id,
-                cm.joint2_placement, frame,
-            )  # fmt: skip
-            self._pin_cms.append(c)
-            self._pin_cds.append(c.createData())
-            if not point:
-                self._welds.append((self._pin_cds[len(self._pin_cds) - 1], int(o)))
-        self._pin_pairs = list(zip(self._pin_cms, self._pin_cds, strict=True))
+        self._sampled: SampledKinematics | None = None
+
+    def passive_forces(self, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
+        """Generalized forces (nv,) of everything but the actuators, closures and wrenches.
+
+        The hook for non-actuator force terms of the dynamics equation (``M a + h =
+        S^T tau + J^T lambda + f_ext + passive_forces``) the solver would evaluate itself: none
+        (``None``); pkdyn passes a robot's springs, dampers and friction
+        (:class:`solvers.PassiveForces`, evaluated on the whole trajectory at once) in
+        ``f_ext``.
+
+        Args:
+            q: Configuration (nq,).
+            v: Velocity (nv,).
+
+        Returns:
+            The forces [N m or N], or ``None``.
+
+        """
+        return None
 
     def _jacobian(self, q: np.ndarray) -> np.ndarray:
-        """Closure Jacobian (nc, nv) at ``q`` (:class:`ClosureSet` convention)."""
-        model, kin = self.model, self._kin
-        pin.computeJointJacobians(model, kin, q)
-        for cm, cd in self._pin_pairs:
-            cm.calc(model, kin, cd)
-        J = pin.getConstraintsJacobian(model, kin, self._pin_cms, self._pin_cds)
-        J = np.reshape(J, (self.closure_set.nc, model.nv))
-        for cd, o in self._welds:
-            M = cd.c1Mc2
-            J[o : o + 6] = -pin.Jlog6(M).dot(M.inverse().toActionMatrix()).dot(J[o : o + 6])
-        return J
+        """Closure Jacobian (nc, nv) at ``q`` (:class:`ClosureSet`, Pinocchio's C++)."""
+        return self.closure_set.jacobian(self._kin, q)
 
     # ------------------------------------------------------------------ one state
 
@@ -278,9 +299,17 @@ class InverseDynamics:
         b = np.array(pin.rnea(model, self.data, q, v, a))
         if f_ext is not None:
             b -= np.asarray(f_ext, dtype=float).reshape(model.nv)
+        f = self.passive_forces(q, v)
+        if f is not None:
+            b -= f
+        J = self._jacobian(q) if self.closure_set.nc else np.zeros((0, model.nv))
+        return self._solve_state(b, J, sample)
+
+    def _solve_state(self, b: np.ndarray, J: np.ndarray, sample: int | None) -> InverseResult:
+        """:meth:`solve` given ``b = M a + h - f_ext`` (nv,) and the closure Jacobian (nc, nv)."""
+        model = self.model
         cs = self.closure_set
         if cs.nc:
-            J = self._jacobian(q)
             fast = self._solve_unique(b, J)
             if fast is not None:
                 return fast
@@ -288,7 +317,6 @@ class InverseDynamics:
             r = numerics.rank_of(s, self.rank_tol)
             Z = Vt[r:].T
         else:
-            J = np.zeros((0, model.nv))
             U, s, Vt, r = np.zeros((0, 0)), np.zeros(0), np.eye(model.nv), 0
             Z = np.eye(model.nv)
         G = Z.T @ self.S.T  # (d, n_a)
@@ -486,19 +514,39 @@ class InverseDynamics:
         v: np.ndarray,
         a: np.ndarray,
         f_ext: np.ndarray | None = None,
+        *,
+        wrench: tuple[int, np.ndarray] | None = None,
+        check_tol: float | None = None,
+        first_sample: int = 0,
     ) -> InverseTrajectory:
-        """Inverse dynamics at every sample of a trajectory (warm-started QP).
+        """Inverse dynamics at every sample of a trajectory, in batches.
+
+        Per sample only Pinocchio's C++ runs (``rnea``, the joint Jacobians, the constraint
+        Jacobian, the energies) and its results are copied into
+        arrays; the closure check (:class:`~solvers.sampled.SampledKinematics`) and the
+        passive-row elimination of :meth:`solve` (same margins, same solution) are vectorised
+        over a batch of samples. Samples where the elimination does not apply (redundant
+        actuation, violated bounds, rank margins) are solved one by one by :meth:`solve`'s
+        general path, in order (the QP stays warm-started along the trajectory).
 
         Args:
             q: Configurations (N, nq).
             v: Velocities (N, nv).
             a: Accelerations (N, nv).
             f_ext: Generalized external forces (N, nv) [N m or N] (default: none).
+            wrench: ``(frame id, W)``: wrenches (N, 6) applied on the frame's body at the
+                frame origin, force in world axes [N] then moment in the frame's axes [N m]
+                (added to ``f_ext``).
+            check_tol: When given, refuse samples that do not satisfy the closures: residual
+                above ``check_tol`` [m or rad], velocity error above ``check_tol max(1, |v|)``,
+                acceleration error above ``check_tol max(1, |a|)`` (largest components).
+            first_sample: Index of the first row in the whole trajectory (for the errors).
 
         Returns:
-            Efforts, closure forces and residuals per sample.
+            Efforts, closure forces, residuals and energies per sample.
 
         Raises:
+            InconsistentMotionError: At the first sample that breaks the check (checked first).
             InfeasibleError: At the first sample that cannot be realised (``.sample`` set).
 
         """
@@ -508,15 +556,164 @@ class InverseDynamics:
             raise ValueError(
                 f"{N} configurations, {v.shape[0]} velocities, {a.shape[0]} accelerations"
             )
-        tau = np.empty((N, self.actuation.n))
-        lam = np.empty((N, self.closure_set.nc))
-        res = np.empty(N)
+        model = self.model
+        nv, nc = model.nv, self.closure_set.nc
+        out = InverseTrajectory(
+            np.empty((N, self.actuation.n)),
+            np.empty((N, nc)),
+            np.empty(N),
+            np.empty(N),
+            np.empty(N),
+        )
         if f_ext is not None:
-            f_ext = np.asarray(f_ext, dtype=float).reshape(N, self.model.nv)
-        for k in range(N):
-            out = self.solve(q[k], v[k], a[k], sample=k, f_ext=None if f_ext is None else f_ext[k])
-            tau[k], lam[k], res[k] = out.tau, out.constraint_forces, out.residual
-        return InverseTrajectory(tau, lam, res)
+            f_ext = np.asarray(f_ext, dtype=float).reshape(N, nv)
+        frames: tuple[int, ...] = () if wrench is None else (int(wrench[0]),)
+        kin = self._sampled
+        if kin is None or tuple(kin._frame_slot) != frames:
+            kin = self._sampled = SampledKinematics(model, self.closure_set, frames, _BATCH)
+        for s in range(0, N, _BATCH):
+            e = min(N, s + _BATCH)
+            b, J = self._sample_terms(kin, q[s:e], v[s:e], a[s:e], out, s)
+            n = e - s
+            if f_ext is not None:
+                b -= f_ext[s:e]
+            if wrench is not None:
+                b -= kin.frame_force(n, int(wrench[0]), np.asarray(wrench[1], dtype=float)[s:e])
+            stop = n
+            bad = None
+            if check_tol is not None and nc:
+                bad = self._first_inconsistent(kin, n, v[s:e], a[s:e], check_tol)
+                if bad is not None:
+                    stop = bad[0]
+            done = self._solve_unique_batch(b[:stop], J[:stop], out, s)
+            for i in np.flatnonzero(~done).tolist():
+                res = self._solve_state(b[i], J[i], first_sample + s + i)
+                out.tau[s + i], out.constraint_forces[s + i] = res.tau, res.constraint_forces
+                out.residual[s + i] = res.residual
+            if bad is not None:
+                i, what, name, worst = bad
+                raise InconsistentMotionError(
+                    f"sample {first_sample + s + i}: the {what} does not satisfy closure "
+                    f"'{name}' (error {worst:.3g})",
+                    sample=first_sample + s + i,
+                    what=what,
+                    closure=name,
+                    error=worst,
+                )
+        return out
+
+    def _sample_terms(
+        self,
+        kin: SampledKinematics,
+        q: np.ndarray,
+        v: np.ndarray,
+        a: np.ndarray,
+        out: InverseTrajectory,
+        s: int,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Per-sample C++ work of a batch: ``b = M a + h`` (n, nv) and closure Jacobians.
+
+        The Jacobians are (n, nc, nv); the energies go into ``out`` from row ``s``; ``kin``
+        captures the kinematics of the closure check.
+        """
+        model, kd = self.model, self._kin
+        n = q.shape[0]
+        nc = self.closure_set.nc
+        b = np.empty((n, model.nv))
+        J = np.empty((n, nc, model.nv))
+        rnea, jac = pin.rnea, pin.computeJointJacobians
+        kinetic, potential = pin.computeKineticEnergy, pin.computePotentialEnergy
+        jacobian_at, capture = self.closure_set.jacobian_at, kin.capture
+        ke, pe = out.kinetic[s:], out.potential[s:]
+        passive = self.passive_forces
+        for i in range(n):
+            b[i] = rnea(model, kd, q[i], v[i], a[i])  # also the joint velocities, accelerations
+            f = passive(q[i], v[i])
+            if f is not None:
+                b[i] -= f
+            ke[i] = kinetic(model, kd)
+            jac(model, kd, q[i])  # placements and world Jacobian
+            pe[i] = potential(model, kd)
+            if nc:
+                capture(i, kd)
+                J[i] = jacobian_at(kd)
+        return b, J
+
+    def _first_inconsistent(
+        self, kin: SampledKinematics, n: int, v: np.ndarray, a: np.ndarray, tol: float
+    ) -> tuple[int, str, str, float] | None:
+        """First sample of a batch breaking the closure check, the kind, closure and error."""
+        r, ev, ea = kin.closure_errors(n, v)
+        checks = (
+            ("configuration", r, np.ones(n)),
+            ("velocity", ev, np.maximum(1.0, np.abs(v).max(axis=1))),
+            ("acceleration", ea, np.maximum(1.0, np.abs(a).max(axis=1))),
+        )
+        worst = [np.abs(err).max(axis=1) for _, err, _ in checks]
+        bad = [~(w <= tol * scale) for w, (_, _, scale) in zip(worst, checks, strict=True)]
+        hit = np.flatnonzero(bad[0] | bad[1] | bad[2])
+        if not hit.size:
+            return None
+        i = int(hit[0])
+        c = next(c for c in range(3) if bad[c][i])
+        per = self.closure_set.split(checks[c][1][i])
+        name = max(per, key=lambda k: per[k])
+        return i, checks[c][0], name, float(worst[c][i])
+
+    def _solve_unique_batch(
+        self, b: np.ndarray, J: np.ndarray, out: InverseTrajectory, s: int
+    ) -> np.ndarray:
+        """:meth:`_solve_unique` on a batch (same margins and operations).
+
+        Results go into ``out`` from row ``s``; returns where the elimination applied (n,).
+        """
+        n = b.shape[0]
+        done = np.zeros(n, dtype=bool)
+        n_p = self._vp.size
+        nc = self.closure_set.nc
+        if n == 0 or n_p == 0 or nc == 0:
+            return done
+        Jp, Ja = J[:, :, self._vp], J[:, :, self._va]
+        JpT = np.swapaxes(Jp, 1, 2)
+        wide = nc <= n_p
+        try:  # Ginv = (J_p J_p^T)^-1 (wide) or (J_p^T J_p)^-1; trace(Ginv) = |X|_F^2
+            Ginv = np.linalg.inv(Jp @ JpT if wide else JpT @ Jp)
+        except np.linalg.LinAlgError:  # one of them singular: let the one-by-one path decide
+            return done
+        x2 = np.trace(Ginv, axis1=1, axis2=2)
+        jp2 = np.einsum("nij,nij->n", Jp, Jp)
+        ja2 = np.einsum("nij,nij->n", Ja, Ja)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ok = x2 * jp2 < 1e8
+            s_lb = x2**-0.5
+            j_norm = np.sqrt(jp2 + ja2)
+            ok &= s_lb > 1e3 * self.rank_tol * j_norm
+            if not wide:
+                E = Ja - Jp @ (Ginv @ (JpT @ Ja))
+                e_norm = np.sqrt(np.einsum("nij,nij->n", E, E))
+                ok &= e_norm <= 1e-3 * self.rank_tol * j_norm / math.sqrt(nc)
+            ok &= self._gmin * s_lb > 1e3 * self._g_tol * (s_lb + np.sqrt(ja2))
+        bp = b[:, self._vp]
+
+        def X(r: np.ndarray) -> np.ndarray:  # X r: Ginv J_p r (wide) or J_p Ginv r
+            return _mv(Ginv, _mv(Jp, r)) if wide else _mv(Jp, _mv(Ginv, r))
+
+        lam = X(bp)
+        lam += X(bp - _mv(JpT, lam))  # one step of iterative refinement
+        scale = np.maximum(1.0, np.abs(b).max(axis=1))
+        ok &= np.abs(bp - _mv(JpT, lam)).max(axis=1) <= self.consistency_tol * scale
+        gains = self.actuation.gains
+        tau = (b[:, self._va] - _mv(np.swapaxes(Ja, 1, 2), lam)) / gains
+        if self._bounded:
+            tol = self.eps * np.maximum(1.0, np.abs(tau).max(axis=1))[:, None]
+            ok &= ~((tau < self.lower - tol) | (tau > self.upper + tol)).any(axis=1)
+        y = b - _mv(np.swapaxes(J, 1, 2), lam)
+        y[:, self._va] -= gains * tau
+        done[:] = ok
+        out.tau[s : s + n][ok] = tau[ok]
+        out.constraint_forces[s : s + n][ok] = lam[ok]
+        out.residual[s : s + n][ok] = np.abs(y[ok]).max(axis=1)
+        return done
 
 
 def _vector(
@@ -528,6 +725,11 @@ def _vector(
     if out.size != n:
         raise ValueError(f"{what}: {out.size} values for {n} actuators")
     return out
+
+
+def _mv(M: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Batched matrix-vector products ``M_k x_k``: (n, i, j), (n, j) -> (n, i)."""
+    return (M @ x[:, :, None])[:, :, 0]
 
 
 def _where(sample: int | None) -> str:

@@ -55,6 +55,30 @@ class FramePoseTask:
         """
         return self.error(pin.updateFramePlacement(self.model, data, self.frame_id))[self.rows]
 
+    def jacobian(self, data: pin.Data) -> np.ndarray:
+        """Jacobian of the selected rows; needs ``computeJointJacobians`` done.
+
+        Args:
+            data: Pinocchio data after ``pin.computeJointJacobians``.
+
+        Returns:
+            Jacobian (len(rows), nv).
+
+        """
+        model = self.model
+        R = pin.updateFramePlacement(model, data, self.frame_id).rotation
+        Jw = np.reshape(
+            pin.getFrameJacobian(
+                model, data, self.frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+            ),
+            (6, model.nv),
+        )
+        J = np.empty((6, model.nv))
+        J[:3] = Jw[:3]
+        # d log3(Rt^T R) = Jlog3 * (R^T omega_world)
+        J[3:] = pin.Jlog3(self.target.rotation.T @ R) @ (R.T @ Jw[3:])
+        return J[self.rows]
+
     def residual_and_jacobian(self, data: pin.Data) -> tuple[np.ndarray, np.ndarray]:
         """Selected error rows and their Jacobian; needs ``computeJointJacobians`` done.
 
@@ -65,18 +89,4 @@ class FramePoseTask:
             Residual (len(rows),) and Jacobian (len(rows), nv).
 
         """
-        model = self.model
-        oMf = pin.updateFramePlacement(model, data, self.frame_id)
-        Jw = np.reshape(
-            pin.getFrameJacobian(
-                model, data, self.frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-            ),
-            (6, model.nv),
-        )
-        Rerr = self.target.rotation.T @ oMf.rotation
-        J = np.empty((6, model.nv))
-        J[:3] = Jw[:3]
-        # d log3(Rt^T R) = Jlog3 * (R^T omega_world)
-        J[3:] = pin.Jlog3(Rerr) @ (oMf.rotation.T @ Jw[3:])
-        e = self.error(oMf)
-        return e[self.rows], J[self.rows]
+        return self.residual(data), self.jacobian(data)

@@ -8,6 +8,8 @@ energy; Euclidean norm if the mass matrix is singular).
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pinocchio as pin
 
@@ -51,7 +53,11 @@ def project_state(
     """
     cs = closure_set
     sol = solve_lm(
-        model, q, lambda x: cs.residual(data, x), lambda x: cs.jacobian(data, x), tol=aim
+        model,
+        q,
+        partial(cs.local_residual, data),
+        partial(cs.local_jacobian_after_residual, data),
+        tol=aim,
     )
     if sol.error > accept:
         raise ProjectionError(

@@ -124,8 +124,13 @@ class Recorder:
         ev: Evaluation,
         work: float,
         dissipated: float,
+        residual: float | None = None,
     ) -> None:
-        """Store one sample (``fd``: the :class:`~solvers.ForwardDynamics` recording)."""
+        """Store one sample (``fd``: the :class:`~solvers.ForwardDynamics` recording).
+
+        ``residual``: the largest closure residual component at ``q`` when already known,
+        with the kinematics of ``q`` in ``fd._kin`` (else computed here).
+        """
         k = self.k
         model, kin = fd.model, fd._kin
         self.t[k] = t
@@ -134,7 +139,9 @@ class Recorder:
         self.a[k] = ev.a
         self.tau[k] = ev.tau
         if fd.nc:  # the residual runs the kinematics the force conversion needs
-            self.res[k] = float(np.max(np.abs(fd.closure_set.residual(kin, q))))
+            if residual is None:
+                residual = float(np.max(np.abs(fd.closure_set.residual(kin, q))))
+            self.res[k] = residual
             self.lam[k] = fd.closure_forces(kin, fd.data.lambda_c)
         else:
             self.res[k] = 0.0

@@ -17,7 +17,7 @@ def _cmd_simulate(args: argparse.Namespace) -> None:
     from pkdyn.dynamics import simulate
 
     robot = load(args)
-    res = simulate(robot, args.duration, args.dt, integrator=args.integrator)
+    res = simulate(robot, args.duration, args.dt, integrator=args.integrator, step=args.step)
     payload = {
         "robot": robot.name,
         "duration": float(res.t[-1] - res.t[0]),
@@ -157,6 +157,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--duration", type=float, default=1.0, help="simulated time [s]")
     sp.add_argument("--dt", type=float, default=1e-3, help="output time step [s]")
     sp.add_argument("--integrator", choices=("dopri5", "rk4", "euler"), default="dopri5")
+    sp.add_argument("--step", type=float, default=None, help="integration step [s] (default: --dt)")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_simulate)
     sp = robot_command(sub, "size", "actuator efforts, speeds and powers along a trajectory")

@@ -40,6 +40,7 @@ def simulate(
     integrator: str = "dopri5",
     record_every: int = 1,
     passive: bool = True,
+    step: float | None = None,
     motor_torque: TorqueFn | None = None,
 ) -> ForwardResult:
     """Constrained forward dynamics of the robot under gravity and actuator efforts.
@@ -47,7 +48,8 @@ def simulate(
     Args:
         robot: The robot.
         duration: Simulated time [s].
-        dt: Output time step [s] (largest substep for ``dopri5``).
+        dt: Output time step [s]: the closures are checked (and the state projected back on
+            them when their residual exceeds 1e-9) and a sample recorded once per output step.
         q0: Initial configuration (default ``robot.q_home``); projected onto the closures.
         v0: Initial velocity (default zero); projected onto the closures.
         torque: Joint-side actuator efforts ``torque(t, q, v) -> (n_a,)`` [N m or N]
@@ -57,8 +59,11 @@ def simulate(
         coulomb: Extra Coulomb friction per velocity coordinate, scalar or (nv,) [N m or N],
             added to the joints' own friction.
         integrator: ``dopri5`` (adaptive, default), ``rk4`` or ``euler``.
-        record_every: Record one sample every that many steps.
+        record_every: Record one sample every that many output steps.
         passive: Include the robot's own passive elements (``robot.passive``).
+        step: Integration step [s] of ``euler`` and ``rk4`` (``dt`` is divided into a whole
+            number of steps), largest substep of ``dopri5`` (default: ``dt``). ``euler`` keeps
+            the energy of a passive Delta to 0.1 % over 10 s at ``step=1e-5``.
         motor_torque: Motor torques ``motor_torque(t, q, v) -> (n_a,)`` [N m] instead of
             ``torque``: the joint-side efforts are ``Drives.joint_effort(tau_m, qa_dot)``
             (efficiency and motor friction included). Without either, the motors are free: zero
@@ -91,6 +96,14 @@ def simulate(
         raise InvalidInputError("integrator", f"unknown {integrator!r} (dopri5, rk4 or euler)")
     if record_every < 1:
         raise InvalidInputError("record_every", f"must be >= 1, got {record_every}")
+    if step is not None and not (np.isfinite(step) and step > 0.0):
+        raise InvalidInputError("step", f"must be > 0 s, got {step}")
+    if step is not None and duration / min(step, dt) > MAX_STEPS:
+        raise InvalidInputError(
+            "step",
+            f"{duration:g} s in integration steps of {min(step, dt):g} s is "
+            f"{duration / min(step, dt):.3g} steps; at most {MAX_STEPS:.0e}: use a longer step",
+        )
     q = robot.q_home if q0 is None else as_finite("q0", q0, robot.nq)
     v = np.zeros(robot.nv) if v0 is None else as_finite("v0", v0, robot.nv)
     fd = ForwardDynamics(
@@ -116,7 +129,7 @@ def simulate(
             return out
 
     try:
-        out = fd.simulate(q, v, duration, dt, tau=tau_fn, record_every=record_every)
+        out = fd.simulate(q, v, duration, dt, tau=tau_fn, record_every=record_every, step=step)
     except IntegrationError as err:
         raise SimulationError(str(err), err.time) from None
     g = max(float(np.linalg.norm(robot.model.gravity.linear)), 1.0)

@@ -16,16 +16,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
-from pkdyn.analysis.kinematics import platform_jacobian
 from pkdyn.dynamics.actuation import actuation
-from pkdyn.dynamics.energy import mechanical_energy
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
-from solvers import ClosureSet, InverseDynamics
+from solvers import InconsistentMotionError, InverseDynamics
 from solvers import InfeasibleError as _SolverInfeasible
 from solvers.minmax_effort import MinMaxInverseDynamics
 
@@ -104,36 +101,8 @@ CONSISTENCY_TOL = 1e-7
 """Largest closure error of a trajectory sample accepted by the inverse dynamics, relative to
 ``max(1, |v|)`` for velocities and ``max(1, |a|)`` for accelerations [m, m/s, m/s^2]."""
 
-
-def _check_consistent(
-    cs: ClosureSet,
-    data: pin.Data,
-    k: int,
-    t: float,
-    q: np.ndarray,
-    v: np.ndarray,
-    a: np.ndarray,
-) -> None:
-    """Raise :class:`TrajectoryError` unless ``(q, v, a)`` satisfies the closures."""
-    if not cs.nc:
-        return
-    r, J = cs.residual_and_jacobian(data, q)
-    checks = (
-        ("configuration", r, 1.0),
-        ("velocity", J @ v, max(1.0, float(np.max(np.abs(v))))),
-        ("acceleration", J @ a + cs.drift(data, q, v), max(1.0, float(np.max(np.abs(a))))),
-    )
-    for what, err, scale in checks:
-        worst = float(np.max(np.abs(err)))
-        if not worst <= CONSISTENCY_TOL * scale:
-            per = cs.split(err)
-            name = max(per, key=lambda n: per[n])
-            raise TrajectoryError(
-                f"the {what} does not satisfy closure '{name}' (error {worst:.3g}); map task "
-                "trajectories with pkdyn.dynamics.trajectory.map_task_trajectory",
-                sample=k,
-                time=t,
-            )
+_CHUNK = 2048
+"""Samples per call of the solver (one step of the progress bar)."""
 
 
 def inverse_dynamics(
@@ -164,7 +133,8 @@ def inverse_dynamics(
         weights: Effort weights for redundant actuation (default ``1 / effort_limit^2`` when
             limits are finite, else ones).
         progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) shows
-            it when stderr is a terminal and there are more than 2000 samples.
+            it when stderr is a terminal and there are more than 2048 samples (the samples go
+            to the solver by chunks of 2048).
         passive: Include the robot's springs, dampers and friction (``robot.passive``).
         allocation: Redundant actuation: ``"norm"`` (least weighted norm) or ``"max"`` (least
             largest effort relative to its limit, with the default weights).
@@ -210,33 +180,48 @@ def inverse_dynamics(
         weights=weights,
     )
     elements = robot.passive if passive else None
-    F_passive = None if elements is None else elements.forces(traj.q, traj.v)
-    kin_data = robot.model.createData()
-    tau = np.empty((N, len(robot.actuators)))
-    lam = np.empty((N, solver.closure_set.nc))
-    res = np.empty(N)
-    kin = np.empty(N)
-    pot = np.empty(N)
-    iterator = progress_bar(range(N), "inverse dynamics", "sample", progress, min_items=2000)
-    for k in iterator:
-        q, v, a = traj.q[k], traj.v[k], traj.a[k]
-        _check_consistent(solver.closure_set, kin_data, k, float(traj.t[k]), q, v, a)
-        f_ext = None if F_passive is None else F_passive[k]
-        if W is not None:
-            f_w = platform_jacobian(robot, q).T @ W[k]
-            f_ext = f_w if f_ext is None else f_ext + f_w
-        try:
-            out = solver.solve(q, v, a, sample=k, f_ext=f_ext)
-        except _SolverInfeasible as err:
-            raise InfeasibleEffortError(
-                f"t = {traj.t[k]:.6g} s: {err}", sample=k, actuator=err.name
-            ) from None
-        tau[k], lam[k], res[k] = out.tau, out.constraint_forces, out.residual
-        kin[k], pot[k] = mechanical_energy(robot, q, v)
+    F_passive = None if elements is None else elements.forces(traj.q, traj.v)  # vectorised
+    frame = robot.platform_frame
+    parts = []
+    starts = range(0, N, _CHUNK)
+    try:  # (a bar from two chunks on, when stderr is a terminal unless forced)
+        for s in progress_bar(starts, "inverse dynamics", "chunk", progress, min_items=2):
+            e = min(N, s + _CHUNK)
+            parts.append(
+                solver.trajectory(
+                    traj.q[s:e],
+                    traj.v[s:e],
+                    traj.a[s:e],
+                    None if F_passive is None else F_passive[s:e],
+                    wrench=None if W is None or frame is None else (frame, W[s:e]),
+                    check_tol=CONSISTENCY_TOL,
+                    first_sample=s,
+                )
+            )
+    except InconsistentMotionError as err:
+        raise TrajectoryError(
+            f"the {err.what} does not satisfy closure '{err.closure}' (error {err.error:.3g}); "
+            "map task trajectories with pkdyn.dynamics.trajectory.map_task_trajectory",
+            sample=err.sample,
+            time=float(traj.t[err.sample]),
+        ) from None
+    except _SolverInfeasible as err:
+        k = int(err.sample) if err.sample is not None else 0
+        raise InfeasibleEffortError(
+            f"t = {traj.t[k]:.6g} s: {err}", sample=k, actuator=err.name
+        ) from None
     elastic = dissipation = None
     if elements is not None:
         elastic = elements.potentials(traj.q)
         dissipation = elements.dissipations(traj.v)
     return EffortTrajectory(
-        traj, robot.actuator_names, tau, lam, res, kin, pot, elastic, dissipation
+        traj,
+        robot.actuator_names,
+        np.concatenate([p.tau for p in parts]),
+        np.concatenate([p.constraint_forces for p in parts]),
+        np.concatenate([p.residual for p in parts]),
+        np.concatenate([p.kinetic for p in parts]),
+        np.concatenate([p.potential for p in parts]),
+        elastic,
+        dissipation,
     )

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import pinocchio as pin
@@ -32,10 +33,16 @@ __all__ = [
     "assembly_modes",
     "inverse_geometry",
     "closure_residual",
+    "solve_pose",
 ]
 
 DEFAULT_TOL = 1e-12
 """Convergence threshold on the largest closure / pose residual component [m or rad]."""
+
+_LOCAL_TOL = 1.0
+"""The solvers work on the contact-frame closure residual (:meth:`solvers.ClosureSet.
+local_residual`, the world one rotated: same norm per closure); ``tol`` applies to its
+components."""
 
 
 @dataclass
@@ -46,7 +53,8 @@ class GeometryResult:
         q: Full assembled configuration (nq,).
         qa: Actuated coordinates in actuator order [rad or m].
         placement: Platform placement (``None`` if the robot has no platform).
-        residual: Largest closure residual component after the solve [m or rad].
+        residual: Largest closure residual component after the solve [m or rad] (in the
+            contact frames the solver works in: the world residual rotated).
         iterations: Solver iterations.
 
     """
@@ -84,10 +92,10 @@ def _solve_closures(
     return solve_lm(
         robot.model,
         q0,
-        lambda q: cs.residual(data, q),
-        lambda q: cs.jacobian(data, q),
+        partial(cs.local_residual, data),  # contact-frame residual: one copy per closure
+        partial(cs.local_jacobian_after_residual, data),  # at the last residual's q
         free=free,
-        tol=tol,
+        tol=tol * _LOCAL_TOL,
     )
 
 
@@ -101,10 +109,14 @@ def _worst(robot: Robot, q: np.ndarray) -> tuple[str, float]:
 
 
 def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryResult:
-    placement = robot.platform_placement(sol.q) if robot.platform_frame is not None else None
-    return GeometryResult(
-        sol.q, sol.q[robot.actuated_q].copy(), placement, closure_error, sol.iterations
-    )
+    """The result of a converged solve.
+
+    The robot data holds the kinematics of ``sol.q``: the solver's last evaluation was there.
+    """
+    placement = None
+    if robot.platform_frame is not None:
+        placement = pin.SE3(pin.updateFramePlacement(robot.model, robot.data, robot.platform_frame))
+    return GeometryResult(sol.q, sol.q[robot.actuated_q], placement, closure_error, sol.iterations)
 
 
 def _family_of(robot: Robot) -> Family | None:
@@ -210,10 +222,13 @@ def forward_geometry(
 
     """
     qa = as_finite("actuated coordinates", qa, len(robot.actuators))
-    q0 = np.array(robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq))
+    q0 = robot.q_home.copy() if q_init is None else as_finite("q_init", q_init, robot.nq)
     q0[robot.actuated_q] = qa
     if check_limits:
-        check_actuator_limits(robot, q0)
+        iq = robot.actuated_q
+        lo, hi = robot.model.lowerPositionLimit[iq], robot.model.upperPositionLimit[iq]
+        if not ((qa >= lo - 1e-12) & (qa <= hi + 1e-12)).all():
+            check_actuator_limits(robot, q0)  # raises, naming the actuator
     start = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
     fam = _family_of(robot) if keep_mode else None
     seeded = None
@@ -316,16 +331,6 @@ def inverse_geometry(
         raise UnreachablePoseError("-", 0.0, f"{robot.name} declares no platform frame")
     task = FramePoseTask(robot.model, robot.platform_frame, robot.task_rows)
     task.target = target
-    cs = robot.closure_set
-    data = robot.data
-
-    def residual(q: np.ndarray) -> np.ndarray:
-        return np.concatenate([cs.residual(data, q), task.residual(data)])
-
-    def jacobian(q: np.ndarray) -> np.ndarray:
-        _, J = cs.residual_and_jacobian(data, q)
-        return np.vstack([J, task.residual_and_jacobian(data)[1]])
-
     q0 = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
     fam = _family_of(robot) if q_init is None else None
     seeded = None
@@ -338,7 +343,8 @@ def inverse_geometry(
     if seeded is None:  # the working mode of the start, followed by continuation
         seeded = _ik_continuation(robot, q0, target, tol)
     q0 = q0 if seeded is None else seeded
-    sol = solve_lm(robot.model, q0, residual, jacobian, tol=tol, max_iter=100)
+    cs = robot.closure_set
+    sol = solve_pose(robot, task, q0, tol)
     if not sol.converged:
         pos, rpy = pose_to_vector(target)
         name, res = _worst(robot, sol.q)
@@ -451,24 +457,58 @@ def _ik_continuation(
     if n <= 1:
         return None
     task = FramePoseTask(robot.model, robot.platform_frame, rows)
-    cs, data = robot.closure_set, robot.data
-
-    def residual(q: np.ndarray) -> np.ndarray:
-        return np.concatenate([cs.residual(data, q), task.residual(data)])
-
-    def jacobian(q: np.ndarray) -> np.ndarray:
-        _, J = cs.residual_and_jacobian(data, q)
-        return np.vstack([J, task.residual_and_jacobian(data)[1]])
-
     rot = pin.log3(M0.rotation.T @ target.rotation)
     q = np.array(start, dtype=float)
     for t in np.linspace(0.0, 1.0, n + 1)[1:]:
         task.target = pin.SE3(M0.rotation @ pin.exp3(t * rot), M0.translation + t * d[:3])
-        sol = solve_lm(robot.model, q, residual, jacobian, tol=max(tol, 1e-10), max_iter=100)
+        sol = solve_pose(robot, task, q, max(tol, 1e-10))
         if not sol.converged:
             return None
         q = sol.q
     return q
+
+
+def solve_pose(
+    robot: Robot,
+    task: FramePoseTask,
+    q0: np.ndarray,
+    tol: float = DEFAULT_TOL,
+    max_iter: int = 100,
+    stall: float = 0.0,
+) -> SolveResult:
+    """Closures and platform pose solved together (the inverse geometric model, unchecked).
+
+    The hot path of :func:`inverse_geometry` (no validation, no message): for callers that
+    solve many poses, e.g. the numeric workspace.
+
+    Args:
+        robot: The robot.
+        task: The platform pose task (its ``target`` set).
+        q0: Initial configuration (nq,).
+        tol: Residual threshold [m or rad].
+        max_iter: Iteration cap.
+        stall: Early stop of :func:`solvers.solve_lm` on a stalling residual (0: never).
+
+    Returns:
+        The solver's outcome: closure rows first, then the task rows.
+
+    """
+    cs, data = robot.closure_set, robot.data
+    nc = cs.nc
+
+    def residual(q: np.ndarray) -> np.ndarray:
+        r_c = cs.local_residual(data, q)  # runs the kinematics
+        r_t = task.residual(data)
+        return np.concatenate((r_c, r_t)) if nc else r_t
+
+    def jacobian(q: np.ndarray) -> np.ndarray:  # at the last residual's configuration
+        J_c = cs.local_jacobian_after_residual(data)  # also the joint Jacobians of the task
+        J_t = task.jacobian(data)
+        return np.concatenate((J_c, J_t)) if nc else J_t
+
+    return solve_lm(
+        robot.model, q0, residual, jacobian, tol=tol * _LOCAL_TOL, max_iter=max_iter, stall=stall
+    )
 
 
 def check_actuator_limits(robot: Robot, q: np.ndarray) -> None:
@@ -482,7 +522,9 @@ def check_actuator_limits(robot: Robot, q: np.ndarray) -> None:
     iq = robot.actuated_q
     lo = robot.model.lowerPositionLimit[iq]
     hi = robot.model.upperPositionLimit[iq]
-    bad = np.flatnonzero((q[iq] < lo - 1e-12) | (q[iq] > hi + 1e-12))
-    if bad.size:
+    qa = q[iq]
+    out = (qa < lo - 1e-12) | (qa > hi + 1e-12)
+    if out.any():
+        bad = np.flatnonzero(out)
         k = int(bad[0])
         raise JointLimitError(robot.actuators[k].joint, float(q[iq[k]]), float(lo[k]), float(hi[k]))

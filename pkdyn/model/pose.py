@@ -35,8 +35,8 @@ def as_finite(
         raise InvalidInputError(name, f"expected numbers, got {values!r}") from None
     if size is not None and arr.size != size:
         raise InvalidInputError(name, f"expected {size} values, got {arr.size}")
-    bad = np.flatnonzero(~np.isfinite(arr))
-    if bad.size:
+    if not np.isfinite(arr).all():
+        bad = np.flatnonzero(~np.isfinite(arr))
         raise InvalidInputError(name, f"value #{bad[0] + 1} is {arr[bad[0]]}; give finite numbers")
     return arr
 

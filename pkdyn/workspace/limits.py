@@ -27,6 +27,7 @@ import pinocchio as pin
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.description import ConeLimit, PyramidLimit
 from pkdyn.model.robot import Robot
+from pkdyn.progress import progress as progress_bar
 
 __all__ = [
     "LIMIT_KINDS",
@@ -121,6 +122,39 @@ class PoseEvaluator(ABC):
         c = self.violations(P, R, kinds, margin).reshape(X.shape)
         c[1::2] = c[1::2, ::-1]
         return c
+
+    def box_grid(
+        self,
+        xs: np.ndarray,
+        ys: np.ndarray,
+        zs: np.ndarray,
+        R: np.ndarray,
+        kinds: tuple[str, ...],
+        margin: float,
+        progress: bool | None = None,
+    ) -> np.ndarray:
+        """Violation codes on the box grid ``xs x ys x zs`` (nx, ny, nz).
+
+        The default evaluates plane by plane with :meth:`grid` (a progress bar over the planes);
+        the numeric evaluator overrides it with a continuation over the whole grid.
+
+        Args:
+            xs: Grid coordinates along x [m].
+            ys: Grid coordinates along y [m].
+            zs: Grid coordinates along z [m].
+            R: Platform orientation (3, 3).
+            kinds: Kinds to check (``reach`` first).
+            margin: Safety distance for ``interference`` [m].
+            progress: Progress bar (``None``: when stderr is a terminal).
+
+        Returns:
+            (nx, ny, nz) codes (see :meth:`violations`).
+
+        """
+        codes = np.empty((xs.size, ys.size, zs.size), dtype=np.int8)
+        for k in progress_bar(range(zs.size), "workspace", "plane", progress, leave=False):
+            codes[:, :, k] = self.grid(xs, ys, float(zs[k]), R, kinds, margin)
+        return codes
 
 
 def classify(stages: Sequence[tuple[str, np.ndarray]], n: int) -> np.ndarray:

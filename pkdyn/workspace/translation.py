@@ -5,7 +5,7 @@ platform orientation and classifies each one by the first limit it breaks (see
 :mod:`pkdyn.workspace.limits`: reach, actuator stroke or angle, passive-joint cone or pyramid,
 interference). The check is vectorised where a closed form exists (leg robots such as the
 Gough-Stewart platform: :mod:`pkdyn.workspace.legs`; the Delta: :mod:`pkdyn.workspace.delta`)
-and done pose by pose with the general inverse model and coal otherwise
+and done with the general inverse model and coal otherwise, by continuation over the grid
 (:mod:`pkdyn.workspace.numeric`).
 
 The result (:class:`TranslationWorkspace`) gives the volume (sample count times cell volume; an
@@ -23,7 +23,6 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.robot import Robot
-from pkdyn.progress import progress as progress_bar
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, check_kinds
 
 __all__ = [
@@ -321,9 +320,7 @@ def translation_workspace(
         raise InvalidInputError("bounds", "expected 3 rows (min, max) of finite numbers [m]")
     home = robot.platform_placement(robot.q_home).translation
     xs, ys, zs = _grid_axes(box, step, samples, dims, home)
-    codes = np.empty((xs.size, ys.size, zs.size), dtype=np.int8)
-    for k in progress_bar(range(zs.size), "workspace", "plane", progress, leave=False):
-        codes[:, :, k] = ev.grid(xs, ys, float(zs[k]), R, kinds, margin)
+    codes = ev.box_grid(xs, ys, zs, R, kinds, margin, progress)
     return TranslationWorkspace(
         robot=robot.name,
         rpy=rpy_a,
