@@ -126,7 +126,7 @@ def robot_scales(robot: Robot, task_rows: np.ndarray) -> tuple[np.ndarray, np.nd
     that the margins are dimensionless and the same for the robot at any size.
     """
     L = robot.length_scale
-    a_scale = np.where(robot.actuator_prismatic, L, 1.0)
+    a_scale = robot.actuator_scale
     x_scale = np.where(np.asarray(task_rows) < 3, L, 1.0)
     return a_scale, x_scale
 

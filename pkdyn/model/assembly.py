@@ -222,23 +222,25 @@ def forward_geometry(
 
     """
     qa = as_finite("actuated coordinates", qa, len(robot.actuators))
-    q0 = robot.q_home.copy() if q_init is None else as_finite("q_init", q_init, robot.nq)
+    start = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
+    q0 = start.copy()
     q0[robot.actuated_q] = qa
     if check_limits:
         iq = robot.actuated_q
         lo, hi = robot.model.lowerPositionLimit[iq], robot.model.upperPositionLimit[iq]
         if not ((qa >= lo - 1e-12) & (qa <= hi + 1e-12)).all():
             check_actuator_limits(robot, q0)  # raises, naming the actuator
-    start = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
     fam = _family_of(robot) if keep_mode else None
     seeded = None
-    if fam is not None:  # the assembly mode of the start, from the family's closed form
+    if fam is not None and fam.has_forward_position:  # the start's mode, from the closed form
         reference = None
         if q_init is not None and robot.platform_frame is not None:
             reference = (start[robot.actuated_q], robot.platform_placement(start).translation)
         x = fam.forward_position(robot.params, qa, reference)
         seeded = None if x is None else _seeded(robot, q0, x, tol, fam)
-    if seeded is None and keep_mode:  # the assembly mode of the start, by continuation
+    if (  # the assembly mode of the start, by continuation when the actuators move far
+        seeded is None and keep_mode and _moves_far(robot, start[robot.actuated_q], qa)
+    ):
         seeded = _fk_continuation(robot, start, qa, tol)
     q0 = q0 if seeded is None else seeded
     sol = _solve_closures(robot, q0, robot.passive_v, tol)
@@ -413,6 +415,14 @@ def _size(robot: Robot) -> float:
     return robot.length_scale
 
 
+def _moves_far(robot: Robot, a0: np.ndarray, qa: np.ndarray) -> bool:
+    """Whether an actuator moves by more than one continuation step (a cheap test first)."""
+    d = (qa - a0) / robot.actuator_scale
+    if d.dot(d) <= CONTINUATION_STEP**2:  # the 2-norm bounds every component
+        return False
+    return bool(np.max(np.abs(d)) > CONTINUATION_STEP)
+
+
 def _fk_continuation(
     robot: Robot, start: np.ndarray, qa: np.ndarray, tol: float
 ) -> np.ndarray | None:
@@ -423,9 +433,8 @@ def _fk_continuation(
     failed (the caller then solves directly).
     """
     a0 = np.array(start[robot.actuated_q], dtype=float)
-    prismatic = robot.actuator_prismatic
-    scale = np.where(prismatic, _size(robot), 1.0) if prismatic.any() else np.ones(a0.size)
-    n = int(np.ceil(np.max(np.abs(qa - a0) / (CONTINUATION_STEP * scale), initial=0.0)))
+    scale = CONTINUATION_STEP * robot.actuator_scale
+    n = int(np.ceil(np.max(np.abs(qa - a0) / scale, initial=0.0)))
     if n <= 1 or robot.closure_set.nc == 0:
         return None
     q = np.array(start, dtype=float)

@@ -7,6 +7,7 @@ The model layer owns the registry; :mod:`pkdyn.library` registers its families i
 from __future__ import annotations
 
 import dataclasses
+import functools
 import importlib
 from dataclasses import dataclass
 from types import ModuleType
@@ -54,6 +55,11 @@ class Family:
     def home(self, params: Any) -> list[float]:
         """Actuated coordinates of the home configuration."""
         return list(self._module().home(params))
+
+    @property
+    def has_forward_position(self) -> bool:
+        """Whether the family has a closed-form direct model (:meth:`forward_position`)."""
+        return _has(self.module, "forward_position")
 
     def forward_position(self, params: Any, qa: Any, reference: Any = None) -> Any:
         """Platform position (3,) [m] from actuated coordinates, in a chosen assembly mode.
@@ -327,3 +333,9 @@ def _difference(desc: Any, model: Any, ref_desc: Any, ref: Any, tol: float = 1e-
     ):
         return "platform"
     return ""
+
+
+@functools.cache
+def _has(module: str, name: str) -> bool:
+    """Whether a family module defines ``name`` (modules do not change at run time)."""
+    return getattr(importlib.import_module(module), name, None) is not None

@@ -118,11 +118,25 @@ class Robot:
 
     @property
     def actuator_prismatic(self) -> np.ndarray:
-        """Whether each actuator drives a prismatic joint (n_a,) bool.
+        """Whether each actuator drives a prismatic joint (n_a,) bool (a copy).
 
         Prismatic actuators have positions in m, speeds in m/s and efforts in N; revolute ones
         rad, rad/s and N m.
         """
+        return self._actuator_prismatic.copy()
+
+    @functools.cached_property
+    def actuator_scale(self) -> np.ndarray:
+        """Characteristic size of each actuated coordinate (n_a,), read-only.
+
+        1 rad for revolute actuators, :attr:`length_scale` [m] for prismatic ones.
+        """
+        out = np.where(self._actuator_prismatic, self.length_scale, 1.0)
+        out.flags.writeable = False
+        return out
+
+    @functools.cached_property
+    def _actuator_prismatic(self) -> np.ndarray:
         return np.array(
             [_prismatic(self.model.joints[int(j)]) for j in self.actuated_joints], dtype=bool
         )
