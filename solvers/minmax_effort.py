@@ -26,10 +26,14 @@ from proxsuite import proxqp
 
 from solvers.inverse_dynamics import InfeasibleError, InverseDynamics, _where
 
-__all__ = ["MINMAX_REGULARISATION", "MinMaxInverseDynamics"]
+__all__ = ["INFEASIBILITY_TOL", "MINMAX_REGULARISATION", "MinMaxInverseDynamics"]
 
 MINMAX_REGULARISATION = 1e-6
 """Weight ``eps`` of the norm of the scaled efforts beside the squared largest one."""
+
+INFEASIBILITY_TOL = 1e-14
+"""proxqp's primal and dual infeasibility thresholds for the min-max QP (its default, 1e-4,
+declared feasible problems with small right-hand sides infeasible)."""
 
 
 class MinMaxInverseDynamics(InverseDynamics):
@@ -47,7 +51,10 @@ class MinMaxInverseDynamics(InverseDynamics):
         s = 1.0 / np.sqrt(self.weights)
         s_max = float(np.max(s))
         A = np.hstack([E * (s / s_max), np.zeros((rg, 1))])  # rows scaled like u
-        b = f / s_max
+        # unknowns u / c, with c the size of the right-hand side: proxqp's tolerances are
+        # absolute, and a problem of tiny (or huge) efforts looked infeasible to it
+        c = float(np.max(np.abs(f))) / s_max or 1.0
+        b = f / (s_max * c)
         H = np.diag(np.r_[np.full(n, MINMAX_REGULARISATION), 1.0])
         g = np.zeros(n + 1)
         eye = np.eye(n)
@@ -57,10 +64,10 @@ class MinMaxInverseDynamics(InverseDynamics):
         hi = [np.zeros(n), np.full(n, 1e20)]
         if self._bounded:
             rows.append(np.hstack([eye, np.zeros((n, 1))]))
-            lo.append(np.where(np.isfinite(self.lower), self.lower / s, -1e20))
-            hi.append(np.where(np.isfinite(self.upper), self.upper / s, 1e20))
+            lo.append(np.where(np.isfinite(self.lower), self.lower / (s * c), -1e20))
+            hi.append(np.where(np.isfinite(self.upper), self.upper / (s * c), 1e20))
         C, l_c, u_c = np.vstack(rows), np.concatenate(lo), np.concatenate(hi)
-        eps_abs = self.eps * scale / s_max  # the parent's accuracy on E tau = f
+        eps_abs = self.eps * scale / (s_max * c)  # the parent's accuracy on E tau = f
         iterations = 0
         status = None
         # warm start from the previous sample, then (the rows of E are a basis of the reduced
@@ -69,7 +76,7 @@ class MinMaxInverseDynamics(InverseDynamics):
         for qp in (previous, None) if previous is not None else (None,):
             if qp is not None:
                 qp.settings.eps_abs = eps_abs
-                qp.update(A=A, b=b)
+                qp.update(A=A, b=b, l=l_c, u=u_c)  # bounds scale with c
             else:
                 qp = proxqp.dense.QP(n + 1, rg, C.shape[0])
                 qp.settings.eps_rel = 0.0
@@ -77,12 +84,18 @@ class MinMaxInverseDynamics(InverseDynamics):
                 qp.settings.verbose = False
                 qp.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
                 qp.settings.eps_abs = eps_abs
+                # proxqp's default infeasibility threshold (1e-4, absolute) misfires on these
+                # small right-hand sides (f / s_max ~ 1e-2): a feasible problem was declared
+                # infeasible after 9 iterations. Without bounds the problem is always feasible;
+                # with bounds a true infeasibility ends at max_iter and is explained below.
+                qp.settings.eps_primal_inf = INFEASIBILITY_TOL
+                qp.settings.eps_dual_inf = INFEASIBILITY_TOL
                 qp.init(H, g, A, b, C, l_c, u_c)
                 self._qp, self._qp_rank = qp, rg
             qp.solve()
             iterations += int(qp.results.info.iter)
             status = qp.results.info.status
-            tau = s * np.array(qp.results.x[:n])
+            tau = (s * c) * np.array(qp.results.x[:n])
             ok = status == proxqp.QPSolverOutput.PROXQP_SOLVED
             if ok and self._bounded:
                 tol = 1e3 * self.eps * scale
