@@ -67,10 +67,14 @@ def test_assembly_from_random_actuator_inputs(delta):
     P = _workspace_points(delta, 100, rng)
     alpha, _ = cf.inverse(delta.params, P)
     alpha += rng.uniform(-0.02, 0.02, alpha.shape)  # arbitrary inputs near the workspace
-    for a in alpha:
+    P_cf, ok = cf.forward(delta.params, alpha)  # Clavel's direct model (three spheres)
+    assert ok.all()
+    for a, p_cf in zip(alpha, P_cf, strict=True):
         fk = pkdyn.forward_geometry(delta, a)
         assert pkdyn.closure_residual(delta, fk.q) < 1e-10
-        np.testing.assert_allclose(fk.qa, a, atol=0)
+        # the solver moved only the passive coordinates: the actuated ones are the inputs
+        np.testing.assert_allclose(fk.q[delta.actuated_q], a, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(fk.position, p_cf, atol=1e-9)
 
 
 def test_fk_ik_round_trip_1000_poses(delta):

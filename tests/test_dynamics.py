@@ -11,7 +11,6 @@ import pytest
 from conftest import simpson_work
 
 import pkdyn
-from pkdyn.analysis.kinematics import platform_jacobian
 from pkdyn.analysis.statics import static_equilibrium
 from pkdyn.cli import main
 from pkdyn.dynamics import (
@@ -129,9 +128,28 @@ def test_wrench_does_the_work_it_should(mapped):
     dE = ef.energy[idx] - ef.energy[0]
     exchanged = max(float(np.max(np.abs(work))), float(np.max(np.abs(w_force))))
     assert np.max(np.abs(work + w_force - dE)) < 5e-3 * exchanged
-    # and it is J^T F on the platform, not something else
-    q = jt.q[0]
-    assert platform_jacobian(robot, q).shape == (6, robot.nv)
+    # and its share of the efforts is -J^T F, with J the derivative of the direct geometric
+    # model by central differences (force in world axes, moment in platform axes)
+    F6 = np.array([15.0, -10.0, 40.0, 2.0, -1.5, 3.0])
+    share = inverse_dynamics(robot, jt, wrench=F6).tau - inverse_dynamics(robot, jt).tau
+    h = 1e-5
+    for k in (0, jt.t.size // 3, 2 * jt.t.size // 3):
+        q = jt.q[k]
+        M0 = robot.platform_placement(q)
+        n_a = len(robot.actuators)
+        J = np.zeros((6, n_a))
+        for j in range(n_a):
+            dq = np.zeros(n_a)
+            dq[j] = h
+            Mp, Mm = (
+                pkdyn.forward_geometry(robot, jt.qa[k] + s * dq, q_init=q).placement
+                for s in (1.0, -1.0)
+            )
+            J[:3, j] = (Mp.translation - Mm.translation) / (2 * h)
+            J[3:, j] = (
+                pin.log3(M0.rotation.T @ Mp.rotation) - pin.log3(M0.rotation.T @ Mm.rotation)
+            ) / (2 * h)
+        np.testing.assert_allclose(share[k], -J.T @ F6, atol=1e-7 * np.max(np.abs(J.T @ F6)))
 
 
 # --------------------------------------------------------------------------- sizing
