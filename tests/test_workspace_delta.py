@@ -184,3 +184,34 @@ def test_cli_clavel_json(capsys):
     code = main(["workspace", "gough_stewart", "--clavel"])
     _, err = capsys.readouterr()
     assert code == 1 and "clavel" in err.lower()
+
+
+def test_delta_580_figures():
+    """The DELTA 580 figures of the README (Clavel's limits: gamma_max 40 deg, (alpha+beta)_min
+    30 deg): the closed form from the seed's dimensionless formulas (section 1.4, z_T' with its
+    minus sign) with ra = 150, rb = 25, la = 200, lb = 380 mm (seed's table: r = 0.625, b = 1.9),
+    the mechanism's measurement (clavel_numeric, default resolution) to 2e-10 m, and the whole
+    workspace's volume (recorded figure of the numeric measurement)."""
+    p = pkdyn.load("delta", geometry=False).params
+    r, b, la, g = 0.625, 1.9, 0.2, GAMMA_MAX
+    assert ((p.ra - p.rb) / p.la, p.lb / p.la, p.la) == pytest.approx((r, b, la), abs=1e-15)
+    z_h = -math.sqrt(1 + b * b - 2 * b * math.cos(AB_MIN))
+    z_t = -math.sqrt((1 + b) ** 2 - (r + 2 * b * math.sin(g) / math.sqrt(3)) ** 2)
+    z_tp = -math.sqrt((1 + b * math.cos(g)) ** 2 - (r + b * math.sin(g) / math.sqrt(3)) ** 2)
+    d, s = 2 * b * math.sin(g), 2 * math.sqrt(3) * math.sin(g) ** 2 * b**2
+    h, h_max = z_h - max(z_t, z_tp), math.sqrt((1 + b) ** 2 - r**2) + z_h
+    seed = {"D": d * la, "S": s * la**2, "H": h * la, "Hmax": h_max * la, "V": s * h * la**3}
+    seed["zh"] = z_h * la
+    cf = clavel_closed_form(p)
+    for key, value in seed.items():
+        assert getattr(cf, key) == pytest.approx(value, rel=1e-12), key
+    # as printed in the README
+    readme = {"D": 0.4885, "S": 0.2067, "H": 0.1831, "Hmax": 0.3367, "V": 0.0378, "zh": -0.2297}
+    for key, value in readme.items():
+        assert round(getattr(cf, key), 4) == value, key
+    nu, v_ws = clavel_numeric(p, progress=False)
+    for key in ("D", "H", "Hmax", "zh", "zb"):
+        assert getattr(nu, key) == pytest.approx(getattr(cf, key), abs=2e-10), key
+    # recorded: the whole workspace 0.0593 m^3 = 1.57 V
+    assert v_ws == pytest.approx(0.05927, rel=1e-3)
+    assert v_ws / cf.V == pytest.approx(1.566, abs=1e-3)
