@@ -37,7 +37,9 @@ from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rpy_z_to
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
 
 NAME = "delta"
+"""Family name (``pkdyn.load`` and the CLI take it)."""
 SUMMARY = "Clavel's Delta, rotary actuators, parallelograms of two ball-jointed bars (DELTA 580)"
+"""One-line description of the family (``pkdyn info``, the family registry)."""
 
 
 @dataclass(frozen=True)
