@@ -86,7 +86,14 @@ def _documented(module: str, name: str, seen: tuple[str, ...] = ()) -> bool | No
     entry = _definitions(module).get(name)
     if entry is None:
         # a submodule listed in a package's __all__ (checked as a module of its own)
-        return True if f"{module}.{name}" in MODULES else None
+        if f"{module}.{name}" in MODULES:
+            return True
+        # a name provided at run time (a lazy export): checked where its object is defined
+        obj = getattr(importlib.import_module(module), name, None)
+        home = getattr(obj, "__module__", None)
+        if isinstance(home, str) and home != module:
+            return _documented(home, getattr(obj, "__name__", name), (*seen, module))
+        return None
     kind, detail = entry
     if kind == "doc":
         return bool(detail)
