@@ -2,12 +2,14 @@
 
 The examples of ``README.md`` and ``urdf/README.md`` are extracted and run in file order, in
 one temporary directory (files written by one example, e.g. ``cloud.npy``, are there for the
-next). Each Python block runs in a fresh namespace, so that each is complete by itself (a reader
-can copy any one); a block whose first line is ``# (continued)`` shares the namespace of the block
-above instead. CLI lines run in-process through ``pkdyn.cli.main`` and must exit with status 0;
-other shell lines (``make ...``) and comment lines are not run. An example that would run too
-long or forever (a live viewer) carries the comment ``(not run by the tests)``: on the CLI line,
-or on the first line of a Python block. A failure names the README file and line.
+next) where the repository's top-level files and folders are linked, so that paths relative to
+the repository root (``urdf/delta.urdf``, ``tests/data/...``) work as in a checkout. Each Python
+block runs in a fresh namespace, so that each is complete by itself (a reader can copy any one);
+a block whose first line is ``# (continued)`` shares the namespace of the block above instead.
+CLI lines run in-process through ``pkdyn.cli.main`` and must exit with status 0; other shell
+lines (``make ...``) and comment lines are not run. An example that would run too long or
+forever (a live viewer) carries the comment ``(not run by the tests)``: on the CLI line, or on
+the first line of a Python block. A failure names the README file and line.
 """
 
 from __future__ import annotations
@@ -108,6 +110,9 @@ def test_readme_examples_run(readme, tmp_path, monkeypatch):
     examples = extract(path.read_text(encoding="utf-8"))
     if readme == "README.md":
         assert len(examples) > 10  # the extractor still finds the tour's examples
+    for item in ROOT.iterdir():
+        if item.name not in (".git", ".venv") and not (tmp_path / item.name).exists():
+            (tmp_path / item.name).symlink_to(item, target_is_directory=item.is_dir())
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MPLBACKEND", "Agg")
     matplotlib.use("Agg")
