@@ -38,6 +38,8 @@ napoleon_google_docstring = True
 napoleon_numpy_docstring = False
 napoleon_attr_annotations = True
 templates_path = ["_templates"]
+# attribute types such as ``nv`` or ``codes`` name attributes of several classes: Sphinx picks one
+suppress_warnings = ["ref.python"]
 
 # notebooks: copied from notebooks/ and executed at every build
 NOTEBOOKS = DOCS / "notebooks"
