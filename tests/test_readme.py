@@ -6,10 +6,11 @@ next) where the repository's top-level files and folders are linked, so that pat
 the repository root (``urdf/delta.urdf``, ``tests/data/...``) work as in a checkout. Each Python
 block runs in a fresh namespace, so that each is complete by itself (a reader can copy any one);
 a block whose first line is ``# (continued)`` shares the namespace of the block above instead.
-CLI lines run in-process through ``pkdyn.cli.main`` and must exit with status 0; other shell
-lines (``make ...``) and comment lines are not run. An example that would run too long or
-forever (a live viewer) carries the comment ``(not run by the tests)``: on the CLI line, or on
-the first line of a Python block. A failure names the README file and line.
+CLI lines run in-process through ``pkdyn.cli.main`` and must exit with status 0; a line ending
+with ``\\`` continues on the next; other shell lines (``make ...``), comment lines and sketches
+(a line with ``...`` for some of its arguments) are not run. An example that would run too long
+or forever (a live viewer) carries the comment ``(not run by the tests)``: on the CLI line, or
+on the first line of a Python block. A failure names the README file and line.
 """
 
 from __future__ import annotations
@@ -60,10 +61,16 @@ def extract(text: str) -> list[Example]:
             if body and SKIP not in body[0]:
                 out.append(Example("python", start + 1, "\n".join(body)))
         elif lang in ("sh", "bash", "console"):
-            for i, line in enumerate(body):
-                command = line.strip()
-                if command.startswith("pkdyn ") and SKIP not in command:
-                    out.append(Example("cli", start + 1 + i, command))
+            i = 0
+            while i < len(body):
+                first, command = i, body[i].strip()
+                while command.endswith("\\") and i + 1 < len(body):  # continued line
+                    i += 1
+                    command = command[:-1].rstrip() + " " + body[i].strip()
+                i += 1
+                sketch = "..." in command.split("#")[0].split()  # `pkdyn cmd ... --opt`
+                if command.startswith("pkdyn ") and SKIP not in command and not sketch:
+                    out.append(Example("cli", start + 1 + first, command))
     return out
 
 
@@ -79,6 +86,9 @@ def test_extractor_finds_blocks_lines_and_markers():
             "pkdyn info delta --json   # comment",
             "#   continuation comment",
             "pkdyn view delta   # live (not run by the tests)",
+            "pkdyn design ... --seed 1   # a sketch: `...` stands for the options above",
+            "pkdyn mobility delta \\",
+            "  --json",
             "```",
             "```python",
             "# slow (not run by the tests)",
@@ -91,6 +101,7 @@ def test_extractor_finds_blocks_lines_and_markers():
     assert extract(text) == [
         Example("python", 3, "x = 1"),
         Example("cli", 7, "pkdyn info delta --json   # comment"),
+        Example("cli", 11, "pkdyn mobility delta --json"),
     ]
 
 
