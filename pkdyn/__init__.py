@@ -16,6 +16,8 @@ The parts, each importing only the parts listed before it (``tests/test_layering
 :mod:`solvers` (robot-agnostic algorithms) never imports pkdyn.
 """
 
+from typing import TYPE_CHECKING, Any
+
 from pkdyn import library as _library  # noqa: F401  (registers the families with the loader)
 from pkdyn.exceptions import (
     AssemblyError,
@@ -36,16 +38,49 @@ from pkdyn.exceptions import (
     UnknownRobotError,
     UnreachablePoseError,
 )
-from pkdyn.model.assembly import (
-    GeometryResult,
-    assembly_modes,
-    closure_residual,
-    forward_geometry,
-    inverse_geometry,
-    project,
-)
-from pkdyn.model.loader import load, load_string
-from pkdyn.model.robot import Robot
+
+if TYPE_CHECKING:
+    from pkdyn.analysis.actuation_map import ActuationMap, actuation_map
+    from pkdyn.model.assembly import (
+        GeometryResult,
+        assembly_modes,
+        closure_residual,
+        forward_geometry,
+        inverse_geometry,
+        project,
+    )
+    from pkdyn.model.loader import load, load_string
+    from pkdyn.model.robot import Robot
+
+_LAZY = {
+    "ActuationMap": "pkdyn.analysis.actuation_map",
+    "actuation_map": "pkdyn.analysis.actuation_map",
+    "GeometryResult": "pkdyn.model.assembly",
+    "assembly_modes": "pkdyn.model.assembly",
+    "closure_residual": "pkdyn.model.assembly",
+    "forward_geometry": "pkdyn.model.assembly",
+    "inverse_geometry": "pkdyn.model.assembly",
+    "project": "pkdyn.model.assembly",
+    "load": "pkdyn.model.loader",
+    "load_string": "pkdyn.model.loader",
+    "Robot": "pkdyn.model.robot",
+}
+"""Entry points imported on first use: ``import pkdyn`` (and the CLI's start) stays light."""
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(f"module 'pkdyn' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "ActuationMap",
@@ -78,17 +113,3 @@ __all__ = [
     "project",
 ]
 __version__ = "0.1.0"
-
-_LAZY = {
-    "ActuationMap": "pkdyn.analysis.actuation_map",
-    "actuation_map": "pkdyn.analysis.actuation_map",
-}
-
-
-def __getattr__(name: str) -> object:
-    """Analyses exported here, imported on first use (``import pkdyn`` stays light)."""
-    if name in _LAZY:
-        import importlib
-
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'pkdyn' has no attribute {name!r}")

@@ -14,21 +14,58 @@ stepping), :mod:`~solvers.sampled` (kinematics and closure errors of many sample
 :mod:`~solvers.numerics` (rank decisions, null spaces, least squares: the one cut-off rule).
 """
 
-from solvers.actuation import Actuation, Drives
+from typing import TYPE_CHECKING, Any
+
 from solvers.closure import ClosureSet
-from solvers.forward_dynamics import ForwardDynamics, IntegrationError, simulate
-from solvers.inverse_dynamics import (
-    InconsistentMotionError,
-    InfeasibleError,
-    InverseDynamics,
-    InverseResult,
-    InverseTrajectory,
-)
 from solvers.lm import SolveResult, solve_lm
-from solvers.passive import FrameSpring, PassiveForces
 from solvers.pose_task import FramePoseTask
-from solvers.recording import ForwardResult
-from solvers.sampled import SampledKinematics
+
+if TYPE_CHECKING:
+    from solvers.actuation import Actuation, Drives
+    from solvers.forward_dynamics import ForwardDynamics, IntegrationError, simulate
+    from solvers.inverse_dynamics import (
+        InconsistentMotionError,
+        InfeasibleError,
+        InverseDynamics,
+        InverseResult,
+        InverseTrajectory,
+    )
+    from solvers.passive import FrameSpring, PassiveForces
+    from solvers.recording import ForwardResult
+    from solvers.sampled import SampledKinematics
+
+_LAZY = {
+    "Actuation": "solvers.actuation",
+    "Drives": "solvers.actuation",
+    "ForwardDynamics": "solvers.forward_dynamics",
+    "IntegrationError": "solvers.forward_dynamics",
+    "simulate": "solvers.forward_dynamics",
+    "InconsistentMotionError": "solvers.inverse_dynamics",
+    "InfeasibleError": "solvers.inverse_dynamics",
+    "InverseDynamics": "solvers.inverse_dynamics",
+    "InverseResult": "solvers.inverse_dynamics",
+    "InverseTrajectory": "solvers.inverse_dynamics",
+    "FrameSpring": "solvers.passive",
+    "PassiveForces": "solvers.passive",
+    "ForwardResult": "solvers.recording",
+    "SampledKinematics": "solvers.sampled",
+}
+"""Names imported on first use (dynamics and proxsuite stay out of a geometry-only import)."""
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(f"module 'solvers' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "Actuation",

@@ -119,6 +119,11 @@ class ForwardDynamics:
             acceleration residual, or on the change of the forces between iterations).
         prox_mu: Proximal regularisation of the solver (handles redundant closures).
         prox_max_iter: Iteration cap of the proximal solver.
+        max_substeps: Largest number of ``dopri5`` substeps (accepted and rejected) within one
+            output step; beyond, the run stops with :class:`IntegrationError` (a stiff or
+            blowing-up state would otherwise shrink the steps without end).
+        max_speed: Largest joint speed [rad/s or m/s] accepted; beyond, the state is taken as
+            blowing up and the run stops with :class:`IntegrationError`.
 
     Raises:
         ValueError: Unknown integrator or inconsistent sizes.
@@ -142,11 +147,15 @@ class ForwardDynamics:
         prox_accuracy: float = 1e-12,
         prox_mu: float = 1e-6,
         prox_max_iter: int = 30,
+        max_substeps: int = 100_000,
+        max_speed: float = 1e4,
     ) -> None:
         if integrator not in ("rk4", "dopri5", "euler"):
             raise ValueError(f"unknown integrator {integrator!r} (rk4, dopri5 or euler)")
         self.rtol = rtol
         self.atol = atol
+        self.max_substeps = int(max_substeps)
+        self.max_speed = float(max_speed)
         self._h = 0.0
         self.steps = 0
         self.rejected = 0
@@ -429,7 +438,16 @@ class ForwardDynamics:
         tab = DOPRI5
         t_end = t + dt
         w_act = w_fric = 0.0
+        tries = 0
         while t_end - t > 1e-12 * dt:
+            tries += 1
+            if tries > self.max_substeps:
+                raise IntegrationError(
+                    f"more than {self.max_substeps} substeps to advance one output step at "
+                    f"t = {t:.9g} s (step {self._h:.3g} s): the state is stiff or blowing up; "
+                    "check the model and the efforts, or use a shorter dt",
+                    t,
+                )
             h = min(self._h, self._h_max, t_end - t)
             K, A, P, q_new, tau_new = self._stages(t, q, v, h, tab, tau_fn, first)
             # first same as last: the last stage is the new state (its evaluation is reused)
@@ -622,6 +640,15 @@ class ForwardDynamics:
                 ev = self._evaluate(t, q, v, tau)
             if not math.isfinite(float(ev.a @ ev.a)):
                 raise IntegrationError(f"non-finite acceleration at t = {t:.6g} s", t)
+            speed = float(np.max(np.abs(v), initial=0.0))
+            if not speed <= self.max_speed:
+                j = int(np.argmax(np.abs(v))) if np.all(np.isfinite(v)) else 0
+                raise IntegrationError(
+                    f"the state blows up: joint speed {speed:.3g} (velocity coordinate {j}) "
+                    f"exceeds {self.max_speed:.3g} rad/s or m/s at t = {t:.6g} s; use a shorter "
+                    "dt or the adaptive integrator, and check the efforts and the model",
+                    t,
+                )
             if k % record_every == 0 or k == n_steps:
                 rec.add(self, t, q, v, ev, w_act, w_fric, residual)
             if k == n_steps:

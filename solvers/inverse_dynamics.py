@@ -32,7 +32,10 @@ Method (null-space reduction, exact and well conditioned):
 4. ``lambda`` is the minimum-norm solution of ``J^T lambda = M a + h - S^T tau``.
 
 Fast path (same solution, fewer operations): when the passive columns ``J_p`` of ``J`` have
-full row rank with a safe margin (estimated from ``(J_p J_p^T)^-1``), ``lambda`` is unique and
+full row rank with a safe margin (estimated from the norm of ``(J_p J_p^T)^-1`` itself: the
+norm of ``(J_p J_p^T)^-1 J_p`` stays moderate when ``J_p`` loses rank, which let the
+redundantly actuated four-armed Delta with ball-jointed bars through with antagonistic
+efforts of hundreds of N m), ``lambda`` is unique and
 solves the passive rows ``J_p^T lambda = b_p`` in the least-squares sense (semi-normal equations
 with one refinement step; their residual is the unreachable part of the equation), then
 ``tau = (b_a - J_a^T lambda) / gains``. The margins guarantee that the general method would find
@@ -372,16 +375,21 @@ class InverseDynamics:
         Jr = J[:, self._perm]  # passive columns, then actuated ones
         Jp, Ja = Jr[:, :n_p], Jr[:, n_p:]
         wide = nc <= n_p  # J_p of full row rank (else: of full column rank)
-        try:  # X: the pseudo-inverse of J_p^T (wide) or of J_p; |X|_2 = 1 / sigma_min(J_p)
-            X = np.linalg.solve(Jp.dot(Jp.T), Jp) if wide else np.linalg.solve(Jp.T.dot(Jp), Jp.T)
-        except np.linalg.LinAlgError:
+        G = Jp.dot(Jp.T) if wide else Jp.T.dot(Jp)
+        try:  # the inverse itself: (J_p J_p^T)^-1 J_p stays moderate when J_p loses rank
+            Y = np.linalg.inv(G)  # (its blow-up is along directions J_p does not reach), so
+        except np.linalg.LinAlgError:  # the margin is read on the inverse, not on X
             return None
-        x2 = float(np.vdot(X, X))  # >= 1 / sigma_min(J_p)^2
+        y = math.sqrt(float(np.vdot(Y, Y)))  # |Y|_F >= 1 / sigma_min(J_p)^2
+        if not math.isfinite(y) or y <= 0.0:
+            return None
+        # X: the pseudo-inverse of J_p^T (wide) or of J_p
+        X = Y.dot(Jp) if wide else Y.dot(Jp.T)
         jp2 = float(np.vdot(Jp, Jp))
         ja2 = float(np.vdot(Ja, Ja))
-        if not x2 * jp2 < 1e8:  # cond(J_p)^2 small enough for the semi-normal equations
+        if not y * jp2 < 1e8:  # cond(J_p)^2 small enough for the semi-normal equations
             return None
-        s_lb = x2**-0.5  # lower bound of sigma_min(J_p), and of the rank-th singular value of J
+        s_lb = y**-0.5  # lower bound of sigma_min(J_p), and of the rank-th singular value of J
         j_norm = math.sqrt(jp2 + ja2)
         if s_lb <= 1e3 * self.rank_tol * j_norm:  # rank(J) >= rank(J_p), with margin
             return None

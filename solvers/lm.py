@@ -28,7 +28,7 @@ system first tries the undamped Newton step (one linear solve instead of three p
 quadratic convergence); if it does not reduce the residual, the damped steps follow."""
 
 
-@dataclass
+@dataclass(eq=False)  # numpy fields: no boolean ==
 class SolveResult:
     """Outcome of :func:`solve_lm`.
 

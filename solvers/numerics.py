@@ -38,6 +38,7 @@ __all__ = [
     "range_space",
     "rank",
     "rank_of",
+    "scaled_margins",
 ]
 
 RTOL = 1e-9
@@ -208,3 +209,51 @@ def _lstsq(
     y = U[:, :r].T @ bb
     y = y / (s[:r] if bb.ndim == 1 else s[:r, None])
     return Vt[:r].T @ y, np.ascontiguousarray(Vt[r:].T)
+
+
+def scaled_margins(
+    A: np.ndarray,
+    B: np.ndarray,
+    a_scale: np.ndarray,
+    x_scale: np.ndarray,
+    rtol: float = RTOL,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Scale-aware singularity margins of velocity relations ``A x_dot = B qa_dot``.
+
+    **The singularity rule.** The relations are rewritten in dimensionless rates (each rate
+    divided by its ``scale``: a length for translations and prismatic actuators, 1 for angles),
+    then ``[B', -A']`` is orthonormalised (rows beyond the numerical rank of the relations, by
+    the cut-off rule with ``rtol``, become zero: a degenerate mobility makes both singular). The
+    singular values of ``A'`` and ``B'`` lie in ``[0, 1]`` and are compared with *absolute*
+    thresholds by the caller: a uniform collapse of ``B`` (every Delta arm stretched along its
+    bars at once), which leaves ``cond(B)`` near 1, is seen; a mechanism scaled by any factor
+    gets the same margins; translations and rotations weigh alike.
+
+    Args:
+        A: Parallel matrices (..., m, m), any normalisation.
+        B: Serial matrices (..., m, n_a), the same normalisation.
+        a_scale: Scale of each actuator rate (n_a,) (a length for prismatic ones, else 1).
+        x_scale: Scale of each task rate (m,) (a length for translations, else 1).
+        rtol: Relative tolerance of the relations' rank.
+
+    Returns:
+        ``(sigma_A, sigma_B, rows)``: singular values of ``A'`` (..., m) and ``B'`` (...,
+        min(m, n_a)), largest first, and the orthonormal relation rows ``[B', -A']`` (..., m,
+        n_a + m).
+
+    """
+    A = np.asarray(A, dtype=float)
+    B = np.asarray(B, dtype=float)
+    m, n_a = A.shape[-1], B.shape[-1]
+    R = np.concatenate([B * np.asarray(a_scale), -A * np.asarray(x_scale)], axis=-1)
+    _, s, Vt = np.linalg.svd(R, full_matrices=False)
+    s_m = np.zeros(s.shape[:-1] + (m,))
+    s_m[..., : min(m, s.shape[-1])] = s[..., :m]
+    live = s_m > rtol * s[..., :1]
+    rows = np.zeros(Vt.shape[:-2] + (m, Vt.shape[-1]))
+    k = min(m, Vt.shape[-2])
+    rows[..., :k, :] = Vt[..., :k, :]
+    rows = np.where(live[..., None], rows, 0.0)
+    sA = np.linalg.svd(-rows[..., n_a:], compute_uv=False)
+    sB = np.linalg.svd(rows[..., :n_a], compute_uv=False)
+    return sA, sB, rows

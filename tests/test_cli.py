@@ -25,7 +25,7 @@ def test_info_json_keys(capsys):
     assert set(info) >= {"name", "nq", "nv", "dof", "actuated", "loops", "closures"}
     assert info["actuated"] == ["arm1", "arm2", "arm3"]
     assert info["actuators"] == ["motor1", "motor2", "motor3"]
-    assert info["loops"] == 5 and info["dof"] == 9
+    assert info["loops"] == 5 and info["dof"] == 3 and info["internal"] == 6  # bar spins
     assert {c["type"] for c in info["closures"]} == {"point"}
 
 

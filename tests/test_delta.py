@@ -15,7 +15,7 @@ def _workspace_points(robot, n, rng):
     while len(pts) < n:
         r = 0.12 * np.sqrt(rng.uniform())
         t = rng.uniform(0, 2 * np.pi)
-        P = np.array([r * np.cos(t), r * np.sin(t), p.z_home + rng.uniform(-0.08, 0.08)])
+        P = np.array([r * np.cos(t), r * np.sin(t), p.home_height() + rng.uniform(-0.08, 0.08)])
         alpha, ok = cf.inverse(p, P)
         if ok[0] and np.all((alpha > p.alpha_min) & (alpha < p.alpha_max)):
             pts.append(P)
@@ -105,7 +105,7 @@ def test_out_of_reach_pose_raises_naming_a_closure(delta):
 
 
 def test_vectorised_closed_form_flags_unreachable(delta):
-    P = np.array([[0.0, 0.0, delta.params.z_home], [2.0, 0.0, -0.3]])
+    P = np.array([[0.0, 0.0, delta.params.home_height()], [2.0, 0.0, -0.3]])
     alpha, ok = cf.inverse(delta.params, P)
     assert ok.tolist() == [True, False] and np.isnan(alpha[1]).all()
     Pf, okf = cf.forward(delta.params, np.array([[0.2, 0.2, 0.2], [3.0, -3.0, 3.0]]))
@@ -116,7 +116,7 @@ def test_vectorised_closed_form_flags_unreachable(delta):
 def test_home_is_assembled_and_centred(delta):
     assert pkdyn.closure_residual(delta, delta.q_home) < 1e-12
     M = delta.platform_placement(delta.q_home)
-    np.testing.assert_allclose(M.translation, [0, 0, delta.params.z_home], atol=1e-9)
+    np.testing.assert_allclose(M.translation, [0, 0, delta.params.home_height()], atol=1e-9)
 
 
 def test_bar_lengths_in_assembled_model(delta):

@@ -24,7 +24,7 @@ def _points(p, n, rng, radius=0.08):
     while len(out) < n:
         r = radius * np.sqrt(rng.uniform())
         t = rng.uniform(0, 2 * np.pi)
-        E = np.array([p.x_home + r * np.cos(t), p.y_home + r * np.sin(t)])
+        E = np.array([p.x_home + r * np.cos(t), p.home_height() + r * np.sin(t)])
         q, ok = fb_cf.inverse(p, E)
         if ok[0] and np.all((q > p.q_min) & (q < p.q_max)):
             out.append(E)
@@ -45,7 +45,9 @@ def test_loads_with_two_dof_at_home(robot):
     assert robot.actuator_names == ["motor1", "motor2"]
     assert [c.kind for c in robot.closures] == ["hinge"]
     np.testing.assert_allclose(
-        robot.platform_placement(robot.q_home).translation, [p.x_home, p.y_home, 0.0], atol=1e-9
+        robot.platform_placement(robot.q_home).translation,
+        [p.x_home, p.home_height(), 0.0],
+        atol=1e-9,
     )
     q = robot.q_home.copy()
     q[robot.actuated_q] = 0.0
@@ -166,12 +168,23 @@ def test_assembly_modes_are_the_two_circle_intersections(robot):
         ("l2", float("inf")),
         ("working_mode", "+"),
         ("y_home", 0.6),  # out of reach
-        ("q_max", 2.0),  # theta_1 at home is 2.41 rad
+        ("q_max", -3.0),  # no home within [q_min, q_max]: named by the derived y_home
     ],
 )
 def test_bad_parameters_are_named(name, value):
-    with pytest.raises(pkdyn.ParameterError, match=f"'{name}'"):
+    culprit = "y_home" if name == "q_max" else name
+    with pytest.raises(pkdyn.ParameterError, match=f"'{culprit}'"):
         pkdyn.load("five_bar", **{name: value})
+
+
+def test_explicit_home_outside_the_actuator_limits_names_the_limit():
+    with pytest.raises(pkdyn.ParameterError, match="'q_max'"):
+        pkdyn.load("five_bar", y_home=0.3, q_max=2.0)  # theta_1 at (0, 0.3) is 2.41 rad
+
+
+def test_derived_home_respects_the_actuator_limits():
+    r = pkdyn.load("five_bar", q_max=2.0, geometry=False)
+    assert np.all(r.q_home[r.actuated_q] <= 2.0)
 
 
 def test_unreachable_points(robot):

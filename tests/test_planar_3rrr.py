@@ -25,8 +25,8 @@ def _poses(p, n, rng, radius=0.10, dphi=0.4):
         t = rng.uniform(0, 2 * np.pi)
         X = np.array(
             [
-                p.x_home + r * np.cos(t),
-                p.y_home + r * np.sin(t),
+                p.home_pose[0] + r * np.cos(t),
+                p.home_pose[1] + r * np.sin(t),
                 p.phi_home + rng.uniform(-dphi, dphi),
             ]
         )
@@ -62,7 +62,7 @@ def test_loads_with_three_dof_at_home(robot):
     q[robot.actuated_q] = 0.0
     np.testing.assert_allclose(q, pin.neutral(robot.model), atol=1e-9)
     M = robot.platform_placement(robot.q_home)
-    np.testing.assert_allclose(M.translation, [p.x_home, p.y_home, 0.0], atol=1e-9)
+    np.testing.assert_allclose(M.translation, [p.home_pose[0], p.home_pose[1], 0.0], atol=1e-9)
     np.testing.assert_allclose(M.rotation, pin.rpy.rpyToMatrix(0, 0, p.phi_home), atol=1e-9)
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-10
 

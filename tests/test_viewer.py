@@ -14,6 +14,7 @@ import base64
 import os
 import re
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -432,6 +433,71 @@ def test_cli_user_errors_are_one_line(argv, message, capsys, tmp_path, monkeypat
     assert message in err and len(err.strip().splitlines()) == 1
 
 
+def listening(port: int) -> set[str]:
+    """Local addresses of the TCP sockets listening on ``port`` (from /proc/net/tcp, tcp6)."""
+    out = set()
+    for table, width in (("/proc/net/tcp", 8), ("/proc/net/tcp6", 32)):
+        if not os.path.exists(table):
+            continue
+        for line in Path(table).read_text().splitlines()[1:]:
+            local, state = line.split()[1], line.split()[3]
+            addr, hexport = local.split(":")
+            if state != "0A" or int(hexport, 16) != port:
+                continue
+            raw = bytes.fromhex(addr)
+            if width == 8:
+                out.add(".".join(str(b) for b in raw[::-1]))
+            else:  # four little-endian 32-bit words
+                words = [raw[i : i + 4][::-1] for i in range(0, 16, 4)]
+                out.add(socket.inet_ntop(socket.AF_INET6, b"".join(words)))
+    return out
+
+
+def outside_address() -> str | None:
+    """An address of this machine other than loopback (None if it has none)."""
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+            s.connect(("192.0.2.1", 9))  # no packet is sent: this only picks the interface
+            addr = s.getsockname()[0]
+    except OSError:
+        return None
+    return None if addr.startswith("127.") or addr == "0.0.0.0" else addr
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/net/tcp"), reason="needs Linux /proc/net/tcp")
+def test_live_viewer_listens_on_loopback_only(delta):
+    scene = Scene(delta, serve=True)
+    try:
+        url = scene.url
+        assert url is not None and url.startswith("http://127.0.0.1:")
+        port = int(url.split(":")[2].split("/")[0])
+        assert listening(port) == {"127.0.0.1"}
+        zmq_port = int(scene._process.zmq_url.rsplit(":", 1)[1])
+        assert listening(zmq_port) == {"127.0.0.1"}
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/static/", timeout=10) as r:
+            assert r.status == 200
+        other = outside_address()
+        if other is not None:  # from another address of this machine: refused
+            with pytest.raises(OSError):
+                socket.create_connection((other, port), timeout=2).close()
+    finally:
+        scene.close()
+    assert listening(port) == set()
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/net/tcp"), reason="needs Linux /proc/net/tcp")
+def test_live_viewer_on_every_interface_only_on_request_with_a_warning(delta):
+    with pytest.warns(UserWarning, match="anyone who can reach this machine"):
+        scene = Scene(delta, serve=True, host="0.0.0.0")
+    try:
+        port = int(scene.url.split(":")[2].split("/")[0])
+        assert listening(port) == {"0.0.0.0"}
+        zmq_port = int(scene._process.zmq_url.rsplit(":", 1)[1])
+        assert listening(zmq_port) == {"127.0.0.1"}  # the command socket stays local
+    finally:
+        scene.close()
+
+
 def test_core_never_imports_the_viewer():
     """The core (pkdyn/ but the viewer and the CLI) never imports the viewer; CLI modules only
     inside their command functions, so that ``pkdyn --help`` and every other command stay light.
@@ -528,9 +594,21 @@ def test_browser_delta_page_draws_and_animates_the_robot(browser, delta, work):
     clips = len(delta.visual_model.geometryObjects) + 2  # the triads too
     assert tab.eval("viewer.animator.actions.length") == clips
     assert tab.eval("viewer.animator.duration") == pytest.approx(traj.t[-1] - traj.t[0])
-    t0 = tab.eval("viewer.animator.time")
-    time.sleep(0.5)
-    assert tab.eval("viewer.animator.playing") and tab.eval("viewer.animator.time") > t0
+    # it plays by itself: the page's own render loop advances it. The animation clock is driven
+    # (three frames of 0.1 s, then frozen) so the check does not depend on the machine's load
+    # (a 2 s animation loops during a wall-clock wait).
+    assert tab.eval("viewer.animator.playing")
+    tab.call("Page.bringToFront")  # background tabs get no animation frames
+    tab.eval(
+        "(() => { const a = viewer.animator; a.seek(0); let n = 0;"
+        " a.clock.getDelta = () => (n++ < 3 ? 0.1 : 0); })()"
+    )
+    advanced = "Math.abs(viewer.animator.time - 0.3) < 1e-9"
+    for _ in range(600):
+        if tab.eval(advanced):
+            break
+        time.sleep(0.05)
+    assert tab.eval(advanced), tab.eval("viewer.animator.time")
     tab.seek(0.3)
     early = tab.shot("delta_t0.3")
     tab.seek(1.2)

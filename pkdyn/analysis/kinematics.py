@@ -71,14 +71,18 @@ __all__ = [
 TASK_NAMES = ("x", "y", "z", "rx", "ry", "rz")
 """Names of the pose components, indexed by ``Robot.task_rows``."""
 
-SINGULAR_TOL = 1e-8
-"""A matrix whose smallest-to-largest singular value ratio is below this is exactly singular.
+SINGULAR_TOL = 1e-7
+"""A configuration is exactly singular when a scale-aware margin (:func:`relation_margins`) is
+below this.
 
-Not much smaller: URDF descriptions store 10 significant digits, so a configuration built to be
-singular is singular to ~1e-10 in the loaded model."""
+Not much smaller: at a serial singularity (a fold of the inverse model: an arm stretched along
+its bars) the configuration of a given pose is only determined to about sqrt(machine epsilon),
+1.5e-8, which is then its margin; URDF descriptions store 10 significant digits, so a
+configuration built to be singular is singular to ~1e-10 in the loaded model. A configuration
+1e-6 rad from a singularity keeps a margin near 1e-6: near-singular, not singular."""
 
 NEAR_SINGULAR_TOL = 1e-4
-"""Below this ratio (condition number above 1e4) a configuration is flagged near-singular."""
+"""Below this margin a configuration is flagged near-singular."""
 
 COND_MAX = 1e16
 """Condition numbers are reported finite, capped at this value (exactly singular matrices)."""
@@ -101,6 +105,30 @@ def _cond(s: np.ndarray, n: int) -> float:
     if smin <= float(s[0]) / COND_MAX:
         return COND_MAX
     return float(s[0]) / smin
+
+
+def relation_margins(
+    A: np.ndarray, B: np.ndarray, a_scale: np.ndarray, x_scale: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Scale-aware singular values of ``A`` and ``B``: the singularity rule.
+
+    :func:`solvers.numerics.scaled_margins`, the relations' rank cut at :data:`SINGULAR_TOL`;
+    kinds are decided by comparing the smallest values with :data:`SINGULAR_TOL` and
+    :data:`NEAR_SINGULAR_TOL`.
+    """
+    return numerics.scaled_margins(A, B, a_scale, x_scale, SINGULAR_TOL)
+
+
+def robot_scales(robot: Robot, task_rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``a_scale`` and ``x_scale`` of :func:`relation_margins` for a robot and task rows.
+
+    Translations and prismatic actuator rates are divided by :attr:`Robot.length_scale`, so
+    that the margins are dimensionless and the same for the robot at any size.
+    """
+    L = robot.length_scale
+    a_scale = robot.actuator_scale
+    x_scale = np.where(np.asarray(task_rows) < 3, L, 1.0)
+    return a_scale, x_scale
 
 
 def platform_jacobian(robot: Robot, q: np.ndarray) -> np.ndarray:
@@ -176,6 +204,9 @@ class KinematicModels:
         sigma_B: Singular values of ``B`` (descending).
         relation_gap: Ratio of the ``m``-th singular value of the raw relation matrix to the
             largest (small: the robot's mobility degenerates, e.g. a lost degree of freedom).
+        margin_A: Scale-aware smallest singular value of ``A`` (:func:`relation_margins`),
+            in ``[0, 1]``: the parallel-singularity test.
+        margin_B: The same for ``B``: the serial-singularity test.
         Jc: Closure Jacobian (nc, nv) at ``q``.
         Jx: Platform Jacobian rows of the task (m, nv) at ``q``.
         J6: Full platform Jacobian (6, nv) at ``q``.
@@ -192,6 +223,8 @@ class KinematicModels:
     sigma_A: np.ndarray
     sigma_B: np.ndarray
     relation_gap: float
+    margin_A: float
+    margin_B: float
     Jc: np.ndarray
     Jx: np.ndarray
     J6: np.ndarray
@@ -223,15 +256,17 @@ class KinematicModels:
         """Raise at an exact singularity of ``A`` (parallel) or ``B`` (serial), warn near one."""
         matrix, jac = ("A", "J") if which == "parallel" else ("B", "J_inv")
         cond = self.cond_A if which == "parallel" else self.cond_B
-        if cond * SINGULAR_TOL >= 1.0:
+        margin = self.margin_A if which == "parallel" else self.margin_B
+        if margin < SINGULAR_TOL:
             raise SingularConfigurationError(
                 which,
-                f"{which} singularity: {matrix} is singular (condition number {cond:.3g}), "
-                f"so {jac} does not exist at this configuration",
+                f"{which} singularity: {matrix} is singular (scale-aware margin {margin:.3g}, "
+                f"condition number {cond:.3g}), so {jac} does not exist at this configuration",
             )
-        if cond * NEAR_SINGULAR_TOL >= 1.0:
+        if margin < NEAR_SINGULAR_TOL:
             warnings.warn(
-                f"near a {which} singularity: condition number of {matrix} is {cond:.3g}",
+                f"near a {which} singularity: scale-aware margin of {matrix} is {margin:.3g} "
+                f"(condition number {cond:.3g})",
                 NearSingularityWarning,
                 stacklevel=3,
             )
@@ -322,6 +357,7 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
     B = basis[:, :n_a]
     A = -basis[:, n_a:]
     gap = float(s[m - 1] / s[0]) if s.size >= m and s[0] > 0 else 0.0
+    sA, sB, _ = relation_margins(A, B, *robot_scales(robot, rows))
     return KinematicModels(
         q=qq,
         task=tuple(TASK_NAMES[i] for i in rows),
@@ -331,6 +367,8 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
         sigma_A=np.linalg.svd(A, compute_uv=False),
         sigma_B=np.linalg.svd(B, compute_uv=False),
         relation_gap=gap,
+        margin_A=float(sA[-1]) if sA.size else 1.0,
+        margin_B=float(sB[-1]) if sB.size else 1.0,
         Jc=Jc,
         Jx=Jx,
         J6=J6,

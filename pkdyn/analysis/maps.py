@@ -12,8 +12,8 @@ without any numeric solve: ~1e5 poses per second. Each map holds, per pose:
 - ``cond_J``, ``lci``, ``manipulability``: dexterity of ``J = A^-1 B``
   (:mod:`pkdyn.analysis.dexterity`); at parallel singularities ``cond_J`` is capped at
   :data:`pkdyn.analysis.kinematics.COND_MAX`, ``lci`` is 0 and ``manipulability`` NaN;
-- ``kind``: 0 regular, 1 serial, 2 parallel, 3 both (:mod:`pkdyn.analysis.singularity` thresholds),
-  -1 unreachable.
+- ``kind``: 0 regular, 1 serial, 2 parallel, 3 both (:mod:`pkdyn.analysis.singularity`'s
+  scale-aware margins and thresholds), -1 unreachable.
 
 Unreachable poses (outside the workspace of the chosen working mode) have ``valid`` False and NaN
 values. The Delta's reduced model (nacelle = point) does not see Clavel's family c) (nacelle
@@ -33,7 +33,12 @@ from pkdyn.analysis.dexterity import (
     local_conditioning_index,
     manipulability,
 )
-from pkdyn.analysis.kinematics import COND_MAX, NEAR_SINGULAR_TOL, SINGULAR_TOL
+from pkdyn.analysis.kinematics import (
+    COND_MAX,
+    NEAR_SINGULAR_TOL,
+    SINGULAR_TOL,
+    relation_margins,
+)
 from pkdyn.analysis.screws import delta_AB, normalise, planar_3rrr_AB, planar_3rrr_chain_angles
 from pkdyn.closed_form import delta as delta_cf
 from pkdyn.closed_form import planar_3rrr as rrr_cf
@@ -103,6 +108,7 @@ def conditioning(
     length: float | None = None,
     tol: float = SINGULAR_TOL,
     near_tol: float = NEAR_SINGULAR_TOL,
+    scale: float | None = None,
 ) -> Conditioning:
     """Indicators from stacks of ``A`` (N, m, m) and ``B`` (N, m, n_a) matrices.
 
@@ -112,8 +118,11 @@ def conditioning(
         valid: Rows to evaluate (N,); others get NaN.
         task: Task component names (for ``length``).
         length: Characteristic length for the angular rows of ``J`` [m].
-        tol: Singular threshold on singular-value ratios.
+        tol: Singular threshold on the scale-aware margins
+            (:func:`pkdyn.analysis.kinematics.relation_margins`, revolute actuators).
         near_tol: Near-singular threshold.
+        scale: The robot's length [m] for the margins (default 1 m); the kinds are the same
+            for any length of the robot's order.
 
     Returns:
         The indicators (N,).
@@ -127,8 +136,12 @@ def conditioning(
     An, Bn = normalise(A0, B0)
     cA = _cond(np.linalg.svd(An, compute_uv=False))
     cB = _cond(np.linalg.svd(Bn, compute_uv=False))
-    parallel = cA * tol >= 1.0
-    serial = cB * tol >= 1.0
+    L = 1.0 if scale is None else float(scale)
+    x_scale = np.array([L if t in ("x", "y", "z") else 1.0 for t in task])
+    sA, sB, _ = relation_margins(A0, B0, np.ones(B0.shape[-1]), x_scale)
+    margin = np.minimum(sA[..., -1], sB[..., -1])
+    parallel = sA[..., -1] < tol
+    serial = sB[..., -1] < tol
     As = np.where(parallel[:, None, None], np.eye(m), A0)
     J = np.linalg.solve(As, B0)
     Jh = homogenise(J, task, length)
@@ -136,7 +149,7 @@ def conditioning(
     lci = np.where(parallel, 0.0, local_conditioning_index(Jh))
     w = np.where(parallel, np.nan, manipulability(Jh))
     kind = parallel.astype(int) * 2 + serial.astype(int)
-    near = (kind == 0) & (np.maximum(cA, cB) * near_tol >= 1.0)
+    near = (kind == 0) & (margin < near_tol)
     nan = np.full(ok.shape, np.nan)
     return Conditioning(
         valid=ok,
@@ -166,7 +179,7 @@ def delta_conditioning(g: delta_cf.DeltaGeometry, P: np.ndarray) -> Conditioning
     P = np.atleast_2d(np.asarray(P, dtype=float))
     alpha, ok = delta_cf.inverse(g, P)
     A, B = delta_AB(g, P, np.where(np.isfinite(alpha), alpha, 0.0))
-    return conditioning(A, B, ok, ("x", "y", "z"))
+    return conditioning(A, B, ok, ("x", "y", "z"), scale=g.ra + g.la + g.lb)
 
 
 def planar_3rrr_conditioning(
@@ -192,7 +205,8 @@ def planar_3rrr_conditioning(
     q1, ok = rrr_cf.inverse(g, X, elbow)
     angles = planar_3rrr_chain_angles(g, X, np.where(np.isfinite(q1), q1, 0.0))
     A, B = planar_3rrr_AB(g, angles)
-    return conditioning(A, B, ok, ("x", "y", "rz"), length)
+    scale = 2.0 * float(np.max(np.linalg.norm(g.base_xy, axis=-1)))
+    return conditioning(A, B, ok, ("x", "y", "rz"), length, scale=scale)
 
 
 @dataclass

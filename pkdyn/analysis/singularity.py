@@ -25,8 +25,12 @@ together: to first order the actuators could also move while the centre stays pu
 turning. That is not a serial singularity (the platform is not at rest), so in this case the
 serial test and ``cond_B`` use the 6D relations.
 
-Measures: condition numbers (finite, capped at :data:`pkdyn.analysis.kinematics.COND_MAX`) and
-``distance``, the smallest of their inverses, in ``[0, 1]`` (0: exactly singular). Below
+Measures: condition numbers (finite, capped at :data:`pkdyn.analysis.kinematics.COND_MAX`),
+``distance``, the smallest of their inverses, and ``margin``, the scale-aware smallest singular
+value (:func:`pkdyn.analysis.kinematics.relation_margins`: rates made dimensionless by the
+robot's length, relations orthonormalised), all in ``[0, 1]`` (0: exactly singular). The
+decisions use the margins, which see what a condition number cannot: every Delta arm stretched
+along its bars at once shrinks ``B`` as a whole, ``cond(B)`` stays near 1. Below
 :data:`pkdyn.analysis.kinematics.SINGULAR_TOL` a matrix is singular; below
 :data:`pkdyn.analysis.kinematics.NEAR_SINGULAR_TOL` the configuration is *near-singular*: ``kind``
 stays ``"regular"``, ``near`` is set and a
@@ -51,6 +55,8 @@ from pkdyn.analysis.kinematics import (
     _cond,
     _relations,
     kinematic_models,
+    relation_margins,
+    robot_scales,
 )
 from pkdyn.model.robot import Robot
 from solvers import numerics
@@ -73,8 +79,12 @@ class SingularityReport:
         cond_platform: Condition number of the 6D platform relations (robots with ``m < 6``;
             equals ``cond_A`` otherwise).
         distance: ``min(1 / cond_A, 1 / cond_B, 1 / cond_platform)`` in ``[0, 1]``.
+        margin: Smallest scale-aware margin of ``A``, ``B`` and the 6D relations
+            (:func:`pkdyn.analysis.kinematics.relation_margins`), in ``[0, 1]``: ``kind`` and
+            ``near`` are decided on it (0: exactly singular).
         near: Near-singular (within :data:`pkdyn.analysis.kinematics.NEAR_SINGULAR_TOL`), not
-        singular. constraint: The parallel singularity lets the platform move in uncontrolled
+            singular.
+        constraint: The parallel singularity lets the platform move in uncontrolled
             components (only these).
         parallel_directions: (k, m) unit platform velocities (task components) in the
             (near-)null space of ``A``.
@@ -91,6 +101,7 @@ class SingularityReport:
     cond_B: float
     cond_platform: float
     distance: float
+    margin: float
     near: bool
     constraint: bool
     parallel_directions: np.ndarray
@@ -107,6 +118,7 @@ class SingularityReport:
             "cond_B": self.cond_B,
             "cond_platform": self.cond_platform,
             "distance": self.distance,
+            "margin": self.margin,
             "near": self.near,
             "constraint": self.constraint,
             "directions": {
@@ -148,6 +160,28 @@ def _platform_relations(robot: Robot, km: KinematicModels) -> np.ndarray:
     return np.asarray(U.T[:r6] @ rel.R)
 
 
+def _directions(
+    rows: np.ndarray, k: int, n: int, scale: np.ndarray, tol: float, first: bool
+) -> tuple[float, np.ndarray]:
+    """Margin and (near-)singular directions of one block of orthonormal relation rows.
+
+    ``rows`` are ``[B', -A']`` (scaled, :func:`relation_margins`); the block is the first
+    ``k`` columns (``first``: ``B'``) or the last ones (``A'``), ``n`` its expected rank. The
+    directions are converted back to physical rates (times ``scale``) and normalised.
+    """
+    M = rows[:, :k] if first else -rows[:, rows.shape[1] - k :]
+    if M.size == 0 or n == 0:
+        return 1.0, np.zeros((0, k))
+    _, s, Vt = np.linalg.svd(M, full_matrices=True)
+    sfull = np.zeros(k)
+    sfull[: s.size] = s
+    margin = float(sfull[n - 1]) if n <= sfull.size else 0.0
+    keep = np.flatnonzero(sfull[:n] < tol)
+    D = np.asarray(Vt[keep]) * scale
+    norms = np.linalg.norm(D, axis=1, keepdims=True)
+    return margin, D / np.where(norms > 0, norms, 1.0)
+
+
 def classify(
     robot: Robot,
     q: Sequence[float] | np.ndarray,
@@ -156,11 +190,16 @@ def classify(
 ) -> SingularityReport:
     """Classify a configuration as regular, serial, parallel or both.
 
+    The tests are scale-aware (:func:`pkdyn.analysis.kinematics.relation_margins`): rates made
+    dimensionless by the robot's length, relations orthonormalised, the smallest singular
+    values of ``A'`` and ``B'`` (the margins, in ``[0, 1]``) compared with ``tol`` and
+    ``near_tol``.
+
     Args:
         robot: Any loaded robot with a platform.
         q: Assembled configuration (nq,).
-        tol: Singular-value ratio below which a matrix is singular.
-        near_tol: Ratio below which a configuration is flagged near-singular (warning).
+        tol: Margin below which a matrix is singular.
+        near_tol: Margin below which a configuration is flagged near-singular (warning).
 
     Returns:
         The report; condition numbers are finite.
@@ -171,24 +210,38 @@ def classify(
     """
     km = kinematic_models(robot, q)
     m, n_a = km.m, km.n_a
-    cond_A, par = _null_dirs(km.A, m, near_tol)
-    cond_B, ser = _null_dirs(km.B, min(m, n_a), near_tol)
+    rows_task = np.asarray(robot.task_rows, dtype=int)
+    a_scale, x_scale = robot_scales(robot, rows_task)
+    _, _, rel = relation_margins(km.A, km.B, a_scale, x_scale)
+    cond_A = _null_dirs(km.A, m, near_tol)[0]
+    cond_B = _null_dirs(km.B, min(m, n_a), near_tol)[0]
+    margin_A, par = _directions(rel, m, m, x_scale, near_tol, first=False)
+    margin_B, ser = _directions(rel, n_a, min(m, n_a), a_scale, near_tol, first=True)
     if m < 6:
         rows = _platform_relations(robot, km)
         A6 = -rows[:, n_a:]
-        cond_P, plat = _null_dirs(A6, A6.shape[0], near_tol)
+        cond_P = _null_dirs(A6, A6.shape[0], near_tol)[0]
+        six_a, six_x = robot_scales(robot, np.arange(6))
+        if rows.shape[0]:
+            _, _, rel6 = relation_margins(A6, rows[:, :n_a], six_a, six_x)
+        else:
+            rel6 = np.zeros((0, n_a + 6))
+        margin_P, plat = _directions(rel6, 6, rel6.shape[0], six_x, near_tol, first=False)
         if km.relation_gap < tol:
             # The task relations lost a dimension: a hidden (uncontrolled-component) platform
             # motion moves the task point, so A and B both degenerate. Whether an actuator
             # motion leaves the *whole* platform at rest is decided on the 6D relations.
-            cond_B, ser = _null_dirs(rows[:, :n_a], min(rows.shape[0], n_a), near_tol)
+            cond_B = _null_dirs(rows[:, :n_a], min(rows.shape[0], n_a), near_tol)[0]
+            margin_B, ser = _directions(
+                rel6, n_a, min(rel6.shape[0], n_a), a_scale, near_tol, first=True
+            )
     else:
-        cond_P = cond_A
-        _, plat = _null_dirs(km.A, m, near_tol)
-    parallel_task = cond_A * tol >= 1.0
-    parallel_6d = cond_P * tol >= 1.0
+        cond_P, margin_P = cond_A, margin_A
+        plat = par
+    parallel_task = margin_A < tol
+    parallel_6d = margin_P < tol
     parallel = parallel_task or parallel_6d
-    serial = cond_B * tol >= 1.0
+    serial = margin_B < tol
     kind = {
         (False, False): "regular",
         (False, True): "serial",
@@ -196,12 +249,13 @@ def classify(
         (True, True): "both",
     }[(parallel, serial)]
     worst = max(cond_A, cond_B, cond_P)
-    near = kind == "regular" and worst * near_tol >= 1.0
+    margin = min(margin_A, margin_B, margin_P)
+    near = kind == "regular" and margin < near_tol
     if near:
-        which = "parallel" if max(cond_A, cond_P) >= cond_B else "serial"
+        which = "parallel" if min(margin_A, margin_P) <= margin_B else "serial"
         warnings.warn(
-            f"{robot.name}: near a {which} singularity (condition number {worst:.3g}); "
-            "velocities and efforts are ill-conditioned here",
+            f"{robot.name}: near a {which} singularity (scale-aware margin {margin:.3g}, "
+            f"condition number {worst:.3g}); velocities and efforts are ill-conditioned here",
             NearSingularityWarning,
             stacklevel=2,
         )
@@ -211,6 +265,7 @@ def classify(
         cond_B=cond_B,
         cond_platform=cond_P,
         distance=1.0 / worst,
+        margin=margin,
         near=near,
         constraint=parallel_6d and not parallel_task,
         parallel_directions=par,

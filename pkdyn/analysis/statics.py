@@ -166,17 +166,25 @@ def static_equilibrium(
         km = kinematic_models(robot, q)
     model, data = robot.model, robot.data
     F6 = _wrench6(robot, F)
-    rhs = -km.J6.T @ F6
-    if gravity:
-        rhs += pin.computeGeneralizedGravity(model, data, km.q)
-    if passive and robot.passive is not None:
-        rhs -= robot.passive.conservative_force(km.q)
     nv, n_a = robot.nv, km.n_a
     S_T = np.zeros((nv, n_a))
     S_T[km.actuated_v, np.arange(n_a)] = 1.0
     K = np.hstack([S_T, km.Jc.T])
-    sol = numerics.lstsq(K, rhs, 1e-12)
-    residual = float(np.linalg.norm(K @ sol - rhs))
+    with np.errstate(over="ignore", invalid="ignore"):
+        rhs = -km.J6.T @ F6
+        if gravity:
+            rhs += pin.computeGeneralizedGravity(model, data, km.q)
+        if passive and robot.passive is not None:
+            rhs -= robot.passive.conservative_force(km.q)
+        sol = numerics.lstsq(K, rhs, 1e-12) if np.all(np.isfinite(rhs)) else rhs
+        residual = float(np.linalg.norm(K @ sol - rhs)) if sol.shape == (K.shape[1],) else 0.0
+    if not (np.all(np.isfinite(sol)) and np.isfinite(residual)):
+        raise InvalidInputError(
+            "F",
+            f"wrench {np.array2string(F6, precision=3)} [N, N m] overflows the computation "
+            f"(largest component {float(np.max(np.abs(F6))):.3g}): the efforts are not finite "
+            "numbers; give a physical load",
+        )
     scale = max(float(np.linalg.norm(rhs)), 1e-300)
     if residual > EQUILIBRIUM_TOL * scale + 1e-12:
         raise SingularConfigurationError(
@@ -184,7 +192,7 @@ def static_equilibrium(
             f"{robot.name}: no static equilibrium: the load has a component along an "
             f"uncontrollable platform motion (unbalanced {residual:.3g})",
         )
-    if km.cond_A * SINGULAR_TOL >= 1.0:
+    if km.margin_A < SINGULAR_TOL:
         raise SingularConfigurationError(
             "parallel",
             f"{robot.name}: parallel singularity: actuator efforts are not unique here",

@@ -3,6 +3,11 @@
 ``ROBOT`` is a library family name or a URDF path; ``--param k=v`` overrides builder parameters;
 ``--json`` prints one JSON object. A user error prints one line on stderr and exits with 1.
 
+Exit codes (:data:`EXIT_CODES`): 0 success, 1 user error (one line ``pkdyn: error: ...`` on
+stderr), 2 usage error (bad arguments), 130 interrupted by Ctrl-C (SIGINT), 143 terminated
+(SIGTERM). An interrupted run prints one line and leaves every output file as it was (files are
+written to a temporary name and renamed when complete, :mod:`pkdyn.files`).
+
 Each command group lives in its own module of this package and exposes ``register(sub)``; the
 modules import their heavy dependencies inside the command functions so ``pkdyn --help`` is quick.
 """
@@ -11,15 +16,18 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
+import signal
 import sys
 import warnings
 from collections.abc import Sequence
 from typing import Any
 
+from pkdyn import __version__
 from pkdyn.cli._common import Parser
 from pkdyn.exceptions import PkdynError
 
-__all__ = ["main"]
+__all__ = ["EXIT_CODES", "main"]
 
 #: Command modules, in the order their commands appear in ``pkdyn --help``.
 COMMAND_MODULES = (
@@ -31,19 +39,80 @@ COMMAND_MODULES = (
     "mjcf",
     "tripod",
     "demo",
+    "listing",
 )
 
+#: The module of each command: a command line naming one imports only that module.
+COMMANDS = {
+    "info": "geometry",
+    "urdf": "geometry",
+    "forward-geometry": "geometry",
+    "fk": "geometry",
+    "inverse-geometry": "geometry",
+    "ik": "geometry",
+    "mobility": "geometry",
+    "jacobian": "geometry",
+    "singularity": "geometry",
+    "statics": "geometry",
+    "simulate": "dynamics",
+    "size": "dynamics",
+    "collisions": "workspace",
+    "workspace": "workspace",
+    "design": "design",
+    "view": "viewer",
+    "mjcf": "mjcf",
+    "tripod": "tripod",
+    "demo": "demo",
+    "list": "listing",
+}
 
-def _parser() -> argparse.ArgumentParser:
-    p = Parser(prog="pkdyn", description="Kinematics and dynamics of parallel robots.")
+EXIT_CODES = {
+    0: "success",
+    1: "user error (one line 'pkdyn: error: ...' on stderr)",
+    2: "usage error (unknown option, missing or malformed argument)",
+    130: "interrupted (Ctrl-C, SIGINT)",
+    143: "terminated (SIGTERM)",
+}
+"""Exit codes of the ``pkdyn`` command."""
+
+_EPILOG = "exit codes: " + ", ".join(f"{k} {v.split(' (')[0]}" for k, v in EXIT_CODES.items())
+
+
+def _parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser; given the arguments, with only the named command's module (quick start)."""
+    first = next((a for a in (sys.argv[1:] if argv is None else argv) if a[:1] != "-"), None)
+    modules = (COMMANDS[first],) if first in COMMANDS else COMMAND_MODULES
+    p = Parser(
+        prog="pkdyn",
+        description="Kinematics and dynamics of parallel robots.",
+        epilog=_EPILOG,
+    )
+    p.add_argument("--version", action="version", version=f"pkdyn {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for name in COMMAND_MODULES:
+    for name in modules:
         importlib.import_module(f"pkdyn.cli.{name}").register(sub)
     return p
 
 
 def _one_line_warning(message: Warning | str, category: type[Warning], *_: Any, **__: Any) -> None:
     print(f"pkdyn: warning: {message}", file=sys.stderr)
+
+
+class _Terminated(BaseException):
+    """SIGTERM, raised in the main thread (like KeyboardInterrupt for SIGINT)."""
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    raise _Terminated
+
+
+def _quiet_stdout() -> None:
+    """After a broken pipe (``pkdyn ... | head``): no 'Exception ignored' at exit."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -53,16 +122,40 @@ def main(argv: Sequence[str] | None = None) -> int:
         argv: Arguments (default: ``sys.argv[1:]``).
 
     Returns:
-        Exit code: 0 on success, 1 on a user error (one line on stderr).
+        Exit code (:data:`EXIT_CODES`): 0 on success, 1 on a user error (one line on stderr),
+        130 after Ctrl-C, 143 after SIGTERM (one line on stderr, no traceback). Usage errors
+        exit with 2 through ``SystemExit``.
 
     """
-    args = _parser().parse_args(argv)
-    warnings.showwarning = _one_line_warning
+    try:  # (only the main thread may install handlers)
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+        handlers = True
+    except ValueError:
+        previous, handlers = None, False
+    shown = warnings.showwarning
+    filters = list(warnings.filters)
     try:
+        args = _parser(argv).parse_args(argv)
+        warnings.showwarning = _one_line_warning
+        # libraries' deprecation notices are for developers, not for command-line users
+        warnings.filterwarnings("ignore", category=DeprecationWarning)
+        warnings.filterwarnings("ignore", category=PendingDeprecationWarning)
         args.func(args)
     except PkdynError as err:
         print(f"pkdyn: error: {err}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print("pkdyn: interrupted", file=sys.stderr)
+        return 130
+    except _Terminated:
+        print("pkdyn: terminated", file=sys.stderr)
+        return 143
     except BrokenPipeError:
+        _quiet_stdout()
         return 0
+    finally:
+        warnings.showwarning = shown
+        warnings.filters[:] = filters  # type: ignore[index]
+        if handlers:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
     return 0

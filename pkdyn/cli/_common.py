@@ -3,42 +3,126 @@
 from __future__ import annotations
 
 import argparse
-import json
+import math
+import os
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 
-from pkdyn.exceptions import PkdynError
+from pkdyn.exceptions import InvalidInputError, OutputError
 
 __all__ = [
     "Parser",
+    "add_param_option",
     "configuration",
     "emit",
     "fmt",
     "load",
+    "output_path",
     "params",
     "posed_command",
     "qa_argument",
     "robot_command",
+    "units",
 ]
+
+
+class _Formatter(argparse.HelpFormatter):
+    """argparse's formatter, with the terminal width read without importing shutil (4 ms)."""
+
+    def __init__(self, prog: str, **kwargs: Any) -> None:
+        if kwargs.get("width") is None:
+            try:
+                width = int(os.environ["COLUMNS"])
+            except (KeyError, ValueError):
+                try:
+                    width = os.get_terminal_size().columns
+                except OSError:
+                    width = 80
+            kwargs["width"] = max(width - 2, 40)
+        super().__init__(prog, **kwargs)
 
 
 class Parser(argparse.ArgumentParser):
     """Argument parser whose errors are one line and exit code 2."""
 
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
+
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"pkdyn: error: {message} (see pkdyn {self.prog.split()[-1]} --help)\n")
+        self.exit(2, f"pkdyn: error: {message} (see {self.prog} --help)\n")
 
 
 def params(items: Sequence[str] | None) -> dict[str, Any]:
+    """Builder parameters from ``--param`` items (``NAME=VALUE``; repeated or several at once).
+
+    Raises:
+        InvalidInputError: An item is not ``NAME=VALUE`` or a name is given twice.
+
+    """
     out: dict[str, Any] = {}
     for item in items or []:
         key, sep, value = item.partition("=")
+        key = key.strip()
         if not sep or not key:
-            raise PkdynError(f"--param '{item}': expected NAME=VALUE")
-        out[key.strip()] = value.strip()
+            raise InvalidInputError(
+                "--param", f"'{item}': expected NAME=VALUE (give ROBOT before --param)"
+            )
+        if key in out:
+            raise InvalidInputError("--param", f"'{key}' is given twice")
+        out[key] = value.strip()
     return out
+
+
+def add_param_option(sp: argparse.ArgumentParser) -> None:
+    """``--param NAME=VALUE [NAME=VALUE ...]``, repeatable."""
+    sp.add_argument(
+        "--param",
+        nargs="+",
+        action="extend",
+        metavar="NAME=VALUE",
+        help="builder parameters (SI units), e.g. --param la=0.3 lb=0.8; see pkdyn list",
+    )
+
+
+def output_path(option: str, path: str | None, figure: bool = False) -> str | None:
+    """Check an output file name before any work is done (the file is written at the end).
+
+    Args:
+        option: The option that names it, for messages (``--csv``).
+        path: The file, or ``None`` (no output).
+        figure: The file is a figure: its extension must name a matplotlib format.
+
+    Returns:
+        ``path``.
+
+    Raises:
+        OutputError: A directory, a missing or read-only directory, or an unknown figure format.
+
+    """
+    if path is None:
+        return None
+    p = Path(path)
+    if p.name in ("", ".", "..") or p.is_dir():
+        raise OutputError(path, f"{option} names a directory, not a file")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise OutputError(path, f"{option}: directory '{parent}' does not exist")
+    if not os.access(parent, os.W_OK):
+        raise OutputError(path, f"{option}: directory '{parent}' is not writable")
+    if figure:
+        from matplotlib.figure import Figure
+
+        supported = Figure().canvas.get_supported_filetypes()
+        fmt = p.suffix.lower().lstrip(".")
+        if fmt not in supported:
+            known = ", ".join(f".{k}" for k in sorted(supported))
+            what = f"unknown figure format '{p.suffix}'" if fmt else "no file extension"
+            raise OutputError(path, f"{option}: {what}; name the file with one of {known}")
+    return path
 
 
 def load(args: argparse.Namespace, geometry: bool = False) -> Any:
@@ -52,11 +136,49 @@ def load(args: argparse.Namespace, geometry: bool = False) -> Any:
     return pkdyn.load(args.robot, geometry=geometry, **extra, **params(args.param))
 
 
+def _non_finite(value: Any, where: str = "") -> str | None:
+    """Path of the first NaN or infinite number in a JSON-ready value, else ``None``."""
+    if isinstance(value, float):
+        return None if math.isfinite(value) else (where or "value")
+    if isinstance(value, dict):
+        for k, v in value.items():
+            found = _non_finite(v, f"{where}.{k}" if where else str(k))
+            if found:
+                return found
+    if isinstance(value, list | tuple):
+        for i, v in enumerate(value):
+            found = _non_finite(v, f"{where}[{i}]")
+            if found:
+                return found
+    return None
+
+
 def emit(args: argparse.Namespace, payload: dict[str, Any], text: str) -> None:
+    """Print the result: one JSON object with ``--json`` (never NaN or Infinity), else text.
+
+    Raises:
+        InvalidInputError: A result is not finite (an input overflowed the computation).
+
+    """
+    bad = _non_finite(payload)
+    if bad is not None:
+        raise InvalidInputError(
+            bad, "the result is not a finite number (an input is too large or degenerate)"
+        )
     if args.json:
-        print(json.dumps(payload))
+        import json
+
+        print(json.dumps(payload, allow_nan=False))
     else:
         print(text)
+
+
+def units(robot: Any) -> list[tuple[str, str, str]]:
+    """Per actuator: position, speed and effort units (``rad, rad/s, N m`` or ``m, m/s, N``)."""
+    return [
+        ("m", "m/s", "N") if prismatic else ("rad", "rad/s", "N m")
+        for prismatic in robot.actuator_prismatic
+    ]
 
 
 def fmt(v: np.ndarray) -> str:
@@ -93,7 +215,7 @@ def robot_command(
     """A sub-command taking ``ROBOT`` and ``--param NAME=VALUE`` (also called ``aliases``)."""
     sp: argparse.ArgumentParser = sub.add_parser(name, help=help_, aliases=list(aliases))
     sp.add_argument("robot", help="library family name, or a URDF, MJCF or SDFormat file")
-    sp.add_argument("--param", action="append", metavar="NAME=VALUE", help="builder parameter")
+    add_param_option(sp)
     sp.add_argument(
         "--home",
         nargs="+",

@@ -11,11 +11,6 @@ import time
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
-
-from pkdyn import library
-from pkdyn.model.assembly import closure_residual, forward_geometry, inverse_geometry
-from pkdyn.model.loader import load
 
 __all__ = ["register", "run_demo", "run_fastest_demo", "run_geometry_demo", "run_sizing_demo"]
 
@@ -60,6 +55,7 @@ def run_fastest_demo(
     from pkdyn.dynamics.fastest import fastest_trajectory, joint_path
     from pkdyn.dynamics.sizing import sizing_from_efforts
     from pkdyn.dynamics.trajectory import named_task
+    from pkdyn.model.loader import load
 
     robot = load("delta", geometry=False)
     p = robot.params
@@ -130,6 +126,8 @@ def run_sizing_demo(
     """
     from pkdyn.dynamics.sizing import size
     from pkdyn.dynamics.trajectory import map_task_trajectory, named_task, named_trajectory
+    from pkdyn.model.assembly import closure_residual
+    from pkdyn.model.loader import load
 
     robot = load("delta", geometry=False)
     p = robot.params
@@ -191,6 +189,12 @@ def run_geometry_demo(samples: int = 200, seed: int = 0) -> list[dict[str, float
         One row per robot (the printed figures).
 
     """
+    import pinocchio as pin
+
+    from pkdyn import library
+    from pkdyn.model.assembly import closure_residual, forward_geometry, inverse_geometry
+    from pkdyn.model.loader import load
+
     rng = np.random.default_rng(seed)
     rows = []
     header = f"{'robot':<14}{'nq':>4}{'nv':>4}{'dof':>5}{'loops':>6}{'act':>5}"

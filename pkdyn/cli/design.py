@@ -155,8 +155,11 @@ def _cmd_design(args: argparse.Namespace) -> None:
     if args.clavel_chart:
         _clavel_chart(args)
         return
+    from pkdyn.cli._common import output_path
     from pkdyn.design.run import run_study
 
+    output_path("--plot", args.plot, figure=True)
+    output_path("--urdf", args.urdf)
     study = _study(args)
     if args.save_study:
         from pkdyn.files import atomic_write

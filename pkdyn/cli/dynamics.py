@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, robot_command
+from pkdyn.cli._common import emit, load, output_path, robot_command
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["register"]
@@ -43,6 +43,8 @@ def _cmd_simulate(args: argparse.Namespace) -> None:
 def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
     if args.cycle_time is not None and args.cycle_time <= 0.0:
         raise InvalidInputError("--cycle-time", f"must be > 0 s, got {args.cycle_time}")
+    if args.cycles < 1:
+        raise InvalidInputError("--cycles", f"must be a whole number >= 1, got {args.cycles}")
     opts: dict[str, Any] = {"dt": args.dt}
     if args.trajectory == "adept":
         opts["cycle_time"] = 0.5 if args.cycle_time is None else args.cycle_time
@@ -72,6 +74,8 @@ def _cmd_size(args: argparse.Namespace) -> None:
     from pkdyn.dynamics.sizing import size, sizing_from_efforts
     from pkdyn.dynamics.trajectory import named_task, named_trajectory
 
+    output_path("--csv", args.csv)
+    output_path("--plot", args.plot, figure=True)
     robot = load(args)
     if args.payload < 0.0 or not np.isfinite(args.payload):
         raise InvalidInputError("--payload", f"must be >= 0 kg, got {args.payload}")
@@ -113,10 +117,7 @@ def _cmd_size(args: argparse.Namespace) -> None:
     if args.plot:
         from pkdyn.plotting.dynamics import plot_efforts
 
-        try:
-            plot_efforts(result, path=args.plot)
-        except (OSError, ValueError) as err:
-            raise InvalidInputError("--plot", f"cannot write '{args.plot}': {err}") from None
+        plot_efforts(result, path=args.plot)
     head = (
         f"{robot.name}: {result.trajectory}, {result.duration:.4g} s, payload {args.payload:g} kg"
         + ("" if result.feasible else "  -- LIMITS EXCEEDED")

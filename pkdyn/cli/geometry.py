@@ -17,27 +17,50 @@ from pkdyn.cli._common import (
     emit,
     fmt,
     load,
+    output_path,
     params,
     posed_command,
     qa_argument,
     robot_command,
+    units,
 )
-from pkdyn.exceptions import PkdynError
+from pkdyn.exceptions import OutputError, PkdynError
 
 __all__ = ["register"]
+
+
+def _limit(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None
 
 
 def _cmd_info(args: argparse.Namespace) -> None:
     robot = load(args)
     closures = [{"name": c.name, "type": c.kind} for c in robot.closures]
     joints, names = robot.actuated_joint_names, robot.actuator_names
+    dof, internal = robot.mobility_split()
+    actuation = [
+        {
+            "name": a.name,
+            "joint": a.joint,
+            "type": "prismatic" if prismatic else "revolute",
+            "effort": _limit(a.effort),
+            "velocity": _limit(a.velocity),
+            "reduction": a.reduction,
+            "units": {"position": u[0], "velocity": u[1], "effort": u[2]},
+        }
+        for a, prismatic, u in zip(
+            robot.actuators, robot.actuator_prismatic, units(robot), strict=True
+        )
+    ]
     payload = {
         "name": robot.name,
         "nq": robot.nq,
         "nv": robot.nv,
-        "dof": robot.dof(),
+        "dof": dof,
+        "internal": internal,
         "actuated": joints,
         "actuators": names,
+        "actuation": actuation,
         "loops": robot.loops,
         "closures": closures,
     }
@@ -45,9 +68,17 @@ def _cmd_info(args: argparse.Namespace) -> None:
 
     passive = passive_summary(robot)
     payload["passive"] = passive
+
+    def limits(a: dict[str, Any]) -> str:
+        u = a["units"]
+        eff = "-" if a["effort"] is None else f"{a['effort']:g} {u['effort']}"
+        vel = "-" if a["velocity"] is None else f"{a['velocity']:g} {u['velocity']}"
+        return f"{a['joint']} ({a['name']}, {a['type']}, {eff}, {vel})"
+
     lines = [
-        f"{robot.name}: nq={robot.nq} nv={robot.nv} dof={payload['dof']} loops={robot.loops}",
-        "actuated: " + ", ".join(f"{j} ({a})" for j, a in zip(joints, names, strict=True)),
+        f"{robot.name}: nq={robot.nq} nv={robot.nv} dof={dof} internal={internal} "
+        f"loops={robot.loops}",
+        "actuated: " + ", ".join(limits(a) for a in actuation),
         "closures: " + ", ".join(f"{c['name']} ({c['type']})" for c in closures),
         "passive: " + (_passive_text(passive) or "none"),
     ]
@@ -80,10 +111,13 @@ def _passive_text(passive: dict[str, Any]) -> str:
 def _cmd_urdf(args: argparse.Namespace) -> None:
     from pkdyn import library
 
+    output_path("-o", args.output)
     overrides = params(args.param)
     if args.robot in library.FAMILIES:
+        from pkdyn.model.families import export_urdf
+
         fam = library.FAMILIES[args.robot]
-        text = fam.build_urdf(fam.make_params(overrides))
+        text = export_urdf(args.robot, fam.make_params(overrides))
     else:
         import pkdyn
         from pkdyn.model.formats.xmldoc import read_text
@@ -99,11 +133,13 @@ def _cmd_urdf(args: argparse.Namespace) -> None:
             )
         del pkdyn
     if args.output:
+        from pkdyn.files import atomic_write
+
         try:
-            with open(args.output, "w") as fh:
+            with atomic_write(args.output) as fh:
                 fh.write(text)
         except OSError as err:
-            raise PkdynError(f"cannot write '{args.output}': {err.strerror}") from None
+            raise OutputError(args.output, err.strerror or str(err)) from None
     else:
         sys.stdout.write(text)
 
@@ -138,7 +174,9 @@ def _cmd_ik(args: argparse.Namespace) -> None:
         "actuators": names,
         "residual": res.residual,
     }
-    text = "\n".join(f"{n}: {v:.9f}" for n, v in zip(names, res.qa, strict=True))
+    text = "\n".join(
+        f"{n}: {v:.9f} {u[0]}" for n, v, u in zip(names, res.qa, units(robot), strict=True)
+    )
     emit(args, payload, text)
 
 
@@ -164,8 +202,8 @@ def _cmd_singularity(args: argparse.Namespace) -> None:
     robot, q = configuration(args)
     out = singularity_json(robot, q)
     text = (
-        f"{out['kind']}: cond(A) = {out['cond_A']:.4g}, cond(B) = {out['cond_B']:.4g}, "
-        f"distance = {out['distance']:.4g}"
+        f"{out['kind']}: margin = {out['margin']:.4g} (scale-aware, 0: singular), "
+        f"cond(A) = {out['cond_A']:.4g}, cond(B) = {out['cond_B']:.4g}"
     )
     emit(args, out, text)
 
@@ -175,7 +213,10 @@ def _cmd_statics(args: argparse.Namespace) -> None:
 
     robot, q = configuration(args)
     out = statics_json(robot, q, args.wrench, gravity=args.gravity)
-    text = "\n".join(f"{n}: {t:.6g}" for n, t in zip(out["actuators"], out["tau"], strict=True))
+    text = "\n".join(
+        f"{n}: {t:.6g} {u[2]}"
+        for n, t, u in zip(out["actuators"], out["tau"], units(robot), strict=True)
+    )
     emit(args, out, text)
 
 

@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Any
 
-from pkdyn.cli._common import load, robot_command
+from pkdyn.cli._common import load, output_path, robot_command
 from pkdyn.exceptions import PkdynError
 
 __all__ = ["register"]
@@ -17,6 +17,7 @@ def _cmd_mjcf(args: argparse.Namespace) -> None:
 
     if not args.timestep > 0.0:
         raise PkdynError(f"--timestep must be > 0 s, got {args.timestep}")
+    output_path("-o", args.output)
     robot = load(args, geometry=True)
     options = MjcfOptions(timestep=args.timestep, contacts=not args.no_contacts)
     if args.output:

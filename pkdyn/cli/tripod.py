@@ -11,7 +11,7 @@ import argparse
 import json
 from typing import Any
 
-from pkdyn.cli._common import Parser, params
+from pkdyn.cli._common import Parser, add_param_option, output_path, params
 from pkdyn.exceptions import InvalidInputError, PkdynError
 
 __all__ = ["register"]
@@ -53,6 +53,8 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
     from pkdyn.tripod.machining import MachiningPlan
     from pkdyn.tripod.scenario import WalkPlan
 
+    output_path("--plot", args.plot, figure=True)
+    output_path("--html", args.html)
     overrides = params(args.param)
     if args.branches is not None:
         overrides["branches"] = args.branches
@@ -75,10 +77,7 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
     if args.plot:
         from pkdyn.plotting.tripod import plot_scenario
 
-        try:
-            plot_scenario(report, path=args.plot)
-        except (OSError, ValueError) as err:
-            raise PkdynError(f"cannot write the plot '{args.plot}': {err}") from None
+        plot_scenario(report, path=args.plot)
     if args.html:
         _html(robot, report, args.html)
     if args.json:
@@ -94,11 +93,8 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
 def _html(robot: Any, report: Any, path: str) -> None:
     from pkdyn.viewer import animate, export_html
 
-    try:
-        scene = animate(robot, report.t, report.q)
-        export_html(scene, path)
-    except OSError as err:
-        raise PkdynError(f"cannot write '{path}': {err.strerror}") from None
+    scene = animate(robot, report.t, report.q)
+    export_html(scene, path)
 
 
 def register(sub: Any) -> None:
@@ -109,7 +105,7 @@ def register(sub: Any) -> None:
         "scenario",
         help="machining, reconfiguration and swing of each branch, repeated; checks per phase",
     )
-    sc.add_argument("--param", action="append", metavar="NAME=VALUE", help="builder parameter")
+    add_param_option(sc)
     sc.add_argument(
         "--branches",
         type=int,

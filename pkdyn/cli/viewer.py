@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import load, qa_argument, robot_command
+from pkdyn.cli._common import load, output_path, qa_argument, robot_command
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["register"]
@@ -69,6 +69,7 @@ def _configuration(robot: Any, args: argparse.Namespace) -> np.ndarray | None:
 def _cmd_view(args: argparse.Namespace) -> None:
     from pkdyn.viewer import Scene, chain
 
+    output_path("--html", args.html)
     robot = load(args, geometry=True)
     segments = []
     if args.trajectory:
@@ -80,7 +81,7 @@ def _cmd_view(args: argparse.Namespace) -> None:
     q = _configuration(robot, args)
     if q is None and segments:
         q = segments[0][1][0]
-    scene = Scene(robot, q, collision=args.collision, serve=args.html is None)
+    scene = Scene(robot, q, collision=args.collision, serve=args.html is None, host=args.host)
     try:
         for k, path in enumerate(args.points or []):
             scene.add_points(
@@ -122,6 +123,12 @@ def register(sub: Any) -> None:
         help="animate built-in trajectories one after the other (adept, sine, p2p)",
     )
     sp.add_argument("--html", metavar="FILE", help="write a self-contained HTML file, no server")
+    sp.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address the live viewer listens on (default 127.0.0.1: this machine only; "
+        "0.0.0.0 serves every interface, with a warning)",
+    )
     sp.add_argument("--collision", action="store_true", help="draw the collision geometry")
     sp.add_argument(
         "--singular", action="store_true", help="colour singular (red), near-singular (pink)"

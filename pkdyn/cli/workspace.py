@@ -6,7 +6,7 @@ import argparse
 import math
 from typing import Any
 
-from pkdyn.cli._common import emit, load, posed_command, robot_command
+from pkdyn.cli._common import emit, load, output_path, posed_command, robot_command
 
 __all__ = ["register"]
 
@@ -185,6 +185,7 @@ def _text(out: dict[str, Any]) -> str:
 
 
 def _cmd_workspace(args: argparse.Namespace) -> None:
+    output_path("--plot", args.plot, figure=True)
     robot = load(args, geometry=True)
     if args.clavel:
         _cmd_clavel(args, robot)

@@ -158,9 +158,14 @@ class StudyResult:
         return pkdyn.load(self.study.family, geometry=geometry, **self.overrides(i))
 
     def urdf(self, i: int | None = None) -> str:
-        """URDF text of a design (default: the chosen one), as ``pkdyn urdf`` writes it."""
+        """URDF text of a design (default: the chosen one), as ``pkdyn urdf`` writes it.
+
+        With its ``<pkdyn:family>`` element: the file loads as the family with these parameters.
+        """
+        from pkdyn.model.families import export_urdf
+
         fam = self.study.space.family_obj
-        return fam.build_urdf(self.params(i))
+        return export_urdf(fam.name, self.params(i))
 
     def write_urdf(self, path: str | os.PathLike[str], i: int | None = None) -> None:
         """Write the URDF of a design (default: the chosen one), atomically."""

@@ -77,19 +77,34 @@ def simulate(
         ``Drives.losses``).
 
     Raises:
-        InvalidInputError: Non-positive duration or step, unknown integrator, bad sizes.
-        SimulationError: The state becomes non-finite or the closures cannot be kept.
+        InvalidInputError: Non-positive duration or step, a step longer than the duration,
+            more than :data:`MAX_STEPS` steps or :data:`MAX_RECORD_BYTES` of recording,
+            negative damping or friction, unknown integrator, bad sizes.
+        SimulationError: The state becomes non-finite or blows up (joint speed beyond
+            10^4 rad/s or m/s), the adaptive step count within an output step exceeds its
+            limit, or the closures cannot be kept.
 
     """
     for what, val in (("duration", duration), ("dt", dt)):
         if not np.isfinite(val) or val <= 0.0:
             raise InvalidInputError(what, f"must be > 0 s, got {val}")
+    if dt > duration:
+        raise InvalidInputError(
+            "dt", f"{dt:g} s is longer than the duration {duration:g} s: no step would be taken"
+        )
+    _check_work(robot, duration, dt, record_every)
     if integrator not in ("dopri5", "rk4", "euler"):
         raise InvalidInputError("integrator", f"unknown {integrator!r} (dopri5, rk4 or euler)")
     if record_every < 1:
         raise InvalidInputError("record_every", f"must be >= 1, got {record_every}")
     if step is not None and not (np.isfinite(step) and step > 0.0):
         raise InvalidInputError("step", f"must be > 0 s, got {step}")
+    if step is not None and duration / min(step, dt) > MAX_STEPS:
+        raise InvalidInputError(
+            "step",
+            f"{duration:g} s in integration steps of {min(step, dt):g} s is "
+            f"{duration / min(step, dt):.3g} steps; at most {MAX_STEPS:.0e}: use a longer step",
+        )
     q = robot.q_home if q0 is None else as_finite("q0", q0, robot.nq)
     v = np.zeros(robot.nv) if v0 is None else as_finite("v0", v0, robot.nv)
     fd = ForwardDynamics(
@@ -115,9 +130,42 @@ def simulate(
             return out
 
     try:
-        return fd.simulate(q, v, duration, dt, tau=tau_fn, record_every=record_every, step=step)
+        out = fd.simulate(q, v, duration, dt, tau=tau_fn, record_every=record_every, step=step)
     except IntegrationError as err:
         raise SimulationError(str(err), err.time) from None
+    g = max(float(np.linalg.norm(robot.model.gravity.linear)), 1.0)
+    mass = sum(robot.model.inertias[j].mass for j in range(robot.model.njoints))
+    out.energy_scale = float(mass * g * robot.length_scale)
+    return out
+
+
+MAX_STEPS = 10_000_000
+"""Largest number of output steps of one :func:`simulate` call (about an hour of computing)."""
+
+MAX_RECORD_BYTES = 2 * 1024**3
+"""Largest memory of the recorded time series of one :func:`simulate` call."""
+
+
+def _check_work(robot: Robot, duration: float, dt: float, record_every: int) -> None:
+    """Refuse up front a run that would take hours or exhaust memory (with the estimate)."""
+    steps = duration / dt
+    if steps > MAX_STEPS:
+        raise InvalidInputError(
+            "dt",
+            f"{duration:g} s in steps of {dt:g} s is {steps:.3g} steps (hours of computing at "
+            f"~50 us each); at most {MAX_STEPS:.0e}: use a longer dt or a shorter duration",
+        )
+    nc = robot.closure_set.nc
+    per_sample = 8 * (robot.nq + 3 * robot.nv + len(robot.actuators) + nc + 8)
+    need = (steps / record_every + 2) * per_sample
+    if need > MAX_RECORD_BYTES:
+        every = int(np.ceil(need / MAX_RECORD_BYTES * record_every))
+        raise InvalidInputError(
+            "record_every",
+            f"recording {steps / record_every:.3g} samples of {robot.name} would take "
+            f"{need / 1e9:.3g} GB (at most {MAX_RECORD_BYTES / 1e9:.3g} GB); record every "
+            f"{every} steps or fewer",
+        )
 
 
 def _extra(name: str, x: float | Sequence[float], nv: int) -> np.ndarray:

@@ -25,7 +25,8 @@ from pkdyn.dynamics.actuation import drives
 from pkdyn.dynamics.inverse import EffortTrajectory, inverse_dynamics
 from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import JointTrajectory
-from pkdyn.exceptions import PkdynError
+from pkdyn.exceptions import OutputError
+from pkdyn.files import atomic_write
 from pkdyn.model.robot import Robot
 
 __all__ = ["FEASIBLE_TOL", "ActuatorSizing", "SizingResult", "size", "sizing_from_efforts"]
@@ -61,6 +62,9 @@ class ActuatorSizing:
         motor_mean_speed: Time mean of the motor's |speed| [rad/s] (with ``motor_rms``: the
             RMS operating point).
         loss: Mean power lost in the drive, motor friction and gearbox [W].
+        prismatic: The actuator drives a prismatic joint: joint-side efforts in N and speeds in
+            m/s (else N m and rad/s). Its motor side is rotary (N m, rad/s) through a reduction
+            in rad/m (a screw: ``2 pi / lead``), linear (N, m/s) when the reduction is 1.
 
     """
 
@@ -82,6 +86,16 @@ class ActuatorSizing:
     efficiency: float = 1.0
     motor_mean_speed: float = 0.0
     loss: float = 0.0
+    prismatic: bool = False
+
+    @property
+    def units(self) -> tuple[str, str, str, str]:
+        """Units of (joint effort, joint speed, motor effort, motor speed)."""
+        if not self.prismatic:
+            return ("N m", "rad/s", "N m", "rad/s")
+        if self.reduction == 1.0:
+            return ("N", "m/s", "N", "m/s")
+        return ("N", "m/s", "N m", "rad/s")
 
     def as_json(self) -> dict[str, Any]:
         """JSON-ready dict (infinite limits as ``None``)."""
@@ -132,21 +146,26 @@ class SizingResult:
         }
 
     def table(self) -> str:
-        """A readable table of the figures."""
+        """A readable table of the figures (units per actuator kind: N m, rad/s or N, m/s)."""
         head = (
             f"{'actuator':<10} {'peak':>9} {'rms':>9} {'limit':>8} {'margin':>7} "
             f"{'speed':>8} {'v-margin':>8} {'power':>8} {'motor pk':>9} {'motor rms':>9}"
         )
-        units = (
-            f"{'':<10} {'[N m]':>9} {'[N m]':>9} {'[N m]':>8} {'':>7} {'[rad/s]':>8} {'':>8} "
-            f"{'[W]':>8} {'[N m]':>9} {'[N m]':>9}"
-        )
-        rows = [head, units]
+        kinds = {a.units for a in self.actuators}
+        mixed = len(kinds) > 1
+        rows = [head + ("  units" if mixed else "")]
+        if not mixed and kinds:
+            e, v, me, _ = next(iter(kinds))
+            rows.append(
+                f"{'':<10} {f'[{e}]':>9} {f'[{e}]':>9} {f'[{e}]':>8} {'':>7} {f'[{v}]':>8} "
+                f"{'':>8} {'[W]':>8} {f'[{me}]':>9} {f'[{me}]':>9}"
+            )
         for a in self.actuators:
             rows.append(
                 f"{a.name:<10} {a.peak:9.3f} {a.rms:9.3f} {a.limit:8.3g} {100 * a.margin:6.1f}% "
                 f"{a.peak_speed:8.3f} {100 * a.speed_margin:7.1f}% {a.peak_power:8.1f} "
                 f"{a.motor_peak:9.4f} {a.motor_rms:9.4f}"
+                + (f"  {a.units[0]}, {a.units[1]}, motor {a.units[2]}" if mixed else "")
             )
         return "\n".join(rows)
 
@@ -159,7 +178,7 @@ class SizingResult:
             path: Output file.
 
         Raises:
-            PkdynError: The file cannot be written.
+            OutputError: The file cannot be written (an existing file is left intact).
 
         """
         ef = self.efforts
@@ -174,13 +193,13 @@ class SizingResult:
         )
         table = np.column_stack([traj.t, traj.qa, traj.qa_dot, ef.tau, ef.energy])
         try:
-            with open(path, "w", newline="") as fh:
+            with atomic_write(path, newline="") as fh:
                 w = csv.writer(fh)
                 w.writerow(header)
                 for row in table:
                     w.writerow([f"{x:.10g}" for x in row])
         except OSError as err:
-            raise PkdynError(f"cannot write '{path}': {err.strerror}") from None
+            raise OutputError(str(path), err.strerror or str(err)) from None
 
 
 def _rms(t: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -263,6 +282,7 @@ def sizing_from_efforts(robot: Robot, ef: EffortTrajectory, payload: float = 0.0
     mean_loss = _mean(t, loss)
     rotor = np.max(np.abs(drv.armature * qdd), axis=0)
     out = []
+    prismatic = robot.actuator_prismatic
     for i, act in enumerate(robot.actuators):
         r = act.reduction
         out.append(
@@ -285,6 +305,7 @@ def sizing_from_efforts(robot: Robot, ef: EffortTrajectory, payload: float = 0.0
                 efficiency=float(act.efficiency),
                 motor_mean_speed=float(m_mean[i]),
                 loss=float(mean_loss[i]),
+                prismatic=bool(prismatic[i]),
             )
         )
     return SizingResult(

@@ -48,7 +48,7 @@ from pkdyn.exceptions import (
     UnreachablePoseError,
 )
 from pkdyn.model.assembly import inverse_geometry
-from pkdyn.model.pose import pose_to_vector
+from pkdyn.model.pose import pose_from_vector, pose_to_vector
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
 from solvers import numerics
@@ -166,10 +166,67 @@ def _pose6(pose: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
     return p
 
 
-def _times(duration: float, dt: float) -> np.ndarray:
+MIN_SAMPLES_PER_MOVE = 2
+"""Fewest samples of the shortest move (or half period) a trajectory accepts: coarser, the
+motion is not seen at all (``size --dt 10`` used to report a 0.5 s cycle feasible with
+0.05 N m)."""
+
+_WARNED: list[bool] = []
+
+WARN_SAMPLES_PER_MOVE = 10
+"""Below this many samples of the shortest move a warning says that peaks may be missed (a
+quintic move's acceleration peaks at 21 % and 79 % of its duration)."""
+
+MAX_SAMPLES = 2_000_000
+"""Most samples of one trajectory (mapping to the joints takes ~1 ms each: about half an hour)."""
+
+
+def _times(
+    duration: float,
+    dt: float,
+    shortest: float | None = None,
+    what: str = "",
+    warn: bool = False,
+) -> np.ndarray:
+    """Sample times ``0..duration`` every ``dt``, refused when too coarse or too many.
+
+    Args:
+        duration: Duration [s].
+        dt: Sample period [s].
+        shortest: Duration of the shortest feature to resolve [s] (a move, a half period).
+        what: What that feature is, for messages.
+        warn: Warn below :data:`WARN_SAMPLES_PER_MOVE` samples of it (the built-in
+            trajectories of :func:`named_task`).
+
+    """
     if not np.isfinite(dt) or dt <= 0.0:
         raise InvalidInputError("dt", f"sample period must be > 0 s, got {dt}")
-    n = max(2, int(round(duration / dt)) + 1)
+    shortest = duration if shortest is None else shortest
+    if dt > shortest / MIN_SAMPLES_PER_MOVE:
+        raise InvalidInputError(
+            "dt",
+            f"{dt:g} s samples the {shortest:.3g} s {what or 'motion'} fewer than "
+            f"{MIN_SAMPLES_PER_MOVE} times: the motion would be missed; use dt <= "
+            f"{shortest / WARN_SAMPLES_PER_MOVE:.3g} s",
+        )
+    if warn and dt > shortest / WARN_SAMPLES_PER_MOVE and not _WARNED:
+        _WARNED.append(True)  # once per process: a design study samples many robots alike
+        warnings.warn(
+            f"dt = {dt:g} s samples the {shortest:.3g} s {what or 'motion'} only "
+            f"{shortest / dt:.1f} times: peak and RMS values may be underestimated (dt <= "
+            f"{shortest / WARN_SAMPLES_PER_MOVE:.3g} s resolves them)",
+            UserWarning,
+            stacklevel=4,
+        )
+    steps = duration / dt
+    if steps > MAX_SAMPLES:
+        raise InvalidInputError(
+            "dt",
+            f"{duration:g} s every {dt:g} s is {steps:.3g} samples (mapping them takes ~1 ms "
+            f"each: about {steps * 1e-3 / 3600:.2g} h); at most {MAX_SAMPLES:.0e}: use a longer "
+            "dt or a shorter duration",
+        )
+    n = max(2, int(round(steps)) + 1)
     return np.linspace(0.0, duration, n)
 
 
@@ -179,6 +236,7 @@ def point_to_point(
     duration: float,
     profile: str = "quintic",
     dt: float = 1e-3,
+    warn_coarse: bool = False,
 ) -> TaskTrajectory:
     """A straight rest-to-rest move in pose coordinates.
 
@@ -187,7 +245,8 @@ def point_to_point(
         end: End pose, same form.
         duration: Duration [s].
         profile: Motion law, ``quintic`` or ``jerk`` (see :mod:`pkdyn.dynamics.profiles`).
-        dt: Sample period [s].
+        dt: Sample period [s] (at least 2 samples of the move).
+        warn_coarse: Warn when fewer than 10 samples resolve the move.
 
     Returns:
         The sampled move.
@@ -195,7 +254,7 @@ def point_to_point(
     """
     p0, p1 = _pose6(start, "start"), _pose6(end, "end")
     law = motion_law(profile, duration)
-    t = _times(duration, dt)
+    t = _times(duration, dt, duration, "move", warn_coarse)
     return _segment(t, p0, p1, law, f"{profile} move")
 
 
@@ -252,6 +311,7 @@ def adept_cycle(
     profile: str = "quintic",
     overlap: float = 0.0,
     dt: float = 1e-3,
+    warn_coarse: bool = False,
 ) -> TaskTrajectory:
     """The pick-and-place "Adept cycle": ``up`` up, ``across`` across, ``up`` down, and back.
 
@@ -272,7 +332,8 @@ def adept_cycle(
         direction: Direction of the horizontal move in the x-y plane [rad] (0: along x).
         profile: Motion law of each move, ``quintic`` or ``jerk``.
         overlap: Fraction of the vertical moves overlapped with the horizontal one.
-        dt: Sample period [s].
+        dt: Sample period [s] (at least 2 samples of the shortest move).
+        warn_coarse: Warn when fewer than 10 samples resolve the shortest move.
 
     Returns:
         The sampled cycle (one period; repeat by :func:`concatenate`).
@@ -290,7 +351,7 @@ def adept_cycle(
     rv, rh = np.sqrt(up), np.sqrt(across)
     Tv = half / (2.0 * rv * (1.0 - overlap) + rh) * rv
     Th = half - 2.0 * Tv * (1.0 - overlap)
-    t = _times(cycle_time, dt)
+    t = _times(cycle_time, dt, min(Tv, Th), "shortest move of the cycle", warn_coarse)
     law_v, law_h = motion_law(profile, Tv), motion_law(profile, Th)
     pose = np.zeros((t.size, 6))
     pd = np.zeros((t.size, 6))
@@ -324,6 +385,7 @@ def sinusoid(
     duration: float,
     phase: Sequence[float] | np.ndarray | float = 0.0,
     dt: float = 1e-3,
+    warn_coarse: bool = False,
 ) -> TaskTrajectory:
     """Sinusoidal motion of each pose component: ``center + amplitude sin(2 pi f t + phase)``.
 
@@ -333,7 +395,8 @@ def sinusoid(
         frequency: Frequencies (6,) or one for all [Hz].
         duration: Duration [s].
         phase: Phases (6,) or one for all [rad].
-        dt: Sample period [s].
+        dt: Sample period [s] (at least 2 samples per half period).
+        warn_coarse: Warn when fewer than 10 samples resolve a half period.
 
     Returns:
         The sampled motion (it starts in motion unless every phase is a multiple of pi and
@@ -348,7 +411,9 @@ def sinusoid(
         raise InvalidInputError("sinusoid", "amplitudes, frequencies and phases must be finite")
     if not np.isfinite(duration) or duration <= 0.0:
         raise InvalidInputError("duration", f"must be > 0 s, got {duration}")
-    t = _times(duration, dt)
+    moving = f[(A != 0.0) & (f > 0.0)]
+    half = 0.5 / float(np.max(moving)) if moving.size else duration
+    t = _times(duration, dt, min(half, duration), "half period", warn_coarse)
     w = 2.0 * np.pi * f
     arg = np.outer(t, w) + ph
     return TaskTrajectory(
@@ -438,7 +503,9 @@ def map_task_trajectory(
             h = tk - float(task.t[k - 1])
             q = pin.integrate(model, q, h * V[k - 1] + 0.5 * h * h * A[k - 1])
         try:
-            q = inverse_geometry(robot, task.pose[k], q_init=q, check_limits=check_limits).q
+            # a placement: the task rows are imposed, the others are placeholders
+            target = pose_from_vector(task.pose[k])
+            q = inverse_geometry(robot, target, q_init=q, check_limits=check_limits).q
         except UnreachablePoseError as err:
             raise TrajectoryError(f"pose out of reach: {err}", sample=k, time=tk) from None
         except JointLimitError as err:
@@ -449,7 +516,7 @@ def map_task_trajectory(
                 km = kinematic_models(robot, q)
         except SingularConfigurationError as err:
             raise TrajectoryError(f"singular configuration: {err}", sample=k, time=tk) from None
-        if numerics.rank_of(km.sigma_A, SINGULAR_TOL, scale=1.0) < km.sigma_A.size:
+        if km.margin_A < SINGULAR_TOL:
             raise TrajectoryError(
                 f"parallel singularity (cond(A) = {km.cond_A:.3g}): the actuators cannot "
                 "control the platform here",
@@ -601,8 +668,10 @@ def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:
     dt = _number(name, opts, "dt", 1e-3)
     if name == "adept":
         cycles = _number(name, opts, "cycles", 1)
-        if cycles != int(cycles):
-            raise InvalidInputError("cycles", f"{name}: expected a whole number, got {cycles}")
+        if cycles != int(cycles) or cycles < 1:
+            raise InvalidInputError(
+                "cycles", f"{name}: expected a whole number >= 1, got {cycles:g}"
+            )
         depth = _number(name, opts, "depth", 0.05)
         bottom = home[:3] - np.array([0.0, 0.0, depth])
         one = adept_cycle(
@@ -614,8 +683,15 @@ def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:
             profile=str(opts.pop("profile", "quintic")),
             overlap=_number(name, opts, "overlap", 0.0),
             dt=dt,
+            warn_coarse=True,
         )
-        return concatenate([one] * max(1, int(cycles)), name=one.name)
+        if int(cycles) * one.t.size > MAX_SAMPLES:
+            raise InvalidInputError(
+                "cycles",
+                f"{name}: {int(cycles)} cycles of {one.t.size} samples exceed {MAX_SAMPLES:.0e} "
+                "samples (about half an hour of mapping): fewer cycles or a longer dt",
+            )
+        return concatenate([one] * int(cycles), name=one.name)
     if name == "sine":
         amp = _number(name, opts, "amplitude", 0.01)
         ang = _number(name, opts, "angle", 0.02)
@@ -627,12 +703,12 @@ def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:
         # distinct frequencies per component so that the motion explores all directions
         freqs = f * np.array([1.0, 1.0, 2.0, 1.0, 1.0, 2.0])
         phases = np.array([0.0, 0.5 * np.pi, 0.0, 0.5 * np.pi, 0.0, 0.0])
-        return sinusoid(home.copy(), A, freqs, duration, phases, dt=dt)
+        return sinusoid(home.copy(), A, freqs, duration, phases, dt=dt, warn_coarse=True)
     default = np.where(task_mask, np.r_[0.05, 0.0, 0.0, 0.1, 0.1, 0.1], 0.0)
     offset = _pose6(opts.pop("offset", default), "offset")
     duration = _number(name, opts, "duration", 0.5)
     profile = str(opts.pop("profile", "quintic"))
-    return point_to_point(home, home + offset, duration, profile, dt=dt)
+    return point_to_point(home, home + offset, duration, profile, dt=dt, warn_coarse=True)
 
 
 _OPTIONS = {

@@ -24,17 +24,32 @@ count (-6) misses redundant equations; the mobility is still 3 (see :mod:`pkdyn.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+import math
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from pkdyn.closed_form import delta as cf
-from pkdyn.exceptions import ParameterError
-from pkdyn.library._check import in_range, positive
+from pkdyn.exceptions import ParameterError, UnreachablePoseError
+from pkdyn.library._check import in_range, middle_of_reach, positive
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rpy_z_to
 
-__all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
+__all__ = [
+    "NAME",
+    "SUMMARY",
+    "Params",
+    "build_urdf",
+    "configuration",
+    "forward_position",
+    "home",
+    "in_working_mode",
+    "inverse_actuators",
+    "resolved",
+]
 
 NAME = "delta"
 """Family name (``pkdyn.load`` and the CLI take it)."""
@@ -57,7 +72,10 @@ class Params:
         nacelle_mass: Nacelle mass [kg].
         arm_radius: Arm tube radius (inertia, display, collision) [m].
         bar_radius: Bar tube radius [m].
-        z_home: Nacelle height at the home configuration [m] (negative: below the base).
+        z_home: Nacelle height on the axis at the home configuration [m] (negative: below the
+            base); ``None`` (default) derives it from the other parameters: the middle of the
+            nacelle's vertical reach within the arm limits, rounded to two significant digits
+            (-0.35 m for the DELTA 580). See :meth:`home_height`.
         alpha_min: Lower arm-angle limit [rad].
         alpha_max: Upper arm-angle limit [rad].
         effort: Joint-side actuator torque limit [N m].
@@ -89,7 +107,7 @@ class Params:
     nacelle_mass: float = 0.150
     arm_radius: float = 0.012
     bar_radius: float = 0.005
-    z_home: float = -0.350
+    z_home: float | None = None
     alpha_min: float = -0.8
     alpha_max: float = 1.6
     effort: float = 40.0
@@ -122,13 +140,36 @@ class Params:
             raise ParameterError(NAME, "parallelogram", "must be 'ball' or 'hinge'")
         if self.ra <= self.rb:
             raise ParameterError(NAME, "ra", f"must exceed rb ({self.rb}) for a Delta")
-        _, ok = cf.inverse(self, np.array([0.0, 0.0, self.z_home]))
-        if self.z_home >= 0 or not ok[0]:
-            raise ParameterError(
-                NAME,
-                "z_home",
-                f"{self.z_home} m is not reachable below the base with these lengths",
-            )
+        if self.z_home is not None:
+            in_range(NAME, "z_home", self.z_home, -math.inf, 0.0)
+            if not self._reachable(np.array([self.z_home]))[0]:
+                raise ParameterError(
+                    NAME,
+                    "z_home",
+                    f"{self.z_home} m is not reachable below the base with these lengths and arm "
+                    f"limits (leave z_home unset: it is then {self._derived_height():.4g} m)",
+                )
+        else:
+            self._derived_height()  # raises if nothing is reachable
+
+    def _reachable(self, z: np.ndarray) -> np.ndarray:
+        """Nacelle heights on the axis reached with every arm within its limits."""
+        alpha, ok = cf.inverse(self, np.column_stack([0.0 * z, 0.0 * z, z]))
+        with np.errstate(invalid="ignore"):
+            inside = np.all((alpha >= self.alpha_min) & (alpha <= self.alpha_max), axis=1)
+        return ok & inside & (z < 0.0)
+
+    def _derived_height(self) -> float:
+        return self._derived
+
+    @functools.cached_property
+    def _derived(self) -> float:
+        reach = self.la + self.lb + self.ra
+        return middle_of_reach(NAME, "z_home", -reach, 0.0, self._reachable)
+
+    def home_height(self) -> float:
+        """Nacelle height at home [m]: ``z_home``, or the middle of the vertical reach."""
+        return float(self.z_home) if self.z_home is not None else self._derived_height()
 
 
 _SIGNED = {
@@ -146,9 +187,105 @@ _PASSIVE_VELOCITY = 1e3
 
 
 def home(p: Params) -> list[float]:
-    """Arm angles [rad] with the nacelle at ``(0, 0, z_home)``."""
-    alpha, _ = cf.inverse(p, np.array([0.0, 0.0, p.z_home]))
+    """Arm angles [rad] with the nacelle at ``(0, 0, p.home_height())``."""
+    alpha, _ = cf.inverse(p, np.array([0.0, 0.0, p.home_height()]))
     return [float(a) for a in alpha[0]]
+
+
+def forward_position(
+    p: Params, qa: np.ndarray, reference: tuple[np.ndarray, np.ndarray] | None = None
+) -> np.ndarray | None:
+    """Nacelle position [m] from the arm angles: Clavel's direct model, working mode.
+
+    The working assembly mode has the nacelle below the plane of the reduced elbows ``C'_i``
+    (the lower root of eq. 4; below the base in use); ``reference`` is not needed. With four
+    arms the first three give the position (the fourth must agree for the input to be
+    assemblable). ``None`` if the arms cannot be assembled.
+    """
+    P, ok = cf.forward(p, np.asarray(qa, dtype=float)[:3])
+    return P[0] if ok[0] else None
+
+
+def in_working_mode(p: Params, P: np.ndarray) -> np.ndarray:
+    """Which nacelle positions (N, 3) the working modes reach.
+
+    Arms on the working branch (elbows out) and the nacelle below the plane of the reduced
+    elbows (the lower root of the direct model).
+    """
+    P = np.atleast_2d(np.asarray(P, dtype=float))
+    alpha, ok = cf.inverse(p, P)
+    C = cf.elbow_points(p, np.where(np.isfinite(alpha), alpha, 0.0))[:, :3]
+    n = np.cross(C[:, 1] - C[:, 0], C[:, 2] - C[:, 0])
+    n *= np.where(n[:, 2:3] < 0.0, -1.0, 1.0)  # upward normal
+    below = np.einsum("ij,ij->i", P - C[:, 0], n) < 0.0
+    return ok & below
+
+
+def inverse_actuators(p: Params, pose: pin.SE3) -> np.ndarray | None:
+    """Arm angles [rad] of a nacelle position in the working modes, or ``None``.
+
+    Elbows out and nacelle below the elbows; ``None`` when the arms cannot reach it.
+
+    Raises:
+        UnreachablePoseError: Only the other assembly mode (nacelle above the elbows) reaches
+            the position.
+
+    """
+    P = np.asarray(pose.translation, dtype=float)
+    alpha, ok = cf.inverse(p, P)
+    if not ok[0]:
+        return None
+    if not in_working_mode(p, P)[0]:
+        raise UnreachablePoseError(
+            "-",
+            0.0,
+            f"delta: nacelle position {np.array2string(P, precision=4)} m lies above the plane "
+            "of the elbows: only the other assembly mode (nacelle above the arms) reaches it; "
+            "pkdyn keeps the Delta in its working mode",
+        )
+    return alpha[0]
+
+
+def configuration(robot: Any, qa: np.ndarray, position: np.ndarray) -> np.ndarray | None:
+    """The configuration with arm angles ``qa`` and the nacelle at ``position``, built.
+
+    Ball-jointed bars are turned along the segment from their upper joint to their nacelle
+    joint (the shortest rotation, no spin): exact even where a bar and its arm are aligned (the
+    workspace boundary), where an iterative solve from far away stalls. ``None`` for the other
+    bar joints (the caller solves from the home configuration).
+
+    Args:
+        robot: A Delta of this family.
+        qa: Arm angles [rad].
+        position: Nacelle position [m] (from :func:`forward_position`).
+
+    """
+    p = robot.params
+    if p.parallelogram != "ball" or p.bar_joint != "spherical":
+        return None
+    m, data = robot.model, robot.data
+    q = np.array(robot.q_home, dtype=float)
+    q[robot.actuated_q] = qa
+    j = m.getJointId("nacelle")
+    jm = m.joints[j]
+    M = m.jointPlacements[j].actInv(pin.SE3(np.eye(3), np.asarray(position, dtype=float)))
+    q[jm.idx_q : jm.idx_q + 7] = pin.SE3ToXYZQUAT(M)
+    pin.forwardKinematics(m, data, q)
+    for cm in robot.constraint_models:  # bar (joint 1, tip) to nacelle (joint 2)
+        jb = cm.joint1_id
+        top = data.oMi[m.parents[jb]] * m.jointPlacements[jb]
+        low = data.oMi[cm.joint2_id].act(cm.joint2_placement.translation)
+        d = top.rotation.T @ (low - top.translation)
+        tip = np.asarray(cm.joint1_placement.translation, dtype=float)
+        quat = pin.Quaternion.FromTwoVectors(tip / np.linalg.norm(tip), d / np.linalg.norm(d))
+        k = m.joints[jb].idx_q
+        q[k : k + 4] = quat.coeffs()
+    return q
+
+
+def resolved(p: Params) -> Params:
+    """The parameters with the derived ones (``z_home``) computed."""
+    return dataclasses.replace(p, z_home=p.home_height())
 
 
 def _arm_rotation(theta: float, alpha: float) -> np.ndarray:
@@ -217,7 +354,7 @@ def build_urdf(p: Params) -> str:
         collisions=[Shape("cylinder", (p.ra + 0.04, 0.01), (0, 0, 0.02))],
     )
     alphas = home(p)
-    P = np.array([0.0, 0.0, p.z_home])
+    P = np.array([0.0, 0.0, p.home_height()])
     for i, (theta, alpha) in enumerate(zip(p.theta, alphas, strict=True), start=1):
         u = np.array([np.cos(theta), np.sin(theta), 0.0])
         t = np.array([-np.sin(theta), np.cos(theta), 0.0])

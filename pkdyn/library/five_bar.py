@@ -3,8 +3,9 @@
 Base points ``A_1 = (-d/2, 0)`` and ``A_2 = (d/2, 0)`` in the plane z = 0; proximal links ``l1``
 driven about z at ``A_j`` (absolute angle ``theta_j`` from the base x axis); distal links ``l2``
 from the elbows ``C_j = A_j + l1 (cos theta_j, sin theta_j)`` meet at the end-effector point
-``E = (x, y)``. Defaults: ``d = 0.2``, ``l1 = 0.2``, ``l2 = 0.3`` m, home ``E = (0, 0.3)`` in the
-working mode with both elbows outward (``working_mode = "+-"``).
+``E = (x, y)``. Defaults: ``d = 0.2``, ``l1 = 0.2``, ``l2 = 0.3`` m, home ``E = (0, y_home)``
+(derived: the middle of the reach along the axis) in the working mode with both elbows outward
+(``working_mode = "+-"``).
 
 Closed forms (vectorised, :mod:`pkdyn.closed_form.five_bar`): with ``K = E - A_j``,
 ``K_x cos theta_j + K_y sin theta_j = K_3 = (|K|^2 + l1^2 - l2^2) / (2 l1)``, hence
@@ -24,14 +25,17 @@ tip of ``distal1``; task ``x y``.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
-from pkdyn.closed_form.five_bar import MODES, _wrap, elbow_points, inverse
+from pkdyn.closed_form.five_bar import MODES, _wrap, elbow_points, forward, inverse
 from pkdyn.exceptions import ParameterError
-from pkdyn.library._check import in_range, positive
+from pkdyn.library._check import in_range, middle_of_reach, positive
 from pkdyn.library._planar import write_rr_chain
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 
@@ -39,8 +43,12 @@ __all__ = [
     "NAME",
     "SUMMARY",
     "Params",
+    "assembly_mode",
     "build_urdf",
+    "forward_position",
     "home",
+    "inverse_actuators",
+    "resolved",
 ]
 
 NAME = "five_bar"
@@ -57,8 +65,11 @@ class Params:
         d: Distance between the two base revolutes [m].
         l1: Proximal (actuated) link length [m].
         l2: Distal link length [m].
-        x_home: End-effector x at the home configuration [m].
-        y_home: End-effector y at the home configuration [m].
+        x_home: End-effector x at the home configuration [m] (default 0: midway between the
+            base points).
+        y_home: End-effector y at the home configuration [m]; ``None`` (default) derives it
+            from the lengths: the middle of the end-effector's reach along ``x = x_home``
+            above the base, within the actuator limits, rounded to two significant digits.
         working_mode: Elbow side of chains 1 and 2, ``s_1 s_2`` among ``+-`` (both elbows
             outward, default), ``-+`` (both inward), ``++``, ``--``; ``+`` is the left of
             ``A_j -> E``.
@@ -78,7 +89,7 @@ class Params:
     l1: float = 0.20
     l2: float = 0.30
     x_home: float = 0.0
-    y_home: float = 0.30
+    y_home: float | None = None
     working_mode: str = "+-"
     proximal_mass: float = 0.20
     distal_mass: float = 0.15
@@ -105,7 +116,8 @@ class Params:
             reduction=self.reduction,
         )
         in_range(NAME, "x_home", self.x_home, -math.inf, math.inf)
-        in_range(NAME, "y_home", self.y_home, -math.inf, math.inf)
+        if self.y_home is not None:
+            in_range(NAME, "y_home", self.y_home, -math.inf, math.inf)
         if self.working_mode not in MODES:
             raise ParameterError(
                 NAME,
@@ -114,13 +126,17 @@ class Params:
             )
         in_range(NAME, "q_min", self.q_min, -math.pi, self.q_max)
         in_range(NAME, "q_max", self.q_max, self.q_min, math.pi)
+        if self.y_home is None:
+            self._derived  # noqa: B018  (raises if nothing is reachable)
+            return
         theta, ok = inverse(self, self.home_point)
         if not ok[0]:
             raise ParameterError(
                 NAME,
                 "y_home",
                 f"home point ({self.x_home}, {self.y_home}) m is out of reach with these lengths "
-                "(each base point must lie between |l1 - l2| and l1 + l2 from it)",
+                "(each base point must lie between |l1 - l2| and l1 + l2 from it); leave y_home "
+                "unset to derive it",
             )
         out = [float(v) for v in theta[0] if not self.q_min <= v <= self.q_max]
         if out:
@@ -130,6 +146,20 @@ class Params:
                 f"home actuated angle {out[0]:.6g} rad lies outside [q_min, q_max]",
             )
 
+    def _reachable(self, y: np.ndarray) -> np.ndarray:
+        theta, ok = inverse(self, np.column_stack([np.full_like(y, self.x_home), y]))
+        with np.errstate(invalid="ignore"):
+            inside = np.all((theta >= self.q_min) & (theta <= self.q_max), axis=1)
+        return ok & inside
+
+    @functools.cached_property
+    def _derived(self) -> float:
+        return middle_of_reach(NAME, "y_home", 0.0, self.l1 + self.l2, self._reachable)
+
+    def home_height(self) -> float:
+        """Home end-effector y [m]: ``y_home``, or the middle of the reach above the base."""
+        return float(self.y_home) if self.y_home is not None else self._derived
+
     @property
     def base_xy(self) -> np.ndarray:
         """Base points ``A_1, A_2``, shape (2, 2) [m]."""
@@ -138,13 +168,53 @@ class Params:
     @property
     def home_point(self) -> np.ndarray:
         """Home end-effector point ``(x, y)`` [m]."""
-        return np.array([self.x_home, self.y_home])
+        return np.array([self.x_home, self.home_height()])
 
 
 def home(p: Params) -> list[float]:
     """Actuated angles ``theta_1, theta_2`` [rad] with the end-effector at the home point."""
     theta, _ = inverse(p, p.home_point)
     return [float(v) for v in theta[0]]
+
+
+def assembly_mode(
+    p: Params, theta: np.ndarray | None = None, point: np.ndarray | None = None
+) -> int:
+    """Assembly mode of a configuration (default: home): +1 with E left of ``C_1 -> C_2``.
+
+    As ``assembly`` of :func:`pkdyn.closed_form.five_bar.forward`.
+
+    Args:
+        p: Parameters.
+        theta: Actuated angles (2,) [rad] (default: home).
+        point: End-effector point (2,) [m] there (default: home).
+
+    """
+    th = np.array(home(p)) if theta is None else np.asarray(theta, dtype=float)
+    E = p.home_point if point is None else np.asarray(point, dtype=float)[:2]
+    C = elbow_points(p, th)[0]
+    u, w = C[1] - C[0], E - C[0]
+    return 1 if u[0] * w[1] - u[1] * w[0] >= 0.0 else -1
+
+
+def forward_position(
+    p: Params, qa: np.ndarray, reference: tuple[np.ndarray, np.ndarray] | None = None
+) -> np.ndarray | None:
+    """End-effector position [m] in the assembly mode of ``reference`` (default home)."""
+    mode = assembly_mode(p) if reference is None else assembly_mode(p, *reference)
+    E, ok = forward(p, np.asarray(qa, dtype=float), mode)
+    return np.array([E[0, 0], E[0, 1], 0.0]) if ok[0] else None
+
+
+def inverse_actuators(p: Params, pose: pin.SE3) -> np.ndarray | None:
+    """Actuated angles [rad] of an end-effector point in ``working_mode``, or ``None``."""
+    theta, ok = inverse(p, np.asarray(pose.translation, dtype=float)[:2])
+    return theta[0] if ok[0] else None
+
+
+def resolved(p: Params) -> Params:
+    """The parameters with the derived ones (``y_home``) computed."""
+    return dataclasses.replace(p, y_home=p.home_height())
 
 
 def build_urdf(p: Params) -> str:

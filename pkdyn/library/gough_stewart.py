@@ -15,6 +15,7 @@ leg may then spin about its own axis, Pasqui's mobility 12 = 6 + 6 internal (see
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,6 +36,7 @@ __all__ = [
     "Params",
     "build_urdf",
     "home",
+    "resolved",
 ]
 
 NAME = "gough_stewart"
@@ -152,7 +154,9 @@ class Params:
         if self.z_home != 0.0:
             return float(self.z_home)
         mid = 0.5 * (np.asarray(self.rho_min) + np.asarray(self.rho_max))
-        z = np.linspace(0.05, 2.0 * float(np.max(self.rho_max)), 4001)
+        top = 2.0 * float(np.max(self.rho_max))
+        # from 5 cm (a tenth of the range for robots under 25 cm: any size works)
+        z = np.linspace(0.05 if top > 0.5 else 0.1 * top, top, 4001)
         p = np.column_stack([np.zeros_like(z), np.zeros_like(z), z])
         err = ((leg_lengths(self.a, self.b, p, np.eye(3)) - mid) ** 2).sum(axis=1)
         return float(z[int(np.argmin(err))])
@@ -162,6 +166,11 @@ def home(p: Params) -> list[float]:
     """Leg lengths [m] at the home pose (platform level, centred, at ``home_height``)."""
     rho = leg_lengths(p.a, p.b, np.array([0.0, 0.0, p.home_height()]), np.eye(3))[0]
     return [float(r) for r in rho]
+
+
+def resolved(p: Params) -> Params:
+    """The parameters with the derived ones (``z_home = 0``: the mid-stroke height) computed."""
+    return dataclasses.replace(p, z_home=p.home_height())
 
 
 def _hole_ref(a: np.ndarray, rpy: tuple[float, float, float]) -> tuple[float, float, float]:

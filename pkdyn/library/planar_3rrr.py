@@ -18,6 +18,7 @@ the platform by the ``hinge`` closure ``loop{i}`` about z. Actuators ``motor1..3
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -29,7 +30,7 @@ from pkdyn.library._check import in_range, positive
 from pkdyn.library._planar import write_rr_chain
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 
-__all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
+__all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home", "resolved"]
 
 NAME = "planar_3rrr"
 """Family name (``pkdyn.load`` and the CLI take it)."""
@@ -56,8 +57,9 @@ class Params:
             frame [rad] (default 210, 330, 90 deg: radial, facing the base points).
         elbow: Working mode of every chain: ``+1`` for ``sin q_2^i > 0`` (elbows
             counter-clockwise), ``-1`` for the mirror mode.
-        x_home: Platform x at the home pose [m].
-        y_home: Platform y at the home pose [m].
+        x_home: Platform x at the home pose [m]; ``None`` (default): the centroid of the base
+            points (0 for the default base).
+        y_home: Platform y at the home pose [m]; ``None`` (default): the centroid's y.
         phi_home: Platform orientation at the home pose [rad].
         proximal_mass: Mass of a proximal link [kg].
         distal_mass: Mass of a distal link [kg].
@@ -79,8 +81,8 @@ class Params:
     base_points: tuple[tuple[float, float], ...] = ()
     platform_angles: tuple[float, float, float] = _ANGLES
     elbow: int = 1
-    x_home: float = 0.0
-    y_home: float = 0.0
+    x_home: float | None = None
+    y_home: float | None = None
     phi_home: float = 0.0
     proximal_mass: float = 0.50
     distal_mass: float = 0.30
@@ -118,7 +120,8 @@ class Params:
         if self.elbow not in (-1, 1):
             raise ParameterError(NAME, "elbow", f"must be +1 or -1, got {self.elbow!r}")
         for name in ("x_home", "y_home", "phi_home"):
-            in_range(NAME, name, getattr(self, name), -math.inf, math.inf)
+            if getattr(self, name) is not None:
+                in_range(NAME, name, getattr(self, name), -math.inf, math.inf)
         in_range(NAME, "q_min", self.q_min, -math.pi, self.q_max)
         in_range(NAME, "q_max", self.q_max, self.q_min, math.pi)
         q, ok = cf.inverse(self, self.home_pose, self.elbow)
@@ -147,8 +150,13 @@ class Params:
 
     @property
     def home_pose(self) -> np.ndarray:
-        """Home platform pose ``(x, y, phi)`` [m, m, rad]."""
-        return np.array([self.x_home, self.y_home, self.phi_home])
+        """Home platform pose ``(x, y, phi)`` [m, m, rad] (unset x, y: the base centroid)."""
+        base = self.base_xy
+        c = base.mean(axis=0)
+        c[np.abs(c) < 1e-12 * float(np.max(np.abs(base)))] = 0.0  # the symmetric default: 0
+        x = c[0] if self.x_home is None else self.x_home
+        y = c[1] if self.y_home is None else self.y_home
+        return np.array([x, y, self.phi_home])
 
 
 def _angles(name: str, values: tuple[float, ...]) -> None:
@@ -160,6 +168,12 @@ def home(p: Params) -> list[float]:
     """Actuated angles ``q_1^i`` [rad] at the home pose, in the ``elbow`` working mode."""
     q, _ = cf.inverse(p, p.home_pose, p.elbow)
     return [float(v) for v in q[0]]
+
+
+def resolved(p: Params) -> Params:
+    """The parameters with the derived ones (``x_home``, ``y_home``) computed."""
+    x, y, _ = (float(v) for v in p.home_pose)
+    return dataclasses.replace(p, x_home=x, y_home=y)
 
 
 def build_urdf(p: Params) -> str:
@@ -224,7 +238,7 @@ def build_urdf(p: Params) -> str:
         "planar",
         "base",
         "effector",
-        xyz=(p.x_home, p.y_home, 0.0),
+        xyz=(float(p.home_pose[0]), float(p.home_pose[1]), 0.0),
         rpy=(0, 0, p.phi_home),
     )
     w.platform("effector", ("x", "y", "rz"))

@@ -70,6 +70,7 @@ length 0.686 m, ``q6_home`` = 37.4 deg), spindle tip 0.15 m below ``P_O``; nacel
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
@@ -170,6 +171,18 @@ class Params:
     passive_range: float = 1.2
     branches: int = 3
 
+    def _heights(self) -> list[float | None]:
+        """Sampled nacelle heights whose home actuator lengths are within the strokes."""
+        heights = np.linspace(self.foot_height, self.foot_height + 2.0 * self.stroke_max, 401)
+        return [
+            float(h)
+            if all(
+                self.stroke_min <= q <= self.stroke_max for q in home(_at_height(self, float(h)))
+            )
+            else None
+            for h in heights[1:]
+        ]
+
     def __post_init__(self) -> None:
         if self.branches not in (3, 4):
             raise ParameterError(
@@ -199,13 +212,27 @@ class Params:
             )
         lengths = home(self)
         if not all(self.stroke_min <= q <= self.stroke_max for q in lengths):
+            fits = [float(h) for h in self._heights() if h is not None]
+            advice = (
+                f"nacelle_height must lie in [{min(fits):.3g}, {max(fits):.3g}] m with these "
+                "footholds and strokes"
+                if fits
+                else "no nacelle height fits these footholds and strokes"
+            )
             raise ParameterError(
                 NAME,
                 "nacelle_height",
-                f"home actuator lengths {min(lengths):.4g}..{max(lengths):.4g} m fall outside the "
-                f"strokes [{self.stroke_min}, {self.stroke_max}] m; change nacelle_height, "
-                "foothold_radius or the strokes",
+                f"{self.nacelle_height} m puts the home actuator lengths at "
+                f"{min(lengths):.4g}..{max(lengths):.4g} m, outside the strokes "
+                f"[{self.stroke_min}, {self.stroke_max}] m: {advice}",
             )
+
+
+def _at_height(p: Params, h: float) -> Params:
+    """``p`` with another nacelle height, not validated (a copy: no ``__post_init__``)."""
+    out = copy.copy(p)
+    object.__setattr__(out, "nacelle_height", h)
+    return out
 
 
 def home(p: Params) -> list[float]:

@@ -20,6 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import AssemblyError, JointLimitError, UnreachablePoseError
+from pkdyn.model.families import FAMILIES, Family
 from pkdyn.model.pose import as_finite, pose_from_vector, pose_to_vector
 from pkdyn.model.robot import Robot
 from solvers import FramePoseTask, SolveResult, solve_lm
@@ -118,6 +119,43 @@ def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryRes
     return GeometryResult(sol.q, sol.q[robot.actuated_q], placement, closure_error, sol.iterations)
 
 
+def _family_of(robot: Robot) -> Family | None:
+    """The library family of a robot (:attr:`Robot.family`), or ``None``."""
+    name = robot.family
+    return None if name is None else FAMILIES[name]
+
+
+def _seeded(
+    robot: Robot, q0: np.ndarray, position: np.ndarray, tol: float, fam: Family | None = None
+) -> np.ndarray | None:
+    """``q0`` moved onto the closures with the platform at ``position``, actuators fixed.
+
+    The closed forms of a family give the platform position of the assembly (or working) mode
+    of its home; imposing it while the passive joints settle keeps the solution in that mode,
+    where a plain solve from ``q_home`` may land in another one (the Delta's nacelle above the
+    base).
+    """
+    if robot.platform_frame is None or not np.all(np.isfinite(position)):
+        return None
+    rows = np.array([r for r in robot.task_rows if r < 3] or [0, 1, 2], dtype=int)
+    task = FramePoseTask(robot.model, robot.platform_frame, rows)
+    task.target = pin.SE3(np.eye(3), np.asarray(position, dtype=float))
+    cs, data = robot.closure_set, robot.data
+
+    def residual(q: np.ndarray) -> np.ndarray:
+        return np.concatenate([cs.residual(data, q), task.residual(data)])
+
+    def jacobian(q: np.ndarray) -> np.ndarray:
+        _, J = cs.residual_and_jacobian(data, q)
+        return np.vstack([J, task.residual_and_jacobian(data)[1]])
+
+    if fam is not None:  # a configuration the family builds (exact at folds), if it can
+        built = fam.configuration(robot, q0[robot.actuated_q], position)
+        q0 = q0 if built is None else built
+    sol = solve_lm(robot.model, q0, residual, jacobian, free=robot.passive_v, tol=tol)
+    return sol.q if sol.converged else None
+
+
 def project(robot: Robot, q: np.ndarray, tol: float = DEFAULT_TOL) -> np.ndarray:
     """Assembled configuration near ``q``: minimum-norm Gauss-Newton steps onto the closures.
 
@@ -155,11 +193,15 @@ def forward_geometry(
     q_init: np.ndarray | None = None,
     tol: float = DEFAULT_TOL,
     check_limits: bool = True,
+    keep_mode: bool = True,
 ) -> GeometryResult:
     """Direct geometric model: full configuration and platform pose from actuated coordinates.
 
-    The passive coordinates are solved from ``q_init`` (default ``robot.q_home``); the assembly
-    mode is the one this guess leads to (see :func:`assembly_modes` to enumerate them).
+    The result is in the assembly mode of ``q_init`` (default ``robot.q_home``): for a library
+    family with a closed-form direct model (Delta: always the nacelle below the base;
+    five-bar) the closed form of that mode seeds the solve; otherwise the actuators move from
+    ``q_init``'s values to ``qa`` in steps (:data:`CONTINUATION_STEP`), each solved from the
+    previous one. See :func:`assembly_modes` to enumerate the modes.
 
     Args:
         robot: The robot.
@@ -167,6 +209,8 @@ def forward_geometry(
         q_init: Initial configuration (nq,), e.g. the previous solution (warm start).
         tol: Residual threshold [m or rad].
         check_limits: Raise if an actuated coordinate is outside its limits.
+        keep_mode: Stay in the assembly mode of ``q_init`` (``False``: a plain solve from
+            ``q_init``, wherever it leads; :func:`assembly_modes` explores that way).
 
     Returns:
         The solved configuration and platform placement.
@@ -178,13 +222,27 @@ def forward_geometry(
 
     """
     qa = as_finite("actuated coordinates", qa, len(robot.actuators))
-    q0 = robot.q_home.copy() if q_init is None else as_finite("q_init", q_init, robot.nq)
+    start = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
+    q0 = start.copy()
     q0[robot.actuated_q] = qa
     if check_limits:
         iq = robot.actuated_q
         lo, hi = robot.model.lowerPositionLimit[iq], robot.model.upperPositionLimit[iq]
         if not ((qa >= lo - 1e-12) & (qa <= hi + 1e-12)).all():
             check_actuator_limits(robot, q0)  # raises, naming the actuator
+    fam = _family_of(robot) if keep_mode else None
+    seeded = None
+    if fam is not None and fam.has_forward_position:  # the start's mode, from the closed form
+        reference = None
+        if q_init is not None and robot.platform_frame is not None:
+            reference = (start[robot.actuated_q], robot.platform_placement(start).translation)
+        x = fam.forward_position(robot.params, qa, reference)
+        seeded = None if x is None else _seeded(robot, q0, x, tol, fam)
+    if (  # the assembly mode of the start, by continuation when the actuators move far
+        seeded is None and keep_mode and _moves_far(robot, start[robot.actuated_q], qa)
+    ):
+        seeded = _fk_continuation(robot, start, qa, tol)
+    q0 = q0 if seeded is None else seeded
     sol = _solve_closures(robot, q0, robot.passive_v, tol)
     if not sol.converged:
         name, res = _worst(robot, sol.q)
@@ -226,7 +284,7 @@ def assembly_modes(
             dv[robot.passive_v] = rng.uniform(-spread, spread, robot.passive_v.size)
         q0 = pin.integrate(robot.model, robot.q_home, dv)
         try:
-            res = forward_geometry(robot, qa, q0, check_limits=False)
+            res = forward_geometry(robot, qa, q0, check_limits=False, keep_mode=False)
         except AssemblyError:
             continue
         key = res.placement.translation if res.placement is not None else res.q
@@ -248,7 +306,11 @@ def inverse_geometry(
 ) -> GeometryResult:
     """Inverse geometric model: actuated coordinates that put the platform at ``pose``.
 
-    Only the pose components the robot controls (its ``task``) are imposed.
+    Only the pose components the robot controls (its ``task``) are imposed; uncontrolled
+    components given as numbers must be those the robot reaches (a Delta cannot yaw), else
+    :class:`UnreachablePoseError` names them. Without ``q_init``,
+    a library robot with a closed-form inverse model is solved in the working mode of its
+    home (the Delta's elbows out), other robots start from ``q_home``.
 
     Args:
         robot: The robot.
@@ -272,6 +334,17 @@ def inverse_geometry(
     task = FramePoseTask(robot.model, robot.platform_frame, robot.task_rows)
     task.target = target
     q0 = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
+    fam = _family_of(robot) if q_init is None else None
+    seeded = None
+    if fam is not None:  # the family's working mode, from its closed form
+        qa = fam.inverse_actuators(robot.params, target)
+        if qa is not None:
+            guess = np.array(q0)
+            guess[robot.actuated_q] = qa
+            seeded = _seeded(robot, guess, target.translation, tol, fam)
+    if seeded is None:  # the working mode of the start, followed by continuation
+        seeded = _ik_continuation(robot, q0, target, tol)
+    q0 = q0 if seeded is None else seeded
     cs = robot.closure_set
     sol = solve_pose(robot, task, q0, tol)
     if not sol.converged:
@@ -285,9 +358,123 @@ def inverse_geometry(
             f"{np.array2string(rpy, precision=4)} rad is out of reach (closest configuration "
             f"misses it by {pose_err:.3g}; closure '{name}' residual {res:.3g})",
         )
+    _check_uncontrolled(robot, pose, target, sol.q)
     if check_limits:
         check_actuator_limits(robot, sol.q)
     return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.nc]), initial=0.0)))
+
+
+UNCONTROLLED_TOL = 1e-9
+"""Largest difference [m or rad] between a requested and the reached value of a pose component
+the robot does not control, before :func:`inverse_geometry` refuses the request."""
+
+
+def _check_uncontrolled(
+    robot: Robot, pose: Sequence[float] | np.ndarray | pin.SE3, target: pin.SE3, q: np.ndarray
+) -> None:
+    """Refuse a pose whose uncontrolled components differ from what the robot reaches.
+
+    A Delta keeps its nacelle level: a requested roll or yaw cannot be imposed and must not be
+    dropped silently. Components count as requested when given as numbers: all six of a
+    6-vector, the position of a 3-vector. A ``pin.SE3`` placement is a target frame whose
+    uncontrolled components are free (a trajectory's rows, a moved current placement).
+    """
+    if isinstance(pose, pin.SE3):
+        return
+    given = int(np.size(pose))
+    rows = [k for k in range(given) if k not in set(int(r) for r in robot.task_rows)]
+    if not rows:
+        return
+    reached = robot.platform_placement(q)
+    err = np.concatenate(
+        [reached.translation - target.translation, pin.log3(target.rotation.T @ reached.rotation)]
+    )
+    bad = [k for k in rows if abs(err[k]) > UNCONTROLLED_TOL]
+    if bad:
+        names = ("x", "y", "z", "roll", "pitch", "yaw")
+        pos, rpy = pose_to_vector(reached)
+        now = np.concatenate([pos, rpy])
+        want = np.concatenate(pose_to_vector(target))
+        what = ", ".join(f"{names[k]} = {want[k]:.6g} (it stays at {now[k]:.6g})" for k in bad)
+        task = " ".join(("x", "y", "z", "rx", "ry", "rz")[int(r)] for r in robot.task_rows)
+        raise UnreachablePoseError(
+            "-",
+            0.0,
+            f"{robot.name} controls only {task} of its platform: {what} cannot be imposed; "
+            "give those components as the robot reaches them, or only the controlled ones",
+        )
+
+
+CONTINUATION_STEP = 0.1
+"""Largest actuator step [rad; m for prismatic actuators, times the robot's size] and platform
+step [rad; times the size for translations] of one solve in a continuation."""
+
+
+def _size(robot: Robot) -> float:
+    """Characteristic length [m] (:attr:`Robot.length_scale`)."""
+    return robot.length_scale
+
+
+def _moves_far(robot: Robot, a0: np.ndarray, qa: np.ndarray) -> bool:
+    """Whether an actuator moves by more than one continuation step (a cheap test first)."""
+    d = (qa - a0) / robot.actuator_scale
+    if d.dot(d) <= CONTINUATION_STEP**2:  # the 2-norm bounds every component
+        return False
+    return bool(np.max(np.abs(d)) > CONTINUATION_STEP)
+
+
+def _fk_continuation(
+    robot: Robot, start: np.ndarray, qa: np.ndarray, tol: float
+) -> np.ndarray | None:
+    """Configuration for ``qa`` reached from ``start`` by moving the actuators in steps.
+
+    Each step is solved from the previous one, so the result keeps the assembly mode of
+    ``start`` (unless the path crosses a singularity). ``None``: one step suffices, or a step
+    failed (the caller then solves directly).
+    """
+    a0 = np.array(start[robot.actuated_q], dtype=float)
+    scale = CONTINUATION_STEP * robot.actuator_scale
+    n = int(np.ceil(np.max(np.abs(qa - a0) / scale, initial=0.0)))
+    if n <= 1 or robot.closure_set.nc == 0:
+        return None
+    q = np.array(start, dtype=float)
+    for t in np.linspace(0.0, 1.0, n + 1)[1:]:
+        q[robot.actuated_q] = (1.0 - t) * a0 + t * qa
+        sol = _solve_closures(robot, q, robot.passive_v, max(tol, 1e-10))
+        if not sol.converged:
+            return None
+        q = sol.q
+    return q
+
+
+def _ik_continuation(
+    robot: Robot, start: np.ndarray, target: pin.SE3, tol: float
+) -> np.ndarray | None:
+    """Configuration reaching ``target`` from ``start`` by moving the platform in steps.
+
+    Keeps the working and assembly modes of ``start``. ``None``: one step suffices, or a step
+    failed (the caller then solves directly).
+    """
+    if robot.platform_frame is None:
+        return None
+    M0 = robot.platform_placement(start)
+    rows = np.asarray(robot.task_rows, dtype=int)
+    d = pin.log6(M0.actInv(target)).vector
+    d[:3] = target.translation - M0.translation  # world-frame translation
+    step = np.where(np.arange(6) < 3, CONTINUATION_STEP * _size(robot), CONTINUATION_STEP)
+    n = int(np.ceil(np.max(np.abs(d[rows]) / step[rows], initial=0.0)))
+    if n <= 1:
+        return None
+    task = FramePoseTask(robot.model, robot.platform_frame, rows)
+    rot = pin.log3(M0.rotation.T @ target.rotation)
+    q = np.array(start, dtype=float)
+    for t in np.linspace(0.0, 1.0, n + 1)[1:]:
+        task.target = pin.SE3(M0.rotation @ pin.exp3(t * rot), M0.translation + t * d[:3])
+        sol = solve_pose(robot, task, q, max(tol, 1e-10))
+        if not sol.converged:
+            return None
+        q = sol.q
+    return q
 
 
 def solve_pose(

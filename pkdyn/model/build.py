@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import sys
 from collections.abc import Iterator, Sequence
 
@@ -12,8 +13,16 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.description import ClosureSpec, FrameRef, JointSpec
+from pkdyn.model.validate import check_data_size
 
-__all__ = ["HINGE_ARM", "build_tree", "build_geometry", "resolve_frame", "constraint_models"]
+__all__ = [
+    "HINGE_ARM",
+    "build_tree",
+    "build_geometry",
+    "check_model_size",
+    "resolve_frame",
+    "constraint_models",
+]
 
 HINGE_ARM = 0.1
 """Distance [m] between the two point constraints a ``hinge`` closure is built from."""
@@ -168,7 +177,45 @@ def build_geometry(
         with _quiet_stderr():
             return pin.buildGeomFromUrdfString(model, xml, kind, None, list(package_dirs))
     except (RuntimeError, ValueError, IndexError) as err:
-        raise DescriptionError(source, f"{kind} geometry", str(err).splitlines()[0]) from None
+        first = str(err).splitlines()[0] if str(err).strip() else type(err).__name__
+        missing = re.match(r"Mesh (.*) could not be found", first)
+        if missing:
+            raise _missing_mesh(source, xml, missing[1], package_dirs) from None
+        raise DescriptionError(source, f"{kind} geometry", first) from None
+
+
+def _missing_mesh(
+    source: str, xml: str, filename: str, package_dirs: Sequence[str]
+) -> DescriptionError:
+    """The error for a mesh file that cannot be found: the link, the file, where it looked."""
+    import xml.etree.ElementTree as ET
+
+    link = "?"
+    for el in ET.fromstring(xml).findall("link"):
+        if any(m.get("filename") == filename for m in el.iter("mesh")):
+            link = el.get("name", "?")
+            break
+    where = ", ".join(package_dirs) if package_dirs else "no package directories given"
+    return DescriptionError(
+        source,
+        f"link '{link}' <mesh filename='{filename}'>",
+        f"mesh file not found (searched: {where}); pass package_dirs= or fix the path",
+    )
+
+
+def check_model_size(model: pin.Model, source: str) -> None:
+    """Refuse, before ``model.createData()``, a model whose Pinocchio data would not fit.
+
+    Args:
+        model: The model.
+        source: File or robot name, for messages.
+
+    Raises:
+        DescriptionError: The estimated ``Data`` size exceeds
+            :data:`pkdyn.model.validate.MAX_DATA_BYTES` or half of the memory available.
+
+    """
+    check_data_size(source, int(model.nv), model.njoints - 1)
 
 
 def resolve_frame(model: pin.Model, ref: FrameRef, source: str, what: str) -> tuple[int, pin.SE3]:

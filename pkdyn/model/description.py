@@ -19,6 +19,13 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
   spring about a rest position, and damping / friction overriding ``<dynamics>``);
   ``<pkdyn:spring name stiffness rest_length>`` with two ``<pkdyn:frame>`` children: a linear
   spring between two frames.
+- ``<pkdyn:family name>`` with ``<pkdyn:param name value>`` children: the library family and
+  parameters the file was written from (``pkdyn urdf FAMILY``); the file then loads exactly as
+  the family does (its parameters, home configuration and closed forms), after a check that its
+  model is the builder's.
+
+The URDF part is validated by :mod:`pkdyn.model.validate` (numbers, physics, tree), the pkdyn
+elements here (unknown elements, mistyped namespaces, duplicates).
 """
 
 from __future__ import annotations
@@ -31,6 +38,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
+from pkdyn.model.validate import check_urdf
 
 __all__ = [
     "NAMESPACE",
@@ -44,6 +52,7 @@ __all__ = [
     "PlatformSpec",
     "PassiveSpec",
     "SpringSpec",
+    "FamilySpec",
     "Description",
     "parse_description",
 ]
@@ -59,7 +68,7 @@ JOINT_KINDS = ("spherical", "universal")
 _NS = "{" + NAMESPACE + "}"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class FrameRef:
     """A frame rigidly attached to a link (or to any named Pinocchio frame).
 
@@ -73,7 +82,7 @@ class FrameRef:
     placement: pin.SE3 = field(default_factory=pin.SE3.Identity)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class ClosureSpec:
     """A loop closure between two frames.
 
@@ -100,7 +109,7 @@ class ClosureSpec:
         return CLOSURE_KINDS[self.kind]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class ConeLimit:
     """Passive-joint limit: ``axis`` of the child may tilt at most ``half_angle`` [rad].
 
@@ -117,7 +126,7 @@ class ConeLimit:
         return self.half_angle - math.acos(c)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class PyramidLimit:
     """Passive-joint limit of Merlet's pyramid (a square hole): four plane faces.
 
@@ -137,7 +146,7 @@ class PyramidLimit:
         return min(self.half_angles[0] - abs(a1), self.half_angles[1] - abs(a2))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class JointSpec:
     """A tree joint URDF cannot express, mapped to a Pinocchio joint model.
 
@@ -187,7 +196,7 @@ class ActuatorSpec:
     coulomb: float = 0.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class PlatformSpec:
     """The platform / end-effector frame and the pose components the mechanism controls."""
 
@@ -226,7 +235,7 @@ class PassiveSpec:
         return not any(any(getattr(self, f)) for f in ("stiffness", "damping", "friction"))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class SpringSpec:
     """A linear spring between two frames on two bodies, along the line joining their origins.
 
@@ -249,6 +258,20 @@ class SpringSpec:
 
 
 @dataclass(frozen=True)
+class FamilySpec:
+    """``<pkdyn:family>``: the library family and parameters a file was written from.
+
+    Attributes:
+        name: Family name (``delta``...).
+        params: Parameter values as written (text), by name.
+
+    """
+
+    name: str
+    params: tuple[tuple[str, str], ...] = ()
+
+
+@dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class Description:
     """Everything a pkdyn description says beyond the URDF tree."""
 
@@ -261,6 +284,7 @@ class Description:
     joint_names: tuple[str, ...] = ()
     passive: tuple[PassiveSpec, ...] = ()
     springs: tuple[SpringSpec, ...] = ()
+    family: FamilySpec | None = None
 
 
 def _vec(source: str, el: ET.Element, attr: str, default: str, n: int = 3) -> np.ndarray:
@@ -537,40 +561,44 @@ def _spring(source: str, el: ET.Element, links: set[str]) -> SpringSpec:
     return SpringSpec(name, f1, f2, k[0], L0[0])
 
 
-_URDF_NUMBERS = {
-    "origin": ("xyz", "rpy"),
-    "axis": ("xyz",),
-    "mass": ("value",),
-    "inertia": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
-    "limit": ("lower", "upper", "effort", "velocity"),
-}
+ELEMENTS = ("closure", "joint", "platform", "passive", "spring", "family")
+"""The top-level pkdyn elements (children of ``<robot>``)."""
 
 
-def _check_urdf_numbers(source: str, root: ET.Element) -> None:
-    """Reject NaN / infinite numbers in links and joints, naming where they are.
+def _check_namespace(source: str, root: ET.Element) -> None:
+    """Refuse pkdyn-like elements in another namespace and unknown pkdyn elements.
 
-    The URDF parser either rejects the whole document without saying where, or (inertials)
-    silently drops the element; other malformed numbers are left to it.
+    A mistyped namespace URI (``urn:pkdyn:urdf:2``, ``urn:pkydn:urdf:1``) would make every
+    pkdyn element invisible: the closures would be silently dropped.
     """
-    for kind in ("link", "joint"):
-        for owner in root.findall(kind):
-            for el in owner.iter():
-                for attr in _URDF_NUMBERS.get(str(el.tag), ()):
-                    text = el.get(attr)
-                    if text is None:
-                        continue
-                    for token in text.split():
-                        try:
-                            finite = math.isfinite(float(token))
-                        except ValueError:
-                            continue
-                        if not finite:
-                            raise DescriptionError(
-                                source,
-                                f"{kind} '{owner.get('name', '?')}' <{el.tag}> "
-                                f"attribute {attr}='{text}'",
-                                "NaN and infinite values are not allowed",
-                            )
+    for el in root.iter():
+        tag = el.tag if isinstance(el.tag, str) else ""
+        if not tag.startswith("{"):
+            continue
+        uri, _, local = tag[1:].partition("}")
+        if uri == NAMESPACE:
+            if el in list(root) and local not in ELEMENTS:
+                raise DescriptionError(
+                    source,
+                    f"<pkdyn:{local}>",
+                    f"unknown pkdyn element; the elements are {', '.join(ELEMENTS)}",
+                )
+            continue
+        if "pkdyn" in uri.lower() or local in ELEMENTS + ("frame", "cone", "pyramid"):
+            raise DescriptionError(
+                source,
+                f"namespace '{uri}' of <{local}>",
+                f"pkdyn's namespace is '{NAMESPACE}' (xmlns:pkdyn=\"{NAMESPACE}\"); with any "
+                "other the pkdyn elements would be ignored",
+            )
+
+
+def _unique(source: str, what: str, names: list[str]) -> None:
+    seen: set[str] = set()
+    for n in names:
+        if n in seen:
+            raise DescriptionError(source, f"{what} '{n}'", f"{what} is given twice")
+        seen.add(n)
 
 
 def parse_description(xml_text: str, source: str) -> Description:
@@ -593,18 +621,24 @@ def parse_description(xml_text: str, source: str) -> Description:
         raise DescriptionError(source, "XML", f"malformed document ({err})") from None
     if root.tag != "robot":
         raise DescriptionError(source, f"<{root.tag}>", "the root element must be <robot>")
-    _check_urdf_numbers(source, root)
+    _check_namespace(source, root)
+    extended = any(isinstance(el.tag, str) and el.tag.startswith(_NS) for el in root)
+    check_urdf(source, root, strict=extended)
     links = {el.get("name", "") for el in root.findall("link")}
     joint_names = tuple(el.get("name", "") for el in root.findall("joint"))
     closures = tuple(_closure(source, el, links) for el in root.findall(_NS + "closure"))
     joints = tuple(_joint(source, el) for el in root.findall(_NS + "joint"))
-    extended = any(isinstance(el.tag, str) and el.tag.startswith(_NS) for el in root)
-    names = [c.name for c in closures]
-    for n in names:
-        if names.count(n) > 1:
-            raise DescriptionError(source, f"closure '{n}'", "closure names must be unique")
+    _unique(source, "closure", [c.name for c in closures])
+    _unique(source, "pkdyn:joint", [j.name for j in joints])
     platform = None
-    pel = root.find(_NS + "platform")
+    platforms = root.findall(_NS + "platform")
+    if len(platforms) > 1:
+        raise DescriptionError(
+            source,
+            "<pkdyn:platform>",
+            f"given {len(platforms)} times; a robot has one platform frame",
+        )
+    pel = platforms[0] if platforms else None
     if pel is not None:
         task = tuple(pel.get("task", " ".join(TASK_COMPONENTS)).split())
         bad = [t for t in task if t not in TASK_COMPONENTS]
@@ -630,4 +664,30 @@ def parse_description(xml_text: str, source: str) -> Description:
         joint_names=joint_names,
         passive=_passive(source, root),
         springs=springs,
+        family=_family(source, root),
     )
+
+
+def _family(source: str, root: ET.Element) -> FamilySpec | None:
+    found = root.findall(_NS + "family")
+    if not found:
+        return None
+    if len(found) > 1:
+        raise DescriptionError(source, "<pkdyn:family>", f"given {len(found)} times")
+    el = found[0]
+    name = el.get("name")
+    if not name:
+        raise DescriptionError(source, "<pkdyn:family>", "missing attribute 'name'")
+    values: list[tuple[str, str]] = []
+    for par in el.findall(_NS + "param"):
+        key, value = par.get("name"), par.get("value")
+        if not key or value is None:
+            raise DescriptionError(
+                source, f"<pkdyn:family name='{name}'> <pkdyn:param>", "needs name and value"
+            )
+        if key in dict(values):
+            raise DescriptionError(
+                source, f"<pkdyn:family name='{name}'> parameter '{key}'", "given twice"
+            )
+        values.append((key, value))
+    return FamilySpec(name, tuple(values))

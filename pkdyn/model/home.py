@@ -69,7 +69,7 @@ def rank(J: np.ndarray) -> int:
     return numerics.rank(J, RANK_RTOL, 1.0)
 
 
-@dataclass
+@dataclass(eq=False)  # numpy fields: no boolean ==
 class HomeResult:
     """Outcome of :func:`find_home`.
 
@@ -118,7 +118,8 @@ def singular(robot: Robot, q: np.ndarray, rng: np.random.Generator | None = None
     Args:
         robot: The robot.
         q: Assembled configuration (nq,).
-        rng: Random generator for the nearby configurations (default: seeded).
+        rng: Random generator for the nearby configurations (default: fixed pseudo-random
+            directions, without importing ``numpy.random`` on every load).
 
     Returns:
         ``True`` when singular.
@@ -131,17 +132,23 @@ def singular(robot: Robot, q: np.ndarray, rng: np.random.Generator | None = None
     r = rank(J)
     if robot.actuated_v.size and rank(J[:, robot.passive_v]) < r:
         return True
-    rng = rng or np.random.default_rng(0)
     Z = numerics.null_space(J, RANK_RTOL, 1.0)
     if Z.shape[1] == 0:
         return False
-    for _ in range(2):
-        step = Z @ rng.standard_normal(Z.shape[1])
+    for k in range(2):
+        d = _direction(k, Z.shape[1]) if rng is None else rng.standard_normal(Z.shape[1])
+        step = Z @ d
         step *= 0.05 / max(float(np.max(np.abs(step))), 1e-300)
         sol = _solve(robot, pin.integrate(robot.model, q, step), None, 60)
         if sol.converged and rank(cs.jacobian(data, sol.q)) > r:
             return True
     return False
+
+
+def _direction(k: int, n: int) -> np.ndarray:
+    """A fixed, irregular direction in ``R^n`` (k-th of a sequence), entries in (-1, 1)."""
+    i = np.arange(1, n + 1, dtype=float)
+    return np.sin(i * (12.9898 + 78.233 * (k + 1))) * 43758.5453 % 2.0 - 1.0
 
 
 def _random_start(

@@ -19,32 +19,38 @@ import os
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from xml.parsers import expat
 
 import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError, InvalidInputError, ParameterError, UnknownRobotError
-from pkdyn.model.build import build_geometry, build_tree, constraint_models, resolve_frame
+from pkdyn.model.build import (
+    build_geometry,
+    build_tree,
+    check_model_size,
+    constraint_models,
+    resolve_frame,
+)
 from pkdyn.model.description import (
     TASK_COMPONENTS,
     ActuatorSpec,
     Description,
     parse_description,
 )
-from pkdyn.model.families import FAMILIES
-from pkdyn.model.formats import drake, onshape
-from pkdyn.model.formats.gepetto import Sidecar, apply_joint_types, loop_frames, read_sidecar
-from pkdyn.model.formats.graph import build
-from pkdyn.model.formats.mjcf_import import read_mjcf
-from pkdyn.model.formats.sdf import read_sdf
-from pkdyn.model.formats.xmldoc import parse_xml, read_text
+from pkdyn.model.families import FAMILIES, from_description
 from pkdyn.model.home import ASSEMBLY_TOL, find_home
 from pkdyn.model.passive import passive_forces
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn
 from solvers import ClosureSet
+
+if TYPE_CHECKING:
+    from pkdyn.model.formats.gepetto import Sidecar
+
+# The readers of other formats (MJCF, SDFormat, sidecars: yaml, Drake, onshape) are imported
+# where they are used: a library robot or a URDF loads without them (the CLI starts quicker).
 
 __all__ = ["FORMATS", "detect_format", "load", "load_string"]
 
@@ -168,6 +174,8 @@ def load(
     if params:
         first = next(iter(params))
         raise ParameterError(path.name, first, "builder parameters apply to library robots only")
+    from pkdyn.model.formats.xmldoc import read_text
+
     text = read_text(path, "description file")
     side = Path(sidecar) if sidecar is not None else None
     if side is None:
@@ -188,7 +196,7 @@ def load(
     )
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(eq=False)
 class _Parts:
     """A description turned into Pinocchio objects, before assembly."""
 
@@ -230,11 +238,19 @@ def load_string(
 
     """
     fmt = detect_format(xml, source)
-    side = read_sidecar(sidecar) if sidecar is not None else None
+    side = None
+    if sidecar is not None:
+        from pkdyn.model.formats.gepetto import read_sidecar
+
+        side = read_sidecar(sidecar)
     dirs = list(package_dirs or [])
     if fmt == "urdf":
         parts = _urdf(xml, source, geometry, dirs, side)
     else:
+        from pkdyn.model.formats.graph import build
+        from pkdyn.model.formats.mjcf_import import read_mjcf
+        from pkdyn.model.formats.sdf import read_sdf
+
         reader = read_mjcf if fmt == "mjcf" else read_sdf
         mech = reader(xml, source, path, geometry=geometry)
         if side is not None and side.joint_types:
@@ -242,6 +258,7 @@ def load_string(
                 str(sidecar), "joint_name", "joint upgrades apply to URDF descriptions only"
             )
         built = build(mech)
+        check_model_size(built.model, source)  # before any createData
         q_ref = built.q_ref
         if "home" in mech.home:
             q_ref = built.configuration(mech.home["home"], q_ref)
@@ -260,6 +277,10 @@ def load_string(
             parts.visual, parts.collision = pin.GeometryModel(), pin.GeometryModel()
     parts = _with_sidecar(parts, side, source)
     parts = _with_onshape(parts)
+    if parts.desc.family is not None and params is None:  # a file of pkdyn urdf FAMILY
+        params, family_home = from_description(parts.desc, parts.model, source)
+        if home is None:
+            home, user_home = family_home, False
     robot = _robot(parts, source, params)
     return _assembled(
         robot, parts, home, tol, user_home if user_home is not None else home is not None
@@ -269,8 +290,14 @@ def load_string(
 _URDF_JOINTS = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 
 
-def _check_urdf_joints(xml: str, source: str) -> None:
+def _check_urdf_joints(xml: str, source: str, root: ET.Element | None = None) -> None:
     """Name the joint and its line when its type is not a URDF joint type."""
+    if root is not None and all(
+        el.get("type") is None or el.get("type") in _URDF_JOINTS for el in root.iter("joint")
+    ):
+        return  # the common case, without parsing again for line numbers
+    from pkdyn.model.formats.xmldoc import parse_xml
+
     doc = parse_xml(xml, source)
     for el in doc.root.iter("joint"):
         if el.get("type") is not None and el.get("type") not in _URDF_JOINTS:
@@ -283,16 +310,29 @@ def _check_urdf_joints(xml: str, source: str) -> None:
 
 
 def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar | None) -> _Parts:
-    _check_urdf_joints(xml, source)
+    from pkdyn.model.formats import drake
+
+    root = None
+    if "<!DOCTYPE" not in xml and "<!ENTITY" not in xml:  # else: xmldoc's guarded parser first
+        try:
+            root = ET.fromstring(xml)
+        except ET.ParseError:
+            root = None  # parse_description names the problem
+    _check_urdf_joints(xml, source, root)
     desc = parse_description(xml, source)
-    root = ET.fromstring(xml)
+    root = ET.fromstring(xml) if root is None else root
     extra = drake.urdf_constraints(root, source)
     model = build_tree(xml, desc.joints, source)
+    check_model_size(model, source)  # before any createData
     if side is not None:
+        from pkdyn.model.formats.gepetto import apply_joint_types
+
         model = apply_joint_types(model, side, source)
     if side is not None and side.free_flyer:
         model = _with_free_flyer(model)
     if side is None and not desc.closures and not extra:
+        from pkdyn.model.formats.gepetto import loop_frames
+
         pairs = loop_frames(model)
         if pairs:
             warn(
@@ -369,6 +409,8 @@ def _with_sidecar(parts: _Parts, side: Sidecar | None, source: str) -> _Parts:
 
 
 def _with_onshape(parts: _Parts) -> _Parts:
+    from pkdyn.model.formats import onshape
+
     used = {f.link for c in parts.desc.closures for f in (c.frame1, c.frame2)}
     extra = [c for c in onshape.closing_closures(parts.model) if c.frame1.link not in used]
     if extra:
@@ -395,7 +437,9 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
     vec = pin.StdVec_RigidConstraintModel()
     for cm in cms:
         vec.append(cm)
-    passive = np.setdiff1d(np.arange(model.nv), actuated_v)
+    is_passive = np.ones(model.nv, dtype=bool)
+    is_passive[actuated_v] = False
+    passive = np.flatnonzero(is_passive)  # (not setdiff1d: it imports numpy.ma, 10 ms)
     elements = passive_forces(
         model, desc.passive, desc.springs, source, desc.joint_names, desc.joints
     )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,7 +21,7 @@ MODELLING_JOINTS = ("JointModelFreeFlyer", "JointModelPlanar")
 """Joint models that place a platform or floating base: modelling devices, not hardware."""
 
 
-@dataclass
+@dataclass(eq=False)  # identity: numpy and Pinocchio fields have no boolean ==
 class Robot:
     """A closed-loop robot loaded by :func:`pkdyn.load`.
 
@@ -70,6 +71,18 @@ class Robot:
     params: Any = None
     passive: PassiveForces | None = None
 
+    @functools.cached_property
+    def length_scale(self) -> float:
+        """Characteristic length [m]: the diagonal of the box of the joint origins at home.
+
+        Makes translations and rotations commensurate where a test compares them (singularity
+        margins, continuation steps), so that results do not depend on the robot's size.
+        """
+        data = self.model.createData()
+        pin.forwardKinematics(self.model, data, self.q_home)
+        P = np.array([M.translation for M in data.oMi])
+        return max(float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))), 1e-9)
+
     @property
     def nq(self) -> int:
         """Size of the configuration vector."""
@@ -85,20 +98,48 @@ class Robot:
         """Library family that built the robot, ``None`` for a robot its user described.
 
         The family is ``robot.source`` for a robot built by :func:`pkdyn.load` from a family
-        name; a URDF file or string has none.
+        name, or the ``<pkdyn:family>`` of a file written by ``pkdyn urdf FAMILY`` (checked to
+        be the builder's output when loaded); other descriptions have none.
 
         Code that has a closed form for some families keeps a registry keyed by this name (e.g.
         :data:`pkdyn.analysis.screws.RECIPROCAL_SCREWS`); robots of no family take the general
         path.
         """
-        if self.params is None or self.source not in FAMILIES:
+        if self.params is None:
             return None
-        return self.source
+        spec = self.description.family
+        name = spec.name if spec is not None else self.source
+        return name if name in FAMILIES else None
 
     @property
     def closures(self) -> tuple[ClosureSpec, ...]:
         """Loop closures of the description."""
         return self.description.closures
+
+    @property
+    def actuator_prismatic(self) -> np.ndarray:
+        """Whether each actuator drives a prismatic joint (n_a,) bool (a copy).
+
+        Prismatic actuators have positions in m, speeds in m/s and efforts in N; revolute ones
+        rad, rad/s and N m.
+        """
+        return self._actuator_prismatic.copy()
+
+    @functools.cached_property
+    def actuator_scale(self) -> np.ndarray:
+        """Characteristic size of each actuated coordinate (n_a,), read-only.
+
+        1 rad for revolute actuators, :attr:`length_scale` [m] for prismatic ones.
+        """
+        out = np.where(self._actuator_prismatic, self.length_scale, 1.0)
+        out.flags.writeable = False
+        return out
+
+    @functools.cached_property
+    def _actuator_prismatic(self) -> np.ndarray:
+        return np.array(
+            [_prismatic(self.model.joints[int(j)]) for j in self.actuated_joints], dtype=bool
+        )
 
     @property
     def actuator_names(self) -> list[str]:
@@ -179,6 +220,55 @@ class Robot:
         _, J = self.closure_set.residual_and_jacobian(self.data, qq)
         return self.nv - rank(J, tol, scale=1.0)
 
+    def mobility_split(self, q: np.ndarray | None = None, tol: float = 1e-9) -> tuple[int, int]:
+        """Degrees of freedom of the platform and internal mobilities at ``q`` (default home).
+
+        The motions allowed by the closures (null space of the closure Jacobian) are split into
+        those that move the platform's controlled pose components (``dof``) and those that
+        leave them still (``internal``, e.g. the spin of a Delta's ball-jointed bars).
+        ``dof + internal == self.dof(q)``. A robot without a platform frame has no internal
+        mobility by this definition.
+
+        Args:
+            q: Configuration (nq,).
+            tol: Relative singular-value threshold of the ranks.
+
+        Returns:
+            ``(dof, internal)``.
+
+        """
+        qq = self.q_home if q is None else q
+        nv = self.nv
+        if self.closure_set.nc:
+            _, Jc = self.closure_set.residual_and_jacobian(self.data, qq)
+            _, s, Vt = np.linalg.svd(Jc)
+            rank = int(np.sum(s > tol * max(1.0, float(s[0]) if s.size else 0.0)))
+            N = Vt[rank:].T
+        else:
+            N = np.eye(nv)
+        total = N.shape[1]
+        if self.platform_frame is None or total == 0:
+            return total, 0
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, qq)
+        pin.updateFramePlacements(model, data)
+        lin = pin.getFrameJacobian(
+            model, data, self.platform_frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        )[:3]
+        ang = pin.getFrameJacobian(model, data, self.platform_frame, pin.ReferenceFrame.LOCAL)[3:]
+        Jx = np.vstack([lin, ang])[self.task_rows] @ N
+        sx = np.linalg.svd(Jx, compute_uv=False)
+        useful = int(np.sum(sx > tol * max(1.0, float(sx[0]) if sx.size else 0.0)))
+        return useful, total - useful
+
+    def __repr__(self) -> str:
+        task = " ".join(self.description.platform.task) if self.description.platform else "-"
+        return (
+            f"<Robot {self.name!r} from {self.source!r}: nq={self.nq} nv={self.nv}, "
+            f"{len(self.actuators)} actuators ({', '.join(a.name for a in self.actuators)}), "
+            f"{len(self.closures)} closures, {self.loops} loops, platform task: {task}>"
+        )
+
     def platform_placement(self, q: np.ndarray) -> pin.SE3:
         """World placement of the platform frame at ``q``.
 
@@ -193,3 +283,9 @@ class Robot:
             raise PkdynError(f"{self.name} declares no platform frame (add a <pkdyn:platform>)")
         pin.framesForwardKinematics(self.model, self.data, q)
         return pin.SE3(self.data.oMf[self.platform_frame])
+
+
+def _prismatic(jm: pin.JointModel) -> bool:
+    """A 1-DOF prismatic joint model (``JointModelP{X,Y,Z}``, ``JointModelPrismaticUnaligned``)."""
+    name = str(jm.shortname())
+    return name.startswith("JointModelP") and not name.startswith("JointModelPlanar")

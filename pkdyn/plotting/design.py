@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.design.result import StudyResult
-from pkdyn.files import atomic_path
+from pkdyn.plotting._save import save_figure
 
 __all__ = ["plot_pareto"]
 
@@ -109,6 +109,5 @@ def plot_pareto(
         else f"{s.name or s.family}: {counts['designs']} designs, {counts['feasible']} feasible"
     )
     if path is not None:
-        with atomic_path(path) as tmp:
-            fig.savefig(str(tmp), dpi=120)
+        save_figure(fig, path, dpi=120)
     return fig

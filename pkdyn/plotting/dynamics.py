@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.dynamics.sizing import SizingResult
+from pkdyn.plotting._save import save_figure
 
 __all__ = ["plot_efforts"]
 
@@ -62,5 +63,5 @@ def plot_efforts(
     )
     fig.tight_layout()
     if path is not None:
-        fig.savefig(str(path), dpi=120)
+        save_figure(fig, path, dpi=120)
     return fig

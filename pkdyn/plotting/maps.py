@@ -13,6 +13,7 @@ import numpy as np
 
 from pkdyn.analysis.maps import ConditioningMap
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.plotting._save import save_figure
 
 __all__ = ["plot_conditioning_map"]
 
@@ -81,5 +82,5 @@ def plot_conditioning_map(
     fixed = ", ".join(f"{k} = {v:.4g}" for k, v in cmap.fixed.items())
     ax.set_title(title if title is not None else f"{cmap.robot}: {field} ({fixed})")
     if path is not None:
-        fig.savefig(str(path), dpi=120)
+        save_figure(fig, path, dpi=120)
     return fig

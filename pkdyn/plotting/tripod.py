@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from pkdyn.plotting._save import save_figure
+
 __all__ = ["plot_comparison", "plot_scenario"]
 
 _PHASE_COLOURS = {"machining": "#d9e8f5", "reconfiguration": "#eeeeee", "swing": "#fde4c8"}
@@ -107,7 +109,7 @@ def plot_scenario(report: Any, path: str | Path | None = None, title: str | None
     )
     fig.tight_layout()
     if path is not None:
-        fig.savefig(str(path), dpi=110)
+        save_figure(fig, path, dpi=110)
     return fig
 
 
@@ -167,5 +169,5 @@ def plot_comparison(
     fig.suptitle(title if title is not None else "tripod against four-branch walker, same plans")
     fig.tight_layout()
     if path is not None:
-        fig.savefig(str(path), dpi=110)
+        save_figure(fig, path, dpi=110)
     return fig

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from pkdyn.plotting._save import save_figure
 from pkdyn.workspace.limits import LIMIT_KINDS
 from pkdyn.workspace.orientation import OrientationWorkspace
 from pkdyn.workspace.translation import AXES, TranslationWorkspace
@@ -121,7 +122,7 @@ def plot_translation_workspace(
     )
     fig.tight_layout()
     if path is not None:
-        fig.savefig(str(path), dpi=110)
+        save_figure(fig, path, dpi=110)
     return fig
 
 
@@ -209,7 +210,7 @@ def plot_orientation_workspace(
         fig.suptitle(label, fontsize=10)
         fig.tight_layout()
         if path is not None:
-            fig.savefig(str(path), dpi=110)
+            save_figure(fig, path, dpi=110)
     else:
         fig.text(0.005, 1.0 - (i + 0.5) / n, label, fontsize=10, va="center", rotation=90)
     return fig
@@ -236,5 +237,5 @@ def plot_mel_study(
         plot_orientation_workspace(ow, fig=fig, row=(i, n), title=f"limits: {name}")
     fig.tight_layout(rect=(0.02, 0, 1, 1))
     if path is not None:
-        fig.savefig(str(path), dpi=100)
+        save_figure(fig, path, dpi=100)
     return fig

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -12,9 +13,11 @@ import numpy as np
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
-from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.exceptions import InvalidInputError, OutputError, PkdynError
+from pkdyn.files import atomic_write
 from pkdyn.model.robot import Robot
 from pkdyn.viewer import highlight as hl
+from pkdyn.viewer._server import LOOPBACK, ServerProcess, start_server
 from pkdyn.viewer.animation import AnimationCommand, Clip, check_trajectory, keyframes
 from pkdyn.viewer.camera import Camera, bounding_box, frame_box
 from pkdyn.viewer.html import static_html
@@ -41,6 +44,9 @@ class Scene:
         frames: Names of the model frames to draw as triads; default the world frame
             (``universe``) and the platform frame.
         serve: Also start meshcat's server; the live scene is at :attr:`url`.
+        host: Address the live server listens on: ``127.0.0.1`` (default) serves this machine
+            only; another address (``0.0.0.0``: every interface) lets anyone who can reach the
+            machine read the scene, and warns.
         viewer: An existing ``meshcat.Visualizer`` to draw into as well (a notebook's, say).
 
     Attributes:
@@ -64,6 +70,7 @@ class Scene:
         collision: bool = False,
         frames: Sequence[str] | None = None,
         serve: bool = False,
+        host: str = LOOPBACK,
         viewer: meshcat.Visualizer | None = None,
     ) -> None:
         if robot.visual_model.ngeoms == 0 and robot.collision_model.ngeoms == 0:
@@ -72,9 +79,18 @@ class Scene:
         self.record = OfflineWindow()
         windows: list[object] = [self.record]
         self._server: meshcat.Visualizer | None = None
+        self._process: ServerProcess | None = None
         if serve:
+            if host not in (LOOPBACK, "localhost", "::1"):
+                warnings.warn(
+                    f"the live viewer listens on {host!r}: anyone who can reach this machine "
+                    "can read the scene (default 127.0.0.1: this machine only)",
+                    UserWarning,
+                    stacklevel=2,
+                )
+            self._process = start_server(host)
             with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL itself
-                self._server = meshcat.Visualizer()
+                self._server = meshcat.Visualizer(zmq_url=self._process.zmq_url)
             windows.append(self._server.window)
         if viewer is not None:
             windows.append(viewer.window)
@@ -405,21 +421,20 @@ class Scene:
         """Write :meth:`html` to ``path`` and return the path.
 
         Raises:
-            PkdynError: The file cannot be written.
+            OutputError: The file cannot be written (an existing file is left intact).
 
         """
         p = Path(path)
         try:
-            p.write_text(self.html(), encoding="utf-8")
+            with atomic_write(p) as fh:
+                fh.write(self.html())
         except OSError as err:
-            raise PkdynError(f"cannot write '{p}': {err.strerror}") from None
+            raise OutputError(str(p), err.strerror or str(err)) from None
         return p
 
     def close(self) -> None:
         """Stop the live server, if any."""
-        if self._server is not None:
-            proc = getattr(self._server.window, "server_proc", None)
-            if proc is not None and proc.poll() is None:
-                proc.kill()
-                proc.wait()
-            self._server = None
+        if self._process is not None:
+            self._process.stop()
+            self._process = None
+        self._server = None

@@ -336,6 +336,12 @@ def clavel_numeric(
     _check_limits(gamma_max, ab_min)
     if rays < 12 or fractions < 3 or heights < 20:
         raise InvalidInputError("sampling", "need rays >= 12, fractions >= 3, heights >= 20")
+    if rays * fractions * heights > 50_000_000:
+        raise InvalidInputError(
+            "sampling",
+            f"rays x fractions x heights = {rays * fractions * heights:.3g} samples before "
+            "bisection (tens of minutes); at most 5e7: fewer rays",
+        )
     smp = _Sampler(g, gamma_max, ab_min, heights, tol)
     if not smp.columns(np.zeros((1, 2))).any():
         raise PkdynError("no valid nacelle position on the axis with these limits")

@@ -56,6 +56,10 @@ def _unit(name: str, v: Sequence[float]) -> np.ndarray:
     return a / n
 
 
+MAX_ORIENTATIONS = 5_000_000
+"""Most sampled orientations of one orientation workspace (refused beyond, with the estimate)."""
+
+
 def _axis_angle(axis: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """Rotations about ``axis`` by angles ``theta`` (...,) -> (..., 3, 3) (Rodrigues)."""
     K = pin.skew(axis)
@@ -280,6 +284,12 @@ def orientation_workspace(
         )
     if n1 < 2 or n2 < 8:
         raise InvalidInputError("samples", "need n1 >= 2 and n2 >= 8")
+    if n1 * n2 > MAX_ORIENTATIONS:
+        raise InvalidInputError(
+            "samples",
+            f"n1 x n2 = {n1} x {n2} = {n1 * n2:.3g} orientations (about "
+            f"{n1 * n2 / 2e4 / 60:.2g} min); at most {MAX_ORIENTATIONS:.0e}",
+        )
     if center is None:
         C = robot.platform_placement(robot.q_home).translation.copy()
     else:

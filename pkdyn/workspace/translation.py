@@ -246,8 +246,26 @@ def _grid_axes(
         k = int(np.floor((hi - lo) / step + 1e-9)) + 1
         if not step > 0 or k < 2:
             raise InvalidInputError("step", f"{step} m leaves fewer than 2 samples along {AXES[d]}")
+        if k > MAX_GRID_SAMPLES:
+            raise InvalidInputError(
+                "step", f"{step} m gives {k:.3g} samples along {AXES[d]} alone; use a coarser step"
+            )
         axes.append(lo + step * np.arange(k))
+    total = float(np.prod([a.size for a in axes]))
+    if total > MAX_GRID_SAMPLES:
+        shape = " x ".join(str(a.size) for a in axes)
+        raise InvalidInputError(
+            "step" if step is not None else "samples",
+            f"a {shape} grid is {total:.3g} poses (about {total / 1e5 / 60:.2g} min in closed "
+            f"form, {total / 1e3 / 3600:.2g} h numerically, {total * 100 / 1e9:.2g} GB); at "
+            f"most {MAX_GRID_SAMPLES:.0e}: a coarser grid or a smaller box",
+        )
     return axes[0], axes[1], axes[2]
+
+
+MAX_GRID_SAMPLES = 10_000_000
+"""Most poses of one workspace grid (~100 bytes each; 10^5 poses/s in closed form, ~10^3
+numerically): larger requests are refused before any work, with the estimate."""
 
 
 def translation_workspace(

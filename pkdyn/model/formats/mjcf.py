@@ -56,7 +56,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import DescriptionError, PkdynError
+from pkdyn.exceptions import DescriptionError, OutputError, PkdynError
+from pkdyn.files import atomic_write
 from pkdyn.model.robot import Robot
 from solvers.numerics import lstsq, machine_rtol
 
@@ -746,14 +747,15 @@ def write_mjcf(
         options: Simulation options.
 
     Raises:
-        PkdynError: The file cannot be written.
+        OutputError: The file cannot be written (an existing file is left intact).
 
     """
     text = to_mjcf(robot, options)
     try:
-        Path(path).write_text(text)
+        with atomic_write(path) as fh:
+            fh.write(text)
     except OSError as err:
-        raise PkdynError(f"cannot write '{path}': {err.strerror}") from None
+        raise OutputError(str(path), err.strerror or str(err)) from None
 
 
 # ---------------------------------------------------------------------------------- MuJoCo side

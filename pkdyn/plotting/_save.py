@@ -1,0 +1,41 @@
+"""Saving figures: the format from the file name's extension, written atomically."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from pkdyn.exceptions import OutputError
+from pkdyn.files import atomic_path
+
+__all__ = ["save_figure"]
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int) -> None:
+    """Write a matplotlib figure to ``path`` in the format its extension names.
+
+    The figure goes to a temporary file beside ``path``, renamed when complete
+    (:func:`pkdyn.files.atomic_path`): an interrupted run leaves a previous file intact.
+
+    Args:
+        fig: The figure.
+        path: Output file; its extension (``.png``, ``.pdf``, ``.svg``...) is the format.
+        dpi: Resolution of raster formats [dots per inch].
+
+    Raises:
+        OutputError: No or unknown extension, missing directory, or the file cannot be written.
+
+    """
+    target = Path(path)
+    fmt = target.suffix.lower().lstrip(".")
+    supported = fig.canvas.get_supported_filetypes()
+    if fmt not in supported:
+        known = ", ".join(f".{k}" for k in sorted(supported))
+        what = f"unknown figure format '{target.suffix}'" if fmt else "no file extension"
+        raise OutputError(str(path), f"{what}: name the file with one of {known}")
+    with atomic_path(target) as tmp:
+        try:
+            fig.savefig(tmp, dpi=dpi, format=fmt)
+        except (OSError, ValueError) as err:
+            raise OutputError(str(path), str(err)) from None
