@@ -111,7 +111,10 @@ def _run_cli(command: str) -> tuple[int, str]:
     argv = shlex.split(command, comments=True)[1:]
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(buf):
-        code = main(argv)
+        try:
+            code = main(argv)
+        except SystemExit as stop:  # --help, --version and usage errors exit through argparse
+            code = stop.code if isinstance(stop.code, int) else 1
     return code, buf.getvalue()
 
 
