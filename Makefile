@@ -2,13 +2,15 @@
 #   make demo   -- size the motors of the default DELTA 580 on the Adept cycle
 #   make test   -- lint, type-check and run the whole test suite
 #   make bench  -- benchmarks (figures recorded in README.md)
+#   make docs   -- HTML API reference and executed notebooks in docs/_build/html
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+DOCS_STAMP := $(VENV)/.docs-installed
 CHROMIUM ?= /usr/bin/chromium
 
-.PHONY: demo test lint browser bench urdf clean
+.PHONY: demo test lint browser bench urdf docs clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -44,5 +46,15 @@ urdf: $(STAMP)
 bench: $(STAMP)
 	$(PY) bench/run.py
 
+# the docs extra (Sphinx, myst-nb, furo) on top of the development install
+$(DOCS_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e ".[dev,docs]"
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	rm -rf docs/_autosummary
+	$(VENV)/bin/sphinx-build -q -b html docs docs/_build/html
+	@echo "API reference and notebooks: docs/_build/html/index.html"
+
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache docs/_build docs/_autosummary docs/notebooks

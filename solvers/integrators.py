@@ -54,6 +54,7 @@ RK4 = Tableau(
     c=np.array([0, 0.5, 0.5, 1.0]),
     e=np.zeros(4),
 )
+"""The classical fourth-order Runge-Kutta tableau (fixed step, no error estimate)."""
 
 DOPRI5 = Tableau(
     a=np.array(

@@ -178,9 +178,27 @@ def test_crossing_legs_reported_and_clear_pose_not(gough_stewart):
         assert {i, j} in ({1, 3}, {0, 5})
         d_ij = float(segment_distance(A[i], B[i], A[j], B[j])[0])
         assert pd.distance == pytest.approx(d_ij - 2 * robot.params.leg_radius, abs=1e-6)
-    # home: clear, 14 mm between the closest legs; a 20 mm safety margin flags it
+    # home: clear; the closest legs are the rods of legs 2-4 and 1-6 (closest points inside
+    # both rods), so the distance is that of the rod axes minus two radii: rods of length
+    # min(rho_min, cylinder_length) ending at B_i on the leg lines (Merlet's MEL, Table 3.1)
     rep = distance_report(robot, robot.q_home)
-    assert not rep.in_collision and rep.min_distance == pytest.approx(0.01439, abs=1e-4)
+    p = robot.params
+    A, B = _legs(robot, np.array([0.0, 0.0, zh, 0.0, 0.0, 0.0]))
+    u = (B - A) / np.linalg.norm(B - A, axis=1)[:, None]
+    rod = np.minimum(p.rho_min, p.cylinder_length)[:, None]
+    d, s, t = segment_distance(
+        B[[1, 0]],
+        B[[1, 0]] - rod[[1, 0]] * u[[1, 0]],
+        B[[3, 5]],
+        B[[3, 5]] - rod[[3, 5]] * u[[3, 5]],
+    )
+    assert np.all((0.05 < s) & (s < 0.95) & (0.05 < t) & (t < 0.95))
+    expected = float(np.min(d)) - 2 * p.leg_radius  # 14.4 mm
+    assert not rep.in_collision and rep.min_distance == pytest.approx(expected, abs=1e-8)
+    assert {rep.pairs[0].a, rep.pairs[0].b} in (
+        {"leg2_rod_0", "leg4_rod_0"},
+        {"leg1_rod_0", "leg6_rod_0"},
+    )
     assert distance_report(robot, robot.q_home, margin=0.02).in_collision
     # nearest points are on the surfaces, min_distance apart
     p0 = rep.pairs[0]
@@ -209,12 +227,100 @@ def test_no_geometry_is_an_error():
         distance_report(robot, robot.q_home)
 
 
-@pytest.mark.parametrize("name", ["delta", "tripod", "planar_3rrr"])
-def test_library_robots_clear_at_home(name):
+def _cylinder_axes(robot: pkdyn.Robot, q: np.ndarray) -> dict[str, tuple]:
+    """Axis end points (world) and radius of every collision cylinder, from the placements."""
+    gm = robot.collision_model
+    gd = pin.GeometryData(gm)
+    pin.updateGeometryPlacements(robot.model, robot.data, gm, gd, q)
+    out = {}
+    for k, g in enumerate(gm.geometryObjects):
+        if isinstance(g.geometry, coal.Cylinder):
+            h = g.geometry.halfLength
+            ends = [gd.oMg[k].act(np.array([0.0, 0.0, z])) for z in (-h, h)]
+            out[g.name] = (ends[0], ends[1], g.geometry.radius)
+    return out
+
+
+# Tripod pairs that overlap at home by construction (see pkdyn.library.tripod): in each branch
+# the knuckle sphere is centred on A, where rod R ends (hinge closure on rod L, which carries the
+# knuckle) and where the foot post starts (universal joint at A); the two actuator bodies
+# converge on A in the triangle plane (the model puts both axes in that plane; hardware would
+# stagger them along axis a), so their cylinders meet near their ends (11 mm at home).
+TRIPOD_BY_DESIGN = {
+    frozenset((f"branch{i}_{a}_0", f"branch{i}_{b}_0"))
+    for i in (1, 2, 3)
+    for a, b in (("knuckle", "rodR"), ("cylL", "cylR"), ("rodL", "foot"), ("rodR", "foot"))
+}
+
+
+@pytest.mark.parametrize(
+    "name, closest, distance",
+    [
+        # recorded figures (coal); the three pairs are equal by the ternary symmetry
+        ("delta", {("bar1b", "bar3a"), ("bar2a", "bar3b"), ("bar1a", "bar2b")}, 0.0058611),
+        (
+            "planar_3rrr",
+            {("distal1", "distal2"), ("distal2", "distal3"), ("distal1", "distal3")},
+            0.1583207,
+        ),
+        # the actuator body of one side and the rod of the other, in each branch (the rim of the
+        # body's far end against the rod: closed form below)
+        (
+            "tripod",
+            {
+                (f"branch{i}_cyl{a}", f"branch{i}_rod{b}")
+                for i in (1, 2, 3)
+                for a, b in ("LR", "RL")
+            },
+            0.0036428,
+        ),
+    ],
+)
+def test_library_robots_clear_at_home(name, closest, distance):
+    """At home only the by-design overlaps penetrate; every other pair is clear, the closest ones
+    are the expected symmetric pairs, and each cylinder pair agrees with its axes: the axis
+    distance minus both radii when the closest points are inside both cylinders, between that
+    and the axis distance otherwise (flat ends)."""
     robot = pkdyn.load(name)
     rep = distance_report(robot, robot.q_home)
-    assert rep.pairs and np.isfinite(rep.min_distance)
-    assert not any(np.isnan(p.distance) for p in rep.pairs)
+    by_design = TRIPOD_BY_DESIGN if name == "tripod" else set()
+    assert {frozenset((p.a, p.b)) for p in rep.pairs if p.distance < 0.0} == by_design
+    clear = [p for p in rep.pairs if frozenset((p.a, p.b)) not in by_design]
+    assert len(clear) > 20
+    first = [p for p in clear if p.distance < clear[0].distance + 1e-9]
+    assert {tuple(sorted((p.a[:-2], p.b[:-2]))) for p in first} == closest
+    assert clear[0].distance == pytest.approx(distance, abs=1e-6)
+    axes = _cylinder_axes(robot, robot.q_home)
+    for p in clear:
+        if p.a in axes and p.b in axes:
+            (a0, a1, ra), (b0, b1, rb) = axes[p.a], axes[p.b]
+            d, s, t = (float(x) for x in segment_distance(a0, a1, b0, b1))
+            if 1e-3 < s < 1 - 1e-3 and 1e-3 < t < 1 - 1e-3 and d > ra + rb:
+                assert p.distance == pytest.approx(d - ra - rb, abs=1e-8), (p.a, p.b)
+            else:
+                assert d - ra - rb - 1e-9 <= p.distance <= d + 1e-9, (p.a, p.b)
+    if name == "tripod":
+        # the actuator body and the other rod lie in the triangle plane: the closest point of
+        # the body is the rim of its far end, in that plane, on the rod's side
+        for p in first:
+            cyl, rod = sorted((p.a, p.b), key=lambda n: "_rod" in n)
+            (c0, c1, rc), (r0, r1, rr) = axes[cyl], axes[rod]
+            normal = np.cross(c1 - c0, r1 - r0)
+            assert abs(normal @ (r0 - c0)) < 1e-12 * np.linalg.norm(normal)  # coplanar axes
+            end = min((c0, c1), key=lambda e: float(segment_distance(e, e, r0, r1)[0]))
+            side = np.cross(normal, c1 - c0)
+            side *= np.sign(side @ (0.5 * (r0 + r1) - end)) / np.linalg.norm(side)
+            rim = end + rc * side
+            expected = float(segment_distance(rim, rim, r0, r1)[0]) - rr
+            assert p.distance == pytest.approx(expected, abs=1e-8)
+        # across bodies of different branches: the knuckle spheres (radius 0.03, centred on A,
+        # foot_height = 0.06 above the support) are closest to the support: 0.03 (closed form)
+        other = [p for p in clear if p.a[:8] != p.b[:8]]
+        assert other[0].distance == pytest.approx(robot.params.foot_height - 0.03, abs=1e-9)
+        assert {other[0].a, other[0].b} <= {
+            "support_0",
+            *(f"branch{i}_knuckle_0" for i in (1, 2, 3)),
+        }
 
 
 def test_cli_collisions_json(capsys):

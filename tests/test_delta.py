@@ -67,10 +67,14 @@ def test_assembly_from_random_actuator_inputs(delta):
     P = _workspace_points(delta, 100, rng)
     alpha, _ = cf.inverse(delta.params, P)
     alpha += rng.uniform(-0.02, 0.02, alpha.shape)  # arbitrary inputs near the workspace
-    for a in alpha:
+    P_cf, ok = cf.forward(delta.params, alpha)  # Clavel's direct model (three spheres)
+    assert ok.all()
+    for a, p_cf in zip(alpha, P_cf, strict=True):
         fk = pkdyn.forward_geometry(delta, a)
         assert pkdyn.closure_residual(delta, fk.q) < 1e-10
-        np.testing.assert_allclose(fk.qa, a, atol=0)
+        # the solver moved only the passive coordinates: the actuated ones are the inputs
+        np.testing.assert_allclose(fk.q[delta.actuated_q], a, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(fk.position, p_cf, atol=1e-9)
 
 
 def test_fk_ik_round_trip_1000_poses(delta):
@@ -105,7 +109,8 @@ def test_vectorised_closed_form_flags_unreachable(delta):
     alpha, ok = cf.inverse(delta.params, P)
     assert ok.tolist() == [True, False] and np.isnan(alpha[1]).all()
     Pf, okf = cf.forward(delta.params, np.array([[0.2, 0.2, 0.2], [3.0, -3.0, 3.0]]))
-    assert okf[0] and np.isfinite(Pf[0]).all()
+    assert okf[0]  # and the inverse model gives the arm angles back
+    np.testing.assert_allclose(cf.inverse(delta.params, Pf[:1])[0][0], [0.2, 0.2, 0.2], atol=1e-12)
 
 
 def test_home_is_assembled_and_centred(delta):

@@ -1,18 +1,22 @@
 """Plain URDFs (every robot of example-robot-data) load through pkdyn exactly as in Pinocchio.
 
-Without pkdyn elements a description is a plain kinematic tree: no loops, the same sizes, and
-the same mass matrix (CRBA) and inverse dynamics (RNEA) as ``pin.buildModelFromUrdf``.
+Without pkdyn elements a description is a plain kinematic tree: no loops, the same sizes, joint
+placements and inertias as ``pin.buildModelFromUrdf``. Its link poses, mass matrix, gravity
+torques and inverse-dynamics power are checked against an independent reading of the same file:
+yourdfpy's parser and forward kinematics, with the Jacobians and the mass matrix assembled here.
 """
 
 from __future__ import annotations
 
 import importlib.metadata
+import logging
 import zlib
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+import yourdfpy
 
 import pkdyn
 
@@ -63,6 +67,7 @@ def _upper(M: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("path", URDFS, ids=_id)
 def test_plain_urdf_matches_pinocchio(path):
+    """The loader adds nothing to a plain URDF: the same model as ``pin.buildModelFromUrdf``."""
     ref = _plain_model(path)
     robot = pkdyn.load(path, geometry=False)
     model = robot.model
@@ -71,20 +76,108 @@ def test_plain_urdf_matches_pinocchio(path):
     assert robot.closure_set.nc == 0
     assert (model.nq, model.nv, model.njoints) == (ref.nq, ref.nv, ref.njoints)
     assert list(model.names) == list(ref.names)
-    data, ref_data = model.createData(), ref.createData()
+    for a, b in zip(model.inertias, ref.inertias, strict=True):
+        assert a.isApprox(b, 1e-14)
+    for a, b in zip(model.jointPlacements, ref.jointPlacements, strict=True):
+        assert a.isApprox(b, 1e-14)
+
+
+def _yourdfpy_model(path: Path) -> yourdfpy.URDF:
+    """The URDF parsed by yourdfpy, mimic tags dropped (Pinocchio gives mimic joints their own
+    coordinates, as a plain tree joint)."""
+    logging.getLogger("yourdfpy").setLevel(logging.ERROR)  # mimic targets missing in one file
+    parsed = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False).robot
+    for joint in parsed.joints:
+        joint.mimic = None
+    return yourdfpy.URDF(robot=parsed, build_scene_graph=True, load_meshes=False)
+
+
+def _independent_dynamics(
+    y: yourdfpy.URDF, model: pin.Model, q: np.ndarray
+) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """Link poses, mass matrix and gravity torques from yourdfpy's kinematics and inertias.
+
+    The link poses come from yourdfpy's forward kinematics; the Jacobian of a link's centre of
+    mass is built from its ancestor joints (revolute: ``a x (c - o)``, ``a``; prismatic: ``a``,
+    axes and origins in world from yourdfpy's child-link poses); then ``M = sum m Jv^T Jv +
+    Jw^T I Jw`` and ``g = -sum m Jv^T g0``. Pinocchio only maps ``q`` to yourdfpy's joint values
+    and names the velocity columns.
+    """
+    cfg, column = {}, {}
+    for i in range(1, model.njoints):
+        joint = model.joints[i]
+        # continuous joints: (cos, sin) in Pinocchio, an angle in yourdfpy
+        value = np.arctan2(q[joint.idx_q + 1], q[joint.idx_q]) if joint.nq == 2 else q[joint.idx_q]
+        cfg[model.names[i]], column[model.names[i]] = float(value), joint.idx_v
+    y.update_cfg(cfg)
+    poses = {link.name: y.get_transform(link.name) for link in y.robot.links}
+    by_child = {j.child: j for j in y.robot.joints}
+    M, g = np.zeros((model.nv, model.nv)), np.zeros(model.nv)
+    g0 = np.array([0.0, 0.0, -9.81])
+    for link in y.robot.links:
+        inertial = link.inertial
+        if inertial is None:
+            continue
+        T = poses[link.name] @ (np.eye(4) if inertial.origin is None else inertial.origin)
+        c, R = T[:3, 3], T[:3, :3]
+        inertia = np.zeros((3, 3)) if inertial.inertia is None else inertial.inertia
+        mass = float(inertial.mass or 0.0)
+        Jv, Jw = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+        name = link.name
+        while name in by_child:
+            joint = by_child[name]
+            if joint.type != "fixed":
+                frame = poses[joint.child]
+                axis = frame[:3, :3] @ (joint.axis / np.linalg.norm(joint.axis))
+                k = column[joint.name]
+                if joint.type == "prismatic":
+                    Jv[:, k] = axis
+                else:
+                    Jv[:, k], Jw[:, k] = np.cross(axis, c - frame[:3, 3]), axis
+            name = joint.parent
+        M += mass * Jv.T @ Jv + Jw.T @ (R @ inertia @ R.T) @ Jw
+        g -= mass * Jv.T @ g0
+    return poses, M, g
+
+
+@pytest.mark.parametrize("path", URDFS, ids=_id)
+def test_plain_urdf_dynamics_match_yourdfpy(path):
+    """Link poses, mass matrix, gravity and the power of the inverse dynamics against yourdfpy's
+    kinematics and inertias (an independent parser and forward kinematics)."""
+    _plain_model(path)  # skips the files Pinocchio itself rejects
+    robot = pkdyn.load(path, geometry=False)
+    model, data = robot.model, robot.data
+    y = _yourdfpy_model(path)
     rng = np.random.default_rng(zlib.crc32(_id(path).encode()))
-    for _ in range(3):
-        q = pin.integrate(ref, pin.neutral(ref), rng.uniform(-1.0, 1.0, ref.nv))
-        v = rng.uniform(-1.0, 1.0, ref.nv)
-        a = rng.uniform(-1.0, 1.0, ref.nv)
-        M_ref = _upper(pin.crba(ref, ref_data, q))
-        M = _upper(pin.crba(model, data, q))
-        scale = max(1.0, float(np.max(np.abs(M_ref), initial=0.0)))
-        np.testing.assert_allclose(M, M_ref, rtol=0, atol=1e-10 * scale)
-        tau_ref = pin.rnea(ref, ref_data, q, v, a)
-        tau = pin.rnea(model, data, q, v, a)
-        scale = max(1.0, float(np.max(np.abs(tau_ref), initial=0.0)))
-        np.testing.assert_allclose(tau, tau_ref, rtol=0, atol=1e-10 * scale)
+    q = pin.integrate(model, pin.neutral(model), rng.uniform(-1.0, 1.0, model.nv))
+    v = rng.uniform(-1.0, 1.0, model.nv)
+    a = rng.uniform(-1.0, 1.0, model.nv)
+    poses, M_ref, g_ref = _independent_dynamics(y, model, q)
+    pin.framesForwardKinematics(model, data, q)
+    for link, T in poses.items():
+        frame = data.oMf[model.getFrameId(link, pin.FrameType.BODY)]
+        np.testing.assert_allclose(frame.homogeneous, T, rtol=0, atol=1e-12, err_msg=link)
+    scale = max(1.0, float(np.max(np.abs(M_ref), initial=0.0)))
+    np.testing.assert_allclose(_upper(pin.crba(model, data, q)), M_ref, atol=1e-12 * scale)
+    tau = pin.rnea(model, data, q, v, a)
+    scale = max(1.0, float(np.max(np.abs(g_ref), initial=0.0)))
+    np.testing.assert_allclose(
+        pin.rnea(model, data, q, np.zeros(model.nv), np.zeros(model.nv)),
+        g_ref,
+        atol=1e-12 * scale,
+    )
+    # power of the inverse dynamics: v.tau = v.M a + 1/2 v.(dM/dt) v + v.g (Lagrange);
+    # dM/dt along v by a fourth-order central difference of the independent mass matrix
+    # (steps of 1e-3: yourdfpy's scene graph may miss much smaller updates)
+    h = 1e-3
+    M_at = [
+        _independent_dynamics(y, model, pin.integrate(model, q, s * h * v))[1]
+        for s in (-2.0, -1.0, 1.0, 2.0)
+    ]
+    M_dot = (M_at[0] - 8.0 * M_at[1] + 8.0 * M_at[2] - M_at[3]) / (12.0 * h)
+    power = v @ M_ref @ a + 0.5 * v @ M_dot @ v + v @ g_ref
+    scale = max(1.0, float(np.abs(v) @ np.abs(tau)))
+    assert float(v @ tau) == pytest.approx(power, abs=1e-8 * scale)
 
 
 @pytest.mark.parametrize("sub", GEOMETRY_SAMPLES)

@@ -50,9 +50,11 @@ def test_passive_run_keeps_energy_and_closures(robots, name):
     v0 = _tangent_velocity(robot, robot.q_home, 0.5)
     res = simulate(robot.model, robot.constraint_models, robot.q_home, v0, 2.0, 1e-3)
     assert res.t[-1] == pytest.approx(2.0)
+    # recorded: closures up to 9e-10 m, energy drift 1.8e-6 (Delta), 7e-15 (five-bar), 9e-12
+    # (hexapod)
     assert np.max(res.closure_residual) < 1e-8
     drift = np.max(np.abs(res.energy - res.energy[0])) / np.max(res.kinetic)
-    assert drift < 1e-3
+    assert drift < 1e-5
     assert res.energy_drift() == pytest.approx(drift)
     if name != "five_bar":  # gravity did work: potential energy turned into kinetic energy
         assert np.max(res.kinetic) > 20 * res.kinetic[0]

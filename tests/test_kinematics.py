@@ -198,5 +198,7 @@ def test_jacobian_json(robots):
     out = kin.jacobian_json(robot, robot.q_home)
     for key in ("A", "B", "J"):
         assert np.asarray(out[key]).shape == (6, 6)
-        assert np.isfinite(out[key]).all()
+    # J is the derivative of the direct geometric model, and A J = B
+    np.testing.assert_allclose(out["J"], fd_jacobian(robot, robot.q_home), atol=1e-7)
+    np.testing.assert_allclose(np.asarray(out["A"]) @ out["J"], out["B"], atol=1e-10)
     assert out["task"] == ["x", "y", "z", "rx", "ry", "rz"]

@@ -43,8 +43,14 @@ CROSS = {  # cross-checked robots: name -> builder parameters
     "delta_universal": {"bar_joint": "universal"},
     "gough_stewart": {},
     "five_bar": {},
+    "planar_3rrr": {},
+    "tripod": {},
 }
 IMPEDANCES = (0.9999, 0.9998, 0.9996)
+# bounds of the README's table (relative accelerations): MuJoCo's stiffest soft closures, and
+# extrapolated to rigid ones; the tripod's welded feet are the softest (README: 1.8e-2, 2.3e-7)
+SOFT = {"tripod": 3e-2}
+RIGID = {"tripod": 1e-6}
 
 
 @pytest.fixture(scope="module", params=LIBRARY)
@@ -352,8 +358,9 @@ def test_forward_accelerations_match_mujoco(case):
         hard = np.linalg.solve(np.vander(eps, 3, increasing=True), soft)[0]  # Richardson
         scale = np.linalg.norm(a)
         # nearly hard MuJoCo closures: within O(1 - d); extrapolated: 1e-7 (observed <= 2e-9)
-        assert np.linalg.norm(soft[0] - a) < 5e-3 * scale
-        assert np.linalg.norm(hard - a) < 1e-7 * scale
+        name = case.robot.name
+        assert np.linalg.norm(soft[0] - a) < SOFT.get(name, 5e-3) * scale
+        assert np.linalg.norm(hard - a) < RIGID.get(name, 1e-7) * scale
         # the velocity terms (centripetal, closure Jdot v) matter far more than the error
         assert np.linalg.norm(hard - a) < 1e-3 * np.linalg.norm(a - a_still)
         # null-space part Z^T M a: independent of the constraint model (observed <= 1e-11)

@@ -141,8 +141,20 @@ def test_statics_at_parallel_singularity_raises():
 
 def test_statics_json_and_input_checks(robots):
     robot = robots["delta"]
-    out = statics.statics_json(robot, robot.q_home, [0.0, 0.0, -9.81], gravity=True)
-    assert len(out["tau"]) == 3 and np.isfinite(out["tau"]).all()
+    F = np.array([0.0, 0.0, -9.81])
+    out = statics.statics_json(robot, robot.q_home, F, gravity=True)
+    # virtual work with gravity: tau . dqa = dV - F . dx on a small motion along each actuator
+    data = robot.model.createData()
+    q = robot.q_home
+    for j in range(3):
+        dqa = np.zeros(3)
+        dqa[j] = 1e-5
+        q_minus, q_plus = small_motion(robot, q, dqa)
+        dV = pin.computePotentialEnergy(robot.model, data, q_plus) - pin.computePotentialEnergy(
+            robot.model, data, q_minus
+        )
+        dx = platform_displacement(robot, q, q_minus, q_plus)
+        assert out["tau"][j] * 2e-5 == pytest.approx(dV - 2.0 * F @ dx, rel=1e-6)
     assert out["actuators"] == robot.actuator_names
     with pytest.raises(pkdyn.InvalidInputError):
         statics.static_equilibrium(robot, robot.q_home, [1.0, 2.0])

@@ -44,18 +44,35 @@ def test_motion_law_is_rest_to_rest_and_differentiates(name):
     assert np.all(np.diff(s) >= -1e-15)  # monotonic
 
 
-def test_quintic_peaks_and_jerk_law_bounded_jerk():
+@pytest.mark.parametrize(
+    "fa, fj, v_max, a_max, j_max",
+    [
+        # closed forms of the double S (unit distance, duration T, symmetric acceleration
+        # phase of length fa T with jerk ramps of fj fa T): v_max = 1 / (T - fa T),
+        # a_max = v_max / (fa T - fj fa T), j = a_max / (fj fa T)
+        (0.25, 0.5, 4.0 / 3.0, 32.0 / 3.0, 256.0 / 3.0),  # triangular acceleration
+        (1.0 / 3.0, 1.0 / 3.0, 1.5, 27.0 / 4.0, 243.0 / 4.0),  # the default law
+    ],
+)
+def test_quintic_peaks_and_jerk_law_closed_forms(fa, fj, v_max, a_max, j_max):
     T = 0.5
     t = np.linspace(0.0, T, 100001)
     _, sd, sdd = motion_law("quintic", T)(t)
     assert np.max(sd) == pytest.approx(1.875 / T, rel=1e-8)
     assert np.max(sdd) == pytest.approx(10.0 / np.sqrt(3.0) / T**2, rel=1e-6)
-    _, sd, sdd = motion_law("jerk", T, accel_fraction=0.25, jerk_fraction=0.5)(t)
+    _, sd, sdd = motion_law("jerk", T, accel_fraction=fa, jerk_fraction=fj)(t)
+    assert np.max(sd) == pytest.approx(v_max / T, rel=1e-12)
+    assert np.max(sdd) == pytest.approx(a_max / T**2, rel=1e-8)
+    # the jerk (differences of s'') is +j, 0 or -j away from the breakpoints
     jerk = np.diff(sdd) / np.diff(t)
-    # triangular acceleration over T/4: a_max = j * T/8, v_max = a_max * T/8 ... exact jerk level
-    assert np.max(np.abs(jerk)) == pytest.approx(np.max(np.abs(jerk[: t.size // 10])), rel=1e-6)
-    # constant velocity in the middle half
-    mid = (t > 0.26 * T) & (t < 0.74 * T)
+    tm = 0.5 * (t[1:] + t[:-1])
+    knots = T * np.array([0.0, fj * fa, fa - fj * fa, fa, 1 - fa, 1 - fa + fj * fa, 1 - fj * fa, 1])
+    away = np.min(np.abs(tm[:, None] - knots[None]), axis=1) > 2 * (t[1] - t[0])
+    level = np.array([1, 0, -1, 0, -1, 0, 1])[np.searchsorted(knots, tm[away]) - 1]
+    np.testing.assert_allclose(jerk[away], level * j_max / T**3, atol=1e-6 * j_max / T**3)
+    assert np.max(np.abs(jerk)) <= j_max / T**3 * (1 + 1e-6)
+    # constant velocity between the acceleration phases
+    mid = (t > fa * T) & (t < (1 - fa) * T)
     assert np.ptp(sd[mid]) < 1e-9 and np.max(np.abs(sdd[mid])) < 1e-9
 
 

@@ -175,8 +175,10 @@ def test_leg_distances_agree_with_segment_bounds(robot, report):
 def test_singularity_margins_and_efforts(report):
     for r in report.reports:
         assert r.min_singularity_distance > 0.05
-        assert 10.0 < r.max_actuator_force < P.effort
         assert r.max_dynamics_residual < 1e-8
+    # recorded figures of this plan [N] (largest |force| per phase; the limit is 3000 N)
+    recorded = [307.3, 93.45, 344.08, 93.76, 358.48, 82.46, 370.71, 72.84]
+    assert [r.max_actuator_force for r in report.reports] == pytest.approx(recorded, rel=1e-3)
     # the released branch hangs on the supports: the swings load the actuators most
     swing = max(r.max_actuator_force for r in report.reports if r.mode == "BE")
     reconf = max(r.max_actuator_force for r in report.reports if r.name == "reconfiguration")
@@ -184,6 +186,33 @@ def test_singularity_margins_and_efforts(report):
     assert report.violations() == []
     assert report.tau.shape == (report.t.size, 6)
     assert np.isfinite(report.singularity_distance).sum() >= report.t.size // 2
+
+
+def test_forces_at_rest_are_the_gradient_of_the_potential_energy(report):
+    """Virtual work: each phase starts at rest without machining wrench, where the actuator
+    forces must be dV/dqa, V the potential energy of the mechanism assembled by the direct
+    geometric model of the phase's robot (central differences)."""
+    h = 1e-5
+    for i, ph in enumerate(report.phases):
+        jt, r = ph.trajectory, ph.robot
+        assert np.max(np.abs(jt.v[0])) == 0.0 and np.max(np.abs(jt.a[0])) == 0.0
+        assert ph.wrench is None or np.max(np.abs(ph.wrench[0])) == 0.0
+        tau = report.tau[np.flatnonzero(report.phase == i)[0]]
+        q = jt.q[0]
+        qa = q[r.actuated_q]
+        data = r.model.createData()
+        grad = np.zeros(qa.size)
+        for j in range(qa.size):
+            dq = np.zeros(qa.size)
+            dq[j] = h
+            V = [
+                pin.computePotentialEnergy(
+                    r.model, data, pkdyn.forward_geometry(r, qa + s * dq, q_init=q).q
+                )
+                for s in (1.0, -1.0)
+            ]
+            grad[j] = (V[0] - V[1]) / (2 * h)
+        np.testing.assert_allclose(tau, grad, atol=1e-7 * np.max(np.abs(grad)))
 
 
 def test_report_json_has_the_phase_keys(report):

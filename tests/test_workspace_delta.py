@@ -32,21 +32,54 @@ def _geometry(r, b, la=0.2, rb=0.025):
 
 
 def test_seed_coefficients():
-    """Section 1.4: d = 2 b sin(gamma_max) ~ 1.3 b, s = 1.431 b^2, z_T = z_T' at r = 0.63."""
+    """Section 1.4: d = 2 b sin(gamma_max) ~ 1.3 b, s = 1.431 b^2 (the seed's figures)."""
     for b in (1.5, 1.9, 2.5):
         f = clavel_closed_form(_geometry(0.625, b)).dimensionless()
         assert f["d"] / b == pytest.approx(1.2856, abs=1e-4)
         assert f["s"] / b**2 == pytest.approx(1.431, abs=5e-4)
-    g = GAMMA_MAX
-    r_star = math.sqrt(3) * (1 - math.cos(g)) / math.sin(g)
-    assert r_star == pytest.approx(0.63, abs=1e-2)
+    # z_h for (alpha+beta)_min = 30 deg: -sqrt(1 + b^2 - b sqrt 3) (seed, Fig. 19)
     b = 1.9
-    z_t = -math.sqrt((1 + b) ** 2 - (r_star + 2 * b * math.sin(g) / math.sqrt(3)) ** 2)
-    z_tp = -math.sqrt((1 + b * math.cos(g)) ** 2 - (r_star + b * math.sin(g) / math.sqrt(3)) ** 2)
-    assert z_t == pytest.approx(z_tp, abs=1e-12)
-    # z_h for (alpha+beta)_min = 30 deg: -sqrt(1 + b^2 - b sqrt 3)
     f = clavel_closed_form(_geometry(0.625, b)).dimensionless()
     assert f["z_h"] == pytest.approx(-math.sqrt(1 + b * b - b * math.sqrt(3)), abs=1e-12)
+
+
+def _lowest_reachable(robot: pkdyn.Robot, xy: np.ndarray) -> float:
+    """Lowest height [m] the nacelle reaches above ``xy``: bisection on the numeric inverse
+    geometric model of the Pinocchio mechanism (no joint limits), to 1e-10 m."""
+    hi, lo, q = -0.25, -0.75, None
+    while hi - lo > 1e-10:
+        z = 0.5 * (hi + lo)
+        try:
+            q = pkdyn.inverse_geometry(robot, [*xy, z], q_init=q, check_limits=False).q
+            hi = z
+        except pkdyn.PkdynError:
+            lo = z
+    return hi
+
+
+def test_prism_bottom_measured_on_the_mechanism():
+    """Fig. 20, measured: the prism's vertical edges are at ``2 b sin(gamma_max) / sqrt 3`` (LA
+    units) from the axis. Above the edge opposite arm 1 (T) arm 1 runs out of reach first (arm
+    and bars aligned, gamma_1 = 0); above the edge on arm 1's side (T'), arms 2 and 3 do
+    (gamma = gamma_max). The lowest reachable points there are the seed's z_T and z_T' (z_T'
+    with its minus sign), their maximum is the closed form's z_b, and they cross between
+    r = 0.62 and 0.64 (the seed: r = 0.63 for gamma_max = 40 deg)."""
+    la, b, g = 0.2, 1.9, GAMMA_MAX
+    corner = 2 * b * math.sin(g) / math.sqrt(3)
+    gap = []
+    for r in (0.5, 0.62, 0.64, 0.8):
+        geo = _geometry(r, b, la=la)
+        robot = pkdyn.load("delta", ra=geo.ra, rb=geo.rb, la=geo.la, lb=geo.lb, geometry=False)
+        z_t = _lowest_reachable(robot, np.array([-corner * la, 0.0]))
+        z_tp = _lowest_reachable(robot, np.array([corner * la, 0.0]))
+        # the seed's formulas (section 1.4), in LA units
+        seed_t = -math.sqrt((1 + b) ** 2 - (r + 2 * b * math.sin(g) / math.sqrt(3)) ** 2)
+        seed_tp = -math.sqrt((1 + b * math.cos(g)) ** 2 - (r + b * math.sin(g) / math.sqrt(3)) ** 2)
+        assert z_t == pytest.approx(seed_t * la, abs=2e-9)
+        assert z_tp == pytest.approx(seed_tp * la, abs=2e-9)
+        assert clavel_closed_form(geo).zb == pytest.approx(max(z_t, z_tp), abs=2e-9)
+        gap.append(z_t - z_tp)
+    assert gap[0] < 0 and gap[1] < 0 < gap[2] < gap[3]
 
 
 def test_angles_match_the_pinocchio_model(delta):
@@ -151,3 +184,34 @@ def test_cli_clavel_json(capsys):
     code = main(["workspace", "gough_stewart", "--clavel"])
     _, err = capsys.readouterr()
     assert code == 1 and "clavel" in err.lower()
+
+
+def test_delta_580_figures():
+    """The DELTA 580 figures of the README (Clavel's limits: gamma_max 40 deg, (alpha+beta)_min
+    30 deg): the closed form from the seed's dimensionless formulas (section 1.4, z_T' with its
+    minus sign) with ra = 150, rb = 25, la = 200, lb = 380 mm (seed's table: r = 0.625, b = 1.9),
+    the mechanism's measurement (clavel_numeric, default resolution) to 2e-10 m, and the whole
+    workspace's volume (recorded figure of the numeric measurement)."""
+    p = pkdyn.load("delta", geometry=False).params
+    r, b, la, g = 0.625, 1.9, 0.2, GAMMA_MAX
+    assert ((p.ra - p.rb) / p.la, p.lb / p.la, p.la) == pytest.approx((r, b, la), abs=1e-15)
+    z_h = -math.sqrt(1 + b * b - 2 * b * math.cos(AB_MIN))
+    z_t = -math.sqrt((1 + b) ** 2 - (r + 2 * b * math.sin(g) / math.sqrt(3)) ** 2)
+    z_tp = -math.sqrt((1 + b * math.cos(g)) ** 2 - (r + b * math.sin(g) / math.sqrt(3)) ** 2)
+    d, s = 2 * b * math.sin(g), 2 * math.sqrt(3) * math.sin(g) ** 2 * b**2
+    h, h_max = z_h - max(z_t, z_tp), math.sqrt((1 + b) ** 2 - r**2) + z_h
+    seed = {"D": d * la, "S": s * la**2, "H": h * la, "Hmax": h_max * la, "V": s * h * la**3}
+    seed["zh"] = z_h * la
+    cf = clavel_closed_form(p)
+    for key, value in seed.items():
+        assert getattr(cf, key) == pytest.approx(value, rel=1e-12), key
+    # as printed in the README
+    readme = {"D": 0.4885, "S": 0.2067, "H": 0.1831, "Hmax": 0.3367, "V": 0.0378, "zh": -0.2297}
+    for key, value in readme.items():
+        assert round(getattr(cf, key), 4) == value, key
+    nu, v_ws = clavel_numeric(p, progress=False)
+    for key in ("D", "H", "Hmax", "zh", "zb"):
+        assert getattr(nu, key) == pytest.approx(getattr(cf, key), abs=2e-10), key
+    # recorded: the whole workspace 0.0593 m^3 = 1.57 V
+    assert v_ws == pytest.approx(0.05927, rel=1e-3)
+    assert v_ws / cf.V == pytest.approx(1.566, abs=1e-3)

@@ -173,7 +173,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--profile", choices=("quintic", "jerk"), default="quintic")
     sp.add_argument("--dt", type=float, default=1e-3, help="sample period [s]")
     sp.add_argument(
-        "--csv", metavar="FILE", help="write the time series (t, q_, qd_, tau_, energy)"
+        "--csv", metavar="FILE", help="write the time series (t, qa_, qa_dot_, tau_, energy)"
     )
     sp.add_argument("--plot", metavar="FILE.png", help="plot effort, speed, power vs time")
     sp.add_argument(

@@ -26,6 +26,7 @@ __all__ = ["TorqueFn", "simulate"]
 
 
 TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+"""Actuator efforts ``tau(t, q, v)`` (n_a,) [N m or N] from the time [s], ``q`` and ``v``."""
 
 
 def simulate(

@@ -25,6 +25,7 @@ from pkdyn.exceptions import InvalidInputError
 __all__ = ["PROFILES", "MotionLaw", "motion_law"]
 
 PROFILES = ("quintic", "jerk")
+"""Names of the motion laws :func:`motion_law` knows."""
 
 
 @dataclass(frozen=True)

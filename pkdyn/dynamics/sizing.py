@@ -43,16 +43,16 @@ class ActuatorSizing:
 
     Attributes:
         name: Actuator name (the transmission, e.g. ``motor1``).
-        peak: Peak |effort|, joint side [N m or N].
+        peak: Peak ``|effort|``, joint side [N m or N].
         rms: RMS effort over time, joint side [N m or N].
-        peak_speed: Peak |speed|, joint side [rad/s or m/s].
-        peak_power: Peak |effort x speed| [W].
+        peak_speed: Peak ``|speed|``, joint side [rad/s or m/s].
+        peak_power: Peak ``|effort x speed|`` [W].
         limit: Effort limit, joint side (URDF ``effort``; ``inf`` when absent).
         margin: ``1 - peak / limit`` (negative: limit exceeded).
         speed_limit: Speed limit, joint side (URDF ``velocity``).
         speed_margin: ``1 - peak_speed / speed_limit``.
         reduction: Transmission reduction (motor speed = reduction x joint speed).
-        motor_peak: Peak |effort| on the motor side [N m or N].
+        motor_peak: Peak ``|effort|`` on the motor side [N m or N].
         motor_rms: RMS effort on the motor side [N m or N].
         motor_peak_speed: Peak motor speed [rad/s or m/s].
         reflected_inertia: Rotor inertia seen by the joint, ``N^2 J`` [kg m^2 or kg].

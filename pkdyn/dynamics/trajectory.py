@@ -67,6 +67,7 @@ __all__ = [
 ]
 
 TRAJECTORIES = ("adept", "sine", "p2p")
+"""Names of the task trajectories :func:`named_task` and :func:`named_trajectory` know."""
 
 _LOCAL = pin.ReferenceFrame.LOCAL
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED

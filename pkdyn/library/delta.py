@@ -52,7 +52,9 @@ __all__ = [
 ]
 
 NAME = "delta"
+"""Family name (``pkdyn.load`` and the CLI take it)."""
 SUMMARY = "Clavel's Delta, rotary actuators, parallelograms of two ball-jointed bars (DELTA 580)"
+"""One-line description of the family (``pkdyn info``, the family registry)."""
 
 
 @dataclass(frozen=True)

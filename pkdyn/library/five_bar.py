@@ -52,7 +52,9 @@ __all__ = [
 ]
 
 NAME = "five_bar"
+"""Family name (``pkdyn.load`` and the CLI take it)."""
 SUMMARY = "Planar five-bar, two actuated base revolutes, end-effector where the distal links meet"
+"""One-line description of the family (``pkdyn info``, the family registry)."""
 
 
 @dataclass(frozen=True)

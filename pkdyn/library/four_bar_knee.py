@@ -32,7 +32,9 @@ from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
 
 NAME = "four_bar_knee"
+"""Family name (``pkdyn.load`` and the CLI take it)."""
 SUMMARY = "Four-bar knee: thigh motor drives the knee through a crank and a coupler rod"
+"""One-line description of the family (``pkdyn info``, the family registry)."""
 
 GREY = (0.6, 0.6, 0.65, 1.0)
 BLUE = (0.2, 0.4, 0.8, 1.0)

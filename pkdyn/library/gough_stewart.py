@@ -40,7 +40,9 @@ __all__ = [
 ]
 
 NAME = "gough_stewart"
+"""Family name (``pkdyn.load`` and the CLI take it)."""
 SUMMARY = "6-UPS Gough-Stewart hexapod; defaults: Merlet's MEL prototype (Tables 3.1, 3.2)"
+"""One-line description of the family (``pkdyn info``, the family registry)."""
 
 _XA = (112.5, -225.0, -112.5, 67.5, -135.0, 67.5)
 _YA = (-194.856, 0.0, 194.856, -116.913, 0.0, 116.913)

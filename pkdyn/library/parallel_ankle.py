@@ -38,7 +38,9 @@ from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rod_inertia
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
 
 NAME = "parallel_ankle"
+"""Family name (``pkdyn.load`` and the CLI take it)."""
 SUMMARY = "Humanoid parallel ankle: two shank motors drive ankle pitch and roll through two rods"
+"""One-line description of the family (``pkdyn info``, the family registry)."""
 
 GREY = (0.6, 0.6, 0.65, 1.0)
 BLUE = (0.2, 0.4, 0.8, 1.0)

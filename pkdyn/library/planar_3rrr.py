@@ -33,7 +33,9 @@ from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home", "resolved"]
 
 NAME = "planar_3rrr"
+"""Family name (``pkdyn.load`` and the CLI take it)."""
 SUMMARY = "Planar 3-RRR, three actuated base revolutes, triangular platform (Pasqui's 3R plan)"
+"""One-line description of the family (``pkdyn info``, the family registry)."""
 
 _ANGLES = (7.0 * math.pi / 6.0, 11.0 * math.pi / 6.0, math.pi / 2.0)
 

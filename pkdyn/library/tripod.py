@@ -100,10 +100,12 @@ __all__ = [
 ]
 
 NAME = "tripod"
+"""Family name (``pkdyn.load`` and the CLI take it)."""
 SUMMARY = (
     "Walking tripod (Yang et al.), 3 branches of 2 prismatic actuators, feet welded (mode PP); "
     "branches=4: the four-branch walker"
 )
+"""One-line description of the family (``pkdyn info``, the family registry)."""
 
 MOUNT_CLEARANCE = 0.08
 """Length [m] of an actuator body next to its nacelle attachment (the clevis, inside the

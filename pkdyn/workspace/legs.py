@@ -55,7 +55,7 @@ class HexapodLegs:
         names: Actuated joint of each leg.
         A: Base joint centres (n, 3) [m], world frame.
         B: Platform joint centres (n, 3) [m], platform frame.
-        rho_min: Smallest leg length |A_i B_i| (n,) [m].
+        rho_min: Smallest leg length ``|A_i B_i|`` (n,) [m].
         rho_max: Largest leg length (n,) [m].
         radius: Leg radius (n,) [m] (from the collision geometry; 0 without geometry).
         R0: Orientation of each base joint frame in the world (n, 3, 3).
