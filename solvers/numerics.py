@@ -230,28 +230,29 @@ def scaled_margins(
     gets the same margins; translations and rotations weigh alike.
 
     Args:
-        A: Parallel matrices (..., m, m), any normalisation.
-        B: Serial matrices (..., m, n_a), the same normalisation.
+        A: Parallel matrices (..., r, m), any normalisation: ``r = m`` relations, or
+            ``r = n_a > m`` under redundant actuation (one relation per actuator).
+        B: Serial matrices (..., r, n_a), the same normalisation.
         a_scale: Scale of each actuator rate (n_a,) (a length for prismatic ones, else 1).
         x_scale: Scale of each task rate (m,) (a length for translations, else 1).
         rtol: Relative tolerance of the relations' rank.
 
     Returns:
-        ``(sigma_A, sigma_B, rows)``: singular values of ``A'`` (..., m) and ``B'`` (...,
-        min(m, n_a)), largest first, and the orthonormal relation rows ``[B', -A']`` (..., m,
-        n_a + m).
+        ``(sigma_A, sigma_B, rows)``: singular values of ``A'`` (..., min(r, m)) and ``B'``
+        (..., min(r, n_a)), largest first, and the orthonormal relation rows ``[B', -A']``
+        (..., r, n_a + m).
 
     """
     A = np.asarray(A, dtype=float)
     B = np.asarray(B, dtype=float)
-    m, n_a = A.shape[-1], B.shape[-1]
+    r, n_a = A.shape[-2], B.shape[-1]
     R = np.concatenate([B * np.asarray(a_scale), -A * np.asarray(x_scale)], axis=-1)
     _, s, Vt = np.linalg.svd(R, full_matrices=False)
-    s_m = np.zeros(s.shape[:-1] + (m,))
-    s_m[..., : min(m, s.shape[-1])] = s[..., :m]
-    live = s_m > rtol * s[..., :1]
-    rows = np.zeros(Vt.shape[:-2] + (m, Vt.shape[-1]))
-    k = min(m, Vt.shape[-2])
+    s_r = np.zeros(s.shape[:-1] + (r,))
+    s_r[..., : min(r, s.shape[-1])] = s[..., :r]
+    live = s_r > rtol * s[..., :1]
+    rows = np.zeros(Vt.shape[:-2] + (r, Vt.shape[-1]))
+    k = min(r, Vt.shape[-2])
     rows[..., :k, :] = Vt[..., :k, :]
     rows = np.where(live[..., None], rows, 0.0)
     sA = np.linalg.svd(-rows[..., n_a:], compute_uv=False)

@@ -62,3 +62,38 @@ def test_four_arms_need_less_than_three(run):
     peak4, peak3 = np.abs(ef.tau).max(), np.abs(t3.tau).max()
     assert peak4 < peak3
     assert peak4 == pytest.approx(15.2, abs=0.1)
+
+
+@pytest.mark.parametrize("pose", [[0.0, 0.0, -0.35], [0.05, 0.03, -0.4], [-0.08, 0.06, -0.45]])
+def test_kinematic_models_of_the_redundant_delta_against_differences(pose):
+    """One relation per actuator: ``J_inv`` (4 x 3) by central differences of the inverse model.
+
+    With four actuators for three platform coordinates every actuator rate is tied to the
+    platform's: ``A`` is 4 x 3 and ``B`` 4 x 4. The models used to keep only three relations,
+    which made ``J_inv`` wrong off home and the home pose a false parallel singularity.
+    """
+    import warnings
+
+    from pkdyn.analysis.kinematics import kinematic_models
+    from pkdyn.analysis.singularity import classify
+
+    robot = pkdyn.load("delta", arms=4, geometry=False)
+    q = pkdyn.inverse_geometry(robot, pose).q
+    km = kinematic_models(robot, q)
+    assert km.A.shape == (4, 3) and km.B.shape == (4, 4)
+    h = 1e-6
+    J_fd = np.zeros((4, 3))
+    for i in range(3):
+        up, down = np.array(pose), np.array(pose)
+        up[i] += h
+        down[i] -= h
+        J_fd[:, i] = (
+            pkdyn.inverse_geometry(robot, up, q_init=q).qa
+            - pkdyn.inverse_geometry(robot, down, q_init=q).qa
+        ) / (2 * h)
+    assert np.max(np.abs(km.J_inv - J_fd)) < 1e-6 * max(1.0, float(np.max(np.abs(J_fd))))
+    assert np.allclose(km.J @ km.J_inv, np.eye(3), atol=1e-9)  # consistent rates: x back
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # not even near a singularity
+        report = classify(robot, q)
+    assert report.kind == "regular" and report.margin > 0.05

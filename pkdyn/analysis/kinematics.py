@@ -40,6 +40,7 @@ tests are rank tests on ``A`` (parallel: a platform motion with locked actuators
 from __future__ import annotations
 
 import warnings
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -198,11 +199,12 @@ class KinematicModels:
         q: The configuration (nq,).
         task: Names of the controlled pose components (``m`` of them).
         actuators: Actuated joint names (``n_a``).
-        A: Parallel matrix (m, m) [task units: m for rows' linear parts, rad for angular].
-        B: Serial matrix (m, n_a).
+        A: Parallel matrix (r, m) [task units: m for rows' linear parts, rad for angular]:
+            ``r = m`` relations, or ``r = n_a`` under redundant actuation (``n_a > m``).
+        B: Serial matrix (r, n_a).
         sigma_A: Singular values of ``A`` (descending).
         sigma_B: Singular values of ``B`` (descending).
-        relation_gap: Ratio of the ``m``-th singular value of the raw relation matrix to the
+        relation_gap: Ratio of the ``r``-th singular value of the raw relation matrix to the
             largest (small: the robot's mobility degenerates, e.g. a lost degree of freedom).
         margin_A: Scale-aware smallest singular value of ``A`` (:func:`relation_margins`),
             in ``[0, 1]``: the parallel-singularity test.
@@ -250,7 +252,7 @@ class KinematicModels:
     @property
     def cond_B(self) -> float:
         """Condition number of ``B`` (finite, capped at :data:`COND_MAX`)."""
-        return _cond(self.sigma_B, min(self.m, self.n_a))
+        return _cond(self.sigma_B, min(self.B.shape))
 
     def _check(self, which: str) -> None:
         """Raise at an exact singularity of ``A`` (parallel) or ``B`` (serial), warn near one."""
@@ -321,6 +323,31 @@ class KinematicModels:
         return np.array(self._cache["V"])
 
 
+_RELATION_COUNTS: dict[tuple[int, tuple[int, ...]], int] = {}
+
+
+def _relation_count(robot: Robot, rows: np.ndarray) -> int:
+    """Number of independent velocity relations between actuators and task, at least ``m``.
+
+    ``n_a + m - mobility``: ``m`` when the actuators control the platform exactly, ``n_a`` under
+    redundant actuation (the four-armed Delta: 4 relations between 4 actuator rates and 3
+    platform rates). A structural count, taken at ``q_home`` (cached per robot): at a singular
+    configuration the missing relations are zero rows of ``A`` and ``B``.
+    """
+    key = (id(robot), tuple(int(r) for r in rows))
+    count = _RELATION_COUNTS.get(key)
+    if count is None:
+        q = robot.q_home
+        Jc = robot.closure_set.jacobian(robot.data, q) if robot.closure_set.nc else None
+        Jc = np.zeros((0, robot.nv)) if Jc is None else Jc
+        Jx = platform_jacobian(robot, q)[rows]
+        rel = _relations(Jc, Jx, np.asarray(robot.actuated_v), np.asarray(robot.passive_v))
+        count = max(rows.size, numerics.rank_of(rel.s, SINGULAR_TOL))
+        _RELATION_COUNTS[key] = count
+        weakref.finalize(robot, _RELATION_COUNTS.pop, key, None)
+    return count
+
+
 def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> KinematicModels:
     """Parallel matrix ``A``, serial matrix ``B`` and Jacobians of a robot at ``q``.
 
@@ -336,27 +363,31 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
 
     """
     qq = _checked_q(robot, q)
+    rows = np.asarray(robot.task_rows, dtype=int)
+    _relation_count(robot, rows)  # (evaluated at home once, before the kinematics at q)
     nv = robot.nv
     Jc = robot.closure_set.jacobian(robot.data, qq) if robot.closure_set.nc else np.zeros((0, nv))
     J6 = platform_jacobian(robot, qq)
-    rows = np.asarray(robot.task_rows, dtype=int)
     Jx = J6[rows]
     a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)
     m, n_a = rows.size, a.size
     rel = _relations(Jc, Jx, a, p)
-    # orthonormal basis of the relation row space: the m most significant directions
+    # orthonormal basis of the relation row space: its r most significant directions, r the
+    # number of relations at home (at least m): m, or n_a under redundant actuation (every
+    # actuator rate is then tied to the platform's)
+    r = _relation_count(robot, rows)
     if rel.R.size:
         _, s, Vt = np.linalg.svd(rel.R, full_matrices=False)
     else:
         s, Vt = np.zeros(0), np.zeros((0, n_a + m))
     # relations beyond the numerical rank (a degenerate mobility) are left as zero rows, which
     # makes both A and B singular
-    k = min(m, numerics.rank_of(s, SINGULAR_TOL))
-    basis = np.zeros((m, n_a + m))
+    k = min(r, numerics.rank_of(s, SINGULAR_TOL))
+    basis = np.zeros((r, n_a + m))
     basis[:k] = Vt[:k]
     B = basis[:, :n_a]
     A = -basis[:, n_a:]
-    gap = float(s[m - 1] / s[0]) if s.size >= m and s[0] > 0 else 0.0
+    gap = float(s[r - 1] / s[0]) if s.size >= r and s[0] > 0 else 0.0
     sA, sB, _ = relation_margins(A, B, *robot_scales(robot, rows))
     return KinematicModels(
         q=qq,

@@ -214,19 +214,20 @@ def classify(
     a_scale, x_scale = robot_scales(robot, rows_task)
     _, _, rel = relation_margins(km.A, km.B, a_scale, x_scale)
     cond_A = _null_dirs(km.A, m, near_tol)[0]
-    cond_B = _null_dirs(km.B, min(m, n_a), near_tol)[0]
+    r = km.A.shape[0]  # relations: m, or n_a under redundant actuation
+    cond_B = _null_dirs(km.B, min(r, n_a), near_tol)[0]
     margin_A, par = _directions(rel, m, m, x_scale, near_tol, first=False)
-    margin_B, ser = _directions(rel, n_a, min(m, n_a), a_scale, near_tol, first=True)
+    margin_B, ser = _directions(rel, n_a, min(r, n_a), a_scale, near_tol, first=True)
     if m < 6:
         rows = _platform_relations(robot, km)
         A6 = -rows[:, n_a:]
-        cond_P = _null_dirs(A6, A6.shape[0], near_tol)[0]
+        cond_P = _null_dirs(A6, min(A6.shape), near_tol)[0]
         six_a, six_x = robot_scales(robot, np.arange(6))
         if rows.shape[0]:
             _, _, rel6 = relation_margins(A6, rows[:, :n_a], six_a, six_x)
         else:
             rel6 = np.zeros((0, n_a + 6))
-        margin_P, plat = _directions(rel6, 6, rel6.shape[0], six_x, near_tol, first=False)
+        margin_P, plat = _directions(rel6, 6, min(rel6.shape[0], 6), six_x, near_tol, first=False)
         if km.relation_gap < tol:
             # The task relations lost a dimension: a hidden (uncontrolled-component) platform
             # motion moves the task point, so A and B both degenerate. Whether an actuator

@@ -523,7 +523,7 @@ def map_task_trajectory(
                 sample=k,
                 time=tk,
             )
-        if km.A.shape[0] == km.B.shape[1]:
+        if km.A.shape[0] == km.A.shape[1] == km.B.shape[1]:  # square: not redundant
             # det(J_inv) = det(A) / det(B) does not depend on the basis of A and B: a change of
             # sign between samples means a singularity was crossed between them
             J_inv = numerics.lstsq(km.B, km.A, numerics.machine_rtol(km.B))
