@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 import pkdyn
-from pkdyn.cli import EXIT_CODES, main
+from pkdyn.cli import COMMANDS, EXIT_CODES, main
 from pkdyn.model.families import FAMILIES
 
 PKDYN = str(Path(sys.executable).with_name("pkdyn"))
@@ -239,3 +239,17 @@ def test_env_without_bytecode_cache_still_runs():
         check=False,
     )
     assert out.returncode == 0 and "five_bar" in out.stdout
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_each_command_parses_alone_and_has_its_help(command, capsys):
+    """A command line naming one command builds only that command's parser (quick start)."""
+    from pkdyn.cli import _parser
+
+    with pytest.raises(SystemExit) as stop:
+        _parser([command, "--help"]).parse_args([command, "--help"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.startswith("usage: pkdyn ")
+    sub = next(a for a in _parser([command])._actions if hasattr(a, "choices") and a.choices)
+    full = next(a for a in _parser(["--help"])._actions if hasattr(a, "choices") and a.choices)
+    assert command in sub.choices and set(sub.choices) < set(full.choices)

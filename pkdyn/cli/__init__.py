@@ -89,9 +89,33 @@ def _parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     )
     p.add_argument("--version", action="version", version=f"pkdyn {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
+    target = sub if first not in COMMANDS else _OnlyCommand(sub, first)
     for name in modules:
-        importlib.import_module(f"pkdyn.cli.{name}").register(sub)
+        importlib.import_module(f"pkdyn.cli.{name}").register(target)
     return p
+
+
+class _Skipped:
+    """Stands for the parser of a sub-command this command line does not name (quick start).
+
+    Every method call (``add_argument``, ``set_defaults``, ``add_mutually_exclusive_group``...)
+    is accepted and returns the stand-in itself.
+    """
+
+    def __getattr__(self, name: str) -> Any:
+        return lambda *args, **kwargs: self
+
+
+class _OnlyCommand:
+    """The sub-parsers action, building only the named command's parser (or its alias's)."""
+
+    def __init__(self, sub: Any, command: str) -> None:
+        self._sub, self._command = sub, command
+
+    def add_parser(self, name: str, **kwargs: Any) -> Any:
+        if self._command == name or self._command in kwargs.get("aliases", ()):
+            return self._sub.add_parser(name, **kwargs)
+        return _Skipped()
 
 
 def _one_line_warning(message: Warning | str, category: type[Warning], *_: Any, **__: Any) -> None:

@@ -203,6 +203,9 @@ def passive_forces(
         frame_springs.append(FrameSpring(j1, M1, j2, M2, sp.stiffness, sp.rest_length, sp.name))
     model.damping[:] = damping
     model.friction[:] = friction
+    live_springs = any(sp.stiffness > 0.0 for sp in frame_springs)
+    if not (np.any(stiffness) or np.any(damping) or np.any(friction) or live_springs):
+        return None  # nothing passive (PassiveForces.empty), without building the solver
     forces = PassiveForces(
         model,
         stiffness=stiffness,
