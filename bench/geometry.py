@@ -57,9 +57,12 @@ def delta_closed_form(n: int = 200_000) -> list[Row]:
     ]
 
 
-def gs_assembly(n: int = 2000) -> list[Row]:
-    """Gough-Stewart FK along a smooth platform trajectory (leg lengths from the closed form)."""
-    robot = pkdyn.load("gough_stewart", geometry=False)
+def gs_leg_path(robot: pkdyn.Robot, n: int) -> np.ndarray:
+    """Leg lengths (n, 6) [m] along a smooth closed platform path about the Gough-Stewart's home.
+
+    Small translations (2 cm) and rotations (0.05-0.08 rad) at several frequencies; the lengths
+    from the closed-form inverse model.
+    """
     p = robot.params
     t = np.linspace(0, 2 * np.pi, n)
     poses = np.column_stack(
@@ -72,7 +75,13 @@ def gs_assembly(n: int = 2000) -> list[Row]:
             0.08 * np.sin(2 * t),
         ]
     )
-    rho = cf_gs.leg_lengths_rpy(p.a, p.b, poses)
+    return np.asarray(cf_gs.leg_lengths_rpy(p.a, p.b, poses))
+
+
+def gs_assembly(n: int = 2000) -> list[Row]:
+    """Gough-Stewart FK along a smooth platform trajectory (leg lengths from the closed form)."""
+    robot = pkdyn.load("gough_stewart", geometry=False)
+    rho = gs_leg_path(robot, n)
     q = pkdyn.forward_geometry(robot, rho[0]).q
     times = np.empty(n)
     iters = np.empty(n)

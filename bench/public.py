@@ -29,10 +29,10 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 import raw_pinocchio
+from geometry import gs_leg_path
 from timing import Row, paired, print_table, us
 
 import pkdyn
-from pkdyn.closed_form import gough_stewart as cf_gs
 from pkdyn.dynamics import actuation, inverse_dynamics, simulate
 from pkdyn.dynamics.trajectory import named_trajectory
 from pkdyn.model.formats.mjcf import MjcfOptions, StateMap, actuator_efforts, mujoco_model
@@ -205,19 +205,7 @@ def simulation_rows(name: str, long_euler: bool = True) -> list[Row]:
 
 def assembly_rows(n: int = 400) -> list[Row]:
     robot = pkdyn.load("gough_stewart", geometry=False)
-    p = robot.params
-    t = np.linspace(0, 2 * np.pi, n)
-    poses = np.column_stack(
-        [
-            0.02 * np.sin(t),
-            0.02 * np.cos(2 * t),
-            p.home_height() + 0.02 * np.sin(3 * t),
-            0.05 * np.sin(t),
-            0.05 * np.cos(t),
-            0.08 * np.sin(2 * t),
-        ]
-    )
-    rho = cf_gs.leg_lengths_rpy(p.a, p.b, poses)
+    rho = gs_leg_path(robot, n)
     lean = raw_pinocchio.LeanNewton(
         robot.model, robot.constraint_models, robot.actuated_q, robot.passive_v
     )

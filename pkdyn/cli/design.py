@@ -113,7 +113,6 @@ def _default_metrics(d: dict[str, Any]) -> list[str]:
 
 def _clavel_chart(args: argparse.Namespace) -> None:
     from pkdyn.design.clavel import clavel_chart_study, clavel_chart_text
-    from pkdyn.design.run import run_study
     from pkdyn.design.space import Range
 
     if args.family not in (None, "delta"):
@@ -126,7 +125,20 @@ def _clavel_chart(args: argparse.Namespace) -> None:
     study = clavel_chart_study(
         spans["r"], spans["b"], grid=args.grid or 4, **params(_flat(args.fix))
     )
-    result = run_study(
+    result = _run(study, args)
+    if args.json:
+        print(
+            json.dumps({"rows": [_plain(result.table.record(i)) for i in range(len(result.table))]})
+        )
+    else:
+        print(clavel_chart_text(result))
+
+
+def _run(study: Any, args: argparse.Namespace) -> Any:
+    """Run a study with the command line's executor, resume and progress options."""
+    from pkdyn.design.run import run_study
+
+    return run_study(
         study,
         args.out,
         workers=args.workers,
@@ -135,12 +147,6 @@ def _clavel_chart(args: argparse.Namespace) -> None:
         progress=None if not args.json else False,
         scheduler_timeout=args.timeout,
     )
-    if args.json:
-        print(
-            json.dumps({"rows": [_plain(result.table.record(i)) for i in range(len(result.table))]})
-        )
-    else:
-        print(clavel_chart_text(result))
 
 
 def _plain(rec: dict[str, Any]) -> dict[str, Any]:
@@ -156,7 +162,6 @@ def _cmd_design(args: argparse.Namespace) -> None:
         _clavel_chart(args)
         return
     from pkdyn.cli._common import output_path
-    from pkdyn.design.run import run_study
 
     output_path("--plot", args.plot, figure=True)
     output_path("--urdf", args.urdf)
@@ -166,15 +171,7 @@ def _cmd_design(args: argparse.Namespace) -> None:
 
         with atomic_write(args.save_study) as fh:
             fh.write(study.to_yaml())
-    result = run_study(
-        study,
-        args.out,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        resume=not args.no_resume,
-        progress=None if not args.json else False,
-        scheduler_timeout=args.timeout,
-    )
+    result = _run(study, args)
     if args.verify:
         result.verify(args.verify)
     if args.plot:

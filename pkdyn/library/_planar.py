@@ -5,15 +5,13 @@ from __future__ import annotations
 import math
 from typing import Protocol
 
+from pkdyn.library._colors import BLUE, ORANGE
 from pkdyn.model.formats.urdf_writer import UrdfWriter
 
 __all__ = ["PASSIVE_VELOCITY", "write_rr_chain"]
 
 PASSIVE_VELOCITY = 1e3
 """Velocity limit written on passive revolute joints [rad/s] (effort 0: they are not driven)."""
-
-BLUE = (0.2, 0.4, 0.8, 1.0)
-ORANGE = (0.9, 0.5, 0.1, 1.0)
 
 
 class ChainParams(Protocol):

@@ -36,6 +36,7 @@ import pinocchio as pin
 from pkdyn.closed_form import delta as cf
 from pkdyn.exceptions import ParameterError, UnreachablePoseError
 from pkdyn.library._check import in_range, middle_of_reach, positive
+from pkdyn.library._colors import BLUE, GREY, ORANGE
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rpy_z_to
 
 __all__ = [
@@ -312,7 +313,7 @@ def _hinged_bar(
     x, y = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
     w.universal(f"{bar}_upper", arm, bar, (p.la, sign * s, 0.0), pitch, y, x, cone=cone)
     if side == "a":
-        w.rod(beam, p.bar_mass, p.bar_radius, (0, 0, 0), (0, -2 * s, 0), (0.9, 0.5, 0.1, 1.0))
+        w.rod(beam, p.bar_mass, p.bar_radius, (0, 0, 0), (0, -2 * s, 0), ORANGE)
         w.joint(
             beam,
             "revolute",
@@ -347,10 +348,9 @@ def build_urdf(p: Params) -> str:
     """
     w = UrdfWriter("delta")
     s = 0.5 * p.bar_spacing
-    grey, blue, orange = (0.6, 0.6, 0.65, 1.0), (0.2, 0.4, 0.8, 1.0), (0.9, 0.5, 0.1, 1.0)
     w.link(
         "base",
-        visuals=[Shape("cylinder", (p.ra + 0.04, 0.01), (0, 0, 0.02), rgba=grey)],
+        visuals=[Shape("cylinder", (p.ra + 0.04, 0.01), (0, 0, 0.02), rgba=GREY)],
         collisions=[Shape("cylinder", (p.ra + 0.04, 0.01), (0, 0, 0.02))],
     )
     alphas = home(p)
@@ -364,9 +364,9 @@ def build_urdf(p: Params) -> str:
             (p.arm_radius * 0.8, p.bar_spacing + 0.02),
             (p.la, 0, 0),
             (np.pi / 2, 0, 0),
-            blue,
+            BLUE,
         )
-        w.rod(arm, p.arm_mass, p.arm_radius, (0, 0, 0), (p.la, 0, 0), blue, [elbow])
+        w.rod(arm, p.arm_mass, p.arm_radius, (0, 0, 0), (p.la, 0, 0), BLUE, [elbow])
         w.joint(
             arm,
             "revolute",
@@ -392,7 +392,7 @@ def build_urdf(p: Params) -> str:
             attach = P + p.rb * u + sign * s * t
             d_arm = R_arm.T @ (attach - elbow_w)
             jrpy = rpy_z_to(d_arm)
-            w.rod(bar, p.bar_mass, p.bar_radius, (0, 0, 0), (0, 0, p.lb), orange)
+            w.rod(bar, p.bar_mass, p.bar_radius, (0, 0, 0), (0, 0, p.lb), ORANGE)
             cone = ((0.0, 0.0, 1.0), p.cone_half_angle)
             if hinged:
                 _hinged_bar(w, p, i, side, u, theta, pitch, cone)
@@ -419,7 +419,7 @@ def build_urdf(p: Params) -> str:
         p.nacelle_mass,
         (0, 0, 0),
         I_n,
-        visuals=[Shape("cylinder", (nacelle_r, 0.01), rgba=grey)],
+        visuals=[Shape("cylinder", (nacelle_r, 0.01), rgba=GREY)],
         collisions=[Shape("cylinder", (nacelle_r, 0.01))],
     )
     w.joint("nacelle", "floating", "base", "nacelle", xyz=P)

@@ -36,6 +36,7 @@ import pinocchio as pin
 from pkdyn.closed_form.five_bar import MODES, _wrap, elbow_points, forward, inverse
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, middle_of_reach, positive
+from pkdyn.library._colors import GREY
 from pkdyn.library._planar import write_rr_chain
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 
@@ -228,13 +229,12 @@ def build_urdf(p: Params) -> str:
 
     """
     w = UrdfWriter("five_bar")
-    grey = (0.6, 0.6, 0.65, 1.0)
     r = p.link_radius
     z_prox, z_dist = 0.0, 2.5 * r  # display layers; the kinematics is in z = 0
     A = p.base_xy
     w.link(
         "base",
-        visuals=[Shape("box", (p.d + 6 * r, 4 * r, 2 * r), (0.0, 0.0, -2 * r), rgba=grey)],
+        visuals=[Shape("box", (p.d + 6 * r, 4 * r, 2 * r), (0.0, 0.0, -2 * r), rgba=GREY)],
         collisions=[Shape("box", (p.d + 6 * r, 4 * r, 2 * r), (0.0, 0.0, -2 * r))],
     )
     theta = np.array(home(p))
@@ -260,7 +260,7 @@ def build_urdf(p: Params) -> str:
         p.effector_mass,
         (0.0, 0.0, 0.0),
         I_e,
-        visuals=[Shape("sphere", (r_e,), (0.0, 0.0, z_dist), rgba=grey)],
+        visuals=[Shape("sphere", (r_e,), (0.0, 0.0, z_dist), rgba=GREY)],
         collisions=[Shape("sphere", (r_e,), (0.0, 0.0, z_dist))],
     )
     w.joint("effector", "fixed", "distal1", "effector", xyz=(p.l2, 0.0, 0.0))

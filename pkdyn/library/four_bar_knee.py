@@ -26,6 +26,7 @@ import numpy as np
 from pkdyn.closed_form.four_bar_knee import motor_from_knee
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
+from pkdyn.library._colors import BLUE, GREY, ORANGE
 from pkdyn.library._planar import PASSIVE_VELOCITY
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 
@@ -35,10 +36,6 @@ NAME = "four_bar_knee"
 """Family name (``pkdyn.load`` and the CLI take it)."""
 SUMMARY = "Four-bar knee: thigh motor drives the knee through a crank and a coupler rod"
 """One-line description of the family (``pkdyn info``, the family registry)."""
-
-GREY = (0.6, 0.6, 0.65, 1.0)
-BLUE = (0.2, 0.4, 0.8, 1.0)
-ORANGE = (0.9, 0.5, 0.1, 1.0)
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ import pinocchio as pin
 from pkdyn.closed_form.gough_stewart import leg_lengths
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
+from pkdyn.library._colors import BLUE, GREY, ORANGE
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rpy_z_to
 
 __all__ = [
@@ -198,9 +199,8 @@ def build_urdf(p: Params) -> str:
 
     """
     w = UrdfWriter("gough_stewart")
-    grey, blue, orange = (0.6, 0.6, 0.65, 1.0), (0.2, 0.4, 0.8, 1.0), (0.9, 0.5, 0.1, 1.0)
     base_r = float(np.max(np.linalg.norm(p.a[:, :2], axis=1))) + 0.04
-    plate = Shape("cylinder", (base_r, 0.01), (0, 0, -0.005), rgba=grey)
+    plate = Shape("cylinder", (base_r, 0.01), (0, 0, -0.005), rgba=GREY)
     w.link("base", visuals=[plate], collisions=[plate])
     zh = p.home_height()
     C = np.array([0.0, 0.0, zh])
@@ -215,7 +215,7 @@ def build_urdf(p: Params) -> str:
             p.cylinder_mass,
             (0, 0, 0.5 * L),
             Ic,
-            visuals=[Shape("cylinder", (1.6 * r, L), (0, 0, 0.5 * L), rgba=blue)],
+            visuals=[Shape("cylinder", (1.6 * r, L), (0, 0, 0.5 * L), rgba=BLUE)],
             collisions=[Shape("cylinder", (r, L), (0, 0, 0.5 * L))],
         )
         Lr = float(min(p.rho_min[i], L))
@@ -225,7 +225,7 @@ def build_urdf(p: Params) -> str:
             p.rod_mass,
             (0, 0, -0.5 * Lr),
             Ir,
-            visuals=[Shape("cylinder", (r, Lr), (0, 0, -0.5 * Lr), rgba=orange)],
+            visuals=[Shape("cylinder", (r, Lr), (0, 0, -0.5 * Lr), rgba=ORANGE)],
             collisions=[Shape("cylinder", (r, Lr), (0, 0, -0.5 * Lr))],
         )
         pyramid = ((0.0, 0.0, 1.0), _hole_ref(p.a[i], rpy), (p.pyramid_half_angle,) * 2)
@@ -261,7 +261,7 @@ def build_urdf(p: Params) -> str:
         p.platform_mass,
         (0, 0, 0),
         Ip,
-        visuals=[Shape("cylinder", (R, 0.012), (0, 0, -0.014), rgba=grey)],
+        visuals=[Shape("cylinder", (R, 0.012), (0, 0, -0.014), rgba=GREY)],
         collisions=[Shape("cylinder", (R, 0.012), (0, 0, -0.014))],
     )
     w.joint("platform", "floating", "base", "platform", xyz=C)

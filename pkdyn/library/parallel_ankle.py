@@ -32,6 +32,7 @@ import pinocchio as pin
 from pkdyn.closed_form.parallel_ankle import crank_points, foot_points, inverse
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import positive
+from pkdyn.library._colors import BLUE, GREY, ORANGE
 from pkdyn.library._planar import PASSIVE_VELOCITY
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rod_inertia
 
@@ -41,10 +42,6 @@ NAME = "parallel_ankle"
 """Family name (``pkdyn.load`` and the CLI take it)."""
 SUMMARY = "Humanoid parallel ankle: two shank motors drive ankle pitch and roll through two rods"
 """One-line description of the family (``pkdyn info``, the family registry)."""
-
-GREY = (0.6, 0.6, 0.65, 1.0)
-BLUE = (0.2, 0.4, 0.8, 1.0)
-ORANGE = (0.9, 0.5, 0.1, 1.0)
 
 
 @dataclass(frozen=True)

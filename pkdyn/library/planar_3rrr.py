@@ -27,6 +27,7 @@ import numpy as np
 from pkdyn.closed_form import planar_3rrr as cf
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
+from pkdyn.library._colors import GREY
 from pkdyn.library._planar import write_rr_chain
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 
@@ -187,7 +188,6 @@ def build_urdf(p: Params) -> str:
 
     """
     w = UrdfWriter("planar_3rrr")
-    grey = (0.6, 0.6, 0.65, 1.0)
     base = p.base_xy
     r = p.link_radius
     # Display layers (kinematics is in z = 0): proximal links, distal links, platform.
@@ -196,10 +196,10 @@ def build_urdf(p: Params) -> str:
     w.link(
         "base",
         visuals=[
-            Shape("cylinder", (2.0 * r, 2.0 * r), (float(a), float(b), z_prox - 2.0 * r), rgba=grey)
+            Shape("cylinder", (2.0 * r, 2.0 * r), (float(a), float(b), z_prox - 2.0 * r), rgba=GREY)
             for a, b in base
         ]
-        + [Shape("cylinder", (reach + 2.0 * r, 0.004), (0.0, 0.0, z_prox - 3.0 * r), rgba=grey)],
+        + [Shape("cylinder", (reach + 2.0 * r, 0.004), (0.0, 0.0, z_prox - 3.0 * r), rgba=GREY)],
         collisions=[
             Shape("cylinder", (2.0 * r, 2.0 * r), (float(a), float(b), z_prox - 2.0 * r))
             for a, b in base
@@ -230,7 +230,7 @@ def build_urdf(p: Params) -> str:
         p.platform_mass,
         (0, 0, z_plat),
         I_p,
-        visuals=[Shape("cylinder", (p.h, thick), (0.0, 0.0, z_plat), rgba=grey)],
+        visuals=[Shape("cylinder", (p.h, thick), (0.0, 0.0, z_plat), rgba=GREY)],
         collisions=[Shape("cylinder", (p.h, thick), (0.0, 0.0, z_plat))],
     )
     w.joint(

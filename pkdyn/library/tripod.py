@@ -88,6 +88,7 @@ from pkdyn.closed_form.tripod import (
 )
 from pkdyn.exceptions import ParameterError
 from pkdyn.library._check import in_range, positive
+from pkdyn.library._colors import BLUE, GREY, ORANGE
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rod_inertia, segment_origin
 
 __all__ = [
@@ -298,13 +299,8 @@ def build_urdf(p: Params) -> str:
 
     """
     w = UrdfWriter("tripod" if p.branches == 3 else "walker")
-    grey, blue, orange, dark = (
-        (0.6, 0.6, 0.65, 1.0),
-        (0.2, 0.4, 0.8, 1.0),
-        (0.9, 0.5, 0.1, 1.0),
-        (0.25, 0.25, 0.3, 1.0),
-    )
-    ground = Shape("cylinder", (p.foothold_radius + 0.15, 0.01), (0, 0, -0.005), rgba=grey)
+    dark = (0.25, 0.25, 0.3, 1.0)
+    ground = Shape("cylinder", (p.foothold_radius + 0.15, 0.01), (0, 0, -0.005), rgba=GREY)
     w.link("support", visuals=[ground], collisions=[Shape("cylinder", ground.size, ground.xyz)])
 
     plate_r, plate_t, spindle_r = p.r_p + 0.04, 0.04, 0.05
@@ -323,7 +319,7 @@ def build_urdf(p: Params) -> str:
         mass,
         com,
         inertia,
-        visuals=[Shape("cylinder", (plate_r, plate_t), rgba=grey), spindle_v],
+        visuals=[Shape("cylinder", (plate_r, plate_t), rgba=GREY), spindle_v],
         collisions=[Shape("cylinder", (plate_r, plate_t)), spindle_c],
     )
     M0 = home_nacelle_placement(p)
@@ -347,7 +343,7 @@ def build_urdf(p: Params) -> str:
 
         # edge body, hinged about u through P_L (the paper's q6)
         ends = (np.zeros(3), np.array([e, 0.0, 0.0]))
-        vis, col = _cylinder_shapes(0.02, ends[0], ends[1], grey)
+        vis, col = _cylinder_shapes(0.02, ends[0], ends[1], GREY)
         edge = _rod(p.edge_mass, 0.02, ends[0], ends[1])
         w.link(f"{b}_edge", p.edge_mass, tuple(edge.lever), edge.inertia, [vis], [col])
         w.joint(f"{b}_q6", "revolute", "nacelle", f"{b}_edge", P_L, _rpy(R_T), (1, 0, 0), passive)
@@ -358,10 +354,10 @@ def build_urdf(p: Params) -> str:
             axis_joint = "b" if side == "L" else "c"
             body, rod = f"{b}_cyl{side}", f"{b}_rod{side}"
             c_end = np.array([cyl_len, 0.0, 0.0])
-            vis, _ = _cylinder_shapes(p.cylinder_radius, np.zeros(3), c_end, blue)
+            vis, _ = _cylinder_shapes(p.cylinder_radius, np.zeros(3), c_end, BLUE)
             # the collision cylinder leaves out the clevis inside the nacelle plate
             _, col = _cylinder_shapes(
-                p.cylinder_radius, np.array([MOUNT_CLEARANCE, 0.0, 0.0]), c_end, blue
+                p.cylinder_radius, np.array([MOUNT_CLEARANCE, 0.0, 0.0]), c_end, BLUE
             )
             cyl = _rod(p.cylinder_mass, p.cylinder_radius, np.zeros(3), c_end)
             w.link(body, p.cylinder_mass, tuple(cyl.lever), cyl.inertia, [vis], [col])
@@ -376,7 +372,7 @@ def build_urdf(p: Params) -> str:
                 passive,
             )
             r_start = np.array([-rod_len, 0.0, 0.0])
-            vis, col = _cylinder_shapes(p.rod_radius, r_start, np.zeros(3), orange)
+            vis, col = _cylinder_shapes(p.rod_radius, r_start, np.zeros(3), ORANGE)
             rd = _rod(p.rod_mass, p.rod_radius, r_start, np.zeros(3))
             w.link(rod, p.rod_mass, tuple(rd.lever), rd.inertia, [vis], [col])
             w.joint(

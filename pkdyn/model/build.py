@@ -20,6 +20,7 @@ __all__ = [
     "build_tree",
     "build_geometry",
     "check_model_size",
+    "replace_joints",
     "resolve_frame",
     "constraint_models",
 ]
@@ -111,20 +112,54 @@ def _single_joint_model(jm: pin.JointModel) -> pin.Model:
 
 
 def _rebuild(model: pin.Model, specs: dict[str, JointSpec]) -> pin.Model:
+    joints: dict[str, pin.JointModel | None] = {}
+    for name, spec in specs.items():
+        if spec.kind == "spherical":
+            joints[name] = pin.JointModelSpherical()
+        else:
+            assert spec.axis2 is not None
+            jm = model.joints[model.getJointId(name)]
+            joints[name] = pin.JointModelUniversal(_axis_of(jm), spec.axis2)
+    return replace_joints(model, joints)
+
+
+def replace_joints(model: pin.Model, joints: dict[str, pin.JointModel | None]) -> pin.Model:
+    """A copy of ``model`` with the named joints replaced (ball and universal joints, welds).
+
+    The other joints keep their models and limits; a new joint gets effort and velocity limits
+    of 1e3 and position bounds of -1..1 (quaternion) or -pi..pi (universal angles); ``None``
+    welds the joint's body to its parent (a fixed joint: later joints and frames move onto the
+    parent with the placement). Bodies and frames follow.
+
+    Args:
+        model: The tree (unchanged).
+        joints: Joint name -> new joint model, or ``None`` to weld.
+
+    Returns:
+        The new model.
+
+    """
     new = pin.Model()
     new.name = model.name
     new.gravity = model.gravity
+    image: dict[int, tuple[int, pin.SE3]] = {0: (0, pin.SE3.Identity())}
     for jid in range(1, model.njoints):
         name = model.names[jid]
         jm = model.joints[jid]
-        spec = specs.get(name)
-        if spec is None:
+        pj, off = image[model.parents[jid]]
+        placement = off * model.jointPlacements[jid]
+        if name in joints and joints[name] is None:
+            image[jid] = (pj, placement)
+            new.appendBodyToJoint(pj, model.inertias[jid], placement)
+            continue
+        njm = joints.get(name)
+        if njm is None:
             sl_q = slice(jm.idx_q, jm.idx_q + jm.nq)
             sl_v = slice(jm.idx_v, jm.idx_v + jm.nv)
-            new_id = new.addJoint(
-                model.parents[jid],
+            nid = new.addJoint(
+                pj,
                 jm,
-                model.jointPlacements[jid],
+                placement,
                 name,
                 model.effortLimit[sl_v],
                 model.velocityLimit[sl_v],
@@ -132,25 +167,25 @@ def _rebuild(model: pin.Model, specs: dict[str, JointSpec]) -> pin.Model:
                 model.upperPositionLimit[sl_q],
             )
         else:
-            if spec.kind == "spherical":
-                njm: pin.JointModel = pin.JointModelSpherical()
-                nq, nv = 4, 3
-            else:
-                assert spec.axis2 is not None
-                njm = pin.JointModelUniversal(_axis_of(jm), spec.axis2)
-                nq, nv = 2, 2
-            big = np.full(nv, 1e3)
-            lo = np.full(nq, -np.pi if spec.kind == "universal" else -1.0)
-            new_id = new.addJoint(
-                model.parents[jid], njm, model.jointPlacements[jid], name, big, big, lo, -lo
-            )
-        new.appendBodyToJoint(new_id, model.inertias[jid], pin.SE3.Identity())
+            big = np.full(njm.nv, 1e3)
+            lo = np.full(njm.nq, -np.pi if njm.nq == 2 else -1.0)
+            nid = new.addJoint(pj, njm, placement, name, big, big, lo, -lo)
+        image[jid] = (nid, pin.SE3.Identity())
+        new.appendBodyToJoint(nid, model.inertias[jid], pin.SE3.Identity())
+    welded = {name for name, jm in joints.items() if jm is None}
     for f in model.frames:
         if f.name == "universe" and f.parentJoint == 0 and f.type == pin.FrameType.FIXED_JOINT:
             continue
-        if new.existFrame(f.name, f.type):
+        pj, off = image[f.parentJoint]
+        ftype = f.type
+        if ftype == pin.FrameType.JOINT and f.name in welded:
+            ftype = pin.FrameType.FIXED_JOINT
+        if new.existFrame(f.name, ftype):
             continue
-        new.addFrame(pin.Frame(f), False)
+        if not welded:  # the same tree: the frame as it is
+            new.addFrame(pin.Frame(f), False)
+        else:
+            new.addFrame(pin.Frame(f.name, pj, off * f.placement, ftype), False)
     return new
 
 

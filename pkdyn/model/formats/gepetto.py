@@ -23,7 +23,6 @@ as a string is an error, not a list of characters).
 
 from __future__ import annotations
 
-import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -34,6 +33,7 @@ import pinocchio as pin
 import yaml
 
 from pkdyn.exceptions import DescriptionError
+from pkdyn.model.build import replace_joints
 from pkdyn.model.description import (
     TASK_COMPONENTS,
     ActuatorSpec,
@@ -269,64 +269,19 @@ def apply_joint_types(model: pin.Model, side: Sidecar, source: str) -> pin.Model
             + (" ..." if len(absent) > 4 else "")
         )
         types = {k: v for k, v in types.items() if k not in absent}
-    return _rebuild(model, types)
+    return replace_joints(model, {name: _new_joint(t) for name, t in types.items()})
 
 
-def _new_joint(t: str) -> tuple[pin.JointModel, int, int]:
+def _new_joint(t: str) -> pin.JointModel | None:
+    """The joint model of a Gepetto ``joint_type`` (``None``: FIXED, a weld)."""
+    if t == "FIXED":
+        return None
     if t == "SPHERICAL":
-        return pin.JointModelSpherical(), 4, 3
+        return pin.JointModelSpherical()
     m = _UJOINT.match(t)
     assert m is not None
     e = {c: np.eye(3)[k] for k, c in enumerate("XYZ")}
-    return pin.JointModelUniversal(e[m.group(1)], e[m.group(2)]), 2, 2
-
-
-def _rebuild(model: pin.Model, types: dict[str, str]) -> pin.Model:
-    new = pin.Model()
-    new.name = model.name
-    new.gravity = model.gravity
-    image: dict[int, tuple[int, pin.SE3]] = {0: (0, pin.SE3.Identity())}
-    for jid in range(1, model.njoints):
-        name = model.names[jid]
-        jm = model.joints[jid]
-        pj, off = image[model.parents[jid]]
-        placement = off * model.jointPlacements[jid]
-        t = types.get(name)
-        if t == "FIXED":
-            image[jid] = (pj, placement)
-            new.appendBodyToJoint(pj, model.inertias[jid], placement)
-            continue
-        if t is None:
-            sl_q = slice(jm.idx_q, jm.idx_q + jm.nq)
-            sl_v = slice(jm.idx_v, jm.idx_v + jm.nv)
-            nid = new.addJoint(
-                pj,
-                jm,
-                placement,
-                name,
-                model.effortLimit[sl_v],
-                model.velocityLimit[sl_v],
-                model.lowerPositionLimit[sl_q],
-                model.upperPositionLimit[sl_q],
-            )
-        else:
-            njm, nq, nv = _new_joint(t)
-            big = np.full(nv, 1e3)
-            lo = np.full(nq, -math.pi if nq == 2 else -1.0)
-            nid = new.addJoint(pj, njm, placement, name, big, big, lo, -lo)
-        image[jid] = (nid, pin.SE3.Identity())
-        new.appendBodyToJoint(nid, model.inertias[jid], pin.SE3.Identity())
-    for f in model.frames:
-        if f.name == "universe" and f.parentJoint == 0 and f.type == pin.FrameType.FIXED_JOINT:
-            continue
-        pj, off = image[f.parentJoint]
-        ftype = f.type
-        if ftype == pin.FrameType.JOINT and types.get(f.name) == "FIXED":
-            ftype = pin.FrameType.FIXED_JOINT
-        if new.existFrame(f.name, ftype):
-            continue
-        new.addFrame(pin.Frame(f.name, pj, off * f.placement, ftype), False)
-    return new
+    return pin.JointModelUniversal(e[m.group(1)], e[m.group(2)])
 
 
 _LOOP_FRAME = re.compile(r"^(closedloop\d+)_?([AB])(_.*)?$")
