@@ -23,6 +23,8 @@ import time
 from datetime import datetime, timezone
 from pathlib import Path
 
+from pkdyn.files import atomic_write
+
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "results.md"
 MODULES = (
@@ -122,7 +124,8 @@ def main() -> None:
         lines += ["| benchmark | figure | target |", "|---|---|---|"]
         lines += ["| " + " | ".join(r) + " |" for r in rows]
     lines += ["", NOTES]
-    OUT.write_text("\n".join(lines))
+    with atomic_write(OUT) as fh:  # an interrupted run keeps the previous results
+        fh.write("\n".join(lines))
     print("\n".join(lines))
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import null_space
 
 import pkdyn
 from pkdyn.analysis.mobility import mobility
@@ -104,6 +105,19 @@ def test_inverse_dynamics_along_a_short_motion(model):
     )
     efforts = inverse_dynamics(robot, traj)
     assert np.all(np.isfinite(efforts.tau))
+    # the efforts satisfy the dynamics over the motions the closures allow, rebuilt here from
+    # RNEA (rotor armature included), the closure Jacobian and the passive forces
+    model, data = robot.model, robot.model.createData()
+    S = np.zeros((n, robot.nv))
+    S[np.arange(n), robot.actuated_v] = 1.0
+    for k in range(0, t.size, 2):
+        q, v, a = traj.q[k], traj.v[k], traj.a[k]
+        b = pin.rnea(model, data, q, v, a)
+        if robot.passive is not None:
+            b = b - robot.passive.force(q, v)
+        Z = null_space(robot.closure_set.jacobian(model.createData(), q))
+        scale = max(1.0, float(np.abs(Z.T @ b).max()))
+        assert np.abs(Z.T @ (S.T @ efforts.tau[k] - b)).max() < 1e-7 * scale
     assert np.max(np.abs(efforts.residual)) < 1e-8
     # power balance at every sample: sum tau_i qa_dot_i = dE/dt, dE/dt = v . (M a + C v + g)
     # is the same as v^T (S^T tau) since closure forces do no work on closure-consistent v;

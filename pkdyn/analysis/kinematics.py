@@ -364,7 +364,7 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
     """
     qq = _checked_q(robot, q)
     rows = np.asarray(robot.task_rows, dtype=int)
-    _relation_count(robot, rows)  # (evaluated at home once, before the kinematics at q)
+    r = _relation_count(robot, rows)  # (at home, once: before the kinematics at q)
     nv = robot.nv
     Jc = robot.closure_set.jacobian(robot.data, qq) if robot.closure_set.nc else np.zeros((0, nv))
     J6 = platform_jacobian(robot, qq)
@@ -375,7 +375,6 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
     # orthonormal basis of the relation row space: its r most significant directions, r the
     # number of relations at home (at least m): m, or n_a under redundant actuation (every
     # actuator rate is then tied to the platform's)
-    r = _relation_count(robot, rows)
     if rel.R.size:
         _, s, Vt = np.linalg.svd(rel.R, full_matrices=False)
     else:
