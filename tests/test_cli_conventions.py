@@ -253,3 +253,4 @@ def test_each_command_parses_alone_and_has_its_help(command, capsys):
     sub = next(a for a in _parser([command])._actions if hasattr(a, "choices") and a.choices)
     full = next(a for a in _parser(["--help"])._actions if hasattr(a, "choices") and a.choices)
     assert command in sub.choices and set(sub.choices) < set(full.choices)
+    assert set(full.choices) == set(COMMANDS)  # every registered command has its quick start
