@@ -15,6 +15,7 @@ RANK = {
     "exceptions": 0,
     "progress": 1,
     "files": 1,
+    "inputs": 1,
     "model": 2,
     "closed_form": 3,
     "library": 4,

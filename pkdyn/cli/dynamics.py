@@ -9,6 +9,7 @@ import numpy as np
 
 from pkdyn.cli._common import emit, load, output_path, robot_command
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.inputs import non_negative
 
 __all__ = ["register"]
 
@@ -77,8 +78,7 @@ def _cmd_size(args: argparse.Namespace) -> None:
     output_path("--csv", args.csv)
     output_path("--plot", args.plot, figure=True)
     robot = load(args)
-    if args.payload < 0.0 or not np.isfinite(args.payload):
-        raise InvalidInputError("--payload", f"must be >= 0 kg, got {args.payload}")
+    non_negative("--payload", args.payload, "kg")
     if args.operating_points and not args.catalog:
         raise InvalidInputError("--operating-points", "needs --catalog (the motors to plot)")
     fast = None

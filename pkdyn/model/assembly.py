@@ -19,7 +19,12 @@ from functools import partial
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import AssemblyError, JointLimitError, UnreachablePoseError
+from pkdyn.exceptions import (
+    AssemblyError,
+    InvalidInputError,
+    JointLimitError,
+    UnreachablePoseError,
+)
 from pkdyn.model.families import FAMILIES, Family
 from pkdyn.model.pose import as_finite, pose_from_vector, pose_to_vector
 from pkdyn.model.robot import Robot
@@ -223,6 +228,7 @@ def forward_geometry(
     """
     qa = as_finite("actuated coordinates", qa, len(robot.actuators))
     start = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
+    _refuse_far_actuators(robot, start, qa)
     q0 = start.copy()
     q0[robot.actuated_q] = qa
     if check_limits:
@@ -334,6 +340,7 @@ def inverse_geometry(
     task = FramePoseTask(robot.model, robot.platform_frame, robot.task_rows)
     task.target = target
     q0 = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
+    _refuse_far_pose(robot, q0, target)
     fam = _family_of(robot) if q_init is None else None
     seeded = None
     if fam is not None:  # the family's working mode, from its closed form
@@ -362,6 +369,42 @@ def inverse_geometry(
     if check_limits:
         check_actuator_limits(robot, sol.q)
     return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.nc]), initial=0.0)))
+
+
+FAR = 100.0
+"""Farthest a requested pose may lie from the platform's start (in robot sizes), or actuator
+values from the start's (in actuator scales: rad, or robot sizes for prismatic actuators),
+before they are refused as out of reach: the continuation towards them takes one solve per
+tenth of a size (1,000 at this distance), and absurd values (1e308) would overflow."""
+
+
+def _refuse_far_pose(robot: Robot, start: np.ndarray, target: pin.SE3) -> None:
+    """Refuse a target more than :data:`FAR` robot sizes from the platform's start position."""
+    size = _size(robot)
+    d = float(np.max(np.abs(target.translation - robot.platform_placement(start).translation)))
+    if d > FAR * size:  # (the largest component: no overflow)
+        pos = np.array2string(target.translation, precision=4)
+        raise UnreachablePoseError(
+            "-",
+            0.0,
+            f"{robot.name}: pose {pos} m lies {d:.3g} m from the platform's position along an "
+            f"axis, more than {FAR:g} times the robot's size ({size:.3g} m): out of reach",
+        )
+
+
+def _refuse_far_actuators(robot: Robot, start: np.ndarray, qa: np.ndarray) -> None:
+    """Refuse actuator values more than :data:`FAR` actuator scales from the start's."""
+    a0 = start[robot.actuated_q]
+    d = np.abs(qa - a0) / robot.actuator_scale
+    if d.size and float(np.max(d)) > FAR:
+        k = int(np.argmax(d))
+        unit = "m" if robot.actuator_prismatic[k] else "rad"
+        raise InvalidInputError(
+            "actuated coordinates",
+            f"{robot.actuators[k].name} = {qa[k]:.6g} {unit} is {d[k]:.3g} times its scale "
+            f"({robot.actuator_scale[k]:.3g} {unit}) from its start {a0[k]:.6g} {unit}: beyond "
+            "any reachable value",
+        )
 
 
 UNCONTROLLED_TOL = 1e-9

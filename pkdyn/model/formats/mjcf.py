@@ -56,8 +56,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import DescriptionError, OutputError, PkdynError
+from pkdyn.exceptions import DescriptionError, OutputError
 from pkdyn.files import atomic_write
+from pkdyn.inputs import positive
 from pkdyn.model.robot import Robot
 from solvers.numerics import lstsq, machine_rtol
 
@@ -618,12 +619,11 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
 
     Raises:
         DescriptionError: A joint has no MuJoCo equivalent.
-        PkdynError: Invalid options.
+        InvalidInputError: A timestep that is not a positive finite number of seconds.
 
     """
     opt = options or MjcfOptions()
-    if not opt.timestep > 0.0:
-        raise PkdynError(f"MJCF timestep must be > 0, got {opt.timestep}")
+    positive("timestep", opt.timestep, "s")
     model = robot.model
     smap = StateMap(robot)
     names = smap.body_names
