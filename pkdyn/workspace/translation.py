@@ -317,6 +317,13 @@ def translation_workspace(
     if not np.isfinite(margin):
         raise InvalidInputError("margin", f"must be a finite distance [m], got {margin}")
     kinds = check_kinds(limits)
+    if "interference" in kinds and not robot.collision_model.ngeoms:
+        raise InvalidInputError(
+            "limits",
+            f"{robot.name}: interference needs collision geometry: give the links <collision> "
+            "elements (in Python, load with geometry=True), or leave interference out "
+            "(--limits stroke joint; limits=('stroke', 'joint'))",
+        )
     ev = evaluator if evaluator is not None else evaluator_for(robot, method, progress)
     R = pin.rpy.rpyToMatrix(rpy_a)
     dims = tuple(int(d) for d in robot.task_rows if d < 3)
