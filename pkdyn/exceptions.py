@@ -19,6 +19,7 @@ __all__ = [
     "SingularConfigurationError",
     "TrajectoryError",
     "InfeasibleEffortError",
+    "LimitsExceededError",
     "SimulationError",
     "OutputError",
     "StudyError",
@@ -179,6 +180,22 @@ class InfeasibleEffortError(PkdynError):
         self.sample = sample
         self.actuator = actuator
         super().__init__(message)
+
+
+class LimitsExceededError(PkdynError):
+    """A motion was sized and exceeds actuator limits: the report stands, the answer is no.
+
+    Raised by the command line after printing the sizing (``pkdyn size``): the margins are
+    reported, and the exit status says the motion is not feasible.
+
+    Attributes:
+        exceeded: One phrase per limit exceeded (``motor1 speed by 9.04 %``).
+
+    """
+
+    def __init__(self, what: str, exceeded: list[str], hint: str) -> None:
+        self.exceeded = exceeded
+        super().__init__(f"{what}: limits exceeded: {'; '.join(exceeded)}; {hint}")
 
 
 class SimulationError(PkdynError):

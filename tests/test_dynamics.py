@@ -308,7 +308,7 @@ def quattro():
 
 def test_four_armed_delta_is_redundantly_actuated(quattro):
     robot, jt = quattro
-    assert len(robot.actuators) == 4 and robot.dof() == 3
+    assert len(robot.actuators) == 4 and robot.mobility() == 3
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
 
 

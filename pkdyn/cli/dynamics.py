@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.cli._common import emit, load, output_path, robot_command
-from pkdyn.exceptions import InvalidInputError
+from pkdyn.exceptions import InvalidInputError, LimitsExceededError
 from pkdyn.inputs import non_negative
 
 __all__ = ["register"]
@@ -90,7 +90,10 @@ def _cmd_size(args: argparse.Namespace) -> None:
         traj = fast.trajectory
         result = sizing_from_efforts(robot, fast.efforts, args.payload)
     else:
-        traj = named_trajectory(robot, args.trajectory, **_trajectory_options(args))
+        # speeds are reported (their margins), not refused: a sizing answers how far off it is
+        traj = named_trajectory(
+            robot, args.trajectory, check_speeds=False, **_trajectory_options(args)
+        )
         result = size(robot, traj, payload=args.payload)
     selection = None
     if args.catalog:
@@ -149,6 +152,12 @@ def _cmd_size(args: argparse.Namespace) -> None:
         payload["selection"] = selection.as_json()
         text.append(selection.table(show=args.show))
     emit(args, payload, "\n".join(text))
+    if not result.feasible:  # the report stands; the exit status and one line say no
+        raise LimitsExceededError(
+            f"{robot.name} on {result.trajectory} with {args.payload:g} kg",
+            result.exceeded,
+            "see the margins above (a longer cycle or a lighter payload)",
+        )
 
 
 def register(sub: Any) -> None:

@@ -213,11 +213,20 @@ def _cmd_statics(args: argparse.Namespace) -> None:
 
     robot, q = configuration(args)
     out = statics_json(robot, q, args.wrench, gravity=args.gravity)
-    text = "\n".join(
+    lines = [
         f"{n}: {t:.6g} {u[2]}"
         for n, t, u in zip(out["actuators"], out["tau"], units(robot), strict=True)
-    )
-    emit(args, out, text)
+    ]
+    for name, r in out["reactions"].items():
+        lines.append(
+            f"closure {name}: force {_vector(r['force'])} N, moment {_vector(r['moment'])} N m "
+            f"about {_vector(r['point'])} m (on its first body, world axes)"
+        )
+    emit(args, out, "\n".join(lines))
+
+
+def _vector(v: list[float]) -> str:
+    return "[" + " ".join(f"{x + 0.0:.4g}" for x in v) + "]"  # (+ 0.0: no negative zero)
 
 
 def register(sub: Any) -> None:

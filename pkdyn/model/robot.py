@@ -203,6 +203,24 @@ class Robot:
         return out
 
     def dof(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
+        """Degrees of freedom of the platform at ``q`` (default ``q_home``): the Delta's 3.
+
+        The word's one meaning, as ``pkdyn info`` prints it: the motions allowed by the
+        closures that move the platform's controlled pose components (:meth:`mobility_split`);
+        without a platform, every motion the closures allow. :meth:`mobility` counts the
+        internal mobilities too (the Delta's six bar spins: 9).
+
+        Args:
+            q: Configuration (nq,).
+            tol: Relative singular-value threshold of the ranks.
+
+        Returns:
+            Number of degrees of freedom of the platform.
+
+        """
+        return self.mobility_split(q, tol)[0]
+
+    def mobility(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
         """Mobility at ``q`` (default ``q_home``): nv minus the rank of the closure Jacobian.
 
         Args:
@@ -211,7 +229,8 @@ class Robot:
                 closure Jacobian's entries are of order one in SI units).
 
         Returns:
-            Number of degrees of freedom, internal mobilities included.
+            Number of independent motions, internal mobilities included
+            (``dof + internal`` of :meth:`mobility_split`).
 
         """
         qq = self.q_home if q is None else q
@@ -226,8 +245,8 @@ class Robot:
         The motions allowed by the closures (null space of the closure Jacobian) are split into
         those that move the platform's controlled pose components (``dof``) and those that
         leave them still (``internal``, e.g. the spin of a Delta's ball-jointed bars).
-        ``dof + internal == self.dof(q)``. A robot without a platform frame has no internal
-        mobility by this definition.
+        ``dof + internal == self.mobility(q)``. A robot without a platform frame has no
+        internal mobility by this definition.
 
         Args:
             q: Configuration (nq,).
