@@ -32,6 +32,14 @@ class PkdynError(Exception):
     """Base class of every error a pkdyn user can cause."""
 
 
+def close_match(name: str, known: list[str]) -> str:
+    """``; did you mean 'x'?`` with the closest of ``known`` to ``name``, or ``""``."""
+    import difflib
+
+    close = difflib.get_close_matches(name, known, n=2, cutoff=0.6)
+    return "; did you mean " + " or ".join(f"'{c}'" for c in close) + "?" if close else ""
+
+
 class DescriptionError(PkdynError):
     """A robot description (URDF, extension element or YAML sidecar) is malformed.
 
@@ -55,7 +63,7 @@ class UnknownRobotError(PkdynError):
         self.known = known
         super().__init__(
             f"unknown robot '{name}': not a file and not one of the library robots "
-            f"({', '.join(known)})"
+            f"({', '.join(known)}){close_match(name, known)}"
         )
 
 

@@ -17,7 +17,7 @@ from typing import IO, Any
 
 from pkdyn.exceptions import OutputError
 
-__all__ = ["atomic_path", "atomic_write"]
+__all__ = ["atomic_path", "atomic_write", "check_writable"]
 
 
 def _temporary(path: Path) -> Path:
@@ -27,11 +27,33 @@ def _temporary(path: Path) -> Path:
     try:
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
     except FileNotFoundError:
-        raise OutputError(str(path), f"directory '{path.parent}' does not exist") from None
+        if not path.parent.is_dir():
+            raise OutputError(str(path), f"directory '{path.parent}' does not exist") from None
+        raise OutputError(  # /proc, /sys: directories that take no new file
+            str(path), f"directory '{path.parent}' does not accept new files; choose another"
+        ) from None
+    except PermissionError:
+        raise OutputError(
+            str(path), f"no permission to create files in directory '{path.parent}'"
+        ) from None
     except OSError as err:
         raise OutputError(str(path), err.strerror or str(err)) from None
     os.close(fd)
     return Path(tmp)
+
+
+def check_writable(path: str | os.PathLike[str]) -> None:
+    """Make sure ``path`` can be written, before any work: create and remove a temporary file.
+
+    Permission checks (``os.access``) do not tell: root passes them everywhere, and virtual
+    file systems (``/proc``) refuse new files whatever the permissions say.
+
+    Raises:
+        OutputError: A directory, a missing directory, no permission, or a directory that takes
+            no new file.
+
+    """
+    _temporary(Path(path)).unlink(missing_ok=True)
 
 
 def _commit(tmp: Path, path: Path) -> None:

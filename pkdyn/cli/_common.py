@@ -11,7 +11,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from pkdyn.exceptions import InvalidInputError, OutputError
+from pkdyn.exceptions import InvalidInputError, OutputError, close_match
 
 __all__ = [
     "Parser",
@@ -53,7 +53,17 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"pkdyn: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"pkdyn: error: {message}{_did_you_mean(message)} (see {self.prog} --help)\n")
+
+
+def _did_you_mean(message: str) -> str:
+    """``; did you mean 'fk'?`` for an argparse "invalid choice" close to a valid one."""
+    import re
+
+    m = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+    if m is None:
+        return ""
+    return close_match(m[1], re.findall(r"'([^']*)'", m[2]))
 
 
 def params(items: Sequence[str] | None) -> dict[str, Any]:
@@ -112,7 +122,7 @@ def output_path(option: str, path: str | None, figure: bool = False) -> str | No
     if not parent.is_dir():
         raise OutputError(path, f"{option}: directory '{parent}' does not exist")
     if not os.access(parent, os.W_OK):
-        raise OutputError(path, f"{option}: directory '{parent}' is not writable")
+        raise OutputError(path, f"{option}: no permission to create files in '{parent}'")
     if figure:
         from matplotlib.figure import Figure
 
@@ -122,6 +132,12 @@ def output_path(option: str, path: str | None, figure: bool = False) -> str | No
             known = ", ".join(f".{k}" for k in sorted(supported))
             what = f"unknown figure format '{p.suffix}'" if fmt else "no file extension"
             raise OutputError(path, f"{option}: {what}; name the file with one of {known}")
+    from pkdyn.files import check_writable
+
+    try:
+        check_writable(p)  # (root passes os.access; /proc takes no new file)
+    except OutputError as err:
+        raise OutputError(path, f"{option}: {str(err).split(': ', 1)[1]}") from None
     return path
 
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from types import ModuleType
 from typing import Any
 
-from pkdyn.exceptions import ParameterError, UnknownRobotError
+from pkdyn.exceptions import ParameterError, UnknownRobotError, close_match
 from pkdyn.inputs import MAX_MAGNITUDE
 
 __all__ = ["FAMILIES", "Family", "export_urdf", "family", "from_description", "register"]
@@ -111,7 +111,10 @@ class Family:
         for key, value in overrides.items():
             if key not in fields:
                 raise ParameterError(
-                    self.name, key, f"unknown; valid parameters: {', '.join(sorted(fields))}"
+                    self.name,
+                    key,
+                    f"unknown; valid parameters: {', '.join(sorted(fields))}"
+                    + close_match(key, sorted(fields)),
                 )
             f = fields[key]  # the field's default, without building (validating) an instance
             factory: Any = f.default_factory
