@@ -50,7 +50,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
 from pkdyn.model.pose import as_finite
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 from solvers import FramePoseTask, numerics
 
 __all__ = [
@@ -161,7 +161,9 @@ def platform_jacobian(robot: Robot, q: np.ndarray) -> np.ndarray:
 
     """
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
     pin.computeJointJacobians(robot.model, robot.data, q)
     oMf = pin.updateFramePlacement(robot.model, robot.data, robot.platform_frame)
     task = FramePoseTask(robot.model, robot.platform_frame, np.arange(6))

@@ -25,6 +25,7 @@ from pkdyn.cli._common import (
     units,
 )
 from pkdyn.exceptions import OutputError, PkdynError
+from pkdyn.model.robot import PLATFORM_HINT
 
 __all__ = ["register"]
 
@@ -150,7 +151,9 @@ def _cmd_fk(args: argparse.Namespace) -> None:
     robot = load(args)
     res = pkdyn.forward_geometry(robot, args.qa)
     if res.placement is None:
-        raise PkdynError(f"{robot.name} declares no platform frame; nothing to report")
+        raise PkdynError(
+            f"{robot.name} declares no platform frame, so no pose to report; {PLATFORM_HINT}"
+        )
     payload = {
         "position": res.position.tolist(),
         "rpy": res.rpy.tolist(),

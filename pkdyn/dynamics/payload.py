@@ -11,7 +11,7 @@ import pinocchio as pin
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.inputs import non_negative
 from pkdyn.model.pose import as_finite
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 
 __all__ = ["with_payload"]
 
@@ -41,7 +41,9 @@ def with_payload(
     """
     mass = non_negative("payload", mass, "kg")
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform to carry a payload")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform to carry a payload; {PLATFORM_HINT}"
+        )
     c = as_finite("offset", offset, 3)
     I3 = np.zeros((3, 3)) if inertia is None else np.asarray(inertia, dtype=float).reshape(3, 3)
     model = pin.Model(robot.model)

@@ -49,7 +49,7 @@ from pkdyn.exceptions import (
 )
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.pose import pose_from_vector, pose_to_vector
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.progress import progress as progress_bar
 from solvers import numerics
 
@@ -488,7 +488,9 @@ def map_task_trajectory(
 
     """
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
     model, data = robot.model, robot.data
     rows = robot.task_rows
     N = task.t.size
@@ -601,7 +603,9 @@ def map_task_trajectory(
 
 def _home_pose(robot: Robot) -> np.ndarray:
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
     pin.framesForwardKinematics(robot.model, robot.data, robot.q_home)
     M = robot.data.oMf[robot.platform_frame]
     pos, rpy = pose_to_vector(M)

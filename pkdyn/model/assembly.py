@@ -27,7 +27,7 @@ from pkdyn.exceptions import (
 )
 from pkdyn.model.families import FAMILIES, Family
 from pkdyn.model.pose import as_finite, pose_from_vector, pose_to_vector
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 from solvers import FramePoseTask, SolveResult, solve_lm
 
 __all__ = [
@@ -336,7 +336,9 @@ def inverse_geometry(
     """
     target = pose_from_vector(pose)
     if robot.platform_frame is None:
-        raise UnreachablePoseError("-", 0.0, f"{robot.name} declares no platform frame")
+        raise UnreachablePoseError(
+            "-", 0.0, f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
     task = FramePoseTask(robot.model, robot.platform_frame, robot.task_rows)
     task.target = target
     q0 = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)

@@ -15,7 +15,13 @@ from pkdyn.model.families import FAMILIES
 from solvers import ClosureSet, PassiveForces
 from solvers.numerics import rank
 
-__all__ = ["MODELLING_JOINTS", "Robot"]
+__all__ = ["PLATFORM_HINT", "MODELLING_JOINTS", "Robot"]
+
+PLATFORM_HINT = (
+    'declare one: <pkdyn:platform link="LINK" task="x y z"/> in the URDF (urdf/README.md), '
+    "or 'platform: {frame: LINK}' in its YAML sidecar"
+)
+"""How to declare a platform, for the messages of the commands that need one."""
 
 MODELLING_JOINTS = ("JointModelFreeFlyer", "JointModelPlanar")
 """Joint models that place a platform or floating base: modelling devices, not hardware."""
@@ -299,7 +305,7 @@ class Robot:
 
         """
         if self.platform_frame is None:
-            raise PkdynError(f"{self.name} declares no platform frame (add a <pkdyn:platform>)")
+            raise PkdynError(f"{self.name} declares no platform frame; {PLATFORM_HINT}")
         pin.framesForwardKinematics(self.model, self.data, q)
         return pin.SE3(self.data.oMf[self.platform_frame])
 

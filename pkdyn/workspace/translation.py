@@ -23,7 +23,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.inputs import count, positive
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, check_kinds
 
 __all__ = [
@@ -310,7 +310,9 @@ def translation_workspace(
 
     """
     if robot.platform_frame is None:
-        raise PkdynError(f"{robot.name} declares no platform frame: no workspace to sample")
+        raise PkdynError(
+            f"{robot.name} declares no platform frame: no workspace to sample; {PLATFORM_HINT}"
+        )
     rpy_a = np.asarray(rpy, dtype=float)
     if rpy_a.shape != (3,) or not np.all(np.isfinite(rpy_a)):
         raise InvalidInputError("rpy", "expected 3 finite angles [rad]")
