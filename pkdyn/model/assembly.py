@@ -320,7 +320,9 @@ def inverse_geometry(
 
     Args:
         robot: The robot.
-        pose: ``[x, y, z]`` or ``[x, y, z, roll, pitch, yaw]`` [m, rad], or a placement.
+        pose: ``[x, y, z]`` or ``[x, y, z, roll, pitch, yaw]`` [m, rad], a placement, or
+            only the controlled components in that order when they are neither 3 nor 6 (a
+            five-bar: ``[x, y]``).
         q_init: Initial configuration (nq,) (default ``robot.q_home``).
         tol: Residual threshold [m or rad].
         check_limits: Raise if an actuator ends outside its limits.
@@ -334,11 +336,12 @@ def inverse_geometry(
         JointLimitError: The pose needs an actuator outside its limits.
 
     """
-    target = pose_from_vector(pose)
     if robot.platform_frame is None:
         raise UnreachablePoseError(
             "-", 0.0, f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
         )
+    partial = _partial_pose(robot, pose)
+    target = pose_from_vector(pose if partial is None else partial)
     task = FramePoseTask(robot.model, robot.platform_frame, robot.task_rows)
     task.target = target
     q0 = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
@@ -367,7 +370,8 @@ def inverse_geometry(
             f"{np.array2string(rpy, precision=4)} rad is out of reach (closest configuration "
             f"misses it by {pose_err:.3g}; closure '{name}' residual {res:.3g})",
         )
-    _check_uncontrolled(robot, pose, target, sol.q)
+    if partial is None:  # (a partial pose gives no uncontrolled component)
+        _check_uncontrolled(robot, pose, target, sol.q)
     if check_limits:
         check_actuator_limits(robot, sol.q)
     return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.nc]), initial=0.0)))
@@ -409,6 +413,35 @@ def _refuse_far_actuators(robot: Robot, start: np.ndarray, qa: np.ndarray) -> No
         )
 
 
+_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
+
+
+def _partial_pose(robot: Robot, pose: Sequence[float] | np.ndarray | pin.SE3) -> np.ndarray | None:
+    """A full pose vector from the controlled components only, or ``None`` for a full pose.
+
+    A pose of ``n`` values that is neither ``x y z`` nor ``x y z roll pitch yaw`` gives the
+    robot's ``n`` controlled components, in the order ``x y z roll pitch yaw`` (a five-bar:
+    ``x y``; a four-bar knee: its one); the others are those of the home pose (placeholders:
+    the robot does not control them).
+    """
+    if isinstance(pose, pin.SE3):
+        return None
+    values = as_finite("pose", pose)
+    rows = np.asarray(robot.task_rows, dtype=int)
+    if values.size in (3, 6):
+        return None
+    if values.size != rows.size:
+        names = " ".join(_NAMES[int(r)] for r in rows)
+        raise InvalidInputError(
+            "pose",
+            f"expected x y z [roll pitch yaw] (3 or 6 values) or the {rows.size} components "
+            f"{robot.name} controls ({names}), got {values.size}",
+        )
+    home = np.concatenate(pose_to_vector(robot.platform_placement(robot.q_home)))
+    home[rows] = values
+    return home
+
+
 UNCONTROLLED_TOL = 1e-9
 """Largest difference [m or rad] between a requested and the reached value of a pose component
 the robot does not control, before :func:`inverse_geometry` refuses the request."""
@@ -446,7 +479,12 @@ def _check_uncontrolled(
             "-",
             0.0,
             f"{robot.name} controls only {task} of its platform: {what} cannot be imposed; "
-            "give those components as the robot reaches them, or only the controlled ones",
+            "give those components as the robot reaches them"
+            + (
+                f", or only the {len(robot.task_rows)} controlled ones"
+                if len(robot.task_rows) not in (3, 6)
+                else ""
+            ),
         )
 
 
