@@ -17,8 +17,28 @@ __all__ = ["register"]
 def _cmd_simulate(args: argparse.Namespace) -> None:
     from pkdyn.dynamics import simulate
 
-    robot = load(args)
+    output_path("--csv", args.csv)
+    output_path("--plot", args.plot, figure=True)
+    output_path("--html", args.html)
+    robot = load(args, geometry=args.html is not None)
     res = simulate(robot, args.duration, args.dt, integrator=args.integrator, step=args.step)
+    if args.csv:
+        from pkdyn.dynamics.simulation_output import write_simulation_csv
+
+        write_simulation_csv(robot, res, args.csv)
+    if args.plot:
+        from pkdyn.plotting.dynamics import plot_simulation
+
+        plot_simulation(robot, res, path=args.plot)
+    if args.html:
+        from pkdyn.viewer import Scene
+
+        scene = Scene(robot, res.q[0])
+        try:
+            scene.animate(res.t, res.q)
+            scene.save_html(args.html)
+        finally:
+            scene.close()
     payload = {
         "robot": robot.name,
         "duration": float(res.t[-1] - res.t[0]),
@@ -167,6 +187,13 @@ def register(sub: Any) -> None:
     sp.add_argument("--dt", type=float, default=1e-3, help="output time step [s]")
     sp.add_argument("--integrator", choices=("dopri5", "rk4", "euler"), default="dopri5")
     sp.add_argument("--step", type=float, default=None, help="integration step [s] (default: --dt)")
+    sp.add_argument(
+        "--csv",
+        metavar="FILE",
+        help="write the time series (t, qa_, qa_dot_, tau_, energies, closure_residual)",
+    )
+    sp.add_argument("--plot", metavar="FILE.png", help="plot actuators, energies, closures vs time")
+    sp.add_argument("--html", metavar="FILE", help="save a meshcat animation (static HTML)")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_simulate)
     sp = robot_command(sub, "size", "actuator efforts, speeds and powers along a trajectory")
