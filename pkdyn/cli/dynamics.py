@@ -82,6 +82,31 @@ def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
     return opts
 
 
+def _trajectory_file(args: argparse.Namespace, robot: Any) -> Any:
+    """The task trajectory of ``--trajectory FILE.csv``, or ``None`` for a named one."""
+    from pkdyn.dynamics.trajectory import TRAJECTORIES
+
+    if args.trajectory in TRAJECTORIES:
+        return None
+    if not args.trajectory.lower().endswith(".csv"):
+        from pkdyn.exceptions import close_match
+
+        raise InvalidInputError(
+            "--trajectory",
+            f"'{args.trajectory}': one of {', '.join(TRAJECTORIES)} or a .csv file"
+            + close_match(args.trajectory, list(TRAJECTORIES)),
+        )
+    for option, given in (
+        ("--cycle-time", args.cycle_time is not None),
+        ("--cycles", args.cycles != 1),
+    ):
+        if given:
+            raise InvalidInputError(option, "does not apply to a trajectory read from a file")
+    from pkdyn.dynamics.trajectory_file import read_task_csv
+
+    return read_task_csv(robot, args.trajectory)
+
+
 def _fastest_options(args: argparse.Namespace) -> dict[str, Any]:
     """The path's nominal parametrisation: ``cycle_time / dt`` samples (default 1 s)."""
     opts = _trajectory_options(args)
@@ -102,18 +127,24 @@ def _cmd_size(args: argparse.Namespace) -> None:
     if args.operating_points and not args.catalog:
         raise InvalidInputError("--operating-points", "needs --catalog (the motors to plot)")
     fast = None
+    from_file = _trajectory_file(args, robot)
     if args.fastest:
         from pkdyn.dynamics.fastest import fastest_trajectory
 
-        task = named_task(robot, args.trajectory, **_fastest_options(args))
+        task = from_file or named_task(robot, args.trajectory, **_fastest_options(args))
         fast = fastest_trajectory(robot, task, payload=args.payload)
         traj = fast.trajectory
         result = sizing_from_efforts(robot, fast.efforts, args.payload)
     else:
         # speeds are reported (their margins), not refused: a sizing answers how far off it is
-        traj = named_trajectory(
-            robot, args.trajectory, check_speeds=False, **_trajectory_options(args)
-        )
+        if from_file is not None:
+            from pkdyn.dynamics.trajectory import map_task_trajectory
+
+            traj = map_task_trajectory(robot, from_file, check_speeds=False)
+        else:
+            traj = named_trajectory(
+                robot, args.trajectory, check_speeds=False, **_trajectory_options(args)
+            )
         result = size(robot, traj, payload=args.payload)
     selection = None
     if args.catalog:
@@ -197,7 +228,13 @@ def register(sub: Any) -> None:
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_simulate)
     sp = robot_command(sub, "size", "actuator efforts, speeds and powers along a trajectory")
-    sp.add_argument("--trajectory", choices=("adept", "sine", "p2p"), default="adept")
+    sp.add_argument(
+        "--trajectory",
+        default="adept",
+        metavar="NAME|FILE.csv",
+        help="adept, sine, p2p, or a CSV file: a column t [s] and qa_<actuator> columns "
+        "(actuator space) or the controlled pose components among x y z roll pitch yaw",
+    )
     sp.add_argument("--payload", type=float, default=0.0, help="payload mass [kg]")
     sp.add_argument(
         "--cycle-time",
