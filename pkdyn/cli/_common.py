@@ -201,11 +201,11 @@ def fmt(v: np.ndarray) -> str:
     return " ".join(f"{x:.6f}" for x in v)
 
 
-def configuration(args: argparse.Namespace) -> tuple[Any, np.ndarray]:
+def configuration(args: argparse.Namespace, geometry: bool = False) -> tuple[Any, np.ndarray]:
     """The robot and the assembled configuration named by ``--pose`` or ``--qa``."""
     import pkdyn
 
-    robot = load(args)
+    robot = load(args, geometry=geometry)
     if args.qa is not None:
         return robot, pkdyn.forward_geometry(robot, args.qa, check_limits=False).q
     return robot, pkdyn.inverse_geometry(robot, args.pose, check_limits=False).q
