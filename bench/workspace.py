@@ -22,7 +22,7 @@ import pinocchio as pin
 
 import pkdyn
 from pkdyn.workspace.clavel import clavel_numeric
-from pkdyn.workspace.legs import HexapodEvaluator
+from pkdyn.workspace.legs import HexapodEvaluator, leg_placements
 from pkdyn.workspace.numeric import NumericEvaluator
 from pkdyn.workspace.orientation import mel_study
 from pkdyn.workspace.translation import translation_workspace
@@ -70,9 +70,10 @@ def gough_stewart_rows() -> list[Row]:
     v = ev.legs.leg_vectors(P, R)
     margin = 0.002
     li = ev.interference
-    t_vec = _median_s(lambda: li.bad(P, R, v, margin), repeats=3)
+    where = leg_placements(gs, ev.legs, P, R, v)
+    t_vec = _median_s(lambda: li.bad(leg_placements(gs, ev.legs, P, R, v), m, margin), repeats=3)
     li.coal_calls = 0
-    hits = li.bad(P, R, v, margin)
+    hits = li.bad(where, m, margin)
     npairs = len(li.checker.ids)
     rows.append(
         (
@@ -86,7 +87,7 @@ def gough_stewart_rows() -> list[Row]:
     k = 300
     t0 = time.perf_counter()
     coal_hits = np.array(
-        [min(li.distance(c, n, P, R, v) for c in range(npairs)) < margin for n in range(k)]
+        [min(li.distance(c, n, where) for c in range(npairs)) < margin for n in range(k)]
     )
     t_coal = (time.perf_counter() - t0) / k
     assert np.array_equal(coal_hits, hits[:k])
