@@ -124,6 +124,7 @@ def load(
     *,
     home: Sequence[float] | np.ndarray | None = None,
     tol: float = ASSEMBLY_TOL,
+    xacro_args: dict[str, Any] | None = None,
     **params: Any,
 ) -> Robot:
     """Load a robot: a library family name (``delta``, ``gough_stewart``...) or a file.
@@ -140,6 +141,8 @@ def load(
             passive ones solved, or a full configuration (nq,) used as the starting guess.
         tol: Assembly tolerance [m or rad]: closures a description misses by at most this much
             (CAD rounding) are closed with a warning; beyond it, an error.
+        xacro_args: Arguments of a ``.xacro`` file (``<xacro:arg>`` name -> value); the file
+            is expanded by the ``xacro`` package (``pip install "pkdyn[xacro]"``).
         **params: Builder parameters of a library family (SI units).
 
     Returns:
@@ -155,6 +158,8 @@ def load(
 
     """
     name = str(name_or_path)
+    if name in FAMILIES and xacro_args:
+        raise ParameterError(name, "xacro_args", "apply to .xacro files only")
     if name in FAMILIES:
         fam = FAMILIES[name]
         p = fam.make_params(params)
@@ -174,9 +179,16 @@ def load(
     if params:
         first = next(iter(params))
         raise ParameterError(path.name, first, "builder parameters apply to library robots only")
-    from pkdyn.model.formats.xmldoc import read_text
+    from pkdyn.model.formats.xacro_files import expand_xacro, is_xacro
 
-    text = read_text(path, "description file")
+    if is_xacro(path):
+        text = expand_xacro(path, xacro_args)
+    elif xacro_args:
+        raise ParameterError(path.name, "xacro_args", "apply to .xacro files only")
+    else:
+        from pkdyn.model.formats.xmldoc import read_text
+
+        text = read_text(path, "description file")
     side = Path(sidecar) if sidecar is not None else None
     if side is None:
         for cand in (path.with_suffix(".yaml"), path.parent / "robot.yaml"):
@@ -237,6 +249,9 @@ def load_string(
         The loaded robot.
 
     """
+    from pkdyn.model.formats.xmldoc import lenient
+
+    xml = lenient(xml)  # Drake's and Gazebo's leniencies: comments with --, drake: undeclared
     fmt = detect_format(xml, source)
     side = None
     if sidecar is not None:
@@ -319,10 +334,16 @@ def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar 
         except ET.ParseError:
             root = None  # parse_description names the problem
     _check_urdf_joints(xml, source, root)
+    if root is not None:
+        xml = drake.implicit_world(xml, root)  # Drake's implicit world link
     desc = parse_description(xml, source)
-    root = ET.fromstring(xml) if root is None else root
+    root = ET.fromstring(xml)
     extra = drake.urdf_constraints(root, source)
     model = build_tree(xml, desc.joints, source)
+    if root.find("gazebo/joint") is not None:
+        from pkdyn.model.formats.gazebo import gazebo_closures
+
+        extra += gazebo_closures(root, model, source)
     check_model_size(model, source)  # before any createData
     if side is not None:
         from pkdyn.model.formats.gepetto import apply_joint_types
