@@ -10,7 +10,9 @@ returns the Pinocchio model:
   in file order, following each joint from its parent to its child (so loops are cut at the
   joints farthest from a root); a joint whose child is already in the tree closes a loop
   and becomes a closure (``ball`` -> ``point``, ``revolute`` -> ``hinge`` about its axis,
-  ``fixed`` -> ``weld``; other kinds are refused, naming the joint);
+  ``fixed`` -> ``weld``); a prismatic (or other) joint that would close a loop swaps places with
+  the closable tree joint that reached the same body; when there is none, it is refused, naming
+  the joint;
 - a body without a parent joint is welded to the world (an importer that wants it floating
   gives it a ``free`` joint);
 - Pinocchio joints are added depth first along the tree, in file order (MuJoCo's order);
@@ -327,6 +329,7 @@ def spanning_tree(mech: Mechanism) -> tuple[list[Joint], list[Joint]]:
             tree.append(j)
             stack.extend(reversed(chosen[j.child]))
     order = {id(j): k for k, j in enumerate(mech.joints)}
+    _prefer_cuttable(chosen, cut, order)
     cut.sort(key=lambda j: order[id(j)])
     # bodies reachable only against joint directions are not reached: their joints are cuts
     # already, or they hang on an unreached body (a cycle without a root)
@@ -341,9 +344,40 @@ def spanning_tree(mech: Mechanism) -> tuple[list[Joint], list[Joint]]:
     return tree, cut
 
 
+_CUT_KINDS = {"ball": "point", "revolute": "hinge", "fixed": "weld"}
+
+
+def _prefer_cuttable(
+    chosen: dict[str, list[Joint]], cut: list[Joint], order: dict[int, int]
+) -> None:
+    """Swap a cut joint that cannot close a loop (prismatic...) with the tree joint beside it.
+
+    When a joint ``J`` that no closure can replace closes a loop at body ``c``, and the tree
+    joint ``T`` that reached ``c`` can (ball, revolute, fixed), ``J`` joins the tree and ``T``
+    closes the loop instead, unless ``J``'s parent hangs below ``c`` (the tree would cycle).
+    """
+    parent_joint = {j.child: j for joints in chosen.values() for j in joints}
+    for J in [j for j in cut if j.kind not in _CUT_KINDS]:
+        T = parent_joint.get(J.child)
+        if T is None or T.kind not in _CUT_KINDS:
+            continue
+        below, stack = set(), [J.child]
+        while stack:  # the subtree of c
+            b = stack.pop()
+            below.add(b)
+            stack.extend(j.child for j in chosen.get(b, []))
+        if J.parent in below:
+            continue
+        chosen[T.parent].remove(T)
+        chosen[J.parent].append(J)
+        chosen[J.parent].sort(key=lambda j: order[id(j)])
+        parent_joint[J.child] = J
+        cut[cut.index(J)] = T
+
+
 def _cut_closure(mech: Mechanism, j: Joint) -> ClosureSpec:
     """Closure replacing a joint that closes a loop."""
-    kinds = {"ball": "point", "revolute": "hinge", "fixed": "weld"}
+    kinds = _CUT_KINDS
     if j.kind not in kinds:
         raise DescriptionError(
             mech.source,

@@ -11,17 +11,21 @@ One ``<model>`` per file (directly under ``<sdf>`` or in a ``<world>``). What is
   links or frames, their pose (relative to the child by default), axes (``expressed_in``,
   ``use_parent_model_frame``), limits and dynamics (damping, friction, ``spring_stiffness``
   about ``spring_reference``: ``robot.passive``; a universal joint takes its first axis's);
+- ``revolute2`` joints (Gazebo's two-axis hinge: ``<axis>`` fixed in the parent, ``<axis2>``
+  carried by the first rotation, not necessarily orthogonal) as two revolute joints
+  ``<name>_1``, ``<name>_2`` through a massless intermediate body, each axis with its own limits
+  and dynamics; as a loop's cut joint, the second axis becomes a hinge closure;
 - the model's ``<pose>`` and ``<static>``;
 - Drake's ``drake:ball_constraint`` and ``drake:weld_constraint``
   (:mod:`~pkdyn.model.formats.drake`).
 
 The joints form a graph: :func:`pkdyn.model.formats.graph.build` takes a spanning tree and
 turns the joints that close loops into closures (ball -> point, revolute -> hinge, fixed ->
-weld). A link that is no joint's child floats: it gets a free-flyer joint (``root_joint`` when
+weld; a prismatic joint closing a loop trades places with the revolute beside it). A link that is no joint's child floats: it gets a free-flyer joint (``root_joint`` when
 there is one such link, else ``<link>_root_joint``), unless the model is static.
 
 SDFormat has no actuators: name them in a sidecar (``name_mot``). Joint types SDFormat has and
-pkdyn does not (``revolute2``, ``screw``, ``gearbox``), nested models, ``<include>`` and
+pkdyn does not (``screw``, ``gearbox``), nested models, ``<include>`` and
 ``drake:joint`` are refused, naming the element and its line.
 """
 
@@ -47,7 +51,6 @@ from pkdyn.model.warn import warn
 __all__ = ["read_sdf"]
 
 _REFUSED_JOINTS = {
-    "revolute2": "two-axis revolute2 joints",
     "screw": "screw joints",
     "gearbox": "gearbox joints",
 }
@@ -248,8 +251,7 @@ def _model(r: _Reader, m: ET.Element) -> Mechanism:
         mech.add_body(_link(r, el), doc.where(el))
     children = set()
     for el in joints:
-        j = _joint(r, el)
-        if j is not None:
+        for j in _joint(r, el, mech):
             mech.joints.append(j)
             children.add(j.child)
     roots = [b for b in mech.bodies if b not in children]
@@ -421,7 +423,7 @@ def _axis(r: _Reader, el: ET.Element | None, oMj: pin.SE3) -> np.ndarray | None:
     return v
 
 
-def _joint(r: _Reader, el: ET.Element) -> Joint | None:
+def _joint(r: _Reader, el: ET.Element, mech: Mechanism) -> list[Joint]:
     doc = r.doc
     name = el.get("name", "")
     jtype = el.get("type", "")
@@ -429,6 +431,7 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
     if jtype in _REFUSED_JOINTS:
         raise doc.error(el, f"{_REFUSED_JOINTS[jtype]} are not supported by pkdyn")
     kinds = {
+        "revolute2": "revolute2",
         "revolute": "revolute",
         "continuous": "revolute",
         "prismatic": "prismatic",
@@ -453,6 +456,8 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
         raise doc.error(el, "the world cannot be a joint's child")
     oMj = _resolve(r, name)
     kind = kinds[jtype]
+    if kind == "revolute2":
+        return _revolute2(r, el, mech, parent, child, oMj)
     axis_el = el.find("axis")
     axis = _axis(r, axis_el, oMj)
     if kind in ("revolute", "prismatic", "universal") and axis is None:
@@ -460,17 +465,37 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
     axis2 = _axis(r, el.find("axis2"), oMj) if kind == "universal" else None
     if kind == "universal" and axis2 is None:
         raise doc.error(el, "a universal joint needs <axis2>")
+    props = _axis_props(r, axis_el, jtype == "continuous")
+    if kind not in ("revolute", "prismatic"):
+        props["spring_ref"] = None
+    return [
+        Joint(
+            name,
+            kind,
+            parent,
+            child,
+            oMj,
+            axis=axis if axis is not None else np.array([0.0, 0.0, 1.0]),
+            axis2=axis2,
+            where=where,
+            **props,
+        )
+    ]
+
+
+def _axis_props(r: _Reader, axis_el: ET.Element | None, continuous: bool) -> dict[str, Any]:
+    """Limits and dynamics of one ``<axis>`` (or ``<axis2>``) as :class:`Joint` fields."""
     lo, hi, effort, velocity, damping, friction = -math.inf, math.inf, math.inf, math.inf, 0.0, 0.0
     stiffness, spring_ref = 0.0, 0.0
     if axis_el is not None:
         lim = axis_el.find("limit")
-        if lim is not None and jtype != "continuous":
+        if lim is not None and not continuous:
             lo = _number(r, lim, "lower", -math.inf)
             hi = _number(r, lim, "upper", math.inf)
             lo = -math.inf if lo <= -_INFINITE else lo
             hi = math.inf if hi >= _INFINITE else hi
             if lo > hi:
-                raise doc.error(lim, f"lower limit {lo} above upper limit {hi}")
+                raise r.doc.error(lim, f"lower limit {lo} above upper limit {hi}")
         if lim is not None:
             effort = _number(r, lim, "effort", -1.0)
             velocity = _number(r, lim, "velocity", -1.0)
@@ -482,21 +507,54 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
             friction = _number(r, dyn, "friction", 0.0)
             stiffness = _number(r, dyn, "spring_stiffness", 0.0)
             spring_ref = _number(r, dyn, "spring_reference", 0.0)
-    return Joint(
-        name,
-        kind,
-        parent,
-        child,
-        oMj,
-        axis=axis if axis is not None else np.array([0.0, 0.0, 1.0]),
-        axis2=axis2,
-        lower=lo,
-        upper=hi,
-        effort=effort,
-        velocity=velocity,
-        damping=damping,
-        friction=friction,
-        stiffness=stiffness,
-        spring_ref=np.array([spring_ref]) if kind in ("revolute", "prismatic") else None,
-        where=where,
-    )
+    return {
+        "lower": lo,
+        "upper": hi,
+        "effort": effort,
+        "velocity": velocity,
+        "damping": damping,
+        "friction": friction,
+        "stiffness": stiffness,
+        "spring_ref": np.array([spring_ref]),
+    }
+
+
+def _revolute2(
+    r: _Reader, el: ET.Element, mech: Mechanism, parent: str, child: str, oMj: pin.SE3
+) -> list[Joint]:
+    """A ``revolute2`` joint as two revolute joints through a massless intermediate body.
+
+    The first turns about ``<axis>`` (fixed in the parent), the second about ``<axis2>``, carried
+    by the first rotation (as Gazebo's two-axis hinge: the axes need not be orthogonal); each
+    has its own limits and dynamics. Named ``<name>_1`` and ``<name>_2``; when the joint closes
+    a loop, the second becomes a hinge closure.
+    """
+    name = el.get("name", "")
+    where = r.doc.where(el)
+    z = np.array([0.0, 0.0, 1.0])
+    a1 = _axis(r, el.find("axis"), oMj)
+    a2 = _axis(r, el.find("axis2"), oMj)
+    if a2 is None:
+        raise r.doc.error(el, "a revolute2 joint needs <axis2>")
+    mid = f"{name}#1"
+    mech.add_body(Body(mid, oMj, virtual=True), where)
+    out = []
+    for k, (axis, a_el, p, c) in enumerate(
+        (
+            (a1 if a1 is not None else z, el.find("axis"), parent, mid),
+            (a2, el.find("axis2"), mid, child),
+        )
+    ):
+        out.append(
+            Joint(
+                f"{name}_{k + 1}",
+                "revolute",
+                p,
+                c,
+                oMj,
+                axis=axis,
+                where=where,
+                **_axis_props(r, a_el, False),
+            )
+        )
+    return out
