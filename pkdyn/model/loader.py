@@ -27,10 +27,10 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError, InvalidInputError, ParameterError, UnknownRobotError
 from pkdyn.model.build import (
-    build_geometry,
     build_tree,
     check_model_size,
     constraint_models,
+    geometry_models,
     resolve_frame,
 )
 from pkdyn.model.description import (
@@ -43,7 +43,7 @@ from pkdyn.model.families import FAMILIES, from_description
 from pkdyn.model.home import ASSEMBLY_TOL, find_home
 from pkdyn.model.passive import passive_forces
 from pkdyn.model.robot import Robot
-from pkdyn.model.warn import warn
+from pkdyn.model.warn import warn, warn_missing_meshes
 from solvers import ClosureSet
 
 if TYPE_CHECKING:
@@ -217,6 +217,7 @@ class _Parts:
     visual: pin.GeometryModel
     collision: pin.GeometryModel
     q_ref: np.ndarray
+    missing_meshes: tuple[str, ...] = ()
 
 
 def load_string(
@@ -287,7 +288,9 @@ def load_string(
             tuple(j.name for j in mech.joints),
             passive=tuple(built.passive),
         )
-        parts = _Parts(built.model, desc, built.visual, built.collision, q_ref)
+        parts = _Parts(
+            built.model, desc, built.visual, built.collision, q_ref, tuple(mech.missing_meshes)
+        )
         if not geometry:
             parts.visual, parts.collision = pin.GeometryModel(), pin.GeometryModel()
     parts = _with_sidecar(parts, side, source)
@@ -361,13 +364,15 @@ def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar 
                 "look like Gepetto loop frames, but there is no robot.yaml sidecar: the "
                 "loops are left open"
             )
+    missing: list[str] = []
     if geometry:
-        visual = build_geometry(model, xml, pin.GeometryType.VISUAL, dirs, source)
-        collision = build_geometry(model, xml, pin.GeometryType.COLLISION, dirs, source)
+        visual, collision, missing = geometry_models(model, xml, dirs, source)
+        if missing:
+            warn_missing_meshes(source, missing)
     else:
         visual, collision = pin.GeometryModel(), pin.GeometryModel()
     desc = dataclasses.replace(desc, closures=desc.closures + tuple(extra))
-    return _Parts(model, desc, visual, collision, _guess(model))
+    return _Parts(model, desc, visual, collision, _guess(model), tuple(missing))
 
 
 def _with_free_flyer(model: pin.Model) -> pin.Model:
@@ -485,6 +490,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         q_home=pin.neutral(model),
         params=params,
         passive=elements,
+        missing_meshes=parts.missing_meshes,
     )
 
 

@@ -6,7 +6,7 @@ import os
 import sys
 import warnings
 
-__all__ = ["warn"]
+__all__ = ["missing_list", "warn", "warn_missing_meshes"]
 
 _PKDYN = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -24,3 +24,25 @@ def warn(message: str) -> None:
         frame = frame.f_back  # type: ignore[assignment]
         level += 1
     warnings.warn(message, UserWarning, stacklevel=level)
+
+
+def missing_list(files: list[str] | tuple[str, ...], shown: int = 5) -> str:
+    """``a, b, c and 4 more``: file names for a one-line message (sorted, unique)."""
+    names = sorted(set(files))
+    more = f" and {len(names) - shown} more" if len(names) > shown else ""
+    return ", ".join(names[:shown]) + more
+
+
+def warn_missing_meshes(source: str, files: list[str] | tuple[str, ...]) -> None:
+    """The one warning of a load whose mesh files are missing (every format says the same).
+
+    Args:
+        source: File or robot name.
+        files: The mesh files not found.
+
+    """
+    n = len(set(files))
+    warn(
+        f"{source}: {n} mesh file(s) not found, their geometry is left out (kinematics and "
+        f"dynamics are complete; collision checks and the viewer need them): {missing_list(files)}"
+    )

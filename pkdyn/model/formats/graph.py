@@ -153,6 +153,7 @@ class Mechanism:
         actuators: Actuators.
         gravity: Gravity vector [m/s^2].
         home: Named configurations (joint name -> coordinates, Pinocchio convention).
+        missing_meshes: Mesh files that were not found (their shapes are left out).
 
     """
 
@@ -164,6 +165,7 @@ class Mechanism:
     actuators: list[ActuatorSpec] = field(default_factory=list)
     gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
     home: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    missing_meshes: list[str] = field(default_factory=list)
 
     def add_body(self, body: Body, where: str = "") -> Body:
         """Add a body; its name must be new."""
@@ -321,6 +323,7 @@ def spanning_tree(mech: Mechanism) -> tuple[list[Joint], list[Joint]]:
                     chosen[b].append(j)
                     nxt.append(j.child)
         frontier = nxt
+    _prefer_cuttable(chosen, cut, {id(j): k for k, j in enumerate(mech.joints)})
     tree: list[Joint] = []
     for root in roots:  # then depth first, in file order: MuJoCo's joint (and qpos) order
         stack = list(reversed(chosen[root]))
@@ -329,7 +332,6 @@ def spanning_tree(mech: Mechanism) -> tuple[list[Joint], list[Joint]]:
             tree.append(j)
             stack.extend(reversed(chosen[j.child]))
     order = {id(j): k for k, j in enumerate(mech.joints)}
-    _prefer_cuttable(chosen, cut, order)
     cut.sort(key=lambda j: order[id(j)])
     # bodies reachable only against joint directions are not reached: their joints are cuts
     # already, or they hang on an unreached body (a cycle without a root)

@@ -48,7 +48,7 @@ from pkdyn.model.description import ActuatorSpec, ClosureSpec, FrameRef
 from pkdyn.model.formats import mjcf_spec as spec
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
 from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml, read_text
-from pkdyn.model.warn import warn
+from pkdyn.model.warn import warn, warn_missing_meshes
 
 __all__ = ["read_mjcf"]
 
@@ -160,12 +160,8 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
             if key.tag == "key" and key.get("name") == "home" and "qpos" in key.attrib:
                 mech.home["home"] = _keyframe(r, key)
     if r.missing:
-        names = sorted(set(r.missing))
-        warn(
-            f"{source}: {len(names)} mesh file(s) not found, their geometry is left out: "
-            + ", ".join(names[:5])
-            + (f" and {len(names) - 5} more" if len(names) > 5 else "")
-        )
+        mech.missing_meshes = sorted(set(r.missing))
+        warn_missing_meshes(source, mech.missing_meshes)
     return mech
 
 

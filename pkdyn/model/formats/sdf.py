@@ -21,8 +21,9 @@ One ``<model>`` per file (directly under ``<sdf>`` or in a ``<world>``). What is
 
 The joints form a graph: :func:`pkdyn.model.formats.graph.build` takes a spanning tree and
 turns the joints that close loops into closures (ball -> point, revolute -> hinge, fixed ->
-weld; a prismatic joint closing a loop trades places with the revolute beside it). A link that is no joint's child floats: it gets a free-flyer joint (``root_joint`` when
-there is one such link, else ``<link>_root_joint``), unless the model is static.
+weld; a prismatic joint closing a loop trades places with the revolute beside it). A link that
+is no joint's child floats: it gets a free-flyer joint (``root_joint`` when there is one such
+link, else ``<link>_root_joint``), unless the model is static.
 
 SDFormat has no actuators: name them in a sidecar (``name_mot``). Joint types SDFormat has and
 pkdyn does not (``screw``, ``gearbox``), nested models, ``<include>`` and
@@ -46,7 +47,7 @@ from pkdyn.model.description import FrameRef
 from pkdyn.model.formats import drake
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
 from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml
-from pkdyn.model.warn import warn
+from pkdyn.model.warn import warn, warn_missing_meshes
 
 __all__ = ["read_sdf"]
 
@@ -280,12 +281,8 @@ def _model(r: _Reader, m: ET.Element) -> Mechanism:
                     raise doc.error(el, f"names body '{ref.link}', which is not a link")
             mech.closures.append(c)
     if r.missing:
-        names = sorted(set(r.missing))
-        warn(
-            f"{doc.source}: {len(names)} mesh file(s) not found, their geometry is left out: "
-            + ", ".join(names[:5])
-            + (f" and {len(names) - 5} more" if len(names) > 5 else "")
-        )
+        mech.missing_meshes = sorted(set(r.missing))
+        warn_missing_meshes(doc.source, mech.missing_meshes)
     return mech
 
 
