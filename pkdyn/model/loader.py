@@ -36,6 +36,7 @@ from pkdyn.model.build import (
 from pkdyn.model.description import (
     TASK_COMPONENTS,
     ActuatorSpec,
+    ClosureSpec,
     Description,
     parse_description,
 )
@@ -435,10 +436,40 @@ def _with_sidecar(parts: _Parts, side: Sidecar | None, source: str) -> _Parts:
 
 
 def _with_onshape(parts: _Parts) -> _Parts:
+    """Closures of onshape-to-robot ``closing_`` frame pairs, each loop closed once.
+
+    A pair already closed by another closure (the ``<connect>`` equality an MJCF export writes
+    between the two sites, a sidecar or pkdyn closure on the same frames) is not closed again:
+    the same two joints, the same points (1e-9 m).
+    """
     from pkdyn.model.formats import onshape
 
+    found = onshape.closing_closures(parts.model)
+    if not found:
+        return parts
+    model = parts.model
+
+    def ends(c: ClosureSpec) -> list[tuple[int, np.ndarray]] | None:
+        try:
+            out = [resolve_frame(model, f, "", "") for f in (c.frame1, c.frame2)]
+        except DescriptionError:
+            return None
+        return sorted(((j, M.translation) for j, M in out), key=lambda e: e[0])
+
+    def same(a: list[tuple[int, np.ndarray]] | None, b: list[tuple[int, np.ndarray]]) -> bool:
+        return a is not None and all(
+            ja == jb and float(np.linalg.norm(pa - pb)) < 1e-9
+            for (ja, pa), (jb, pb) in zip(a, b, strict=True)
+        )
+
     used = {f.link for c in parts.desc.closures for f in (c.frame1, c.frame2)}
-    extra = [c for c in onshape.closing_closures(parts.model) if c.frame1.link not in used]
+    closed = [ends(c) for c in parts.desc.closures]
+    extra = []
+    for c in found:
+        e = ends(c)
+        if c.frame1.link in used or (e is not None and any(same(k, e) for k in closed)):
+            continue
+        extra.append(c)
     if extra:
         parts.desc = dataclasses.replace(parts.desc, closures=parts.desc.closures + tuple(extra))
     return parts

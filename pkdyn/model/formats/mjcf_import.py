@@ -506,33 +506,50 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
             warn(f"{mech.source}: {doc.where(el)} is inactive (active='false'); not used")
             continue
         name = _unique(mech, a.get("name") or f"{tag}{counts[tag]}")
-        if "site1" in a or "site2" in a:
-            f1, f2 = _frame_of(r, el, "site1"), _frame_of(r, el, "site2")
-            if tag == "connect":  # only the origins meet: keep the frames' positions
-                f1 = FrameRef(f1.link, pin.SE3(np.eye(3), f1.placement.translation))
-                f2 = FrameRef(f2.link, pin.SE3(np.eye(3), f2.placement.translation))
-        else:
-            b1, b2 = _body_ref(r, el, "body1"), _body_ref(r, el, "body2")
-            o1, o2 = _pose_of(r, b1), _pose_of(r, b2)
-            if tag == "connect":
-                anchor = spec.vector(doc, el, "anchor", a.get("anchor", "0 0 0"), 3)
-                p1 = pin.SE3(np.eye(3), anchor)
-                f1 = FrameRef(_link(b1), p1)
-                f2 = FrameRef(_link(b2), pin.SE3(np.eye(3), o2.actInv(o1 * p1).translation))
-            else:
-                rel = spec.vector(doc, el, "relpose", a.get("relpose", "0 1 0 0 0 0 0"), 7)
-                if np.allclose(rel[3:], 0.0):  # relative pose of qpos0
-                    f1 = FrameRef(_link(b1), pin.SE3.Identity())
-                    f2 = FrameRef(_link(b2), o2.actInv(o1))
-                else:
-                    w, x, y, z = rel[3:] / np.linalg.norm(rel[3:])
-                    b1Mb2 = pin.SE3(pin.Quaternion(w, x, y, z).matrix(), rel[:3])
-                    f1 = FrameRef(_link(b1), b1Mb2)
-                    f2 = FrameRef(_link(b2), pin.SE3.Identity())
+        torquescale = 1.0
+        if tag == "weld" and "torquescale" in a:
+            torquescale = float(spec.vector(doc, el, "torquescale", a["torquescale"], 1)[0])
+        f1, f2 = _equality_frames(r, el, a, tag)
+        if tag == "weld" and torquescale == 0.0:  # MuJoCo: a weld that ignores rotations
+            f1 = FrameRef(f1.link, pin.SE3(np.eye(3), f1.placement.translation))
+            f2 = FrameRef(f2.link, pin.SE3(np.eye(3), f2.placement.translation))
         if f1.link == f2.link:
             raise doc.error(el, "both sides are on the same body; nothing to close")
-        kind = "point" if tag == "connect" else "weld"
+        kind = "point" if tag == "connect" or torquescale == 0.0 else "weld"
         mech.closures.append(ClosureSpec(name, kind, f1, f2))
+
+
+def _equality_frames(
+    r: _Reader, el: ET.Element, a: dict[str, str], tag: str
+) -> tuple[FrameRef, FrameRef]:
+    """The two frames a ``connect`` or ``weld`` holds together (MuJoCo's ``eq_data``).
+
+    A weld by bodies holds the point ``anchor`` of body2 (its frame) on body1's point and
+    orientation at ``qpos0`` or, with ``relpose``, at ``relpose`` in body1's frame.
+    """
+    doc = r.doc
+    if "site1" in a or "site2" in a:
+        f1, f2 = _frame_of(r, el, "site1"), _frame_of(r, el, "site2")
+        if tag == "connect":  # only the origins meet: keep the frames' positions
+            f1 = FrameRef(f1.link, pin.SE3(np.eye(3), f1.placement.translation))
+            f2 = FrameRef(f2.link, pin.SE3(np.eye(3), f2.placement.translation))
+        return f1, f2
+    b1, b2 = _body_ref(r, el, "body1"), _body_ref(r, el, "body2")
+    o1, o2 = _pose_of(r, b1), _pose_of(r, b2)
+    anchor = spec.vector(doc, el, "anchor", a.get("anchor", "0 0 0"), 3)
+    if tag == "connect":  # anchor in body1, body2's point taken at qpos0
+        p1 = pin.SE3(np.eye(3), anchor)
+        return FrameRef(_link(b1), p1), FrameRef(
+            _link(b2), pin.SE3(np.eye(3), o2.actInv(o1 * p1).translation)
+        )
+    p2 = pin.SE3(np.eye(3), anchor)  # weld: anchor in body2
+    rel = spec.vector(doc, el, "relpose", a.get("relpose", "0 1 0 0 0 0 0"), 7)
+    if np.allclose(rel[3:], 0.0):  # relative pose of qpos0
+        return FrameRef(_link(b1), o1.actInv(o2 * p2)), FrameRef(_link(b2), p2)
+    w, x, y, z = rel[3:] / np.linalg.norm(rel[3:])
+    return FrameRef(_link(b1), pin.SE3(pin.Quaternion(w, x, y, z).matrix(), rel[:3])), FrameRef(
+        _link(b2), p2
+    )
 
 
 # ---------------------------------------------------------------------------------- actuators

@@ -481,8 +481,8 @@ def geom_props(doc: XmlDoc, el: ET.Element, cls: str, defs: Defaults, comp: Comp
         placement = pin.SE3(_zaxis(doc, el, d), 0.5 * (ft[:3] + ft[3:]))
         if gtype in ("capsule", "cylinder"):
             size = np.array([size[0], half, 0.0])
-        elif gtype in ("box", "ellipsoid"):
-            size = np.array([size[0], size[1], half])
+        elif gtype in ("box", "ellipsoid"):  # MuJoCo: size[0] for both other half-sizes
+            size = np.array([size[0], size[0], half])
     else:
         placement = pose(doc, el, a, comp)
     contype = int(float(a.get("contype", "1")))
