@@ -282,6 +282,9 @@ def _body(r: _Reader, el: ET.Element, parent: str, oMp: pin.SE3, cls: str) -> No
     )
     if use_geoms:
         body.inertia = _geom_inertia(r, el, sub)
+        I = body.inertia
+        if not (math.isfinite(I.mass) and np.all(np.isfinite(I.inertia))):
+            raise doc.error(el, "the inertia inferred from the geoms is not finite", name)
     elif inertial:
         body.inertia = spec.inertial_props(doc, inertial[0], r.comp).inertia
 

@@ -47,6 +47,7 @@ from pkdyn.model.description import FrameRef
 from pkdyn.model.formats import drake
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
 from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml
+from pkdyn.model.validate import inertia_problem, unit_vector
 from pkdyn.model.warn import warn, warn_missing_meshes
 
 __all__ = ["read_sdf"]
@@ -304,8 +305,6 @@ def _link(r: _Reader, el: ET.Element) -> Body:
 
 def _inertia(r: _Reader, el: ET.Element, link: str) -> pin.Inertia:
     mass = _number(r, el, "mass", 1.0)
-    if mass < 0.0:
-        raise r.doc.error(el.find("mass") or el, f"mass {mass} of link '{link}' is negative")
     M, rel = _pose(r, el.find("pose"), link)
     if rel != link:
         M = _resolve(r, link).actInv(_resolve(r, rel) * M)
@@ -315,6 +314,9 @@ def _inertia(r: _Reader, el: ET.Element, link: str) -> pin.Inertia:
         xx, yy, zz = (_number(r, ie, k, 0.0) for k in ("ixx", "iyy", "izz"))
         xy, xz, yz = (_number(r, ie, k, 0.0) for k in ("ixy", "ixz", "iyz"))
         I = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    problem = inertia_problem(mass, I)  # the rule of every importer (point masses kept)
+    if problem is not None:
+        raise r.doc.error(el, f"link '{link}': {problem}")
     R = M.rotation
     return pin.Inertia(mass, M.translation, R @ I @ R.T)
 
@@ -406,9 +408,10 @@ def _axis(r: _Reader, el: ET.Element | None, oMj: pin.SE3) -> np.ndarray | None:
         return None
     xyz = el.find("xyz")
     v = _numbers(r, xyz, 3) if xyz is not None else np.array([0.0, 0.0, 1.0])
-    if np.linalg.norm(v) < 1e-12:
+    u = unit_vector(v)
+    if u is None or float(np.abs(v).max()) < 1e-12:
         raise r.doc.error(xyz if xyz is not None else el, "zero joint axis")
-    v = v / np.linalg.norm(v)
+    v = u
     expressed = xyz.get("expressed_in") if xyz is not None else None
     if expressed is None and (
         _text(el.find("use_parent_model_frame")).lower() in ("1", "true") or r.version < 1.5
