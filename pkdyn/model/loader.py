@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError, InvalidInputError, ParameterError, UnknownRobotError
+from pkdyn.model.assembly import check_actuator_limits
 from pkdyn.model.build import (
     build_tree,
     check_model_size,
@@ -564,8 +565,15 @@ def _assembled(
         n_a = len(robot.actuators)
         if h.size == n_a and n_a > 0:
             qa = h
+            if user:  # the limits forward_geometry holds the same values to
+                q_check = q0.copy()
+                q_check[robot.actuated_q] = qa
+                check_actuator_limits(robot, q_check)
         elif h.size == robot.nq:
+            _check_quaternions(robot.model, h)
             q0 = pin.normalize(robot.model, h)
+            if user:
+                check_actuator_limits(robot, q0)
         else:
             raise InvalidInputError(
                 "home",
@@ -579,6 +587,20 @@ def _assembled(
         robot = _robot(parts, robot.source, robot.params)
     robot.q_home = res.q
     return robot
+
+
+def _check_quaternions(model: pin.Model, q: np.ndarray) -> None:
+    """Refuse a configuration whose ball or free joint has a zero (or tiny) quaternion."""
+    for jid in range(1, model.njoints):
+        jm = model.joints[jid]
+        if jm.nq in (4, 7) and jm.nv in (3, 6):
+            quat = q[jm.idx_q + jm.nq - 4 : jm.idx_q + jm.nq]
+            if float(np.linalg.norm(quat)) < 1e-9:
+                raise InvalidInputError(
+                    "home",
+                    f"joint '{model.names[jid]}': the quaternion {quat.tolist()} has no "
+                    "orientation (norm 0); give a unit quaternion x y z w",
+                )
 
 
 def _actuation(

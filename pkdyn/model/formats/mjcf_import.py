@@ -48,13 +48,24 @@ from pkdyn.model.description import ActuatorSpec, ClosureSpec, FrameRef
 from pkdyn.model.formats import mjcf_spec as spec
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
 from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml, read_text
+from pkdyn.model.validate import unit_vector
 from pkdyn.model.warn import warn, warn_missing_meshes
 
-__all__ = ["read_mjcf"]
+__all__ = ["MAX_BODIES", "MAX_DEPTH", "MAX_INCLUDES", "MAX_INCLUDE_DEPTH", "read_mjcf"]
 
 _REFUSED_IN_BODY = ("composite", "flexcomp", "replicate", "attach", "plugin")
 _IGNORED_IN_BODY = ("camera", "light")
-_MAX_INCLUDE_DEPTH = 8
+MAX_INCLUDE_DEPTH = 8
+"""Deepest nesting of ``<include>`` files."""
+
+MAX_INCLUDES = 100
+"""Most ``<include>`` elements one model may expand, in all."""
+
+MAX_DEPTH = 200
+"""Deepest nesting of ``<body>`` and ``<frame>`` elements (real robots: about 20)."""
+
+MAX_BODIES = 10_000
+"""Most bodies in one model (a humanoid has about 30; MuJoCo scenes of many robots, hundreds)."""
 
 
 @dataclass
@@ -72,29 +83,88 @@ class _Reader:
     geometry: bool = True
 
 
-def _includes(doc: XmlDoc, el: ET.Element, base: Path | None, depth: int) -> None:
-    """Replace ``<include file>`` elements by the children of the included documents."""
-    for k, child in enumerate(list(el)):
-        if child.tag == "include":
-            if depth >= _MAX_INCLUDE_DEPTH:
-                raise doc.error(child, f"includes nested deeper than {_MAX_INCLUDE_DEPTH} levels")
+def _includes(doc: XmlDoc, root: ET.Element, base: Path | None) -> None:
+    """Replace ``<include file>`` elements by the children of the included documents.
+
+    Iterative (any nesting of elements), with the nesting of includes capped at
+    :data:`MAX_INCLUDE_DEPTH` levels and their number at :data:`MAX_INCLUDES` (a tree of files
+    each including the next ten times would otherwise multiply), and the included text at
+    :data:`~pkdyn.model.formats.xmldoc.MAX_FILE_BYTES` in all.
+    """
+    from pkdyn.model.formats.xmldoc import MAX_FILE_BYTES
+
+    origin: dict[int, tuple[Path | None, int]] = {}  # included elements: their file, depth
+    count, size = 0, 0
+    stack: list[tuple[ET.Element, Path | None, int]] = [(root, base, 0)]
+    while stack:
+        el, b, depth = stack.pop()
+        i = 0
+        while i < len(el):
+            child = el[i]
+            cb, cd = origin.get(id(child), (b, depth))
+            if child.tag != "include":
+                stack.append((child, cb, cd))
+                i += 1
+                continue
+            if cd >= MAX_INCLUDE_DEPTH:
+                raise doc.error(child, f"includes nested deeper than {MAX_INCLUDE_DEPTH} levels")
+            count += 1
+            if count > MAX_INCLUDES:
+                raise doc.error(
+                    child, f"more than {MAX_INCLUDES} <include> elements in one model (in all)"
+                )
             name = child.get("file")
             if not name:
                 raise doc.error(child, "missing attribute 'file'")
-            path = (base / name) if base is not None and not os.path.isabs(name) else Path(name)
+            path = (cb / name) if cb is not None and not os.path.isabs(name) else Path(name)
             if not path.is_file():
                 raise doc.error(child, f"included file '{path}' does not exist")
-            sub = parse_xml(read_text(path, "included file"), str(path), path)
+            text = read_text(path, "included file")
+            size += len(text)
+            if size > MAX_FILE_BYTES:
+                raise doc.error(
+                    child, f"the included files exceed {MAX_FILE_BYTES // 2**20} MiB in all"
+                )
+            sub = parse_xml(text, str(path), path)
             if sub.root.tag != "mujoco":
                 raise doc.error(child, f"included file '{path}' is not an MJCF document")
-            _includes(sub, sub.root, path.parent, depth + 1)
             doc.merge(sub)
             el.remove(child)
-            for i, grandchild in enumerate(list(sub.root)):
-                el.insert(k + i, grandchild)
-            _includes(doc, el, base, depth)  # positions shifted: start over on this level
-            return
-        _includes(doc, child, base, depth)
+            for k, grandchild in enumerate(list(sub.root)):
+                el.insert(i + k, grandchild)
+                origin[id(grandchild)] = (path.parent, cd + 1)
+
+
+def _check_size(doc: XmlDoc, root: ET.Element) -> None:
+    """Bounded work: the number of bodies, the nesting depth and Pinocchio's data, up front."""
+    from pkdyn.model.validate import check_data_size
+
+    bodies = nv = 0
+    dofs = {"hinge": 1, "slide": 1, "ball": 3, "free": 6}
+    stack: list[tuple[ET.Element, int]] = [(w, 0) for w in root if w.tag == "worldbody"]
+    while stack:
+        el, depth = stack.pop()
+        for child in el:
+            if child.tag in ("body", "frame"):
+                if depth + 1 > MAX_DEPTH:
+                    raise doc.error(
+                        child,
+                        f"bodies and frames nested deeper than {MAX_DEPTH} levels (real robots "
+                        "nest about 20)",
+                    )
+                bodies += child.tag == "body"
+                if bodies > MAX_BODIES:
+                    raise doc.error(
+                        child,
+                        f"more than {MAX_BODIES} bodies: pkdyn reads models of at most "
+                        f"{MAX_BODIES} bodies",
+                    )
+                stack.append((child, depth + 1))
+            elif child.tag == "freejoint":
+                nv += 6
+            elif child.tag == "joint":
+                nv += dofs.get(child.get("type", "hinge"), 1)
+    check_data_size(doc.source, nv, bodies)
 
 
 def _sections(root: ET.Element, tag: str) -> list[ET.Element]:
@@ -123,7 +193,8 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
     if root.tag != "mujoco":
         raise doc.error(root, "the root element of an MJCF file must be <mujoco>")
     base = path.parent if path is not None else None
-    _includes(doc, root, base, 0)
+    _includes(doc, root, base)
+    _check_size(doc, root)
     comp = spec.Compiler.read(doc, _sections(root, "compiler"))
     defs = spec.Defaults(doc, _sections(root, "default"))
     mech = Mechanism(root.get("model", "mujoco"), source)
@@ -614,12 +685,13 @@ def _keyframe(r: _Reader, key: ET.Element) -> dict[str, np.ndarray]:
     for name, t in r.mj_joints:
         v = qpos[i : i + sizes[t]]
         i += sizes[t]
-        if t == "free":
-            w = v[3:] / max(float(np.linalg.norm(v[3:])), 1e-300)
-            out[name] = np.concatenate([v[:3], w[1:], w[:1]])
-        elif t == "ball":
-            w = v / max(float(np.linalg.norm(v)), 1e-300)
-            out[name] = np.concatenate([w[1:], w[:1]])
+        if t in ("free", "ball"):
+            w = unit_vector(v[-4:])
+            if w is None:
+                raise r.doc.error(
+                    key, f"qpos of joint '{name}': the quaternion {v[-4:].tolist()} is zero"
+                )
+            out[name] = np.concatenate([v[:-4], w[1:], w[:1]])
         else:
             out[name] = v.copy()
     return out

@@ -27,6 +27,7 @@ from pkdyn.model.validate import unit_vector
 
 __all__ = [
     "ACTUATOR_TAGS",
+    "MAX_DEFAULT_DEPTH",
     "ActuatorProps",
     "Compiler",
     "Defaults",
@@ -54,6 +55,9 @@ ACTUATOR_TAGS = (
     "plugin",
 )
 """Actuator elements of MJCF (``plugin`` actuators included)."""
+
+MAX_DEFAULT_DEPTH = 100
+"""Deepest nesting of ``<default>`` classes."""
 
 
 def vector(doc: XmlDoc, el: ET.Element, attr: str, text: str, n: int | None) -> np.ndarray:
@@ -167,27 +171,41 @@ class Defaults:
     def __init__(self, doc: XmlDoc, elements: list[ET.Element]) -> None:
         self.doc = doc
         self.classes: dict[str, dict[str, dict[str, str]]] = {"main": {}}
-        for el in elements:
-            self._read(el, "main", None)
+        stack: list[tuple[ET.Element, str, str | None, int]] = [
+            (el, "main", None, 0) for el in reversed(elements)
+        ]
+        while stack:  # iterative: any nesting depth up to MAX_DEFAULT_DEPTH
+            el, name, parent, depth = stack.pop()
+            if parent is not None and name in self.classes:
+                raise self.doc.error(el, f"default class '{name}' defined twice")
+            for child in reversed(self._read(el, name, parent)):
+                if depth + 1 > MAX_DEFAULT_DEPTH:
+                    raise self.doc.error(
+                        child, f"default classes nested deeper than {MAX_DEFAULT_DEPTH} levels"
+                    )
+                stack.append((child, str(child.get("class")), name, depth + 1))
 
-    def _read(self, el: ET.Element, name: str, parent: str | None) -> None:
+    def _read(self, el: ET.Element, name: str, parent: str | None) -> list[ET.Element]:
+        """Read one class's own defaults; return its nested ``<default>`` elements."""
         if name not in self.classes or parent is not None:
             base = self.classes.get(parent, {}) if parent is not None else {}
             self.classes[name] = {tag: dict(a) for tag, a in base.items()}
         own = self.classes[name]
+        nested = []
         for child in el:
             if child.tag == "default":
                 cname = child.get("class")
                 if not cname:
                     raise self.doc.error(child, "a nested <default> needs a class name")
-                if cname in self.classes:
+                if cname in self.classes or cname in [c.get("class") for c in nested]:  # early
                     raise self.doc.error(child, f"default class '{cname}' defined twice")
-                self._read(child, cname, name)
+                nested.append(child)
             else:
                 tag = "actuator" if child.tag in ACTUATOR_TAGS else child.tag
                 own.setdefault(tag, {}).update(child.attrib)
                 if child.tag in ACTUATOR_TAGS:
                     own["actuator"]["_shortcut"] = child.tag
+        return nested
 
     def check(self, el: ET.Element, cls: str) -> None:
         """Refuse a class name that was never defined."""

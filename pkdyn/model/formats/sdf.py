@@ -109,8 +109,11 @@ def _pose(r: _Reader, el: ET.Element | None, default: str) -> tuple[pin.SE3, str
     if fmt == "quat_xyzw":
         if v.size != 7:
             raise r.doc.error(el, "a quat_xyzw pose needs 7 numbers")
-        x, y, z, w = v[3:]
-        R = pin.Quaternion(w, x, y, z).normalized().matrix()
+        u = unit_vector(v[3:])
+        if u is None:
+            raise r.doc.error(el, "a quat_xyzw pose needs a non-zero quaternion")
+        x, y, z, w = u
+        R = pin.Quaternion(w, x, y, z).matrix()
     else:
         if v.size != 6:
             raise r.doc.error(el, "a pose needs 6 numbers: x y z roll pitch yaw")
@@ -119,37 +122,50 @@ def _pose(r: _Reader, el: ET.Element | None, default: str) -> tuple[pin.SE3, str
     return pin.SE3(R, v[:3]), rel
 
 
-def _resolve(r: _Reader, name: str, stack: tuple[str, ...] = ()) -> pin.SE3:
-    """World pose of a named frame in the reference configuration."""
-    if name in r.world:
-        return r.world[name]
-    if name not in r.frames:
-        raise DescriptionError(
-            r.doc.source, f"frame '{name}'", "is not a link, joint or frame of this model"
-        )
-    if name in stack:
-        raise DescriptionError(
-            r.doc.source,
-            f"frame '{name}'",
-            "poses refer to each other in a cycle: " + " -> ".join(stack + (name,)),
-        )
-    f = r.frames[name]
-    out = _resolve(r, f.relative_to, stack + (name,)) * f.pose
-    r.world[name] = out
-    return out
+def _resolve(r: _Reader, name: str) -> pin.SE3:
+    """World pose of a named frame in the reference configuration (iterative, any depth)."""
+    chain: list[str] = []
+    seen: set[str] = set()
+    cur = name
+    while cur not in r.world:
+        if cur not in r.frames:
+            raise DescriptionError(
+                r.doc.source, f"frame '{cur}'", "is not a link, joint or frame of this model"
+            )
+        if cur in seen:
+            loop = chain[chain.index(cur) :] + [cur]
+            raise DescriptionError(
+                r.doc.source,
+                f"frame '{cur}'",
+                "poses refer to each other in a cycle: "
+                + " -> ".join(loop[:8])
+                + (" ..." if len(loop) > 8 else ""),
+            )
+        seen.add(cur)
+        chain.append(cur)
+        cur = r.frames[cur].relative_to
+    out = r.world[cur]
+    for f in reversed(chain):
+        out = out * r.frames[f].pose
+        r.world[f] = out
+    return r.world[name]
 
 
-def _link_of(r: _Reader, name: str, stack: tuple[str, ...] = ()) -> str:
-    """Link (or ``world``) a frame is attached to."""
-    if name == WORLD or name in r.links:
-        return name
-    if name == "__model__":  # the model frame is attached to the canonical (first) link
-        return r.links[0] if r.links else WORLD
-    if name not in r.frames or name in stack:
-        raise DescriptionError(
-            r.doc.source, f"frame '{name}'", "is attached to no link of this model"
-        )
-    return _link_of(r, r.frames[name].attached_to, stack + (name,))
+def _link_of(r: _Reader, name: str) -> str:
+    """Link (or ``world``) a frame is attached to (iterative, any depth)."""
+    seen: set[str] = set()
+    cur = name
+    while True:
+        if cur == WORLD or cur in r.links:
+            return cur
+        if cur == "__model__":  # the model frame is attached to the canonical (first) link
+            return r.links[0] if r.links else WORLD
+        if cur not in r.frames or cur in seen:
+            raise DescriptionError(
+                r.doc.source, f"frame '{name}'", "is attached to no link of this model"
+            )
+        seen.add(cur)
+        cur = r.frames[cur].attached_to
 
 
 def _frame_ref(r: _Reader, name: str) -> FrameRef:
@@ -355,14 +371,17 @@ def _geometry(r: _Reader, el: ET.Element, link: str, oMl: pin.SE3, default: str)
             c = mat.find(key)
             if c is not None and _text(c):
                 v = _numbers(r, c)
+                if v.size not in (3, 4):
+                    raise doc.error(c, f"'{_text(c)}': a colour is 3 or 4 numbers (r g b [a])")
                 rgba = np.concatenate([v[:3], v[3:4] if v.size > 3 else [1.0]])
                 break
     name = el.get("name") or default
 
     def positive(tag: str, default_value: str) -> np.ndarray:
         sub = shape_el.find(tag)
+        n = len(default_value.split())
         v = (
-            _numbers(r, sub)
+            _numbers(r, sub, n)
             if sub is not None
             else np.array([float(x) for x in default_value.split()])
         )
