@@ -328,11 +328,18 @@ def _check_joints(source: str, root: ET.Element) -> dict[str, str]:
         axis = j.find("axis")
         if jtype in _MOVING and axis is not None:
             values = [float(t) for t in axis.get("xyz", "1 0 0").split()]
-            if math.sqrt(sum(v * v for v in values)) < 1e-12:
+            norm = math.sqrt(sum(v * v for v in values))
+            if norm < 1e-12:
                 raise DescriptionError(
                     source,
                     f"joint '{name}' <axis xyz='{axis.get('xyz')}'>",
                     "the axis of a moving joint must be a non-zero vector",
+                )
+            if not math.isfinite(norm):  # the URDF parser would divide by inf: a zero axis
+                raise DescriptionError(
+                    source,
+                    f"joint '{name}' <axis xyz='{axis.get('xyz')}'>",
+                    "the axis's length overflows; give a unit vector",
                 )
         lim = j.find("limit")
         if lim is not None and jtype in _MOVING:

@@ -25,6 +25,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.description import ClosureSpec, FrameRef
+from pkdyn.model.validate import unit_vector
 
 __all__ = ["gazebo_closures"]
 
@@ -109,11 +110,11 @@ def gazebo_closures(root: ET.Element, model: pin.Model, source: str) -> list[Clo
         axis = np.array([0.0, 0.0, 1.0])
         xyz = el.find("axis/xyz")
         if xyz is not None:
-            axis = _numbers(source, f"{where} <axis><xyz>", xyz.text, 3)
-            norm = float(np.linalg.norm(axis))
-            if norm < 1e-12:
+            v = _numbers(source, f"{where} <axis><xyz>", xyz.text, 3)
+            u = unit_vector(v)
+            if u is None or float(np.abs(v).max()) < 1e-12:
                 raise DescriptionError(source, f"{where} <axis>", "zero axis")
-            axis = axis / norm
+            axis = np.asarray(u)
             frame = xyz.get("expressed_in")
             if frame is not None:
                 if frame not in poses:

@@ -36,6 +36,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.description import ActuatorSpec, ClosureSpec, FrameRef, PassiveSpec
+from pkdyn.model.validate import unit_vector
 from pkdyn.model.warn import warn
 
 __all__ = ["WORLD", "Body", "Geometry", "Joint", "Mechanism", "Built", "build"]
@@ -223,7 +224,10 @@ class Built:
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
-    return np.asarray(v, dtype=float) / float(np.linalg.norm(v))
+    u = unit_vector(v)
+    if u is None:
+        raise ValueError(f"zero or non-finite axis {v}")  # importers refuse these first
+    return np.asarray(u)
 
 
 def _axis_model(kind: str, axis: np.ndarray) -> pin.JointModel:

@@ -191,7 +191,7 @@ class Defaults:
             base = self.classes.get(parent, {}) if parent is not None else {}
             self.classes[name] = {tag: dict(a) for tag, a in base.items()}
         own = self.classes[name]
-        nested = []
+        nested: list[ET.Element] = []
         for child in el:
             if child.tag == "default":
                 cname = child.get("class")
