@@ -466,11 +466,15 @@ def build(mech: Mechanism) -> Built:
         model.addFrame(pin.Frame(j.name, jid, pin.SE3.Identity(), pin.JOINT), False)
         where[j.child] = (jid, jMc)
         q_ref.append((jm.idx_q, qr))
+    closures = list(mech.closures) + [_cut_closure(mech, j) for j in cut]
+    referenced = {f.link for c in closures for f in (c.frame1, c.frame2)}
     for b in mech.bodies.values():
         jid, jMb = where[b.name]
         model.appendBodyToJoint(jid, b.inertia, jMb)
         if not b.virtual:
             body_frames[b.name] = model.addFrame(pin.Frame(b.name, jid, jMb, pin.BODY), False)
+        elif b.name in referenced:  # an intermediate body a closure holds (a cut revolute2)
+            model.addFrame(pin.Frame(b.name, jid, jMb, pin.OP_FRAME), False)
         for name, bMf in b.frames:
             model.addFrame(pin.Frame(name, jid, jMb * bMf, pin.OP_FRAME), False)
     q = pin.neutral(model)
@@ -487,7 +491,6 @@ def build(mech: Mechanism) -> Built:
                 )
                 go.meshColor = np.asarray(g.rgba, dtype=float)
                 gm.addGeometryObject(go)
-    closures = list(mech.closures) + [_cut_closure(mech, j) for j in cut]
     return Built(model, visual, collision, closures, q, joint_ids, [j.name for j in cut], passive)
 
 
