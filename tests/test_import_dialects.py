@@ -301,6 +301,15 @@ def test_missing_meshes_load_with_one_warning_and_collision_checks_name_them(fmt
     assert robot.missing_meshes[0] in str(err.value)
 
 
+def test_missing_mesh_that_carries_a_body_mass_says_the_dynamics_are_incomplete():
+    text = (
+        '<mujoco><asset><mesh name="m" file="gone.stl"/></asset><worldbody><body name="a">'
+        '<joint/><geom type="mesh" mesh="m"/><geom size="0.1"/></body></worldbody></mujoco>'
+    )
+    with pytest.warns(UserWarning, match=r"dynamics are incomplete: a \(gone.stl\)"):
+        pkdyn.load_string(text, "x.xml", geometry=False)
+
+
 def test_viewer_says_which_meshes_it_cannot_draw():
     pytest.importorskip("meshcat")
     from pkdyn.viewer.scene import Scene

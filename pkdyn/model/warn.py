@@ -33,16 +33,27 @@ def missing_list(files: list[str] | tuple[str, ...], shown: int = 5) -> str:
     return ", ".join(names[:shown]) + more
 
 
-def warn_missing_meshes(source: str, files: list[str] | tuple[str, ...]) -> None:
+def warn_missing_meshes(
+    source: str, files: list[str] | tuple[str, ...], lost_inertia: list[str] | None = None
+) -> None:
     """The one warning of a load whose mesh files are missing (every format says the same).
 
     Args:
         source: File or robot name.
         files: The mesh files not found.
+        lost_inertia: Bodies whose inertia would come from those meshes (MJCF bodies without
+            ``<inertial>``): their dynamics are incomplete, and the warning says so.
 
     """
     n = len(set(files))
+    if lost_inertia:
+        dynamics = (
+            f"the mass and inertia of {len(lost_inertia)} body(ies) inferred from them are left "
+            f"out, so the dynamics are incomplete: {missing_list(lost_inertia, 3)}"
+        )
+    else:
+        dynamics = "kinematics and dynamics are complete"
     warn(
-        f"{source}: {n} mesh file(s) not found, their geometry is left out (kinematics and "
-        f"dynamics are complete; collision checks and the viewer need them): {missing_list(files)}"
+        f"{source}: {n} mesh file(s) not found, their geometry is left out ({dynamics}; "
+        f"collision checks and the viewer need them): {missing_list(files)}"
     )

@@ -77,6 +77,7 @@ class _Reader:
     meshes: dict[str, tuple[str, np.ndarray]] = field(default_factory=dict)
     materials: dict[str, np.ndarray] = field(default_factory=dict)
     missing: list[str] = field(default_factory=list)
+    lost_inertia: list[str] = field(default_factory=list)  # bodies whose mesh mass is missing
     mj_joints: list[tuple[str, str]] = field(default_factory=list)  # (name, type), qpos order
     joint_types: dict[str, str] = field(default_factory=dict)
     sites: dict[str, tuple[str, pin.SE3]] = field(default_factory=dict)
@@ -232,7 +233,7 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
                 mech.home["home"] = _keyframe(r, key)
     if r.missing:
         mech.missing_meshes = sorted(set(r.missing))
-        warn_missing_meshes(source, mech.missing_meshes)
+        warn_missing_meshes(source, mech.missing_meshes, r.lost_inertia)
     return mech
 
 
@@ -471,9 +472,12 @@ def _geom_inertia(r: _Reader, el: ET.Element, cls: str) -> pin.Inertia:
         g = spec.geom_props(r.doc, child, el.get("childclass", cls), r.defs, r.comp)
         if not lo <= g.group <= hi or g.type in ("plane", "hfield", "sdf"):
             continue
+        n = len(r.missing)
         I = _primitive_inertia(r, child, g)
         if I is not None:
             total += g.placement.act(I)
+        elif g.type == "mesh" and len(r.missing) > n and (g.mass is None or g.mass > 0.0):
+            r.lost_inertia.append(f"{el.get('name') or '?'} ({r.missing[-1]})")
     return total
 
 
