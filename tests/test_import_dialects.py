@@ -1,9 +1,10 @@
 """Import II: Gazebo and Drake dialects, revolute2, missing meshes, xacro, MuJoCo welds, exports.
 
-Physics, not re-runs: the Gazebo four-bar read from its URDF (``<gazebo><joint>``) and from its
-SDFormat twin move the same way; the Strandbeest's crank drives every leg (one degree of freedom
-plus its floating crossbar); MuJoCo itself counts the weld model's degrees of freedom (3) and
-the cross-check module compares the dynamics (``tests/test_mujoco_crosscheck.py``).
+Physics, not re-runs: pkdyn's Gazebo-dialect four-bar (``tests/data/gazebo_dialect``) read from
+its URDF (``<gazebo><joint>``) and from its two SDFormat twins moves and weighs the same way; the
+Strandbeest's crank drives every leg (one degree of freedom plus its floating crossbar); MuJoCo
+itself counts the weld model's degrees of freedom (3) and the cross-check module compares the
+dynamics (``tests/test_mujoco_crosscheck.py``).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from pkdyn.analysis.mobility import mobility
 from pkdyn.exceptions import DescriptionError, ParameterError, PkdynError
 
 PUBLIC = Path(__file__).parent / "data" / "public"
-GAZEBO = PUBLIC / "gazebo_four_bar"
+GAZEBO = Path(__file__).parent / "data" / "gazebo_dialect"
 STRANDBEEST = PUBLIC / "drake_strandbeest" / "StrandbeestConstraints.urdf.xacro"
 
 
@@ -44,35 +45,49 @@ def _com(robot: pkdyn.Robot, q: np.ndarray) -> np.ndarray:
 def test_gazebo_joint_closes_the_urdf_four_bar_like_its_sdformat_twin():
     urdf = pkdyn.load(GAZEBO / "four_bar_split_fixed.urdf")
     sdf = pkdyn.load(GAZEBO / "four_bar_split_fixed.sdf")
-    assert [(c.name, c.kind) for c in urdf.closures] == [("joint_E", "weld")]
-    assert urdf.dof() == sdf.dof() == 1 == mobility(urdf).mobility
-    # the URDF's assembled configurations, joint by joint, assemble the SDFormat model too, and
-    # put the mass at the same place (two importers, one linkage)
+    whole = pkdyn.load(GAZEBO / "four_bar.sdf")  # the coupler in one piece, the loop in the graph
+    assert [(c.name, c.kind) for c in urdf.closures] == [("coupler_splice", "weld")]
+    assert [c.kind for c in whole.closures] == ["hinge"]
+    assert urdf.dof() == sdf.dof() == whole.dof() == 1 == mobility(urdf).mobility
+    # the URDF's assembled configurations, joint by joint, assemble the SDFormat models too, and
+    # put the mass at the same place (two importers, three descriptions, one linkage)
     rng = np.random.default_rng(0)
     for _ in range(3):
         q1 = pkdyn.project(
             urdf, pin.integrate(urdf.model, urdf.q_home, 0.3 * rng.standard_normal(urdf.nv))
         )
         assert pkdyn.closure_residual(urdf, q1) < 1e-10
-        q2 = sdf.q_home.copy()
-        for name in ("joint_A", "joint_B", "joint_C", "joint_D"):
-            a = urdf.model.joints[urdf.model.getJointId(name)]
-            b = sdf.model.joints[sdf.model.getJointId(name)]
-            c, s_ = (
-                q1[a.idx_q : a.idx_q + 2]
-                if a.nq == 2
-                else (np.cos(q1[a.idx_q]), np.sin(q1[a.idx_q]))
-            )
-            q2[b.idx_q] = np.arctan2(s_, c)
-        assert pkdyn.closure_residual(sdf, q2) < 1e-9
-        np.testing.assert_allclose(_com(urdf, q1), _com(sdf, q2), atol=1e-9)
+        assert np.linalg.norm(q1 - urdf.q_home) > 1e-2  # it moved
+        for other in (sdf, whole):
+            q2 = other.q_home.copy()
+            for name in ("crank_pivot", "crank_pin", "rocker_pivot", "rocker_pin"):
+                if not other.model.existJointName(name):
+                    continue  # the joint ``whole`` cuts to close its loop
+                a = urdf.model.joints[urdf.model.getJointId(name)]
+                b = other.model.joints[other.model.getJointId(name)]
+                c, s_ = (
+                    q1[a.idx_q : a.idx_q + 2]
+                    if a.nq == 2
+                    else (np.cos(q1[a.idx_q]), np.sin(q1[a.idx_q]))
+                )
+                q2[b.idx_q] = np.arctan2(s_, c)
+            assert pkdyn.closure_residual(other, q2) < 1e-9
+            np.testing.assert_allclose(_com(urdf, q1), _com(other, q2), atol=1e-9)
 
 
 GAZEBO_BAD = {
-    "prismatic closes a loop": ('type="fixed">', 'type="prismatic">', "joint_E'> type 'prismatic'"),
-    "unknown child": ("<child>link_EC</child>", "<child>link_XX</child>", "<child>link_XX</child>"),
-    "no parent": ("<parent>link_BE</parent>", "", "needs <parent> and <child>"),
-    "pose of 5": ("<pose>-0.1 -0.01 0 0 0 0</pose>", "<pose>-0.1 -0.01 0 0 0</pose>", "<pose>"),
+    "prismatic closes a loop": (
+        'type="fixed">',
+        'type="prismatic">',
+        "coupler_splice'> type 'prismatic'",
+    ),
+    "unknown child": (
+        "<child>coupler_rear</child>",
+        "<child>bar_XX</child>",
+        "<child>bar_XX</child>",
+    ),
+    "no parent": ("<parent>coupler_front</parent>", "", "needs <parent> and <child>"),
+    "pose of 5": ("<pose>0.15 0 0 0 0 0</pose>", "<pose>0.15 0 0 0 0</pose>", "<pose>"),
 }
 
 
@@ -88,10 +103,10 @@ def test_gazebo_joints_are_never_ignored_silently(old, new, words):
 def test_gazebo_revolute_joint_is_a_hinge_about_its_axis():
     text = (GAZEBO / "four_bar_split_fixed.urdf").read_text()
     text = text.replace('type="fixed">\n      <pose>', 'type="revolute">\n      <pose>').replace(
-        "<child>link_EC</child>", "<child>link_EC</child><axis><xyz>0 0 1</xyz></axis>"
+        "<child>coupler_rear</child>", "<child>coupler_rear</child><axis><xyz>0 0 1</xyz></axis>"
     )
     robot = pkdyn.load_string(text, "g.urdf")
-    assert [(c.name, c.kind) for c in robot.closures] == [("joint_E", "hinge")]
+    assert [(c.name, c.kind) for c in robot.closures] == [("coupler_splice", "hinge")]
     assert robot.dof() == 2  # two bars jointed at E: a five-bar
 
 
@@ -186,7 +201,7 @@ def test_xacro_arguments_from_python_and_the_cli(tmp_path):
     )
     assert run.returncode == 0, run.stderr
     with pytest.raises(ParameterError, match="xacro_args"):
-        pkdyn.load(PUBLIC / "gazebo_four_bar" / "four_bar.sdf", xacro_args={"a": "1"})
+        pkdyn.load(GAZEBO / "four_bar.sdf", xacro_args={"a": "1"})
     bad = subprocess.run(
         [sys.executable, "-m", "pkdyn", "info", str(path), "--xacro-arg", "length=2"],
         capture_output=True,
@@ -273,7 +288,7 @@ def _with_missing_meshes(fmt: str) -> tuple[str, str]:
     if fmt == "urdf":
         text = (GAZEBO / "four_bar_split_fixed.urdf").read_text()
         text = text.replace(
-            '<box size="0.1 0.02 0.02"/>', '<mesh filename="package://nowhere/bar.stl"/>'
+            '<box size="0.11 0.015 0.015"/>', '<mesh filename="package://nowhere/bar.stl"/>'
         )
         return text, "x.urdf"
     if fmt == "sdf":
