@@ -78,6 +78,15 @@ class Scene:
                 f"{robot.name} has no geometry to draw: give the links <visual> or <collision> "
                 "elements (in Python, load with geometry=True)"
             )
+        if robot.missing_meshes:
+            from pkdyn.model.warn import missing_list
+
+            warnings.warn(
+                f"{robot.name}: {len(robot.missing_meshes)} mesh file(s) were not found when it "
+                f"was loaded and are not drawn: {missing_list(robot.missing_meshes)}",
+                UserWarning,
+                stacklevel=2,
+            )
         self.robot = robot
         self.record = OfflineWindow()
         windows: list[object] = [self.record]
