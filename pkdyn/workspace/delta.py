@@ -202,7 +202,7 @@ class DeltaEvaluator(PoseEvaluator):
             d = P + p_nac - E[b]
             out[f"bar{b}"] = (E[b], d / np.linalg.norm(d, axis=-1, keepdims=True))
         M = self._nacelle_joint  # the nacelle joint frame when the platform frame is at 0
-        out["nacelle"] = (np.broadcast_to(M.rotation, (n, 3, 3)), P + M.translation)
+        out["nacelle"] = (np.array(M.rotation), P + M.translation)
         return out
 
     def _clearance(self, P: np.ndarray, E: list[np.ndarray], tip: np.ndarray) -> np.ndarray:

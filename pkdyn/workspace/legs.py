@@ -279,9 +279,9 @@ def leg_placements(
     P = np.atleast_2d(np.asarray(P, dtype=float))
     assert robot.platform_frame is not None
     fp = robot.model.frames[robot.platform_frame].placement  # the frame in its joint
-    Rw = np.broadcast_to(R, (n, 3, 3)) if R.ndim == 2 else R
-    Rj = Rw @ fp.rotation.T
-    out: Placements = {"platform": (Rj, P - Rj @ fp.translation)}
+    Rj = R @ fp.rotation.T  # (3, 3) when one orientation for every pose
+    tj = P - (fp.translation @ Rj.T if Rj.ndim == 2 else Rj @ fp.translation)
+    out: Placements = {"platform": (Rj, tj)}
     u = v / np.linalg.norm(v, axis=-1, keepdims=True)
     for i in range(legs.n):
         out[f"leg{i}"] = (np.broadcast_to(legs.A[i], (n, 3)), u[:, i])

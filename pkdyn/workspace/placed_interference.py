@@ -79,7 +79,8 @@ class AxialBody:
 Body = RigidBody | AxialBody
 Placements = dict[str, tuple[np.ndarray, np.ndarray]]
 """Per placement key: ``(point (N, 3), direction (N, 3))`` of an axial body or ``(rotation
-(N, 3, 3), translation (N, 3))`` of a rigid one [m]."""
+(N, 3, 3), or (3, 3) when it is the same for every pose, translation (N, 3))`` of a rigid one
+[m]."""
 
 
 @dataclass(frozen=True)
@@ -189,6 +190,7 @@ class PlacedInterference:
         names = sorted(set(groups))
         self._group = np.array([names.index(g) for g in groups], dtype=int)
         self._n_groups = len(names)
+        self._members = [np.flatnonzero(self._group == g) for g in range(self._n_groups)]
         ll, lr, rr = [], [], []
         for c, (a, b) in enumerate(self.checker.ids):
             la, lb = a in col, b in col
@@ -204,8 +206,8 @@ class PlacedInterference:
 
     # ------------------------------------------------------------------ placements
 
-    def _ends(self, where: Placements) -> tuple[np.ndarray, np.ndarray]:
-        """End points (N, line parts, 3) of every line shape's axis segment."""
+    def _ends(self, where: Placements) -> tuple[np.ndarray, ...]:
+        """End points (N, line parts, 3) of the line shapes' axis segments, points, directions."""
         pts, dirs = [], []
         for k in self._line_keys:
             p, u = where[self.parts[k].key]  # type: ignore[index]
@@ -214,17 +216,24 @@ class PlacedInterference:
         O, U = np.stack(pts, axis=1), np.stack(dirs, axis=1)
         c = O + self._s[:, None] * U
         h = self._half[:, None] * U
-        return c - h, c + h
+        return c - h, c + h, O, U
 
     def _rigid(self, part: _RigidPart, where: Placements, n: int) -> tuple[np.ndarray, ...]:
-        """World rotation (N, 3, 3) and translation (N, 3) of a rigid shape."""
+        """World rotation ((N,) 3, 3) and translation (N, 3) of a rigid shape.
+
+        One rotation (3, 3) serves every pose when it does not change.
+        """
         if part.key is None:
-            return (
-                np.broadcast_to(part.local.rotation, (n, 3, 3)),
-                np.broadcast_to(part.local.translation, (n, 3)),
-            )
+            return part.local.rotation, np.broadcast_to(part.local.translation, (n, 3))
         R, t = where[part.key]
+        if R.ndim == 2:
+            return R @ part.local.rotation, t + part.local.translation @ R.T
         return R @ part.local.rotation, t + R @ part.local.translation
+
+    @staticmethod
+    def _to_local(R: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """``R^T x`` for points ``x`` (N, k, 3): one rotation (3, 3) or one per pose."""
+        return x @ R if R.ndim == 2 else np.einsum("nji,nkj->nki", R, x)
 
     # ------------------------------------------------------------------ lower bounds
 
@@ -242,24 +251,23 @@ class PlacedInterference:
         """
         return self._bounds(where, n, margin)[0]
 
-    def _group_bounds(self, e0: np.ndarray, e1: np.ndarray) -> np.ndarray:
-        """Segment distance minus radii of every pair of groups (N, G, G) [m]."""
-        G, N = self._n_groups, e0.shape[0]
+    def _group_bounds(self, O: np.ndarray, U: np.ndarray) -> np.ndarray:
+        """Segment distance minus radii of every pair of groups (N, G, G) [m].
+
+        A group's shapes lie on one line: each spans ``s +- half`` along it from its
+        placement's point; the group's capsule spans them all.
+        """
+        G, N = self._n_groups, O.shape[0]
         L0 = np.empty((N, G, 3))
         L1 = np.empty_like(L0)
         r = np.zeros(G)
         for g in range(G):
-            mine = np.flatnonzero(self._group == g)
+            mine = self._members[g]
             first = mine[0]
-            u = e1[:, first] - e0[:, first]
-            norm = np.linalg.norm(u, axis=-1, keepdims=True)
-            u = np.where(norm > 0.0, u / np.where(norm > 0.0, norm, 1.0), 0.0)
-            origin = e0[:, first]
-            t = np.einsum(
-                "npk,nk->np", np.concatenate([e0[:, mine], e1[:, mine]], 1) - origin[:, None], u
-            )
-            L0[:, g] = origin + t.min(axis=1)[:, None] * u
-            L1[:, g] = origin + t.max(axis=1)[:, None] * u
+            origin, u = O[:, first], U[:, first]
+            t = np.einsum("npk,nk->np", O[:, mine] - origin[:, None], u) + self._s[mine]
+            L0[:, g] = origin + (t - self._half[mine]).min(axis=1)[:, None] * u
+            L1[:, g] = origin + (t + self._half[mine]).max(axis=1)[:, None] * u
             r[g] = self._radius[mine].max()
         ia, ib = np.triu_indices(G, 1)
         out = np.full((N, G, G), -np.inf)
@@ -273,13 +281,13 @@ class PlacedInterference:
         out = np.empty((n, len(self.checker.ids)))
         exact = np.zeros(out.shape, dtype=bool)
         if self._line_keys:
-            e0, e1 = self._ends(where)
+            e0, e1, O, U = self._ends(where)
         if self._ll.size:
             c, i, j = self._ll.T
             gi, gj = self._group[i], self._group[j]
             grouped = self._n_groups < len(self._line_keys)  # some group holds several shapes
             if grouped:
-                out[:, c] = self._group_bounds(e0, e1)[:, gi, gj]
+                out[:, c] = self._group_bounds(O, U)[:, gi, gj]
                 rows, k = np.nonzero(out[:, c] < margin)
             else:
                 rows, k = np.nonzero(np.ones((n, c.size), dtype=bool))
@@ -299,16 +307,19 @@ class PlacedInterference:
             part = self.parts[rk]
             assert isinstance(part, _RigidPart)
             Rw, tw = rig[rk]
-            a = np.einsum("nji,nkj->nki", Rw, e0[:, ii] - tw[:, None])  # in the shape's frame
-            b = np.einsum("nji,nkj->nki", Rw, e1[:, ii] - tw[:, None])
+            a = self._to_local(Rw, e0[:, ii] - tw[:, None])  # in the shape's frame
+            b = self._to_local(Rw, e1[:, ii] - tw[:, None])
             out[:, cc] = self._box_gap(part.lo, part.hi, a, b, self._radius[ii][:, None])
         for col, ka, kb in self._rr:
             pa, pb = self.parts[ka], self.parts[kb]
             assert isinstance(pa, _RigidPart) and isinstance(pb, _RigidPart)
             (Ra, ta), (Rb, tb) = rig[ka], rig[kb]
             corners = np.array(np.meshgrid(*zip(pb.lo, pb.hi, strict=True))).reshape(3, -1).T
-            world = np.einsum("nij,kj->nki", Rb, corners) + tb[:, None]
-            local = np.einsum("nji,nkj->nki", Ra, world - ta[:, None])
+            if Rb.ndim == 2:
+                world = (corners @ Rb.T)[None] + tb[:, None]
+            else:
+                world = np.einsum("nij,kj->nki", Rb, corners) + tb[:, None]
+            local = self._to_local(Ra, world - ta[:, None])
             out[:, col] = self._box_gap(pa.lo, pa.hi, local.min(axis=1), local.max(axis=1), 0.0)
         return out, exact
 
@@ -320,9 +331,8 @@ class PlacedInterference:
             if part.key is None:
                 return coal.Transform3s(part.local.rotation, part.local.translation)
             R, t = where[part.key]
-            return coal.Transform3s(
-                R[n] @ part.local.rotation, t[n] + R[n] @ part.local.translation
-            )
+            Rn = R if R.ndim == 2 else R[n]
+            return coal.Transform3s(Rn @ part.local.rotation, t[n] + Rn @ part.local.translation)
         p, u = where[part.key]
         rot = pin.Quaternion.FromTwoVectors(np.array([0.0, 0.0, 1.0]), u[n]).toRotationMatrix()
         return coal.Transform3s(rot, p[n] + part.s * u[n])
