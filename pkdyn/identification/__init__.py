@@ -1,0 +1,1 @@
+"""Dynamic identification of closed-loop robots (placeholder docstring, completed below)."""
