@@ -38,7 +38,7 @@ ASSEMBLY_TOL = 1e-10
 BATCH = 256
 """Samples per batch."""
 
-_NEWTON_STEPS = 6
+_NEWTON_STEPS = 12
 _REG = 1e-15  # relative regularisation of the Gram matrices (rank-deficient closure rows)
 
 
@@ -110,6 +110,11 @@ class MotionSampler:
         self._history: list[np.ndarray] = [np.array(q0, dtype=float)]
         self._fresh = True
 
+    def restart(self, q: np.ndarray) -> None:
+        """Forget the previous samples: the next one starts from ``q`` (nq,)."""
+        self._history = [np.array(q, dtype=float)]
+        self._fresh = True
+
     def _guess(self) -> np.ndarray:
         h = self._history
         if self._fresh or len(h) == 1:
@@ -131,7 +136,7 @@ class MotionSampler:
             err_new = float(np.abs(r).max(initial=0.0))
             if err_new <= ASSEMBLY_TOL:
                 return q, J, err_new
-            if err_new > 0.5 * err:  # not converging quadratically: let LM take over
+            if err_new > 0.9 * err:  # not converging: let Levenberg-Marquardt take over
                 return q, None, err_new
             err = err_new
             dq[vp] = -passive_solve(J[None, :, vp], r[None])[0]

@@ -1,0 +1,203 @@
+"""Physically consistent standard parameters that reproduce the identified base parameters.
+
+The base parameters say nothing of the directions the efforts cannot see, and a least-squares
+estimate can be non-physical (a negative mass, an inertia breaking the triangle inequality).
+The description written back needs a full, physical set. It comes from a **constrained fit**:
+
+- each identified body (and the payload) is parametrised by the log-Cholesky factor of its
+  pseudo-inertia (Rucker and Wensing, 2022): ``P = [[Sigma, h], [h^T, m]] = U U^T`` with
+  ``U = e^alpha [[e^d1, s12, s13, t1], [0, e^d2, s23, t2], [0, 0, e^d3, t3], [0, 0, 0, 1]]``,
+  ``Sigma = tr(I)/2 1 - I``; every value of the 10 coordinates is a body of positive mass
+  whose inertia satisfies the triangle inequality strictly (``P`` positive definite: a
+  density can realise it), and every such body has coordinates;
+- drive parameters (viscous and Coulomb friction, rotor inertia) are bounded below by zero;
+- nonlinear least squares (scipy ``least_squares``, trust region) minimises
+  ``|R (K theta - theta_b)|^2 + lambda^2 |D (theta - theta_nominal)|^2``: ``R`` the factor of the
+  weighted regressor (the data misfit, in noise units), ``K`` the base map, ``D`` each
+  parameter's effect on the efforts (column norm of the weighted regressor, or of the structural
+  one for parameters the base leaves free) and ``lambda`` = :data:`PRIOR_WEIGHT`: the nominal
+  values settle what the data cannot see without pulling on what it can.
+
+When the estimate is physically realisable the fit reproduces it (to the small bias of the
+prior); otherwise it is the nearest physical set in the metric of the data, and the reported
+misfit says by how many standard deviations each base parameter moved.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import least_squares
+
+__all__ = ["PRIOR_WEIGHT", "consistent_parameters", "from_log_cholesky", "to_log_cholesky"]
+
+_LOG_CLIP = 200.0  # exponents kept finite during the solver's trial steps
+
+PRIOR_WEIGHT = 1e-3
+"""Weight of the pull to the nominal values, relative to the data misfit."""
+
+
+def pseudo_inertia(pi: np.ndarray) -> np.ndarray:
+    """Pseudo-inertia (4, 4) of Pinocchio dynamic parameters (10,) [kg, kg m, kg m^2]."""
+    m, h = pi[0], pi[1:4]
+    Ixx, Ixy, Iyy, Ixz, Iyz, Izz = pi[4:]
+    I = np.array([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])
+    P = np.zeros((4, 4))
+    P[:3, :3] = 0.5 * np.trace(I) * np.eye(3) - I
+    P[:3, 3] = P[3, :3] = h
+    P[3, 3] = m
+    return P
+
+
+def _params(P: np.ndarray) -> np.ndarray:
+    S = P[:3, :3]
+    I = np.trace(S) * np.eye(3) - S
+    return np.array(
+        [P[3, 3], *P[:3, 3], I[0, 0], I[0, 1], I[1, 1], I[0, 2], I[1, 2], I[2, 2]], dtype=float
+    )
+
+
+def from_log_cholesky(x: np.ndarray) -> np.ndarray:
+    """Dynamic parameters (10,) of log-Cholesky coordinates (10,) (module doc)."""
+    alpha, d1, d2, d3, s12, s23, s13, t1, t2, t3 = x
+    e = np.exp(np.clip([alpha, d1, d2, d3], -_LOG_CLIP, _LOG_CLIP))
+    U = e[0] * np.array(
+        [
+            [e[1], s12, s13, t1],
+            [0.0, e[2], s23, t2],
+            [0.0, 0.0, e[3], t3],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+    return _params(U @ U.T)
+
+
+_ENTRIES = ((0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3))  # s12, s23, s13, t1, t2, t3
+
+
+def log_cholesky_jacobian(x: np.ndarray) -> np.ndarray:
+    """Derivative (10, 10) of :func:`from_log_cholesky` at ``x`` (exact: ``dP = dU U^T + U dU^T``,
+    and the parameters are linear in ``P``)."""
+    alpha, d1, d2, d3, s12, s23, s13, t1, t2, t3 = x
+    e = np.exp(np.clip([alpha, d1, d2, d3], -_LOG_CLIP, _LOG_CLIP))
+    U = e[0] * np.array(
+        [[e[1], s12, s13, t1], [0.0, e[2], s23, t2], [0.0, 0.0, e[3], t3], [0.0, 0.0, 0.0, 1.0]]
+    )
+    out = np.empty((10, 10))
+    for k in range(10):
+        dU = np.zeros((4, 4))
+        if k == 0:
+            dU = U
+        elif k <= 3:
+            dU[k - 1, k - 1] = U[k - 1, k - 1]
+        else:
+            dU[_ENTRIES[k - 4]] = e[0]
+        dP = dU @ U.T
+        out[:, k] = _params(dP + dP.T)
+    return out
+
+
+def to_log_cholesky(pi: np.ndarray, scale: float) -> np.ndarray:
+    """Log-Cholesky coordinates (10,) of dynamic parameters, made strictly physical if needed.
+
+    Args:
+        pi: Dynamic parameters (10,).
+        scale: A mass [kg] for a body without one (a payload starting from zero).
+
+    Returns:
+        Coordinates of ``pi``, or of the nearest strictly physical body (eigenvalues of the
+        pseudo-inertia raised to a small positive floor).
+
+    """
+    P = pseudo_inertia(pi)
+    if P[3, 3] <= 0.0:
+        P = np.diag([1e-6, 1e-6, 1e-6, 1.0]) * max(scale, 1e-9)
+    w, V = np.linalg.eigh(P)
+    floor = 1e-9 * max(float(w.max()), 1e-300)
+    P = (V * np.maximum(w, floor)) @ V.T
+    F = np.flip(np.eye(4), axis=0)  # upper factor through the lower Cholesky of the flipped P
+    L = np.linalg.cholesky(F @ P @ F)
+    U = F @ L @ F
+    a = U[3, 3]
+    U = U / a
+    return np.array(
+        [np.log(a), np.log(U[0, 0]), np.log(U[1, 1]), np.log(U[2, 2])]
+        + [U[0, 1], U[1, 2], U[0, 2], U[0, 3], U[1, 3], U[2, 3]]
+    )
+
+
+def consistent_parameters(
+    K: np.ndarray,
+    R: np.ndarray,
+    theta_b: np.ndarray,
+    nominal: np.ndarray,
+    bodies: list[slice],
+    nonnegative: np.ndarray,
+    effect: np.ndarray,
+) -> np.ndarray:
+    """The constrained fit of the module doc, on the identified standard parameters.
+
+    Args:
+        K: Base map (p_b, p).
+        R: Triangular factor (p_b, p_b) of the weighted base regressor.
+        theta_b: Estimated base parameters (p_b,).
+        nominal: Nominal standard parameters (p,).
+        bodies: Column slices of each body (10 columns each) to keep physical.
+        nonnegative: Columns bounded below by zero (p,) bool.
+        effect: Effect of each parameter on the efforts (p,) (the metric ``D``), > 0.
+
+    Returns:
+        Physically consistent standard parameters (p,).
+
+    """
+    p = nominal.size
+    in_body = np.zeros(p, dtype=bool)
+    for s in bodies:
+        in_body[s] = True
+    free = np.flatnonzero(~in_body)
+    scale_m = float(max((nominal[s][0] for s in bodies), default=1.0) or 1.0)
+    x0 = [nominal[free]]
+    for s in bodies:
+        x0.append(to_log_cholesky(nominal[s], 1e-3 * scale_m))
+    x0v = np.concatenate(x0) if x0 else np.zeros(0)
+    nf = free.size
+    lo = np.full(x0v.size, -np.inf)
+    lo[:nf] = np.where(nonnegative[free], 0.0, -np.inf)
+    x0v[:nf] = np.maximum(x0v[:nf], lo[:nf])
+    D = PRIOR_WEIGHT * effect
+
+    def theta(x: np.ndarray) -> np.ndarray:
+        out = np.empty(p)
+        out[free] = x[:nf]
+        for k, s in enumerate(bodies):
+            out[s] = from_log_cholesky(x[nf + 10 * k : nf + 10 * k + 10])
+        return out
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        th = theta(x)
+        return np.concatenate([R @ (K @ th - theta_b), D * (th - nominal)])
+
+    RK = R @ K
+
+    def jacobian(x: np.ndarray) -> np.ndarray:
+        dth = np.zeros((p, x.size))
+        dth[free, np.arange(nf)] = 1.0
+        for k, s in enumerate(bodies):
+            c = nf + 10 * k
+            dth[s, c : c + 10] = log_cholesky_jacobian(x[c : c + 10])
+        return np.vstack([RK @ dth, D[:, None] * dth])
+
+    if x0v.size == 0:
+        return nominal.copy()
+    with np.errstate(over="ignore", invalid="ignore"):  # trial steps may overflow: rejected
+        sol = least_squares(
+            residual,
+            x0v,
+            jac=jacobian,
+            bounds=(lo, np.inf),
+            method="trf",
+            ftol=1e-12,
+            xtol=1e-12,
+            gtol=1e-12,
+            max_nfev=2000,
+        )
+    return theta(sol.x)
