@@ -2,7 +2,10 @@
 
 The base parameters say nothing of the directions the efforts cannot see, and a least-squares
 estimate can be non-physical (a negative mass, an inertia breaking the triangle inequality).
-The description written back needs a full, physical set. It comes from a **constrained fit**:
+The description written back needs a full, physical set. First the least change of the nominal
+values (in the metric ``D`` below) that reproduces the estimated base parameters exactly, a
+linear least-norm problem; when every body it gives is strictly physical and no friction or
+rotor inertia is negative, that is the answer. Otherwise a **constrained fit**:
 
 - each identified body (and the payload) is parametrised by the log-Cholesky factor of its
   pseudo-inertia (Rucker and Wensing, 2022): ``P = [[Sigma, h], [h^T, m]] = U U^T`` with
@@ -125,6 +128,18 @@ def to_log_cholesky(pi: np.ndarray, scale: float) -> np.ndarray:
     )
 
 
+def _physical(theta: np.ndarray, bodies: list[slice], nonnegative: np.ndarray) -> bool:
+    """Every body strictly physical (positive definite pseudo-inertia) and bounds kept."""
+    if np.any(theta[nonnegative] < 0.0):
+        return False
+    for s in bodies:
+        P = pseudo_inertia(theta[s])
+        w = np.linalg.eigvalsh(P)
+        if w[0] <= 1e-9 * max(float(w[-1]), 1e-300):
+            return False
+    return True
+
+
 def consistent_parameters(
     K: np.ndarray,
     R: np.ndarray,
@@ -150,20 +165,27 @@ def consistent_parameters(
 
     """
     p = nominal.size
+    D = PRIOR_WEIGHT * effect
+    # the least deviation from nominal (metric D) that reproduces the base parameters exactly:
+    # the answer when it is physical
+    KD = K / effect
+    step, *_ = np.linalg.lstsq(KD, theta_b - K @ nominal, rcond=None)
+    linear = nominal + step / effect
+    if _physical(linear, bodies, nonnegative):
+        return linear
     in_body = np.zeros(p, dtype=bool)
     for s in bodies:
         in_body[s] = True
     free = np.flatnonzero(~in_body)
     scale_m = float(max((nominal[s][0] for s in bodies), default=1.0) or 1.0)
-    x0 = [nominal[free]]
+    x0 = [linear[free]]
     for s in bodies:
-        x0.append(to_log_cholesky(nominal[s], 1e-3 * scale_m))
+        x0.append(to_log_cholesky(linear[s], 1e-3 * scale_m))
     x0v = np.concatenate(x0) if x0 else np.zeros(0)
     nf = free.size
     lo = np.full(x0v.size, -np.inf)
     lo[:nf] = np.where(nonnegative[free], 0.0, -np.inf)
     x0v[:nf] = np.maximum(x0v[:nf], lo[:nf])
-    D = PRIOR_WEIGHT * effect
 
     def theta(x: np.ndarray) -> np.ndarray:
         out = np.empty(p)
@@ -195,9 +217,10 @@ def consistent_parameters(
             jac=jacobian,
             bounds=(lo, np.inf),
             method="trf",
+            tr_solver="lsmr",
             ftol=1e-12,
             xtol=1e-12,
             gtol=1e-12,
-            max_nfev=2000,
+            max_nfev=500,
         )
     return theta(sol.x)

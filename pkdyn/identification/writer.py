@@ -6,8 +6,9 @@ mass, inertia about it; a payload is added to the platform's link), the ``<inert
 merged into it by fixed joints removed (the identified body is the whole), and the actuators'
 ``<pkdyn:rotor_inertia>`` and ``<pkdyn:motor_friction>`` set; ``<pkdyn:efficiency>`` is removed
 (identification lumps the gearbox losses into the friction: unit efficiency). A
-``<pkdyn:family>`` element is dropped: the file no longer is the family's. It loads, assembles
-and sizes like any other description.
+``<pkdyn:family>`` element is dropped (the file no longer is the family's) and
+``<pkdyn:home q>`` records the home configuration, so that the file loads in the assembly mode
+the robot was identified in. It loads, assembles and sizes like any other description.
 """
 
 from __future__ import annotations
@@ -171,7 +172,8 @@ def identified_urdf(robot: Robot, ps: ParameterSet, theta: np.ndarray) -> str:
     model = robot.model
     for j, I in body_inertias(robot, ps, theta).items():
         own, *merged = names.get(j, [str(model.names[j])])
-        frame = model.frames[model.getFrameId(own)] if model.existFrame(own) else None
+        body = pin.FrameType.BODY
+        frame = model.frames[model.getFrameId(own, body)] if model.existFrame(own, body) else None
         M = frame.placement.inverse() if frame is not None else pin.SE3.Identity()
         if own in links:
             _inertial(links[own], I, M)
@@ -195,6 +197,10 @@ def identified_urdf(robot: Robot, ps: ParameterSet, theta: np.ndarray) -> str:
         ET.SubElement(
             holder, _NS + "motor_friction", viscous=_num(d["viscous"]), coulomb=_num(d["coulomb"])
         )
+    for old in root.findall(_NS + "home"):
+        root.remove(old)
+    home = ET.SubElement(root, _NS + "home")  # the assembly mode it was identified in
+    home.set("q", " ".join(repr(float(v)) for v in robot.q_home))
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"
 
