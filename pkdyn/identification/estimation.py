@@ -89,6 +89,25 @@ class Accumulator:
         if self._rows >= _FOLD_ROWS:
             self._fold()
 
+    def merge(self, R: list[np.ndarray], samples: int) -> None:
+        """Fold in the factors of another accumulator (the same parameters, other samples).
+
+        Args:
+            R: Its triangular factors, one per actuator.
+            samples: Its number of samples.
+
+        """
+        for j in range(self.n_a):
+            self._pending[j].append(R[j])
+        self._rows += 1
+        self.samples += samples
+        self._fold()
+
+    def factors(self) -> list[np.ndarray]:
+        """The triangular factors so far, one per actuator (pending rows folded in)."""
+        self._fold()
+        return list(self.R)
+
     def _fold(self) -> None:
         for j in range(self.n_a):
             if self._pending[j]:

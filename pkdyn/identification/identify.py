@@ -13,8 +13,10 @@
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -37,6 +39,11 @@ __all__ = ["MAX_SAMPLES", "check_identifiable", "identify", "structural_base"]
 
 MAX_SAMPLES = 2_000_000
 """Largest number of samples accepted (about 3 minutes for a Delta on one core)."""
+
+PARALLEL_SAMPLES = 20_000
+"""From this many samples on, two worker processes share the samples by default."""
+
+_WORK: dict[str, Any] = {}  # the job of the worker processes (inherited by fork)
 
 _SEED = 20240527
 
@@ -132,12 +139,63 @@ def structural_base(
     return base_parameters(Y, names), np.linalg.norm(Y, axis=0) / np.sqrt(Y.shape[0])
 
 
+def _accumulate(
+    first: int, stop: int, q0: np.ndarray | None, progress: bool | None
+) -> tuple[list[np.ndarray], int, np.ndarray]:
+    """Regressor rows of samples ``first:stop`` folded into triangular factors (``_WORK``)."""
+    w = _WORK
+    robot, ps, base = w["robot"], w["ps"], w["base"]
+    t, qa, qd, qdd, tau = w["t"], w["qa"], w["qd"], w["qdd"], w["tau"]
+    reg = ClosedLoopRegressor(robot, ps)
+    sampler = MotionSampler(robot, q0)
+    acc = Accumulator(len(robot.actuators), base.size)
+    colsq = np.zeros(int(ps.identified.sum()))
+    ind = base.independent
+    starts = range(first, stop, BATCH)
+    for s in progress_bar(starts, "identification", "batch", progress, min_items=20):
+        e = min(stop, s + BATCH)
+        b = sampler.batch(t[s:e], qa[s:e], qd[s:e], qdd[s:e], s)
+        Y, known = reg.rows(b)
+        colsq += np.einsum("nip,nip->p", Y, Y)
+        acc.add(Y[:, :, ind], tau[s:e] - known)
+    return acc.factors(), acc.samples, colsq
+
+
+def _worker(job: tuple[int, int, np.ndarray]) -> tuple[list[np.ndarray], int, np.ndarray]:
+    return _accumulate(job[0], job[1], job[2], False)
+
+
+def _split_configurations(robot: Robot, splits: list[int]) -> list[np.ndarray]:
+    """Assembled configurations at the split samples, followed from home on a coarse grid."""
+    w = _WORK
+    t, qa, qd, qdd = w["t"], w["qa"], w["qd"], w["qdd"]
+    last = splits[-1]
+    step = max(1, last // 2000)
+    idx = np.union1d(np.arange(0, last + 1, step), splits)
+    sampler = MotionSampler(robot)
+    Q, _ = sampler.configurations(qa[idx], t[idx])
+    return [Q[int(np.searchsorted(idx, k))] for k in splits]
+
+
+def _parallel(robot: Robot, N: int, workers: int) -> list[tuple[list[np.ndarray], int, np.ndarray]]:
+    import multiprocessing
+
+    bounds = [round(k * N / workers) for k in range(workers + 1)]
+    starts = _split_configurations(robot, bounds[1:-1])
+    jobs = [(bounds[0], bounds[1], None)] + [
+        (bounds[k], bounds[k + 1], q) for k, q in zip(range(1, workers), starts, strict=True)
+    ]
+    with multiprocessing.get_context("fork").Pool(workers) as pool:
+        return pool.map(_worker, jobs)
+
+
 def identify(
     robot: Robot,
     data: Measurements,
     parameters: Sequence[str] | str | None = None,
     cutoff: float | None = None,
     progress: bool | None = None,
+    workers: int | None = None,
 ) -> IdentificationResult:
     """Identify the dynamic parameters of a robot from one measured motion.
 
@@ -147,7 +205,11 @@ def identify(
         parameters: Groups to identify (:data:`~pkdyn.identification.parameters.GROUPS`;
             default inertia, friction, rotor).
         cutoff: Cut-off frequency [Hz] of the position filter when the rates are not given.
-        progress: Progress bar (``None``: on a terminal, for more than 20 batches).
+        progress: Progress bar (``None``: on a terminal, for more than 20 batches; one
+            process only).
+        workers: Processes sharing the samples (default: 2 from :data:`PARALLEL_SAMPLES`
+            samples on where processes can be forked, else 1); each follows its share from an
+            assembled configuration found on a coarse pass, and their factors are merged.
 
     Returns:
         The identification (base parameters with their standard deviations, physical
@@ -188,18 +250,25 @@ def identify(
     qa, qd, qdd = data.qa, data.qa_dot, data.qa_ddot
     if qd is None or qdd is None:
         qa, qd, qdd = derivatives(data.t, data.qa, cutoff)
-    reg = ClosedLoopRegressor(robot, ps)
-    sampler = MotionSampler(robot)
+    import multiprocessing
+
+    if workers is None:
+        forkable = "fork" in multiprocessing.get_all_start_methods()
+        workers = min(2, os.cpu_count() or 1) if forkable and N >= PARALLEL_SAMPLES else 1
+    workers = max(1, min(int(workers), N // (4 * BATCH) or 1))
+    _WORK.update(robot=robot, ps=ps, base=base, t=data.t, qa=qa, qd=qd, qdd=qdd, tau=data.tau)
+    try:
+        if workers > 1:
+            parts = _parallel(robot, N, workers)
+        else:
+            parts = [_accumulate(0, N, None, progress)]
+    finally:
+        _WORK.clear()
     acc = Accumulator(n_a, base.size)
     colsq = np.zeros(int(ps.identified.sum()))
-    ind = base.independent
-    starts = range(0, N, BATCH)
-    for s in progress_bar(starts, "identification", "batch", progress, min_items=20):
-        e = min(N, s + BATCH)
-        b = sampler.batch(data.t[s:e], qa[s:e], qd[s:e], qdd[s:e], s)
-        Y, known = reg.rows(b)
-        colsq += np.einsum("nip,nip->p", Y, Y)
-        acc.add(Y[:, :, ind], data.tau[s:e] - known)
+    for R, n, cs in parts:
+        acc.merge(R, n)
+        colsq += cs
     est = acc.estimate(formulas)
     sel = np.flatnonzero(ps.identified)
     pos = {int(c): k for k, c in enumerate(sel)}

@@ -88,6 +88,18 @@ def passive_solve(Jp: np.ndarray, x: np.ndarray) -> np.ndarray:
     return out[..., 0] if vec else out
 
 
+def _step(Jp: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """One sample's least-squares, least-norm ``J_p^+ r`` (as :func:`passive_solve`)."""
+    nc, n_p = Jp.shape
+    if nc <= n_p:
+        G = Jp @ Jp.T
+        G.flat[:: nc + 1] += _REG * G.trace()
+        return Jp.T @ np.linalg.solve(G, r)
+    G = Jp.T @ Jp
+    G.flat[:: n_p + 1] += _REG * G.trace()
+    return np.linalg.solve(G, Jp.T @ r)
+
+
 class MotionSampler:
     """Turns actuator motions into joint motions batch after batch (see the module doc).
 
@@ -139,7 +151,7 @@ class MotionSampler:
             if err_new > 0.9 * err:  # not converging: let Levenberg-Marquardt take over
                 return q, None, err_new
             err = err_new
-            dq[vp] = -passive_solve(J[None, :, vp], r[None])[0]
+            dq[vp] = -_step(J[:, vp], r)
             q = pin.integrate(model, q, dq)
         return q, None, err
 
