@@ -77,6 +77,59 @@ def from_log_cholesky(x: np.ndarray) -> np.ndarray:
 _ENTRIES = ((0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3))  # s12, s23, s13, t1, t2, t3
 
 
+def _factors(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Factors ``U`` (n, 4, 4) and ``e^alpha`` (n,) of log-Cholesky coordinates (n, 10)."""
+    e = np.exp(np.clip(X[:, :4], -_LOG_CLIP, _LOG_CLIP))
+    U = np.zeros((X.shape[0], 4, 4))
+    U[:, [0, 1, 2], [0, 1, 2]] = e[:, 1:]
+    for k, (i, j) in enumerate(_ENTRIES):
+        U[:, i, j] = X[:, 4 + k]
+    U[:, 3, 3] = 1.0
+    return U * e[:, :1, None], e[:, 0]
+
+
+def _params_batch(P: np.ndarray) -> np.ndarray:
+    """Dynamic parameters (n, 10) of pseudo-inertias (n, 4, 4) (linear in ``P``)."""
+    S = P[:, :3, :3]
+    tr = np.trace(S, axis1=1, axis2=2)
+    return np.column_stack(
+        [
+            P[:, 3, 3],
+            P[:, 0, 3],
+            P[:, 1, 3],
+            P[:, 2, 3],
+            tr - S[:, 0, 0],
+            -S[:, 0, 1],
+            tr - S[:, 1, 1],
+            -S[:, 0, 2],
+            -S[:, 1, 2],
+            tr - S[:, 2, 2],
+        ]
+    )
+
+
+def from_log_cholesky_batch(X: np.ndarray) -> np.ndarray:
+    """:func:`from_log_cholesky` of many bodies: (n, 10) -> (n, 10)."""
+    U, _ = _factors(X)
+    return _params_batch(U @ np.swapaxes(U, 1, 2))
+
+
+def log_cholesky_jacobian_batch(X: np.ndarray) -> np.ndarray:
+    """:func:`log_cholesky_jacobian` of many bodies: (n, 10) -> (n, 10, 10)."""
+    n = X.shape[0]
+    U, ea = _factors(X)
+    dU = np.zeros((n, 10, 4, 4))
+    dU[:, 0] = U
+    for k in range(3):
+        dU[:, 1 + k, k, k] = U[:, k, k]
+    for k, (i, j) in enumerate(_ENTRIES):
+        dU[:, 4 + k, i, j] = ea
+    dP = dU @ np.swapaxes(U, 1, 2)[:, None]
+    dP = dP + np.swapaxes(dP, 2, 3)
+    out = _params_batch(dP.reshape(n * 10, 4, 4)).reshape(n, 10, 10)
+    return np.swapaxes(out, 1, 2)
+
+
 def log_cholesky_jacobian(x: np.ndarray) -> np.ndarray:
     """Derivative (10, 10) of :func:`from_log_cholesky` at ``x`` (exact: ``dP = dU U^T + U dU^T``,
     and the parameters are linear in ``P``)."""
@@ -187,11 +240,13 @@ def consistent_parameters(
     lo[:nf] = np.where(nonnegative[free], 0.0, -np.inf)
     x0v[:nf] = np.maximum(x0v[:nf], lo[:nf])
 
+    cols = np.array([np.arange(s.start, s.start + 10) for s in bodies], dtype=int).reshape(-1, 10)
+
     def theta(x: np.ndarray) -> np.ndarray:
         out = np.empty(p)
         out[free] = x[:nf]
-        for k, s in enumerate(bodies):
-            out[s] = from_log_cholesky(x[nf + 10 * k : nf + 10 * k + 10])
+        if len(bodies):
+            out[cols] = from_log_cholesky_batch(x[nf:].reshape(-1, 10))
         return out
 
     def residual(x: np.ndarray) -> np.ndarray:
@@ -203,9 +258,10 @@ def consistent_parameters(
     def jacobian(x: np.ndarray) -> np.ndarray:
         dth = np.zeros((p, x.size))
         dth[free, np.arange(nf)] = 1.0
-        for k, s in enumerate(bodies):
-            c = nf + 10 * k
-            dth[s, c : c + 10] = log_cholesky_jacobian(x[c : c + 10])
+        if len(bodies):
+            blocks = log_cholesky_jacobian_batch(x[nf:].reshape(-1, 10))
+            for k in range(len(bodies)):
+                dth[cols[k], nf + 10 * k : nf + 10 * k + 10] = blocks[k]
         return np.vstack([RK @ dth, D[:, None] * dth])
 
     if x0v.size == 0:
@@ -221,6 +277,6 @@ def consistent_parameters(
             ftol=1e-12,
             xtol=1e-12,
             gtol=1e-12,
-            max_nfev=500,
+            max_nfev=200,
         )
     return theta(sol.x)
