@@ -49,8 +49,11 @@ def rows() -> list[Row]:
     tau = predict_efforts(robot, ps, ps.nominal, t, qa, qd, qdd)
     noise = 0.01 * np.sqrt(np.mean(tau**2, axis=0))
     meas = tau + noise * np.random.default_rng(2).standard_normal(tau.shape)
+
     def cpu_s() -> float:  # this process and its (joined) worker processes
-        own, kids = (resource.getrusage(w) for w in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
+        own, kids = (
+            resource.getrusage(w) for w in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)
+        )
         return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
     t0 = time.perf_counter()

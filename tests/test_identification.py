@@ -62,7 +62,9 @@ def _amplitude(name):
     return {"gough_stewart": 0.01, "tripod": 0.005}.get(name, 0.2)
 
 
-@pytest.mark.parametrize(("name", "kw"), FAMILIES, ids=[f"{n}{'-u' if k else ''}" for n, k in FAMILIES])
+@pytest.mark.parametrize(
+    ("name", "kw"), FAMILIES, ids=[f"{n}{'-u' if k else ''}" for n, k in FAMILIES]
+)
 def test_regressor_matches_inverse_dynamics(name, kw):
     """Y theta + known = N tau_motor of pkdyn's inverse dynamics and drive model, to 1e-9."""
     robot = with_drives(
@@ -112,7 +114,10 @@ def test_log_cholesky_round_trip_and_jacobian():
         assert np.all(np.linalg.eigvalsh(pseudo_inertia(from_log_cholesky(x))) > 0.0)
         h = 1e-6
         fd = np.column_stack(
-            [(from_log_cholesky(x + h * e) - from_log_cholesky(x - h * e)) / (2 * h) for e in np.eye(10)]
+            [
+                (from_log_cholesky(x + h * e) - from_log_cholesky(x - h * e)) / (2 * h)
+                for e in np.eye(10)
+            ]
         )
         np.testing.assert_allclose(log_cholesky_jacobian(x), fd, atol=1e-7)
 

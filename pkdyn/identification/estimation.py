@@ -32,6 +32,11 @@ below which a motion leaves a base parameter undetermined."""
 _FOLD_ROWS = 4096
 
 
+def _qr_r(A: np.ndarray) -> np.ndarray:
+    """The triangular factor of ``A`` (numpy's QR, ``mode="r"``)."""
+    return np.asarray(np.linalg.qr(A, mode="r"))
+
+
 @dataclass(frozen=True, eq=False)  # numpy fields
 class Estimate:
     """Weighted least-squares estimate of the base parameters.
@@ -112,7 +117,7 @@ class Accumulator:
         for j in range(self.n_a):
             if self._pending[j]:
                 A = np.vstack([self.R[j], *self._pending[j]])
-                self.R[j] = np.linalg.qr(A, mode="r")
+                self.R[j] = _qr_r(A)
                 self._pending[j] = []
         self._rows = 0
 
@@ -146,7 +151,7 @@ class Accumulator:
         sigma = np.sqrt(rss / dof)
         floor = 1e-12 * max(float(sigma.max()), 1e-300)
         w = 1.0 / np.maximum(sigma, floor)
-        Rw = np.linalg.qr(np.vstack([R * wj for R, wj in zip(Rs, w, strict=True)]), mode="r")
+        Rw = _qr_r(np.vstack([R * wj for R, wj in zip(Rs, w, strict=True)]))
         Rw = self._square(Rw)
         theta = self._solve(Rw, names, weighted=True)
         A = Rw[:p, :p]
@@ -181,7 +186,7 @@ class Accumulator:
     def _solve(self, R: np.ndarray, names: list[str], weighted: bool) -> np.ndarray:
         """Least squares from a stacked factor ``[R_Y  r_y]``; refuse a rank-deficient one."""
         p = self.p
-        F = np.linalg.qr(R, mode="r") if R.shape[0] > p + 1 else R
+        F = _qr_r(R) if R.shape[0] > p + 1 else R
         A, b = F[:p, :p], F[:p, p]
         norms = np.linalg.norm(A, axis=0)
         dead = norms <= 0.0

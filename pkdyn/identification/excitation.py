@@ -127,9 +127,11 @@ def excitation_trajectory(
     start = robot.q_home[robot.actuated_q].copy()
     lo = robot.model.lowerPositionLimit[robot.actuated_q]
     hi = robot.model.upperPositionLimit[robot.actuated_q]
-    span = np.where(
-        robot.actuator_prismatic, 0.05 * robot.length_scale, 0.3
-    ) if amplitude is None else np.full(n, float(amplitude))
+    span = (
+        np.where(robot.actuator_prismatic, 0.05 * robot.length_scale, 0.3)
+        if amplitude is None
+        else np.full(n, float(amplitude))
+    )
     lo = np.where(np.isfinite(lo), lo, start - span)
     hi = np.where(np.isfinite(hi), hi, start + span)
     vmax = np.array([a.velocity for a in robot.actuators])

@@ -26,7 +26,7 @@ from pkdyn.identification.base import BaseParameters, base_parameters
 from pkdyn.identification.data import Measurements
 from pkdyn.identification.estimation import Accumulator
 from pkdyn.identification.filtering import derivatives
-from pkdyn.identification.motion import BATCH, MotionSampler
+from pkdyn.identification.motion import BATCH, MotionBatch, MotionSampler
 from pkdyn.identification.parameters import ParameterSet, parameter_set
 from pkdyn.identification.physical import consistent_parameters
 from pkdyn.identification.regressor import ClosedLoopRegressor
@@ -80,7 +80,7 @@ def check_identifiable(robot: Robot) -> None:
             )
 
 
-def _random_batches(robot: Robot, n: int, seed: int) -> list:
+def _random_batches(robot: Robot, n: int, seed: int) -> list[MotionBatch]:
     """Joint motions of ``n`` random samples near home, closure-consistent (structural rows)."""
     rng = np.random.default_rng(seed)
     n_a = len(robot.actuators)
@@ -91,7 +91,7 @@ def _random_batches(robot: Robot, n: int, seed: int) -> list:
     finite = np.isfinite(lo) & np.isfinite(hi)
     spread = np.where(finite, np.minimum(spread, 0.2 * (hi - lo)), spread)
     sampler = MotionSampler(robot)
-    out = []
+    out: list[MotionBatch] = []
     tries = 0
     while len(out) < n and tries < 4 * n:
         tries += 1
@@ -161,14 +161,16 @@ def _accumulate(
     return acc.factors(), acc.samples, colsq
 
 
-def _worker(job: tuple[int, int, np.ndarray]) -> tuple[list[np.ndarray], int, np.ndarray]:
+def _worker(
+    job: tuple[int, int, np.ndarray | None],
+) -> tuple[list[np.ndarray], int, np.ndarray]:
     return _accumulate(job[0], job[1], job[2], False)
 
 
 def _split_configurations(robot: Robot, splits: list[int]) -> list[np.ndarray]:
     """Assembled configurations at the split samples, followed from home on a coarse grid."""
     w = _WORK
-    t, qa, qd, qdd = w["t"], w["qa"], w["qd"], w["qdd"]
+    t, qa = w["t"], w["qa"]
     last = splits[-1]
     step = max(1, last // 2000)
     idx = np.union1d(np.arange(0, last + 1, step), splits)
@@ -182,7 +184,7 @@ def _parallel(robot: Robot, N: int, workers: int) -> list[tuple[list[np.ndarray]
 
     bounds = [round(k * N / workers) for k in range(workers + 1)]
     starts = _split_configurations(robot, bounds[1:-1])
-    jobs = [(bounds[0], bounds[1], None)] + [
+    jobs: list[tuple[int, int, np.ndarray | None]] = [(bounds[0], bounds[1], None)] + [
         (bounds[k], bounds[k + 1], q) for k, q in zip(range(1, workers), starts, strict=True)
     ]
     with multiprocessing.get_context("fork").Pool(workers) as pool:

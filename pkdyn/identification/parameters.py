@@ -171,8 +171,9 @@ def _groups(groups: Sequence[str] | str | None) -> tuple[str, ...]:
     if bad or not items:
         raise InvalidInputError(
             "parameters",
-            f"unknown group {bad[0]!r}" if bad else "no group given"
-            f"; choose among {', '.join(GROUPS)}",
+            f"unknown group {bad[0]!r}"
+            if bad
+            else f"no group given; choose among {', '.join(GROUPS)}",
         )
     return tuple(g for g in GROUPS if g in items)
 

@@ -31,9 +31,19 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
-__all__ = ["PRIOR_WEIGHT", "consistent_parameters", "from_log_cholesky", "to_log_cholesky"]
+__all__ = [
+    "MAX_EVALUATIONS",
+    "PRIOR_WEIGHT",
+    "consistent_parameters",
+    "from_log_cholesky",
+    "to_log_cholesky",
+]
 
 _LOG_CLIP = 200.0  # exponents kept finite during the solver's trial steps
+
+MAX_EVALUATIONS = 40
+"""Cap on the constrained fit's evaluations (every iterate is physical; each one lowers the
+objective, so a capped fit is physical and no worse than its start)."""
 
 PRIOR_WEIGHT = 1e-3
 """Weight of the pull to the nominal values, relative to the data misfit."""
@@ -131,8 +141,10 @@ def log_cholesky_jacobian_batch(X: np.ndarray) -> np.ndarray:
 
 
 def log_cholesky_jacobian(x: np.ndarray) -> np.ndarray:
-    """Derivative (10, 10) of :func:`from_log_cholesky` at ``x`` (exact: ``dP = dU U^T + U dU^T``,
-    and the parameters are linear in ``P``)."""
+    """Derivative (10, 10) of :func:`from_log_cholesky` at ``x``.
+
+    Exact: ``dP = dU U^T + U dU^T``, and the parameters are linear in ``P``.
+    """
     alpha, d1, d2, d3, s12, s23, s13, t1, t2, t3 = x
     e = np.exp(np.clip([alpha, d1, d2, d3], -_LOG_CLIP, _LOG_CLIP))
     U = e[0] * np.array(
@@ -273,10 +285,9 @@ def consistent_parameters(
             jac=jacobian,
             bounds=(lo, np.inf),
             method="trf",
-            tr_solver="lsmr",
             ftol=1e-12,
             xtol=1e-12,
             gtol=1e-12,
-            max_nfev=200,
+            max_nfev=MAX_EVALUATIONS,
         )
     return theta(sol.x)

@@ -124,9 +124,12 @@ class IdentificationResult:
         write_urdf(path, self.robot, self.parameters, self.theta)
 
     def payload(self) -> dict[str, Any] | None:
-        """The identified payload: mass [kg], centre of mass [m] and inertia about it
-        [kg m^2] in the platform frame, with standard deviations of the mass; ``None`` when the
-        payload is not identified."""
+        """The identified payload, or ``None`` when the payload is not identified.
+
+        Returns:
+            Mass [kg], centre of mass [m] and inertia about it [kg m^2], platform frame.
+
+        """
         ps = self.parameters
         s = ps.payload_slice
         if not ps.identified[s.start]:

@@ -65,10 +65,7 @@ def body_inertias(robot: Robot, ps: ParameterSet, theta: np.ndarray) -> dict[int
 
 def _drives(ps: ParameterSet, theta: np.ndarray, robot: Robot) -> list[dict[str, float]]:
     return [
-        {
-            f: float(theta[ps.drive_column(i, f)])
-            for f in ("viscous", "coulomb", "rotor_inertia")
-        }
+        {f: float(theta[ps.drive_column(i, f)]) for f in ("viscous", "coulomb", "rotor_inertia")}
         for i in range(len(robot.actuators))
     ]
 
