@@ -237,3 +237,24 @@ def test_refuses_redundant_actuation():
     qa = np.tile(robot.q_home[robot.actuated_q], (3, 1))
     with pytest.raises(InvalidInputError, match="redundantly actuated"):
         identify(robot, Measurements(t, qa, qa * 0, qa * 0, qa * 0))
+
+
+def test_excitation_lowers_the_condition_within_the_limits():
+    from pkdyn.identification.excitation import excitation_trajectory
+
+    robot = pkdyn.load("five_bar", geometry=False)
+    kw = dict(period=4.0, harmonics=3, samples=20, amplitude=0.3, seed=3)
+    start = excitation_trajectory(robot, max_iter=0, **kw)
+    best = excitation_trajectory(robot, max_iter=6, **kw)
+    assert best.condition < 0.5 * start.condition  # observed 42 -> 4 (30 samples, 8 iter.)
+    q, qd, qdd = best.evaluate(np.array([0.0]))
+    np.testing.assert_allclose(q[0], robot.q_home[robot.actuated_q], atol=1e-12)
+    np.testing.assert_allclose(np.r_[qd[0], qdd[0]], 0.0, atol=1e-12)  # starts at rest
+    t, qa, qd, qdd = best.sample(rate=200.0)
+    lo = robot.model.lowerPositionLimit[robot.actuated_q]
+    hi = robot.model.upperPositionLimit[robot.actuated_q]
+    assert np.all((qa >= lo - 1e-6) & (qa <= hi + 1e-6))
+    lim = np.array([a.velocity for a in robot.actuators])
+    assert np.all(np.abs(qd) <= lim * (1 + 1e-6))
+    h = t[1] - t[0]  # the rates are the positions' derivatives
+    np.testing.assert_allclose(np.gradient(qa, h, axis=0)[1:-1], qd[1:-1], atol=1e-3)

@@ -13,7 +13,8 @@ robot, must
   standard deviations, their RMS within 2;
 - predict a held-out motion's efforts with an RMS error below the noise (the nominal model is
   tens of noise levels off);
-- report the parameters the efforts cannot see (not invent them): they keep their nominal values.
+- report the parameters the efforts cannot see (not invent them): they keep their nominal values,
+  up to the least change their body's physical consistency needs.
 """
 
 from __future__ import annotations
@@ -35,9 +36,9 @@ mujoco = pytest.importorskip("mujoco")
 
 CASES = {  # family: (excursion of the actuators [rad or m], samples)
     "delta": (0.3, 1000),
-    "gough_stewart": (0.03, 1600),
+    "gough_stewart": (0.03, 1000),
     "five_bar": (0.3, 600),
-    "tripod": (0.01, 1200),
+    "tripod": (0.01, 800),
 }
 
 
@@ -127,11 +128,17 @@ def test_recovers_a_perturbed_robot_from_mujoco_efforts(name):
     z = (res.estimate.theta - res.base.K @ ps_true.nominal[sel]) / res.estimate.std
     assert np.abs(z).max() < 4.5 and np.sqrt(np.mean(z**2)) < 2.0, z
     np.testing.assert_allclose(res.estimate.sigma, noise, rtol=0.15)
-    # not invented: what the efforts cannot see keeps its nominal value
-    names = list(res.parameters.names)
+    # reported, not invented: the parameters without effect are listed and keep their nominal
+    # values, up to the least change their body's physical consistency needs (observed < 1 %)
+    ps = res.parameters
+    assert len(res.base.unidentifiable) >= {"five_bar": 30, "delta": 30}.get(name, 1)
+    units = np.array(ps.units)
     for p in res.base.unidentifiable:
-        i = names.index(p)
-        assert res.theta[i] == pytest.approx(res.parameters.nominal[i], rel=1e-6, abs=1e-12)
+        i = ps.index(p)
+        body = [k for k, n in enumerate(ps.names) if n.split(".")[0] == p.split(".")[0]]
+        same = [k for k in body if units[k] == units[i]]
+        scale = max(abs(ps.nominal[i]), 0.1 * np.abs(ps.nominal[same]).max(), 1e-12)
+        assert abs(res.theta[i] - ps.nominal[i]) <= 0.02 * scale, p
     t2, qa2, qd2, qdd2 = multisine(nominal, samples // 3, 5e-3, amp, 2)
     tau2 = mujoco_efforts(truth, t2, qa2, qd2, qdd2)
     err = np.sqrt(np.mean((res.predict(t2, qa2, qd2, qdd2) - tau2) ** 2, axis=0))

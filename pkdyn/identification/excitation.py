@@ -9,7 +9,8 @@ that it starts at the home position, at rest and without acceleration:
 The coefficients minimise the condition number of the base regressor (columns scaled to unit
 norm) over one period, sampled at ``samples`` instants, subject to the position limits (the
 joint limits, or ``amplitude`` about home when there are none), the speed limits and the effort
-limits (efforts of the nominal model) at those instants: ``scipy.optimize.minimize`` (SLSQP,
+limits (efforts of the nominal model) at those instants, each with a 5 % margin so that they
+also hold between them: ``scipy.optimize.minimize`` (SLSQP,
 finite-difference gradients) from a seeded random start. Each evaluation assembles the samples
 and evaluates the regressor, so the search costs seconds to minutes; keep ``samples`` and
 ``harmonics`` small and sample the result densely afterwards.
@@ -29,6 +30,8 @@ from pkdyn.identification.regressor import ClosedLoopRegressor
 from pkdyn.model.robot import Robot
 
 __all__ = ["FourierTrajectory", "excitation_trajectory"]
+
+_MARGIN = 0.05  # fraction of each range kept free at the design samples
 
 
 @dataclass(frozen=True, eq=False)  # numpy fields
@@ -134,6 +137,8 @@ def excitation_trajectory(
     )
     lo = np.where(np.isfinite(lo), lo, start - span)
     hi = np.where(np.isfinite(hi), hi, start + span)
+    pad = _MARGIN * (hi - lo)  # the limits hold at the design samples: keep off them between
+    lo, hi = lo + pad, hi - pad
     vmax = np.array([a.velocity for a in robot.actuators])
     emax = np.array([a.effort for a in robot.actuators])
     t = np.linspace(0.0, period, samples, endpoint=False)
@@ -153,7 +158,7 @@ def excitation_trajectory(
             ((hi - q) / (hi - lo)).ravel(),
         ]
         if np.all(np.isfinite(vmax)):
-            margins.append((1.0 - np.abs(qd) / vmax).ravel())
+            margins.append((1.0 - _MARGIN - np.abs(qd) / vmax).ravel())
         cond = 1e12
         try:
             sampler = MotionSampler(robot)
@@ -169,7 +174,7 @@ def excitation_trajectory(
             sv = np.linalg.svd(Y, compute_uv=False)
             cond = float(sv[0] / max(sv[-1], sv[0] * 1e-12))
             if np.all(np.isfinite(emax)):
-                margins.append((1.0 - np.abs(np.vstack(efforts)) / emax).ravel())
+                margins.append((1.0 - _MARGIN - np.abs(np.vstack(efforts)) / emax).ravel())
         except PkdynError:  # out of reach: no admissible point
             margins.append(-np.ones(1))
         out = (float(np.log(cond)), np.concatenate(margins))

@@ -28,7 +28,7 @@ from pkdyn.identification.estimation import Accumulator
 from pkdyn.identification.filtering import derivatives
 from pkdyn.identification.motion import BATCH, MotionBatch, MotionSampler
 from pkdyn.identification.parameters import ParameterSet, parameter_set
-from pkdyn.identification.physical import consistent_parameters
+from pkdyn.identification.physical import PRIOR_WEIGHT, consistent_parameters
 from pkdyn.identification.regressor import ClosedLoopRegressor
 from pkdyn.identification.result import IdentificationResult
 from pkdyn.model.robot import Robot
@@ -191,6 +191,37 @@ def _parallel(robot: Robot, N: int, workers: int) -> list[tuple[list[np.ndarray]
         return pool.map(_worker, jobs)
 
 
+def prior_weights(effect: np.ndarray, nominal: np.ndarray, base: BaseParameters) -> np.ndarray:
+    """Metric ``D`` of the pull to the nominal values (:mod:`~.physical`), per parameter.
+
+    A parameter the efforts see weighs its effect on them (its column norm in noise units). One
+    without any effect (unidentifiable) would weigh nothing and could drift anywhere to make its
+    body physical; it weighs instead what a change of the same relative size costs a typical
+    seen parameter, a hundred times over: what the data cannot tell, the nominal values keep.
+
+    Args:
+        effect: Column norms (p,) of the identified parameters, in noise units.
+        nominal: Their nominal values (p,).
+        base: Their base parameters.
+
+    Returns:
+        Weights (p,), > 0.
+
+    """
+    out = effect.copy()
+    unseen = np.zeros(effect.size, dtype=bool)
+    names = list(base.names)
+    for n in base.unidentifiable:
+        unseen[names.index(n)] = True
+    seen = ~unseen & (effect > 0.0) & (nominal != 0.0)
+    typical = float(np.median(effect[seen] * np.abs(nominal[seen]))) if seen.any() else 1.0
+    scale = np.where(nominal != 0.0, np.abs(nominal), np.abs(nominal).max(initial=1.0) or 1.0)
+    out[unseen] = 100.0 * typical / scale[unseen] / PRIOR_WEIGHT
+    tiny = out <= 0.0
+    out[tiny] = 1e-12 * max(float(out.max(initial=0.0)), 1.0)
+    return out
+
+
 def identify(
     robot: Robot,
     data: Measurements,
@@ -284,8 +315,7 @@ def identify(
         bodies.append(slice(s0, s0 + 10))
     nonneg = np.array([ps.groups[c] in ("friction", "rotor") for c in sel])
     sigma = float(np.sqrt(np.mean(est.sigma**2))) or 1.0
-    effect = np.sqrt(colsq) / sigma
-    effect = np.where(effect > 0.0, effect, 1e-12 * max(float(effect.max()), 1.0))
+    effect = prior_weights(np.sqrt(colsq) / sigma, ps.nominal[sel], base)
     theta_id = consistent_parameters(
         base.K, est.R, est.theta, ps.nominal[sel], bodies, nonneg, effect
     )
