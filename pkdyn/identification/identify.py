@@ -28,7 +28,7 @@ from pkdyn.identification.estimation import Accumulator
 from pkdyn.identification.filtering import derivatives
 from pkdyn.identification.motion import BATCH, MotionBatch, MotionSampler
 from pkdyn.identification.parameters import ParameterSet, parameter_set
-from pkdyn.identification.physical import PRIOR_WEIGHT, consistent_parameters
+from pkdyn.identification.physical import consistent_parameters
 from pkdyn.identification.regressor import ClosedLoopRegressor
 from pkdyn.identification.result import IdentificationResult
 from pkdyn.model.robot import Robot
@@ -195,9 +195,10 @@ def prior_weights(effect: np.ndarray, nominal: np.ndarray, base: BaseParameters)
     """Metric ``D`` of the pull to the nominal values (:mod:`~.physical`), per parameter.
 
     A parameter the efforts see weighs its effect on them (its column norm in noise units). One
-    without any effect (unidentifiable) would weigh nothing and could drift anywhere to make its
-    body physical; it weighs instead what a change of the same relative size costs a typical
-    seen parameter, a hundred times over: what the data cannot tell, the nominal values keep.
+    without any effect (unidentifiable) would weigh nothing and could drift anywhere when its
+    body needs a change to be physical; it weighs instead what a change of the same relative
+    size costs a typical seen parameter: it moves no more than its body's consistency needs,
+    and the data still decide everything they can see.
 
     Args:
         effect: Column norms (p,) of the identified parameters, in noise units.
@@ -216,7 +217,7 @@ def prior_weights(effect: np.ndarray, nominal: np.ndarray, base: BaseParameters)
     seen = ~unseen & (effect > 0.0) & (nominal != 0.0)
     typical = float(np.median(effect[seen] * np.abs(nominal[seen]))) if seen.any() else 1.0
     scale = np.where(nominal != 0.0, np.abs(nominal), np.abs(nominal).max(initial=1.0) or 1.0)
-    out[unseen] = 100.0 * typical / scale[unseen] / PRIOR_WEIGHT
+    out[unseen] = typical / scale[unseen]
     tiny = out <= 0.0
     out[tiny] = 1e-12 * max(float(out.max(initial=0.0)), 1.0)
     return out
