@@ -7,8 +7,8 @@ workspace), ``geometry`` (closed forms, assembly / FK and
 IK against raw Pinocchio), ``dynamics`` (forward step and inverse dynamics against raw
 Pinocchio), ``vs_mujoco`` (forward step and inverse dynamics against MuJoCo, agreement),
 ``workspace`` (workspace throughput, when present), ``actuation_map`` (closed-loop legs, loading
-public models), ``cli_latency`` (command start-up against the bare imports), ``identification`` (a Delta
-identified from 1e5 samples) and ``design``
+public models), ``cli_latency`` (command start-up against the bare imports), ``identification``
+(a Delta identified from 1e5 samples) and ``design``
 (design-study throughput and a 10,000-design study: several minutes; ``PKDYN_BENCH_DESIGNS``
 makes it smaller). Figures are medians of repeated runs; ratios are medians of ratios measured on
 alternating batches (CPU time of the process), so that they hold under a varying load.
