@@ -41,7 +41,7 @@ __all__ = [
 
 _LOG_CLIP = 200.0  # exponents kept finite during the solver's trial steps
 
-MAX_EVALUATIONS = 30
+MAX_EVALUATIONS = 100
 """Cap on the constrained fit's evaluations (every iterate is physical; each one lowers the
 objective, so a capped fit is physical and no worse than its start)."""
 
