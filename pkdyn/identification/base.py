@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from solvers import numerics
+
 __all__ = ["STRUCTURAL_RTOL", "BaseParameters", "base_parameters"]
 
 STRUCTURAL_RTOL = 1e-7
@@ -127,7 +129,8 @@ def base_parameters(Y: np.ndarray, names: tuple[str, ...] | list[str]) -> BasePa
     dep = np.setdiff1d(np.arange(p), ind)
     beta = np.zeros((ind.size, dep.size))
     if dep.size and ind.size:
-        sol, *_ = np.linalg.lstsq(Y[:, ind], Y[:, dep], rcond=None)
+        A = Y[:, ind]
+        sol = numerics.lstsq(A, Y[:, dep], numerics.machine_rtol(A))
         big = np.abs(sol).max(axis=0, keepdims=True)
         sol[np.abs(sol) < _CLEAN * np.maximum(big, 1e-300)] = 0.0
         sol[:, ~live[dep]] = 0.0

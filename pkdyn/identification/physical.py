@@ -31,6 +31,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
+from solvers import numerics
+
 __all__ = [
     "MAX_EVALUATIONS",
     "PRIOR_WEIGHT",
@@ -234,7 +236,7 @@ def consistent_parameters(
     # the least deviation from nominal (metric D) that reproduces the base parameters exactly:
     # the answer when it is physical
     KD = K / effect
-    step, *_ = np.linalg.lstsq(KD, theta_b - K @ nominal, rcond=None)
+    step = numerics.lstsq(KD, theta_b - K @ nominal, numerics.machine_rtol(KD))
     linear = nominal + step / effect
     if _physical(linear, bodies, nonnegative):
         return linear
