@@ -23,6 +23,9 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
   parameters the file was written from (``pkdyn urdf FAMILY``); the file then loads exactly as
   the family does (its parameters, home configuration and closed forms), after a check that its
   model is the builder's.
+- ``<pkdyn:home q>``: the home configuration to assemble (actuator coordinates, or a full
+  configuration in Pinocchio's order), as ``pkdyn.load(..., home=)`` takes it: written by
+  ``pkdyn calibrate`` so that a calibrated robot loads in the assembly mode it was measured in.
 
 The URDF part is validated by :mod:`pkdyn.model.validate` (numbers, physics, tree), the pkdyn
 elements here (unknown elements, mistyped namespaces, duplicates).
@@ -285,6 +288,7 @@ class Description:
     passive: tuple[PassiveSpec, ...] = ()
     springs: tuple[SpringSpec, ...] = ()
     family: FamilySpec | None = None
+    home: tuple[float, ...] | None = None
 
 
 def _vec(source: str, el: ET.Element, attr: str, default: str, n: int = 3) -> np.ndarray:
@@ -561,7 +565,7 @@ def _spring(source: str, el: ET.Element, links: set[str]) -> SpringSpec:
     return SpringSpec(name, f1, f2, k[0], L0[0])
 
 
-ELEMENTS = ("closure", "joint", "platform", "passive", "spring", "family")
+ELEMENTS = ("closure", "joint", "platform", "passive", "spring", "family", "home")
 """The top-level pkdyn elements (children of ``<robot>``)."""
 
 
@@ -665,7 +669,20 @@ def parse_description(xml_text: str, source: str) -> Description:
         passive=_passive(source, root),
         springs=springs,
         family=_family(source, root),
+        home=_home(source, root),
     )
+
+
+def _home(source: str, root: ET.Element) -> tuple[float, ...] | None:
+    found = root.findall(_NS + "home")
+    if not found:
+        return None
+    if len(found) > 1:
+        raise DescriptionError(source, "<pkdyn:home>", f"given {len(found)} times")
+    text = found[0].get("q")
+    if text is None:
+        raise DescriptionError(source, "<pkdyn:home>", "missing attribute 'q'")
+    return _values(source, "<pkdyn:home> q", text, True)
 
 
 def _family(source: str, root: ET.Element) -> FamilySpec | None:
