@@ -22,6 +22,7 @@ RANK = {
     "dynamics": 6,
     "workspace": 6,
     "tripod": 7,
+    "precision": 7,
     "design": 8,
     "viewer": 9,
     "plotting": 9,
