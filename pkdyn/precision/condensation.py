@@ -30,6 +30,7 @@ from pkdyn.precision.elastic import ElasticModel
 
 __all__ = [
     "FREE_TOL",
+    "translational",
     "RANK_TOL",
     "Reduced",
     "compliance",
@@ -220,7 +221,7 @@ def compliance(em: ElasticModel, red: Reduced) -> tuple[np.ndarray, int]:
     Kz = red.Kz
     if Kz.shape[0] == 0:
         return np.zeros((6, 6)), 0
-    sym = np.allclose(Kz, Kz.T, rtol=0.0, atol=1e-9 * float(np.max(np.abs(Kz))))
+    sym = float(np.max(np.abs(Kz - Kz.T))) <= 1e-9 * float(np.max(np.abs(Kz)))
     # (the tangent of a moment fixed in world axes is not symmetric: its zero and negative
     # directions are those of its symmetric part to first order)
     w, V = np.linalg.eigh(0.5 * (Kz + Kz.T))
@@ -250,3 +251,25 @@ def compliance(em: ElasticModel, red: Reduced) -> tuple[np.ndarray, int]:
         JV = red.Jz @ Vk
         C = JV @ np.linalg.solve(Vk.T @ Kz @ Vk, JV.T)
     return C, int(zero.sum())
+
+
+def translational(
+    em: ElasticModel, q: np.ndarray, point: np.ndarray, w: np.ndarray | None
+) -> tuple[float, float]:
+    """Smallest principal translational stiffness [N/m] among the task components and the
+    translation of the point under ``w`` [m] (``nan`` without), at an assembled ``q``.
+
+    The lean path of the maps (no input checks): :func:`reduce` and :func:`compliance`.
+
+    Raises:
+        SingularConfigurationError: As :func:`compliance`.
+
+    """
+    C, _ = compliance(em, reduce(em, em.embed(q), point))
+    t = [int(i) for i in em.base.task_rows if i < 3]
+    if not t:
+        return float("nan"), float("nan")
+    top = float(np.linalg.eigvalsh(C[np.ix_(t, t)])[-1])
+    kmin = 1.0 / top if top > 0.0 else float("nan")
+    defl = float(np.linalg.norm((C @ w)[:3])) if w is not None else float("nan")
+    return kmin, defl

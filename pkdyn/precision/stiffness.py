@@ -19,8 +19,8 @@ spring) the result is Gosselin's ``K = J^T K_a J`` (1990), ``J`` the inverse kin
   ``K6`` (6 x 6) exists when no platform direction is held rigidly (e.g. the Delta's rotations,
   blocked by its rigid parallelograms: give its links a material for a finite ``K6``).
 - Principal stiffnesses: the inverses of the eigenvalues of the compliance's translation block
-  (forces only) and rotation block (moments only), with their directions (world axes),
-  smallest first; over the task components, or all six when ``K6`` exists.
+  (forces only) and rotation block (moments only) among the task components, with their
+  directions (world axes), smallest first (the other directions: ``K6``).
 - Loaded mode (``loaded=True``): the equilibrium under ``wrench`` (and the weight with
   ``gravity``) is solved (:mod:`pkdyn.precision.equilibrium`) and the tangent stiffness there,
   with the geometric terms of the load, is returned; ``deflection`` is then the nonlinear
@@ -97,7 +97,7 @@ class Stiffness:
         K: Task stiffness (m, m) [N/m, N/rad, N m/m, N m/rad].
         K6: Full stiffness (6, 6), or ``None`` when a direction is held rigidly.
         translation: Principal translational stiffnesses (forces only), or ``None`` (no
-            translation among the task components and no ``K6``).
+            translation among the task components).
         rotation: Principal rotational stiffnesses (moments only), or ``None``.
         internal: Internal mobilities without stiffness (e.g. the spin of a Delta's bars).
         wrench: Applied wrench (6,) [N, N m], or ``None``.
@@ -292,8 +292,8 @@ def _result(
         compliance6=C6,
         K=K,
         K6=K6,
-        translation=_principal(C6, rows if K6 is None else list(range(6)), (0, 1, 2)),
-        rotation=_principal(C6, rows if K6 is None else list(range(6)), (3, 4, 5)),
+        translation=_principal(C6, rows, (0, 1, 2)),
+        rotation=_principal(C6, rows, (3, 4, 5)),
         internal=internal,
         wrench=wrench,
         deflection=deflection,
