@@ -47,11 +47,11 @@ def _elastic(args: argparse.Namespace) -> tuple[Any, Any, np.ndarray]:
 
 
 def _posed(args: argparse.Namespace) -> tuple[Any, np.ndarray]:
-    if args.material is None:
+    if args.material is None and getattr(args, "html", None) is None:
         return configuration(args)
     import pkdyn
 
-    robot = load(args, geometry=True)  # beams are read from the links' cylinders
+    robot = load(args, geometry=True)  # beams are read from the links' cylinders; the view
     if args.qa is not None:
         return robot, pkdyn.forward_geometry(robot, args.qa, check_limits=False).q
     return robot, pkdyn.inverse_geometry(robot, args.pose, check_limits=False).q
