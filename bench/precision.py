@@ -91,11 +91,10 @@ def general_path() -> list[Row]:
         robot = pkdyn.load(name, geometry=material is not None)
         em = elastic_model(robot, k, material=material)
         q = robot.q_home
-        zero = np.zeros(3)
         label = f"{name}" + (f", {material} links ({len(em.links)} beams)" if material else "")
         if material is None:
             t, t_raw, ratio = paired(
-                lambda em=em, q=q: translational(em, q, zero, None),
+                lambda em=em, q=q: translational(em, q, np.zeros(3), None),
                 lambda robot=robot, q=q, k=k: _raw_floor(robot, q, k),
                 200,
             )
@@ -108,7 +107,7 @@ def general_path() -> list[Row]:
                 )
             )
         else:
-            t = median_us(lambda em=em, q=q: translational(em, q, zero, None), 50)
+            t = median_us(lambda em=em, q=q: translational(em, q, np.zeros(3), None), 50)
             out.append((f"{label}: stiffness per configuration", f"{1e6 / t:.3g} poses/s", "-"))
         t_pub = median_us(lambda em=em, q=q: stiffness(em, q), 50)
         t_modes = median_us(lambda em=em, q=q: modes(em, q), 20, repeats=5)

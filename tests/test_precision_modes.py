@@ -126,9 +126,7 @@ def test_compliant_links_ring_in_simulation(four_bar):
     assert result.frequencies.size > 1 and result.condensed == 0
     rigid = modes(robot, robot.q_home, 5e3)
     assert result.f1 < rigid.f1  # the cranks' bending lowers it
-    f = _ring(
-        em, result, 0, periods=8, integrator="rk4", step=1.0 / (6 * result.frequencies[-1])
-    )
+    f = _ring(em, result, 0, periods=8, integrator="rk4", step=1.0 / (6 * result.frequencies[-1]))
     assert f == pytest.approx(result.f1, rel=1e-4)
 
 

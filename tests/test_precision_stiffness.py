@@ -16,9 +16,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import scipy.optimize
+from conftest import random_configs
 
 import pkdyn
-from conftest import random_configs
 from pkdyn.analysis.kinematics import kinematic_models
 from pkdyn.analysis.statics import static_equilibrium
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
@@ -137,13 +137,14 @@ def _springs(robot, q, k):
     return with_passive(robot, specs)
 
 
-def _nonlinear(robot, q0, k, w, point=np.zeros(3)):
+def _nonlinear(robot, q0, k, w, point=None):
     """Equilibrium under the dead wrench ``w`` (world, moment about ``point``), by statics.
 
     Unknowns: the actuated coordinates; the direct geometric model gives the configuration, and
     the existing statics the actuator efforts that would still be needed with the springs in
     place: zero at equilibrium.
     """
+    point = np.zeros(3) if point is None else point
     sp = _springs(robot, q0, k)
     state = {"q": q0}
 
@@ -161,7 +162,8 @@ def _nonlinear(robot, q0, k, w, point=np.zeros(3)):
     return q
 
 
-def _displacement(robot, q0, q1, point=np.zeros(3)):
+def _displacement(robot, q0, q1, point=None):
+    point = np.zeros(3) if point is None else point
     M0, M1 = robot.platform_placement(q0), robot.platform_placement(q1)
     return np.concatenate(
         [
@@ -196,9 +198,7 @@ def test_deflection_and_loaded_tangent_match_nonlinear_equilibria(name):
     dF = 1e-3 * np.where(F != 0.0, rng.uniform(-1.0, 1.0, 6), 0.0) * np.abs(F).max()
     inc = _displacement(robot, q_nl, _nonlinear(robot, q0, k, F + dF))
     tangent = np.linalg.norm(S.compliance6 @ dF - inc) / np.linalg.norm(inc)
-    unloaded = np.linalg.norm(stiffness(robot, q0, k).compliance6 @ dF - inc) / np.linalg.norm(
-        inc
-    )
+    unloaded = np.linalg.norm(stiffness(robot, q0, k).compliance6 @ dF - inc) / np.linalg.norm(inc)
     assert tangent < 1e-3 and unloaded > 10 * tangent  # the geometric terms matter here
 
 
@@ -250,7 +250,8 @@ def test_extended_model_keeps_the_robot(delta):
     q = em.embed(delta.q_home)
     assert len(em.links) == 9  # three arms, six bars
     assert np.allclose(
-        em.robot.platform_placement(q).homogeneous, delta.platform_placement(delta.q_home).homogeneous
+        em.robot.platform_placement(q).homogeneous,
+        delta.platform_placement(delta.q_home).homogeneous,
     )
     M = mass_matrix(em.robot, q)[np.ix_(em.v_index, em.v_index)]
     assert np.allclose(M, mass_matrix(delta, delta.q_home), atol=1e-12)
@@ -323,9 +324,13 @@ def test_described_compliance_is_the_beams(tmp_path):
         xyz = " ".join(f"{x:.17g}" for x in lc.placement.translation)
         rpy = " ".join(f"{x:.17g}" for x in pin.rpy.matrixToRpy(lc.placement.rotation))
         c = " ".join(f"{x:.17g}" for x in lc.compliance)
-        extra.append(f'<pkdyn:compliance link="{lc.link}" compliance="{c}" xyz="{xyz}" rpy="{rpy}"/>')
+        extra.append(
+            f'<pkdyn:compliance link="{lc.link}" compliance="{c}" xyz="{xyz}" rpy="{rpy}"/>'
+        )
     xml = xml.replace("</robot>", "\n".join(extra) + "</robot>")
-    xml = xml.replace("<mechanicalReduction>", '<pkdyn:stiffness value="3e3"/><mechanicalReduction>')
+    xml = xml.replace(
+        "<mechanicalReduction>", '<pkdyn:stiffness value="3e3"/><mechanicalReduction>'
+    )
     path = tmp_path / "five_bar.urdf"
     path.write_text(xml)
     described = pkdyn.load(str(path))
@@ -333,7 +338,9 @@ def test_described_compliance_is_the_beams(tmp_path):
     q = described.q_home
     S1 = stiffness(described, q)
     S0 = stiffness(em, q)
-    assert np.allclose(S1.compliance6, S0.compliance6, rtol=1e-9, atol=1e-12 * np.abs(S0.compliance6).max())
+    assert np.allclose(
+        S1.compliance6, S0.compliance6, rtol=1e-9, atol=1e-12 * np.abs(S0.compliance6).max()
+    )
 
 
 def test_bad_input_names_the_value(gough_stewart, delta):

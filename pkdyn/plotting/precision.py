@@ -66,7 +66,9 @@ def plot_precision_map(
     fig.colorbar(im, ax=ax, label=f"{FIELDS[field][1]} [{unit}]")
     worst = np.nanargmax(z) if field == "deflection" else np.nanargmin(z)
     iv, iu = np.unravel_index(worst, z.shape)
-    ax.plot(pmap.u[iu], pmap.v[iv], "rx", ms=9, mew=2, label=f"worst: {z[iv, iu] * scale:.4g} {unit}")
+    ax.plot(
+        pmap.u[iu], pmap.v[iv], "rx", ms=9, mew=2, label=f"worst: {z[iv, iu] * scale:.4g} {unit}"
+    )
     if reference is not None and np.nanmin(z) < reference < np.nanmax(z):
         ax.contour(pmap.u, pmap.v, z, levels=[reference], colors="red", linewidths=1.2)
     ax.legend(loc="upper right", fontsize=8)

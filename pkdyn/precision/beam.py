@@ -59,9 +59,7 @@ class Section:
         if not (math.isfinite(r) and r > 0.0):
             raise InvalidInputError("radius", f"must be a finite length > 0 m, got {r}")
         if not (math.isfinite(ri) and 0.0 <= ri < r):
-            raise InvalidInputError(
-                "inner_radius", f"must lie in [0, radius = {r:g}) m, got {ri}"
-            )
+            raise InvalidInputError("inner_radius", f"must lie in [0, radius = {r:g}) m, got {ri}")
 
     @property
     def area(self) -> float:

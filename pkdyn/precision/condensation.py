@@ -256,10 +256,11 @@ def compliance(em: ElasticModel, red: Reduced) -> tuple[np.ndarray, int]:
 def translational(
     em: ElasticModel, q: np.ndarray, point: np.ndarray, w: np.ndarray | None
 ) -> tuple[float, float]:
-    """Smallest principal translational stiffness [N/m] among the task components and the
-    translation of the point under ``w`` [m] (``nan`` without), at an assembled ``q``.
+    """Smallest translational stiffness [N/m] and deflection [m] at an assembled ``q``.
 
-    The lean path of the maps (no input checks): :func:`reduce` and :func:`compliance`.
+    The smallest principal stiffness among the task's translation components, and the
+    translation of the point under ``w`` (``nan`` without ``w``). The lean path of the maps
+    (no input checks): :func:`reduce` and :func:`compliance`.
 
     Raises:
         SingularConfigurationError: As :func:`compliance`.

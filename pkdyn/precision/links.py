@@ -19,7 +19,6 @@ directly, in a frame of the link; ``rigid="true"`` keeps a link rigid.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import coal
@@ -191,13 +190,13 @@ def link_compliances(
     """
     desc = robot.description
     specs: dict[int, ComplianceSpec] = {}
-    for spec in desc.compliance:
-        j = _body_joint(robot, spec.link)
+    for given in desc.compliance:
+        j = _body_joint(robot, given.link)
         if j == 0:
             raise InvalidInputError(
-                f"pkdyn:compliance link '{spec.link}'", "the base does not move: it cannot deform"
+                f"pkdyn:compliance link '{given.link}'", "the base does not move: it cannot deform"
             )
-        specs[j] = spec
+        specs[j] = given
     default = as_material(material) if material is not None else None
     if default is None and desc.material is not None:
         default = as_material(desc.material)
@@ -253,9 +252,7 @@ def link_compliances(
             )
         section = Section(rod.radius, bore)
         c = centre_compliance(rod.length, section, mat, shear)
-        out.append(
-            LinkCompliance(name, j, _beam_frame(*ends), c, "beam", rod.length, section, mat)
-        )
+        out.append(LinkCompliance(name, j, _beam_frame(*ends), c, "beam", rod.length, section, mat))
     return out
 
 
@@ -264,8 +261,3 @@ def _link_name(robot: Robot, joint: int) -> str:
         if f.parentJoint == joint and f.type == pin.FrameType.BODY:
             return str(f.name)
     return str(robot.model.names[joint])
-
-
-def compliant_joints(links: Sequence[LinkCompliance]) -> dict[int, LinkCompliance]:
-    """The compliances by joint id (one per joint)."""
-    return {lc.joint: lc for lc in links}

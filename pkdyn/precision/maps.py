@@ -220,8 +220,10 @@ class PrecisionMap:
     options: dict[str, object] = field(default_factory=dict)
 
     def extreme(self, name: str) -> float:
-        """Worst value of a field over the map: smallest stiffness or frequency, largest
-        deflection (``nan`` when nothing was evaluated)."""
+        """Worst value of a field over the map (``nan`` when nothing was evaluated).
+
+        The smallest stiffness or frequency, the largest deflection.
+        """
         x = self.values[name]
         if not np.isfinite(x).any():
             return float("nan")

@@ -110,9 +110,7 @@ def mass_matrix(robot: Robot, q: np.ndarray) -> np.ndarray:
     return np.triu(M) + np.triu(M, 1).T
 
 
-def _eigen(
-    red: Reduced, M: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, int]:
+def _eigen(red: Reduced, M: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """``(omega^2, z shapes (nz, n), condensed)``, internal mobilities included first."""
     N, Kz = red.N, red.Kz
     Mz = N.T @ M @ N
