@@ -155,3 +155,38 @@ def test_mode_shapes_are_mass_normalised_and_drawn_assembled(gough_stewart):
     assert len(payload["frequencies"]) == 6 and payload["internal_mobilities"] == 0
     with pytest.raises(InvalidInputError, match="7 is not a mode number"):
         mode_trajectory(em, result, index=6)
+
+
+def test_vibrations_about_the_equilibrium_under_gravity(delta):
+    """Modes about the weighted equilibrium (geometric terms of the weight) ring as simulated.
+
+    The simulation starts at that equilibrium, gravity on, the actuator springs held at their
+    commanded angles: the nacelle rings about it at the loaded frequency.
+    """
+    em = elastic_model(delta, 500.0)  # soft arms: the weight's geometric terms show
+    free = modes(em, delta.q_home)
+    loaded = modes(em, delta.q_home, gravity=True)
+    assert loaded.q_elastic is not None
+    sag = (
+        delta.platform_placement(loaded.q).translation
+        - delta.platform_placement(delta.q_home).translation
+    )
+    assert sag[2] < -2e-4  # the nacelle sinks under its weight
+    assert loaded.frequencies.size == 3 and loaded.internal == 6
+    assert abs(loaded.f1 / free.f1 - 1.0) > 1e-4  # and its frequencies change
+    robot = em.robot
+    qa0 = delta.q_home[robot.actuated_q].copy()
+    k = em.actuator_stiffness
+
+    def torque(t, q, v):
+        return -k * (q[robot.actuated_q] - qa0)
+
+    f = loaded.frequencies[2]
+    shape = loaded.platform[2][:3]
+    v0 = 1e-4 * 2 * np.pi * f * loaded.shapes[2] / np.abs(shape).max()
+    dt = 1.0 / (24 * f)
+    run = simulate(robot, 12 / f, dt, q0=loaded.q_elastic, v0=v0, torque=torque)
+    P = np.array([robot.platform_placement(q).translation for q in run.q])
+    rung = _fft_peak((P - P[0]) @ (shape / np.linalg.norm(shape)), dt)
+    assert rung == pytest.approx(f, rel=3e-5)
+    assert abs(rung - free.frequencies[2]) > 5 * abs(rung - f)  # the weight's terms are seen

@@ -10,12 +10,20 @@
   the platform, the loaded equilibrium and its tangent stiffness;
 - :mod:`~pkdyn.precision.stiffness`: :func:`stiffness` (``K``, compliance, principal
   stiffnesses, deflection);
+- :mod:`~pkdyn.precision.modes`: natural frequencies and mode shapes;
+- :mod:`~pkdyn.precision.vectorised`, :mod:`~pkdyn.precision.maps`: closed forms of the library
+  Gough-Stewart and Delta, figures over many poses and maps over workspace slices (the design
+  metrics ``stiffness_min`` and ``f1_min`` use them).
+
+The accuracy and tolerance analysis (error budget) has its own modules here.
 """
 
 from pkdyn.precision.beam import Section, centre_compliance, tip_compliance
 from pkdyn.precision.elastic import ElasticModel, actuator_stiffness, elastic_model
 from pkdyn.precision.links import LinkCompliance, link_compliances
+from pkdyn.precision.maps import PoseFigures, PrecisionMap, pose_figures, precision_map
 from pkdyn.precision.material import ALUMINIUM, CARBON, MATERIALS, STEEL, Material, as_material
+from pkdyn.precision.modes import Modes, mode_trajectory, modes
 from pkdyn.precision.stiffness import Principal, Stiffness, stiffness, stiffness_json, transport
 
 __all__ = [
@@ -26,6 +34,9 @@ __all__ = [
     "ElasticModel",
     "LinkCompliance",
     "Material",
+    "Modes",
+    "PoseFigures",
+    "PrecisionMap",
     "Principal",
     "Section",
     "Stiffness",
@@ -34,6 +45,10 @@ __all__ = [
     "centre_compliance",
     "elastic_model",
     "link_compliances",
+    "mode_trajectory",
+    "modes",
+    "pose_figures",
+    "precision_map",
     "stiffness",
     "stiffness_json",
     "tip_compliance",

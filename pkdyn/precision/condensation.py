@@ -30,6 +30,7 @@ from pkdyn.precision.elastic import ElasticModel
 
 __all__ = [
     "FREE_TOL",
+    "FREE_TOL_LOADED",
     "translational",
     "RANK_TOL",
     "Reduced",
@@ -45,6 +46,9 @@ RANK_TOL = 1e-9
 
 FREE_TOL = 1e-12
 """Stiffness eigenvalues below this fraction of the largest are zero (no spring resists)."""
+
+FREE_TOL_LOADED = 1e-8
+"""The same for a loaded tangent stiffness (central differences: round-off about 1e-10)."""
 
 _MOVES_TOL = 1e-7
 """A stiffness-free motion moves the platform when its (scale-aware) motion exceeds this."""
@@ -64,6 +68,8 @@ class Reduced:
         Jp: Platform Jacobian (6, nv) in the same convention.
         placement: Platform frame placement.
         point: Reference point, world coordinates [m].
+        free_tol: Relative threshold of a zero stiffness (:data:`FREE_TOL` or
+            :data:`FREE_TOL_LOADED`).
 
     """
 
@@ -74,6 +80,7 @@ class Reduced:
     Jp: np.ndarray
     placement: pin.SE3
     point: np.ndarray
+    free_tol: float = FREE_TOL
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
@@ -201,7 +208,8 @@ def reduce(
         KN = em.spring_stiffness()[:, None] * N
     Kz = N.T @ KN
     Kz = 0.5 * (Kz + Kz.T) if tangent is None else Kz
-    return Reduced(q, N, Kz, Jp @ N, Jp, oMf, pw)
+    tol = FREE_TOL if tangent is None else FREE_TOL_LOADED
+    return Reduced(q, N, Kz, Jp @ N, Jp, oMf, pw, tol)
 
 
 def _scale(em: ElasticModel) -> np.ndarray:
@@ -226,7 +234,7 @@ def compliance(em: ElasticModel, red: Reduced) -> tuple[np.ndarray, int]:
     # directions are those of its symmetric part to first order)
     w, V = np.linalg.eigh(0.5 * (Kz + Kz.T))
     top = float(np.max(np.abs(w))) if w.size else 0.0
-    zero = np.abs(w) <= FREE_TOL * max(top, 1e-300)
+    zero = np.abs(w) <= red.free_tol * max(top, 1e-300)
     moving = _scale(em)[:, None] * (red.Jz @ V[:, zero])
     reach = np.abs(_scale(em)[:, None] * red.Jz).max() if red.Jz.size else 0.0
     if moving.size and float(np.abs(moving).max()) > _MOVES_TOL * max(reach, 1e-300):

@@ -194,7 +194,7 @@ def modes(
     _, internal = compliance(em, red)  # raises when the platform moves without stiffness
     lam, X, condensed = _eigen(red, mass_matrix(em.robot, q_ext))
     top = float(np.max(np.abs(lam))) if lam.size else 0.0
-    elastic = lam > _ZERO_FREQ * max(top, 1e-300)
+    elastic = lam > max(_ZERO_FREQ, red.free_tol) * max(top, 1e-300)
     if not elastic.any():
         raise PkdynError(f"{base.name}: no spring resists any motion: there is no elastic mode")
     lam, X = lam[elastic], X[:, elastic]
