@@ -27,6 +27,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import SingularConfigurationError
 from pkdyn.precision.elastic import ElasticModel
+from solvers import numerics
 
 __all__ = [
     "FREE_TOL",
@@ -36,6 +37,7 @@ __all__ = [
     "Reduced",
     "compliance",
     "constraint_rows",
+    "negligible",
     "platform_rows",
     "reduce",
     "spring_force",
@@ -189,13 +191,7 @@ def reduce(
     """
     rows = constraint_rows(em, q)
     Jp, oMf, pw = platform_rows(em, point)
-    nv = em.nv
-    if rows.shape[0]:
-        _, s, Vt = np.linalg.svd(rows)
-        rank = int(np.sum(s > RANK_TOL * max(1.0, float(s[0]))))
-        N = Vt[rank:].T
-    else:
-        N = np.eye(nv)
+    N = numerics.null_space(rows, RANK_TOL, scale=1.0)
     if tangent is not None:
         KN = tangent(N)
     elif _needs_hessian(em):
@@ -210,6 +206,18 @@ def reduce(
     Kz = 0.5 * (Kz + Kz.T) if tangent is None else Kz
     tol = FREE_TOL if tangent is None else FREE_TOL_LOADED
     return Reduced(q, N, Kz, Jp @ N, Jp, oMf, pw, tol)
+
+
+def negligible(w: np.ndarray, rtol: float) -> np.ndarray:
+    """Which eigenvalues ``w`` (of a symmetric stiffness or mass) count as zero.
+
+    The rank rule of :mod:`solvers.numerics` applied to their magnitudes.
+    """
+    order = np.argsort(np.abs(w))[::-1]
+    rank = numerics.rank_of(np.abs(w)[order], rtol)
+    zero = np.ones(w.size, dtype=bool)
+    zero[order[:rank]] = False
+    return zero
 
 
 def _scale(em: ElasticModel) -> np.ndarray:
@@ -233,8 +241,7 @@ def compliance(em: ElasticModel, red: Reduced) -> tuple[np.ndarray, int]:
     # (the tangent of a moment fixed in world axes is not symmetric: its zero and negative
     # directions are those of its symmetric part to first order)
     w, V = np.linalg.eigh(0.5 * (Kz + Kz.T))
-    top = float(np.max(np.abs(w))) if w.size else 0.0
-    zero = np.abs(w) <= red.free_tol * max(top, 1e-300)
+    zero = negligible(w, red.free_tol)
     moving = _scale(em)[:, None] * (red.Jz @ V[:, zero])
     reach = np.abs(_scale(em)[:, None] * red.Jz).max() if red.Jz.size else 0.0
     if moving.size and float(np.abs(moving).max()) > _MOVES_TOL * max(reach, 1e-300):

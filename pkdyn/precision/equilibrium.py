@@ -35,7 +35,7 @@ from pkdyn.precision.condensation import (
     spring_force,
 )
 from pkdyn.precision.elastic import ElasticModel
-from solvers import solve_lm
+from solvers import numerics, solve_lm
 
 __all__ = ["Equilibrium", "loaded_equilibrium"]
 
@@ -163,22 +163,16 @@ def loaded_equilibrium(
     res = np.inf
     for it in range(1, _MAX_ITER + 1):
         g, rows = _force(em, q, qa_rest, point, w, gravity)
-        if rows.shape[0]:
-            U, s, Vt = np.linalg.svd(rows)
-            rank = int(np.sum(s > RANK_TOL * max(1.0, float(s[0]))))
-            N = Vt[rank:].T
-            # least-squares reactions: rows^T lam = -g on the range of rows^T
-            lam = -(U[:, :rank] / s[:rank]) @ (Vt[:rank] @ g)
-        else:
-            N = np.eye(r.nv)
-            lam = np.zeros(0)
+        N = numerics.null_space(rows, RANK_TOL, scale=1.0)
+        # least-squares reactions: rows^T lam = -g on the range of rows^T
+        lam = numerics.lstsq(rows.T, -g, RANK_TOL, scale=1.0) if rows.shape[0] else np.zeros(0)
         rz = N.T @ g
         res = float(np.linalg.norm(rz))
         if res <= tol * scale:
             return Equilibrium(q, lam, it - 1, res)
         KN = tangent_along(em, q, lam, qa_rest, point, w, gravity, N)
         Kz = N.T @ KN
-        dz = np.linalg.lstsq(Kz, rz, rcond=1e-12)[0]
+        dz = numerics.lstsq(Kz, rz, 1e-12)
         q = _project(em, pin.integrate(r.model, q, N @ dz))
     raise PkdynError(
         f"{em.base.name}: no static equilibrium under this load after {_MAX_ITER} Newton "

@@ -33,12 +33,12 @@ import scipy.linalg
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
-from pkdyn.precision.condensation import Reduced, compliance, reduce
+from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
 from pkdyn.precision.stiffness import _check_assembled, _point, _wrench
-from solvers import solve_lm
+from solvers import numerics, solve_lm
 
 __all__ = ["Modes", "mass_matrix", "mode_trajectory", "modes", "modes_json"]
 
@@ -117,13 +117,13 @@ def _eigen(red: Reduced, M: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     Mz = 0.5 * (Mz + Mz.T)
     Ks = 0.5 * (Kz + Kz.T)
     mu, W = np.linalg.eigh(Mz)
-    massless = mu <= _MASSLESS * max(float(mu.max()) if mu.size else 0.0, 1e-300)
+    massless = negligible(mu, _MASSLESS)
     if not massless.any():
         lam, X = scipy.linalg.eigh(Ks, Mz)
         return lam, X, 0
     P, Q = W[:, ~massless], W[:, massless]
     Kpp, Kpq, Kqq = P.T @ Ks @ P, P.T @ Ks @ Q, Q.T @ Ks @ Q
-    G = np.linalg.pinv(Kqq, rcond=1e-12, hermitian=True)  # (massless and free: dropped)
+    G = numerics.lstsq(Kqq, np.eye(Kqq.shape[0]), 1e-12)  # (massless and free: dropped)
     Kc = Kpp - Kpq @ G @ Kpq.T
     lam, Xp = scipy.linalg.eigh(0.5 * (Kc + Kc.T), np.diag(mu[~massless]))
     X = P @ Xp - Q @ (G @ Kpq.T @ Xp)
@@ -193,8 +193,7 @@ def modes(
         red = reduce(em, q_ext, p, tangent)
     _, internal = compliance(em, red)  # raises when the platform moves without stiffness
     lam, X, condensed = _eigen(red, mass_matrix(em.robot, q_ext))
-    top = float(np.max(np.abs(lam))) if lam.size else 0.0
-    elastic = lam > max(_ZERO_FREQ, red.free_tol) * max(top, 1e-300)
+    elastic = ~negligible(lam, max(_ZERO_FREQ, red.free_tol)) & (lam > 0.0)
     if not elastic.any():
         raise PkdynError(f"{base.name}: no spring resists any motion: there is no elastic mode")
     lam, X = lam[elastic], X[:, elastic]

@@ -50,6 +50,7 @@ from pkdyn.precision.condensation import Reduced, compliance, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
+from solvers import numerics
 
 __all__ = [
     "COND_MAX",
@@ -230,8 +231,7 @@ def _check_serial(red: Reduced, rows: list[int], L: float, name: str) -> None:
     """Raise when the allowed motions cannot move the platform along a task direction."""
     S = np.array([1.0 / L if i < 3 else 1.0 for i in rows])
     Jt = S[:, None] * red.Jz[rows]
-    s = np.linalg.svd(Jt, compute_uv=False) if Jt.size else np.zeros(1)
-    if s.size < len(rows) or s[-1] <= SERIAL_TOL * max(float(s[0]), 1e-300):
+    if numerics.rank(Jt, SERIAL_TOL) < len(rows):
         raise SingularConfigurationError(
             "serial",
             f"{name}: the platform cannot move along a task direction even when the springs "
@@ -271,17 +271,15 @@ def _result(
     L = base.length_scale
     _check_serial(red, rows, L, base.name)
     Ct = C6[np.ix_(rows, rows)]
-    st = np.linalg.svd(_scaled(Ct, rows, L), compute_uv=False)
-    if st[-1] <= st[0] * 1e-15:
+    if numerics.rank(_scaled(Ct, rows, L), 1e-15) < len(rows):
         raise SingularConfigurationError(
             "parallel",
-            f"{base.name}: the compliance is numerically singular here (condition number "
-            f"{st[0] / max(st[-1], 1e-300):.3g}): a singular configuration, the stiffness is "
-            "not defined",
+            f"{base.name}: the compliance is numerically singular here: a singular "
+            "configuration, the stiffness is not defined",
         )
     K = np.linalg.inv(Ct)
-    s6 = np.linalg.svd(_scaled(C6, list(range(6)), L), compute_uv=False)
-    K6 = np.linalg.inv(C6) if s6[-1] > s6[0] / COND_MAX else None
+    full = numerics.rank(_scaled(C6, list(range(6)), L), 1.0 / COND_MAX) == 6
+    K6 = np.linalg.inv(C6) if full else None
     if wrench is not None and deflection is None:
         deflection = C6 @ wrench
     return Stiffness(
