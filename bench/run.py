@@ -36,6 +36,7 @@ MODULES = (
     ("passive", "Passive elements: springs, dampers, friction in the dynamics"),
     ("workspace", "Workspace throughput"),
     ("actuation_map", "Closed-loop legs (actuation maps) and loading public models"),
+    ("precision", "Precision: stiffness and frequency maps, closed forms and general path"),
     ("design", "Design studies: designs/s on 1 and 2 workers, a 10,000-design Delta study"),
     ("sizing", "Sizing: fastest cycle (toppra) and motor selection"),
     ("identification", "Dynamic identification: a Delta from 1e5 samples (issue 27)"),

@@ -23,6 +23,7 @@ RANK = {
     "workspace": 6,
     "tripod": 7,
     "identification": 7,
+    "precision": 7,
     "design": 8,
     "viewer": 9,
     "plotting": 9,
