@@ -23,6 +23,8 @@ RANK = {
     "dynamics": 6,
     "workspace": 6,
     "tripod": 7,
+    "identification": 7,
+    "precision": 7,
     "design": 8,
     "viewer": 9,
     "plotting": 9,

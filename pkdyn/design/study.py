@@ -44,7 +44,16 @@ from pkdyn.exceptions import InvalidInputError, StudyError
 
 __all__ = ["Study"]
 
-_CONDITION_KEYS = ("limits", "length", "gamma_max", "ab_min", "workspace_samples", "clavel_rays")
+_CONDITION_KEYS = (
+    "limits",
+    "length",
+    "gamma_max",
+    "ab_min",
+    "workspace_samples",
+    "clavel_rays",
+    "actuator_stiffness",
+    "material",
+)
 
 
 @dataclass(frozen=True)
@@ -70,7 +79,8 @@ class Study:
         seed: Seed of the sampler or of NSGA-II.
         parametrisation: Name of a parametrisation (:mod:`pkdyn.design.parametrisations`).
         settings: Other conditions: ``limits``, ``length`` [m], ``gamma_max``, ``ab_min`` [rad],
-            ``workspace_samples``, ``clavel_rays`` (see :class:`pkdyn.design.Conditions`).
+            ``workspace_samples``, ``clavel_rays``, ``actuator_stiffness``, ``material`` (see
+            :class:`pkdyn.design.Conditions`).
         name: A label for reports.
 
     Raises:
