@@ -454,3 +454,34 @@ def test_home_found_near_a_dead_centre_is_reported():
         warnings.simplefilter("error")
         regular = _load(_straight_four_bar(0.45))  # a home far from any dead centre: silent
     assert dead_centre_distance(regular, regular.q_home) is None
+
+
+@pytest.mark.parametrize("sig, code", [("SIGINT", 130), ("SIGTERM", 143)])
+def test_the_live_viewer_exits_130_or_143(sig, code):
+    """The README's exit codes: Ctrl-C 130, SIGTERM 143 (it used to exit 0)."""
+    import signal
+    import subprocess
+    from pathlib import Path
+
+    exe = str(Path(sys.executable).with_name("pkdyn"))
+    proc = subprocess.Popen(
+        [exe, "view", "five_bar"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    try:
+        line = proc.stdout.readline() if proc.stdout else ""
+        assert "viewer at http://127.0.0.1" in line, (
+            line,
+            proc.stderr.read() if proc.stderr else "",
+        )
+        proc.send_signal(getattr(signal, sig))
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+            try:
+                proc.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+    assert proc.returncode == code, err
+    assert "viewer stopped" in out and "Traceback" not in err
