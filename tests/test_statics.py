@@ -194,7 +194,7 @@ def test_closure_reactions_balance_the_cut_tree(name):
     gen = np.zeros(robot.nv)
     LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     done = set()
-    for k, (_, j1, M1, j2, M2) in enumerate(robot.closure_set.items):
+    for k, (_, j1, M1, j2, _) in enumerate(robot.closure_set.items):
         owner = robot.constraint_owner[k]
         if owner in done:
             continue
