@@ -76,6 +76,16 @@ def _cmd_size(args: argparse.Namespace) -> None:
 
     output_path("--csv", args.csv)
     output_path("--plot", args.plot, figure=True)
+    output_path("--operating-points", args.operating_points, figure=True)
+    catalog = None
+    if args.catalog:  # read (and refused) before any work
+        from pkdyn.dynamics.motors import load_catalog
+
+        catalog = load_catalog(args.catalog)
+        if args.gearboxes:
+            catalog = catalog + load_catalog(args.gearboxes)
+    elif args.gearboxes:
+        raise InvalidInputError("--gearboxes", "needs --catalog (the motors to pair them with)")
     robot = load(args)
     if args.payload < 0.0 or not np.isfinite(args.payload):
         raise InvalidInputError("--payload", f"must be >= 0 kg, got {args.payload}")
@@ -93,13 +103,9 @@ def _cmd_size(args: argparse.Namespace) -> None:
         traj = named_trajectory(robot, args.trajectory, **_trajectory_options(args))
         result = size(robot, traj, payload=args.payload)
     selection = None
-    if args.catalog:
-        from pkdyn.dynamics.motors import load_catalog
+    if catalog is not None:
         from pkdyn.dynamics.selection import select_drives
 
-        catalog = load_catalog(args.catalog)
-        if args.gearboxes:
-            catalog = catalog + load_catalog(args.gearboxes)
         selection = select_drives(
             robot,
             traj,
