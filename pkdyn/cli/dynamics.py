@@ -63,6 +63,10 @@ def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
 
 def _fastest_options(args: argparse.Namespace) -> dict[str, Any]:
     """The path's nominal parametrisation: ``cycle_time / dt`` samples (default 1 s)."""
+    if args.cycles != 1:
+        raise InvalidInputError(
+            "--cycles", "--fastest traverses the path once (its time is the path parameter)"
+        )
     opts = _trajectory_options(args)
     if args.trajectory == "adept":
         opts["cycle_time"] = 1.0 if args.cycle_time is None else args.cycle_time
@@ -89,6 +93,8 @@ def _cmd_size(args: argparse.Namespace) -> None:
     robot = load(args)
     if args.payload < 0.0 or not np.isfinite(args.payload):
         raise InvalidInputError("--payload", f"must be >= 0 kg, got {args.payload}")
+    if args.show < 0:
+        raise InvalidInputError("--show", f"must be >= 0, got {args.show}")
     if args.operating_points and not args.catalog:
         raise InvalidInputError("--operating-points", "needs --catalog (the motors to plot)")
     fast = None

@@ -37,6 +37,7 @@ ENTRY_POINT_GROUP = "pkdyn.plugins"
 """Entry-point group of installed plug-ins."""
 
 _LOADED: dict[str, ModuleType] = {}
+_FILES: dict[str, ModuleType] = {}
 _ENTRY_POINTS: list[bool] = []
 
 
@@ -85,6 +86,9 @@ def _line(err: BaseException) -> str:
 def _load_file(path: Path) -> ModuleType:
     if not path.is_file() or path.suffix != ".py":
         raise InvalidInputError("--plugin", f"'{path}' is not a .py file")
+    key = str(path.resolve())
+    if key in _FILES:  # once per process
+        return _FILES[key]
     name = path.stem
     if not name.isidentifier():
         raise InvalidInputError("--plugin", f"'{path}': the file name must be a Python identifier")
@@ -105,6 +109,7 @@ def _load_file(path: Path) -> ModuleType:
     except (ImportError, ValueError):  # pragma: no cover
         pass
     _LOADED[name] = module
+    _FILES[key] = module
     return module
 
 

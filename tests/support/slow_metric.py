@@ -4,15 +4,17 @@ Loaded with ``pkdyn design --plugin tests/support/slow_metric.py`` (a file: ship
 workers by value) or ``pkdyn.design.load_plugin``.
 """
 
+import os
 import time
 
 from pkdyn.design import metric
 
-DELAY = 0.05
-"""Seconds each evaluation sleeps."""
+CALLS = [0]
+"""Evaluations in this process."""
 
 
 @metric("slow_mass", "kg", "moving mass, after a pause (tests)")
 def slow_mass(robot, ctx):
-    time.sleep(DELAY)
+    CALLS[0] += 1
+    time.sleep(float(os.environ.get("PKDYN_TEST_DELAY", "0.05")))  # seconds
     return float(sum(robot.model.inertias[j].mass for j in range(1, robot.model.njoints)))
