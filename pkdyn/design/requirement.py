@@ -118,7 +118,11 @@ class Requirement:
     @property
     def count(self) -> int:
         """Number of sampled poses (see the module docstring), computed without sampling."""
-        s, z = self.samples, self.size
+        return self.count_at(self.samples)
+
+    def count_at(self, samples: int) -> int:
+        """Number of poses this requirement would have at ``samples`` per axis."""
+        s, z = int(samples), self.size
         if self.kind == "box":
             return int(np.prod([s if z[k] > 0.0 else 1 for k in ("dx", "dy", "dz")]))
         if self.kind == "cylinder":

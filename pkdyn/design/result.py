@@ -31,6 +31,7 @@ def check_verify(study: Study, samples: int, candidates: int = 50) -> Study:
 
     """
     from pkdyn.design import fields
+    from pkdyn.design.requirement import MAX_REQUIRED_POSES
     from pkdyn.design.study import MAX_STUDY_WORK
 
     samples = fields.integer("--verify (samples per axis)", samples, 2)
@@ -38,6 +39,13 @@ def check_verify(study: Study, samples: int, candidates: int = 50) -> Study:
     req = study.requirement
     if req is None:
         raise InvalidInputError("--verify", "the study has no required workspace to check")
+    count = req.count_at(samples)
+    if count > MAX_REQUIRED_POSES:
+        raise InvalidInputError(
+            "--verify",
+            f"{req.kind} at {samples} samples per axis is {count:,} poses, more than "
+            f"{MAX_REQUIRED_POSES:,}; use fewer samples per axis",
+        )
     dense = dataclasses.replace(req, samples=samples)
     work = candidates * dense.count
     if work > MAX_STUDY_WORK:

@@ -69,7 +69,7 @@ def _evaluate(
 
 
 def _complete(paths: dict[str, Path], study: Study, header: list[str]) -> list[Row] | None:
-    """Rows of a complete earlier run of the same study at these paths, else ``None``."""
+    """Rows of an earlier complete run of the same study (same digest) here, else ``None``."""
     import yaml
 
     if not (paths["study"].is_file() and paths["csv"].is_file()):
@@ -83,9 +83,9 @@ def _complete(paths: dict[str, Path], study: Study, header: list[str]) -> list[R
             return None
         with open(paths["csv"], newline="") as fh:
             rows = Table.read_rows(fh, header)
-    except (OSError, yaml.YAMLError, PkdynError):
+    except (OSError, yaml.YAMLError, PkdynError, RecursionError):
         return None
-    return rows if len(rows) == results.get("designs") else None
+    return rows  # (checked row by row by _belonging)
 
 
 def _belonging(study: Study, rows: list[Row], source: Path) -> dict[int, Row]:

@@ -387,7 +387,7 @@ class Study:
 
         text = read_text(path, MAX_STUDY_FILE, lambda msg: StudyError(str(path), msg))
         try:
-            data = yaml.safe_load(text)
+            data = yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
         except yaml.YAMLError as err:
             raise StudyError(str(path), f"not valid YAML ({err})".replace("\n", " ")) from None
         except RecursionError:

@@ -116,8 +116,17 @@ class DaskCluster(Processes):
     def start_scheduler(self) -> str:
         self._file.unlink(missing_ok=True)
         self.scheduler = self.start(
-            [DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-             "--scheduler-file", self._file],  # fmt: skip
+            [
+                DASK,
+                "scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                self._file,
+            ],  # fmt: skip
             "scheduler",
         )
         wait_for(self._file.exists, START_TIMEOUT, "the Dask scheduler")
@@ -127,8 +136,17 @@ class DaskCluster(Processes):
 
     def add_worker(self, env: dict[str, str] | None = None) -> subprocess.Popen:
         proc = self.start(
-            [DASK, "worker", self.address, "--no-nanny", "--nthreads", "1", "--no-dashboard",
-             "--death-timeout", "20"],  # fmt: skip
+            [
+                DASK,
+                "worker",
+                self.address,
+                "--no-nanny",
+                "--nthreads",
+                "1",
+                "--no-dashboard",
+                "--death-timeout",
+                "20",
+            ],  # fmt: skip
             f"worker{len(self.workers)}",
             env,
         )
