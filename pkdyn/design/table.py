@@ -217,8 +217,9 @@ def output_paths(out: str | os.PathLike[str]) -> dict[str, Path]:
         "study": stem.parent / f"{stem.name}.study.yaml",
         "partial": stem.parent / f".{stem.name}.partial.csv",
     }
-    for path in paths.values():
-        output_target(path)
+    for key, path in paths.items():
+        what = {"csv": "the CSV table", "parquet": "the Parquet table", "study": "the study file"}
+        output_target(path, "" if key == p.suffix[1:] else what.get(key, "the partial file"))
     return paths
 
 
