@@ -71,6 +71,16 @@ def _fastest_options(args: argparse.Namespace) -> dict[str, Any]:
     if args.trajectory == "adept":
         opts["cycle_time"] = 1.0 if args.cycle_time is None else args.cycle_time
         opts["cycles"] = 1
+    from pkdyn.dynamics.fastest import MAX_PATH_SAMPLES
+
+    length = args.cycle_time if args.cycle_time is not None else 1.0
+    if args.dt > 0.0 and length / args.dt > MAX_PATH_SAMPLES:  # before building the path
+        raise InvalidInputError(
+            "--dt",
+            f"{length:g} s of path every {args.dt:g} s is {length / args.dt:.3g} samples, more "
+            f"than the {MAX_PATH_SAMPLES:,} --fastest accepts (each is mapped, then solved "
+            "by toppra); a longer --dt",
+        )
     return opts
 
 
