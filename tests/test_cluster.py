@@ -25,8 +25,8 @@ pytestmark = pytest.mark.skipif(not DASK.exists(), reason="the dask command is n
 PLUGIN = str(Path(__file__).parent / "support" / "slow_metric.py")
 
 STUDY = ["design", "delta", "--range", "la=0.2:0.3", "lb=0.4:0.6", "--metric", "slow_mass",
-         "clavel_D", "--n", "24", "--seed", "4", "--plugin", PLUGIN, "--json"]  # fmt: skip
-"""A study of 24 Deltas; ``slow_mass`` (a plug-in shipped by value) sleeps on the workers."""
+         "clavel_D", "--n", "16", "--seed", "4", "--plugin", PLUGIN, "--json"]  # fmt: skip
+"""A study of 16 Deltas; ``slow_mass`` (a plug-in shipped by value) sleeps on the workers."""
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +87,7 @@ def test_a_killed_worker_the_study_finishes_on_the_others(cluster, local_table, 
     killer.join(5.0)
     assert victim.poll() is not None  # it was killed during the study
     assert out.read_text() == local_table
-    assert _indices(out.read_text()) == list(range(24))  # none lost, none repeated
+    assert _indices(out.read_text()) == list(range(16))  # none lost, none repeated
 
 
 def test_a_killed_scheduler_stops_with_one_line_and_the_study_resumes(
@@ -116,7 +116,7 @@ def test_a_killed_scheduler_stops_with_one_line_and_the_study_resumes(
     assert err.startswith(f"pkdyn: error: scheduler {address}:") and "resume" in err
     assert not out.exists()
     kept = data_rows(partial)
-    assert 2 <= kept < 24
+    assert 2 <= kept < 16
     import sys
 
     sys.modules["slow_metric"].CALLS[0] = 0
@@ -127,7 +127,7 @@ def test_a_killed_scheduler_stops_with_one_line_and_the_study_resumes(
     finally:
         mp.undo()
     assert out.read_text() == local_table
-    assert sys.modules["slow_metric"].CALLS[0] == 24 - kept  # only the others evaluated
+    assert sys.modules["slow_metric"].CALLS[0] == 16 - kept  # only the others evaluated
 
 
 def test_a_scheduler_that_never_answers(tmp_path, capsys):
@@ -156,3 +156,18 @@ def test_a_scheduler_that_never_answers(tmp_path, capsys):
     assert code == 1 and len(err.strip().splitlines()) == 1
     assert "no answer within 1 s (--timeout)" in err
     assert time.monotonic() - t0 < 15  # not distributed's unbounded handshake
+
+
+def test_a_worker_without_the_plugin_is_one_line(cluster, tmp_path, monkeypatch, capsys):
+    """A plug-in loaded by module name must be installed on the workers: one line says so."""
+    (tmp_path / "only_here.py").write_text(
+        "from pkdyn.design import Metric\n"
+        "def one(robot, ctx):\n    return 1.0\n"
+        "here = Metric('here', '-', one)\n"  # a named function: pickled by reference
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    code = main(["design", "delta", "--range", "la=0.2:0.3", "--metric", "only_here:here",
+                 "--n", "2", "--plugin", "only_here", "--scheduler", cluster.address])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 1 and len(err.strip().splitlines()) == 1, err
+    assert "a worker failed (ModuleNotFoundError" in err and "plug-ins installed" in err

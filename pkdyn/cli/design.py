@@ -252,7 +252,8 @@ def register(sub: Any) -> None:
         help="fixed builder parameter",
     )
     sp.add_argument(
-        "--parametrisation", help="clavel (r, b) or mel (scale factors), or module:attr"
+        "--parametrisation",
+        help="clavel (r, b) or mel (scale factors), or module:attr of a --plugin",
     )
     sp.add_argument(
         "--metric",
