@@ -3,8 +3,9 @@ their study.
 
 A study run by ``pkdyn design --workers 2`` in a process of its own: killed with SIGKILL (no
 handler runs), its workers end within a second (kernel parent-death signal, and a watchdog);
-interrupted with Ctrl-C (SIGINT to the whole process group), one line, exit 130, no worker left,
-and the same command resumes from the partial file to the table a serial run gives.
+interrupted with Ctrl-C (SIGINT to the whole process group) or SIGTERM (to the study alone), one
+line, exit 130 or 143, no worker left, and the same command resumes from the partial file to the
+table a serial run gives.
 """
 
 import os
@@ -24,7 +25,7 @@ from pkdyn.exceptions import InvalidInputError
 from pkdyn.workers import worker_count
 
 PLUGIN = str(Path(__file__).parent / "support" / "slow_metric.py")
-STUDY = ["design", "delta", "--range", "la=0.2:0.3", "--metric", "slow_mass", "--n", "40",
+STUDY = ["design", "delta", "--range", "la=0.2:0.3", "--metric", "slow_mass", "--n", "24",
          "--plugin", PLUGIN]  # fmt: skip
 
 
@@ -73,6 +74,19 @@ def test_executor_for_a_thousand_workers_and_four_designs(monkeypatch):
         assert isinstance(make_executor(workers=5, designs=1), SerialExecutor)
 
 
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """The study's table from a serial run in this process (no pause)."""
+    out = tmp_path_factory.mktemp("ref") / "ref.csv"
+    mp = pytest.MonkeyPatch()
+    mp.setenv("PKDYN_TEST_DELAY", "0")
+    try:
+        assert main([*STUDY, "--workers", "1", "--out", str(out)]) == 0
+    finally:
+        mp.undo()
+    return out.read_text()
+
+
 @pytest.fixture
 def procs(tmp_path):
     p = Processes(tmp_path)
@@ -100,46 +114,45 @@ def test_workers_never_outlive_their_study(procs, tmp_path):
     wait_for(lambda: not any(alive(k) for k in kids), 10.0, "the orphaned workers to end")
 
 
-def test_ctrl_c_one_line_no_worker_left_and_the_study_resumes(procs, tmp_path, monkeypatch):
+@pytest.mark.parametrize(
+    "how, code, line",
+    [("ctrl-c", 130, "pkdyn: interrupted"), ("sigterm", 143, "pkdyn: terminated")],
+)
+def test_signals_one_line_no_worker_left_and_the_study_resumes(
+    procs, reference, tmp_path, monkeypatch, how, code, line
+):
     out = tmp_path / "i.csv"
     proc, kids = _study_process(procs, out)
-    os.killpg(proc.pid, signal.SIGINT)  # what the terminal does: the whole group
-    assert proc.wait(60) == 130
+    if how == "ctrl-c":
+        os.killpg(proc.pid, signal.SIGINT)  # what the terminal does: the whole group
+    else:
+        os.kill(proc.pid, signal.SIGTERM)  # what a batch system does: the study alone
+    assert proc.wait(60) == code
     log = (tmp_path / "study.log").read_text()
-    assert log.strip().splitlines()[-1] == "pkdyn: interrupted", log
+    assert log.strip().splitlines()[-1] == line, log
     assert "Traceback" not in log and len(log.strip().splitlines()) == 1, log
     wait_for(lambda: not any(alive(k) for k in kids), 10.0, "the workers to end")
     assert not out.exists()
     kept = data_rows(output_paths(out)["partial"])
-    assert 1 <= kept < 40
+    assert 1 <= kept < 24
     monkeypatch.setenv("PKDYN_TEST_DELAY", "0")
-    assert main([*STUDY, "--workers", "1", "--out", str(out)]) == 0
-    assert sys.modules["slow_metric"].CALLS[0] <= 40 - kept
-    fresh = tmp_path / "fresh.csv"
-    assert main([*STUDY, "--workers", "1", "--out", str(fresh)]) == 0
-    assert out.read_text() == fresh.read_text()
-
-
-def test_a_dead_worker_is_one_line(tmp_path, capsys, monkeypatch):
-    """A worker killed from outside (the OOM killer): one line, the designs done kept."""
     from pkdyn.design import load_plugin
 
-    load_plugin(PLUGIN)
-    monkeypatch.setenv("PKDYN_TEST_DELAY", "0.1")
+    calls = load_plugin(PLUGIN).CALLS
+    calls[0] = 0
+    assert main([*STUDY, "--workers", "1", "--out", str(out)]) == 0
+    assert calls[0] <= 24 - kept
+    assert out.read_text() == reference
+
+
+def test_a_dead_worker_is_one_line(procs, tmp_path):
+    """A worker killed from outside (the OOM killer): one line, the designs done kept."""
     out = tmp_path / "d.csv"
-    partial = output_paths(out)["partial"]
-    me = os.getpid()
-
-    def kill_a_worker():
-        wait_for(lambda: data_rows(partial) >= 1, 120.0, "the first designs")
-        pool = [k for k in children(me) if b"spawn_main" in Path(f"/proc/{k}/cmdline").read_bytes()]
-        os.kill(pool[-1], signal.SIGKILL)
-
-    import threading
-
-    threading.Thread(target=kill_a_worker, daemon=True).start()
-    code = main([*STUDY, "--workers", "2", "--out", str(out)])
-    err = capsys.readouterr().err
-    assert code == 1 and len(err.strip().splitlines()) == 1, err
-    assert "a local worker process died" in err and "resume" in err
-    assert data_rows(partial) >= 1 and not out.exists()
+    proc, kids = _study_process(procs, out)
+    os.kill(kids[-1], signal.SIGKILL)
+    assert proc.wait(60) == 1
+    log = (tmp_path / "study.log").read_text().strip().splitlines()
+    assert len(log) == 1 and log[0].startswith("pkdyn: error: workers:"), log
+    assert "a local worker process died" in log[0] and "resume" in log[0]
+    assert data_rows(output_paths(out)["partial"]) >= 1 and not out.exists()
+    wait_for(lambda: not any(alive(k) for k in kids), 10.0, "the other workers to end")
