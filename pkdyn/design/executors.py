@@ -213,8 +213,8 @@ def _probe_scheduler(address: str, timeout: float) -> None:
         comm = await connect(address, timeout=timeout)
         await comm.close()
 
-    try:
-        asyncio.run(asyncio.wait_for(handshake(), timeout))
+    try:  # (a margin: a refused connection is distributed's own error, at ``timeout``)
+        asyncio.run(asyncio.wait_for(handshake(), timeout + max(0.5, 0.2 * timeout)))
     except (TimeoutError, asyncio.TimeoutError):
         raise StudyError(
             f"scheduler {address}",
