@@ -22,6 +22,8 @@ RANK = {
     "dynamics": 6,
     "workspace": 6,
     "tripod": 7,
+    "precision": 7,
+    "calibration": 8,
     "design": 8,
     "viewer": 9,
     "plotting": 9,

@@ -38,6 +38,8 @@ COMMAND_MODULES = (
     "viewer",
     "mjcf",
     "tripod",
+    "accuracy",
+    "calibration",
     "demo",
     "listing",
 )
@@ -62,6 +64,8 @@ COMMANDS = {
     "view": "viewer",
     "mjcf": "mjcf",
     "tripod": "tripod",
+    "accuracy": "accuracy",
+    "calibrate": "calibration",
     "demo": "demo",
     "list": "listing",
 }

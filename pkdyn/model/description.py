@@ -23,6 +23,11 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
   parameters the file was written from (``pkdyn urdf FAMILY``); the file then loads exactly as
   the family does (its parameters, home configuration and closed forms), after a check that its
   model is the builder's.
+- ``<pkdyn:home q>``: the home configuration to assemble (actuator coordinates, or a full
+  configuration in Pinocchio's order), as ``pkdyn.load(..., home=)`` takes it: written by
+  ``pkdyn calibrate`` so that a calibrated robot loads in the assembly mode it was measured in.
+- ``<pkdyn:encoder gain>`` in a transmission's ``<actuator>``: the actuated joint's coordinate is
+  ``gain`` times the actuator's reading (a calibrated scale error of the encoder or screw).
 
 The URDF part is validated by :mod:`pkdyn.model.validate` (numbers, physics, tree), the pkdyn
 elements here (unknown elements, mistyped namespaces, duplicates).
@@ -181,6 +186,8 @@ class ActuatorSpec:
             (``pkdyn:efficiency backdrive``; default ``efficiency``).
         viscous: Motor viscous friction [N m s/rad] (``pkdyn:motor_friction viscous``).
         coulomb: Motor Coulomb friction [N m] (``pkdyn:motor_friction coulomb``).
+        encoder_gain: Joint coordinate per unit of the actuator's reading (``pkdyn:encoder
+            gain``, > 0; default 1), from a geometric calibration.
 
     """
 
@@ -194,6 +201,7 @@ class ActuatorSpec:
     backdrive_efficiency: float | None = None
     viscous: float = 0.0
     coulomb: float = 0.0
+    encoder_gain: float = 1.0
 
 
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
@@ -285,6 +293,7 @@ class Description:
     passive: tuple[PassiveSpec, ...] = ()
     springs: tuple[SpringSpec, ...] = ()
     family: FamilySpec | None = None
+    home: tuple[float, ...] | None = None
 
 
 def _vec(source: str, el: ET.Element, attr: str, default: str, n: int = 3) -> np.ndarray:
@@ -465,6 +474,7 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
         ("efficiency", "backdrive", "backdrive_efficiency", 0.0, 1.0),
         ("motor_friction", "viscous", "viscous", 0.0, math.inf),
         ("motor_friction", "coulomb", "coulomb", 0.0, math.inf),
+        ("encoder", "gain", "encoder_gain", 0.0, math.inf),
     )
     for tag, attr, key, lo, hi in fields:
         child = el.find(_NS + tag)
@@ -475,9 +485,11 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
         except DescriptionError as err:
             msg = str(err).split(": ")[-1]
             raise DescriptionError(source, f"{where} {err.culprit}", msg) from None
-        ok = lo < value <= hi if key.endswith("efficiency") else lo <= value < hi
+        positive = key.endswith("efficiency") or key == "encoder_gain"
+        ok = lo < value <= hi if positive else lo <= value < hi
         if not ok:
             interval = "(0, 1]" if key.endswith("efficiency") else "[0, inf)"
+            interval = "(0, inf)" if key == "encoder_gain" else interval
             raise DescriptionError(
                 source,
                 f"{where} <pkdyn:{tag}> {attr}='{child.get(attr)}'",
@@ -561,7 +573,7 @@ def _spring(source: str, el: ET.Element, links: set[str]) -> SpringSpec:
     return SpringSpec(name, f1, f2, k[0], L0[0])
 
 
-ELEMENTS = ("closure", "joint", "platform", "passive", "spring", "family")
+ELEMENTS = ("closure", "joint", "platform", "passive", "spring", "family", "home")
 """The top-level pkdyn elements (children of ``<robot>``)."""
 
 
@@ -665,7 +677,20 @@ def parse_description(xml_text: str, source: str) -> Description:
         passive=_passive(source, root),
         springs=springs,
         family=_family(source, root),
+        home=_home(source, root),
     )
+
+
+def _home(source: str, root: ET.Element) -> tuple[float, ...] | None:
+    found = root.findall(_NS + "home")
+    if not found:
+        return None
+    if len(found) > 1:
+        raise DescriptionError(source, "<pkdyn:home>", f"given {len(found)} times")
+    text = found[0].get("q")
+    if text is None:
+        raise DescriptionError(source, "<pkdyn:home>", "missing attribute 'q'")
+    return _values(source, "<pkdyn:home> q", text, True)
 
 
 def _family(source: str, root: ET.Element) -> FamilySpec | None:
