@@ -393,3 +393,46 @@ def test_too_few_poses_and_bad_options(hexapod):
         calibrate(hexapod, m, robust="l1")
     with pytest.raises(InvalidInputError, match="group 1 has 1 calibration"):
         Measurements("point", np.zeros((3, 6)), group=[0, 0, 1]).check_groups()
+
+
+def test_description_home_and_encoder_gain_elements(tmp_path):
+    from pkdyn.exceptions import DescriptionError
+
+    robot = pkdyn.load("five_bar", geometry=False)
+    xml = family_xml(robot)
+    q = " ".join(repr(float(v)) for v in robot.q_home)
+    text = xml.replace("</robot>", f'<pkdyn:home q="{q}"/></robot>').replace(
+        "<mechanicalReduction>", '<pkdyn:encoder gain="1.002"/><mechanicalReduction>', 1
+    )
+    loaded = pkdyn.load_string(text, "x.urdf", geometry=False)
+    np.testing.assert_allclose(loaded.q_home, robot.q_home, atol=1e-12)  # the described mode
+    assert [a.encoder_gain for a in loaded.actuators] == [1.002, 1.0]
+    np.testing.assert_allclose(joint_coordinates(loaded, [1.0, 1.0]), [1.002, 1.0])
+    bad = text.replace('gain="1.002"', 'gain="-1"')
+    with pytest.raises(DescriptionError, match="encoder"):
+        pkdyn.load_string(bad, "x.urdf", geometry=False)
+    with pytest.raises(DescriptionError, match="home"):
+        pkdyn.load_string(text.replace(f'q="{q}"', 'q="a b"'), "x.urdf", geometry=False)
+
+
+def test_gough_stewart_self_calibration_on_fixed_points(hexapod):
+    """Implicit: the platform origin held in a socket (unknown point) while the platform turns."""
+    robot = hexapod
+    model = family_shortcuts(robot)
+    rng = np.random.default_rng(21)
+    p_true = _draw(model, rng)
+    truth, _ = _truth(robot, model, p_true)
+    readings, groups = [], []
+    for g, c in enumerate(([0.02, 0.0, 0.59], [-0.03, 0.03, 0.61])):
+        q = truth.q_home
+        for _ in range(12):
+            rpy = rng.uniform(-0.12, 0.12, 3)
+            q = pkdyn.inverse_geometry(truth, [*c, *rpy], q_init=q).q
+            readings.append(q[truth.actuated_q] + rng.normal(0.0, 5e-6, 6))
+            groups.append(g)
+    m = Measurements("point", np.array(readings), group=np.array(groups))
+    res = calibrate(robot, m, model, noise=5e-6)
+    assert res.validation_before.position_rms > 20 * res.validation_after.position_rms
+    names = {res.identifiability.names[j] for j in res.identifiability.unidentifiable}
+    assert names  # a fixed point does not see the whole geometry: said, not invented
+    assert res.after.position_rms < 3e-5

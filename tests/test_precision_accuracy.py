@@ -156,3 +156,24 @@ def test_cli_accuracy_json(capsys):
     assert main(["accuracy", "delta", "--pose", "0", "0", "-0.35", "--resolution", "-1"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "negative" in err
+
+
+def test_error_max_design_metric(delta):
+    from pkdyn.design.context import Conditions, DesignContext
+    from pkdyn.design.metrics import resolve_metrics
+    from pkdyn.design.requirement import Requirement
+    from pkdyn.precision.accuracy import DEFAULT_RESOLUTION
+
+    req = Requirement.parse("box:X=0.1,Y=0.1,Z=0.04,z=-0.35", samples=2)
+    ctx = DesignContext(delta, Conditions(requirement=req))
+    (metric,) = resolve_metrics(["error_max"])
+    value = metric(delta, ctx)
+    # the largest of the per-pose worst cases, each checked above against brute force
+    per_pose = [
+        actuator_errors(
+            delta, pkdyn.inverse_geometry(delta, p).q, DEFAULT_RESOLUTION[0]
+        ).position_worst
+        for p in req.positions
+    ]
+    assert value == pytest.approx(max(per_pose))
+    assert metric.unit == "m"

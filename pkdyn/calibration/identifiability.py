@@ -90,6 +90,9 @@ class Identifiability:
         singular_values: Singular values of the scaled identifiable columns (r,).
         indices: Observability indices ``O1`` ... ``O5``.
         poses: Number of poses.
+        weak: The unidentifiable parameters that are so only because the measurements tell
+            less about them than the prior (:func:`identifiability`'s ``prior``): identifiable
+            in principle, with other poses or less noise.
 
     """
 
@@ -101,6 +104,7 @@ class Identifiability:
     singular_values: np.ndarray = field(default_factory=lambda: np.zeros(0))
     indices: dict[str, float] = field(default_factory=dict)
     poses: int = 0
+    weak: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     @property
     def rank(self) -> int:
@@ -144,6 +148,7 @@ class Identifiability:
             "unidentifiable": [
                 {
                     "name": self.names[j],
+                    "reason": "weak" if j in set(self.weak.tolist()) else "structural",
                     "absorbed_by": [{"name": n, "coefficient": c} for n, c in self.combination(j)],
                 }
                 for j in self.unidentifiable
@@ -196,8 +201,15 @@ def identifiability(
     poses: int,
     scale: np.ndarray | None = None,
     rtol: float = RTOL,
+    prior: np.ndarray | None = None,
 ) -> Identifiability:
     """Identifiable subset, unidentifiable combinations and observability indices of ``W``.
+
+    With ``prior`` (a prior standard deviation per parameter, ``W`` weighted by the measurement
+    standard deviations), the columns are scaled by it instead of to unit norm: ``|R_kk|`` is
+    then the ratio of the prior to the standard deviation the measurements give that parameter
+    (the others of the subset known), and a parameter with ``|R_kk| < 1`` (the measurements
+    tell less about it than the prior) is *weakly* identifiable: not estimated either.
 
     Args:
         W: Weighted identification Jacobian (rows, n_par) (module docstring).
@@ -206,6 +218,7 @@ def identifiability(
         scale: Parameter scales (n_par,) for the observability indices (e.g. 1 for lengths in
             m, the robot's size for angles); default 1.
         rtol: Relative threshold of the pivoted QR (:data:`RTOL`).
+        prior: Prior standard deviations (n_par,) (see above), or ``None``.
 
     Returns:
         The identifiability analysis.
@@ -219,21 +232,24 @@ def identifiability(
     dead = np.setdiff1d(np.arange(n), live)
     if live.size == 0:
         return Identifiability(tuple(names), np.zeros(0, int), np.arange(n), poses=poses)
-    Wn = W[:, live] / norms[live]
-    R, piv = pivoted_qr(Wn)
+    with np.errstate(divide="ignore"):
+        col = 1.0 / norms if prior is None else np.asarray(prior, dtype=float)
+    R, piv = pivoted_qr(W[:, live] * col[live])
     d = np.abs(np.diag(R))
     d_full = np.zeros(live.size)
     d_full[: d.size] = d
-    r = int(np.sum(d > rtol * d[0]))
+    r_struct = int(np.sum(d > rtol * d[0]))
+    r = r_struct if prior is None else int(np.sum(d[:r_struct] >= 1.0))
     ident = live[piv[:r]]
     rest = live[piv[r:]]
+    weak = live[piv[r:r_struct]]
     combos: dict[int, np.ndarray] = {}
     if rest.size:
         R11 = R[:r, :r]
         R12 = R[:r, r:] if R.shape[0] >= r else np.zeros((r, rest.size))
         beta = scipy.linalg.solve_triangular(R11, R12)
         for k, j in enumerate(rest):
-            combos[int(j)] = beta[:, k] * norms[j] / norms[ident]
+            combos[int(j)] = beta[:, k] * col[ident] / col[j]
     for j in dead:
         combos[int(j)] = np.zeros(r)
     sc = np.ones(n) if scale is None else np.asarray(scale, dtype=float)
@@ -250,4 +266,5 @@ def identifiability(
         s,
         observability(s, poses),
         poses,
+        weak.astype(int),
     )

@@ -13,14 +13,21 @@ from :class:`~pkdyn.calibration.measurements.Measurements`:
    :func:`pkdyn.calibration.identifiability.identifiability`: only the identifiable subset is
    estimated, the unidentifiable parameters are reported with the combination that absorbs them
    and held at zero (the nominal value), never invented;
-3. robust Levenberg-Marquardt (Marquardt's scaling, iteratively reweighted: Huber or Cauchy
-   weights on each measurement's residual, in units of its standard deviation) on the residuals
+3. robust Levenberg-Marquardt (Gauss-Newton steps, halved or damped with Marquardt's scaling
+   when they do not decrease the cost; iteratively reweighted: Huber or Cauchy
+   weights on each measurement's residual, in units of its standard deviation, updated over the
+   first accepted steps and then kept) on the residuals
    *model minus measurement*, each evaluation rebuilding the robot with the current parameters
    (:func:`pkdyn.precision.perturbation.perturbed`) and solving its forward geometry at the
    readings (warm-started from the previous solution: the assembly mode is kept), the Jacobian
    exact (:func:`pose_sensitivity` at the perturbed robot);
 4. standard deviations of the estimates from the weighted normal matrix and the a-posteriori
    residual scale; errors before (nominal model) and after on both sets.
+
+A weakly informative prior (:data:`PRIOR`: errors of a centimetre, 6 degrees, 1 % of gain)
+is added to the least squares: it changes nothing the measurements determine, and keeps the
+directions they barely see (an identifiable but ill-conditioned combination, e.g. with a few
+fixed points in self-calibration) near the nominal robot instead of wandering with the noise.
 
 Residuals, weighted by the measurement standard deviations ``sigma`` (position [m]) and
 ``sigma_rot`` (orientation [rad], default ``sigma`` divided by the robot's size): ``pose``:
@@ -49,14 +56,33 @@ from pkdyn.precision.parameters import ParameterModel, parameter_model
 from pkdyn.precision.perturbation import Perturbed, perturbed
 from pkdyn.precision.sensitivity import pose_sensitivity
 
-__all__ = ["ROBUST", "CalibrationResult", "ErrorStats", "calibrate", "parameter_scale"]
+__all__ = ["PRIOR", "ROBUST", "CalibrationResult", "ErrorStats", "calibrate", "parameter_scale"]
 
 ROBUST = ("huber", "cauchy", "none")
 """Robust weights of :func:`calibrate`."""
 
+_DAMPING = (0.0, 1e-4, 1e-2, 1.0, 1e2)
+"""Marquardt damping factors tried in turn when the Gauss-Newton step (with halving) does not
+decrease the cost."""
 _HUBER_K = 2.5
+_IRLS_ROUNDS = 4
+"""Accepted steps after which the robust weights are updated; then kept, so that the
+iterations converge on one weighted problem."""
 _CAUCHY_K = 2.385
 _GAP_TOL = 1e-9
+
+
+PRIOR = (0.01, 0.1, 0.01)
+"""Default prior standard deviations of the errors (length [m], angle [rad], gain): a
+centimetre, 6 degrees, 1 %: far wider than any tolerance, so it only steadies the directions
+the measurements barely see."""
+
+
+def _prior(model: ParameterModel, prior: tuple[float, float, float]) -> np.ndarray:
+    arr = np.asarray(prior, dtype=float)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)) or np.any(arr <= 0.0):
+        raise InvalidInputError("prior", f"{prior!r}: give (length, angle, gain) > 0")
+    return model.tolerances(float(arr[0]), float(arr[1]), float(arr[2]))
 
 
 def parameter_scale(robot: Robot, model: ParameterModel) -> np.ndarray:
@@ -462,6 +488,7 @@ def calibrate(
     gains: bool = False,
     max_iter: int = 30,
     seed: int = 0,
+    prior: tuple[float, float, float] | None = PRIOR,
 ) -> CalibrationResult:
     """Identify a robot's geometric errors from measurements (module docstring).
 
@@ -481,6 +508,10 @@ def calibrate(
         gains: With a model name: add one relative gain per actuator.
         max_iter: Largest number of Levenberg-Marquardt iterations.
         seed: Seed of the hold-out split.
+        prior: Prior standard deviations of the errors ``(length [m], angle [rad], gain)``
+            (:data:`PRIOR`): a weakly informative prior that keeps directions the measurements
+            barely see near the nominal robot instead of letting noise move them far; ``None``:
+            none.
 
     Returns:
         The calibration.
@@ -531,7 +562,10 @@ def calibrate(
     W0 = J0 / row_sigma[:, None]
     names = tuple(pm.names[k] for k in keep) + _nuisance_names(cal, prob.groups)
     scale_all = np.concatenate([parameter_scale(robot, pm)[keep], _nuisance_scale(robot, prob)])
-    ident = identifiability(W0, names, len(cal), scale_all, rtol)
+    prior_all = None
+    if prior is not None:
+        prior_all = np.concatenate([_prior(pm, prior)[keep], _nuisance_prior(robot, prob)])
+    ident = identifiability(W0, names, len(cal), scale_all, rtol, prior_all)
     n_values = len(cal) * cal.rows
     if ident.rank >= n_values or n_values <= keep.size + prob.n_nuis:
         r_struct = _structural_rank(robot, pm, cal, qs0, keep) + prob.n_nuis
@@ -572,6 +606,15 @@ def calibrate(
         Jz = np.hstack([Jfull[:, : cols.size], Jfull[:, cols.size :][:, nuis_cols]])
         return Jz / row_sigma[:, None]
 
+    # weakly informative prior on the robot's errors (none on the unknowns of implicit kinds)
+    pw = np.zeros(cols.size + nuis_cols.size)
+    if prior is not None:
+        pri = _prior(pm, prior)[cols]
+        pw[: cols.size] = 1.0 / pri**2
+
+    def total(rr: np.ndarray, zz: np.ndarray, ww: np.ndarray) -> float:
+        return 0.5 * float(np.sum(ww * rr**2)) + 0.5 * float(np.sum(pw * zz**2))
+
     z = np.zeros(cols.size + nuis_cols.size)
     p, y = unpack(z)
     P, qcur, poses = P0, qs0, poses0
@@ -582,36 +625,36 @@ def calibrate(
     d = cal.rows
     w = _weights(np.linalg.norm(r.reshape(-1, d), axis=1) / math.sqrt(d), robust, known)
     wr = np.repeat(w, d)
-    cost = 0.5 * float(np.sum(wr * r**2))
-    mu, nu = 1e-6, 2.0
-    iterations, converged = 0, False
+    cost = total(r, z, wr)
+    iterations, converged, accepted = 0, False, 0
     for it in range(1, max_iter + 1):
         iterations = it
-        A = J.T @ (wr[:, None] * J)
-        g = J.T @ (wr * r)
+        A = J.T @ (wr[:, None] * J) + np.diag(pw)
+        g = J.T @ (wr * r) + pw * z
         D = np.maximum(np.diag(A), 1e-12 * max(float(np.max(np.diag(A), initial=0.0)), 1e-300))
         step_ok = False
-        while not step_ok:
+        # Gauss-Newton with backtracking, then Levenberg-Marquardt damping if that fails:
+        # a persistent Marquardt damping would crawl along ill-conditioned directions
+        for mu in _DAMPING:
             try:
-                delta = np.linalg.solve(A + mu * np.diag(D), -g)
+                direction = np.linalg.solve(A + mu * np.diag(D), -g)
             except np.linalg.LinAlgError:
-                mu *= 10.0
                 continue
-            z_new = z + delta
-            p_new, y_new = unpack(z_new)
-            try:
-                P_new, q_new, poses_new = prob.solve(p_new)
-                r_new = weighted(poses_new, y_new)
-                cost_new = 0.5 * float(np.sum(wr * r_new**2))
-            except PkdynError:
-                cost_new = math.inf
-            if cost_new <= cost:
-                step_ok = True
-            else:
-                mu *= nu
-                nu *= 2.0
-                if mu > 1e10:
+            for alpha in (1.0, 0.5, 0.25) if mu == 0.0 else (1.0,):
+                delta = alpha * direction
+                z_new = z + delta
+                p_new, y_new = unpack(z_new)
+                try:
+                    P_new, q_new, poses_new = prob.solve(p_new)
+                    r_new = weighted(poses_new, y_new)
+                    cost_new = total(r_new, z_new, wr)
+                except PkdynError:
+                    cost_new = math.inf
+                if cost_new <= cost:
+                    step_ok = True
                     break
+            if step_ok:
+                break
         if not step_ok:  # no decrease: at the minimum (within round-off), or stuck
             if fresh:
                 converged = bool(
@@ -620,29 +663,38 @@ def calibrate(
                 break
             J, fresh = jac(P, qcur, poses, p, y), True
             continue
-        small = np.max(np.abs(delta) / z_scale, initial=0.0) < 1e-11
+        predicted = -float(g @ delta + 0.5 * delta @ (A @ delta))
+        rho = (cost - cost_new) / max(predicted, 1e-300)
         decrease = (cost - cost_new) / max(cost, 1e-300)
+        # a step far below the parameters' uncertainty (diag of the inverse normal matrix, in
+        # units of sigma) changes nothing that the measurements can tell
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            unc = np.sqrt(np.maximum(np.diag(np.linalg.pinv(A)), 1e-300))
+        small = bool(np.max(np.abs(delta) / unc, initial=0.0) < 1e-4)
         z, p, y = z_new, p_new, y_new
         P, qcur, poses, r = P_new, q_new, poses_new, r_new
         prob.qs = qcur
-        mu, nu = max(mu / 3.0, 1e-12), 2.0
-        w = _weights(np.linalg.norm(r.reshape(-1, d), axis=1) / math.sqrt(d), robust, known)
-        wr = np.repeat(w, d)
-        cost = 0.5 * float(np.sum(wr * r**2))
+        accepted += 1
+        if accepted <= _IRLS_ROUNDS:  # reweighted a few times, then the weights are kept
+            w = _weights(np.linalg.norm(r.reshape(-1, d), axis=1) / math.sqrt(d), robust, known)
+            wr = np.repeat(w, d)
+            small = small and accepted == _IRLS_ROUNDS
+        cost = total(r, z, wr)
         if small or decrease < 1e-10:
             if not fresh:  # make sure the fixed point is the exact Jacobian's
                 J, fresh = jac(P, qcur, poses, p, y), True
                 continue
             converged = True
             break
-        if decrease > 0.5:  # far from the solution: the Jacobian moves
-            J, fresh = jac(P, qcur, poses, p, y), True
+        if decrease > 0.5 or rho < 0.9:  # far from the solution, or the model is off: the
+            J, fresh = jac(P, qcur, poses, p, y), True  # Jacobian moves; else it is kept
         else:
             fresh = False
     if not fresh:
         J = jac(P, qcur, poses, p, y)
-    # uncertainties
-    A = J.T @ (wr[:, None] * J)
+    # uncertainties (posterior: the prior included)
+    A = J.T @ (wr[:, None] * J) + np.diag(pw)
     dof = max(r.size - z.size, 1)
     s_hat = math.sqrt(float(np.sum(wr * r**2)) / dof)
     with warnings.catch_warnings():
@@ -708,6 +760,13 @@ def _nuisance_scale(robot: Robot, prob: _Problem) -> np.ndarray:
     return np.ones(prob.n_nuis)
 
 
+def _nuisance_prior(robot: Robot, prob: _Problem) -> np.ndarray:
+    """Prior scale of the unknowns of implicit measurements: a metre, a radian (no prior)."""
+    if prob.m.kind == "plane":
+        return np.tile([1.0, 1.0, robot.length_scale], prob.groups.size)
+    return np.full(prob.n_nuis, robot.length_scale)
+
+
 def _robot_identifiability(
     ident: Identifiability, keep: np.ndarray, n_rob: int, pm: ParameterModel
 ) -> Identifiability:
@@ -729,5 +788,6 @@ def _robot_identifiability(
         ident.singular_values,
         ident.indices,
         ident.poses,
+        np.array([full(int(i)) for i in ident.weak], dtype=int),
     )
     return out

@@ -34,6 +34,8 @@ Built-in metrics (:data:`METRICS`; groups of them: :data:`GROUPS`):
   m/s], ``peak_power`` [W] (largest over the actuators), ``effort_margin``, ``speed_margin``
   (smallest ``1 - peak / limit``), and per actuator ``peak_effort_<k>``, ``rms_effort_<k>``,
   ``peak_speed_<k>`` (``k`` = 1, 2, ... in actuator order);
+- on the required workspace: ``error_max`` [m], the largest worst-case platform position error
+  of actuator errors of :data:`pkdyn.precision.accuracy.DEFAULT_RESOLUTION` (1e-4 rad, 1e-5 m);
 - ``base_radius`` [m]: largest distance of a base joint from the z axis (a footprint);
 - ``moving_mass`` [kg]: every body but the base.
 """
@@ -290,6 +292,22 @@ def _per_actuator(name: str) -> Metric | None:
         return float(values[k - 1])
 
     return Metric(name, unit, fn, f"{m.group(1).replace('_', ' ')} of actuator {k}")
+
+
+@metric(
+    "error_max",
+    "m",
+    "largest worst-case position error over the reached required poses (actuator resolution "
+    "1e-4 rad or 1e-5 m)",
+)
+def _error_max(robot: Robot, ctx: DesignContext) -> float:
+    from pkdyn.precision.accuracy import largest_position_error
+
+    chk = ctx.required()
+    ok = chk.reached
+    if not ok.any():
+        raise InvalidInputError("error_max", "no required pose reached")
+    return largest_position_error(robot, chk.P[ok], chk.R[ok])
 
 
 @metric("base_radius", "m", "largest distance from the z axis of a joint on the base")

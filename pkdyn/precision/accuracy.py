@@ -59,6 +59,8 @@ __all__ = [
     "MonteCarlo",
     "accuracy_map",
     "actuator_errors",
+    "default_resolution",
+    "largest_position_error",
     "geometric_errors",
     "monte_carlo",
     "pose_error",
@@ -614,3 +616,60 @@ def accuracy_map(
         if model is not None:
             out["gw"][k], out["gr"][k] = geo.position_worst, geo.position_rms
     return AccuracyMap(P, valid, out["aw"], out["ar"], out["gw"], out["gr"], shape or (n,), axes)
+
+
+def default_resolution(robot: Robot) -> np.ndarray:
+    """:data:`DEFAULT_RESOLUTION` per actuator (n_a,) [rad or m]: revolute or prismatic."""
+    return np.where(robot.actuator_prismatic, DEFAULT_RESOLUTION[1], DEFAULT_RESOLUTION[0])
+
+
+def largest_position_error(
+    robot: Robot,
+    positions: np.ndarray,
+    rotations: np.ndarray | None = None,
+    resolution: float | Sequence[float] | np.ndarray | None = None,
+    backlash: float | Sequence[float] | np.ndarray = 0.0,
+) -> float:
+    """Largest worst-case position error of actuator errors over platform poses [m].
+
+    The ``error_max`` design metric: each pose reached by the inverse geometric model (the
+    family's closed form when it has one, else from the previous pose), then
+    :func:`actuator_errors`' worst-case position error.
+
+    Args:
+        robot: The robot.
+        positions: Platform positions (N, 3) [m].
+        rotations: Platform orientations (N, 3, 3) (default: identity).
+        resolution: Actuator resolution (default :func:`default_resolution`).
+        backlash: Actuator backlash [rad or m].
+
+    Returns:
+        The largest error [m] over the poses reached.
+
+    Raises:
+        InvalidInputError: No pose could be reached, or a singular one (unbounded error).
+
+    """
+    P = np.atleast_2d(np.asarray(positions, dtype=float))
+    R = np.broadcast_to(np.eye(3), (len(P), 3, 3)) if rotations is None else rotations
+    res = default_resolution(robot) if resolution is None else resolution
+    worst, reached = 0.0, 0
+    q_prev = None
+    for p, rot in zip(P, R, strict=True):
+        q = None
+        for q0 in (None, q_prev):
+            try:
+                q = inverse_geometry(robot, pin.SE3(np.asarray(rot), p), q_init=q0).q
+                break
+            except PkdynError:
+                continue
+        if q is None:
+            continue
+        q_prev = q
+        reached += 1
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            worst = max(worst, actuator_errors(robot, q, res, backlash).position_worst)
+    if reached == 0:
+        raise InvalidInputError("positions", "no pose was reached: no position error to report")
+    return worst
