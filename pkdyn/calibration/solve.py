@@ -585,9 +585,6 @@ def calibrate(
     rob_cols = np.sort(est[est < n_rob])
     nuis_cols = np.sort(est[est >= n_rob]) - n_rob
     cols = keep[rob_cols]
-    z_scale = np.concatenate(
-        [parameter_scale(robot, pm)[cols], _nuisance_scale(robot, prob)[nuis_cols]]
-    )
 
     def unpack(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p = np.zeros(pm.size)
