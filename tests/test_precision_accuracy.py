@@ -164,7 +164,7 @@ def test_error_max_design_metric(delta):
     from pkdyn.design.requirement import Requirement
     from pkdyn.precision.accuracy import DEFAULT_RESOLUTION
 
-    req = Requirement.parse("box:X=0.1,Y=0.1,Z=0.04,z=-0.35", samples=2)
+    req = Requirement.parse("box:dx=0.1,dy=0.1,dz=0.04,z=-0.35", samples=2)
     ctx = DesignContext(delta, Conditions(requirement=req))
     (metric,) = resolve_metrics(["error_max"])
     value = metric(delta, ctx)

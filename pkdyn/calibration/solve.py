@@ -571,13 +571,13 @@ def calibrate(
         r_struct = _structural_rank(robot, pm, cal, qs0, keep) + prob.n_nuis
         if n_values <= r_struct:
             need = math.ceil((r_struct + 1) / cal.rows)
-            total = need if val_rows.size == 0 else math.ceil(need / (1.0 - holdout))
+            n_total = need if val_rows.size == 0 else math.ceil(need / (1.0 - holdout))
             raise InvalidInputError(
                 "measurements",
                 f"{len(cal)} calibration poses give {n_values} measured values for "
                 f"{r_struct} identifiable parameters ({pm.kind} model, {cal.kind} "
                 f"measurements): measure at least {need} poses"
-                + (f" ({total} with the {holdout:.0%} hold-out)" if val_rows.size else ""),
+                + (f" ({n_total} with the {holdout:.0%} hold-out)" if val_rows.size else ""),
             )
     # estimated columns: identifiable robot parameters and nuisance unknowns
     est = ident.identifiable
