@@ -65,7 +65,7 @@ _DAMPING = (0.0, 1e-4, 1e-2, 1.0, 1e2)
 """Marquardt damping factors tried in turn when the Gauss-Newton step (with halving) does not
 decrease the cost."""
 _HUBER_K = 2.5
-_IRLS_ROUNDS = 4
+_IRLS_ROUNDS = 3
 """Accepted steps after which the robust weights are updated; then kept, so that the
 iterations converge on one weighted problem."""
 _CAUCHY_K = 2.385
@@ -652,11 +652,9 @@ def calibrate(
                     break
             if step_ok:
                 break
-        if not step_ok:  # no decrease: at the minimum (within round-off), or stuck
+        if not step_ok:  # no step decreases the cost: a minimum, within round-off
             if fresh:
-                converged = bool(
-                    np.max(np.abs(g), initial=0.0) <= 1e-6 * max(cost, 1e-300) ** 0.5 * 1e3
-                )
+                converged = True
                 break
             J, fresh = jac(P, qcur, poses, p, y), True
             continue
@@ -668,17 +666,17 @@ def calibrate(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             unc = np.sqrt(np.maximum(np.diag(np.linalg.pinv(A)), 1e-300))
-        small = bool(np.max(np.abs(delta) / unc, initial=0.0) < 1e-4)
+        small = bool(np.max(np.abs(delta) / unc, initial=0.0) < 1e-3)
         z, p, y = z_new, p_new, y_new
         P, qcur, poses, r = P_new, q_new, poses_new, r_new
         prob.qs = qcur
         accepted += 1
-        if accepted <= _IRLS_ROUNDS:  # reweighted a few times, then the weights are kept
+        if accepted <= _IRLS_ROUNDS and robust != "none":  # reweighted a few times, then kept
             w = _weights(np.linalg.norm(r.reshape(-1, d), axis=1) / math.sqrt(d), robust, known)
             wr = np.repeat(w, d)
-            small = small and accepted == _IRLS_ROUNDS
+        frozen = robust == "none" or accepted >= _IRLS_ROUNDS
         cost = total(r, z, wr)
-        if small or decrease < 1e-10:
+        if frozen and (small or decrease < 1e-7):
             if not fresh:  # make sure the fixed point is the exact Jacobian's
                 J, fresh = jac(P, qcur, poses, p, y), True
                 continue
