@@ -131,13 +131,16 @@ def _rebuilt(
             ref.append(fr)
         new_closures.append(dataclasses.replace(c, frame1=ref[0], frame2=ref[1]))
     desc = dataclasses.replace(desc, closures=tuple(new_closures), platform=platform)
+    # the constraint layer's other rows (joint couplings) depend on no placement: kept
+    extra = tuple(getattr(robot.closure_set, "couplings", ()))
+    closure_set = ClosureSet(model, list(cms), *((extra,) if extra else ()))
     out = dataclasses.replace(
         robot,
         model=model,
         data=model.createData(),
         description=desc,
         constraint_models=cms,
-        closure_set=ClosureSet(model, list(cms)),
+        closure_set=closure_set,
         params=None,
     )
     out.q_home = forward_geometry(

@@ -269,9 +269,12 @@ def pose_sensitivity(
     m, data = robot.model, robot.data
     cs = robot.closure_set
     r = _structural_rank(robot) if cs.nc else 0  # (at home: before the kinematics at q)
-    pin.computeJointJacobians(m, data, qq)
+    if cs.nc:  # (runs the kinematics and joint Jacobians at q; coupling rows need q)
+        Jc = cs.jacobian(data, qq)
+    else:
+        Jc = np.zeros((0, robot.nv))
+        pin.computeJointJacobians(m, data, qq)
     pin.updateFramePlacements(m, data)
-    Jc = cs.jacobian_at(data) if cs.nc else np.zeros((0, robot.nv))
     Jx = _platform_jacobian(robot, data)
     a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)
     qa = qq[robot.actuated_q]
