@@ -37,6 +37,7 @@ from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel, parameter_model
 from pkdyn.precision.perturbation import perturbed
 from pkdyn.progress import progress
+from solvers import numerics
 
 __all__ = ["ITERATIONS", "CalibrationPlan", "plan_calibration"]
 
@@ -233,7 +234,7 @@ def plan_calibration(
                 f = f0_c[sel]
                 qs_est = [qc[i] for i in sel]
                 for _ in range(ITERATIONS):
-                    dz, *_ = np.linalg.lstsq(A, (y - f).reshape(-1), rcond=None)
+                    dz = numerics.lstsq(A, (y - f).reshape(-1))
                     p[cols] += dz
                     try:
                         est = perturbed(robot, pm, p)

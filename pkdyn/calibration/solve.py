@@ -55,6 +55,7 @@ from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel, parameter_model
 from pkdyn.precision.perturbation import Perturbed, perturbed
 from pkdyn.precision.sensitivity import pose_sensitivity
+from solvers import numerics
 
 __all__ = ["PRIOR", "ROBUST", "CalibrationResult", "ErrorStats", "calibrate", "parameter_scale"]
 
@@ -408,6 +409,11 @@ class _Problem:
         return out
 
 
+def _inverse(A: np.ndarray) -> np.ndarray:
+    """(Pseudo-)inverse of a normal matrix, cut at round-off (:mod:`solvers.numerics`)."""
+    return numerics.lstsq(A, np.eye(A.shape[0]), numerics.machine_rtol(A))
+
+
 def _nominal_configurations(robot: Robot, m: Measurements, rows: np.ndarray) -> list[np.ndarray]:
     qs = []
     for i, reading in zip(rows, m.qa, strict=True):
@@ -665,7 +671,7 @@ def calibrate(
         # units of sigma) changes nothing that the measurements can tell
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            unc = np.sqrt(np.maximum(np.diag(np.linalg.pinv(A)), 1e-300))
+            unc = np.sqrt(np.maximum(np.diag(_inverse(A)), 1e-300))
         small = bool(np.max(np.abs(delta) / unc, initial=0.0) < 1e-3)
         z, p, y = z_new, p_new, y_new
         P, qcur, poses, r = P_new, q_new, poses_new, r_new
@@ -694,7 +700,7 @@ def calibrate(
     s_hat = math.sqrt(float(np.sum(wr * r**2)) / dof)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        cov = np.linalg.pinv(A)
+        cov = _inverse(A)
     std_z = np.sqrt(np.maximum(np.diag(cov), 0.0)) * s_hat
     std = np.full(pm.size, np.nan)
     std[cols] = std_z[: cols.size]

@@ -48,6 +48,7 @@ from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel, placement_frames
+from solvers import numerics
 
 __all__ = ["PARALLEL_TOL", "PoseSensitivity", "pose_sensitivity"]
 
@@ -230,8 +231,7 @@ def _structural_rank(robot: Robot) -> int:
     rank = _RANKS.get(key)
     if rank is None:
         Jc = robot.closure_set.jacobian(robot.data, robot.q_home)[:, robot.passive_v]
-        s = np.linalg.svd(Jc, compute_uv=False)
-        rank = int(np.sum(s > _RANK_TOL * max(float(s[0]) if s.size else 0.0, 1.0)))
+        rank = numerics.rank(Jc, _RANK_TOL, 1.0)
         _RANKS[key] = rank
         weakref.finalize(robot.model, _RANKS.pop, key, None)
     return rank
