@@ -410,8 +410,14 @@ class _Problem:
 
 
 def _inverse(A: np.ndarray) -> np.ndarray:
-    """(Pseudo-)inverse of a normal matrix, cut at round-off (:mod:`solvers.numerics`)."""
-    return numerics.lstsq(A, np.eye(A.shape[0]), numerics.machine_rtol(A))
+    """Inverse of a normal matrix (positive definite: its columns are identifiable).
+
+    A pseudo-inverse cut at round-off (:mod:`solvers.numerics`) if it is singular after all.
+    """
+    try:
+        return np.linalg.inv(A)
+    except np.linalg.LinAlgError:
+        return numerics.lstsq(A, np.eye(A.shape[0]), numerics.machine_rtol(A))
 
 
 def _nominal_configurations(robot: Robot, m: Measurements, rows: np.ndarray) -> list[np.ndarray]:
