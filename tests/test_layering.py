@@ -24,6 +24,7 @@ RANK = {
     "tripod": 7,
     "identification": 7,
     "precision": 7,
+    "calibration": 8,
     "design": 8,
     "viewer": 9,
     "plotting": 9,

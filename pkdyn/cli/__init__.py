@@ -40,6 +40,8 @@ COMMAND_MODULES = (
     "mjcf",
     "identification",
     "tripod",
+    "accuracy",
+    "calibration",
     "demo",
     "listing",
 )
@@ -67,6 +69,8 @@ COMMANDS = {
     "mjcf": "mjcf",
     "identify": "identification",
     "tripod": "tripod",
+    "accuracy": "accuracy",
+    "calibrate": "calibration",
     "demo": "demo",
     "list": "listing",
 }

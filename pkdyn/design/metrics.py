@@ -38,6 +38,8 @@ Built-in metrics (:data:`METRICS`; groups of them: :data:`GROUPS`):
   ``actuator_stiffness`` and ``material``): ``stiffness_min`` [N/m] (smallest principal
   translational stiffness; 0 when a required pose is singular), ``f1_min`` [Hz] (lowest natural
   frequency);
+- on the required workspace: ``error_max`` [m], the largest worst-case platform position error
+  of actuator errors of :data:`pkdyn.precision.accuracy.DEFAULT_RESOLUTION` (1e-4 rad, 1e-5 m);
 - ``base_radius`` [m]: largest distance of a base joint from the z axis (a footprint);
 - ``moving_mass`` [kg]: every body but the base.
 """
@@ -337,6 +339,22 @@ def _stiffness_min(robot: Robot, ctx: DesignContext) -> float:
 @metric("f1_min", "Hz", "lowest natural frequency over the required workspace", geometry=True)
 def _f1_min(robot: Robot, ctx: DesignContext) -> float:
     return float(np.min(_precision(ctx, True)))
+
+
+@metric(
+    "error_max",
+    "m",
+    "largest worst-case position error over the reached required poses (actuator resolution "
+    "1e-4 rad or 1e-5 m)",
+)
+def _error_max(robot: Robot, ctx: DesignContext) -> float:
+    from pkdyn.precision.accuracy import largest_position_error
+
+    chk = ctx.required()
+    ok = chk.reached
+    if not ok.any():
+        raise InvalidInputError("error_max", "no required pose reached")
+    return largest_position_error(robot, chk.P[ok], chk.R[ok])
 
 
 @metric("base_radius", "m", "largest distance from the z axis of a joint on the base")
