@@ -85,7 +85,15 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
         d["seed"] = args.seed
     if args.parametrisation:
         d["parametrisation"] = args.parametrisation
-    settings = {k: v for k, v in (("length", args.length),) if v is not None}
+    settings = {
+        k: v
+        for k, v in (
+            ("length", args.length),
+            ("actuator_stiffness", args.actuator_stiffness),
+            ("material", args.material),
+        )
+        if v is not None
+    }
     if settings:
         d["settings"] = settings
     return d
@@ -278,6 +286,14 @@ def register(sub: Any) -> None:
     sp.add_argument("--depth", type=float, help="adept: pick line below home [m]")
     sp.add_argument("--dt", type=float, help="duty cycle sample period [s]")
     sp.add_argument("--length", type=float, help="characteristic length for 1/cond [m]")
+    sp.add_argument(
+        "--actuator-stiffness",
+        type=float,
+        nargs="+",
+        metavar="K",
+        help="actuator stiffness for stiffness_min / f1_min [N m/rad or N/m]",
+    )
+    sp.add_argument("--material", help="link material for stiffness_min / f1_min (steel...)")
     how = sp.add_mutually_exclusive_group()
     how.add_argument("--n", type=int, help="number of designs (lhs, sobol, random)")
     how.add_argument("--grid", type=int, help="full grid, values per variable")

@@ -54,6 +54,11 @@ class Conditions:
         ab_min: Clavel's limit 2, (alpha + beta)_min [rad].
         workspace_samples: Grid samples per axis of the translation workspace (volume, GCI).
         clavel_rays: Directions of the numeric Clavel measurement.
+        actuator_stiffness: Joint-side actuator stiffness for the precision metrics
+            (``stiffness_min``, ``f1_min``), one or one per actuator [N m/rad or N/m];
+            ``None``: the description's ``<pkdyn:stiffness>``.
+        material: Material of the links for the precision metrics (a preset name of
+            :mod:`pkdyn.precision.material`); ``None``: rigid links (or the description's).
 
     """
 
@@ -67,6 +72,8 @@ class Conditions:
     ab_min: float = AB_MIN
     workspace_samples: int = 21
     clavel_rays: int = 24
+    actuator_stiffness: float | tuple[float, ...] | None = None
+    material: str | None = None
     _tasks: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -95,6 +102,24 @@ class Conditions:
         set_(
             self, "clavel_rays", fields.integer("clavel_rays", self.clavel_rays, 3, MAX_CLAVEL_RAYS)
         )
+        if self.actuator_stiffness is not None:
+            try:
+                k = np.atleast_1d(np.asarray(self.actuator_stiffness, dtype=float))
+            except (TypeError, ValueError):
+                raise InvalidInputError(
+                    "actuator_stiffness",
+                    f"expected numbers [N m/rad or N/m], got {self.actuator_stiffness!r}",
+                ) from None
+            if k.ndim != 1 or not np.all(k > 0.0):  # (NaN fails too)
+                raise InvalidInputError(
+                    "actuator_stiffness", f"{k.tolist()}: stiffnesses must be > 0 [N m/rad or N/m]"
+                )
+            value = float(k[0]) if k.size == 1 else tuple(float(x) for x in k)
+            object.__setattr__(self, "actuator_stiffness", value)
+        if self.material is not None:
+            from pkdyn.precision.material import as_material
+
+            as_material(self.material)
 
     def as_dict(self) -> dict[str, Any]:
         """Plain form for study files."""
@@ -109,6 +134,14 @@ class Conditions:
             "ab_min": self.ab_min,
             "workspace_samples": self.workspace_samples,
             "clavel_rays": self.clavel_rays,
+            "actuator_stiffness": None
+            if self.actuator_stiffness is None
+            else (
+                self.actuator_stiffness
+                if isinstance(self.actuator_stiffness, float)
+                else list(self.actuator_stiffness)
+            ),
+            "material": self.material,
         }
 
     @classmethod

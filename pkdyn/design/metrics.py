@@ -34,6 +34,12 @@ Built-in metrics (:data:`METRICS`; groups of them: :data:`GROUPS`):
   m/s], ``peak_power`` [W] (largest over the actuators), ``effort_margin``, ``speed_margin``
   (smallest ``1 - peak / limit``), and per actuator ``peak_effort_<k>``, ``rms_effort_<k>``,
   ``peak_speed_<k>`` (``k`` = 1, 2, ... in actuator order);
+- on the required workspace, precision (:mod:`pkdyn.precision`, with the study's
+  ``actuator_stiffness`` and ``material``): ``stiffness_min`` [N/m] (smallest principal
+  translational stiffness; 0 when a required pose is singular), ``f1_min`` [Hz] (lowest natural
+  frequency);
+- on the required workspace: ``error_max`` [m], the largest worst-case platform position error
+  of actuator errors of :data:`pkdyn.precision.accuracy.DEFAULT_RESOLUTION` (1e-4 rad, 1e-5 m);
 - ``base_radius`` [m]: largest distance of a base joint from the z axis (a footprint);
 - ``moving_mass`` [kg]: every body but the base.
 """
@@ -299,6 +305,65 @@ def _per_actuator(name: str) -> Metric | None:
     return Metric(name, unit, fn, f"{m.group(1).replace('_', ' ')} of actuator {k}")
 
 
+# ---------------------------------------------------------------------- precision
+
+
+def _precision(ctx: DesignContext, frequency: bool) -> np.ndarray:
+    """Stiffness (or lowest frequency) at the reached required poses (0: singular)."""
+    from pkdyn.precision.maps import pose_figures
+
+    def run() -> np.ndarray:
+        chk = ctx.required()
+        ok = chk.reached
+        if not ok.any():
+            raise InvalidInputError("stiffness_min", "no required pose reached")
+        c = ctx.conditions
+        fig = pose_figures(
+            ctx.robot,
+            chk.P[ok],
+            chk.R[ok],
+            c.actuator_stiffness,
+            material=c.material,
+            frequency=frequency,
+            progress=False,
+        )
+        values = fig.f1 if frequency else fig.stiffness_min
+        return np.where(fig.valid, values, 0.0)
+
+    return ctx.cached("precision_f1" if frequency else "precision_k", run)
+
+
+@metric(
+    "stiffness_min",
+    "N/m",
+    "smallest translational stiffness over the required workspace",
+    geometry=True,  # the links' beams are read from their cylinders
+)
+def _stiffness_min(robot: Robot, ctx: DesignContext) -> float:
+    return float(np.min(_precision(ctx, False)))
+
+
+@metric("f1_min", "Hz", "lowest natural frequency over the required workspace", geometry=True)
+def _f1_min(robot: Robot, ctx: DesignContext) -> float:
+    return float(np.min(_precision(ctx, True)))
+
+
+@metric(
+    "error_max",
+    "m",
+    "largest worst-case position error over the reached required poses (actuator resolution "
+    "1e-4 rad or 1e-5 m)",
+)
+def _error_max(robot: Robot, ctx: DesignContext) -> float:
+    from pkdyn.precision.accuracy import largest_position_error
+
+    chk = ctx.required()
+    ok = chk.reached
+    if not ok.any():
+        raise InvalidInputError("error_max", "no required pose reached")
+    return largest_position_error(robot, chk.P[ok], chk.R[ok])
+
+
 @metric("base_radius", "m", "largest distance from the z axis of a joint on the base")
 def _base_radius(robot: Robot, ctx: DesignContext) -> float:
     model = robot.model
@@ -328,6 +393,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
         "clavel_z_h",
     ),
     "required": ("contains", "inv_cond_min", "inv_cond_mean", "interference_margin"),
+    "precision": ("stiffness_min", "f1_min"),
     "sizing": (
         "peak_effort",
         "rms_effort",

@@ -57,7 +57,16 @@ MAX_STUDY_WORK = 20_000_000
 """Most pose checks, duty-cycle samples or workspace grid points a study may ask for, over all
 its designs (each is microseconds in closed form, up to a millisecond on the numeric path)."""
 
-_CONDITION_KEYS = ("limits", "length", "gamma_max", "ab_min", "workspace_samples", "clavel_rays")
+_CONDITION_KEYS = (
+    "limits",
+    "length",
+    "gamma_max",
+    "ab_min",
+    "workspace_samples",
+    "clavel_rays",
+    "actuator_stiffness",
+    "material",
+)
 
 
 def _ranges(value: Any) -> tuple[Range, ...]:
@@ -100,7 +109,8 @@ class Study:
         seed: Seed of the sampler or of NSGA-II.
         parametrisation: Name of a parametrisation (:mod:`pkdyn.design.parametrisations`).
         settings: Other conditions: ``limits``, ``length`` [m], ``gamma_max``, ``ab_min`` [rad],
-            ``workspace_samples``, ``clavel_rays`` (see :class:`pkdyn.design.Conditions`).
+            ``workspace_samples``, ``clavel_rays``, ``actuator_stiffness``, ``material`` (see
+            :class:`pkdyn.design.Conditions`).
         name: A label for reports.
 
     Raises:
