@@ -90,10 +90,10 @@ class Conditions:
         if self.length is not None:
             set_(self, "length", fields.number("length", self.length, 0.0, open_low=True, unit="m"))
         for name in ("gamma_max", "ab_min"):
-            value = fields.number(
+            angle = fields.number(
                 name, getattr(self, name), 0.0, math.pi, open_low=True, unit="rad"
             )
-            set_(self, name, value)
+            set_(self, name, angle)
         set_(
             self,
             "workspace_samples",
