@@ -13,6 +13,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 RANK = {
     "exceptions": 0,
+    "workers": 1,
     "progress": 1,
     "files": 1,
     "model": 2,
