@@ -38,6 +38,8 @@ COMMAND_MODULES = (
     "mjcf",
     "identification",
     "tripod",
+    "accuracy",
+    "calibration",
     "demo",
     "listing",
 )
@@ -65,6 +67,8 @@ COMMANDS = {
     "mjcf": "mjcf",
     "identify": "identification",
     "tripod": "tripod",
+    "accuracy": "accuracy",
+    "calibrate": "calibration",
     "demo": "demo",
     "list": "listing",
 }
@@ -125,7 +129,8 @@ class _OnlyCommand:
 
 
 def _one_line_warning(message: Warning | str, category: type[Warning], *_: Any, **__: Any) -> None:
-    print(f"pkdyn: warning: {message}", file=sys.stderr)
+    text = " ".join(str(message).split())
+    print(f"pkdyn: warning: {text}", file=sys.stderr)
 
 
 class _Terminated(BaseException):
@@ -183,7 +188,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         warnings.filterwarnings("ignore", category=PendingDeprecationWarning)
         args.func(args)
     except PkdynError as err:
-        print(f"pkdyn: error: {err}", file=sys.stderr)
+        text = " ".join(str(err).splitlines())
+        print(f"pkdyn: error: {text}", file=sys.stderr)
+        return 1
+    except MemoryError:
+        print(
+            "pkdyn: error: out of memory: ask for less (fewer samples, designs or workers)",
+            file=sys.stderr,
+        )
         return 1
     except KeyboardInterrupt:
         _last_word("pkdyn: interrupted")

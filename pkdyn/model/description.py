@@ -31,6 +31,8 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
 - ``<pkdyn:home q>``: the home configuration to assemble (actuator coordinates, or a full
   configuration in Pinocchio's order), as ``pkdyn.load(..., home=)`` takes it: written by
   ``pkdyn calibrate`` so that a calibrated robot loads in the assembly mode it was measured in.
+- ``<pkdyn:encoder gain>`` in a transmission's ``<actuator>``: the actuated joint's coordinate is
+  ``gain`` times the actuator's reading (a calibrated scale error of the encoder or screw).
 
 The URDF part is validated by :mod:`pkdyn.model.validate` (numbers, physics, tree), the pkdyn
 elements here (unknown elements, mistyped namespaces, duplicates).
@@ -193,6 +195,8 @@ class ActuatorSpec:
         coulomb: Motor Coulomb friction [N m] (``pkdyn:motor_friction coulomb``).
         stiffness: Joint-side stiffness of the actuator and its transmission [N m/rad or N/m]
             (``pkdyn:stiffness value``), ``None`` when not described.
+        encoder_gain: Joint coordinate per unit of the actuator's reading (``pkdyn:encoder
+            gain``, > 0; default 1), from a geometric calibration.
 
     """
 
@@ -207,6 +211,7 @@ class ActuatorSpec:
     viscous: float = 0.0
     coulomb: float = 0.0
     stiffness: float | None = None
+    encoder_gain: float = 1.0
 
 
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
@@ -527,6 +532,7 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
         ("efficiency", "backdrive", "backdrive_efficiency", 0.0, 1.0),
         ("motor_friction", "viscous", "viscous", 0.0, math.inf),
         ("motor_friction", "coulomb", "coulomb", 0.0, math.inf),
+        ("encoder", "gain", "encoder_gain", 0.0, math.inf),
     )
     for tag, attr, key, lo, hi in fields:
         child = el.find(_NS + tag)
@@ -537,9 +543,11 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
         except DescriptionError as err:
             msg = str(err).split(": ")[-1]
             raise DescriptionError(source, f"{where} {err.culprit}", msg) from None
-        ok = lo < value <= hi if key.endswith("efficiency") else lo <= value < hi
+        positive = key.endswith("efficiency") or key == "encoder_gain"
+        ok = lo < value <= hi if positive else lo <= value < hi
         if not ok:
             interval = "(0, 1]" if key.endswith("efficiency") else "[0, inf)"
+            interval = "(0, inf)" if key == "encoder_gain" else interval
             raise DescriptionError(
                 source,
                 f"{where} <pkdyn:{tag}> {attr}='{child.get(attr)}'",

@@ -14,8 +14,16 @@
 - :mod:`~pkdyn.precision.vectorised`, :mod:`~pkdyn.precision.maps`: closed forms of the library
   Gough-Stewart and Delta, figures over many poses and maps over workspace slices (the design
   metrics ``stiffness_min`` and ``f1_min`` use them).
+- :mod:`~pkdyn.precision.parameters`: the placements manufacturing errors move, and parameter
+  models of them (every placement, family shortcuts, family dimensions);
+- :mod:`~pkdyn.precision.perturbation`: robots with those errors, built exactly;
+- :mod:`~pkdyn.precision.sensitivity`: first-order sensitivity of the platform pose to actuator
+  and geometric errors through the loops (shared with :mod:`pkdyn.calibration`);
+- :mod:`~pkdyn.precision.accuracy`: error budgets (worst case, RMS, Monte Carlo, ranking of the
+  tolerances) and pose-error maps.
 
-The accuracy and tolerance analysis (error budget) has its own modules here.
+Layering: may import :mod:`pkdyn.model`, :mod:`pkdyn.analysis`, :mod:`pkdyn.workspace` and
+below; never design, calibration, viewer, plotting or the CLI.
 """
 
 from pkdyn.precision.beam import Section, centre_compliance, tip_compliance

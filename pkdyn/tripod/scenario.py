@@ -92,6 +92,7 @@ from pkdyn.tripod.redundancy import RedundancySettings, SwingSolution, plan_swin
 from pkdyn.tripod.xfkmb import actuator_lengths, bikmx, xfkmb
 
 __all__ = [
+    "MAX_SCENARIO_SAMPLES",
     "WALKER_TOL",
     "Phase",
     "WalkPlan",
@@ -467,6 +468,46 @@ def _walker_swing(
     return mode, r, jt, sol
 
 
+MAX_SCENARIO_SAMPLES = 200_000
+"""Most samples of a scenario (each is mapped to joint space and checked: a few ms)."""
+
+
+def _check_work(p: tripod.Params, plan: WalkPlan, branches: int) -> None:
+    """Refuse a plan whose samples exceed :data:`MAX_SCENARIO_SAMPLES` or whose lift is absurd.
+
+    Raises:
+        InvalidInputError: Too many samples (the estimate given), or a lift longer than the
+            actuators.
+
+    """
+    if plan.lift > p.stroke_max:
+        raise InvalidInputError(
+            "lift",
+            f"{plan.lift:g} m is more than the longest actuator ({p.stroke_max:g} m): no foot "
+            "can be lifted that high",
+        )
+    swing = plan.swing_time / plan.dt
+    moves = plan.reconfiguration_time / plan.dt
+    per_cycle = branches * (swing + moves) + moves
+    if plan.machining is not None:
+        per_cycle += _machining_duration(plan.machining) / plan.dt
+    total = plan.cycles * per_cycle
+    if total > MAX_SCENARIO_SAMPLES:
+        raise InvalidInputError(
+            "scenario",
+            f"{plan.cycles:g} cycles of about {per_cycle:.3g} samples (dt = {plan.dt:g} s) is "
+            f"{total:.3g} samples, more than {MAX_SCENARIO_SAMPLES:,} (each is mapped and "
+            f"checked, a few ms: about {total * 3e-3 / 3600:.2g} h); fewer cycles, shorter "
+            "phases or a longer dt",
+        )
+
+
+def _machining_duration(m: MachiningPlan) -> float:
+    """Upper bound of a machining cycle's duration [s] (every move, plunge and retract)."""
+    holes = len(m.holes_y)
+    return (holes + 3) * m.move_time + 2 * (holes + 1) * m.plunge_time + m.contour_time
+
+
 def plan_scenario(
     robot: Robot, plan: WalkPlan | None = None, progress: bool | None = None
 ) -> list[Phase]:
@@ -484,6 +525,8 @@ def plan_scenario(
 
     Raises:
         PkdynError: Not the library tripod.
+        InvalidInputError: More samples than :data:`MAX_SCENARIO_SAMPLES`, or a lift longer
+            than the actuators (refused before any work).
         TrajectoryError: ``XFKMB_i`` finds no reconfiguration pose within the strokes (step
             too long), or a phase leaves the workspace or meets a parallel singularity; the
             walker: a new foothold out of reach or legs that would interfere (the message names
@@ -507,6 +550,7 @@ def plan_scenario(
     step = np.array(plan.step, dtype=float)
     per_cycle = 2 * len(branches) + (2 if plan.machining is not None else 1)
     n_phases = plan.cycles * per_cycle
+    _check_work(p, plan, len(branches))
 
     def add(phase: Phase) -> np.ndarray:
         nonlocal t0
