@@ -308,10 +308,10 @@ def test_ik_with_the_controlled_components_only(capsys):
     "argv, needle",
     [
         (
-            ["size", "delta", "--cycle-time", "0.25", "--dt", "0.005"],
+            ["size", "delta", "--cycle-time", "0.25", "--dt", "0.001"],
             "limits exceeded: motor1 speed",
         ),
-        (["size", "delta", "--payload", "1e6", "--dt", "0.005"], "limits exceeded: motor1 torque"),
+        (["size", "delta", "--payload", "1e6", "--dt", "0.002"], "limits exceeded: motor1 torque"),
     ],
     ids=["speed", "torque"],
 )
@@ -454,6 +454,17 @@ def test_home_found_near_a_dead_centre_is_reported():
         warnings.simplefilter("error")
         regular = _load(_straight_four_bar(0.45))  # a home far from any dead centre: silent
     assert dead_centre_distance(regular, regular.q_home) is None
+
+
+def test_redundant_actuation_has_no_dead_centre_warning():
+    """The walker's eight actuators cannot move one at a time: no dead-centre warning."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        walker = pkdyn.load("tripod", branches=4, geometry=False)
+    from pkdyn.model.home import dead_centre_distance
+
+    assert walker.actuated_v.size > walker.mobility()
+    assert dead_centre_distance(walker, walker.q_home) is None
 
 
 @pytest.mark.parametrize("sig, code", [("SIGINT", 130), ("SIGTERM", 143)])

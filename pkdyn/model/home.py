@@ -305,10 +305,15 @@ def dead_centre_distance(robot: Robot, q: np.ndarray) -> tuple[float, str, str] 
         q: An assembled, non-singular configuration (nq,).
 
     Returns:
-        ``(distance, unit, actuator)`` of the nearest one found, or ``None``.
+        ``(distance, unit, actuator)`` of the nearest one found, or ``None`` (also for a
+        redundantly actuated robot, whose actuators cannot move one at a time).
 
     """
     if not robot.closure_set.nc or not robot.actuated_v.size:
+        return None
+    if robot.actuated_v.size > robot.mobility(q):
+        # redundant actuation (the four-branch walker): one actuator cannot move alone, so
+        # "moving it until the passive joints cannot follow" measures nothing
         return None
     best: tuple[float, str, str, float] | None = None
     for k, name in enumerate(robot.actuator_names):
