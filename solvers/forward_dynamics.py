@@ -57,6 +57,7 @@ import pinocchio as pin
 
 from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
+from solvers.control_step import ProjectedEulerStep
 from solvers.integrators import COMMUTATIVE_JOINTS, DOPRI5, RK4, Tableau
 from solvers.passive import PassiveForces
 from solvers.projection import ProjectionError, project_state
@@ -207,6 +208,7 @@ class ForwardDynamics:
         self._gains = None if np.all(act_gains == 1.0) else act_gains
         self._h_max = 0.0  # largest dopri5 substep of the current run
         self._substeps = 1  # fixed steps per output step (euler, rk4)
+        self._control: ProjectedEulerStep | None = None  # the Euler control-loop step
 
     def _euler_gains(self, h: float) -> None:
         """Automatic Baumgarte gains of the Euler step ``h``: critically damped at ``0.5 / h``."""
@@ -489,6 +491,12 @@ class ForwardDynamics:
         """Advance a state by one step ``dt`` (with the projection check if ``project``).
 
         For a control loop: no recording. ``dopri5`` keeps its substep size between calls.
+        ``euler`` with ``project`` (the control-loop step, :mod:`solvers.control_step`) ends
+        every step on the closures (residual within ``project_tol``) by one Newton correction
+        with the factorization of the dynamics evaluated at the new state, which the next call
+        reuses when given the state this one returned; it costs less than twice a raw Euler
+        step (``bench/dynamics.py``). The other integrators check the residual after the step
+        and project above ``project_tol``.
 
         Args:
             t: Time [s].
@@ -505,6 +513,10 @@ class ForwardDynamics:
                 ``dopri5`` underflowed.
 
         """
+        if self.integrator == "euler" and self.project and self.nc:
+            if self._control is None:
+                self._control = ProjectedEulerStep(self)
+            return self._control.step(t, q, v, dt, tau)
         if self.integrator == "euler":
             if self._auto_gains and dt != self._gains_step:
                 self._euler_gains(dt)

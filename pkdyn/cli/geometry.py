@@ -25,6 +25,7 @@ from pkdyn.cli._common import (
     units,
 )
 from pkdyn.exceptions import OutputError, PkdynError
+from pkdyn.model.robot import PLATFORM_HINT
 
 __all__ = ["register"]
 
@@ -150,7 +151,9 @@ def _cmd_fk(args: argparse.Namespace) -> None:
     robot = load(args)
     res = pkdyn.forward_geometry(robot, args.qa)
     if res.placement is None:
-        raise PkdynError(f"{robot.name} declares no platform frame; nothing to report")
+        raise PkdynError(
+            f"{robot.name} declares no platform frame, so no pose to report; {PLATFORM_HINT}"
+        )
     payload = {
         "position": res.position.tolist(),
         "rpy": res.rpy.tolist(),
@@ -213,11 +216,20 @@ def _cmd_statics(args: argparse.Namespace) -> None:
 
     robot, q = configuration(args)
     out = statics_json(robot, q, args.wrench, gravity=args.gravity)
-    text = "\n".join(
+    lines = [
         f"{n}: {t:.6g} {u[2]}"
         for n, t, u in zip(out["actuators"], out["tau"], units(robot), strict=True)
-    )
-    emit(args, out, text)
+    ]
+    for name, r in out["reactions"].items():
+        lines.append(
+            f"closure {name}: force {_vector(r['force'])} N, moment {_vector(r['moment'])} N m "
+            f"about {_vector(r['point'])} m (on its first body, world axes)"
+        )
+    emit(args, out, "\n".join(lines))
+
+
+def _vector(v: list[float]) -> str:
+    return "[" + " ".join(f"{x + 0.0:.4g}" for x in v) + "]"  # (+ 0.0: no negative zero)
 
 
 def register(sub: Any) -> None:

@@ -46,7 +46,16 @@ from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn
 from solvers import SolveResult, numerics, solve_lm
 
-__all__ = ["ASSEMBLY_TOL", "EXACT_TOL", "RANK_RTOL", "HomeResult", "find_home", "rank"]
+__all__ = [
+    "ASSEMBLY_TOL",
+    "EXACT_TOL",
+    "NEAR_DEAD_CENTRE",
+    "RANK_RTOL",
+    "HomeResult",
+    "dead_centre_distance",
+    "find_home",
+    "rank",
+]
 
 ASSEMBLY_TOL = 1e-4
 """Default assembly tolerance [m or rad]: the largest closure error of a description pkdyn
@@ -243,6 +252,13 @@ def find_home(
     if sol.converged or _worst(robot, sol) > tol:
         found, best = _search(robot, q, free, sol)
     if found is not None:
+        d = dead_centre_distance(robot, found)
+        if d is not None:
+            warn(
+                f"{robot.source}: the home found by search lies {d[0]:.3g} {d[1]} of actuator "
+                f"'{d[2]}' motion from a singular configuration (a dead centre: the closures "
+                "cannot be followed beyond it); give another home (home=..., --home)"
+            )
         return HomeResult(found, closures, {}, True)
     assert best is not None
     per = _per_closure(robot, best.residual)
@@ -267,6 +283,75 @@ def find_home(
         f"{_RESTARTS} random starts); check its frames and the joint types along its loop, "
         "or give an assembled configuration (home=..., --home)",
     )
+
+
+NEAR_DEAD_CENTRE = 0.1
+"""Actuator motion [rad; for a prismatic actuator, times the robot's size] within which a
+searched home's singular configuration (dead centre) draws a warning."""
+
+_DEAD_CENTRE_STEPS = 20
+
+
+def dead_centre_distance(robot: Robot, q: np.ndarray) -> tuple[float, str, str] | None:
+    """The actuator motion from ``q`` to a singular configuration, if within the warning range.
+
+    Each actuator is moved alone, both ways, in :data:`_DEAD_CENTRE_STEPS` steps up to
+    :data:`NEAR_DEAD_CENTRE`, the passive joints following the closures: a dead centre is where
+    they cannot follow (the solve fails: a fold) or where the passive coordinates stop
+    determining the configuration (``rank J_passive < rank J``).
+
+    Args:
+        robot: The robot.
+        q: An assembled, non-singular configuration (nq,).
+
+    Returns:
+        ``(distance, unit, actuator)`` of the nearest one found, or ``None`` (also for a
+        redundantly actuated robot, whose actuators cannot move one at a time).
+
+    """
+    if not robot.closure_set.nc or not robot.actuated_v.size:
+        return None
+    if robot.actuated_v.size > robot.mobility(q):
+        # redundant actuation (the four-branch walker): one actuator cannot move alone, so
+        # "moving it until the passive joints cannot follow" measures nothing
+        return None
+    best: tuple[float, str, str, float] | None = None
+    for k, name in enumerate(robot.actuator_names):
+        prismatic = bool(robot.actuator_prismatic[k])
+        reach = NEAR_DEAD_CENTRE * (robot.length_scale if prismatic else 1.0)
+        h = reach / _DEAD_CENTRE_STEPS
+        iq = int(robot.actuated_q[k])
+        for sign in (-1.0, 1.0):
+            qk = np.array(q, dtype=float)
+            for _ in range(_DEAD_CENTRE_STEPS):
+                nxt = _regular(robot, qk, iq, qk[iq] + sign * h)
+                if nxt is not None:
+                    qk = nxt
+                    continue
+                lo, hi = 0.0, h  # bisect the step that fails
+                for _ in range(30):
+                    mid = 0.5 * (lo + hi)
+                    if _regular(robot, qk, iq, qk[iq] + sign * mid) is not None:
+                        lo = mid
+                    else:
+                        hi = mid
+                d = abs(float(qk[iq] - q[iq])) + 0.5 * (lo + hi)
+                scale = robot.length_scale if prismatic else 1.0
+                if best is None or d / scale < best[0] / best[3]:
+                    best = (d, "m" if prismatic else "rad", name, scale)
+                break
+    return None if best is None else best[:3]
+
+
+def _regular(robot: Robot, start: np.ndarray, iq: int, value: float) -> np.ndarray | None:
+    """The configuration with coordinate ``iq`` at ``value`` (from ``start``), if regular."""
+    qs = np.array(start, dtype=float)
+    qs[iq] = value
+    sol = _solve(robot, qs, robot.passive_v, 40)
+    if not sol.converged:
+        return None
+    J = robot.closure_set.jacobian(robot.data, sol.q)
+    return sol.q if rank(J[:, robot.passive_v]) == rank(J) else None
 
 
 def _worst(robot: Robot, sol: SolveResult) -> float:

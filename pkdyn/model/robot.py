@@ -15,7 +15,13 @@ from pkdyn.model.families import FAMILIES
 from solvers import ClosureSet, PassiveForces
 from solvers.numerics import rank
 
-__all__ = ["MODELLING_JOINTS", "Robot"]
+__all__ = ["PLATFORM_HINT", "MODELLING_JOINTS", "Robot"]
+
+PLATFORM_HINT = (
+    'declare one: <pkdyn:platform link="LINK" task="x y z"/> in the URDF (urdf/README.md), '
+    "or 'platform: {frame: LINK}' in its YAML sidecar"
+)
+"""How to declare a platform, for the messages of the commands that need one."""
 
 MODELLING_JOINTS = ("JointModelFreeFlyer", "JointModelPlanar")
 """Joint models that place a platform or floating base: modelling devices, not hardware."""
@@ -207,6 +213,24 @@ class Robot:
         return out
 
     def dof(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
+        """Degrees of freedom of the platform at ``q`` (default ``q_home``): the Delta's 3.
+
+        The word's one meaning, as ``pkdyn info`` prints it: the motions allowed by the
+        closures that move the platform's controlled pose components (:meth:`mobility_split`);
+        without a platform, every motion the closures allow. :meth:`mobility` counts the
+        internal mobilities too (the Delta's six bar spins: 9).
+
+        Args:
+            q: Configuration (nq,).
+            tol: Relative singular-value threshold of the ranks.
+
+        Returns:
+            Number of degrees of freedom of the platform.
+
+        """
+        return self.mobility_split(q, tol)[0]
+
+    def mobility(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
         """Mobility at ``q`` (default ``q_home``): nv minus the rank of the closure Jacobian.
 
         Args:
@@ -215,7 +239,8 @@ class Robot:
                 closure Jacobian's entries are of order one in SI units).
 
         Returns:
-            Number of degrees of freedom, internal mobilities included.
+            Number of independent motions, internal mobilities included
+            (``dof + internal`` of :meth:`mobility_split`).
 
         """
         qq = self.q_home if q is None else q
@@ -230,8 +255,8 @@ class Robot:
         The motions allowed by the closures (null space of the closure Jacobian) are split into
         those that move the platform's controlled pose components (``dof``) and those that
         leave them still (``internal``, e.g. the spin of a Delta's ball-jointed bars).
-        ``dof + internal == self.dof(q)``. A robot without a platform frame has no internal
-        mobility by this definition.
+        ``dof + internal == self.mobility(q)``. A robot without a platform frame has no
+        internal mobility by this definition.
 
         Args:
             q: Configuration (nq,).
@@ -284,7 +309,7 @@ class Robot:
 
         """
         if self.platform_frame is None:
-            raise PkdynError(f"{self.name} declares no platform frame (add a <pkdyn:platform>)")
+            raise PkdynError(f"{self.name} declares no platform frame; {PLATFORM_HINT}")
         pin.framesForwardKinematics(self.model, self.data, q)
         return pin.SE3(self.data.oMf[self.platform_frame])
 

@@ -336,7 +336,7 @@ def _analyse_phase(
     branches = branch_numbers(robot)
     clamped = [b for b in branches if b != phase.branch]
     targets = phase.mode.lock_targets()
-    redundant = len(r.actuators) > r.dof(jt.q[0])
+    redundant = len(r.actuators) > r.mobility(jt.q[0])
     effort = _efforts(r, phase, allocation, redundant)
     res = np.empty(N)
     lock = np.zeros(N)

@@ -53,8 +53,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import OutputError, PkdynError
+from pkdyn.exceptions import OutputError
 from pkdyn.files import atomic_write
+from pkdyn.inputs import positive
 from pkdyn.model.formats.mjcf_mujoco import actuator_efforts, mujoco_model
 from pkdyn.model.formats.mjcf_state import JointMap, StateMap
 from pkdyn.model.formats.mjcf_state import quat_wxyz as _quat_wxyz
@@ -258,12 +259,11 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
 
     Raises:
         DescriptionError: A joint has no MuJoCo equivalent.
-        PkdynError: Invalid options.
+        InvalidInputError: A timestep that is not a positive finite number of seconds.
 
     """
     opt = options or MjcfOptions()
-    if not opt.timestep > 0.0:
-        raise PkdynError(f"MJCF timestep must be > 0, got {opt.timestep}")
+    positive("timestep", opt.timestep, "s")
     model = robot.model
     smap = StateMap(robot)
     names = smap.body_names
