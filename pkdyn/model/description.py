@@ -53,6 +53,7 @@ __all__ = [
     "PassiveSpec",
     "SpringSpec",
     "FamilySpec",
+    "CouplingSpec",
     "Description",
     "parse_description",
 ]
@@ -271,6 +272,34 @@ class FamilySpec:
     params: tuple[tuple[str, str], ...] = ()
 
 
+@dataclass(frozen=True)
+class CouplingSpec:
+    """Scalar holonomic relation between two 1-DoF joint coordinates.
+
+    ``(q[joint] - joint_ref) = sum_k coefficients[k] * (q[source] - source_ref)**k``
+    (MuJoCo joint equality: ``polycoef``, refs = ``qpos0``; URDF ``<mimic>``:
+    ``(offset, multiplier)``, refs 0); with ``source`` ``None`` the joint is held at
+    ``joint_ref + coefficients[0]``. A continuous joint's coordinate is its angle [rad].
+
+    Attributes:
+        name: Coupling name (the equality, mimic or ``pkdyn:coupling`` it came from).
+        joint: Driven (dependent) joint name.
+        source: Driving joint name, or ``None`` for a locked joint.
+        coefficients: Polynomial coefficients, constant term first (1 to 5 of them)
+            [rad or m per (rad or m)^k].
+        joint_ref: Reference coordinate of ``joint`` [rad or m].
+        source_ref: Reference coordinate of ``source`` [rad or m].
+
+    """
+
+    name: str
+    joint: str
+    source: str | None
+    coefficients: tuple[float, ...]
+    joint_ref: float = 0.0
+    source_ref: float = 0.0
+
+
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class Description:
     """Everything a pkdyn description says beyond the URDF tree."""
@@ -285,6 +314,7 @@ class Description:
     passive: tuple[PassiveSpec, ...] = ()
     springs: tuple[SpringSpec, ...] = ()
     family: FamilySpec | None = None
+    couplings: tuple[CouplingSpec, ...] = ()
 
 
 def _vec(source: str, el: ET.Element, attr: str, default: str, n: int = 3) -> np.ndarray:
