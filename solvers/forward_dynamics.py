@@ -39,6 +39,14 @@ of a hinge closure. On top of it:
 - actuation: efforts ``tau(t, q, v) -> (n_a,)`` mapped to generalized forces by an
   :class:`Actuation` selection.
 
+Joint couplings (:mod:`solvers.coupling`: gears, mimic joints), which ``pin.constraintDynamics``
+cannot take, switch the evaluation to pkdyn's own proximal KKT solve over the stacked Jacobian of
+:class:`~solvers.closure.ClosureSet` (rigid rows and coupling rows): ``[M, -J^T; J, mu I]
+[a; lambda+] = [tau - h; c + mu lambda]`` with ``c = -gamma - Kd J v - Kp r`` (the same
+Baumgarte gains, on the ClosureSet residual), iterated from ``lambda = 0`` as Pinocchio's proximal
+solver does (same ``prox_accuracy``, ``prox_mu``, ``prox_max_iter``); its multipliers are
+already in the ClosureSet convention. Without couplings nothing changes.
+
 Units: SI. Pinocchio's constraint forces (``data.lambda_c``, for ``J =
 pin.getConstraintsJacobian``) are, per constraint model, the force (3D) or wrench (6D) on
 ``joint1``'s body at its contact frame, expressed in that frame. The recorded
@@ -54,9 +62,11 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
+import scipy.linalg
 
 from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
+from solvers.coupling import JointCoupling
 from solvers.integrators import COMMUTATIVE_JOINTS, DOPRI5, RK4, Tableau
 from solvers.passive import PassiveForces
 from solvers.projection import ProjectionError, project_state
@@ -124,6 +134,8 @@ class ForwardDynamics:
             blowing-up state would otherwise shrink the steps without end).
         max_speed: Largest joint speed [rad/s or m/s] accepted; beyond, the state is taken as
             blowing up and the run stops with :class:`IntegrationError`.
+        couplings: Scalar joint couplings (:mod:`solvers.coupling`); with any, the
+            accelerations come from the KKT solve of the module docstring.
 
     Raises:
         ValueError: Unknown integrator or inconsistent sizes.
@@ -149,6 +161,7 @@ class ForwardDynamics:
         prox_max_iter: int = 30,
         max_substeps: int = 100_000,
         max_speed: float = 1e4,
+        couplings: Sequence[JointCoupling] = (),
     ) -> None:
         if integrator not in ("rk4", "dopri5", "euler"):
             raise ValueError(f"unknown integrator {integrator!r} (rk4, dopri5 or euler)")
@@ -183,8 +196,12 @@ class ForwardDynamics:
             c.setBaumgarteCorrectorParameters(corrector)
             self.constraint_models.append(c)
             self.constraint_datas.append(c.createData())
-        self.closure_set = ClosureSet(model, list(self.constraint_models))
+        self.closure_set = ClosureSet(model, list(self.constraint_models), couplings)
         self.nc = self.closure_set.nc
+        self._coupled = bool(self.closure_set.couplings)
+        self._pd = (float(gains[0]), float(gains[1]))  # Baumgarte gains of the KKT solve
+        self._kkt_data = model.createData() if self._coupled else None
+        self._lambda = np.zeros(self.nc)  # multipliers of the last KKT solve
         # conversion of Pinocchio's multipliers to the ClosureSet convention (see the module doc)
         pts = [k for k, cm in enumerate(self.constraint_models) if cm.type == _POINT]
         self._pt_rows = np.array([self.closure_set.offsets[k] for k in pts], dtype=int)
@@ -193,7 +210,7 @@ class ForwardDynamics:
             [self.constraint_models[k].joint1_placement.rotation for k in pts]
         ).reshape(-1, 3, 3)
         self.prox = pin.ProximalSettings(prox_accuracy, prox_accuracy, prox_mu, prox_max_iter)
-        if self.nc:
+        if self.nc and not self._coupled:
             pin.initConstraintDynamics(
                 model, self.data, self.constraint_models, self.constraint_datas
             )
@@ -216,6 +233,7 @@ class ForwardDynamics:
         corrector = pin.BaumgarteCorrectorParameters(w * w, 2.0 * w)
         for cm in self.constraint_models:
             cm.setBaumgarteCorrectorParameters(corrector)
+        self._pd = (w * w, 2.0 * w)
         self._gains_step = h
 
     # ------------------------------------------------------------------ dynamics
@@ -238,6 +256,8 @@ class ForwardDynamics:
 
     def _accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Acceleration as a view on ``data.ddq`` (overwritten by the next call)."""
+        if self._coupled:
+            return self._kkt(q, v, tau)
         if self.nc:
             return pin.constraintDynamics(
                 self.model,
@@ -250,6 +270,41 @@ class ForwardDynamics:
                 self.prox,
             )
         return pin.aba(self.model, self.data, q, v, tau)
+
+    def _kkt(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Acceleration by the proximal KKT solve over all closure rows (module docstring).
+
+        The multipliers (ClosureSet convention) are left in ``self._lambda``.
+        """
+        model, data = self.model, self._kkt_data
+        assert data is not None
+        cs = self.closure_set
+        nv, nc = model.nv, self.nc
+        M = pin.crba(model, data, q)
+        h = pin.nonLinearEffects(model, data, q, v)
+        r, J = cs.residual_and_jacobian(data, q)
+        gamma = cs.drift(data, q, v)
+        kp, kd = self._pd
+        c = -gamma - kd * (J @ v) - kp * r
+        mu = self.prox.mu
+        K = np.empty((nv + nc, nv + nc))
+        K[:nv, :nv] = np.triu(M) + np.triu(M, 1).T
+        K[:nv, nv:] = -J.T
+        K[nv:, :nv] = J
+        K[nv:, nv:] = mu * np.eye(nc)
+        lu = scipy.linalg.lu_factor(K, check_finite=False)
+        rhs = np.concatenate([tau - h, c])
+        lam = np.zeros(nc)
+        x = rhs
+        for _ in range(max(1, self.prox.max_iter)):
+            rhs[nv:] = c + mu * lam
+            x = scipy.linalg.lu_solve(lu, rhs, check_finite=False)
+            step = float(np.max(np.abs(x[nv:] - lam), initial=0.0))
+            lam = x[nv:]
+            if step <= self.prox.absolute_accuracy * max(1.0, float(np.max(np.abs(lam)))):
+                break
+        self._lambda = np.array(lam)
+        return x[:nv]
 
     def _generalized(
         self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
@@ -407,7 +462,8 @@ class ForwardDynamics:
         w_act, w_fric = h * first.p_act, h * first.p_fric
         if n == 1:
             return q, v, w_act, w_fric, None
-        if tau_fn is None and self.nc and self.passive is None:  # the bare loop
+        if tau_fn is None and self.nc and self.passive is None and not self._coupled:
+            # the bare loop
             data, prox = self.data, self.prox
             cms, cds = self.constraint_models, self.constraint_datas
             dynamics, zero = pin.constraintDynamics, self._zero_nv
@@ -538,9 +594,12 @@ class ForwardDynamics:
             lambda_c: ``data.lambda_c`` (nc,) of ``pin.constraintDynamics``.
 
         Returns:
-            The multipliers (nc,) [N, N m], as returned by the inverse dynamics.
+            The multipliers (nc,) [N, N m], as returned by the inverse dynamics (with couplings:
+            those of the last KKT solve, already in that convention; ``lambda_c`` is not used).
 
         """
+        if self._coupled:
+            return self._lambda.copy()
         out = -np.asarray(lambda_c, dtype=float)
         if self._pt_rows.size:
             R = np.array([kin.oMi[j].rotation for j in self._pt_joint1]) @ self._pt_rot1

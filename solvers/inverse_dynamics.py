@@ -64,6 +64,7 @@ from proxsuite import proxqp
 from solvers import numerics
 from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
+from solvers.coupling import JointCoupling
 from solvers.sampled import SampledKinematics
 
 _BATCH = 256  # samples per batch of :meth:`InverseDynamics.trajectory`
@@ -192,6 +193,9 @@ class InverseDynamics:
             ``max(1, |M a + h|)``.
         eps: Absolute accuracy of the QP [N m or N].
         max_iter: Iteration cap of the QP.
+        couplings: Scalar joint couplings (:mod:`solvers.coupling`), rows of ``J`` after the
+            rigid closures; their multipliers are the generalized forces [N m or N] on the
+            driven joints.
 
     Raises:
         ValueError: Inconsistent sizes or bounds.
@@ -210,11 +214,12 @@ class InverseDynamics:
         consistency_tol: float = 1e-7,
         eps: float = 1e-11,
         max_iter: int = 200,
+        couplings: Sequence[JointCoupling] = (),
     ) -> None:
         self.model = model
         self.data = model.createData()
         self._kin = model.createData()
-        self.closure_set = ClosureSet(model, list(constraints))
+        self.closure_set = ClosureSet(model, list(constraints), couplings)
         self.actuation = actuation
         n = actuation.n
         if n == 0:
@@ -582,7 +587,7 @@ class InverseDynamics:
             stop = n
             bad = None
             if check_tol is not None and nc:
-                bad = self._first_inconsistent(kin, n, v[s:e], a[s:e], check_tol)
+                bad = self._first_inconsistent(kin, q[s:e], v[s:e], a[s:e], check_tol)
                 if bad is not None:
                     stop = bad[0]
             done = self._solve_unique_batch(b[:stop], J[:stop], out, s)
@@ -636,14 +641,15 @@ class InverseDynamics:
             pe[i] = potential(model, kd)
             if nc:
                 capture(i, kd)
-                J[i] = jacobian_at(kd)
+                J[i] = jacobian_at(kd, q[i])
         return b, J
 
     def _first_inconsistent(
-        self, kin: SampledKinematics, n: int, v: np.ndarray, a: np.ndarray, tol: float
+        self, kin: SampledKinematics, q: np.ndarray, v: np.ndarray, a: np.ndarray, tol: float
     ) -> tuple[int, str, str, float] | None:
         """First sample of a batch breaking the closure check, the kind, closure and error."""
-        r, ev, ea = kin.closure_errors(n, v)
+        n = q.shape[0]
+        r, ev, ea = kin.closure_errors(n, v, q, a)
         checks = (
             ("configuration", r, np.ones(n)),
             ("velocity", ev, np.maximum(1.0, np.abs(v).max(axis=1))),

@@ -19,6 +19,13 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
   spring about a rest position, and damping / friction overriding ``<dynamics>``);
   ``<pkdyn:spring name stiffness rest_length>`` with two ``<pkdyn:frame>`` children: a linear
   spring between two frames.
+- ``<pkdyn:coupling name joint [source] [multiplier offset | polycoef] [joint_ref
+  source_ref]>``: a scalar relation between two 1-DoF joint coordinates (a gear pair, a rack,
+  a cam law): ``joint - joint_ref = offset + multiplier (source - source_ref)``, or the polynomial
+  ``sum_k polycoef[k] (source - source_ref)^k`` (1 to 5 coefficients); without ``source`` the
+  joint is locked at ``joint_ref + offset``. The standard URDF ``<mimic joint multiplier
+  offset>`` of a joint is read as the coupling ``<joint name>_mimic`` (the joint stays a tree
+  joint).
 - ``<pkdyn:family name>`` with ``<pkdyn:param name value>`` children: the library family and
   parameters the file was written from (``pkdyn urdf FAMILY``); the file then loads exactly as
   the family does (its parameters, home configuration and closed forms), after a check that its
@@ -572,6 +579,68 @@ def _passive(source: str, root: ET.Element) -> tuple[PassiveSpec, ...]:
     return tuple(PassiveSpec(name, **f) for name, f in fields.items())
 
 
+def _number(source: str, culprit: str, text: str) -> float:
+    """One finite number of a coupling attribute."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise DescriptionError(source, culprit, f"'{text}' is not a number") from None
+    if not math.isfinite(value):
+        raise DescriptionError(source, culprit, f"{text} is not a finite number")
+    return value
+
+
+def _coupling(source: str, el: ET.Element) -> CouplingSpec:
+    """A ``<pkdyn:coupling>`` element."""
+    name = el.get("name")
+    if not name:
+        raise DescriptionError(source, "<pkdyn:coupling>", "missing attribute 'name'")
+    what = f"coupling '{name}'"
+    joint = el.get("joint")
+    if not joint:
+        raise DescriptionError(source, what, "missing attribute 'joint' (the driven joint)")
+    src = el.get("source") or None
+    poly = el.get("polycoef")
+    if poly is not None and (el.get("multiplier") is not None or el.get("offset") is not None):
+        raise DescriptionError(source, what, "give polycoef or multiplier/offset, not both")
+    if poly is not None:
+        coef = tuple(_number(source, f"{what} polycoef", t) for t in poly.split())
+        if not 1 <= len(coef) <= 5:
+            raise DescriptionError(
+                source, f"{what} polycoef='{poly}'", f"{len(coef)} coefficients; give 1 to 5"
+            )
+    else:
+        offset = _number(source, f"{what} offset", el.get("offset", "0"))
+        multiplier = _number(source, f"{what} multiplier", el.get("multiplier", "1"))
+        coef = (offset, multiplier)
+    if src is None:
+        if (poly is not None and any(coef[1:])) or el.get("multiplier") is not None:
+            raise DescriptionError(
+                source, what, "a coupling without source locks its joint: give offset only"
+            )
+        coef = coef[:1]
+    refs = [_number(source, f"{what} {a}", el.get(a, "0")) for a in ("joint_ref", "source_ref")]
+    return CouplingSpec(name, joint, src, coef, refs[0], refs[1])
+
+
+def _mimics(source: str, root: ET.Element) -> list[CouplingSpec]:
+    """Couplings of the URDF ``<mimic joint multiplier offset>`` elements."""
+    out = []
+    for j in root.findall("joint"):
+        m = j.find("mimic")
+        if m is None:
+            continue
+        jname = j.get("name", "?")
+        what = f"joint '{jname}' <mimic>"
+        src = m.get("joint")
+        if not src:
+            raise DescriptionError(source, what, "missing attribute 'joint'")
+        multiplier = _number(source, f"{what} multiplier", m.get("multiplier", "1"))
+        offset = _number(source, f"{what} offset", m.get("offset", "0"))
+        out.append(CouplingSpec(f"{jname}_mimic", jname, src, (offset, multiplier)))
+    return out
+
+
 def _spring(source: str, el: ET.Element, links: set[str]) -> SpringSpec:
     name = el.get("name")
     if not name:
@@ -591,7 +660,7 @@ def _spring(source: str, el: ET.Element, links: set[str]) -> SpringSpec:
     return SpringSpec(name, f1, f2, k[0], L0[0])
 
 
-ELEMENTS = ("closure", "joint", "platform", "passive", "spring", "family")
+ELEMENTS = ("closure", "joint", "platform", "passive", "spring", "family", "coupling")
 """The top-level pkdyn elements (children of ``<robot>``)."""
 
 
@@ -684,6 +753,10 @@ def parse_description(xml_text: str, source: str) -> Description:
     for n in spring_names:
         if spring_names.count(n) > 1:
             raise DescriptionError(source, f"spring '{n}'", "spring names must be unique")
+    couplings = tuple(_mimics(source, root)) + tuple(
+        _coupling(source, el) for el in root.findall(_NS + "coupling")
+    )
+    _unique(source, "coupling", [c.name for c in couplings])
     return Description(
         name=root.get("name", source),
         closures=closures,
@@ -695,6 +768,7 @@ def parse_description(xml_text: str, source: str) -> Description:
         passive=_passive(source, root),
         springs=springs,
         family=_family(source, root),
+        couplings=couplings,
     )
 
 

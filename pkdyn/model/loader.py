@@ -31,6 +31,7 @@ from pkdyn.model.build import (
     build_tree,
     check_model_size,
     constraint_models,
+    joint_couplings,
     resolve_frame,
 )
 from pkdyn.model.description import (
@@ -205,6 +206,7 @@ class _Parts:
     visual: pin.GeometryModel
     collision: pin.GeometryModel
     q_ref: np.ndarray
+    preload: bool = False  # spring rests outside the joint limits accepted (MJCF springref)
 
 
 def load_string(
@@ -271,8 +273,11 @@ def load_string(
             tuple(b for b, body in mech.bodies.items() if not body.virtual),
             tuple(j.name for j in mech.joints),
             passive=tuple(built.passive),
+            couplings=tuple(built.couplings),
         )
-        parts = _Parts(built.model, desc, built.visual, built.collision, q_ref)
+        parts = _Parts(
+            built.model, desc, built.visual, built.collision, q_ref, preload=fmt == "mjcf"
+        )
         if not geometry:
             parts.visual, parts.collision = pin.GeometryModel(), pin.GeometryModel()
     parts = _with_sidecar(parts, side, source)
@@ -425,6 +430,12 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         if names.count(n) > 1:
             raise DescriptionError(source, f"closure '{n}'", "closure names must be unique")
     cms, owner = constraint_models(model, desc.closures, source)
+    couplings = joint_couplings(model, desc.couplings, source)
+    clash = {c.name for c in desc.couplings} & set(names)
+    if clash:
+        raise DescriptionError(
+            source, f"coupling '{sorted(clash)[0]}'", "a closure has the same name"
+        )
     actuated_joints, actuated_q, actuated_v = _actuation(model, list(desc.actuators), source)
     desc = dataclasses.replace(desc, actuators=_reflected(model, desc.actuators, actuated_v))
     platform_frame = None
@@ -441,7 +452,13 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
     is_passive[actuated_v] = False
     passive = np.flatnonzero(is_passive)  # (not setdiff1d: it imports numpy.ma, 10 ms)
     elements = passive_forces(
-        model, desc.passive, desc.springs, source, desc.joint_names, desc.joints
+        model,
+        desc.passive,
+        desc.springs,
+        source,
+        desc.joint_names,
+        desc.joints,
+        preload=parts.preload,
     )
     return Robot(
         name=desc.name,
@@ -453,7 +470,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         description=desc,
         constraint_models=vec,
         constraint_owner=owner,
-        closure_set=ClosureSet(model, cms),
+        closure_set=ClosureSet(model, cms, couplings),
         actuators=tuple(desc.actuators),
         actuated_joints=actuated_joints,
         actuated_q=actuated_q,
@@ -518,6 +535,8 @@ def _assembled(
     res = find_home(robot, q0, qa, tol, user=user)
     if res.moved:
         parts.desc = dataclasses.replace(parts.desc, closures=tuple(res.closures))
+        if res.couplings is not None:
+            parts.desc = dataclasses.replace(parts.desc, couplings=tuple(res.couplings))
         robot = _robot(parts, robot.source, robot.params)
     robot.q_home = res.q
     return robot
