@@ -113,7 +113,11 @@ class ClosureSet:
         self._loc_entries = [
             (is_point, int(o), cm, cd)
             for (is_point, *_), o, cm, cd in zip(
-                self._items, self.offsets[: len(self._items)], self._loc_cms, self._loc_cds, strict=True
+                self._items,
+                self.offsets[: len(self._items)],
+                self._loc_cms,
+                self._loc_cds,
+                strict=True,
             )
         ]
 

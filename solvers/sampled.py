@@ -120,11 +120,12 @@ class SampledKinematics:
                 ``pin.computeJointJacobians(model, data, q)`` at the sample.
 
         """
-        oMi = data.oMi.tolist()
-        acc = data.a_gf.tolist()
         captured = self._captured
-        self.H[k, 1:] = [oMi[j].homogeneous for j in captured]
-        self.acc[k, 1:] = [acc[j].vector for j in captured]
+        if captured:
+            oMi = data.oMi.tolist()
+            acc = data.a_gf.tolist()
+            self.H[k, 1:] = [oMi[j].homogeneous for j in captured]
+            self.acc[k, 1:] = [acc[j].vector for j in captured]
         self.Jw[k] = data.J
 
     def _velocities(self, n: int, v: np.ndarray) -> np.ndarray:
@@ -167,15 +168,15 @@ class SampledKinematics:
         ea = np.empty((n, nc))
         if not nc:
             return r, ev, ea
-        rows = self.closure_set.coupling_rows
-        if rows is not None:
+        coupled = self.closure_set.coupling_rows
+        if coupled is not None:
             if q is None or a is None:
                 raise ValueError("coupling rows need the configurations and accelerations")
             o = self.closure_set.n_rigid
             qq, vv, aa = q[:n], v[:n], a[:n]
-            r[:, o:] = rows.residual(qq)
-            ev[:, o:] = rows.velocity_error(qq, vv)
-            ea[:, o:] = rows.acceleration_error(qq, vv, aa)
+            r[:, o:] = coupled.residual(qq)
+            ev[:, o:] = coupled.velocity_error(qq, vv)
+            ea[:, o:] = coupled.acceleration_error(qq, vv, aa)
             if o == 0:
                 return r, ev, ea
         V = self._velocities(n, v)

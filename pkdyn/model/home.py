@@ -215,9 +215,7 @@ def _moved_couplings(
     return out, adjusted
 
 
-def _contradicting_coupling(
-    robot: Robot, best: SolveResult, per: dict[str, float]
-) -> str | None:
+def _contradicting_coupling(robot: Robot, best: SolveResult, per: dict[str, float]) -> str | None:
     """The coupling to blame when the closures assemble without the couplings, else ``None``.
 
     Then (or when there are no closures) the couplings contradict the closures or one

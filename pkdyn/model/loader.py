@@ -408,7 +408,11 @@ def _with_sidecar(parts: _Parts, side: Sidecar | None, source: str) -> _Parts:
         actuators.append(dataclasses.replace(a, effort=eff, velocity=vel))
     platform = desc.platform if side.platform is None else side.platform
     parts.desc = dataclasses.replace(
-        desc, closures=tuple(closures), actuators=tuple(actuators), platform=platform
+        desc,
+        closures=tuple(closures),
+        actuators=tuple(actuators),
+        platform=platform,
+        couplings=desc.couplings + tuple(side.couplings),
     )
     return parts
 

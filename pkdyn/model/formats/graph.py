@@ -460,12 +460,12 @@ def build(mech: Mechanism) -> Built:
     closures = list(mech.closures) + [_cut_closure(mech, j) for j in cut]
     cut_names = {j.name for j in cut}
     for c in mech.couplings:
-        for name in (c.joint, c.source):
-            if name in cut_names:
+        for jname in (c.joint, c.source):
+            if jname in cut_names:
                 raise DescriptionError(
                     mech.source,
                     f"coupling '{c.name}'",
-                    f"joint '{name}' closes a loop (it became a closure and has no coordinate); "
+                    f"joint '{jname}' closes a loop (it became a closure and has no coordinate); "
                     "a coupled joint must be a tree joint",
                 )
     return Built(

@@ -549,7 +549,7 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
 def _coupling(r: _Reader, el: ET.Element, a: dict[str, str], name: str) -> CouplingSpec:
     """A ``<joint>`` equality: ``joint1 - qpos0 = polycoef(joint2 - qpos0)``."""
     doc = r.doc
-    joints = []
+    joints: list[str | None] = []
     for attr in ("joint1", "joint2"):
         jname = a.get(attr)
         if jname is None:
