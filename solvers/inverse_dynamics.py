@@ -12,7 +12,9 @@ to the mechanism, e.g. a machining wrench or a payload's weight).
 ``lambda`` is the multiplier in that convention: for a 3D point closure, the world-frame force
 [N] applied at the contact point of ``joint1``'s body (the opposite force acts on ``joint2``'s
 body); for a 6D weld, the wrench [N, N m] applied on ``joint2``'s body at its contact frame,
-expressed in that frame (the opposite on ``joint1``'s). Among all multipliers the minimum-norm
+expressed in that frame (the opposite on ``joint1``'s); for a joint coupling
+(:mod:`solvers.coupling`), the generalized force [N m or N] on the driven joint (the source
+receiving ``-p'`` times it). Among all multipliers the minimum-norm
 one is returned (the limit of a vanishing regularisation ``eps |lambda|^2``), which settles the
 redundant equations of hinge closures.
 

@@ -46,6 +46,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.validate import check_urdf
+from pkdyn.model.warn import warn
 
 __all__ = [
     "NAMESPACE",
@@ -623,9 +624,19 @@ def _coupling(source: str, el: ET.Element) -> CouplingSpec:
     return CouplingSpec(name, joint, src, coef, refs[0], refs[1])
 
 
-def _mimics(source: str, root: ET.Element) -> list[CouplingSpec]:
-    """Couplings of the URDF ``<mimic joint multiplier offset>`` elements."""
+_ONE_DOF = ("revolute", "continuous", "prismatic")
+
+
+def _mimics(source: str, root: ET.Element, strict: bool) -> list[CouplingSpec]:
+    """Couplings of the URDF ``<mimic joint multiplier offset>`` elements.
+
+    A mimic between joints that are not both moving 1-DoF joints of the file is an error in a
+    pkdyn description (``strict``) and, in a plain URDF, left out with one warning (Pinocchio
+    and most URDF tools load such files: the joint then moves freely).
+    """
+    kinds = {j.get("name", ""): j.get("type", "") for j in root.findall("joint")}
     out = []
+    skipped: list[str] = []
     for j in root.findall("joint"):
         m = j.find("mimic")
         if m is None:
@@ -637,7 +648,25 @@ def _mimics(source: str, root: ET.Element) -> list[CouplingSpec]:
             raise DescriptionError(source, what, "missing attribute 'joint'")
         multiplier = _number(source, f"{what} multiplier", m.get("multiplier", "1"))
         offset = _number(source, f"{what} offset", m.get("offset", "0"))
+        bad = next((n for n in (jname, src) if kinds.get(n) not in _ONE_DOF), None)
+        if bad is not None:
+            why = (
+                f"names joint '{bad}', which does not exist"
+                if bad not in kinds
+                else f"joint '{bad}' is {kinds[bad] or 'untyped'}, not a revolute, continuous "
+                "or prismatic joint"
+            )
+            if strict:
+                raise DescriptionError(source, what, why)
+            skipped.append(f"{what} {why}")
+            continue
         out.append(CouplingSpec(f"{jname}_mimic", jname, src, (offset, multiplier)))
+    if skipped:
+        warn(
+            f"{source}: {len(skipped)} <mimic> element(s) left out (the joints move freely): "
+            + "; ".join(skipped[:3])
+            + (" ..." if len(skipped) > 3 else "")
+        )
     return out
 
 
@@ -753,7 +782,7 @@ def parse_description(xml_text: str, source: str) -> Description:
     for n in spring_names:
         if spring_names.count(n) > 1:
             raise DescriptionError(source, f"spring '{n}'", "spring names must be unique")
-    couplings = tuple(_mimics(source, root)) + tuple(
+    couplings = tuple(_mimics(source, root, extended)) + tuple(
         _coupling(source, el) for el in root.findall(_NS + "coupling")
     )
     _unique(source, "coupling", [c.name for c in couplings])
