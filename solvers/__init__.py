@@ -4,7 +4,8 @@ Nothing here knows about Deltas or hexapods: inputs are a ``pin.Model``, rigid c
 (3D point or 6D weld) and index sets. Depends on pinocchio, numpy (and proxsuite) only.
 
 Modules: :mod:`~solvers.closure` (closure residuals, Jacobians, drift), :mod:`~solvers.coupling`
-(scalar joint couplings: gears, mimic joints), :mod:`~solvers.lm`
+(scalar joint couplings: gears, mimic joints), :mod:`~solvers.energy` (kinetic energy with every
+armature), :mod:`~solvers.lm`
 (Levenberg-Marquardt on the configuration manifold), :mod:`~solvers.pose_task`,
 :mod:`~solvers.actuation` (actuation selection, drives), :mod:`~solvers.passive` (springs,
 dampers, friction), :mod:`~solvers.integrators`

@@ -333,19 +333,16 @@ class ClosureSet:
         pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
         g = np.zeros(self.nc)
         zero = pin.Motion.Zero()
+        classic = pin.classicAcceleration
         for k, (is_point, j1, M1, j2, M2) in enumerate(self._items):
             o = self.offsets[k]
-            if is_point:
-                acc = []
-                for j, M in ((j1, M1), (j2, M2)):
-                    if j == 0:
-                        acc.append(np.zeros(3))
-                        continue
-                    vp = M.actInv(data.v[j])
-                    ap = M.actInv(data.a[j])
-                    lin = ap.linear + np.cross(vp.angular, vp.linear)
-                    acc.append((data.oMi[j] * M).rotation @ lin)
-                g[o : o + 3] = acc[0] - acc[1]
+            if is_point:  # classical accelerations of the two contact points, world axes
+                if j1:
+                    lin = classic(data.v[j1], data.a[j1], M1)
+                    g[o : o + 3] = (data.oMi[j1] * M1).rotation.dot(lin)
+                if j2:
+                    lin = classic(data.v[j2], data.a[j2], M2)
+                    g[o : o + 3] -= (data.oMi[j2] * M2).rotation.dot(lin)
                 continue
             c1Mc2 = (data.oMi[j1] * M1).actInv(data.oMi[j2] * M2)
             v1 = c1Mc2.actInv(M1.actInv(data.v[j1])) if j1 else zero

@@ -121,13 +121,33 @@ class CouplingRows:
                 self.coef[i, 0] = c.coefficients[0]  # a locked joint: the constant term only
             self.jref[i] = c.joint_ref
             self.sref[i] = c.source_ref
-        # derivative coefficients: p' (degree 3) and p'' (degree 2)
-        powers = np.arange(1, MAX_COEFFICIENTS)
+        # the highest degree in use (trailing zero columns cost Horner steps for nothing)
+        used = np.flatnonzero(np.any(self.coef != 0.0, axis=0))
+        self.coef = self.coef[:, : max(2, int(used[-1]) + 1 if used.size else 2)]
+        # derivative coefficients: p' and p''
+        powers = np.arange(1, self.coef.shape[1])
         self.d1 = self.coef[:, 1:] * powers
-        self.d2 = self.d1[:, 1:] * powers[:-1]
+        self.d2 = self.d1[:, 1:] * powers[:-1] if self.coef.shape[1] > 2 else np.zeros((k, 1))
         self.rows = np.arange(k)
         self.jcirc_any = bool(self.jcirc.any())
         self.scirc_any = bool(self.scirc.any())
+        self.all_sourced = bool(self.has_source.all())
+        # one state at a time: plain floats (numpy's per-call overhead dominates small rows)
+        self._scalar = [
+            (
+                int(self.jq[i]),
+                bool(self.jcirc[i]),
+                int(self.sq[i]),
+                bool(self.scirc[i]),
+                bool(self.has_source[i]),
+                self.coef[i].tolist()[::-1],
+                self.d1[i].tolist()[::-1],
+                self.d2[i].tolist()[::-1],
+                float(self.jref[i]),
+                float(self.sref[i]),
+            )
+            for i in range(k)
+        ]
 
     @staticmethod
     def _coordinate(q: np.ndarray, idx: np.ndarray, circ: np.ndarray, any_circ: bool) -> np.ndarray:
@@ -145,13 +165,33 @@ class CouplingRows:
             out += C[:, i]
         return out
 
+    def _one(self, q: np.ndarray, what: int) -> np.ndarray:
+        """Residuals (0), slopes (1) or ``p''`` (2) at one configuration, with floats."""
+        out = np.empty(self.n)
+        qs = q.tolist()
+        for i, (jq, jc, sq, sc, src, c0, c1, c2, jref, sref) in enumerate(self._scalar):
+            u = 0.0
+            if src:
+                u = (math.atan2(qs[sq + 1], qs[sq]) if sc else qs[sq]) - sref
+            p = 0.0
+            for ck in (c0, c1, c2)[what]:
+                p = p * u + ck
+            if what:
+                out[i] = p
+                continue
+            r = (math.atan2(qs[jq + 1], qs[jq]) if jc else qs[jq]) - jref - p
+            out[i] = ((r + math.pi) % (2.0 * math.pi)) - math.pi if jc else r
+        return out
+
     def _u(self, q: np.ndarray) -> np.ndarray:
         """Source displacement ``x_s - x_s0`` (..., k) (0 for locked joints)."""
         u = self._coordinate(q, self.sq, self.scirc, self.scirc_any) - self.sref
-        return np.where(self.has_source, u, 0.0)
+        return u if self.all_sourced else np.where(self.has_source, u, 0.0)
 
     def residual(self, q: np.ndarray) -> np.ndarray:
         """Residuals ``r`` (..., k) [rad or m] of configurations ``q`` (..., nq)."""
+        if q.ndim == 1:
+            return self._one(q, 0)
         x = self._coordinate(q, self.jq, self.jcirc, self.jcirc_any)
         r = x - self.jref - self._horner(self.coef, self._u(q))
         if self.jcirc_any:
@@ -160,6 +200,8 @@ class CouplingRows:
 
     def slopes(self, q: np.ndarray) -> np.ndarray:
         """``p'(u)`` (..., k): the source's Jacobian entry is ``-p'(u)``."""
+        if q.ndim == 1:
+            return self._one(q, 1)
         return self._horner(self.d1, self._u(q))
 
     def jacobian(self, q: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
@@ -167,7 +209,8 @@ class CouplingRows:
 
         Args:
             q: Configuration (nq,).
-            out: Zeroed array (k, nv) to fill (default: a new one).
+            out: Array (k, nv) to fill, zero but for the entries of earlier calls (default: a
+                new one).
 
         Returns:
             The rows.
@@ -175,21 +218,20 @@ class CouplingRows:
         """
         if out is None:
             out = np.zeros((self.n, self.nv))
-        out[self.rows, self.jv] = 1.0
-        out[self.rows, self.sv] -= np.where(self.has_source, self.slopes(q), 0.0)
+        out[self.rows, self.sv] = -self.slopes(q)  # 0 for locked joints: p' = 0
+        out[self.rows, self.jv] = 1.0  # (after: a locked joint's dummy source index)
         return out
 
     def velocity_error(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """``J v`` (..., k) [rad/s or m/s] of states ``(q, v)`` with leading axes."""
-        s = np.where(self.has_source, self.slopes(q), 0.0)
-        return v[..., self.jv] - s * v[..., self.sv]
+        return v[..., self.jv] - self.slopes(q) * v[..., self.sv]
 
     def drift(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Acceleration drift ``gamma = -p''(u) v_s^2`` (..., k) [rad/s^2 or m/s^2]."""
         vs = v[..., self.sv]
-        return np.where(self.has_source, -self._horner(self.d2, self._u(q)) * vs * vs, 0.0)
+        d2 = self._one(q, 2) if q.ndim == 1 else self._horner(self.d2, self._u(q))
+        return -d2 * vs * vs  # p'' = 0 for locked joints
 
     def acceleration_error(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """``J a + gamma`` (..., k) [rad/s^2 or m/s^2]: the second derivative of ``r``."""
-        s = np.where(self.has_source, self.slopes(q), 0.0)
-        return a[..., self.jv] - s * a[..., self.sv] + self.drift(q, v)
+        return a[..., self.jv] - self.slopes(q) * a[..., self.sv] + self.drift(q, v)

@@ -40,12 +40,14 @@ of a hinge closure. On top of it:
   :class:`Actuation` selection.
 
 Joint couplings (:mod:`solvers.coupling`: gears, mimic joints), which ``pin.constraintDynamics``
-cannot take, switch the evaluation to pkdyn's own proximal KKT solve over the stacked Jacobian of
-:class:`~solvers.closure.ClosureSet` (rigid rows and coupling rows): ``[M, -J^T; J, mu I]
-[a; lambda+] = [tau - h; c + mu lambda]`` with ``c = -gamma - Kd J v - Kp r`` (the same
-Baumgarte gains, on the ClosureSet residual), iterated from ``lambda = 0`` as Pinocchio's proximal
-solver does (same ``prox_accuracy``, ``prox_mu``, ``prox_max_iter``); its multipliers are
-already in the ClosureSet convention. Without couplings nothing changes.
+cannot take (it accepts 3D / 6D rigid constraints only and rejects mimic joints): the rigid
+closures stay Pinocchio's, the couplings' forces ``C^T mu`` are added to the generalized forces.
+The constrained acceleration is affine in the force, ``a(tau + C^T mu) = a(tau) + G mu``; ``G``
+is read from ``k`` more calls with probe forces (``k`` couplings), ``mu`` solves the couplings'
+acceleration equations ``C a = -gamma_c - Kd C v - Kp r_c`` (the same Baumgarte gains, minimum
+norm when couplings are redundant with the closures) and a last call at ``tau + C^T mu`` gives
+the acceleration and the rigid forces; ``k + 2`` calls per evaluation (``aba`` when there are no
+rigid closures). Without couplings nothing changes: one call.
 
 Units: SI. Pinocchio's constraint forces (``data.lambda_c``, for ``J =
 pin.getConstraintsJacobian``) are, per constraint model, the force (3D) or wrench (6D) on
@@ -62,11 +64,12 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
-import scipy.linalg
 
+from solvers import numerics
 from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
 from solvers.coupling import JointCoupling
+from solvers.energy import KineticEnergy
 from solvers.integrators import COMMUTATIVE_JOINTS, DOPRI5, RK4, Tableau
 from solvers.passive import PassiveForces
 from solvers.projection import ProjectionError, project_state
@@ -175,6 +178,7 @@ class ForwardDynamics:
         self.model = model
         self.data = model.createData()
         self._kin = model.createData()  # kinematics for residuals, energies, projections
+        self.kinetic_energy = KineticEnergy(model)
         self.actuation = actuation if actuation is not None else Actuation([])
         if self.actuation.n and int(self.actuation.v_index.max()) >= model.nv:
             raise ValueError(f"actuated velocity index out of range (nv = {model.nv})")
@@ -199,9 +203,11 @@ class ForwardDynamics:
         self.closure_set = ClosureSet(model, list(self.constraint_models), couplings)
         self.nc = self.closure_set.nc
         self._coupled = bool(self.closure_set.couplings)
-        self._pd = (float(gains[0]), float(gains[1]))  # Baumgarte gains of the KKT solve
-        self._kkt_data = model.createData() if self._coupled else None
-        self._lambda = np.zeros(self.nc)  # multipliers of the last KKT solve
+        self._pd = (float(gains[0]), float(gains[1]))  # Baumgarte gains of the couplings
+        n_k = len(self.closure_set.couplings)
+        self._C = np.zeros((n_k, model.nv))  # the couplings' Jacobian rows
+        self._mu = np.zeros(n_k)  # the couplings' forces at the last evaluation
+        self._probe = 1.0  # probe force [N m or N]: of the order of the couplings' forces
         # conversion of Pinocchio's multipliers to the ClosureSet convention (see the module doc)
         pts = [k for k, cm in enumerate(self.constraint_models) if cm.type == _POINT]
         self._pt_rows = np.array([self.closure_set.offsets[k] for k in pts], dtype=int)
@@ -210,7 +216,7 @@ class ForwardDynamics:
             [self.constraint_models[k].joint1_placement.rotation for k in pts]
         ).reshape(-1, 3, 3)
         self.prox = pin.ProximalSettings(prox_accuracy, prox_accuracy, prox_mu, prox_max_iter)
-        if self.nc and not self._coupled:
+        if self.closure_set.n_rigid:
             pin.initConstraintDynamics(
                 model, self.data, self.constraint_models, self.constraint_datas
             )
@@ -257,7 +263,7 @@ class ForwardDynamics:
     def _accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Acceleration as a view on ``data.ddq`` (overwritten by the next call)."""
         if self._coupled:
-            return self._kkt(q, v, tau)
+            return self._coupled_accel(q, v, tau)
         if self.nc:
             return pin.constraintDynamics(
                 self.model,
@@ -271,40 +277,47 @@ class ForwardDynamics:
             )
         return pin.aba(self.model, self.data, q, v, tau)
 
-    def _kkt(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """Acceleration by the proximal KKT solve over all closure rows (module docstring).
+    def _rigid(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Acceleration under the rigid closures alone (a copy); forces in ``data.lambda_c``."""
+        if self.closure_set.n_rigid:
+            return np.array(
+                pin.constraintDynamics(
+                    self.model,
+                    self.data,
+                    q,
+                    v,
+                    tau,
+                    self.constraint_models,
+                    self.constraint_datas,
+                    self.prox,
+                )
+            )
+        return np.array(pin.aba(self.model, self.data, q, v, tau))
 
-        The multipliers (ClosureSet convention) are left in ``self._lambda``.
+    def _coupled_accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Acceleration with the couplings' forces added (see the module docstring).
+
+        The couplings' forces are left in ``self._mu``, the rigid ones in ``data.lambda_c``.
         """
-        model, data = self.model, self._kkt_data
-        assert data is not None
-        cs = self.closure_set
-        nv, nc = model.nv, self.nc
-        M = pin.crba(model, data, q)
-        h = pin.nonLinearEffects(model, data, q, v)
-        r, J = cs.residual_and_jacobian(data, q)
-        gamma = cs.drift(data, q, v)
+        rows = self.closure_set.coupling_rows
+        assert rows is not None
+        C = rows.jacobian(q, self._C)
         kp, kd = self._pd
-        c = -gamma - kd * (J @ v) - kp * r
-        mu = self.prox.mu
-        K = np.empty((nv + nc, nv + nc))
-        K[:nv, :nv] = np.triu(M) + np.triu(M, 1).T
-        K[:nv, nv:] = -J.T
-        K[nv:, :nv] = J
-        K[nv:, nv:] = mu * np.eye(nc)
-        lu = scipy.linalg.lu_factor(K, check_finite=False)
-        rhs = np.concatenate([tau - h, c])
-        lam = np.zeros(nc)
-        x = rhs
-        for _ in range(max(1, self.prox.max_iter)):
-            rhs[nv:] = c + mu * lam
-            x = scipy.linalg.lu_solve(lu, rhs, check_finite=False)
-            step = float(np.max(np.abs(x[nv:] - lam), initial=0.0))
-            lam = x[nv:]
-            if step <= self.prox.absolute_accuracy * max(1.0, float(np.max(np.abs(lam)))):
-                break
-        self._lambda = np.array(lam)
-        return x[:nv]
+        c = -rows.drift(q, v) - kd * C.dot(v) - kp * rows.residual(q)
+        a0 = self._rigid(q, v, tau)
+        s = self._probe
+        G = np.empty((C.shape[1], C.shape[0]))
+        for i in range(C.shape[0]):
+            G[:, i] = (self._rigid(q, v, tau + s * C[i]) - a0) / s
+        CG = C.dot(G)
+        b = c - C.dot(a0)
+        if CG.shape == (1, 1):  # one coupling: numerics.lstsq's rule, without its SVD
+            mu = b / CG[0] if CG[0, 0] != 0.0 else np.zeros(1)
+        else:
+            mu = numerics.lstsq(CG, b, 1e-12)
+        self._mu = mu
+        self._probe = max(float(np.abs(mu).max()), 1e-6)
+        return self._rigid(q, v, tau + C.T.dot(mu))
 
     def _generalized(
         self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
@@ -594,12 +607,17 @@ class ForwardDynamics:
             lambda_c: ``data.lambda_c`` (nc,) of ``pin.constraintDynamics``.
 
         Returns:
-            The multipliers (nc,) [N, N m], as returned by the inverse dynamics (with couplings:
-            those of the last KKT solve, already in that convention; ``lambda_c`` is not used).
+            The multipliers (nc,) [N, N m], as returned by the inverse dynamics (with couplings,
+            their forces at the last evaluation follow the rigid closures').
 
         """
         if self._coupled:
-            return self._lambda.copy()
+            n = self.closure_set.n_rigid
+            rigid = self._rigid_forces(kin, np.asarray(lambda_c, dtype=float)[:n])
+            return np.concatenate([rigid, self._mu])
+        return self._rigid_forces(kin, lambda_c)
+
+    def _rigid_forces(self, kin: pin.Data, lambda_c: np.ndarray) -> np.ndarray:
         out = -np.asarray(lambda_c, dtype=float)
         if self._pt_rows.size:
             R = np.array([kin.oMi[j].rotation for j in self._pt_joint1]) @ self._pt_rot1

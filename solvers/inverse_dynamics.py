@@ -67,6 +67,7 @@ from solvers import numerics
 from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
 from solvers.coupling import JointCoupling
+from solvers.energy import KineticEnergy
 from solvers.sampled import SampledKinematics
 
 _BATCH = 256  # samples per batch of :meth:`InverseDynamics.trajectory`
@@ -251,6 +252,7 @@ class InverseDynamics:
         self._perm = np.concatenate([self._vp, self._va])
         self._gmin = float(np.min(np.abs(actuation.gains)))
         self._sampled: SampledKinematics | None = None
+        self._kinetic = KineticEnergy(model)
 
     def passive_forces(self, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
         """Generalized forces (nv,) of everything but the actuators, closures and wrenches.
@@ -630,6 +632,7 @@ class InverseDynamics:
         J = np.empty((n, nc, model.nv))
         rnea, jac = pin.rnea, pin.computeJointJacobians
         kinetic, potential = pin.computeKineticEnergy, pin.computePotentialEnergy
+        missing = self._kinetic.missing
         jacobian_at, capture = self.closure_set.jacobian_at, kin.capture
         ke, pe = out.kinetic[s:], out.potential[s:]
         passive = self.passive_forces
@@ -638,7 +641,7 @@ class InverseDynamics:
             f = passive(q[i], v[i])
             if f is not None:
                 b[i] -= f
-            ke[i] = kinetic(model, kd)
+            ke[i] = kinetic(model, kd) + missing(v[i])
             jac(model, kd, q[i])  # placements and world Jacobian
             pe[i] = potential(model, kd)
             if nc:

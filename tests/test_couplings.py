@@ -31,17 +31,20 @@ import pytest
 import pkdyn
 from pkdyn.analysis.kinematics import kinematic_models
 from pkdyn.analysis.mobility import format_mobility, mobility
+from pkdyn.analysis.singularity import classify
 from pkdyn.analysis.statics import actuator_efforts, static_equilibrium
 from pkdyn.cli import main
+from pkdyn.dynamics.actuation import actuation
 from pkdyn.dynamics.forward import simulate
 from pkdyn.dynamics.inverse import inverse_dynamics
+from pkdyn.dynamics.sizing import size
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import DescriptionError, LoopClosureError
 from pkdyn.model.description import parse_description
 from pkdyn.model.formats.mjcf import actuator_efforts as mj_actuator_efforts
 from pkdyn.model.formats.mjcf import to_mjcf
 from pkdyn.model.formats.urdf_writer import UrdfWriter
-from solvers import ClosureSet, SampledKinematics
+from solvers import ClosureSet, InverseDynamics, SampledKinematics
 from solvers.coupling import JointCoupling
 from solvers.forward_dynamics import ForwardDynamics
 
@@ -244,6 +247,28 @@ def test_gear_dynamics_by_lagrange_and_energy(gears):
     assert float(np.ptp(passive.q[:, 0])) > 0.5
 
 
+def test_cam_dwell_is_a_singularity():
+    """A cam law with ``p' = 0`` (a dwell): serial when the cam is actuated (the follower stays
+    put while the actuator moves), parallel when the follower is (the cam turns freely)."""
+    serial = pkdyn.load_string(
+        gear_urdf('source="wheel1" polycoef="0 -0.5 0.5"'), "dwell"
+    )  # wheel2 = -0.5 u + 0.5 u^2, p'(0.5) = 0
+    assert classify(serial, pkdyn.forward_geometry(serial, [0.5]).q).kind == "serial"
+    assert classify(serial, pkdyn.forward_geometry(serial, [0.1]).q).kind == "regular"
+    parallel = pkdyn.load_string(
+        gear_urdf(coupling="", extra="").replace(
+            "</robot>",
+            '<pkdyn:coupling name="cam" joint="wheel1" source="wheel2" polycoef="0 -0.5 0.5"/>'
+            "</robot>",
+        ),
+        "dwell",
+    )
+    q = np.array([-0.125, 0.5])  # wheel1 = p(0.5)
+    assert pkdyn.closure_residual(parallel, q) < 1e-15
+    assert classify(parallel, q).kind == "parallel"
+    assert classify(parallel, np.array([-0.045, 0.1])).kind == "regular"
+
+
 def test_gear_inverse_dynamics_along_a_trajectory(gears):
     """Efforts along theta1(t) = 0.3 sin(2 t): the closed-form torque, sample by sample."""
     p, d1, d2 = law(gears)
@@ -263,6 +288,8 @@ def test_gear_inverse_dynamics_along_a_trajectory(gears):
         for x, y, z in zip(th, w, al, strict=True)
     ]
     np.testing.assert_allclose(res.tau[:, 0], expect, rtol=1e-9, atol=1e-12)
+    sized = size(gears, traj)  # sizing: the peak effort of the same samples
+    assert sized.actuators[0].peak == pytest.approx(float(np.max(np.abs(expect))), rel=1e-9)
 
 
 def test_rack_and_pinion():
@@ -597,3 +624,24 @@ def test_a_coupling_that_contradicts_a_closure_is_named(tmp_path, capsys):
     assert main(["info", str(path)]) == 1
     out = capsys.readouterr().err.strip().splitlines()
     assert len(out) == 1 and "coupling 'stop'" in out[0]
+
+
+def test_gripper_falls_keeping_energy_closures_and_coupling(gripper):
+    """Passive fall under gravity (springs, dampers, friction left out): the rigid closures by
+    Pinocchio's solver, the coupling by its forces; energy kept, every constraint held."""
+    name, robot, _, _ = gripper
+    out = simulate(robot, 0.1, 0.01, passive=False)
+    assert out.energy_drift() < 1e-9, name
+    assert float(np.max(out.closure_residual)) < 1e-10
+    assert float(np.ptp(out.q[:, 0])) > 1e-4  # it moves
+    # the recorded closure and coupling forces are the inverse dynamics' (another solver) at
+    # the recorded state, with no actuator effort
+    inv = InverseDynamics(
+        robot.model,
+        list(robot.constraint_models),
+        actuation(robot),
+        couplings=robot.closure_set.couplings,
+    )
+    res = inv.solve(out.q[-1], out.v[-1], out.a[-1])
+    assert abs(res.tau[0]) < 1e-12
+    np.testing.assert_allclose(res.constraint_forces, out.constraint_forces[-1], atol=1e-9)
