@@ -37,6 +37,16 @@ class KineticEnergy:
         self._idx = np.array(idx, dtype=int)
         self._half_armature = 0.5 * np.asarray(model.armature, dtype=float)[self._idx]
 
+    @property
+    def active(self) -> bool:
+        """Whether the model has armature Pinocchio's kinetic energy leaves out."""
+        return bool(self._idx.size)
+
+    def missing_batch(self, v: np.ndarray) -> np.ndarray:
+        """:meth:`missing` of velocities (N, nv) [J] (N,)."""
+        w = v[:, self._idx]
+        return (w * w).dot(self._half_armature)
+
     def missing(self, v: np.ndarray) -> float:
         """The armature energy Pinocchio leaves out at velocity ``v`` (nv,) [J]."""
         if not self._idx.size:

@@ -632,21 +632,23 @@ class InverseDynamics:
         J = np.empty((n, nc, model.nv))
         rnea, jac = pin.rnea, pin.computeJointJacobians
         kinetic, potential = pin.computeKineticEnergy, pin.computePotentialEnergy
-        missing = self._kinetic.missing
         jacobian_at, capture = self.closure_set.jacobian_at, kin.capture
         ke, pe = out.kinetic[s:], out.potential[s:]
         passive = self.passive_forces
         for i in range(n):
-            b[i] = rnea(model, kd, q[i], v[i], a[i])  # also the joint velocities, accelerations
-            f = passive(q[i], v[i])
+            qi, vi = q[i], v[i]
+            b[i] = rnea(model, kd, qi, vi, a[i])  # also the joint velocities, accelerations
+            f = passive(qi, vi)
             if f is not None:
                 b[i] -= f
-            ke[i] = kinetic(model, kd) + missing(v[i])
-            jac(model, kd, q[i])  # placements and world Jacobian
+            ke[i] = kinetic(model, kd)
+            jac(model, kd, qi)  # placements and world Jacobian
             pe[i] = potential(model, kd)
             if nc:
                 capture(i, kd)
-                J[i] = jacobian_at(kd, q[i])
+                J[i] = jacobian_at(kd, qi)
+        if self._kinetic.active:  # the armature Pinocchio's kinetic energy leaves out
+            ke[:n] += self._kinetic.missing_batch(v)
         return b, J
 
     def _first_inconsistent(

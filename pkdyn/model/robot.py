@@ -216,6 +216,8 @@ class Robot:
     def dof(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
         """Mobility at ``q`` (default ``q_home``): nv minus the rank of the closure Jacobian.
 
+        The closure Jacobian includes the joint couplings' rows.
+
         Args:
             q: Configuration (nq,).
             tol: Relative tolerance of the rank (:mod:`solvers.numerics` rule, scale 1: the
