@@ -138,7 +138,7 @@ class ForwardDynamics:
         max_speed: Largest joint speed [rad/s or m/s] accepted; beyond, the state is taken as
             blowing up and the run stops with :class:`IntegrationError`.
         couplings: Scalar joint couplings (:mod:`solvers.coupling`); with any, the
-            accelerations come from the KKT solve of the module docstring.
+            evaluation adds their forces to the closures' (see the module docstring).
 
     Raises:
         ValueError: Unknown integrator or inconsistent sizes.
