@@ -7,7 +7,7 @@ A coupling ties a driven joint coordinate ``x_j`` to a source coordinate ``x_s``
 or, without a source, holds ``x_j`` at ``x_j0 + c_0`` (a locked joint). ``x`` is the joint's
 coordinate [rad or m]: ``q[idx_q]`` for a revolute or prismatic joint, the angle
 ``atan2(q[idx_q + 1], q[idx_q])`` of an unbounded revolute joint (Pinocchio's cos/sin pair); for
-such a driven joint the residual is wrapped to ``(-pi, pi]`` (its angle is defined modulo one
+such a driven joint the residual is wrapped to ``[-pi, pi)`` (its angle is defined modulo one
 turn).
 
 Derivatives with respect to a velocity increment (``pin.integrate``), exact:

@@ -645,3 +645,26 @@ def test_gripper_falls_keeping_energy_closures_and_coupling(gripper):
     res = inv.solve(out.q[-1], out.v[-1], out.a[-1])
     assert abs(res.tau[0]) < 1e-12
     np.testing.assert_allclose(res.constraint_forces, out.constraint_forces[-1], atol=1e-9)
+
+
+def test_a_coupling_off_by_cad_rounding_is_absorbed(tmp_path):
+    """Crank and rocker both locked, 3e-5 rad apart from an assembly: within the assembly
+    tolerance, the description is taken as rounded (one warning) and assembles exactly."""
+    with pytest.warns(UserWarning):
+        four_bar = pkdyn.load(FOUR_BAR)
+    q = four_bar.q_home
+    crank, rocker = (
+        four_bar.model.joints[four_bar.model.getJointId(n)].idx_q
+        for n in ("crank_joint", "rocker_joint")
+    )
+    locks = (
+        f'<pkdyn:coupling name="a" joint="crank_joint" offset="{float(q[crank])!r}"/>'
+        f'<pkdyn:coupling name="b" joint="rocker_joint" offset="{float(q[rocker]) + 3e-5!r}"/></robot>'
+    )
+    path = tmp_path / "locked.urdf"
+    path.write_text(FOUR_BAR.read_text().replace("</robot>", locks))
+    with pytest.warns(UserWarning, match="cannot be closed exactly") as caught:
+        robot = pkdyn.load(path)
+    assert any("constant terms were adjusted" in str(w.message) for w in caught)
+    assert robot.dof() == 0
+    assert pkdyn.closure_residual(robot, robot.q_home) < 1e-9

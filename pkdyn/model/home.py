@@ -298,12 +298,16 @@ def find_home(
         new, moved = _moved_closures(robot, best.q, per, tol)
         couplings, adjusted = _moved_couplings(robot, best.residual, tol)
         what = "closure" if name not in adjusted else "coupling"
+        also = (
+            f" ({len(adjusted)} coupling(s) also off: their constant terms were adjusted)"
+            if adjusted
+            else ""
+        )
         warn(
-            f"{robot.source}: {len(moved) + len(adjusted)} closure(s) or coupling(s) cannot be "
-            f"closed exactly ({what} '{name}' is off by {per[name]:.2g} at best: the description "
-            f"is inconsistent within the assembly tolerance {tol:g}, as CAD rounding makes it); "
-            "their second frames were moved onto the first ones (the constant terms of the "
-            "couplings adjusted)"
+            f"{robot.source}: {len(moved)} closure(s) cannot be closed exactly ({what} "
+            f"'{name}' is off by {per[name]:.2g} at best: the description is inconsistent "
+            f"within the assembly tolerance {tol:g}, as CAD rounding makes it); their second "
+            f"frames were moved onto the first ones{also}"
         )
         return HomeResult(
             best.q, new, {**moved, **adjusted}, False, couplings if adjusted else None
