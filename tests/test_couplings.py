@@ -657,9 +657,10 @@ def test_a_coupling_off_by_cad_rounding_is_absorbed(tmp_path):
         four_bar.model.joints[four_bar.model.getJointId(n)].idx_q
         for n in ("crank_joint", "rocker_joint")
     )
+    a, b = float(q[crank]), float(q[rocker]) + 3e-5
     locks = (
-        f'<pkdyn:coupling name="a" joint="crank_joint" offset="{float(q[crank])!r}"/>'
-        f'<pkdyn:coupling name="b" joint="rocker_joint" offset="{float(q[rocker]) + 3e-5!r}"/></robot>'
+        f'<pkdyn:coupling name="a" joint="crank_joint" offset="{a!r}"/>'
+        f'<pkdyn:coupling name="b" joint="rocker_joint" offset="{b!r}"/></robot>'
     )
     path = tmp_path / "locked.urdf"
     path.write_text(FOUR_BAR.read_text().replace("</robot>", locks))
