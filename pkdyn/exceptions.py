@@ -129,15 +129,18 @@ class LoopClosureError(DescriptionError, AssemblyError):
 
     Attributes:
         source: File or robot the description came from.
-        culprit: ``closure '<name>'``.
-        closure: Name of the closure with the largest residual.
+        culprit: ``closure '<name>'`` (``coupling '<name>'`` when a joint coupling
+            contradicts the closures).
+        closure: Name of the closure (or coupling) with the largest residual.
         residual: Its residual at the best configuration found [m or rad].
 
     """
 
-    def __init__(self, source: str, closure: str, residual: float, message: str) -> None:
+    def __init__(
+        self, source: str, closure: str, residual: float, message: str, kind: str = "closure"
+    ) -> None:
         self.source = source
-        self.culprit = f"closure '{closure}'"
+        self.culprit = f"{kind} '{closure}'"
         self.closure = closure
         self.residual = residual
         PkdynError.__init__(self, message)

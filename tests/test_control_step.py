@@ -184,3 +184,28 @@ def test_energy_of_a_free_mechanism(robots):
             worst = max(worst, abs(energy(q, v) - e0))
         drifts.append(worst)
     assert drifts[0] <= 1.5 * drifts[1]
+
+
+def test_a_coupled_robot_steps_on_its_closures_and_couplings():
+    """The xArm7 gripper (two closures, one coupling): the control step keeps both."""
+    import warnings
+    from pathlib import Path
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # its tendon actuator is left out
+        robot = pkdyn.load(
+            Path(__file__).parent / "data/public/menagerie_xarm7_hand/hand.xml", geometry=False
+        )
+    fd = ForwardDynamics(
+        robot.model,
+        robot.constraint_models,
+        Actuation(robot.actuated_v),
+        couplings=robot.closure_set.couplings,
+        integrator="euler",
+    )
+    q, v = fd.project_state(robot.q_home, np.zeros(robot.nv))
+    q0 = q.copy()
+    for k in range(300):  # falling under gravity, 1 ms steps
+        q, v = fd.step(k * 1e-3, q, v, 1e-3)
+    assert robot.closure_set.couplings and not np.allclose(q, q0)
+    assert np.max(np.abs(robot.closure_set.residual(robot.model.createData(), q))) < 1e-9

@@ -372,8 +372,8 @@ def _load_text(tmp_path, text, name="bad.xml"):
     [
         (
             '<connect name="tips"',
-            '<joint joint1="l1" joint2="r1"/><connect name="tips"',
-            r"<joint> \(line 24\).*polynomial joint couplings",
+            '<joint joint1="l1" joint2="r1" polycoef="0 1 0 0 0 0"/><connect name="tips"',
+            r"<joint name='joint1'> \(line 24\).*polycoef='0 1 0 0 0 0': 6 coefficients",
         ),
         (
             '<joint name="l2" axis="0 1 0"/>',

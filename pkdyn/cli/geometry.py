@@ -25,6 +25,7 @@ from pkdyn.cli._common import (
     units,
 )
 from pkdyn.exceptions import OutputError, PkdynError
+from pkdyn.model.description import CouplingSpec
 from pkdyn.model.robot import PLATFORM_HINT
 
 __all__ = ["register"]
@@ -64,6 +65,17 @@ def _cmd_info(args: argparse.Namespace) -> None:
         "actuation": actuation,
         "loops": robot.loops,
         "closures": closures,
+        "couplings": [
+            {
+                "name": c.name,
+                "joint": c.joint,
+                "source": c.source,
+                "coefficients": list(c.coefficients),
+                "joint_ref": c.joint_ref,
+                "source_ref": c.source_ref,
+            }
+            for c in robot.couplings
+        ],
     }
     from pkdyn.model.passive import passive_summary
 
@@ -81,9 +93,19 @@ def _cmd_info(args: argparse.Namespace) -> None:
         f"loops={robot.loops}",
         "actuated: " + ", ".join(limits(a) for a in actuation),
         "closures: " + ", ".join(f"{c['name']} ({c['type']})" for c in closures),
-        "passive: " + (_passive_text(passive) or "none"),
     ]
+    if robot.couplings:
+        lines.append("couplings: " + ", ".join(_coupling_text(c) for c in robot.couplings))
+    lines.append("passive: " + (_passive_text(passive) or "none"))
     emit(args, payload, "\n".join(lines))
+
+
+def _coupling_text(c: CouplingSpec) -> str:
+    """``name (joint = p(source))`` of a coupling, coefficients constant term first."""
+    coef = " ".join(f"{v:.6g}" for v in c.coefficients)
+    if c.source is None:
+        return f"{c.name} ({c.joint} locked at {c.joint_ref + c.coefficients[0]:.6g})"
+    return f"{c.name} ({c.joint} from {c.source}, coefficients {coef})"
 
 
 def _values(x: list[float]) -> str:

@@ -116,6 +116,7 @@ def simulate(
         actuation(robot),
         passive=_passive(robot, passive, viscous, coulomb),
         integrator=integrator,
+        couplings=robot.closure_set.couplings,
     )
     if torque is not None and motor_torque is not None:
         raise InvalidInputError("motor_torque", "give either torque or motor_torque, not both")

@@ -180,6 +180,7 @@ def inverse_dynamics(
         lower=lower,
         upper=upper,
         weights=weights,
+        couplings=robot.closure_set.couplings,
     )
     elements = robot.passive if passive else None
     F_passive = None if elements is None else elements.forces(traj.q, traj.v)  # vectorised

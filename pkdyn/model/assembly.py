@@ -108,7 +108,7 @@ def _worst(robot: Robot, q: np.ndarray) -> tuple[str, float]:
     if robot.closure_set.nc == 0:
         return "-", 0.0
     per = robot.closure_set.split(robot.closure_set.residual(robot.data, q))
-    owners = dict(zip(robot.closure_set.names, robot.constraint_owner, strict=True))
+    owners = dict(zip(robot.closure_set.names, robot.row_owners, strict=True))
     name = max(per, key=lambda k: per[k])
     return owners[name], per[name]
 

@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import PkdynError
-from pkdyn.model.description import ActuatorSpec, ClosureSpec, Description
+from pkdyn.model.description import ActuatorSpec, ClosureSpec, CouplingSpec, Description
 from pkdyn.model.families import FAMILIES
 from solvers import ClosureSet, PassiveForces
 from solvers.numerics import rank
@@ -41,7 +41,8 @@ class Robot:
         description: The parsed extension elements.
         constraint_models: Pinocchio rigid constraint models (a ``hinge`` gives two).
         constraint_owner: Closure name of each constraint model.
-        closure_set: Residual / Jacobian evaluator of the closures.
+        closure_set: Residual / Jacobian evaluator of the closures, then the joint couplings
+            (one row each, see :mod:`solvers.coupling`).
         actuators: Actuators in actuator order.
         actuated_joints: Joint id of each actuator.
         actuated_q: Configuration index of each actuator (nq indexing).
@@ -125,6 +126,16 @@ class Robot:
     def closures(self) -> tuple[ClosureSpec, ...]:
         """Loop closures of the description."""
         return self.description.closures
+
+    @property
+    def couplings(self) -> tuple[CouplingSpec, ...]:
+        """Joint couplings of the description (gears, mimic joints, locked joints)."""
+        return self.description.couplings
+
+    @property
+    def row_owners(self) -> list[str]:
+        """Closure or coupling name of each entry of ``closure_set`` (its ``names`` order)."""
+        return list(self.constraint_owner) + [c.name for c in self.closure_set.couplings]
 
     @property
     def actuator_prismatic(self) -> np.ndarray:
@@ -233,6 +244,8 @@ class Robot:
     def mobility(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
         """Mobility at ``q`` (default ``q_home``): nv minus the rank of the closure Jacobian.
 
+        The closure Jacobian includes the joint couplings' rows.
+
         Args:
             q: Configuration (nq,).
             tol: Relative tolerance of the rank (:mod:`solvers.numerics` rule, scale 1: the
@@ -295,7 +308,9 @@ class Robot:
         return (
             f"<Robot {self.name!r} from {self.source!r}: nq={self.nq} nv={self.nv}, "
             f"{len(self.actuators)} actuators ({', '.join(a.name for a in self.actuators)}), "
-            f"{len(self.closures)} closures, {self.loops} loops, platform task: {task}>"
+            f"{len(self.closures)} closures, {self.loops} loops"
+            + (f", {len(self.couplings)} couplings" if self.couplings else "")
+            + f", platform task: {task}>"
         )
 
     def platform_placement(self, q: np.ndarray) -> pin.SE3:

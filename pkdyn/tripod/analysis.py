@@ -329,6 +329,7 @@ def _analyse_phase(
             for cm, o in zip(r.constraint_models, r.constraint_owner, strict=True)
             if o not in lock_names
         ],
+        r.closure_set.couplings,
     )
     data = r.model.createData()
     lo = r.model.lowerPositionLimit[r.actuated_q]
