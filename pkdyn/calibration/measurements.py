@@ -23,6 +23,7 @@ or non-numeric cells and NaN are refused with one line naming them.
 from __future__ import annotations
 
 import csv
+import io
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -39,6 +40,14 @@ __all__ = ["KINDS", "Measurements", "read_csv", "write_csv"]
 
 KINDS = ("pose", "position", "point", "plane")
 """Measurement kinds (module docstring)."""
+
+MAX_BYTES = 16_000_000
+"""Largest measurements file read [bytes] (about 150,000 rows of six numbers)."""
+MAX_ROWS = 20_000
+"""Most measurements accepted: each calibration iteration solves the forward geometry at every
+pose (about a millisecond each), and a few hundred well chosen poses identify any model."""
+MAX_GROUP = 2**31 - 1
+"""Largest group number of implicit measurements."""
 
 ROWS = {"pose": 6, "position": 3, "point": 3, "plane": 1}
 """Residual rows per measurement of each kind."""
@@ -68,7 +77,15 @@ class Measurements:
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
             raise InvalidInputError("kind", f"'{self.kind}': use one of {', '.join(KINDS)}")
-        self.qa = _finite("qa", np.atleast_2d(np.asarray(self.qa, dtype=float)))
+        from pkdyn.inputs import MAX_MAGNITUDE
+
+        self.qa = _finite("qa", _array("qa", self.qa, 2))
+        if len(self.qa) > MAX_ROWS:
+            raise InvalidInputError(
+                "qa",
+                f"{len(self.qa)} measurements: at most {MAX_ROWS} (each calibration iteration "
+                "solves the forward geometry at every pose)",
+            )
         n = len(self.qa)
         needs = {
             "pose": ("position", "rpy"),
@@ -82,13 +99,18 @@ class Measurements:
                 raise InvalidInputError(name, f"{self.kind} measurements need {name}")
             if value is None:
                 continue
-            arr = np.asarray(value, dtype=float)
+            arr = _array(name, value, 1 if name == "group" else 2)
             want = n if name == "group" else 3 * n
             if arr.size != want:
                 shape = f"{n} values" if name == "group" else f"{n} rows of 3 values"
                 raise InvalidInputError(name, f"expected {shape}, got {arr.shape}")
             arr = arr.reshape(-1) if name == "group" else arr.reshape(n, 3)
             arr = _finite(name, arr)
+            if np.any(np.abs(arr) > MAX_MAGNITUDE):
+                row = int(np.argwhere(np.abs(arr) > MAX_MAGNITUDE)[0][0])
+                raise InvalidInputError(
+                    name, f"row {row + 1} holds a value beyond any plausible one (at most 1e9)"
+                )
             if name == "group":
                 if np.any(arr != np.round(arr)):
                     raise InvalidInputError("group", "groups are whole numbers")
@@ -162,6 +184,20 @@ class Measurements:
         return cls(kind, qa, P, rpy)
 
 
+def _array(name: str, value: object, ndim: int) -> np.ndarray:
+    """``value`` as a float array of at most ``ndim`` dimensions (2: rows of values)."""
+    if isinstance(value, str | bytes | dict) or np.iscomplexobj(value):
+        raise InvalidInputError(name, f"expected an array of numbers, got {value!r:.60}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(name, f"expected an array of numbers, got {value!r:.60}") from None
+    arr = np.atleast_2d(arr) if ndim == 2 else arr
+    if arr.ndim > ndim:
+        raise InvalidInputError(name, f"expected {ndim} dimensions at most, got shape {arr.shape}")
+    return arr
+
+
 def _finite(name: str, arr: np.ndarray) -> np.ndarray:
     bad = ~np.isfinite(arr)
     if bad.any():
@@ -198,13 +234,20 @@ def read_csv(path: str | os.PathLike[str], robot: Robot, kind: str | None = None
             unreadable file (one line naming what is wrong).
 
     """
-    p = Path(path)
-    try:
-        with p.open(newline="") as fh:
-            rows = list(csv.reader(fh))
-    except (OSError, UnicodeDecodeError) as err:
-        raise InvalidInputError(str(path), f"cannot read the measurements ({err})") from None
+    from pkdyn.files import read_text
+
+    text = read_text(
+        path, MAX_BYTES, lambda msg: InvalidInputError(str(path), f"measurements file {msg}")
+    )
+    rows = list(csv.reader(io.StringIO(text.lstrip("\ufeff"), newline="")))
     rows = [r for r in rows if any(c.strip() for c in r)]
+    if len(rows) - 1 > MAX_ROWS:
+        raise InvalidInputError(
+            str(path),
+            f"{len(rows) - 1} measurements: at most {MAX_ROWS} (each calibration iteration "
+            "solves the forward geometry at every pose; a few hundred well chosen poses "
+            "suffice, see pkdyn.calibration.selection)",
+        )
     if not rows:
         raise InvalidInputError(str(path), "is empty: expected a header and one row per pose")
     header = [c.strip() for c in rows[0]]

@@ -420,6 +420,22 @@ def _inverse(A: np.ndarray) -> np.ndarray:
         return numerics.lstsq(A, np.eye(A.shape[0]), numerics.machine_rtol(A))
 
 
+def _check_far(robot: Robot, m: Measurements, rows: np.ndarray, positions: np.ndarray) -> None:
+    """Refuse a measured position more than 100 robot sizes from the nominal model's."""
+    if m.position is None:
+        return
+    gap = np.linalg.norm(m.position - positions, axis=1)
+    far = np.flatnonzero(gap > 100.0 * robot.length_scale)
+    if far.size:
+        i = int(far[0])
+        raise InvalidInputError(
+            "measurements",
+            f"row {int(rows[i]) + 1}: the measured position lies {gap[i]:.3g} m from the nominal "
+            f"{robot.name}'s, more than 100 times its size ({robot.length_scale:.3g} m): a unit "
+            "or frame error (positions in metres, in the robot's world frame)",
+        )
+
+
 def _nominal_configurations(robot: Robot, m: Measurements, rows: np.ndarray) -> list[np.ndarray]:
     qs = []
     for i, reading in zip(rows, m.qa, strict=True):
@@ -473,15 +489,26 @@ def _structural_rank(
 
 
 def _sigma(robot: Robot, noise: float | Sequence[float] | None) -> tuple[tuple[float, float], bool]:
+    from pkdyn.inputs import vector
+
     if noise is None:
         s = 1e-5
         return (s, s / robot.length_scale), False
-    arr = np.atleast_1d(np.asarray(noise, dtype=float))
+    try:
+        arr = vector("noise", noise, (1, 2))
+    except InvalidInputError:
+        arr = np.array([np.nan])
     if arr.size not in (1, 2) or not np.all(np.isfinite(arr)) or np.any(arr <= 0.0):
         raise InvalidInputError(
             "noise",
-            f"{noise!r}: give the position noise [m] and optionally the orientation "
+            f"{noise!r:.60}: give the position noise [m] and optionally the orientation "
             "noise [rad], > 0",
+        )
+    if arr[0] > robot.length_scale or (arr.size == 2 and arr[1] > math.pi):
+        raise InvalidInputError(
+            "noise",
+            f"{noise!r:.60}: a measurement noise larger than the robot ({robot.length_scale:.3g} "
+            "m) or than pi rad measures nothing; give the standard deviation [m] [rad]",
         )
     s_pos = float(arr[0])
     s_rot = float(arr[1]) if arr.size == 2 else s_pos / robot.length_scale
@@ -534,8 +561,29 @@ def calibrate(
             poses are needed).
 
     """
+    from pkdyn.inputs import count, flag, instance, positive, real, vector
+    from pkdyn.inputs import seed as _seed
+
+    instance("robot", robot, Robot, "a Robot (pkdyn.load)")
+    instance(
+        "measurements", measurements, Measurements, "Measurements (pkdyn.calibration.read_csv)"
+    )
+    if validation is not None:
+        instance("validation", validation, Measurements, "Measurements or None")
     if robust not in ROBUST:
         raise InvalidInputError("robust", f"'{robust}': use {', '.join(ROBUST)}")
+    holdout = real("holdout", holdout)
+    rtol = positive("rtol", rtol, bound=0.5)
+    gains = flag("gains", gains)
+    max_iter = count("max_iter", max_iter, 1, 10_000)
+    seed = _seed("seed", seed)
+    if prior is not None:
+        pr = vector("prior", prior, 3, "m, rad, -", bound=1e3)
+        if np.any(pr <= 0.0):
+            raise InvalidInputError("prior", f"{tuple(pr)}: give three standard deviations > 0")
+        prior = (float(pr[0]), float(pr[1]), float(pr[2]))
+    if not isinstance(model, str | ParameterModel):
+        instance("model", model, (str, ParameterModel), "a ParameterModel or its kind's name")
     if len(measurements.qa[0]) != len(robot.actuators):
         raise InvalidInputError(
             "measurements",
@@ -564,6 +612,7 @@ def calibrate(
     P0, qs0, poses0 = prob.solve(zero)
     prob.qs = qs0
     positions0 = np.array([M.translation for M in poses0])
+    _check_far(robot, cal, cal_rows, positions0)
     y0 = prob.init_nuisance(positions0)
     J_all = prob.jacobian(P0, qs0, poses0, zero, y0, np.arange(pm.size))
     gaps = prob.last_gap
@@ -579,6 +628,15 @@ def calibrate(
         prior_all = np.concatenate([_prior(pm, prior)[keep], _nuisance_prior(robot, prob)])
     ident = identifiability(W0, names, len(cal), scale_all, rtol, prior_all)
     n_values = len(cal) * cal.rows
+    if ident.rank < min(n_values, keep.size + prob.n_nuis):
+        r_struct = _structural_rank(robot, pm, cal, qs0, keep) + prob.n_nuis
+        if ident.rank < r_struct:
+            warnings.warn(
+                f"these {len(cal)} poses identify {ident.rank} of the {r_struct} parameters that "
+                f"poses spread over the workspace would ({pm.kind} model): the others are held "
+                "at nominal; measure more varied poses (pkdyn.calibration.selection)",
+                stacklevel=2,
+            )
     if ident.rank >= n_values or n_values <= keep.size + prob.n_nuis:
         r_struct = _structural_rank(robot, pm, cal, qs0, keep) + prob.n_nuis
         if n_values <= r_struct:

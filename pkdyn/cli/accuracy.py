@@ -42,7 +42,11 @@ def _cmd_accuracy(args: argparse.Namespace) -> None:
     )
     from pkdyn.precision.parameters import parameter_model
 
+    from pkdyn.inputs import count, seed
+
     output_path("--plot", args.plot, figure=True)
+    count("--top", args.top, 0)
+    seed("--seed", args.seed)
     if args.plot and args.map is None:
         raise InvalidInputError("--plot", "plots a map: give --map xy|xz|yz")
     if not 1 <= len(args.tolerance) <= 3 or min(args.tolerance) < 0:

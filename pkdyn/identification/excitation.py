@@ -118,10 +118,15 @@ def excitation_trajectory(
 
     from pkdyn.identification.identify import check_identifiable, structural_base
 
-    if not period > 0.0 or harmonics < 2 or samples < 4:
-        raise InvalidInputError(
-            "excitation", "period must be > 0 s, harmonics >= 2 and samples >= 4"
-        )
+    from pkdyn import inputs
+
+    period = inputs.positive("period", period, "s", bound=1e6)
+    harmonics = inputs.count("harmonics", harmonics, 2, 50)
+    samples = inputs.count("samples", samples, 4, 10_000)
+    max_iter = inputs.count("max_iter", max_iter, 1, 10_000)
+    seed = inputs.seed("seed", seed)
+    if amplitude is not None:
+        amplitude = inputs.positive("amplitude", amplitude, "rad or m", bound=1e3)
     check_identifiable(robot)
     n = len(robot.actuators)
     ps = parameter_set(robot, parameters)

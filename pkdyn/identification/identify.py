@@ -257,6 +257,10 @@ def identify(
 
     """
     start = time.perf_counter()
+    from pkdyn.inputs import instance
+
+    instance("robot", robot, Robot, "a Robot (pkdyn.load)")
+    instance("data", data, Measurements, "Measurements (pkdyn.identification.read_measurements)")
     check_identifiable(robot)
     n_a = len(robot.actuators)
     if data.tau is None:
