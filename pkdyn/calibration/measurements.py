@@ -27,7 +27,7 @@ import io
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -184,7 +184,7 @@ class Measurements:
         return cls(kind, qa, P, rpy)
 
 
-def _array(name: str, value: object, ndim: int) -> np.ndarray:
+def _array(name: str, value: Any, ndim: int) -> np.ndarray:
     """``value`` as a float array of at most ``ndim`` dimensions (2: rows of values)."""
     if isinstance(value, str | bytes | dict) or np.iscomplexobj(value):
         raise InvalidInputError(name, f"expected an array of numbers, got {value!r:.60}")

@@ -204,7 +204,9 @@ def select_poses(
     try:
         blocks = np.asarray(blocks, dtype=float)
     except (TypeError, ValueError):
-        raise InvalidInputError("blocks", "expected an array (M, rows, n_par) (design_matrix)") from None
+        raise InvalidInputError(
+            "blocks", "expected an array (M, rows, n_par) (design_matrix)"
+        ) from None
     if blocks.ndim != 3 or not np.all(np.isfinite(blocks)):
         raise InvalidInputError(
             "blocks", f"expected finite (M, rows, n_par) Jacobian blocks, got shape {blocks.shape}"

@@ -33,6 +33,7 @@ def _tolerances(args: argparse.Namespace, robot: Any, model: Any) -> np.ndarray:
 def _cmd_accuracy(args: argparse.Namespace) -> None:
     import pkdyn
     from pkdyn.exceptions import InvalidInputError
+    from pkdyn.inputs import count, seed
     from pkdyn.precision.accuracy import (
         accuracy_map,
         actuator_errors,
@@ -41,8 +42,6 @@ def _cmd_accuracy(args: argparse.Namespace) -> None:
         slice_grid,
     )
     from pkdyn.precision.parameters import parameter_model
-
-    from pkdyn.inputs import count, seed
 
     output_path("--plot", args.plot, figure=True)
     count("--top", args.top, 0)

@@ -559,7 +559,9 @@ def slice_grid(
     try:
         extent = positive("extent", extent, "m", bound=1e3)
     except InvalidInputError:
-        raise InvalidInputError("extent", f"{extent}: give a half-width > 0 m (at most 1e3)") from None
+        raise InvalidInputError(
+            "extent", f"{extent}: give a half-width > 0 m (at most 1e3)"
+        ) from None
     i, j = ("xyz".index(axes[0]), "xyz".index(axes[1]))
     u = np.linspace(-extent, extent, int(samples))
     U, V = np.meshgrid(u, u, indexing="ij")

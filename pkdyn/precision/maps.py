@@ -85,7 +85,9 @@ def _poses(P: np.ndarray, R: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]
     try:
         P = np.atleast_2d(np.asarray(P, dtype=float))
     except (TypeError, ValueError):
-        raise InvalidInputError("P", f"expected finite positions (N, 3) [m], got {P!r:.60}") from None
+        raise InvalidInputError(
+            "P", f"expected finite positions (N, 3) [m], got {P!r:.60}"
+        ) from None
     if P.ndim != 2 or P.shape[1] != 3 or not np.all(np.isfinite(P)):
         raise InvalidInputError("P", f"expected finite positions (N, 3) [m], got {P.shape}")
     if P.shape[0] > MAX_POSES:

@@ -199,7 +199,9 @@ def _wrench(robot: Robot, wrench: Sequence[float] | np.ndarray | None) -> np.nda
     try:
         arr = np.atleast_1d(np.asarray(wrench, dtype=float)).reshape(-1)
     except (TypeError, ValueError):
-        raise InvalidInputError("wrench", f"expected numbers [N, N m], got {wrench!r:.60}") from None
+        raise InvalidInputError(
+            "wrench", f"expected numbers [N, N m], got {wrench!r:.60}"
+        ) from None
     if arr.size not in (6, rows.size):
         raise InvalidInputError(
             "wrench",
