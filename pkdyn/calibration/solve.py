@@ -420,6 +420,11 @@ def _inverse(A: np.ndarray) -> np.ndarray:
         return numerics.lstsq(A, np.eye(A.shape[0]), numerics.machine_rtol(A))
 
 
+def _scaled_readings(m: Measurements, gain: np.ndarray) -> Measurements:
+    """The measurements with their readings multiplied by the encoder gains (joint coords)."""
+    return Measurements(m.kind, m.qa * gain, m.position, m.rpy, m.group)
+
+
 def _check_far(robot: Robot, m: Measurements, rows: np.ndarray, positions: np.ndarray) -> None:
     """Refuse a measured position more than 100 robot sizes from the nominal model's."""
     if m.position is None:
@@ -592,6 +597,13 @@ def calibrate(
         )
     pm = parameter_model(robot, model, gains) if isinstance(model, str) else model
     sigma, known = _sigma(robot, noise)
+    # readings -> the nominal robot's joint coordinates (its <pkdyn:encoder gain>, 1 unless it
+    # was calibrated before); the relative gains estimated here multiply them
+    base_gain = np.array([float(a.encoder_gain) for a in robot.actuators])
+    if np.any(base_gain != 1.0):
+        measurements = _scaled_readings(measurements, base_gain)
+        if validation is not None:
+            validation = _scaled_readings(validation, base_gain)
     if validation is not None:
         if validation.kind != measurements.kind:
             raise InvalidInputError("validation", "must be measurements of the same kind")
