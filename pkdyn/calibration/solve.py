@@ -420,6 +420,15 @@ def _inverse(A: np.ndarray) -> np.ndarray:
         return numerics.lstsq(A, np.eye(A.shape[0]), numerics.machine_rtol(A))
 
 
+def _rank(J: np.ndarray) -> int:
+    """Rank of a Jacobian with its columns normalised (:data:`RTOL`)."""
+    if J.size == 0:
+        return 0
+    W = J / np.maximum(np.linalg.norm(J, axis=0), 1e-300)
+    s = np.linalg.svd(W, compute_uv=False)
+    return int(np.sum(s > RTOL * s[0])) if s.size and s[0] > 0 else 0
+
+
 def _scaled_readings(m: Measurements, gain: np.ndarray) -> Measurements:
     """The measurements with their readings multiplied by the encoder gains (joint coords)."""
     return Measurements(m.kind, m.qa * gain, m.position, m.rpy, m.group)
@@ -640,11 +649,12 @@ def calibrate(
         prior_all = np.concatenate([_prior(pm, prior)[keep], _nuisance_prior(robot, prob)])
     ident = identifiability(W0, names, len(cal), scale_all, rtol, prior_all)
     n_values = len(cal) * cal.rows
-    if ident.rank < min(n_values, keep.size + prob.n_nuis):
+    own = _rank(J0)  # what these poses can tell apart, noise aside
+    if own < min(n_values, keep.size + prob.n_nuis):
         r_struct = _structural_rank(robot, pm, cal, qs0, keep) + prob.n_nuis
-        if ident.rank < r_struct:
+        if own < r_struct:
             warnings.warn(
-                f"these {len(cal)} poses identify {ident.rank} of the {r_struct} parameters that "
+                f"these {len(cal)} poses identify {own} of the {r_struct} parameters that "
                 f"poses spread over the workspace would ({pm.kind} model): the others are held "
                 "at nominal; measure more varied poses (pkdyn.calibration.selection)",
                 stacklevel=2,
