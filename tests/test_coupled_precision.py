@@ -40,7 +40,9 @@ IN_PLANE = (".tx", ".ty", ".rz", ".offset")
 def geared_xml() -> str:
     five = pkdyn.load("five_bar", geometry=False)
     xml = family_xml(five)
-    xml = re.sub(r'<transmission name="proximal2_transmission">.*?</transmission>', "", xml, flags=re.S)
+    xml = re.sub(
+        r'<transmission name="proximal2_transmission">.*?</transmission>', "", xml, flags=re.S
+    )
     q1, q2 = float(five.q_home[0]), float(five.q_home[2])
     gear = (
         f'<pkdyn:coupling name="gear" joint="proximal2" source="proximal1" multiplier="-0.7" '
@@ -145,7 +147,16 @@ def test_stiffness_and_frequency_of_the_geared_five_bar(geared):
 def test_compliant_links_of_a_coupled_robot_are_refused_in_one_line(geared, capsys):
     robot, _, path = geared
     qa = repr(float(robot.q_home[robot.actuated_q][0]))
-    argv = ["stiffness", str(path), "--qa", qa, "--actuator-stiffness", "1e3", "--material", "steel"]
+    argv = [
+        "stiffness",
+        str(path),
+        "--qa",
+        qa,
+        "--actuator-stiffness",
+        "1e3",
+        "--material",
+        "steel",
+    ]
     code = main(argv)
     err = capsys.readouterr().err.strip()
     assert code == 1 and err.startswith("pkdyn: error:") and "\n" not in err, err

@@ -233,9 +233,12 @@ def configuration(args: argparse.Namespace, geometry: bool = False) -> tuple[Any
 
 
 def qa_argument(parser: Any, required: bool = False) -> None:
-    """Add ``--qa QA...`` (actuated joint coordinates, in actuator order; ``--q`` is an alias)
-    and ``--readings R...`` (the actuators' encoder readings, ``<pkdyn:encoder gain>`` applied:
-    joint coordinate = gain x reading), one of them required when ``required``."""
+    """Add ``--qa QA...`` (joint coordinates) and ``--readings R...`` (encoder readings).
+
+    ``--qa`` (alias ``--q``): the actuated joint coordinates, in actuator order. ``--readings``:
+    the actuators' encoder readings, the description's ``<pkdyn:encoder gain>`` applied (joint
+    coordinate = gain x reading). One of them is required when ``required``.
+    """
     where = parser.add_mutually_exclusive_group(required=True) if required else parser
     where.add_argument(
         "--qa",
@@ -262,8 +265,10 @@ def gains_of(robot: Any) -> np.ndarray:
 
 
 def _resolve_readings(args: argparse.Namespace, robot: Any) -> None:
-    """Turn ``--readings`` into ``args.qa`` (joint coordinates); note ``--qa`` on a robot with
-    encoder gains, where readings and coordinates differ."""
+    """Turn ``--readings`` into ``args.qa`` (joint coordinates).
+
+    ``--qa`` on a robot with encoder gains, where readings and coordinates differ, prints a note.
+    """
     readings = getattr(args, "readings", None)
     gains = gains_of(robot)
     if readings is not None:
