@@ -302,14 +302,14 @@ def read_csv(path: str | os.PathLike[str], robot: Robot, kind: str | None = None
         raise InvalidInputError("kind", f"'{kind}': use one of {', '.join(KINDS)}")
     if kind == "joints":
         known = measurable_joints(robot)
-        for j in sensors:
-            if j not in known:
+        for name in sensors:
+            if name not in known:
                 from pkdyn.exceptions import close_match
 
                 raise InvalidInputError(
                     str(path),
-                    f"column q_{j}: '{j}' is not a passive 1-DoF joint of {robot.name}"
-                    f"{close_match(j, known)} (measurable: {', '.join(known) or 'none'})",
+                    f"column q_{name}: '{name}' is not a passive 1-DoF joint of {robot.name}"
+                    f"{close_match(name, known)} (measurable: {', '.join(known) or 'none'})",
                 )
         if not sensors:
             raise InvalidInputError(
