@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+import numpy as np
+
 from pkdyn.cli._common import emit, load, output_path, robot_command
 
 __all__ = ["register"]
@@ -51,6 +53,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> None:
     if unid:
         names = ", ".join(u["name"] for u in unid[:8]) + (" ..." if len(unid) > 8 else "")
         lines.append(f"not identifiable (held at nominal): {names}")
+    if len(res.outliers):
+        rows = np.asarray(res.outliers) + 2  # CSV lines (the header is line 1)
+        shown = ", ".join(str(int(r)) for r in rows[:8]) + (" ..." if len(rows) > 8 else "")
+        lines.append(f"outliers (down-weighted by the robust weights): CSV lines {shown}")
     if res.not_assembling:
         lines.append(f"not assembling (held at nominal): {len(res.not_assembling)} parameters")
     idx = res.identifiability.indices
