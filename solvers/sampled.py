@@ -45,6 +45,15 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
+def _relative_motion(d: np.ndarray, oMc2: np.ndarray) -> np.ndarray:
+    """Spatial motions (n, 6), world axes at the origin, in the contact frames ``oMc2`` (n, 4, 4)."""
+    R2, p2 = oMc2[:, :3, :3], oMc2[:, :3, 3]
+    lin = d[:, :3] + _cross(d[:, 3:], p2)  # at the contact point
+    return np.concatenate(
+        [np.einsum("nji,nj->ni", R2, lin), np.einsum("nji,nj->ni", R2, d[:, 3:])], axis=1
+    )
+
+
 class SampledKinematics:
     """Buffers of per-sample kinematics and their vectorised evaluation (see the module doc).
 
@@ -93,6 +102,7 @@ class SampledKinematics:
             [[items[k][2].translation for k in pts], [items[k][4].translation for k in pts]]
         ).reshape(2, len(pts), 3)
         self._pt_rows = (self._pt_offsets[:, None] + np.arange(3)).reshape(-1)
+        self._pt_cols = [self._support_columns(self._pt_slot[s]) for s in (0, 1)]
         self._welds = [
             (
                 int(closure_set.offsets[k]),
@@ -108,6 +118,16 @@ class SampledKinematics:
             int(f): (slot.get(int(model.frames[f].parentJoint), 0), model.frames[f].placement)
             for f in frames
         }
+
+    def _support_columns(self, slots: np.ndarray) -> np.ndarray:
+        """Velocity columns (K, c) supporting each slot's body, padded with ``nv`` (a zero
+        column)."""
+        cols = [np.flatnonzero(self.masks[s]) for s in slots]
+        c = max((x.size for x in cols), default=0)
+        out = np.full((len(cols), max(c, 1)), self.model.nv, dtype=int)
+        for k, x in enumerate(cols):
+            out[k, : x.size] = x
+        return out
 
     def capture(self, k: int, data: pin.Data) -> None:
         """Copy sample ``k``'s kinematics from ``data``.
@@ -158,33 +178,148 @@ class SampledKinematics:
         A = self._accelerations(n)
         H = self.H[:n]
         if self._pt_offsets.size:
-            side = []
-            for s in (0, 1):
-                slot = self._pt_slot[s]
-                Hs = H[:, slot]  # (n, K, 4, 4)
-                p = np.einsum("nkij,kj->nki", Hs[..., :3, :3], self._pt_local[s]) + Hs[..., :3, 3]
-                Vs, As = V[:, slot], A[:, slot]
-                w = Vs[..., 3:]
-                vp = Vs[..., :3] + _cross(w, p)
-                ap = As[..., :3] + _cross(As[..., 3:], p) + _cross(w, vp)
-                side.append((p, vp, ap))
+            side = self._point_sides(H, V, A)
             rows = self._pt_rows
             r[:, rows] = (side[0][0] - side[1][0]).reshape(n, -1)
             ev[:, rows] = (side[0][1] - side[1][1]).reshape(n, -1)
             ea[:, rows] = (side[0][2] - side[1][2]).reshape(n, -1)
         for o, s1, M1, s2, M2 in self._welds:
-            oMc1 = H[:, s1] @ M1
             oMc2 = H[:, s2] @ M2
-            R2, p2 = oMc2[:, :3, :3], oMc2[:, :3, 3]
             for err, X in ((ev, V), (ea, A)):
-                d = X[:, s2] - X[:, s1]  # relative motion, world axes at the origin
-                lin = d[:, :3] + _cross(d[:, 3:], p2)  # ... at the contact point of joint2
-                err[:, o : o + 3] = np.einsum("nji,nj->ni", R2, lin)
-                err[:, o + 3 : o + 6] = np.einsum("nji,nj->ni", R2, d[:, 3:])
-            c1Mc2 = np.linalg.solve(oMc1, oMc2)
+                err[:, o : o + 6] = _relative_motion(X[:, s2] - X[:, s1], oMc2)
+            c1Mc2 = np.linalg.solve(H[:, s1] @ M1, oMc2)
             for k in range(n):
                 r[k, o : o + 6] = pin.log6(c1Mc2[k]).vector
         return r, ev, ea
+
+    def _point_sides(
+        self, H: np.ndarray, V: np.ndarray, A: np.ndarray
+    ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per side of the point closures: contact points, their velocities and classical
+        accelerations, each (n, K, 3), world axes."""
+        side = []
+        for s in (0, 1):
+            slot = self._pt_slot[s]
+            Hs = H[:, slot]  # (n, K, 4, 4)
+            p = np.einsum("nkij,kj->nki", Hs[..., :3, :3], self._pt_local[s]) + Hs[..., :3, 3]
+            Vs, As = V[:, slot], A[:, slot]
+            w = Vs[..., 3:]
+            vp = Vs[..., :3] + _cross(w, p)
+            ap = As[..., :3] + _cross(As[..., 3:], p) + _cross(w, vp)
+            side.append((p, vp, ap))
+        return side
+
+    def acceleration_errors(self, n: int, v: np.ndarray) -> np.ndarray:
+        """The acceleration errors of :meth:`closure_errors` alone (no residual: no ``log6``).
+
+        Args:
+            n: Number of captured samples (placements, joint Jacobians and accelerations).
+            v: Their velocities (n, nv).
+
+        Returns:
+            Acceleration errors (n, nc) (``J a + gamma``; with accelerations captured at
+            ``a = 0``: the drift ``gamma``).
+
+        """
+        ea = np.empty((n, self.closure_set.nc))
+        if not ea.shape[1]:
+            return ea
+        V = self._velocities(n, v)
+        A = self._accelerations(n)
+        H = self.H[:n]
+        if self._pt_offsets.size:
+            side = self._point_sides(H, V, A)
+            ea[:, self._pt_rows] = (side[0][2] - side[1][2]).reshape(n, -1)
+        for o, s1, _, s2, M2 in self._welds:
+            ea[:, o : o + 6] = _relative_motion(A[:, s2] - A[:, s1], H[:, s2] @ M2)
+        return ea
+
+    def capture_placements(self, k: int, data: pin.Data) -> None:
+        """Copy sample ``k``'s placements and joint Jacobians (for :meth:`residuals_and_jacobians`).
+
+        Args:
+            k: Buffer row.
+            data: Data after ``pin.computeJointJacobians(model, data, q)`` at the sample.
+
+        """
+        if self._captured:
+            oMi = data.oMi.tolist()
+            self.H[k, 1:] = [oMi[j].homogeneous for j in self._captured]
+        self.Jw[k] = data.J
+
+    def capture_accelerations(self, k: int, data: pin.Data) -> None:
+        """Copy sample ``k``'s joint accelerations (the placements captured already).
+
+        Args:
+            k: Buffer row.
+            data: Data after ``pin.rnea(model, data, q, v, a)`` at the sample.
+
+        """
+        if self._captured:
+            acc = data.a_gf.tolist()
+            self.acc[k, 1:] = [acc[j].vector for j in self._captured]
+
+    def residuals_and_jacobians(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Closure residuals and Jacobians of captured samples (:class:`ClosureSet` conventions).
+
+        Point rows: ``J = J_lin(p1) - J_lin(p2)``, the linear velocity of a point ``p`` of body
+        ``j`` being ``(J_w,lin - [p]x J_w,ang) S_j v``. Weld rows:
+        ``J = Jlog6(c1Mc2) X(oMc2)^-1 J_w (S_2 - S_1)`` (the relative twist in the contact frame
+        of ``joint2``; ``log6`` and ``Jlog6`` by Pinocchio, sample by sample).
+
+        Args:
+            rows: Buffer rows (m,) of the samples (placements captured by
+                :meth:`capture_placements` or :meth:`capture`).
+
+        Returns:
+            Residuals (m, nc) [m, rad] and Jacobians (m, nc, nv).
+
+        """
+        m, nc, nv = rows.size, self.closure_set.nc, self.model.nv
+        r = np.empty((m, nc))
+        J = np.empty((m, nc, nv))
+        if not nc:
+            return r, J
+        H, Jw = self.H[rows], self.Jw[rows]
+        if self._pt_offsets.size:
+            Jz = np.zeros((m, 6, nv + 1))  # the padding column nv stays zero
+            Jz[:, :, :nv] = Jw
+            Jx = np.zeros((m, nc, nv + 1))
+            R3 = self._pt_rows.reshape(-1, 3, 1)
+            for s in (0, 1):
+                Hs = H[:, self._pt_slot[s]]
+                p = (Hs[..., :3, :3] @ self._pt_local[s][..., None])[..., 0] + Hs[..., :3, 3]
+                r[:, self._pt_rows] = (
+                    p.reshape(m, -1) if s == 0 else r[:, self._pt_rows] - p.reshape(m, -1)
+                )
+                cols = self._pt_cols[s]
+                G = Jz[:, :, cols]  # (m, 6, K, c): the support columns only
+                lin, ang = G[:, :3], G[:, 3:]
+                px, py, pz = (p[..., i, None] for i in range(3))
+                Jp = np.empty((m, cols.shape[0], 3, cols.shape[1]))
+                Jp[:, :, 0] = lin[:, 0] - (py * ang[:, 2] - pz * ang[:, 1])
+                Jp[:, :, 1] = lin[:, 1] - (pz * ang[:, 0] - px * ang[:, 2])
+                Jp[:, :, 2] = lin[:, 2] - (px * ang[:, 1] - py * ang[:, 0])
+                if s == 0:
+                    Jx[:, R3, cols[:, None, :]] = Jp
+                else:
+                    Jx[:, R3, cols[:, None, :]] -= Jp
+            J[:, self._pt_rows] = Jx[:, self._pt_rows, :nv]
+        for o, s1, M1, s2, M2 in self._welds:
+            oMc1 = H[:, s1] @ M1
+            oMc2 = H[:, s2] @ M2
+            R2, p2 = oMc2[:, :3, :3], oMc2[:, :3, 3]
+            D = Jw * (self.masks[s2] - self.masks[s1])  # relative motion, world axes at origin
+            D_lin = D[:, :3] - np.cross(p2[:, :, None], D[:, 3:], axis=1)  # ... at c2's origin
+            twist = np.concatenate(
+                [np.swapaxes(R2, 1, 2) @ D_lin, np.swapaxes(R2, 1, 2) @ D[:, 3:]], axis=1
+            )
+            c1Mc2 = np.linalg.solve(oMc1, oMc2)
+            for k in range(m):
+                M = pin.SE3(c1Mc2[k])
+                r[k, o : o + 6] = pin.log6(M).vector
+                J[k, o : o + 6] = pin.Jlog6(M) @ twist[k]
+        return r, J
 
     def frame_force(self, n: int, frame: int, W: np.ndarray) -> np.ndarray:
         """Generalized forces (n, nv) of wrenches applied at a frame's origin.
