@@ -118,6 +118,14 @@ class SampledKinematics:
             int(f): (slot.get(int(model.frames[f].parentJoint), 0), model.frames[f].placement)
             for f in frames
         }
+        # placements read from one array (capture_configuration): a spherical leaf joint at
+        # the origin of each captured joint, whose world Jacobian columns are [[o]x R; R]
+        aux = pin.Model(model)
+        for j in self._captured:
+            aux.addJoint(j, pin.JointModelSpherical(), pin.SE3.Identity(), f"_pkdyn_aux_{j}")
+        self._aux_model, self._aux_data = aux, aux.createData()
+        self._aux_q = pin.neutral(aux)
+        self.Jaux = np.empty((self.size, 6, 3 * len(self._captured)))
 
     def _support_columns(self, slots: np.ndarray) -> np.ndarray:
         """Velocity columns (K, c) supporting each slot's body, padded with ``nv`` (a zero
@@ -234,18 +242,45 @@ class SampledKinematics:
             ea[:, o : o + 6] = _relative_motion(A[:, s2] - A[:, s1], H[:, s2] @ M2)
         return ea
 
-    def capture_placements(self, k: int, data: pin.Data) -> None:
-        """Copy sample ``k``'s placements and joint Jacobians (for :meth:`residuals_and_jacobians`).
+    def capture_configuration(self, k: int, q: np.ndarray) -> None:
+        """Joint Jacobians and placements of sample ``k`` (one Pinocchio call, one array read).
+
+        The placements of the captured joints are decoded, for many samples at once, by
+        :meth:`update_placements` (:meth:`residuals_and_jacobians` does it).
 
         Args:
             k: Buffer row.
-            data: Data after ``pin.computeJointJacobians(model, data, q)`` at the sample.
+            q: Configuration (nq,).
 
         """
-        if self._captured:
-            oMi = data.oMi.tolist()
-            self.H[k, 1:] = [oMi[j].homogeneous for j in self._captured]
-        self.Jw[k] = data.J
+        qx = self._aux_q
+        qx[: self.model.nq] = q
+        pin.computeJointJacobians(self._aux_model, self._aux_data, qx)
+        Jx = self._aux_data.J
+        nv = self.model.nv
+        self.Jw[k] = Jx[:, :nv]
+        self.Jaux[k] = Jx[:, nv:]
+
+    def update_placements(self, rows: np.ndarray) -> None:
+        """Placements of rows captured by :meth:`capture_configuration`, from their Jacobians.
+
+        Args:
+            rows: Buffer rows (m,).
+
+        """
+        nj = len(self._captured)
+        if not nj:
+            return
+        X = self.Jaux[rows].reshape(rows.size, 6, nj, 3).transpose(0, 2, 1, 3)  # (m, nj, 6, 3)
+        R = X[:, :, 3:]
+        S = X[:, :, :3] @ np.swapaxes(R, 2, 3)  # [o]x
+        H = self.H[rows]
+        H[:, 1:, :3, :3] = R
+        H[:, 1:, 0, 3] = 0.5 * (S[..., 2, 1] - S[..., 1, 2])
+        H[:, 1:, 1, 3] = 0.5 * (S[..., 0, 2] - S[..., 2, 0])
+        H[:, 1:, 2, 3] = 0.5 * (S[..., 1, 0] - S[..., 0, 1])
+        H[:, 1:, 3] = (0.0, 0.0, 0.0, 1.0)
+        self.H[rows] = H
 
     def capture_accelerations(self, k: int, data: pin.Data) -> None:
         """Copy sample ``k``'s joint accelerations (the placements captured already).
@@ -268,8 +303,7 @@ class SampledKinematics:
         of ``joint2``; ``log6`` and ``Jlog6`` by Pinocchio, sample by sample).
 
         Args:
-            rows: Buffer rows (m,) of the samples (placements captured by
-                :meth:`capture_placements` or :meth:`capture`).
+            rows: Buffer rows (m,) of the samples (captured by :meth:`capture_configuration`).
 
         Returns:
             Residuals (m, nc) [m, rad] and Jacobians (m, nc, nv).
@@ -280,6 +314,7 @@ class SampledKinematics:
         J = np.empty((m, nc, nv))
         if not nc:
             return r, J
+        self.update_placements(rows)
         H, Jw = self.H[rows], self.Jw[rows]
         if self._pt_offsets.size:
             Jz = np.zeros((m, 6, nv + 1))  # the padding column nv stays zero

@@ -31,6 +31,7 @@ from pkdyn.identification.parameters import ParameterSet, parameter_set
 from pkdyn.identification.physical import consistent_parameters
 from pkdyn.identification.regressor import ClosedLoopRegressor
 from pkdyn.identification.result import IdentificationResult
+from pkdyn.identification.threads import single_blas_thread
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
 from solvers import numerics
@@ -256,6 +257,18 @@ def identify(
         TrajectoryError: A sample that cannot be assembled.
 
     """
+    with single_blas_thread():
+        return _identify(robot, data, parameters, cutoff, progress, workers)
+
+
+def _identify(
+    robot: Robot,
+    data: Measurements,
+    parameters: Sequence[str] | str | None,
+    cutoff: float | None,
+    progress: bool | None,
+    workers: int | None,
+) -> IdentificationResult:
     start = time.perf_counter()
     check_identifiable(robot)
     n_a = len(robot.actuators)

@@ -256,10 +256,6 @@ class MotionSampler:
             ]
         return V
 
-    def _capture(self, k: int, q: np.ndarray) -> None:
-        pin.computeJointJacobians(self.model, self.data, q)
-        self.kin.capture_placements(k, self.data)
-
     def newton_batch(
         self, Q: np.ndarray, rows: np.ndarray, J: np.ndarray
     ) -> np.ndarray:
@@ -284,7 +280,7 @@ class MotionSampler:
             if not active.size:
                 break
             for i in active:
-                self._capture(int(i), Q[i])
+                self.kin.capture_configuration(int(i), Q[i])
             r, Jb = self.kin.residuals_and_jacobians(active)
             err = np.abs(r).max(axis=1, initial=0.0)
             ok = err <= ASSEMBLY_TOL
@@ -356,11 +352,11 @@ class MotionSampler:
             if out is None:
                 for k in range(prev + 1, a + 1):
                     Q[k], J[k] = self._solve_one(k, qa[k], float(t[k]), first)  # type: ignore[misc]
-                    self.kin.capture_placements(k, self.data)
+                    self.kin.capture_configuration(k, Q[k])
                     solved[k] = True
             else:
                 Q[a], J[a] = out
-                self.kin.capture_placements(a, self.data)
+                self.kin.capture_configuration(a, Q[a])
                 solved[a] = True
             prev = a
         if S > 1:
@@ -410,7 +406,7 @@ class MotionSampler:
             before = Q[k - 1].copy() if k else self._last[1]  # type: ignore[index]
             self._history, self._fresh = [(first + k - 1, before)], False
             Q[k], J[k] = self._solve_one(k, qa[k], float(t[k]), first)  # type: ignore[misc]
-            self.kin.capture_placements(k, self.data)
+            self.kin.capture_configuration(k, Q[k])
         self._history, self._fresh = history, fresh
 
     def batch(
@@ -455,8 +451,8 @@ class MotionSampler:
         """Velocities and accelerations of assembled samples (module doc).
 
         Args:
-            Q: Configurations (n, nq), n <= :data:`BATCH`, whose placements and joint
-                Jacobians are in the rows ``0..n-1`` of the buffers of ``self.kin``.
+            Q: Configurations (n, nq), n <= :data:`BATCH`, captured in the rows ``0..n-1`` of
+                ``self.kin`` (:meth:`solvers.SampledKinematics.capture_configuration`).
             J: Their closure Jacobians (n, nc, nv).
             qd: Actuator rates (n, n_a) [rad/s or m/s].
             qdd: Actuator accelerations (n, n_a) [rad/s^2 or m/s^2].
@@ -483,6 +479,7 @@ class MotionSampler:
             err /= np.maximum(1.0, np.abs(V).max(axis=1))
             zero = np.zeros(model.nv)
             kin = self.kin
+            kin.update_placements(np.arange(n))
             for i in range(n):
                 pin.rnea(model, data, Q[i], V[i], zero)
                 kin.capture_accelerations(i, data)
