@@ -54,6 +54,77 @@ def _relative_motion(d: np.ndarray, oMc2: np.ndarray) -> np.ndarray:
     )
 
 
+_CONSTANT_SUBSPACE = {
+    "JointModelRX",
+    "JointModelRY",
+    "JointModelRZ",
+    "JointModelRevoluteUnaligned",
+    "JointModelRUBX",
+    "JointModelRUBY",
+    "JointModelRUBZ",
+    "JointModelRevoluteUnboundedUnaligned",
+    "JointModelPX",
+    "JointModelPY",
+    "JointModelPZ",
+    "JointModelPrismaticUnaligned",
+    "JointModelSpherical",
+    "JointModelFreeFlyer",
+    "JointModelTranslation",
+    "JointModelPlanar",
+}
+"""Joints whose motion subspace is constant in their own frame: the time variation of their
+world Jacobian columns is ``V x column`` (``V``: their body's spatial velocity), as Pinocchio's
+``computeJointJacobiansTimeVariation`` computes it."""
+
+_DRIFT_CHECK_TOL = 1e-10
+
+
+def _drift_model(model: pin.Model) -> pin.Model | None:
+    """The tree with every universal joint split into two revolute joints (an intermediate
+    massless body), so that every joint's motion subspace is constant in its frame: same
+    coordinates, same placements and world Jacobian, and the time variation of the world
+    Jacobian gives the bodies' accelerations exactly (Pinocchio leaves out the universal
+    joint's bias acceleration there). ``None`` when another joint type is present or the check
+    against Pinocchio's forward kinematics at a random state fails."""
+    out = pin.Model()
+    out.gravity = model.gravity
+    ids = {0: 0}
+    for j in range(1, model.njoints):
+        jm = model.joints[j]
+        kind = jm.shortname()
+        parent, placement, name = (
+            ids[int(model.parents[j])],
+            model.jointPlacements[j],
+            model.names[j],
+        )
+        if kind == "JointModelUniversal":
+            u = jm.extract()
+            mid = out.addJoint(
+                parent, pin.JointModelRevoluteUnaligned(u.axis1), placement, f"{name}_axis1"
+            )
+            ids[j] = out.addJoint(
+                mid, pin.JointModelRevoluteUnaligned(u.axis2), pin.SE3.Identity(), name
+            )
+        elif kind in _CONSTANT_SUBSPACE:
+            ids[j] = out.addJoint(parent, jm, placement, name)
+        else:
+            return None
+    if out.nq != model.nq or out.nv != model.nv:
+        return None
+    rng = np.random.default_rng(0)
+    q = pin.integrate(model, pin.neutral(model), rng.standard_normal(model.nv))
+    v = rng.standard_normal(model.nv)
+    data, data2 = model.createData(), out.createData()
+    pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
+    pin.computeJointJacobiansTimeVariation(out, data2, q, v)
+    for j in range(1, model.njoints):
+        A = data2.dJ @ (ClosureSet._support_mask(model, j) * v)
+        ref = data.oMi[j].act(data.a[j]).vector
+        if np.abs(A - ref).max() > _DRIFT_CHECK_TOL * max(1.0, np.abs(ref).max()):
+            return None
+    return out
+
+
 class SampledKinematics:
     """Buffers of per-sample kinematics and their vectorised evaluation (see the module doc).
 
@@ -102,7 +173,7 @@ class SampledKinematics:
             [[items[k][2].translation for k in pts], [items[k][4].translation for k in pts]]
         ).reshape(2, len(pts), 3)
         self._pt_rows = (self._pt_offsets[:, None] + np.arange(3)).reshape(-1)
-        self._pt_cols = [self._support_columns(self._pt_slot[s]) for s in (0, 1)]
+        self._point_columns(nv)
         self._welds = [
             (
                 int(closure_set.offsets[k]),
@@ -126,16 +197,34 @@ class SampledKinematics:
         self._aux_model, self._aux_data = aux, aux.createData()
         self._aux_q = pin.neutral(aux)
         self.Jaux = np.empty((self.size, 6, 3 * len(self._captured)))
+        # accelerations at zero joint acceleration (the closures' drift): from the time
+        # variation of the world Jacobian where exact (capture_drift), else from rnea
+        self._drift_model = _drift_model(model) if self._captured else None
+        if self._drift_model is not None:
+            self._drift_data = self._drift_model.createData()
+            self.dJw = np.empty((self.size, 6, nv))
+        self._data = model.createData()
+        self._drift_from_dJ = False
 
-    def _support_columns(self, slots: np.ndarray) -> np.ndarray:
-        """Velocity columns (K, c) supporting each slot's body, padded with ``nv`` (a zero
-        column)."""
-        cols = [np.flatnonzero(self.masks[s]) for s in slots]
-        c = max((x.size for x in cols), default=0)
-        out = np.full((len(cols), max(c, 1)), self.model.nv, dtype=int)
-        for k, x in enumerate(cols):
-            out[k, : x.size] = x
-        return out
+    def _point_columns(self, nv: int) -> None:
+        """Per point closure, the coordinates supporting either side (padded with coordinate 0,
+        weight 0), each side's weights on them (1: supports that side) and where each entry of
+        the closure's 3 rows lands in a flattened ``(nc, nv + 1)`` Jacobian (padding: column
+        ``nv``, dropped)."""
+        K = self._pt_offsets.size
+        sides = [self.masks[self._pt_slot[s]] for s in (0, 1)]  # (K, nv) each
+        union = [np.flatnonzero(sides[0][k] + sides[1][k]) for k in range(K)]
+        cu = max((u.size for u in union), default=0) or 1
+        self._pt_cols = np.zeros((K, cu), dtype=int)
+        self._pt_w = np.zeros((2, K, cu))
+        target = np.full((K, 3, cu), nv, dtype=int)
+        for k, u in enumerate(union):
+            self._pt_cols[k, : u.size] = u
+            for s in (0, 1):
+                self._pt_w[s, k, : u.size] = sides[s][k, u]
+            target[k, :, : u.size] = u
+        rows = self._pt_offsets[:, None, None] + np.arange(3)[None, :, None]
+        self._pt_flat = (rows * (nv + 1) + target).reshape(-1)
 
     def capture(self, k: int, data: pin.Data) -> None:
         """Copy sample ``k``'s kinematics from ``data``.
@@ -152,6 +241,7 @@ class SampledKinematics:
         self.H[k, 1:] = [oMi[j].homogeneous for j in captured]
         self.acc[k, 1:] = [acc[j].vector for j in captured]
         self.Jw[k] = data.J
+        self._drift_from_dJ = False
 
     def _velocities(self, n: int, v: np.ndarray) -> np.ndarray:
         """World spatial velocities (n, nj, 6) of the captured bodies at the origin."""
@@ -233,7 +323,10 @@ class SampledKinematics:
         if not ea.shape[1]:
             return ea
         V = self._velocities(n, v)
-        A = self._accelerations(n)
+        if self._drift_from_dJ:  # world accelerations d/dt(J_w) S_j v (no gravity offset)
+            A = np.swapaxes((self.dJw[:n] * v[:, None, :]) @ self.masks.T, 1, 2)
+        else:
+            A = self._accelerations(n)
         H = self.H[:n]
         if self._pt_offsets.size:
             side = self._point_sides(H, V, A)
@@ -282,17 +375,35 @@ class SampledKinematics:
         H[:, 1:, 3] = (0.0, 0.0, 0.0, 1.0)
         self.H[rows] = H
 
-    def capture_accelerations(self, k: int, data: pin.Data) -> None:
-        """Copy sample ``k``'s joint accelerations (the placements captured already).
+    def capture_drift(self, k: int, q: np.ndarray, v: np.ndarray) -> None:
+        """Sample ``k``'s body accelerations at zero joint acceleration (placements captured
+        already by :meth:`capture_configuration` and decoded by :meth:`update_placements`), for
+        :meth:`acceleration_errors`: one Pinocchio call and one array read.
 
         Args:
             k: Buffer row.
-            data: Data after ``pin.rnea(model, data, q, v, a)`` at the sample.
+            q: Configuration (nq,).
+            v: Velocity (nv,).
 
         """
-        if self._captured:
-            acc = data.a_gf.tolist()
+        if self._drift_model is not None:
+            pin.computeJointJacobiansTimeVariation(self._drift_model, self._drift_data, q, v)
+            self.dJw[k] = self._drift_data.dJ
+            self._drift_from_dJ = True
+        elif self._captured:
+            pin.rnea(self.model, self._data, q, v, np.zeros(self.model.nv))
+            acc = self._data.a_gf.tolist()
             self.acc[k, 1:] = [acc[j].vector for j in self._captured]
+            self._drift_from_dJ = False
+
+    def _point_positions(self, H: np.ndarray, side: int) -> np.ndarray:
+        """World positions (m, K, 3) of one side's contact points, from placements (m, nj, 4, 4)."""
+        Hs = H[:, self._pt_slot[side]]
+        loc = self._pt_local[side]
+        R = Hs[..., :3, :3]
+        return (
+            R[..., 0] * loc[:, 0, None] + R[..., 1] * loc[:, 1, None] + R[..., 2] * loc[:, 2, None]
+        ) + Hs[..., :3, 3]
 
     def residuals_and_jacobians(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Closure residuals and Jacobians of captured samples (:class:`ClosureSet` conventions).
@@ -317,29 +428,24 @@ class SampledKinematics:
         self.update_placements(rows)
         H, Jw = self.H[rows], self.Jw[rows]
         if self._pt_offsets.size:
-            Jz = np.zeros((m, 6, nv + 1))  # the padding column nv stays zero
-            Jz[:, :, :nv] = Jw
-            Jx = np.zeros((m, nc, nv + 1))
-            R3 = self._pt_rows.reshape(-1, 3, 1)
-            for s in (0, 1):
-                Hs = H[:, self._pt_slot[s]]
-                p = (Hs[..., :3, :3] @ self._pt_local[s][..., None])[..., 0] + Hs[..., :3, 3]
-                r[:, self._pt_rows] = (
-                    p.reshape(m, -1) if s == 0 else r[:, self._pt_rows] - p.reshape(m, -1)
-                )
-                cols = self._pt_cols[s]
-                G = Jz[:, :, cols]  # (m, 6, K, c): the support columns only
-                lin, ang = G[:, :3], G[:, 3:]
-                px, py, pz = (p[..., i, None] for i in range(3))
-                Jp = np.empty((m, cols.shape[0], 3, cols.shape[1]))
-                Jp[:, :, 0] = lin[:, 0] - (py * ang[:, 2] - pz * ang[:, 1])
-                Jp[:, :, 1] = lin[:, 1] - (pz * ang[:, 0] - px * ang[:, 2])
-                Jp[:, :, 2] = lin[:, 2] - (px * ang[:, 1] - py * ang[:, 0])
-                if s == 0:
-                    Jx[:, R3, cols[:, None, :]] = Jp
-                else:
-                    Jx[:, R3, cols[:, None, :]] -= Jp
-            J[:, self._pt_rows] = Jx[:, self._pt_rows, :nv]
+            # linear velocity of a point p of a body per coordinate: J_lin - [p]x J_ang on the
+            # coordinates supporting the body; J = that of side 1 - that of side 2, on the
+            # coordinates supporting either side (cross product linear in p)
+            p = [self._point_positions(H, s) for s in (0, 1)]  # (m, K, 3) each
+            r[:, self._pt_rows] = (p[0] - p[1]).reshape(m, -1)
+            w0, w1 = self._pt_w
+            G = Jw[:, :, self._pt_cols]  # (m, 6, K, c)
+            P = w0[..., None] * p[0][:, :, None] - w1[..., None] * p[1][:, :, None]
+            px, py, pz = P[..., 0], P[..., 1], P[..., 2]  # (m, K, c)
+            ax, ay, az = G[:, 3], G[:, 4], G[:, 5]
+            wd = w0 - w1
+            Jp = np.empty((m, self._pt_offsets.size, 3, G.shape[3]))
+            Jp[:, :, 0] = wd * G[:, 0] - (py * az - pz * ay)
+            Jp[:, :, 1] = wd * G[:, 1] - (pz * ax - px * az)
+            Jp[:, :, 2] = wd * G[:, 2] - (px * ay - py * ax)
+            Jx = np.zeros((m, nc * (nv + 1)))
+            Jx[:, self._pt_flat] = Jp.reshape(m, -1)
+            J[:, self._pt_rows] = Jx.reshape(m, nc, nv + 1)[:, self._pt_rows, :nv]
         for o, s1, M1, s2, M2 in self._welds:
             oMc1 = H[:, s1] @ M1
             oMc2 = H[:, s2] @ M2
