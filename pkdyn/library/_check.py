@@ -8,6 +8,7 @@ from collections.abc import Callable
 import numpy as np
 
 from pkdyn.exceptions import ParameterError
+from pkdyn.inputs import MAX_MAGNITUDE
 
 __all__ = ["in_range", "middle_of_reach", "positive"]
 
@@ -17,6 +18,10 @@ def positive(family: str, **values: float) -> None:
     for k, v in values.items():
         if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
             raise ParameterError(family, k, f"must be a positive finite number, got {v!r}")
+        if v > MAX_MAGNITUDE:
+            raise ParameterError(
+                family, k, f"{v:g} is beyond any plausible value (at most {MAX_MAGNITUDE:g})"
+            )
 
 
 def in_range(family: str, name: str, value: float, lo: float, hi: float) -> None:
