@@ -199,6 +199,7 @@ class SampledKinematics:
         self._aux_model, self._aux_data = aux, aux.createData()
         self._aux_q = pin.neutral(aux)
         self.Jaux = np.empty((self.size, 6, 3 * len(self._captured)))
+        self.Q = np.empty((self.size, model.nq))  # for the coupling rows
         # accelerations at zero joint acceleration (the closures' drift): from the time
         # variation of the world Jacobian where exact (capture_drift), else from rnea
         self._drift_model = _drift_model(model) if self._captured else None
@@ -333,20 +334,27 @@ class SampledKinematics:
         return side
 
     def acceleration_errors(self, n: int, v: np.ndarray) -> np.ndarray:
-        """The acceleration errors of :meth:`closure_errors` alone (no residual: no ``log6``).
+        """The closures' acceleration drift ``gamma`` of samples captured at zero acceleration.
 
         Args:
-            n: Number of captured samples (placements, joint Jacobians and accelerations).
+            n: Number of samples captured by :meth:`capture_configuration` (placements decoded
+                by :meth:`update_placements`) and :meth:`capture_drift`, rows ``0..n-1``.
             v: Their velocities (n, nv).
 
         Returns:
-            Acceleration errors (n, nc) (``J a + gamma``; with accelerations captured at
-            ``a = 0``: the drift ``gamma``).
+            ``gamma`` (n, nc): the acceleration errors of :meth:`closure_errors` at ``a = 0``
+            (no residual: no ``log6``); coupling rows ``-p'' v_s^2``.
 
         """
         ea = np.empty((n, self.closure_set.nc))
         if not ea.shape[1]:
             return ea
+        coupled = self.closure_set.coupling_rows
+        if coupled is not None:
+            o = self.closure_set.n_rigid
+            ea[:, o:] = coupled.drift(self.Q[:n], v[:n])
+            if o == 0:
+                return ea
         V = self._velocities(n, v)
         if self._drift_from_dJ:  # world accelerations d/dt(J_w) S_j v (no gravity offset)
             A = np.swapaxes((self.dJw[:n] * v[:, None, :]) @ self.masks.T, 1, 2)
@@ -371,6 +379,9 @@ class SampledKinematics:
             q: Configuration (nq,).
 
         """
+        self.Q[k] = q
+        if not self._captured:
+            return
         qx = self._aux_q
         qx[: self.model.nq] = q
         pin.computeJointJacobians(self._aux_model, self._aux_data, qx)
@@ -450,6 +461,17 @@ class SampledKinematics:
         J = np.empty((m, nc, nv))
         if not nc:
             return r, J
+        coupled = self.closure_set.coupling_rows
+        if coupled is not None:
+            o = self.closure_set.n_rigid
+            Q = self.Q[rows]
+            r[:, o:] = coupled.residual(Q)
+            Jc = J[:, o:]
+            Jc[:] = 0.0
+            Jc[:, coupled.rows, coupled.sv] = -coupled.slopes(Q)  # (then the driven joint)
+            Jc[:, coupled.rows, coupled.jv] = 1.0
+            if o == 0:
+                return r, J
         self.update_placements(rows)
         H, Jw = self.H[rows], self.Jw[rows]
         if self._pt_offsets.size:

@@ -217,7 +217,14 @@ def prior_weights(effect: np.ndarray, nominal: np.ndarray, base: BaseParameters)
         unseen[names.index(n)] = True
     seen = ~unseen & (effect > 0.0) & (nominal != 0.0)
     typical = float(np.median(effect[seen] * np.abs(nominal[seen]))) if seen.any() else 1.0
-    scale = np.where(nominal != 0.0, np.abs(nominal), np.abs(nominal).max(initial=1.0) or 1.0)
+    # the size of a parameter: its nominal value, at least a hundredth of the largest of its
+    # kind (a first moment or product of inertia of 1e-19 from rounding is zero, not a scale
+    # that would freeze it)
+    kind = np.array([n.rsplit(".", 1)[-1] for n in base.names])
+    mag = np.abs(nominal)
+    floor = np.array([mag[kind == k].max() for k in kind])
+    floor = np.where(floor > 0.0, 1e-2 * floor, mag.max(initial=1.0) or 1.0)
+    scale = np.maximum(mag, floor)
     out[unseen] = typical / scale[unseen]
     tiny = out <= 0.0
     out[tiny] = 1e-12 * max(float(out.max(initial=0.0)), 1.0)
