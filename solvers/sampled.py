@@ -48,7 +48,7 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _relative_motion(d: np.ndarray, oMc2: np.ndarray) -> np.ndarray:
-    """Spatial motions (n, 6), world axes at the origin, in the contact frames ``oMc2`` (n, 4, 4)."""
+    """Spatial motions (n, 6), world axes at the origin, in contact frames ``oMc2`` (n, 4, 4)."""
     R2, p2 = oMc2[:, :3, :3], oMc2[:, :3, 3]
     lin = d[:, :3] + _cross(d[:, 3:], p2)  # at the contact point
     return np.concatenate(
@@ -82,12 +82,14 @@ _DRIFT_CHECK_TOL = 1e-10
 
 
 def _drift_model(model: pin.Model) -> pin.Model | None:
-    """The tree with every universal joint split into two revolute joints (an intermediate
-    massless body), so that every joint's motion subspace is constant in its frame: same
-    coordinates, same placements and world Jacobian, and the time variation of the world
-    Jacobian gives the bodies' accelerations exactly (Pinocchio leaves out the universal
-    joint's bias acceleration there). ``None`` when another joint type is present or the check
-    against Pinocchio's forward kinematics at a random state fails."""
+    """The tree with every universal joint split into two revolute joints, or ``None``.
+
+    An intermediate massless body between the two revolute joints makes every joint's motion
+    subspace constant in its frame: same coordinates, same placements and world Jacobian, and
+    the time variation of the world Jacobian gives the bodies' accelerations exactly (Pinocchio
+    leaves out the universal joint's bias acceleration there). ``None`` when another joint type
+    is present or the check against Pinocchio's forward kinematics at a random state fails.
+    """
     out = pin.Model()
     out.gravity = model.gravity
     ids = {0: 0}
@@ -210,10 +212,13 @@ class SampledKinematics:
         self._drift_from_dJ = False
 
     def _point_columns(self, nv: int) -> None:
-        """Per point closure, the coordinates supporting either side (padded with coordinate 0,
+        """Index tables of the point closures' Jacobian rows.
+
+        Per point closure: the coordinates supporting either side (padded with coordinate 0,
         weight 0), each side's weights on them (1: supports that side) and where each entry of
         the closure's 3 rows lands in a flattened ``(nc, nv + 1)`` Jacobian (padding: column
-        ``nv``, dropped)."""
+        ``nv``, dropped).
+        """
         K = self._pt_offsets.size
         sides = [self.masks[self._pt_slot[s]] for s in (0, 1)]  # (K, nv) each
         union = [np.flatnonzero(sides[0][k] + sides[1][k]) for k in range(K)]
@@ -319,8 +324,10 @@ class SampledKinematics:
     def _point_sides(
         self, H: np.ndarray, V: np.ndarray, A: np.ndarray
     ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """Per side of the point closures: contact points, their velocities and classical
-        accelerations, each (n, K, 3), world axes."""
+        """Per side of the point closures: contact points, velocities, classical accelerations.
+
+        Each (n, K, 3), world axes.
+        """
         side = []
         for s in (0, 1):
             slot = self._pt_slot[s]
@@ -412,9 +419,11 @@ class SampledKinematics:
         self.H[rows] = H
 
     def capture_drift(self, k: int, q: np.ndarray, v: np.ndarray) -> None:
-        """Sample ``k``'s body accelerations at zero joint acceleration (placements captured
-        already by :meth:`capture_configuration` and decoded by :meth:`update_placements`), for
-        :meth:`acceleration_errors`: one Pinocchio call and one array read.
+        """Sample ``k``'s body accelerations at zero joint acceleration.
+
+        For :meth:`acceleration_errors` (placements captured already by
+        :meth:`capture_configuration` and decoded by :meth:`update_placements`): one Pinocchio
+        call and one array read.
 
         Args:
             k: Buffer row.

@@ -203,8 +203,11 @@ class MotionSampler:
     def _solve_one(
         self, k: int, qa: np.ndarray, t: float, first: int, lm: bool = True
     ) -> tuple[np.ndarray, np.ndarray] | None:
-        """Sample ``k`` (in the batch) from the extrapolated anchors; ``None`` when Newton
-        fails and ``lm`` is false. The joint Jacobians of ``self.data`` are left at ``q``."""
+        """Sample ``k`` (in the batch) from the extrapolated anchors.
+
+        ``None`` when Newton fails and ``lm`` is false. The joint Jacobians of ``self.data`` are
+        left at ``q``.
+        """
         q = self._guess(first + k)
         q[self.aq] = qa
         q, Jk, _ = self._newton(q)
@@ -461,7 +464,7 @@ class MotionSampler:
             move independently there (a singular configuration).
 
         """
-        model, data, cs = self.model, self.data, self.cs
+        model, cs = self.model, self.cs
         n = Q.shape[0]
         V = np.zeros((n, model.nv))
         A = np.zeros((n, model.nv))
