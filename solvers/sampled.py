@@ -202,6 +202,7 @@ class SampledKinematics:
         self._aux_q = pin.neutral(aux)
         self.Jaux = np.empty((self.size, 6, 3 * len(self._captured)))
         self.Q = np.empty((self.size, model.nq))  # for the coupling rows
+        self._pending = np.zeros(self.size, dtype=bool)  # captured, placements not decoded
         # accelerations at zero joint acceleration (the closures' drift): from the time
         # variation of the world Jacobian where exact (capture_drift), else from rnea
         self._drift_model = _drift_model(model) if self._captured else None
@@ -250,6 +251,7 @@ class SampledKinematics:
             self.H[k, 1:] = [oMi[j].homogeneous for j in captured]
             self.acc[k, 1:] = [acc[j].vector for j in captured]
         self.Jw[k] = data.J
+        self._pending[k] = False
         self._drift_from_dJ = False
 
     def _velocities(self, n: int, v: np.ndarray) -> np.ndarray:
@@ -389,6 +391,7 @@ class SampledKinematics:
         self.Q[k] = q
         if not self._captured:
             return
+        self._pending[k] = True
         qx = self._aux_q
         qx[: self.model.nq] = q
         pin.computeJointJacobians(self._aux_model, self._aux_data, qx)
@@ -405,18 +408,20 @@ class SampledKinematics:
 
         """
         nj = len(self._captured)
-        if not nj:
+        rows = rows[self._pending[rows]]  # decoded already: left as they are
+        if not nj or not rows.size:
             return
+        self._pending[rows] = False
         X = self.Jaux[rows].reshape(rows.size, 6, nj, 3).transpose(0, 2, 1, 3)  # (m, nj, 6, 3)
-        R = X[:, :, 3:]
-        S = X[:, :, :3] @ np.swapaxes(R, 2, 3)  # [o]x
-        H = self.H[rows]
-        H[:, 1:, :3, :3] = R
-        H[:, 1:, 0, 3] = 0.5 * (S[..., 2, 1] - S[..., 1, 2])
-        H[:, 1:, 1, 3] = 0.5 * (S[..., 0, 2] - S[..., 2, 0])
-        H[:, 1:, 2, 3] = 0.5 * (S[..., 1, 0] - S[..., 0, 1])
-        H[:, 1:, 3] = (0.0, 0.0, 0.0, 1.0)
-        self.H[rows] = H
+        R, L = X[:, :, 3:], X[:, :, :3]  # columns r_i and o x r_i
+        # sum_i r_i x (o x r_i) = 3 o - sum_i r_i (r_i . o) = 2 o
+        H = np.empty((rows.size, nj, 4, 4))
+        H[:, :, :3, :3] = R
+        H[:, :, 0, 3] = 0.5 * (R[:, :, 1] * L[:, :, 2] - R[:, :, 2] * L[:, :, 1]).sum(axis=-1)
+        H[:, :, 1, 3] = 0.5 * (R[:, :, 2] * L[:, :, 0] - R[:, :, 0] * L[:, :, 2]).sum(axis=-1)
+        H[:, :, 2, 3] = 0.5 * (R[:, :, 0] * L[:, :, 1] - R[:, :, 1] * L[:, :, 0]).sum(axis=-1)
+        H[:, :, 3] = (0.0, 0.0, 0.0, 1.0)
+        self.H[rows, 1:] = H
 
     def capture_drift(self, k: int, q: np.ndarray, v: np.ndarray) -> None:
         """Sample ``k``'s body accelerations at zero joint acceleration.
