@@ -193,22 +193,12 @@ class SampledKinematics:
             int(f): (slot.get(int(model.frames[f].parentJoint), 0), model.frames[f].placement)
             for f in frames
         }
-        # placements read from one array (capture_configuration): a spherical leaf joint at
-        # the origin of each captured joint, whose world Jacobian columns are [[o]x R; R]
-        aux = pin.Model(model)
-        for j in self._captured:
-            aux.addJoint(j, pin.JointModelSpherical(), pin.SE3.Identity(), f"_pkdyn_aux_{j}")
-        self._aux_model, self._aux_data = aux, aux.createData()
-        self._aux_q = pin.neutral(aux)
-        self.Jaux = np.empty((self.size, 6, 3 * len(self._captured)))
         self.Q = np.empty((self.size, model.nq))  # for the coupling rows
         self._pending = np.zeros(self.size, dtype=bool)  # captured, placements not decoded
-        # accelerations at zero joint acceleration (the closures' drift): from the time
-        # variation of the world Jacobian where exact (capture_drift), else from rnea
-        self._drift_model = _drift_model(model) if self._captured else None
-        if self._drift_model is not None:
-            self._drift_data = self._drift_model.createData()
-            self.dJw = np.empty((self.size, 6, nv))
+        self._aux: tuple[pin.Model, pin.Data, np.ndarray] | None = None  # built on first use
+        self.Jaux = np.empty((self.size, 6, 3 * len(self._captured)))
+        self._drift: tuple[pin.Model, pin.Data] | None = None
+        self._drift_checked = False
         self._data = model.createData()
         self._drift_from_dJ = False
 
@@ -392,10 +382,17 @@ class SampledKinematics:
         if not self._captured:
             return
         self._pending[k] = True
-        qx = self._aux_q
+        if self._aux is None:
+            # placements read from one array: a spherical leaf joint at the origin of each
+            # captured joint, whose world Jacobian columns are [[o]x R; R]
+            aux = pin.Model(self.model)
+            for j in self._captured:
+                aux.addJoint(j, pin.JointModelSpherical(), pin.SE3.Identity(), f"_pkdyn_aux_{j}")
+            self._aux = (aux, aux.createData(), pin.neutral(aux))
+        aux, aux_data, qx = self._aux
         qx[: self.model.nq] = q
-        pin.computeJointJacobians(self._aux_model, self._aux_data, qx)
-        Jx = self._aux_data.J
+        pin.computeJointJacobians(aux, aux_data, qx)
+        Jx = aux_data.J
         nv = self.model.nv
         self.Jw[k] = Jx[:, :nv]
         self.Jaux[k] = Jx[:, nv:]
@@ -436,9 +433,16 @@ class SampledKinematics:
             v: Velocity (nv,).
 
         """
-        if self._drift_model is not None:
-            pin.computeJointJacobiansTimeVariation(self._drift_model, self._drift_data, q, v)
-            self.dJw[k] = self._drift_data.dJ
+        if not self._drift_checked:
+            # accelerations at zero joint acceleration from the time variation of the world
+            # Jacobian where that is exact, else from rnea
+            model = _drift_model(self.model) if self._captured else None
+            self._drift = None if model is None else (model, model.createData())
+            self.dJw = np.empty((self.size, 6, self.model.nv))
+            self._drift_checked = True
+        if self._drift is not None:
+            pin.computeJointJacobiansTimeVariation(self._drift[0], self._drift[1], q, v)
+            self.dJw[k] = self._drift[1].dJ
             self._drift_from_dJ = True
         elif self._captured:
             pin.rnea(self.model, self._data, q, v, np.zeros(self.model.nv))
