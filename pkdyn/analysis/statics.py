@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -187,6 +187,9 @@ class StaticsResult:
         reactions: One force and one moment per closure, by closure name (:class:`Reaction`).
         residual: Norm of the unbalanced generalised force [N m or N] (round-off when the
             equilibrium exists).
+        couplings: The force of each joint coupling (:mod:`solvers.coupling`), by coupling
+            name: the generalized force [N m or N] it applies to its driven joint (the source
+            receives ``-p'`` times it, ``p'`` the law's derivative).
 
     """
 
@@ -194,12 +197,14 @@ class StaticsResult:
     lambdas: np.ndarray
     reactions: dict[str, Reaction]
     residual: float
+    couplings: dict[str, float] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dict."""
         return {
             "tau": self.tau.tolist(),
             "reactions": {k: v.to_json() for k, v in self.reactions.items()},
+            "couplings": dict(self.couplings),
             "residual": self.residual,
         }
 
@@ -265,7 +270,9 @@ def static_equilibrium(
             f"{robot.name}: parallel singularity: actuator efforts are not unique here",
         )
     tau, lam = sol[:n_a], sol[n_a:]
-    return StaticsResult(tau, lam, closure_reactions(robot, km.q, lam), residual)
+    cs = robot.closure_set
+    couplings = {c.name: float(lam[cs.n_rigid + i]) for i, c in enumerate(cs.couplings)}
+    return StaticsResult(tau, lam, closure_reactions(robot, km.q, lam), residual, couplings)
 
 
 def statics_json(
@@ -283,7 +290,7 @@ def statics_json(
         gravity: Include the robot's weight.
 
     Returns:
-        ``{"tau", "actuators", "reactions", "residual"}``.
+        ``{"tau", "actuators", "reactions", "couplings", "residual"}``.
 
     """
     res = static_equilibrium(robot, q, F, gravity)
