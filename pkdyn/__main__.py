@@ -1,7 +1,5 @@
 """``python -m pkdyn``: the ``pkdyn`` command line."""
 
-import sys
+from pkdyn.cli import run
 
-from pkdyn.cli import main
-
-sys.exit(main())
+run()
