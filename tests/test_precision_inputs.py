@@ -658,7 +658,13 @@ def test_ctrl_c_stops_identification_workers(tmp_path, files):
         start_new_session=True,
     )
     try:
-        time.sleep(4.0)
+        children = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and proc.poll() is None:
+            if children.exists() and children.read_text().split():
+                break  # the workers have started
+            time.sleep(0.1)
+        time.sleep(0.5)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=60)
     finally:
