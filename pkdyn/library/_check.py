@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 import numpy as np
 
 from pkdyn.exceptions import ParameterError
 
-__all__ = ["in_range", "middle_of_reach", "positive"]
+__all__ = ["finite", "in_range", "middle_of_reach", "positive", "within_limits"]
 
 
 def positive(family: str, **values: float) -> None:
@@ -17,6 +17,27 @@ def positive(family: str, **values: float) -> None:
     for k, v in values.items():
         if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
             raise ParameterError(family, k, f"must be a positive finite number, got {v!r}")
+
+
+def finite(family: str, **values: float) -> None:
+    """Raise :class:`ParameterError` unless every value is a finite number."""
+    for k, v in values.items():
+        if not math.isfinite(v):
+            raise ParameterError(family, k, f"must be finite, got {v!r}")
+
+
+def within_limits(family: str, q: Iterable[float], q_min: float, q_max: float) -> None:
+    """Raise :class:`ParameterError` for a home actuated angle outside ``[q_min, q_max]`` [rad].
+
+    The error names ``q_min`` or ``q_max``, whichever the first angle outside breaks.
+    """
+    out = [float(v) for v in q if not q_min <= v <= q_max]
+    if out:
+        raise ParameterError(
+            family,
+            "q_min" if out[0] < q_min else "q_max",
+            f"home actuated angle {out[0]:.6g} rad lies outside [q_min, q_max]",
+        )
 
 
 def in_range(family: str, name: str, value: float, lo: float, hi: float) -> None:
