@@ -30,3 +30,29 @@ def test_guide_examples_run(page, tmp_path, monkeypatch):
     failure = run_page(path, examples)
     if failure is not None:
         pytest.fail(failure, pytrace=False)
+
+
+def test_the_described_robot_is_what_the_page_says():
+    """docs/guide/describing.md: its lifter's mobility, home and the strut's holding torque."""
+    import re
+
+    import numpy as np
+
+    import pkdyn
+    from pkdyn.analysis import classify, static_equilibrium
+    from pkdyn.analysis.mobility import mobility
+
+    page = (GUIDE / "describing.md").read_text(encoding="utf-8")
+    xml = re.search(r"```xml\n<!-- file: lifter.urdf -->\n(.*?)```", page, re.S).group(1)
+    lifter = pkdyn.load_string(xml, "lifter.urdf")
+    assert (lifter.dof(), lifter.loops) == (2, 2)
+    assert [c.kind for c in lifter.closures] == ["hinge", "point", "weld"]
+    m = mobility(lifter).as_json()
+    assert (m["mobility"], m["internal"], m["hyperstatism"]) == (2, 0, 4)
+    assert pkdyn.closure_residual(lifter, lifter.q_home) < 1e-12  # the zero pose is assembled
+    assert classify(lifter, lifter.q_home).kind == "regular"
+    hold = static_equilibrium(lifter, lifter.q_home, gravity=True).tau
+    bare = static_equilibrium(lifter, lifter.q_home, gravity=True, passive=False).tau
+    # recorded figures of the page: the strut turns motor 2's 1.02 N m into -0.42 N m
+    assert np.allclose([hold[1], bare[1]], [-0.417, 1.023], atol=1e-3)
+    assert np.isclose(hold[0], bare[0])  # the strut acts on crank 2 only
