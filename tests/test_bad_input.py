@@ -126,10 +126,6 @@ BAD_DESCRIPTIONS = {
     "unknown pkdyn element": (doc(extra='<pkdyn:closur name="x"/>'), "<pkdyn:closur>"),
     "mistyped namespace": (doc(ns='xmlns:pkdyn="urn:pkdyn:urdf:2"'), "urn:pkdyn:urdf:2"),
     "misspelt namespace": (doc(ns='xmlns:pkdyn="urn:pkydn:urdf:1"'), "urn:pkydn:urdf:1"),
-    "missing mesh": (
-        doc(geom='<mesh filename="package://nowhere/meshes/arm.stl"/>'),
-        "link 'arm' <mesh filename='package://nowhere/meshes/arm.stl'>",
-    ),
 }
 
 

@@ -572,9 +572,6 @@ MALFORMED = {
     "limit effort nan": _doc().replace('effort="1"', 'effort="nan"'),
     "axis inf": _doc().replace('<axis xyz="1 0 0"/>', '<axis xyz="inf 0 0"/>'),
     "inertia nan": _doc().replace('ixx="1"', 'ixx="nan"'),
-    "missing mesh": _doc(
-        geom='<visual><geometry><mesh filename="package://nowhere/arm.stl"/></geometry></visual>'
-    ),
     "unreachable closure": _doc(_closure("point", 'link="arm"', 'link="base" xyz="0 0 1"')),
 }
 

@@ -211,7 +211,7 @@ def test_spinning_bar_between_two_tree_ball_joints():
     w = UrdfWriter("ss_bar")
     w.link("base")
     w.rod("bar", 0.1, 0.005, (0, 0, 0), (0, 0, 0.3))
-    w.link("plate", 0.2)
+    w.link("plate", 0.2, inertia=np.diag([2e-4, 2e-4, 4e-4]))  # pkdyn: no point masses
     w.spherical("s1", "base", "bar", (0, 0, 0))
     w.spherical("s2", "bar", "plate", (0, 0, 0.3))
     w.closure("fix", "weld", ("plate", (0, 0, 0), (0, 0, 0)), ("base", (0, 0, 0.3), (0, 0, 0)))

@@ -162,10 +162,24 @@ def test_ball_and_fixed_cut_joints(tmp_path, kind, closure, dof):
     assert robot.dof() == dof  # parallel axes keep a ball-closed four-bar planar; weld: rigid
 
 
-def test_universal_cut_joint_is_refused_naming_it(tmp_path):
+def test_universal_cut_joint_trades_places_with_the_revolute_beside_it(tmp_path):
     axis = '<axis><xyz expressed_in="__model__">0 0 1</xyz></axis>'
     head, tail = _four_bar_text("universal").rsplit(axis, 1)
     text = head + axis + "<axis2><xyz>1 0 0</xyz></axis2>" + tail
+    robot = _load(tmp_path, text)
+    assert [c.name for c in robot.closures] == ["world_rocker"]  # the revolute closes the loop
+    assert robot.model.existJointName("coupler_rocker")
+    assert pkdyn.closure_residual(robot, robot.q_home) < 1e-9
+
+
+def test_universal_cut_joint_without_a_revolute_beside_it_is_refused_naming_it(tmp_path):
+    axis = '<axis><xyz expressed_in="__model__">0 0 1</xyz></axis>'
+    head, tail = _four_bar_text("universal").rsplit(axis, 1)
+    text = head + axis + "<axis2><xyz>1 0 0</xyz></axis2>" + tail
+    text = text.replace(
+        '<joint name="world_rocker" type="revolute">',
+        '<joint name="world_rocker" type="prismatic">',
+    )
     with pytest.raises(
         pkdyn.DescriptionError, match=r"coupler_rocker'> \(line \d+\).*closes a kinematic loop"
     ):
@@ -299,7 +313,7 @@ def test_missing_meshes_warn_once_naming_the_files(tmp_path):
                 'type="revolute">\n      <pose relative_to="Dc"/>',
                 'type="revolute2">\n      <pose relative_to="Dc"/>',
             ),
-            r"line 36\): two-axis revolute2",
+            r"line 36\): a revolute2 joint needs <axis2>",
         ),
         (
             ("<child>driver</child>", "<child>drivr</child>"),

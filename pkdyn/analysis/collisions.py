@@ -176,11 +176,21 @@ class CollisionChecker:
             (see :func:`collision_pairs`).
 
     Raises:
-        PkdynError: The robot has no collision geometry pair to check.
+        PkdynError: The robot has no collision geometry pair to check, or mesh files of its
+            description were not found (naming them).
 
     """
 
     def __init__(self, robot: Robot, pairs: Sequence[tuple[str, str]] | None = None) -> None:
+        if robot.missing_meshes:
+            from pkdyn.model.warn import missing_list
+
+            raise PkdynError(
+                f"{robot.name}: collision checks need the geometry of "
+                f"{len(robot.missing_meshes)} mesh file(s) that were not found when it was "
+                f"loaded: {missing_list(robot.missing_meshes)} (pass package_dirs= or fix "
+                "the paths)"
+            )
         self.robot = robot
         self.ids = collision_pairs(robot, pairs)
         if not self.ids:

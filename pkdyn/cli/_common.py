@@ -133,6 +133,10 @@ def load(args: argparse.Namespace, geometry: bool = False) -> Any:
         extra["home"] = args.home
     if getattr(args, "tol", None) is not None:
         extra["tol"] = args.tol
+    if getattr(args, "xacro_arg", None):
+        from pkdyn.model.formats.xacro_files import parse_xacro_args
+
+        extra["xacro_args"] = parse_xacro_args(args.xacro_arg)
     return pkdyn.load(args.robot, geometry=geometry, **extra, **params(args.param))
 
 
@@ -229,6 +233,12 @@ def robot_command(
         metavar="TOL",
         help="assembly tolerance (m or rad): closure errors of a CAD-rounded description that "
         "are absorbed with a warning (default 1e-4)",
+    )
+    sp.add_argument(
+        "--xacro-arg",
+        action="append",
+        metavar="NAME:=VALUE",
+        help="argument of a .xacro file (repeatable), e.g. --xacro-arg prefix:=left_",
     )
     return sp
 

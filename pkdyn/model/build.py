@@ -19,6 +19,7 @@ __all__ = [
     "HINGE_ARM",
     "build_tree",
     "build_geometry",
+    "geometry_models",
     "check_model_size",
     "replace_joints",
     "resolve_frame",
@@ -196,7 +197,7 @@ def build_geometry(
 
     Args:
         model: Model built by :func:`build_tree`.
-        xml: URDF document.
+        xml: URDF document (every mesh file must be found: see :func:`geometry_models`).
         kind: ``pin.VISUAL`` or ``pin.COLLISION``.
         package_dirs: Directories searched for ``package://`` and relative mesh paths.
         source: File or robot name, for error messages.
@@ -217,6 +218,87 @@ def build_geometry(
         if missing:
             raise _missing_mesh(source, xml, missing[1], package_dirs) from None
         raise DescriptionError(source, f"{kind} geometry", first) from None
+
+
+def _found(filename: str, package_dirs: Sequence[str]) -> bool:
+    """Whether Pinocchio's resource look-up finds a mesh file (``package://``, ``file://``...)."""
+    name = filename
+    if name.startswith("file://"):
+        name = name[len("file://") :]
+    elif name.startswith("package://"):
+        rest = name[len("package://") :]
+        dirs = list(package_dirs) + os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep)
+        return any(d and os.path.isfile(os.path.join(d, rest)) for d in dirs)
+    if os.path.isabs(name):
+        return os.path.isfile(name)
+    return os.path.isfile(name) or any(os.path.isfile(os.path.join(d, name)) for d in package_dirs)
+
+
+def geometry_models(
+    model: pin.Model, xml: str, package_dirs: Sequence[str], source: str
+) -> tuple[pin.GeometryModel, pin.GeometryModel, list[str]]:
+    """Visual and collision geometry of the URDF; shapes whose mesh file is missing left out.
+
+    People often have a URDF without its meshes and need its kinematics and dynamics: the
+    ``<visual>`` and ``<collision>`` elements whose mesh file cannot be found are dropped (the
+    caller warns once, naming the files; collision checks and the viewer refuse or warn).
+
+    Args:
+        model: Model built by :func:`build_tree`.
+        xml: URDF document.
+        package_dirs: Directories searched for ``package://`` and relative mesh paths.
+        source: File or robot name, for error messages.
+
+    Returns:
+        ``(visual, collision, missing)``: the geometry models and the mesh files not found.
+
+    Raises:
+        DescriptionError: A geometry cannot be parsed.
+
+    """
+    import xml.etree.ElementTree as ET
+
+    if "<mesh" not in xml:
+        kinds = (pin.GeometryType.VISUAL, pin.GeometryType.COLLISION)
+        vis, col = (build_geometry(model, xml, k, package_dirs, source) for k in kinds)
+        return vis, col, []
+    root = ET.fromstring(xml)
+    missing: list[str] = []
+    for link in root.findall("link"):
+        for tag in ("visual", "collision"):
+            for el in link.findall(tag):
+                files = [m.get("filename", "") for m in el.iter("mesh")]
+                lost = [f for f in files if not _found(f, package_dirs)]
+                if lost:
+                    missing.extend(lost)
+                    link.remove(el)
+    text = ET.tostring(root, encoding="unicode") if missing else xml
+    out = []
+    for kind in (pin.GeometryType.VISUAL, pin.GeometryType.COLLISION):
+        for _ in range(1000):  # a mesh Pinocchio does not find after all: drop it too
+            try:
+                out.append(build_geometry(model, text, kind, package_dirs, source))
+                break
+            except DescriptionError as err:
+                m = re.search(r"<mesh filename='(.*)'>", err.culprit)
+                if m is None or "mesh file not found" not in str(err):
+                    raise
+                missing.append(m[1])
+                text = _without_mesh(text, m[1])
+    return out[0], out[1], sorted(set(missing))
+
+
+def _without_mesh(xml: str, filename: str) -> str:
+    """The URDF without the visual and collision elements of one mesh file."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(xml)
+    for link in root.findall("link"):
+        for tag in ("visual", "collision"):
+            for el in link.findall(tag):
+                if any(m.get("filename") == filename for m in el.iter("mesh")):
+                    link.remove(el)
+    return ET.tostring(root, encoding="unicode")
 
 
 def _missing_mesh(

@@ -38,7 +38,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
-from pkdyn.model.validate import check_urdf
+from pkdyn.model.validate import check_urdf, unit_vector
 
 __all__ = [
     "NAMESPACE",
@@ -324,10 +324,10 @@ def _tag(el: ET.Element) -> str:
 
 
 def _unit(source: str, what: str, v: np.ndarray) -> np.ndarray:
-    n = float(np.linalg.norm(v))
-    if n < 1e-12:
+    u = unit_vector(v)  # no overflow for huge components
+    if u is None or float(np.abs(v).max()) < 1e-12:
         raise DescriptionError(source, what, "axis must be a non-zero vector")
-    return v / n
+    return np.asarray(u)
 
 
 def _frame(source: str, el: ET.Element, links: set[str]) -> FrameRef:

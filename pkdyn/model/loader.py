@@ -26,16 +26,18 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError, InvalidInputError, ParameterError, UnknownRobotError
+from pkdyn.model.assembly import check_actuator_limits
 from pkdyn.model.build import (
-    build_geometry,
     build_tree,
     check_model_size,
     constraint_models,
+    geometry_models,
     resolve_frame,
 )
 from pkdyn.model.description import (
     TASK_COMPONENTS,
     ActuatorSpec,
+    ClosureSpec,
     Description,
     parse_description,
 )
@@ -43,7 +45,7 @@ from pkdyn.model.families import FAMILIES, from_description
 from pkdyn.model.home import ASSEMBLY_TOL, find_home
 from pkdyn.model.passive import passive_forces
 from pkdyn.model.robot import Robot
-from pkdyn.model.warn import warn
+from pkdyn.model.warn import warn, warn_missing_meshes
 from solvers import ClosureSet
 
 if TYPE_CHECKING:
@@ -124,6 +126,7 @@ def load(
     *,
     home: Sequence[float] | np.ndarray | None = None,
     tol: float = ASSEMBLY_TOL,
+    xacro_args: dict[str, Any] | None = None,
     **params: Any,
 ) -> Robot:
     """Load a robot: a library family name (``delta``, ``gough_stewart``...) or a file.
@@ -140,6 +143,8 @@ def load(
             passive ones solved, or a full configuration (nq,) used as the starting guess.
         tol: Assembly tolerance [m or rad]: closures a description misses by at most this much
             (CAD rounding) are closed with a warning; beyond it, an error.
+        xacro_args: Arguments of a ``.xacro`` file (``<xacro:arg>`` name -> value); the file
+            is expanded by the ``xacro`` package (``pip install "pkdyn[xacro]"``).
         **params: Builder parameters of a library family (SI units).
 
     Returns:
@@ -155,6 +160,8 @@ def load(
 
     """
     name = str(name_or_path)
+    if name in FAMILIES and xacro_args:
+        raise ParameterError(name, "xacro_args", "apply to .xacro files only")
     if name in FAMILIES:
         fam = FAMILIES[name]
         p = fam.make_params(params)
@@ -174,9 +181,16 @@ def load(
     if params:
         first = next(iter(params))
         raise ParameterError(path.name, first, "builder parameters apply to library robots only")
-    from pkdyn.model.formats.xmldoc import read_text
+    from pkdyn.model.formats.xacro_files import expand_xacro, is_xacro
 
-    text = read_text(path, "description file")
+    if is_xacro(path):
+        text = expand_xacro(path, xacro_args)
+    elif xacro_args:
+        raise ParameterError(path.name, "xacro_args", "apply to .xacro files only")
+    else:
+        from pkdyn.model.formats.xmldoc import read_text
+
+        text = read_text(path, "description file")
     side = Path(sidecar) if sidecar is not None else None
     if side is None:
         for cand in (path.with_suffix(".yaml"), path.parent / "robot.yaml"):
@@ -205,6 +219,7 @@ class _Parts:
     visual: pin.GeometryModel
     collision: pin.GeometryModel
     q_ref: np.ndarray
+    missing_meshes: tuple[str, ...] = ()
 
 
 def load_string(
@@ -237,6 +252,9 @@ def load_string(
         The loaded robot.
 
     """
+    from pkdyn.model.formats.xmldoc import lenient
+
+    xml = lenient(xml)  # Drake's and Gazebo's leniencies: comments with --, drake: undeclared
     fmt = detect_format(xml, source)
     side = None
     if sidecar is not None:
@@ -272,7 +290,9 @@ def load_string(
             tuple(j.name for j in mech.joints),
             passive=tuple(built.passive),
         )
-        parts = _Parts(built.model, desc, built.visual, built.collision, q_ref)
+        parts = _Parts(
+            built.model, desc, built.visual, built.collision, q_ref, tuple(mech.missing_meshes)
+        )
         if not geometry:
             parts.visual, parts.collision = pin.GeometryModel(), pin.GeometryModel()
     parts = _with_sidecar(parts, side, source)
@@ -319,10 +339,16 @@ def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar 
         except ET.ParseError:
             root = None  # parse_description names the problem
     _check_urdf_joints(xml, source, root)
+    if root is not None:
+        xml = drake.implicit_world(xml, root)  # Drake's implicit world link
     desc = parse_description(xml, source)
-    root = ET.fromstring(xml) if root is None else root
+    root = ET.fromstring(xml)
     extra = drake.urdf_constraints(root, source)
     model = build_tree(xml, desc.joints, source)
+    if root.find("gazebo/joint") is not None:
+        from pkdyn.model.formats.gazebo import gazebo_closures
+
+        extra += gazebo_closures(root, model, source)
     check_model_size(model, source)  # before any createData
     if side is not None:
         from pkdyn.model.formats.gepetto import apply_joint_types
@@ -340,13 +366,15 @@ def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar 
                 "look like Gepetto loop frames, but there is no robot.yaml sidecar: the "
                 "loops are left open"
             )
+    missing: list[str] = []
     if geometry:
-        visual = build_geometry(model, xml, pin.GeometryType.VISUAL, dirs, source)
-        collision = build_geometry(model, xml, pin.GeometryType.COLLISION, dirs, source)
+        visual, collision, missing = geometry_models(model, xml, dirs, source)
+        if missing:
+            warn_missing_meshes(source, missing)
     else:
         visual, collision = pin.GeometryModel(), pin.GeometryModel()
     desc = dataclasses.replace(desc, closures=desc.closures + tuple(extra))
-    return _Parts(model, desc, visual, collision, _guess(model))
+    return _Parts(model, desc, visual, collision, _guess(model), tuple(missing))
 
 
 def _with_free_flyer(model: pin.Model) -> pin.Model:
@@ -409,10 +437,40 @@ def _with_sidecar(parts: _Parts, side: Sidecar | None, source: str) -> _Parts:
 
 
 def _with_onshape(parts: _Parts) -> _Parts:
+    """Closures of onshape-to-robot ``closing_`` frame pairs, each loop closed once.
+
+    A pair already closed by another closure (the ``<connect>`` equality an MJCF export writes
+    between the two sites, a sidecar or pkdyn closure on the same frames) is not closed again:
+    the same two joints, the same points (1e-9 m).
+    """
     from pkdyn.model.formats import onshape
 
+    found = onshape.closing_closures(parts.model)
+    if not found:
+        return parts
+    model = parts.model
+
+    def ends(c: ClosureSpec) -> list[tuple[int, np.ndarray]] | None:
+        try:
+            out = [resolve_frame(model, f, "", "") for f in (c.frame1, c.frame2)]
+        except DescriptionError:
+            return None
+        return sorted(((j, M.translation) for j, M in out), key=lambda e: e[0])
+
+    def same(a: list[tuple[int, np.ndarray]] | None, b: list[tuple[int, np.ndarray]]) -> bool:
+        return a is not None and all(
+            ja == jb and float(np.linalg.norm(pa - pb)) < 1e-9
+            for (ja, pa), (jb, pb) in zip(a, b, strict=True)
+        )
+
     used = {f.link for c in parts.desc.closures for f in (c.frame1, c.frame2)}
-    extra = [c for c in onshape.closing_closures(parts.model) if c.frame1.link not in used]
+    closed = [ends(c) for c in parts.desc.closures]
+    extra = []
+    for c in found:
+        e = ends(c)
+        if c.frame1.link in used or (e is not None and any(same(k, e) for k in closed)):
+            continue
+        extra.append(c)
     if extra:
         parts.desc = dataclasses.replace(parts.desc, closures=parts.desc.closures + tuple(extra))
     return parts
@@ -464,6 +522,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         q_home=pin.neutral(model),
         params=params,
         passive=elements,
+        missing_meshes=parts.missing_meshes,
     )
 
 
@@ -506,8 +565,15 @@ def _assembled(
         n_a = len(robot.actuators)
         if h.size == n_a and n_a > 0:
             qa = h
+            if user:  # the limits forward_geometry holds the same values to
+                q_check = q0.copy()
+                q_check[robot.actuated_q] = qa
+                check_actuator_limits(robot, q_check)
         elif h.size == robot.nq:
+            _check_quaternions(robot.model, h)
             q0 = pin.normalize(robot.model, h)
+            if user:
+                check_actuator_limits(robot, q0)
         else:
             raise InvalidInputError(
                 "home",
@@ -521,6 +587,20 @@ def _assembled(
         robot = _robot(parts, robot.source, robot.params)
     robot.q_home = res.q
     return robot
+
+
+def _check_quaternions(model: pin.Model, q: np.ndarray) -> None:
+    """Refuse a configuration whose ball or free joint has a zero (or tiny) quaternion."""
+    for jid in range(1, model.njoints):
+        jm = model.joints[jid]
+        if jm.nq in (4, 7) and jm.nv in (3, 6):
+            quat = q[jm.idx_q + jm.nq - 4 : jm.idx_q + jm.nq]
+            if float(np.linalg.norm(quat)) < 1e-9:
+                raise InvalidInputError(
+                    "home",
+                    f"joint '{model.names[jid]}': the quaternion {quat.tolist()} has no "
+                    "orientation (norm 0); give a unit quaternion x y z w",
+                )
 
 
 def _actuation(

@@ -47,6 +47,9 @@ class Robot:
         params: Builder parameters for library robots, else ``None``.
         passive: Springs, dampers and friction of the joints and the two-frame springs
             (:mod:`pkdyn.model.passive`), or ``None`` when there are none.
+        missing_meshes: Mesh files of the description that were not found: their shapes are
+            left out of ``visual_model`` and ``collision_model`` (collision checks refuse to
+            run, the viewer warns, both naming them).
 
     """
 
@@ -70,6 +73,7 @@ class Robot:
     q_home: np.ndarray
     params: Any = None
     passive: PassiveForces | None = None
+    missing_meshes: tuple[str, ...] = ()
 
     @functools.cached_property
     def length_scale(self) -> float:

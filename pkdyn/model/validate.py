@@ -8,11 +8,13 @@ the link, joint or element at fault:
 
 - every number of links and joints: a number (not text), finite; vectors of the right length
   (``<dynamics>`` is read, and checked, with the passive elements: :mod:`pkdyn.model.passive`);
-- inertials: mass > 0 (a massless link has no ``<inertial>``; a plain URDF may give 0, as ROS
-  descriptions do for frames), inertia tensor positive semi-definite (no negative principal
-  moment; zero ones are the point-mass and thin-rod limits) and satisfying the triangle
-  inequality of its principal moments (``I1 + I2 >= I3``); plain URDFs only warn for the
-  inertia tensor, as many published descriptions break it slightly;
+- inertials (:func:`inertia_problem`, the rule every importer uses): mass > 0 (a massless link
+  has no ``<inertial>``; a plain URDF may give 0, as ROS descriptions do for frames), inertia
+  tensor positive semi-definite (no negative principal moment; a thin rod's zero moment is a
+  limit of real bodies) and satisfying the triangle inequality of its principal moments
+  (``I1 + I2 >= I3``), not all zero with a positive mass (pkdyn descriptions; plain URDFs keep
+  point masses); plain URDFs only warn for the inertia tensor, as many published descriptions
+  break it slightly;
 - geometry: box, cylinder, sphere and capsule sizes > 0, mesh scales finite and non-zero;
 - joints: a moving joint's axis is non-zero; ``lower <= upper``; effort and velocity limits
   >= 0;
@@ -26,6 +28,7 @@ from __future__ import annotations
 import math
 import warnings
 import xml.etree.ElementTree as ET
+from typing import Any
 
 from pkdyn.exceptions import DescriptionError
 
@@ -36,6 +39,8 @@ __all__ = [
     "MAX_TREE_DEPTH",
     "check_data_size",
     "check_urdf",
+    "inertia_problem",
+    "unit_vector",
 ]
 
 INERTIA_SLACK = 1e-6
@@ -216,7 +221,7 @@ def _check_inertials(source: str, root: ET.Element, strict: bool) -> None:
         if el is None:
             continue
         tensor = {k: float(el.get(k, "0")) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
-        problem = _inertia_problem(tensor)
+        problem = _inertia_problem(tensor, mass, strict)
         if problem is None:
             continue
         if strict:
@@ -232,22 +237,50 @@ def _check_inertials(source: str, root: ET.Element, strict: bool) -> None:
         )
 
 
-def _inertia_problem(i: dict[str, float]) -> str | None:
-    """Why an inertia tensor is not physical, or ``None``.
+def _inertia_problem(i: dict[str, float], mass: float, strict: bool) -> str | None:
+    M = [
+        [i["ixx"], i["ixy"], i["ixz"]],
+        [i["ixy"], i["iyy"], i["iyz"]],
+        [i["ixz"], i["iyz"], i["izz"]],
+    ]
+    return inertia_problem(mass, M, point_mass=not strict)
 
-    Positive semi-definite (a point mass, all zeros, and a thin rod, one zero moment, are the
-    limits of real bodies) and the triangle inequality, within :data:`INERTIA_SLACK`.
+
+def inertia_problem(mass: float, inertia: Any, point_mass: bool = True) -> str | None:
+    """Why a rigid body's mass and inertia are not physical, or ``None``: one rule, every format.
+
+    Every importer (pkdyn's URDF, plain URDF, MJCF, SDFormat) asks this function; each decides
+    whether a problem is an error (pkdyn descriptions, MJCF and SDFormat, as MuJoCo itself) or
+    a warning (plain URDF: many published ones break the triangle inequality slightly).
+
+    Args:
+        mass: Mass [kg].
+        inertia: Rotational inertia about the centre of mass (3, 3) [kg m^2].
+        point_mass: Accept an all-zero tensor with a positive mass (a point mass, as URDF and
+            SDFormat readers do); otherwise it is refused like a negative moment.
+
+    Returns:
+        The problem (one line), or ``None``: finite numbers, mass >= 0, a symmetric positive
+        semi-definite tensor satisfying the triangle inequality of its principal moments
+        (``I1 + I2 >= I3``) within :data:`INERTIA_SLACK`.
+
     """
     import numpy as np
 
-    M = np.array(
-        [
-            [i["ixx"], i["ixy"], i["ixz"]],
-            [i["ixy"], i["iyy"], i["iyz"]],
-            [i["ixz"], i["iyz"], i["izz"]],
-        ]
-    )
-    ev = np.linalg.eigvalsh(M)
+    M = np.asarray(inertia, dtype=float)
+    if not (math.isfinite(mass) and np.all(np.isfinite(M))):
+        return "mass and inertia must be finite numbers"
+    if mass < 0.0:
+        return f"mass {mass:g} kg is negative"
+    if not np.allclose(M, M.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(M).max()))):
+        return "the inertia tensor is not symmetric"
+    if mass > 0.0 and not point_mass and not np.any(M):
+        return (
+            f"an all-zero inertia tensor with mass {mass:g} kg (a point mass has no rotational "
+            "inertia about any axis: give the body's tensor about its centre of mass)"
+        )
+    scale = float(np.abs(M).max())
+    ev = np.linalg.eigvalsh(M / scale) * scale if scale > 0.0 else np.zeros(3)
     slack = INERTIA_SLACK * max(float(np.trace(M)), 0.0)
     moments = ", ".join(f"{v:.4g}" for v in ev)
     if ev[0] < -slack:
@@ -295,11 +328,18 @@ def _check_joints(source: str, root: ET.Element) -> dict[str, str]:
         axis = j.find("axis")
         if jtype in _MOVING and axis is not None:
             values = [float(t) for t in axis.get("xyz", "1 0 0").split()]
-            if math.sqrt(sum(v * v for v in values)) < 1e-12:
+            norm = math.sqrt(sum(v * v for v in values))
+            if norm < 1e-12:
                 raise DescriptionError(
                     source,
                     f"joint '{name}' <axis xyz='{axis.get('xyz')}'>",
                     "the axis of a moving joint must be a non-zero vector",
+                )
+            if not math.isfinite(norm):  # the URDF parser would divide by inf: a zero axis
+                raise DescriptionError(
+                    source,
+                    f"joint '{name}' <axis xyz='{axis.get('xyz')}'>",
+                    "the axis's length overflows; give a unit vector",
                 )
         lim = j.find("limit")
         if lim is not None and jtype in _MOVING:
@@ -379,3 +419,25 @@ def check_urdf(source: str, root: ET.Element, strict: bool) -> None:
     _check_size(source, root, parent_of)
     _check_inertials(source, root, strict)
     _check_transmissions(source, root)
+
+
+def unit_vector(v: Any) -> Any:
+    """``v / |v|`` computed without overflow (huge components), or ``None`` (zero, non-finite).
+
+    Args:
+        v: A vector (n,).
+
+    Returns:
+        The unit vector (n,), or ``None`` when ``v`` is zero or not finite.
+
+    """
+    import numpy as np
+
+    a = np.asarray(v, dtype=float)
+    if not np.all(np.isfinite(a)):
+        return None
+    top = float(np.abs(a).max()) if a.size else 0.0
+    if top == 0.0:
+        return None
+    a = a / top  # the largest component is 1: no overflow, no underflow to zero
+    return a / float(np.linalg.norm(a))

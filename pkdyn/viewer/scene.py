@@ -75,6 +75,15 @@ class Scene:
     ) -> None:
         if robot.visual_model.ngeoms == 0 and robot.collision_model.ngeoms == 0:
             raise PkdynError(f"{robot.name} has no geometry to draw (load it with geometry=True)")
+        if robot.missing_meshes:
+            from pkdyn.model.warn import missing_list
+
+            warnings.warn(
+                f"{robot.name}: {len(robot.missing_meshes)} mesh file(s) were not found when it "
+                f"was loaded and are not drawn: {missing_list(robot.missing_meshes)}",
+                UserWarning,
+                stacklevel=2,
+            )
         self.robot = robot
         self.record = OfflineWindow()
         windows: list[object] = [self.record]

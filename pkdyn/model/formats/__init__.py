@@ -2,13 +2,17 @@
 
 Modules: :mod:`~pkdyn.model.formats.urdf_writer` (the URDF + pkdyn-extension writer the library
 builders use), :mod:`~pkdyn.model.formats.gepetto` (Gepetto example-parallel-robots YAML
-sidecars), :mod:`~pkdyn.model.formats.mjcf` (MJCF export and the MuJoCo bridge used for
+sidecars), :mod:`~pkdyn.model.formats.mjcf` (MJCF export),
+:mod:`~pkdyn.model.formats.mjcf_state` (joints and states mapped between Pinocchio and MuJoCo),
+:mod:`~pkdyn.model.formats.mjcf_mujoco` (the compiled export and MuJoCo's actuator efforts, for
 cross-checks), :mod:`~pkdyn.model.formats.mjcf_import` and
 :mod:`~pkdyn.model.formats.mjcf_spec` (MJCF import: structure, and attributes with their
 default classes), :mod:`~pkdyn.model.formats.sdf` (SDFormat import),
 :mod:`~pkdyn.model.formats.graph` (the mechanism graph both importers fill, its spanning tree
 and Pinocchio model), :mod:`~pkdyn.model.formats.drake` (Drake's constraint elements),
 :mod:`~pkdyn.model.formats.onshape` (onshape-to-robot closing frames),
+:mod:`~pkdyn.model.formats.gazebo` (``<gazebo><joint>`` loop closures in URDF),
+:mod:`~pkdyn.model.formats.xacro_files` (xacro expansion),
 :mod:`~pkdyn.model.formats.xmldoc` (bounded regular-file reads, XML with line numbers and no
 entities).
 

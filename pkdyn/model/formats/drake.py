@@ -23,7 +23,7 @@ import pinocchio as pin
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.description import ClosureSpec, FrameRef
 
-__all__ = ["closure", "urdf_constraints"]
+__all__ = ["closure", "implicit_world", "urdf_constraints"]
 
 
 def _local(tag: str) -> str:
@@ -129,3 +129,43 @@ def urdf_constraints(root: ET.Element, source: str) -> list[ClosureSpec]:
 
         out.append(closure(el, counts[kind], source, f"<drake:{kind}> #{counts[kind]}", read))
     return out
+
+
+def implicit_world(xml: str, root: ET.Element) -> str:
+    """The URDF with Drake's implicit ``world`` link declared when a joint names it.
+
+    Drake's parser knows a ``world`` link without its ``<link name="world"/>``; the URDF parser
+    does not ("no link of that name"). The declaration is added just after the ``<robot>``
+    start tag (on the same line: line numbers are kept). Links that are no joint's child float
+    in Drake: each gets a ``floating`` joint from the world, named ``<link>_root_joint``.
+
+    Args:
+        xml: The URDF text.
+        root: Its parsed ``<robot>`` element.
+
+    Returns:
+        The text, with ``<link name="world"/>`` when a joint's parent is an undeclared
+        ``world``.
+
+    """
+    if any(el.get("name") == "world" for el in root.findall("link")):
+        return xml
+    used = any(p.get("link") == "world" for j in root.findall("joint") for p in j.findall("parent"))
+    if not used:
+        return xml
+    from pkdyn.model.formats.xmldoc import root_start
+
+    m = root_start(xml)
+    end = xml.find(">", m.end()) if m is not None else -1
+    if end < 0:
+        return xml
+    if xml[end - 1] == "/":  # <robot/>: nothing to add to
+        return xml
+    children = {c.get("link") for j in root.findall("joint") for c in j.findall("child")}
+    roots = [str(el.get("name")) for el in root.findall("link") if el.get("name") not in children]
+    added = '<link name="world"/>' + "".join(
+        f'<joint name="{r}_root_joint" type="floating"><parent link="world"/>'
+        f'<child link="{r}"/></joint>'
+        for r in roots
+    )
+    return xml[: end + 1] + added + xml[end + 1 :]

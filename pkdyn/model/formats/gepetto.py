@@ -49,6 +49,9 @@ __all__ = ["MAX_NODES", "Sidecar", "apply_joint_types", "loop_frames", "read_sid
 MAX_NODES = 100_000
 """Largest number of YAML nodes in a sidecar."""
 
+MAX_DEPTH = 50
+"""Deepest nesting of YAML collections in a sidecar (a sidecar nests 3 levels)."""
+
 _TYPES = {"3d": "point", "6d": "weld"}
 _KEYS = ("closed_loop", "type", "name_mot", "joint_name", "joint_type", "free_flyer", "platform")
 _UJOINT = re.compile(r"^UJOINT_([XYZ])([XYZ])$")
@@ -82,6 +85,7 @@ class _Loader(yaml.SafeLoader):
     """Safe YAML without anchors and aliases, and with a bounded number of nodes."""
 
     nodes = 0
+    depth = 0
 
     def compose_node(self, parent: Any, index: Any) -> Any:  # noqa: D102
         if self.check_event(yaml.AliasEvent):
@@ -98,7 +102,15 @@ class _Loader(yaml.SafeLoader):
         self.nodes += 1
         if self.nodes > MAX_NODES:
             raise yaml.YAMLError(f"more than {MAX_NODES} YAML nodes")
-        return super().compose_node(parent, index)
+        self.depth += 1  # the composer recurses once per level: bounded before Python's limit
+        if self.depth > MAX_DEPTH:
+            raise yaml.YAMLError(
+                f"nested deeper than {MAX_DEPTH} levels (line {event.start_mark.line + 1})"
+            )
+        try:
+            return super().compose_node(parent, index)
+        finally:
+            self.depth -= 1
 
 
 def _strings(src: str, key: str, value: Any) -> list[str]:
@@ -196,6 +208,10 @@ def read_sidecar(path: str | os.PathLike[str]) -> Sidecar:
 
 
 def _numbers(src: str, key: str, value: Any, n: int) -> np.ndarray:
+    if isinstance(value, str):  # "0 0 0.1": numbers in one string (never its characters)
+        value = value.split()
+    if not isinstance(value, list) or any(isinstance(v, bool) for v in value):
+        raise DescriptionError(src, key, f"expected a list of {n} numbers, got {value!r}")
     try:
         out = np.array([float(v) for v in value], dtype=float)
     except (TypeError, ValueError):

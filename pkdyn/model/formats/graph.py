@@ -10,7 +10,9 @@ returns the Pinocchio model:
   in file order, following each joint from its parent to its child (so loops are cut at the
   joints farthest from a root); a joint whose child is already in the tree closes a loop
   and becomes a closure (``ball`` -> ``point``, ``revolute`` -> ``hinge`` about its axis,
-  ``fixed`` -> ``weld``; other kinds are refused, naming the joint);
+  ``fixed`` -> ``weld``); a prismatic (or other) joint that would close a loop swaps places with
+  the closable tree joint that reached the same body; when there is none, it is refused, naming
+  the joint;
 - a body without a parent joint is welded to the world (an importer that wants it floating
   gives it a ``free`` joint);
 - Pinocchio joints are added depth first along the tree, in file order (MuJoCo's order);
@@ -34,6 +36,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.description import ActuatorSpec, ClosureSpec, FrameRef, PassiveSpec
+from pkdyn.model.validate import unit_vector
 from pkdyn.model.warn import warn
 
 __all__ = ["WORLD", "Body", "Geometry", "Joint", "Mechanism", "Built", "build"]
@@ -151,6 +154,7 @@ class Mechanism:
         actuators: Actuators.
         gravity: Gravity vector [m/s^2].
         home: Named configurations (joint name -> coordinates, Pinocchio convention).
+        missing_meshes: Mesh files that were not found (their shapes are left out).
 
     """
 
@@ -162,6 +166,7 @@ class Mechanism:
     actuators: list[ActuatorSpec] = field(default_factory=list)
     gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
     home: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    missing_meshes: list[str] = field(default_factory=list)
 
     def add_body(self, body: Body, where: str = "") -> Body:
         """Add a body; its name must be new."""
@@ -219,7 +224,10 @@ class Built:
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
-    return np.asarray(v, dtype=float) / float(np.linalg.norm(v))
+    u = unit_vector(v)
+    if u is None:
+        raise ValueError(f"zero or non-finite axis {v}")  # importers refuse these first
+    return np.asarray(u)
 
 
 def _axis_model(kind: str, axis: np.ndarray) -> pin.JointModel:
@@ -319,6 +327,7 @@ def spanning_tree(mech: Mechanism) -> tuple[list[Joint], list[Joint]]:
                     chosen[b].append(j)
                     nxt.append(j.child)
         frontier = nxt
+    _prefer_cuttable(chosen, cut, {id(j): k for k, j in enumerate(mech.joints)})
     tree: list[Joint] = []
     for root in roots:  # then depth first, in file order: MuJoCo's joint (and qpos) order
         stack = list(reversed(chosen[root]))
@@ -341,9 +350,40 @@ def spanning_tree(mech: Mechanism) -> tuple[list[Joint], list[Joint]]:
     return tree, cut
 
 
+_CUT_KINDS = {"ball": "point", "revolute": "hinge", "fixed": "weld"}
+
+
+def _prefer_cuttable(
+    chosen: dict[str, list[Joint]], cut: list[Joint], order: dict[int, int]
+) -> None:
+    """Swap a cut joint that cannot close a loop (prismatic...) with the tree joint beside it.
+
+    When a joint ``J`` that no closure can replace closes a loop at body ``c``, and the tree
+    joint ``T`` that reached ``c`` can (ball, revolute, fixed), ``J`` joins the tree and ``T``
+    closes the loop instead, unless ``J``'s parent hangs below ``c`` (the tree would cycle).
+    """
+    parent_joint = {j.child: j for joints in chosen.values() for j in joints}
+    for J in [j for j in cut if j.kind not in _CUT_KINDS]:
+        T = parent_joint.get(J.child)
+        if T is None or T.kind not in _CUT_KINDS:
+            continue
+        below, stack = set(), [J.child]
+        while stack:  # the subtree of c
+            b = stack.pop()
+            below.add(b)
+            stack.extend(j.child for j in chosen.get(b, []))
+        if J.parent in below:
+            continue
+        chosen[T.parent].remove(T)
+        chosen[J.parent].append(J)
+        chosen[J.parent].sort(key=lambda j: order[id(j)])
+        parent_joint[J.child] = J
+        cut[cut.index(J)] = T
+
+
 def _cut_closure(mech: Mechanism, j: Joint) -> ClosureSpec:
     """Closure replacing a joint that closes a loop."""
-    kinds = {"ball": "point", "revolute": "hinge", "fixed": "weld"}
+    kinds = _CUT_KINDS
     if j.kind not in kinds:
         raise DescriptionError(
             mech.source,
@@ -426,11 +466,15 @@ def build(mech: Mechanism) -> Built:
         model.addFrame(pin.Frame(j.name, jid, pin.SE3.Identity(), pin.JOINT), False)
         where[j.child] = (jid, jMc)
         q_ref.append((jm.idx_q, qr))
+    closures = list(mech.closures) + [_cut_closure(mech, j) for j in cut]
+    referenced = {f.link for c in closures for f in (c.frame1, c.frame2)}
     for b in mech.bodies.values():
         jid, jMb = where[b.name]
         model.appendBodyToJoint(jid, b.inertia, jMb)
         if not b.virtual:
             body_frames[b.name] = model.addFrame(pin.Frame(b.name, jid, jMb, pin.BODY), False)
+        elif b.name in referenced:  # an intermediate body a closure holds (a cut revolute2)
+            model.addFrame(pin.Frame(b.name, jid, jMb, pin.OP_FRAME), False)
         for name, bMf in b.frames:
             model.addFrame(pin.Frame(name, jid, jMb * bMf, pin.OP_FRAME), False)
     q = pin.neutral(model)
@@ -447,7 +491,6 @@ def build(mech: Mechanism) -> Built:
                 )
                 go.meshColor = np.asarray(g.rgba, dtype=float)
                 gm.addGeometryObject(go)
-    closures = list(mech.closures) + [_cut_closure(mech, j) for j in cut]
     return Built(model, visual, collision, closures, q, joint_ids, [j.name for j in cut], passive)
 
 

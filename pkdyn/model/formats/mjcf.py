@@ -1,4 +1,4 @@
-"""MJCF export: a MuJoCo model of any loaded robot, and the map between the two state spaces.
+"""MJCF export: a MuJoCo model of any loaded robot (its joints and states: ``mjcf_state``).
 
 The exported model has one MuJoCo body per Pinocchio joint, whose frame *is* that joint's frame
 (body ``pos``/``quat`` = the joint placement in its parent joint's frame), so body poses agree
@@ -35,12 +35,10 @@ velocity limits, meshes in formats MuJoCo cannot read (skipped with a warning). 
 equality constraints are soft (``solref``, ``solimp``); the defaults below make them stiff for
 the chosen time step.
 
-:class:`StateMap` converts states: Pinocchio stores quaternions ``(x, y, z, w)``, MuJoCo
-``(w, x, y, z)``; a free-flyer's Pinocchio velocity is the body's spatial velocity in its own
-frame, MuJoCo's has the linear part in world axes (``qvel_lin = R v_lin``, and
-``qacc_lin = R (a_lin + w x v_lin)``); a planar joint likewise in the plane; ball velocities
-are local angular velocities in both. Generalized forces map by power: ``f = T^T f_mj`` with
-``qvel = T v``.
+The export's joints and state vectors are mapped by :class:`~pkdyn.model.formats.mjcf_state.
+StateMap` (:mod:`~pkdyn.model.formats.mjcf_state`); the compiled MuJoCo model and the actuator
+efforts of MuJoCo's inverse dynamics are in :mod:`~pkdyn.model.formats.mjcf_mujoco`. Their public
+names are importable from here too (``from pkdyn.model.formats.mjcf import StateMap``).
 """
 
 from __future__ import annotations
@@ -49,17 +47,18 @@ import math
 import os
 import warnings
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import DescriptionError, OutputError, PkdynError
+from pkdyn.exceptions import OutputError, PkdynError
 from pkdyn.files import atomic_write
+from pkdyn.model.formats.mjcf_mujoco import actuator_efforts, mujoco_model
+from pkdyn.model.formats.mjcf_state import JointMap, StateMap
+from pkdyn.model.formats.mjcf_state import quat_wxyz as _quat_wxyz
 from pkdyn.model.robot import Robot
-from solvers.numerics import lstsq, machine_rtol
 
 __all__ = [
     "JointMap",
@@ -101,46 +100,6 @@ class MjcfOptions:
     collision: bool = True
 
 
-@dataclass(frozen=True)
-class JointMap:
-    """Where one Pinocchio joint lives in both state vectors.
-
-    Attributes:
-        name: Pinocchio joint name.
-        kind: ``hinge``, ``hinge_unbounded`` (Pinocchio stores cos, sin), ``slide``, ``ball``,
-            ``free``, ``planar``, or ``multi`` (several 1-dof MuJoCo joints: universal,
-            translation, spherical ZYX; coordinates shared one to one).
-        idx_q: First Pinocchio configuration index.
-        nq: Number of Pinocchio configuration coordinates.
-        idx_v: First Pinocchio velocity index.
-        nv: Number of velocity coordinates (equal in both).
-        qpos: First MuJoCo ``qpos`` index.
-        dof: First MuJoCo ``qvel`` index.
-        mj_joints: Names of the MuJoCo joints, in order.
-
-    """
-
-    name: str
-    kind: str
-    idx_q: int
-    nq: int
-    idx_v: int
-    nv: int
-    qpos: int
-    dof: int
-    mj_joints: tuple[str, ...]
-
-
-@dataclass
-class _MjJoint:
-    """One MuJoCo joint element to write."""
-
-    name: str
-    type: str
-    axis: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
-    range: tuple[float, float] | None = None
-
-
 def _num(x: float) -> str:
     """Shortest text that reads back as the same double."""
     text = repr(float(x))
@@ -149,325 +108,6 @@ def _num(x: float) -> str:
 
 def _fmt(x: np.ndarray | list[float] | tuple[float, ...]) -> str:
     return " ".join(_num(v) for v in np.ravel(x))
-
-
-def _quat_wxyz(R: np.ndarray) -> np.ndarray:
-    c = pin.Quaternion(np.asarray(R, dtype=float)).coeffs()  # x y z w
-    return np.array([c[3], c[0], c[1], c[2]])
-
-
-def _placement(jm: pin.JointModel, v: np.ndarray) -> pin.SE3:
-    """Joint placement ``M(q)`` at ``q = neutral (+) v`` (a copy).
-
-    Axes are read from placements, not from the motion subspace ``jd.S``: Pinocchio 4.1 leaves
-    some entries of a universal joint's ``S`` uninitialised.
-    """
-    m = pin.Model()
-    m.addJoint(0, jm, pin.SE3.Identity(), "j")
-    d = m.createData()
-    pin.forwardKinematics(m, d, pin.integrate(m, pin.neutral(m), np.asarray(v, dtype=float)))
-    return pin.SE3(d.oMi[1])
-
-
-def _unit(x: np.ndarray) -> np.ndarray:
-    return x / np.linalg.norm(x)
-
-
-def _joint_elements(model: pin.Model, jid: int, source: str) -> tuple[str, list[_MjJoint]]:
-    """Kind (see :class:`JointMap`) and MuJoCo joint elements of Pinocchio joint ``jid``."""
-    jm = model.joints[jid]
-    name = model.names[jid]
-    short = jm.shortname()
-    lo, hi = model.lowerPositionLimit, model.upperPositionLimit
-
-    def limits(i: int) -> tuple[float, float] | None:
-        a, b = float(lo[i]), float(hi[i])
-        return (a, b) if math.isfinite(a) and math.isfinite(b) and a < b else None
-
-    if short == "JointModelFreeFlyer":
-        if model.parents[jid] != 0:
-            raise DescriptionError(
-                source,
-                f"joint '{name}'",
-                "a free-flyer joint must hang on the world to be exported to MuJoCo",
-            )
-        return "free", [_MjJoint(name, "free")]
-    if short == "JointModelSpherical":
-        return "ball", [_MjJoint(name, "ball")]
-    if short.startswith(("JointModelRUB", "JointModelRevoluteUnbounded")):
-        axis = _unit(pin.log3(_placement(jm, np.ones(1)).rotation))
-        return "hinge_unbounded", [_MjJoint(name, "hinge", axis)]
-    if short.startswith(("JointModelR", "JointModelRevolute")):
-        axis = _unit(pin.log3(_placement(jm, np.ones(1)).rotation))
-        return "hinge", [_MjJoint(name, "hinge", axis, limits(jm.idx_q))]
-    if short.startswith(("JointModelP", "JointModelPrismatic")) and short != "JointModelPlanar":
-        axis = _unit(_placement(jm, np.ones(1)).translation)
-        return "slide", [_MjJoint(name, "slide", axis, limits(jm.idx_q))]
-    if short == "JointModelUniversal":  # M(q1, 0) = exp(q1 axis1), M(0, q2) = exp(q2 axis2)
-        axes = tuple(_unit(pin.log3(_placement(jm, e).rotation)) for e in np.eye(2))
-        return "multi", [_MjJoint(f"{name}_{k + 1}", "hinge", a) for k, a in enumerate(axes)]
-    if short == "JointModelPlanar":
-        e = np.eye(3)
-        return "planar", [
-            _MjJoint(f"{name}_x", "slide", e[0]),
-            _MjJoint(f"{name}_y", "slide", e[1]),
-            _MjJoint(f"{name}_rz", "hinge", e[2]),
-        ]
-    if short == "JointModelTranslation":
-        e = np.eye(3)
-        return "multi", [
-            _MjJoint(f"{name}_{c}", "slide", e[k], limits(jm.idx_q + k))
-            for k, c in enumerate("xyz")
-        ]
-    if short == "JointModelSphericalZYX":
-        e = np.eye(3)
-        return "multi", [
-            _MjJoint(f"{name}_{c}", "hinge", e[k], limits(jm.idx_q + i))
-            for i, (k, c) in enumerate(((2, "z"), (1, "y"), (0, "x")))
-        ]
-    raise DescriptionError(
-        source, f"joint '{name}'", f"{short} has no MuJoCo equivalent; it cannot be exported"
-    )
-
-
-def _body_names(model: pin.Model) -> list[str]:
-    """MuJoCo body name of each joint: its child link's name (the first body frame on it)."""
-    names = ["world"] + [""] * (model.njoints - 1)
-    for f in model.frames:
-        j = f.parentJoint
-        if j > 0 and not names[j] and f.type == pin.FrameType.BODY:
-            names[j] = f.name
-    used: set[str] = {"world"}
-    for j in range(1, model.njoints):
-        base = names[j] or model.names[j]
-        n, k = base, 1
-        while n in used:
-            n, k = f"{base}_{k}", k + 1
-        names[j] = n
-        used.add(n)
-    return names
-
-
-def _dfs(model: pin.Model) -> list[int]:
-    """Joint ids in the depth-first order of the written body tree (MuJoCo's qpos order)."""
-    children: dict[int, list[int]] = {j: [] for j in range(model.njoints)}
-    for j in range(1, model.njoints):
-        children[model.parents[j]].append(j)
-    order: list[int] = []
-    stack = list(reversed(children[0]))
-    while stack:
-        j = stack.pop()
-        order.append(j)
-        stack.extend(reversed(children[j]))
-    return order
-
-
-class StateMap:
-    """Conversion of states and forces between a robot's Pinocchio model and its MJCF export.
-
-    Args:
-        robot: The robot (its model decides the layout; no MuJoCo needed).
-
-    Raises:
-        DescriptionError: A joint has no MuJoCo equivalent.
-
-    """
-
-    def __init__(self, robot: Robot) -> None:
-        model = robot.model
-        self.model = model
-        self.body_names = _body_names(model)
-        self.order = _dfs(model)
-        self.elements: dict[int, list[_MjJoint]] = {}
-        joints: list[JointMap] = []
-        qpos = dof = 0
-        for j in self.order:
-            kind, els = _joint_elements(model, j, robot.source)
-            self.elements[j] = els
-            jm = model.joints[j]
-            names = tuple(e.name for e in els)
-            joints.append(
-                JointMap(model.names[j], kind, jm.idx_q, jm.nq, jm.idx_v, jm.nv, qpos, dof, names)
-            )
-            qpos += {"free": 7, "ball": 4}.get(kind, len(els))
-            dof += jm.nv
-        self._index(joints, qpos, dof)
-
-    def _index(self, joints: list[JointMap], nq: int, nv: int) -> None:
-        self.joints = tuple(joints)
-        self.nq = nq
-        self.nv = nv
-        self._dof_of_v = np.empty(self.model.nv, dtype=int)
-        for jm_ in joints:
-            self._dof_of_v[jm_.idx_v : jm_.idx_v + jm_.nv] = np.arange(jm_.dof, jm_.dof + jm_.nv)
-        self._nonlinear = [jm for jm in joints if jm.kind in ("free", "planar")]
-
-    @classmethod
-    def by_name(cls, robot: Robot, mj_model: Any) -> StateMap:
-        """The map between a robot and a MuJoCo model of it pkdyn did not write.
-
-        For a robot loaded from an MJCF file and the ``mujoco.MjModel`` of that file: joints
-        are matched by name (each MuJoCo joint is a Pinocchio joint of the same name; the two
-        joint orders may differ), ``qpos`` / ``qvel`` addresses are MuJoCo's. Coordinates
-        then agree as pkdyn's MJCF importer writes them: a hinge or slide coordinate is
-        MuJoCo's ``qpos`` itself (``ref`` included: the importer places the joint so that
-        ``q = ref`` is the file's pose), a ball quaternion is reordered (MuJoCo ``w x y z``,
-        Pinocchio ``x y z w``), a free joint's linear velocity is turned from world axes
-        (MuJoCo) to the body's axes (Pinocchio).
-
-        Args:
-            robot: The robot.
-            mj_model: The ``mujoco.MjModel``.
-
-        Returns:
-            The map (``qpos``, ``qvel``, ``qacc``, ``force`` and their inverses).
-
-        Raises:
-            DescriptionError: A MuJoCo joint has no Pinocchio joint of that name and kind, or
-                a Pinocchio joint no MuJoCo one.
-
-        """
-        self = cls.__new__(cls)
-        model = robot.model
-        self.model = model
-        self.body_names, self.order, self.elements = [], [], {}
-        kinds = {0: ("free", 7, 6), 1: ("ball", 4, 3), 2: ("slide", 1, 1), 3: ("hinge", 1, 1)}
-        joints: list[JointMap] = []
-        for j in range(int(mj_model.njnt)):
-            name = str(mj_model.joint(j).name)
-            kind, nq, nv = kinds[int(mj_model.jnt_type[j])]
-            jid = model.getJointId(name) if model.existJointName(name) else model.njoints
-            jm = model.joints[jid] if jid < model.njoints else None
-            if jm is None or jm.nq != nq or jm.nv != nv:
-                raise DescriptionError(
-                    robot.source,
-                    f"MuJoCo joint '{name}'",
-                    f"no Pinocchio {kind} joint of that name",
-                )
-            qpos, dof = int(mj_model.jnt_qposadr[j]), int(mj_model.jnt_dofadr[j])
-            joints.append(JointMap(name, kind, jm.idx_q, nq, jm.idx_v, nv, qpos, dof, (name,)))
-        if sum(jm.nv for jm in joints) != model.nv:
-            raise DescriptionError(
-                robot.source, "MuJoCo model", "its joints do not cover the robot's coordinates"
-            )
-        self._index(joints, int(mj_model.nq), int(mj_model.nv))
-        return self
-
-    def qpos(self, q: np.ndarray) -> np.ndarray:
-        """MuJoCo ``qpos`` of a Pinocchio configuration ``q`` (nq,)."""
-        out = np.empty(self.nq)
-        for jm in self.joints:
-            a, i = jm.qpos, jm.idx_q
-            if jm.kind == "ball":
-                out[a : a + 4] = q[i + 3], q[i], q[i + 1], q[i + 2]
-            elif jm.kind == "free":
-                M = self._free_placement(jm, q)
-                out[a : a + 3] = M.translation
-                out[a + 3 : a + 7] = _quat_wxyz(M.rotation)
-            elif jm.kind == "hinge_unbounded":
-                out[a] = math.atan2(q[i + 1], q[i])
-            elif jm.kind == "planar":
-                out[a : a + 3] = q[i], q[i + 1], math.atan2(q[i + 3], q[i + 2])
-            else:
-                out[a : a + jm.nq] = q[i : i + jm.nq]
-        return out
-
-    def q(self, qpos: np.ndarray) -> np.ndarray:
-        """Pinocchio configuration of a MuJoCo ``qpos``."""
-        model = self.model
-        out = np.empty(model.nq)
-        for jm in self.joints:
-            a, i = jm.qpos, jm.idx_q
-            if jm.kind == "ball":
-                out[i : i + 4] = qpos[a + 1], qpos[a + 2], qpos[a + 3], qpos[a]
-            elif jm.kind == "free":
-                w, x, y, z = qpos[a + 3 : a + 7]
-                oM = pin.SE3(pin.Quaternion(w, x, y, z).normalized().matrix(), qpos[a : a + 3])
-                jid = model.getJointId(jm.name)
-                M = model.jointPlacements[jid].actInv(oM)
-                out[i : i + 7] = pin.SE3ToXYZQUAT(M)
-            elif jm.kind == "hinge_unbounded":
-                out[i : i + 2] = math.cos(qpos[a]), math.sin(qpos[a])
-            elif jm.kind == "planar":
-                th = qpos[a + 2]
-                out[i : i + 4] = qpos[a], qpos[a + 1], math.cos(th), math.sin(th)
-            else:
-                out[i : i + jm.nq] = qpos[a : a + jm.nq]
-        return out
-
-    def _free_placement(self, jm: JointMap, q: np.ndarray) -> pin.SE3:
-        jid = self.model.getJointId(jm.name)
-        return self.model.jointPlacements[jid] * pin.XYZQUATToSE3(q[jm.idx_q : jm.idx_q + 7])
-
-    def _rotations(self, q: np.ndarray) -> list[tuple[JointMap, np.ndarray]]:
-        """World (free) or in-plane (planar) rotation of each joint whose velocity is remapped."""
-        out = []
-        for jm in self._nonlinear:
-            if jm.kind == "free":
-                out.append((jm, self._free_placement(jm, q).rotation))
-            else:
-                c, s = q[jm.idx_q + 2], q[jm.idx_q + 3]
-                out.append((jm, np.array([[c, -s], [s, c]])))
-        return out
-
-    def velocity_matrix(self, q: np.ndarray) -> np.ndarray:
-        """``T`` (nv_mj, nv) with ``qvel = T v`` at configuration ``q``."""
-        T = np.zeros((self.nv, self.model.nv))
-        T[self._dof_of_v, np.arange(self.model.nv)] = 1.0
-        for jm, R in self._rotations(q):
-            n = R.shape[0]
-            T[jm.dof : jm.dof + n, jm.idx_v : jm.idx_v + n] = R
-        return T
-
-    def qvel(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """MuJoCo ``qvel`` of a Pinocchio velocity ``v`` (nv,) at ``q``."""
-        out = np.empty(self.nv)
-        out[self._dof_of_v] = v
-        for jm, R in self._rotations(q):
-            n = R.shape[0]
-            out[jm.dof : jm.dof + n] = R @ v[jm.idx_v : jm.idx_v + n]
-        return out
-
-    def v(self, q: np.ndarray, qvel: np.ndarray) -> np.ndarray:
-        """Pinocchio velocity of a MuJoCo ``qvel`` at the Pinocchio configuration ``q``."""
-        out = np.asarray(qvel, dtype=float)[self._dof_of_v].copy()
-        for jm, R in self._rotations(q):
-            n = R.shape[0]
-            out[jm.idx_v : jm.idx_v + n] = R.T @ qvel[jm.dof : jm.dof + n]
-        return out
-
-    def _coriolis(self, jm: JointMap, v: np.ndarray) -> np.ndarray:
-        """``w x v_lin`` of a free-flyer or planar joint (local frame)."""
-        i = jm.idx_v
-        if jm.kind == "free":
-            return np.cross(v[i + 3 : i + 6], v[i : i + 3])
-        return v[i + 2] * np.array([-v[i + 1], v[i]])
-
-    def qacc(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
-        """MuJoCo ``qacc`` of a Pinocchio acceleration ``a`` at ``(q, v)``."""
-        out = np.empty(self.nv)
-        out[self._dof_of_v] = a
-        for jm, R in self._rotations(q):
-            n = R.shape[0]
-            out[jm.dof : jm.dof + n] = R @ (a[jm.idx_v : jm.idx_v + n] + self._coriolis(jm, v))
-        return out
-
-    def a(self, q: np.ndarray, v: np.ndarray, qacc: np.ndarray) -> np.ndarray:
-        """Pinocchio acceleration of a MuJoCo ``qacc`` at the Pinocchio state ``(q, v)``."""
-        out = np.asarray(qacc, dtype=float)[self._dof_of_v].copy()
-        for jm, R in self._rotations(q):
-            n = R.shape[0]
-            i = jm.idx_v
-            out[i : i + n] = R.T @ qacc[jm.dof : jm.dof + n] - self._coriolis(jm, v)
-        return out
-
-    def force(self, q: np.ndarray, f_mj: np.ndarray) -> np.ndarray:
-        """Pinocchio generalized force of a MuJoCo one (``qfrc_*``): ``T^T f_mj`` (same power)."""
-        out = np.asarray(f_mj, dtype=float)[self._dof_of_v].copy()
-        for jm, R in self._rotations(q):
-            n = R.shape[0]
-            out[jm.idx_v : jm.idx_v + n] = R.T @ f_mj[jm.dof : jm.dof + n]
-        return out
 
 
 # ---------------------------------------------------------------------------------- writing
@@ -756,63 +396,3 @@ def write_mjcf(
             fh.write(text)
     except OSError as err:
         raise OutputError(str(path), err.strerror or str(err)) from None
-
-
-# ---------------------------------------------------------------------------------- MuJoCo side
-
-
-def mujoco_model(robot: Robot, options: MjcfOptions | None = None) -> Any:
-    """The export of ``robot`` compiled by MuJoCo.
-
-    Args:
-        robot: A loaded robot.
-        options: Simulation options.
-
-    Returns:
-        The ``mujoco.MjModel``.
-
-    Raises:
-        ImportError: MuJoCo is not installed (``pip install mujoco``).
-
-    """
-    try:
-        import mujoco
-    except ImportError as err:  # an optional dependency of the core
-        raise ImportError("MuJoCo is not installed: pip install mujoco") from err
-    return mujoco.MjModel.from_xml_string(to_mjcf(robot, options))
-
-
-def actuator_efforts(model: Any, data: Any) -> np.ndarray:
-    """Actuator forces that explain MuJoCo's inverse dynamics through the closures.
-
-    The least-squares solution of ``[moment^T  J_eq^T] [tau; lambda] = qfrc_inverse`` after
-    ``mujoco.mj_inverse``, with ``J_eq`` the rows of MuJoCo's constraint Jacobian that belong to
-    equality constraints (the closures) and ``moment`` the actuator moment arm (the gears).
-    Unique when the actuation is not redundant, whatever the redundancy of the closure rows.
-
-    Args:
-        model: The ``mujoco.MjModel``.
-        data: Its ``mujoco.MjData`` after ``mj_inverse``.
-
-    Returns:
-        Actuator forces (nu,) in actuation space (motor-side efforts for geared motors).
-
-    """
-    import mujoco
-
-    nv, nefc = model.nv, data.nefc
-    if mujoco.mj_isSparse(model):
-        J = np.zeros((nefc, nv))
-        mujoco.mju_sparse2dense(
-            J, data.efc_J, data.efc_J_rownnz, data.efc_J_rowadr, data.efc_J_colind
-        )
-    else:
-        J = np.asarray(data.efc_J).reshape(-1)[: nefc * nv].reshape(nefc, nv)
-    eq = np.asarray(data.efc_type[:nefc]) == mujoco.mjtConstraint.mjCNSTR_EQUALITY
-    moment = np.zeros((model.nu, nv))
-    mujoco.mju_sparse2dense(
-        moment, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind
-    )
-    A = np.hstack([moment.T, J[eq].T])
-    x = lstsq(A, np.asarray(data.qfrc_inverse), machine_rtol(A))
-    return np.asarray(x[: model.nu])

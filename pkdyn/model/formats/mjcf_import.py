@@ -48,13 +48,24 @@ from pkdyn.model.description import ActuatorSpec, ClosureSpec, FrameRef
 from pkdyn.model.formats import mjcf_spec as spec
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
 from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml, read_text
-from pkdyn.model.warn import warn
+from pkdyn.model.validate import unit_vector
+from pkdyn.model.warn import warn, warn_missing_meshes
 
-__all__ = ["read_mjcf"]
+__all__ = ["MAX_BODIES", "MAX_DEPTH", "MAX_INCLUDES", "MAX_INCLUDE_DEPTH", "read_mjcf"]
 
 _REFUSED_IN_BODY = ("composite", "flexcomp", "replicate", "attach", "plugin")
 _IGNORED_IN_BODY = ("camera", "light")
-_MAX_INCLUDE_DEPTH = 8
+MAX_INCLUDE_DEPTH = 8
+"""Deepest nesting of ``<include>`` files."""
+
+MAX_INCLUDES = 100
+"""Most ``<include>`` elements one model may expand, in all."""
+
+MAX_DEPTH = 200
+"""Deepest nesting of ``<body>`` and ``<frame>`` elements (real robots: about 20)."""
+
+MAX_BODIES = 10_000
+"""Most bodies in one model (a humanoid has about 30; MuJoCo scenes of many robots, hundreds)."""
 
 
 @dataclass
@@ -66,35 +77,95 @@ class _Reader:
     meshes: dict[str, tuple[str, np.ndarray]] = field(default_factory=dict)
     materials: dict[str, np.ndarray] = field(default_factory=dict)
     missing: list[str] = field(default_factory=list)
+    lost_inertia: list[str] = field(default_factory=list)  # bodies whose mesh mass is missing
     mj_joints: list[tuple[str, str]] = field(default_factory=list)  # (name, type), qpos order
     joint_types: dict[str, str] = field(default_factory=dict)
     sites: dict[str, tuple[str, pin.SE3]] = field(default_factory=dict)
     geometry: bool = True
 
 
-def _includes(doc: XmlDoc, el: ET.Element, base: Path | None, depth: int) -> None:
-    """Replace ``<include file>`` elements by the children of the included documents."""
-    for k, child in enumerate(list(el)):
-        if child.tag == "include":
-            if depth >= _MAX_INCLUDE_DEPTH:
-                raise doc.error(child, f"includes nested deeper than {_MAX_INCLUDE_DEPTH} levels")
+def _includes(doc: XmlDoc, root: ET.Element, base: Path | None) -> None:
+    """Replace ``<include file>`` elements by the children of the included documents.
+
+    Iterative (any nesting of elements), with the nesting of includes capped at
+    :data:`MAX_INCLUDE_DEPTH` levels and their number at :data:`MAX_INCLUDES` (a tree of files
+    each including the next ten times would otherwise multiply), and the included text at
+    :data:`~pkdyn.model.formats.xmldoc.MAX_FILE_BYTES` in all.
+    """
+    from pkdyn.model.formats.xmldoc import MAX_FILE_BYTES
+
+    origin: dict[int, tuple[Path | None, int]] = {}  # included elements: their file, depth
+    count, size = 0, 0
+    stack: list[tuple[ET.Element, Path | None, int]] = [(root, base, 0)]
+    while stack:
+        el, b, depth = stack.pop()
+        i = 0
+        while i < len(el):
+            child = el[i]
+            cb, cd = origin.get(id(child), (b, depth))
+            if child.tag != "include":
+                stack.append((child, cb, cd))
+                i += 1
+                continue
+            if cd >= MAX_INCLUDE_DEPTH:
+                raise doc.error(child, f"includes nested deeper than {MAX_INCLUDE_DEPTH} levels")
+            count += 1
+            if count > MAX_INCLUDES:
+                raise doc.error(
+                    child, f"more than {MAX_INCLUDES} <include> elements in one model (in all)"
+                )
             name = child.get("file")
             if not name:
                 raise doc.error(child, "missing attribute 'file'")
-            path = (base / name) if base is not None and not os.path.isabs(name) else Path(name)
+            path = (cb / name) if cb is not None and not os.path.isabs(name) else Path(name)
             if not path.is_file():
                 raise doc.error(child, f"included file '{path}' does not exist")
-            sub = parse_xml(read_text(path, "included file"), str(path), path)
+            text = read_text(path, "included file")
+            size += len(text)
+            if size > MAX_FILE_BYTES:
+                raise doc.error(
+                    child, f"the included files exceed {MAX_FILE_BYTES // 2**20} MiB in all"
+                )
+            sub = parse_xml(text, str(path), path)
             if sub.root.tag != "mujoco":
                 raise doc.error(child, f"included file '{path}' is not an MJCF document")
-            _includes(sub, sub.root, path.parent, depth + 1)
             doc.merge(sub)
             el.remove(child)
-            for i, grandchild in enumerate(list(sub.root)):
-                el.insert(k + i, grandchild)
-            _includes(doc, el, base, depth)  # positions shifted: start over on this level
-            return
-        _includes(doc, child, base, depth)
+            for k, grandchild in enumerate(list(sub.root)):
+                el.insert(i + k, grandchild)
+                origin[id(grandchild)] = (path.parent, cd + 1)
+
+
+def _check_size(doc: XmlDoc, root: ET.Element) -> None:
+    """Bounded work: the number of bodies, the nesting depth and Pinocchio's data, up front."""
+    from pkdyn.model.validate import check_data_size
+
+    bodies = nv = 0
+    dofs = {"hinge": 1, "slide": 1, "ball": 3, "free": 6}
+    stack: list[tuple[ET.Element, int]] = [(w, 0) for w in root if w.tag == "worldbody"]
+    while stack:
+        el, depth = stack.pop()
+        for child in el:
+            if child.tag in ("body", "frame"):
+                if depth + 1 > MAX_DEPTH:
+                    raise doc.error(
+                        child,
+                        f"bodies and frames nested deeper than {MAX_DEPTH} levels (real robots "
+                        "nest about 20)",
+                    )
+                bodies += child.tag == "body"
+                if bodies > MAX_BODIES:
+                    raise doc.error(
+                        child,
+                        f"more than {MAX_BODIES} bodies: pkdyn reads models of at most "
+                        f"{MAX_BODIES} bodies",
+                    )
+                stack.append((child, depth + 1))
+            elif child.tag == "freejoint":
+                nv += 6
+            elif child.tag == "joint":
+                nv += dofs.get(child.get("type", "hinge"), 1)
+    check_data_size(doc.source, nv, bodies)
 
 
 def _sections(root: ET.Element, tag: str) -> list[ET.Element]:
@@ -123,7 +194,8 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
     if root.tag != "mujoco":
         raise doc.error(root, "the root element of an MJCF file must be <mujoco>")
     base = path.parent if path is not None else None
-    _includes(doc, root, base, 0)
+    _includes(doc, root, base)
+    _check_size(doc, root)
     comp = spec.Compiler.read(doc, _sections(root, "compiler"))
     defs = spec.Defaults(doc, _sections(root, "default"))
     mech = Mechanism(root.get("model", "mujoco"), source)
@@ -160,12 +232,8 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
             if key.tag == "key" and key.get("name") == "home" and "qpos" in key.attrib:
                 mech.home["home"] = _keyframe(r, key)
     if r.missing:
-        names = sorted(set(r.missing))
-        warn(
-            f"{source}: {len(names)} mesh file(s) not found, their geometry is left out: "
-            + ", ".join(names[:5])
-            + (f" and {len(names) - 5} more" if len(names) > 5 else "")
-        )
+        mech.missing_meshes = sorted(set(r.missing))
+        warn_missing_meshes(source, mech.missing_meshes, r.lost_inertia)
     return mech
 
 
@@ -286,6 +354,9 @@ def _body(r: _Reader, el: ET.Element, parent: str, oMp: pin.SE3, cls: str) -> No
     )
     if use_geoms:
         body.inertia = _geom_inertia(r, el, sub)
+        I = body.inertia
+        if not (math.isfinite(I.mass) and np.all(np.isfinite(I.inertia))):
+            raise doc.error(el, "the inertia inferred from the geoms is not finite", name)
     elif inertial:
         body.inertia = spec.inertial_props(doc, inertial[0], r.comp).inertia
 
@@ -401,9 +472,12 @@ def _geom_inertia(r: _Reader, el: ET.Element, cls: str) -> pin.Inertia:
         g = spec.geom_props(r.doc, child, el.get("childclass", cls), r.defs, r.comp)
         if not lo <= g.group <= hi or g.type in ("plane", "hfield", "sdf"):
             continue
+        n = len(r.missing)
         I = _primitive_inertia(r, child, g)
         if I is not None:
             total += g.placement.act(I)
+        elif g.type == "mesh" and len(r.missing) > n and (g.mass is None or g.mass > 0.0):
+            r.lost_inertia.append(f"{el.get('name') or '?'} ({r.missing[-1]})")
     return total
 
 
@@ -510,33 +584,50 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
             warn(f"{mech.source}: {doc.where(el)} is inactive (active='false'); not used")
             continue
         name = _unique(mech, a.get("name") or f"{tag}{counts[tag]}")
-        if "site1" in a or "site2" in a:
-            f1, f2 = _frame_of(r, el, "site1"), _frame_of(r, el, "site2")
-            if tag == "connect":  # only the origins meet: keep the frames' positions
-                f1 = FrameRef(f1.link, pin.SE3(np.eye(3), f1.placement.translation))
-                f2 = FrameRef(f2.link, pin.SE3(np.eye(3), f2.placement.translation))
-        else:
-            b1, b2 = _body_ref(r, el, "body1"), _body_ref(r, el, "body2")
-            o1, o2 = _pose_of(r, b1), _pose_of(r, b2)
-            if tag == "connect":
-                anchor = spec.vector(doc, el, "anchor", a.get("anchor", "0 0 0"), 3)
-                p1 = pin.SE3(np.eye(3), anchor)
-                f1 = FrameRef(_link(b1), p1)
-                f2 = FrameRef(_link(b2), pin.SE3(np.eye(3), o2.actInv(o1 * p1).translation))
-            else:
-                rel = spec.vector(doc, el, "relpose", a.get("relpose", "0 1 0 0 0 0 0"), 7)
-                if np.allclose(rel[3:], 0.0):  # relative pose of qpos0
-                    f1 = FrameRef(_link(b1), pin.SE3.Identity())
-                    f2 = FrameRef(_link(b2), o2.actInv(o1))
-                else:
-                    w, x, y, z = rel[3:] / np.linalg.norm(rel[3:])
-                    b1Mb2 = pin.SE3(pin.Quaternion(w, x, y, z).matrix(), rel[:3])
-                    f1 = FrameRef(_link(b1), b1Mb2)
-                    f2 = FrameRef(_link(b2), pin.SE3.Identity())
+        torquescale = 1.0
+        if tag == "weld" and "torquescale" in a:
+            torquescale = float(spec.vector(doc, el, "torquescale", a["torquescale"], 1)[0])
+        f1, f2 = _equality_frames(r, el, a, tag)
+        if tag == "weld" and torquescale == 0.0:  # MuJoCo: a weld that ignores rotations
+            f1 = FrameRef(f1.link, pin.SE3(np.eye(3), f1.placement.translation))
+            f2 = FrameRef(f2.link, pin.SE3(np.eye(3), f2.placement.translation))
         if f1.link == f2.link:
             raise doc.error(el, "both sides are on the same body; nothing to close")
-        kind = "point" if tag == "connect" else "weld"
+        kind = "point" if tag == "connect" or torquescale == 0.0 else "weld"
         mech.closures.append(ClosureSpec(name, kind, f1, f2))
+
+
+def _equality_frames(
+    r: _Reader, el: ET.Element, a: dict[str, str], tag: str
+) -> tuple[FrameRef, FrameRef]:
+    """The two frames a ``connect`` or ``weld`` holds together (MuJoCo's ``eq_data``).
+
+    A weld by bodies holds the point ``anchor`` of body2 (its frame) on body1's point and
+    orientation at ``qpos0`` or, with ``relpose``, at ``relpose`` in body1's frame.
+    """
+    doc = r.doc
+    if "site1" in a or "site2" in a:
+        f1, f2 = _frame_of(r, el, "site1"), _frame_of(r, el, "site2")
+        if tag == "connect":  # only the origins meet: keep the frames' positions
+            f1 = FrameRef(f1.link, pin.SE3(np.eye(3), f1.placement.translation))
+            f2 = FrameRef(f2.link, pin.SE3(np.eye(3), f2.placement.translation))
+        return f1, f2
+    b1, b2 = _body_ref(r, el, "body1"), _body_ref(r, el, "body2")
+    o1, o2 = _pose_of(r, b1), _pose_of(r, b2)
+    anchor = spec.vector(doc, el, "anchor", a.get("anchor", "0 0 0"), 3)
+    if tag == "connect":  # anchor in body1, body2's point taken at qpos0
+        p1 = pin.SE3(np.eye(3), anchor)
+        return FrameRef(_link(b1), p1), FrameRef(
+            _link(b2), pin.SE3(np.eye(3), o2.actInv(o1 * p1).translation)
+        )
+    p2 = pin.SE3(np.eye(3), anchor)  # weld: anchor in body2
+    rel = spec.vector(doc, el, "relpose", a.get("relpose", "0 1 0 0 0 0 0"), 7)
+    if np.allclose(rel[3:], 0.0):  # relative pose of qpos0
+        return FrameRef(_link(b1), o1.actInv(o2 * p2)), FrameRef(_link(b2), p2)
+    w, x, y, z = rel[3:] / np.linalg.norm(rel[3:])
+    return FrameRef(_link(b1), pin.SE3(pin.Quaternion(w, x, y, z).matrix(), rel[:3])), FrameRef(
+        _link(b2), p2
+    )
 
 
 # ---------------------------------------------------------------------------------- actuators
@@ -598,12 +689,13 @@ def _keyframe(r: _Reader, key: ET.Element) -> dict[str, np.ndarray]:
     for name, t in r.mj_joints:
         v = qpos[i : i + sizes[t]]
         i += sizes[t]
-        if t == "free":
-            w = v[3:] / max(float(np.linalg.norm(v[3:])), 1e-300)
-            out[name] = np.concatenate([v[:3], w[1:], w[:1]])
-        elif t == "ball":
-            w = v / max(float(np.linalg.norm(v)), 1e-300)
-            out[name] = np.concatenate([w[1:], w[:1]])
+        if t in ("free", "ball"):
+            w = unit_vector(v[-4:])
+            if w is None:
+                raise r.doc.error(
+                    key, f"qpos of joint '{name}': the quaternion {v[-4:].tolist()} is zero"
+                )
+            out[name] = np.concatenate([v[:-4], w[1:], w[:1]])
         else:
             out[name] = v.copy()
     return out

@@ -23,9 +23,11 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.model.formats.xmldoc import XmlDoc
+from pkdyn.model.validate import unit_vector
 
 __all__ = [
     "ACTUATOR_TAGS",
+    "MAX_DEFAULT_DEPTH",
     "ActuatorProps",
     "Compiler",
     "Defaults",
@@ -54,6 +56,9 @@ ACTUATOR_TAGS = (
 )
 """Actuator elements of MJCF (``plugin`` actuators included)."""
 
+MAX_DEFAULT_DEPTH = 100
+"""Deepest nesting of ``<default>`` classes."""
+
 
 def vector(doc: XmlDoc, el: ET.Element, attr: str, text: str, n: int | None) -> np.ndarray:
     """Numbers of an attribute value.
@@ -81,6 +86,24 @@ def vector(doc: XmlDoc, el: ET.Element, attr: str, text: str, n: int | None) -> 
     if not np.all(np.isfinite(values)):
         raise doc.error(el, f"attribute {attr}='{text}': NaN and infinite values are not allowed")
     return values
+
+
+def integer(doc: XmlDoc, el: ET.Element, attr: str, text: str, n: int = 1) -> list[int]:
+    """Integers of an attribute value (``contype``, ``group``, ``inertiagrouprange``...).
+
+    Raises:
+        DescriptionError: Not integers (``1.5``, ``abc``, ``nan``), or the wrong count.
+
+    """
+    out = []
+    for t in text.split():
+        try:
+            out.append(int(t))
+        except ValueError:
+            raise doc.error(el, f"attribute {attr}='{text}': expected integers") from None
+    if len(out) != n:
+        raise doc.error(el, f"attribute {attr}='{text}': expected {n} integer(s)")
+    return out
 
 
 @dataclass(frozen=True)
@@ -123,14 +146,18 @@ class Compiler:
         ifg = attrs.get("inertiafromgeom", "auto")
         if ifg not in ("auto", "true", "false"):
             raise doc.error(elements[-1], f"inertiafromgeom='{ifg}': use auto, true or false")
-        grp = attrs.get("inertiagrouprange", "0 5").split()
+        last = elements[-1] if elements else None
+        grp = (0, 5)
+        if "inertiagrouprange" in attrs and last is not None:
+            lo, hi = integer(doc, last, "inertiagrouprange", attrs["inertiagrouprange"], 2)
+            grp = (lo, hi)
         return Compiler(
             degrees=angle == "degree",
             eulerseq=seq,
             autolimits=attrs.get("autolimits", "true") == "true",
             meshdir=attrs.get("meshdir", attrs.get("assetdir", "")),
             inertiafromgeom=ifg,
-            inertiagrouprange=(int(float(grp[0])), int(float(grp[1]))) if len(grp) == 2 else (0, 5),
+            inertiagrouprange=grp,
         )
 
     def angle(self, value: float) -> float:
@@ -144,27 +171,41 @@ class Defaults:
     def __init__(self, doc: XmlDoc, elements: list[ET.Element]) -> None:
         self.doc = doc
         self.classes: dict[str, dict[str, dict[str, str]]] = {"main": {}}
-        for el in elements:
-            self._read(el, "main", None)
+        stack: list[tuple[ET.Element, str, str | None, int]] = [
+            (el, "main", None, 0) for el in reversed(elements)
+        ]
+        while stack:  # iterative: any nesting depth up to MAX_DEFAULT_DEPTH
+            el, name, parent, depth = stack.pop()
+            if parent is not None and name in self.classes:
+                raise self.doc.error(el, f"default class '{name}' defined twice")
+            for child in reversed(self._read(el, name, parent)):
+                if depth + 1 > MAX_DEFAULT_DEPTH:
+                    raise self.doc.error(
+                        child, f"default classes nested deeper than {MAX_DEFAULT_DEPTH} levels"
+                    )
+                stack.append((child, str(child.get("class")), name, depth + 1))
 
-    def _read(self, el: ET.Element, name: str, parent: str | None) -> None:
+    def _read(self, el: ET.Element, name: str, parent: str | None) -> list[ET.Element]:
+        """Read one class's own defaults; return its nested ``<default>`` elements."""
         if name not in self.classes or parent is not None:
             base = self.classes.get(parent, {}) if parent is not None else {}
             self.classes[name] = {tag: dict(a) for tag, a in base.items()}
         own = self.classes[name]
+        nested: list[ET.Element] = []
         for child in el:
             if child.tag == "default":
                 cname = child.get("class")
                 if not cname:
                     raise self.doc.error(child, "a nested <default> needs a class name")
-                if cname in self.classes:
+                if cname in self.classes or cname in [c.get("class") for c in nested]:  # early
                     raise self.doc.error(child, f"default class '{cname}' defined twice")
-                self._read(child, cname, name)
+                nested.append(child)
             else:
                 tag = "actuator" if child.tag in ACTUATOR_TAGS else child.tag
                 own.setdefault(tag, {}).update(child.attrib)
                 if child.tag in ACTUATOR_TAGS:
                     own["actuator"]["_shortcut"] = child.tag
+        return nested
 
     def check(self, el: ET.Element, cls: str) -> None:
         """Refuse a class name that was never defined."""
@@ -188,7 +229,19 @@ class Defaults:
 
 
 def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    return np.asarray(pin.AngleAxis(angle, axis / np.linalg.norm(axis)).matrix())
+    u = unit_vector(axis)
+    assert u is not None  # callers refuse zero axes
+    return np.asarray(pin.AngleAxis(angle, u).matrix())
+
+
+def _direction(
+    doc: XmlDoc, el: ET.Element, v: np.ndarray, what: str, noun: str = "axis"
+) -> np.ndarray:
+    """Unit vector of ``v`` (huge components allowed), refusing a zero vector."""
+    u = unit_vector(v)
+    if u is None or float(np.abs(v).max()) < 1e-12:
+        raise doc.error(el, f"{what}: zero {noun}")
+    return np.asarray(u)
 
 
 def orientation(doc: XmlDoc, el: ET.Element, attrs: dict[str, str], comp: Compiler) -> np.ndarray:
@@ -221,15 +274,13 @@ def orientation(doc: XmlDoc, el: ET.Element, attrs: dict[str, str], comp: Compil
         return np.eye(3)
     text = attrs[key]
     if key == "quat":
-        w, x, y, z = vector(doc, el, key, text, 4)
-        n = math.sqrt(w * w + x * x + y * y + z * z)
-        if n < 1e-12:
-            raise doc.error(el, f"quat='{text}': zero quaternion")
-        return np.asarray(pin.Quaternion(w / n, x / n, y / n, z / n).matrix())
+        w, x, y, z = _direction(
+            doc, el, vector(doc, el, key, text, 4), f"quat='{text}'", "quaternion"
+        )
+        return np.asarray(pin.Quaternion(w, x, y, z).matrix())
     if key == "axisangle":
         v = vector(doc, el, key, text, 4)
-        if np.linalg.norm(v[:3]) < 1e-12:
-            raise doc.error(el, f"axisangle='{text}': zero axis")
+        _direction(doc, el, v[:3], f"axisangle='{text}'")
         return _axis_angle(v[:3], comp.angle(v[3]))
     if key == "euler":
         v = vector(doc, el, key, text, 3)
@@ -240,12 +291,10 @@ def orientation(doc: XmlDoc, el: ET.Element, attrs: dict[str, str], comp: Compil
         return R
     if key == "xyaxes":
         v = vector(doc, el, key, text, 6)
-        x, y = v[:3], v[3:]
-        if np.linalg.norm(x) < 1e-12:
-            raise doc.error(el, f"xyaxes='{text}': zero x axis")
-        x = x / np.linalg.norm(x)
+        x = _direction(doc, el, v[:3], f"xyaxes='{text}' x axis")
+        y = _direction(doc, el, v[3:], f"xyaxes='{text}' y axis")
         y = y - (y @ x) * x
-        if np.linalg.norm(y) < 1e-12:
+        if np.linalg.norm(y) < 1e-9:
             raise doc.error(el, f"xyaxes='{text}': y axis parallel to x")
         y = y / np.linalg.norm(y)
         return np.column_stack([x, y, np.cross(x, y)])
@@ -255,10 +304,7 @@ def orientation(doc: XmlDoc, el: ET.Element, attrs: dict[str, str], comp: Compil
 
 def _zaxis(doc: XmlDoc, el: ET.Element, z: np.ndarray) -> np.ndarray:
     """Minimal rotation taking (0, 0, 1) to ``z``."""
-    n = float(np.linalg.norm(z))
-    if n < 1e-12:
-        raise doc.error(el, "zero z axis")
-    z = z / n
+    z = _direction(doc, el, z, "z axis")
     e = np.array([0.0, 0.0, 1.0])
     axis = np.cross(e, z)
     s = float(np.linalg.norm(axis))
@@ -330,8 +376,8 @@ def joint_props(
     if jtype not in ("hinge", "slide", "ball", "free"):
         raise doc.error(el, f"joint type '{jtype}' is not an MJCF joint type")
     axis = vector(doc, el, "axis", a.get("axis", "0 0 1"), 3)
-    if jtype in ("hinge", "slide") and np.linalg.norm(axis) < 1e-12:
-        raise doc.error(el, f"axis='{a.get('axis')}': zero axis")
+    if jtype in ("hinge", "slide"):
+        axis = _direction(doc, el, axis, f"axis='{a.get('axis')}'")
     angular = jtype == "hinge"
 
     def ang(v: float) -> float:
@@ -346,11 +392,14 @@ def joint_props(
             rng = (ang(lo), ang(hi))
         if rng[0] > rng[1]:
             raise doc.error(el, f"range='{a.get('range')}': lower bound above the upper bound")
+    for key in ("armature", "damping", "frictionloss", "stiffness"):
+        if key in a and _number(doc, el, a, key, 0.0) < 0.0:
+            raise doc.error(el, f"{key}='{a[key]}' is negative (a negative {key} is not physical)")
     return JointProps(
         name=a.get("name", ""),
         type=jtype,
         pos=vector(doc, el, "pos", a.get("pos", "0 0 0"), 3),
-        axis=axis / max(float(np.linalg.norm(axis)), 1e-300),
+        axis=unit_vector(axis) if np.any(axis) else np.array([0.0, 0.0, 1.0]),
         ref=ang(_number(doc, el, a, "ref", 0.0)),
         range=rng,
         damping=_number(doc, el, a, "damping", 0.0),
@@ -481,12 +530,17 @@ def geom_props(doc: XmlDoc, el: ET.Element, cls: str, defs: Defaults, comp: Comp
         placement = pin.SE3(_zaxis(doc, el, d), 0.5 * (ft[:3] + ft[3:]))
         if gtype in ("capsule", "cylinder"):
             size = np.array([size[0], half, 0.0])
-        elif gtype in ("box", "ellipsoid"):
-            size = np.array([size[0], size[1], half])
+        elif gtype in ("box", "ellipsoid"):  # MuJoCo: size[0] for both other half-sizes
+            size = np.array([size[0], size[0], half])
     else:
         placement = pose(doc, el, a, comp)
-    contype = int(float(a.get("contype", "1")))
-    conaffinity = int(float(a.get("conaffinity", "1")))
+    contype = integer(doc, el, "contype", a.get("contype", "1"))[0]
+    conaffinity = integer(doc, el, "conaffinity", a.get("conaffinity", "1"))[0]
+    mass = _number(doc, el, a, "mass", 0.0) if "mass" in a else None
+    density = _number(doc, el, a, "density", 1000.0)
+    if (mass is not None and mass < 0.0) or density < 0.0:
+        what = f"mass={mass:g}" if mass is not None and mass < 0.0 else f"density={density:g}"
+        raise doc.error(el, f"{what} is negative")
     return GeomProps(
         name=a.get("name", ""),
         type=gtype,
@@ -496,9 +550,9 @@ def geom_props(doc: XmlDoc, el: ET.Element, cls: str, defs: Defaults, comp: Comp
         material=a.get("material", ""),
         rgba=vector(doc, el, "rgba", a["rgba"], 4) if "rgba" in a else np.array([0.5] * 3 + [1.0]),
         visual=contype == 0 and conaffinity == 0,
-        group=int(float(a.get("group", "0"))),
-        mass=_number(doc, el, a, "mass", 0.0) if "mass" in a else None,
-        density=_number(doc, el, a, "density", 1000.0),
+        group=integer(doc, el, "group", a.get("group", "0"))[0],
+        mass=mass,
+        density=density,
     )
 
 
@@ -521,8 +575,6 @@ def inertial_props(doc: XmlDoc, el: ET.Element, comp: Compiler) -> InertialProps
     if "mass" not in a:
         raise doc.error(el, "missing attribute 'mass'")
     mass = float(vector(doc, el, "mass", a["mass"], 1)[0])
-    if mass < 0.0:
-        raise doc.error(el, f"mass={mass} is negative")
     M = pose(doc, el, a, comp)
     if "fullinertia" in a:
         xx, yy, zz, xy, xz, yz = vector(doc, el, "fullinertia", a["fullinertia"], 6)
@@ -531,5 +583,10 @@ def inertial_props(doc: XmlDoc, el: ET.Element, comp: Compiler) -> InertialProps
         I_local = np.diag(vector(doc, el, "diaginertia", a["diaginertia"], 3))
     else:
         raise doc.error(el, "needs diaginertia or fullinertia")
+    from pkdyn.model.validate import inertia_problem
+
+    problem = inertia_problem(mass, I_local, point_mass=False)
+    if problem is not None:
+        raise doc.error(el, problem)
     R = M.rotation
     return InertialProps(mass, pin.Inertia(mass, M.translation, R @ I_local @ R.T))

@@ -11,17 +11,22 @@ One ``<model>`` per file (directly under ``<sdf>`` or in a ``<world>``). What is
   links or frames, their pose (relative to the child by default), axes (``expressed_in``,
   ``use_parent_model_frame``), limits and dynamics (damping, friction, ``spring_stiffness``
   about ``spring_reference``: ``robot.passive``; a universal joint takes its first axis's);
+- ``revolute2`` joints (Gazebo's two-axis hinge: ``<axis>`` fixed in the parent, ``<axis2>``
+  carried by the first rotation, not necessarily orthogonal) as two revolute joints
+  ``<name>_1``, ``<name>_2`` through a massless intermediate body, each axis with its own limits
+  and dynamics; as a loop's cut joint, the second axis becomes a hinge closure;
 - the model's ``<pose>`` and ``<static>``;
 - Drake's ``drake:ball_constraint`` and ``drake:weld_constraint``
   (:mod:`~pkdyn.model.formats.drake`).
 
 The joints form a graph: :func:`pkdyn.model.formats.graph.build` takes a spanning tree and
 turns the joints that close loops into closures (ball -> point, revolute -> hinge, fixed ->
-weld). A link that is no joint's child floats: it gets a free-flyer joint (``root_joint`` when
-there is one such link, else ``<link>_root_joint``), unless the model is static.
+weld; a prismatic joint closing a loop trades places with the revolute beside it). A link that
+is no joint's child floats: it gets a free-flyer joint (``root_joint`` when there is one such
+link, else ``<link>_root_joint``), unless the model is static.
 
 SDFormat has no actuators: name them in a sidecar (``name_mot``). Joint types SDFormat has and
-pkdyn does not (``revolute2``, ``screw``, ``gearbox``), nested models, ``<include>`` and
+pkdyn does not (``screw``, ``gearbox``), nested models, ``<include>`` and
 ``drake:joint`` are refused, naming the element and its line.
 """
 
@@ -42,12 +47,12 @@ from pkdyn.model.description import FrameRef
 from pkdyn.model.formats import drake
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
 from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml
-from pkdyn.model.warn import warn
+from pkdyn.model.validate import inertia_problem, unit_vector
+from pkdyn.model.warn import warn, warn_missing_meshes
 
 __all__ = ["read_sdf"]
 
 _REFUSED_JOINTS = {
-    "revolute2": "two-axis revolute2 joints",
     "screw": "screw joints",
     "gearbox": "gearbox joints",
 }
@@ -104,8 +109,11 @@ def _pose(r: _Reader, el: ET.Element | None, default: str) -> tuple[pin.SE3, str
     if fmt == "quat_xyzw":
         if v.size != 7:
             raise r.doc.error(el, "a quat_xyzw pose needs 7 numbers")
-        x, y, z, w = v[3:]
-        R = pin.Quaternion(w, x, y, z).normalized().matrix()
+        u = unit_vector(v[3:])
+        if u is None:
+            raise r.doc.error(el, "a quat_xyzw pose needs a non-zero quaternion")
+        x, y, z, w = u
+        R = pin.Quaternion(w, x, y, z).matrix()
     else:
         if v.size != 6:
             raise r.doc.error(el, "a pose needs 6 numbers: x y z roll pitch yaw")
@@ -114,37 +122,50 @@ def _pose(r: _Reader, el: ET.Element | None, default: str) -> tuple[pin.SE3, str
     return pin.SE3(R, v[:3]), rel
 
 
-def _resolve(r: _Reader, name: str, stack: tuple[str, ...] = ()) -> pin.SE3:
-    """World pose of a named frame in the reference configuration."""
-    if name in r.world:
-        return r.world[name]
-    if name not in r.frames:
-        raise DescriptionError(
-            r.doc.source, f"frame '{name}'", "is not a link, joint or frame of this model"
-        )
-    if name in stack:
-        raise DescriptionError(
-            r.doc.source,
-            f"frame '{name}'",
-            "poses refer to each other in a cycle: " + " -> ".join(stack + (name,)),
-        )
-    f = r.frames[name]
-    out = _resolve(r, f.relative_to, stack + (name,)) * f.pose
-    r.world[name] = out
-    return out
+def _resolve(r: _Reader, name: str) -> pin.SE3:
+    """World pose of a named frame in the reference configuration (iterative, any depth)."""
+    chain: list[str] = []
+    seen: set[str] = set()
+    cur = name
+    while cur not in r.world:
+        if cur not in r.frames:
+            raise DescriptionError(
+                r.doc.source, f"frame '{cur}'", "is not a link, joint or frame of this model"
+            )
+        if cur in seen:
+            loop = chain[chain.index(cur) :] + [cur]
+            raise DescriptionError(
+                r.doc.source,
+                f"frame '{cur}'",
+                "poses refer to each other in a cycle: "
+                + " -> ".join(loop[:8])
+                + (" ..." if len(loop) > 8 else ""),
+            )
+        seen.add(cur)
+        chain.append(cur)
+        cur = r.frames[cur].relative_to
+    out = r.world[cur]
+    for f in reversed(chain):
+        out = out * r.frames[f].pose
+        r.world[f] = out
+    return r.world[name]
 
 
-def _link_of(r: _Reader, name: str, stack: tuple[str, ...] = ()) -> str:
-    """Link (or ``world``) a frame is attached to."""
-    if name == WORLD or name in r.links:
-        return name
-    if name == "__model__":  # the model frame is attached to the canonical (first) link
-        return r.links[0] if r.links else WORLD
-    if name not in r.frames or name in stack:
-        raise DescriptionError(
-            r.doc.source, f"frame '{name}'", "is attached to no link of this model"
-        )
-    return _link_of(r, r.frames[name].attached_to, stack + (name,))
+def _link_of(r: _Reader, name: str) -> str:
+    """Link (or ``world``) a frame is attached to (iterative, any depth)."""
+    seen: set[str] = set()
+    cur = name
+    while True:
+        if cur == WORLD or cur in r.links:
+            return cur
+        if cur == "__model__":  # the model frame is attached to the canonical (first) link
+            return r.links[0] if r.links else WORLD
+        if cur not in r.frames or cur in seen:
+            raise DescriptionError(
+                r.doc.source, f"frame '{name}'", "is attached to no link of this model"
+            )
+        seen.add(cur)
+        cur = r.frames[cur].attached_to
 
 
 def _frame_ref(r: _Reader, name: str) -> FrameRef:
@@ -248,8 +269,7 @@ def _model(r: _Reader, m: ET.Element) -> Mechanism:
         mech.add_body(_link(r, el), doc.where(el))
     children = set()
     for el in joints:
-        j = _joint(r, el)
-        if j is not None:
+        for j in _joint(r, el, mech):
             mech.joints.append(j)
             children.add(j.child)
     roots = [b for b in mech.bodies if b not in children]
@@ -278,12 +298,8 @@ def _model(r: _Reader, m: ET.Element) -> Mechanism:
                     raise doc.error(el, f"names body '{ref.link}', which is not a link")
             mech.closures.append(c)
     if r.missing:
-        names = sorted(set(r.missing))
-        warn(
-            f"{doc.source}: {len(names)} mesh file(s) not found, their geometry is left out: "
-            + ", ".join(names[:5])
-            + (f" and {len(names) - 5} more" if len(names) > 5 else "")
-        )
+        mech.missing_meshes = sorted(set(r.missing))
+        warn_missing_meshes(doc.source, mech.missing_meshes)
     return mech
 
 
@@ -305,8 +321,6 @@ def _link(r: _Reader, el: ET.Element) -> Body:
 
 def _inertia(r: _Reader, el: ET.Element, link: str) -> pin.Inertia:
     mass = _number(r, el, "mass", 1.0)
-    if mass < 0.0:
-        raise r.doc.error(el.find("mass") or el, f"mass {mass} of link '{link}' is negative")
     M, rel = _pose(r, el.find("pose"), link)
     if rel != link:
         M = _resolve(r, link).actInv(_resolve(r, rel) * M)
@@ -316,6 +330,9 @@ def _inertia(r: _Reader, el: ET.Element, link: str) -> pin.Inertia:
         xx, yy, zz = (_number(r, ie, k, 0.0) for k in ("ixx", "iyy", "izz"))
         xy, xz, yz = (_number(r, ie, k, 0.0) for k in ("ixy", "ixz", "iyz"))
         I = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    problem = inertia_problem(mass, I)  # the rule of every importer (point masses kept)
+    if problem is not None:
+        raise r.doc.error(el, f"link '{link}': {problem}")
     R = M.rotation
     return pin.Inertia(mass, M.translation, R @ I @ R.T)
 
@@ -354,14 +371,17 @@ def _geometry(r: _Reader, el: ET.Element, link: str, oMl: pin.SE3, default: str)
             c = mat.find(key)
             if c is not None and _text(c):
                 v = _numbers(r, c)
+                if v.size not in (3, 4):
+                    raise doc.error(c, f"'{_text(c)}': a colour is 3 or 4 numbers (r g b [a])")
                 rgba = np.concatenate([v[:3], v[3:4] if v.size > 3 else [1.0]])
                 break
     name = el.get("name") or default
 
     def positive(tag: str, default_value: str) -> np.ndarray:
         sub = shape_el.find(tag)
+        n = len(default_value.split())
         v = (
-            _numbers(r, sub)
+            _numbers(r, sub, n)
             if sub is not None
             else np.array([float(x) for x in default_value.split()])
         )
@@ -407,9 +427,10 @@ def _axis(r: _Reader, el: ET.Element | None, oMj: pin.SE3) -> np.ndarray | None:
         return None
     xyz = el.find("xyz")
     v = _numbers(r, xyz, 3) if xyz is not None else np.array([0.0, 0.0, 1.0])
-    if np.linalg.norm(v) < 1e-12:
+    u = unit_vector(v)
+    if u is None or float(np.abs(v).max()) < 1e-12:
         raise r.doc.error(xyz if xyz is not None else el, "zero joint axis")
-    v = v / np.linalg.norm(v)
+    v = u
     expressed = xyz.get("expressed_in") if xyz is not None else None
     if expressed is None and (
         _text(el.find("use_parent_model_frame")).lower() in ("1", "true") or r.version < 1.5
@@ -421,7 +442,7 @@ def _axis(r: _Reader, el: ET.Element | None, oMj: pin.SE3) -> np.ndarray | None:
     return v
 
 
-def _joint(r: _Reader, el: ET.Element) -> Joint | None:
+def _joint(r: _Reader, el: ET.Element, mech: Mechanism) -> list[Joint]:
     doc = r.doc
     name = el.get("name", "")
     jtype = el.get("type", "")
@@ -429,6 +450,7 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
     if jtype in _REFUSED_JOINTS:
         raise doc.error(el, f"{_REFUSED_JOINTS[jtype]} are not supported by pkdyn")
     kinds = {
+        "revolute2": "revolute2",
         "revolute": "revolute",
         "continuous": "revolute",
         "prismatic": "prismatic",
@@ -453,6 +475,8 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
         raise doc.error(el, "the world cannot be a joint's child")
     oMj = _resolve(r, name)
     kind = kinds[jtype]
+    if kind == "revolute2":
+        return _revolute2(r, el, mech, parent, child, oMj)
     axis_el = el.find("axis")
     axis = _axis(r, axis_el, oMj)
     if kind in ("revolute", "prismatic", "universal") and axis is None:
@@ -460,17 +484,37 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
     axis2 = _axis(r, el.find("axis2"), oMj) if kind == "universal" else None
     if kind == "universal" and axis2 is None:
         raise doc.error(el, "a universal joint needs <axis2>")
+    props = _axis_props(r, axis_el, jtype == "continuous")
+    if kind not in ("revolute", "prismatic"):
+        props["spring_ref"] = None
+    return [
+        Joint(
+            name,
+            kind,
+            parent,
+            child,
+            oMj,
+            axis=axis if axis is not None else np.array([0.0, 0.0, 1.0]),
+            axis2=axis2,
+            where=where,
+            **props,
+        )
+    ]
+
+
+def _axis_props(r: _Reader, axis_el: ET.Element | None, continuous: bool) -> dict[str, Any]:
+    """Limits and dynamics of one ``<axis>`` (or ``<axis2>``) as :class:`Joint` fields."""
     lo, hi, effort, velocity, damping, friction = -math.inf, math.inf, math.inf, math.inf, 0.0, 0.0
     stiffness, spring_ref = 0.0, 0.0
     if axis_el is not None:
         lim = axis_el.find("limit")
-        if lim is not None and jtype != "continuous":
+        if lim is not None and not continuous:
             lo = _number(r, lim, "lower", -math.inf)
             hi = _number(r, lim, "upper", math.inf)
             lo = -math.inf if lo <= -_INFINITE else lo
             hi = math.inf if hi >= _INFINITE else hi
             if lo > hi:
-                raise doc.error(lim, f"lower limit {lo} above upper limit {hi}")
+                raise r.doc.error(lim, f"lower limit {lo} above upper limit {hi}")
         if lim is not None:
             effort = _number(r, lim, "effort", -1.0)
             velocity = _number(r, lim, "velocity", -1.0)
@@ -482,21 +526,54 @@ def _joint(r: _Reader, el: ET.Element) -> Joint | None:
             friction = _number(r, dyn, "friction", 0.0)
             stiffness = _number(r, dyn, "spring_stiffness", 0.0)
             spring_ref = _number(r, dyn, "spring_reference", 0.0)
-    return Joint(
-        name,
-        kind,
-        parent,
-        child,
-        oMj,
-        axis=axis if axis is not None else np.array([0.0, 0.0, 1.0]),
-        axis2=axis2,
-        lower=lo,
-        upper=hi,
-        effort=effort,
-        velocity=velocity,
-        damping=damping,
-        friction=friction,
-        stiffness=stiffness,
-        spring_ref=np.array([spring_ref]) if kind in ("revolute", "prismatic") else None,
-        where=where,
-    )
+    return {
+        "lower": lo,
+        "upper": hi,
+        "effort": effort,
+        "velocity": velocity,
+        "damping": damping,
+        "friction": friction,
+        "stiffness": stiffness,
+        "spring_ref": np.array([spring_ref]),
+    }
+
+
+def _revolute2(
+    r: _Reader, el: ET.Element, mech: Mechanism, parent: str, child: str, oMj: pin.SE3
+) -> list[Joint]:
+    """A ``revolute2`` joint as two revolute joints through a massless intermediate body.
+
+    The first turns about ``<axis>`` (fixed in the parent), the second about ``<axis2>``, carried
+    by the first rotation (as Gazebo's two-axis hinge: the axes need not be orthogonal); each
+    has its own limits and dynamics. Named ``<name>_1`` and ``<name>_2``; when the joint closes
+    a loop, the second becomes a hinge closure.
+    """
+    name = el.get("name", "")
+    where = r.doc.where(el)
+    z = np.array([0.0, 0.0, 1.0])
+    a1 = _axis(r, el.find("axis"), oMj)
+    a2 = _axis(r, el.find("axis2"), oMj)
+    if a2 is None:
+        raise r.doc.error(el, "a revolute2 joint needs <axis2>")
+    mid = f"{name}#1"
+    mech.add_body(Body(mid, oMj, virtual=True), where)
+    out = []
+    for k, (axis, a_el, p, c) in enumerate(
+        (
+            (a1 if a1 is not None else z, el.find("axis"), parent, mid),
+            (a2, el.find("axis2"), mid, child),
+        )
+    ):
+        out.append(
+            Joint(
+                f"{name}_{k + 1}",
+                "revolute",
+                p,
+                c,
+                oMj,
+                axis=axis,
+                where=where,
+                **_axis_props(r, a_el, False),
+            )
+        )
+    return out

@@ -156,7 +156,9 @@ class UrdfWriter:
             name: Link name.
             mass: Mass [kg]; 0 writes no inertial element.
             com: Centre of mass in the link frame [m].
-            inertia: 3x3 inertia about the COM in link axes [kg m^2].
+            inertia: 3x3 inertia about the COM in link axes [kg m^2] (default all zero: a
+                point mass, which loads from a plain URDF only; a description with pkdyn
+                elements refuses it, see :func:`pkdyn.model.validate.inertia_problem`).
             visuals: Visual shapes.
             collisions: Collision shapes.
 

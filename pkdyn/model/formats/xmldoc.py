@@ -4,11 +4,20 @@ Every importer reads its file through :func:`read_text` (regular files only, bou
 device or a FIFO would block or never end) and parses XML through :func:`parse_xml`, which keeps
 the line of each element so that errors can say where the culprit is, and refuses entity
 declarations (no entity expansion at all: neither "billion laughs" nor external files).
+
+Leniencies that Drake's and Gazebo's parsers (tinyxml2) have, applied by :func:`lenient` before
+any parser sees the text (line numbers are kept): a comment that contains ``--`` (illegal in XML;
+the comment ends at the first ``-->``), a ``drake:`` prefix used without its ``xmlns:drake``
+declaration (declared on the root element), and Drake's namespace as the default namespace of
+the root element (``<robot xmlns="http://drake.mit.edu">``, dropped: URDF has no namespace).
+None of them lets an entity or an external resource in: :func:`parse_xml` still refuses every
+entity declaration.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import stat
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
@@ -17,10 +26,90 @@ from xml.parsers import expat
 
 from pkdyn.exceptions import DescriptionError
 
-__all__ = ["MAX_FILE_BYTES", "XmlDoc", "parse_xml", "read_text"]
+__all__ = [
+    "DRAKE_NAMESPACE",
+    "MAX_FILE_BYTES",
+    "XmlDoc",
+    "lenient",
+    "parse_xml",
+    "read_text",
+    "root_start",
+]
 
 MAX_FILE_BYTES = 64 * 1024 * 1024
 """Largest description or sidecar file pkdyn reads [bytes] (64 MiB)."""
+
+DRAKE_NAMESPACE = "http://drake.mit.edu"
+"""Namespace URI declared for an undeclared ``drake:`` prefix (Drake's own)."""
+
+_DEFAULT_NS = re.compile(r"""\sxmlns\s*=\s*(["'])[^"']*drake\.mit\.edu[^"']*\1""")
+_ROOT = re.compile(r"<([A-Za-z_][\w.-]*)(?=[\s/>])")
+
+
+def _comments(text: str) -> str:
+    """Comments with ``--`` inside made legal (``- -``), as tinyxml2 reads them."""
+    if "<!--" not in text:
+        return text
+    out: list[str] = []
+    i = 0
+    while True:
+        start = text.find("<!--", i)
+        if start < 0:
+            out.append(text[i:])
+            return "".join(out)
+        end = text.find("-->", start + 4)
+        if end < 0:  # unterminated: left for the parser to report
+            out.append(text[i:])
+            return "".join(out)
+        body = text[start + 4 : end]
+        if "--" in body or body.endswith("-"):
+            body = body.replace("--", "- ").replace("--", "- ")
+            if body.endswith("-"):
+                body = body[:-1] + " "
+        out.append(text[i : start + 4] + body + "-->")
+        i = end + 3
+
+
+def root_start(text: str) -> re.Match[str] | None:
+    """The root element's start tag (after the prolog, comments and processing instructions)."""
+    i = 0
+    while True:
+        m = _ROOT.search(text, i)
+        if m is None:
+            return None
+        before = text[: m.start()]
+        # inside a comment, a processing instruction or the document type: look further
+        if before.rfind("<!--") > before.rfind("-->") or before.rfind("<?") > before.rfind("?>"):
+            i = m.end()
+            continue
+        return m
+
+
+def lenient(text: str) -> str:
+    """The text with the leniencies of Drake's and Gazebo's parsers applied (see the module).
+
+    Args:
+        text: A description.
+
+    Returns:
+        The same document with comments containing ``--`` made legal and an undeclared
+        ``drake:`` prefix declared on the root element (line numbers unchanged).
+
+    """
+    text = _comments(text)
+    undeclared = "drake:" in text and "xmlns:drake" not in text
+    if not undeclared and "drake.mit.edu" not in text:
+        return text
+    m = root_start(text)
+    if m is None:
+        return text
+    k = m.end()
+    end = text.find(">", k)
+    head = text[k:end] if end > 0 else ""
+    head = _DEFAULT_NS.sub("", head)  # Drake's default namespace on the root
+    if undeclared:
+        head = f' xmlns:drake="{DRAKE_NAMESPACE}"' + head
+    return text[:k] + head + (text[end:] if end > 0 else text[k:])
 
 
 def read_text(path: str | os.PathLike[str], what: str = "file") -> str:
@@ -122,6 +211,7 @@ def parse_xml(text: str, source: str, path: Path | None = None) -> XmlDoc:
         DescriptionError: Malformed XML, or a document type declaring entities.
 
     """
+    text = lenient(text)
     builder = ET.TreeBuilder()
     parser = expat.ParserCreate()
     lines: dict[int, int] = {}
