@@ -7,10 +7,13 @@ workspace), ``geometry`` (closed forms, assembly / FK and
 IK against raw Pinocchio), ``dynamics`` (forward step and inverse dynamics against raw
 Pinocchio), ``vs_mujoco`` (forward step and inverse dynamics against MuJoCo, agreement),
 ``workspace`` (workspace throughput, when present), ``actuation_map`` (closed-loop legs, loading
-public models), ``cli_latency`` (command start-up against the bare imports) and ``design``
+public models), ``cli_latency`` (command start-up against the bare imports), ``identification``
+(a Delta identified from 1e5 samples) and ``design``
 (design-study throughput and a 10,000-design study: several minutes; ``PKDYN_BENCH_DESIGNS``
-makes it smaller). Figures are medians of repeated runs; ratios are medians of ratios measured on
-alternating batches (CPU time of the process), so that they hold under a varying load.
+makes it smaller), ``calibration`` (geometric calibration of a Gough-Stewart from 100 poses, a
+Delta from 40, pose sensitivities). Figures are medians of repeated runs; ratios are medians of
+ratios measured on alternating batches (CPU time of the process), so that they hold under a
+varying load.
 """
 
 from __future__ import annotations
@@ -35,8 +38,11 @@ MODULES = (
     ("passive", "Passive elements: springs, dampers, friction in the dynamics"),
     ("workspace", "Workspace throughput"),
     ("actuation_map", "Closed-loop legs (actuation maps) and loading public models"),
+    ("precision", "Precision: stiffness and frequency maps, closed forms and general path"),
     ("design", "Design studies: designs/s on 1 and 2 workers, a 10,000-design Delta study"),
     ("sizing", "Sizing: fastest cycle (toppra) and motor selection"),
+    ("identification", "Dynamic identification: a Delta from 1e5 samples (issue 27)"),
+    ("calibration", "Geometric calibration and pose sensitivities (issues 26, 27)"),
     ("cli_latency", "Command-line start-up: pkdyn commands against importing Pinocchio and numpy"),
 )
 

@@ -6,6 +6,9 @@ message, what was found and how to fix it. The CLI prints ``str(err)`` on one li
 
 from __future__ import annotations
 
+import re
+from typing import Any
+
 __all__ = [
     "PkdynError",
     "DescriptionError",
@@ -28,7 +31,26 @@ __all__ = [
 
 
 class PkdynError(Exception):
-    """Base class of every error a pkdyn user can cause."""
+    """Base class of every error a pkdyn user can cause.
+
+    Its message is one line (a library's multi-line message pasted into it is joined), and it
+    crosses process boundaries (pickled with its attributes: a worker's error reaches the
+    parent as raised).
+    """
+
+    def __str__(self) -> str:
+        return re.sub(r"\s*[\r\n]+\s*", " ", super().__str__()).strip()
+
+    def __reduce__(self) -> tuple[object, ...]:
+        return _rebuild, (type(self), self.args, self.__dict__)
+
+
+def _rebuild(cls: type[PkdynError], args: tuple[object, ...], state: dict[str, object]) -> Any:
+    """Unpickle a :class:`PkdynError` without calling its ``__init__`` (whose signature varies)."""
+    err = cls.__new__(cls)
+    Exception.__init__(err, *args)
+    err.__dict__.update(state)
+    return err
 
 
 class DescriptionError(PkdynError):

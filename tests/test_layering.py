@@ -13,6 +13,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 RANK = {
     "exceptions": 0,
+    "workers": 1,
     "progress": 1,
     "files": 1,
     "model": 2,
@@ -22,6 +23,9 @@ RANK = {
     "dynamics": 6,
     "workspace": 6,
     "tripod": 7,
+    "identification": 7,
+    "precision": 7,
+    "calibration": 8,
     "design": 8,
     "viewer": 9,
     "plotting": 9,

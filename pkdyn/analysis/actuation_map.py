@@ -38,7 +38,10 @@ from pkdyn.exceptions import AssemblyError, InvalidInputError
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
 from solvers import numerics, solve_lm
 
-__all__ = ["ActuationMap", "MapSamples", "actuation_map"]
+__all__ = ["MAX_SAMPLES", "ActuationMap", "MapSamples", "actuation_map"]
+
+MAX_SAMPLES = 200_000
+"""Most samples of one call (each is solved and ranked: about 1-5 ms)."""
 
 RANK_RTOL = numerics.RTOL
 """Relative tolerance of the rank decisions (scale 1, as for :meth:`Robot.dof`)."""
@@ -222,6 +225,13 @@ class ActuationMap:
             raise InvalidInputError(
                 what, f"expected ({self.n},) or (N, {self.n}) finite values, got {np.shape(values)}"
             )
+        if v.shape[0] > MAX_SAMPLES:
+            raise InvalidInputError(
+                what,
+                f"{v.shape[0]:,} samples, more than {MAX_SAMPLES:,} (each is an assembly and a "
+                f"rank decision, about 1-5 ms: {v.shape[0] * 3e-3 / 60:.0f} min); map fewer "
+                "at a time",
+            )
         return v
 
     def from_joints(
@@ -242,7 +252,7 @@ class ActuationMap:
             The maps at every sample.
 
         Raises:
-            InvalidInputError: Malformed input.
+            InvalidInputError: Malformed input, or more than :data:`MAX_SAMPLES` samples.
             AssemblyError: A sample cannot be assembled (``strict``), naming it.
 
         """
@@ -265,7 +275,7 @@ class ActuationMap:
             The maps at every sample.
 
         Raises:
-            InvalidInputError: Malformed input.
+            InvalidInputError: Malformed input, or more than :data:`MAX_SAMPLES` samples.
             AssemblyError: A sample cannot be assembled (``strict``), naming it.
 
         """

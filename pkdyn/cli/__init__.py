@@ -35,10 +35,14 @@ COMMAND_MODULES = (
     "geometry",
     "dynamics",
     "workspace",
+    "precision",
     "design",
     "viewer",
     "mjcf",
+    "identification",
     "tripod",
+    "accuracy",
+    "calibration",
     "demo",
     "listing",
 )
@@ -57,12 +61,17 @@ COMMANDS = {
     "statics": "geometry",
     "simulate": "dynamics",
     "size": "dynamics",
+    "stiffness": "precision",
+    "modes": "precision",
     "collisions": "workspace",
     "workspace": "workspace",
     "design": "design",
     "view": "viewer",
     "mjcf": "mjcf",
+    "identify": "identification",
     "tripod": "tripod",
+    "accuracy": "accuracy",
+    "calibrate": "calibration",
     "demo": "demo",
     "list": "listing",
 }
@@ -166,7 +175,8 @@ class _OnlyCommand:
 
 
 def _one_line_warning(message: Warning | str, category: type[Warning], *_: Any, **__: Any) -> None:
-    print(f"pkdyn: warning: {message}", file=sys.stderr)
+    text = " ".join(str(message).split())
+    print(f"pkdyn: warning: {text}", file=sys.stderr)
 
 
 class _Terminated(BaseException):
@@ -213,7 +223,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         warnings.filterwarnings("ignore", category=PendingDeprecationWarning)
         args.func(args)
     except PkdynError as err:
-        print(f"pkdyn: error: {err}", file=sys.stderr)
+        text = " ".join(str(err).splitlines())
+        print(f"pkdyn: error: {text}", file=sys.stderr)
+        return 1
+    except MemoryError:
+        print(
+            "pkdyn: error: out of memory: ask for less (fewer samples, designs or workers)",
+            file=sys.stderr,
+        )
         return 1
     except KeyboardInterrupt:
         print("pkdyn: interrupted", file=sys.stderr)

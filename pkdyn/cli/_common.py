@@ -16,6 +16,7 @@ from pkdyn.exceptions import InvalidInputError, OutputError
 __all__ = [
     "Parser",
     "add_param_option",
+    "check_figure",
     "configuration",
     "emit",
     "fmt",
@@ -91,6 +92,10 @@ def add_param_option(sp: argparse.ArgumentParser) -> None:
 def output_path(option: str, path: str | None, figure: bool = False) -> str | None:
     """Check an output file name before any work is done (the file is written at the end).
 
+    The rules of :func:`pkdyn.files.output_target`: a regular file (a symbolic link to one is
+    followed, the link kept) or a new name in an existing, writable directory; never a FIFO,
+    a device or a directory; a name the file system accepts.
+
     Args:
         option: The option that names it, for messages (``--csv``).
         path: The file, or ``None`` (no output).
@@ -100,29 +105,38 @@ def output_path(option: str, path: str | None, figure: bool = False) -> str | No
         ``path``.
 
     Raises:
-        OutputError: A directory, a missing or read-only directory, or an unknown figure format.
+        OutputError: Not a regular file, a missing or read-only directory, a name too long, or
+            an unknown figure format.
 
     """
     if path is None:
         return None
-    p = Path(path)
-    if p.name in ("", ".", "..") or p.is_dir():
-        raise OutputError(path, f"{option} names a directory, not a file")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise OutputError(path, f"{option}: directory '{parent}' does not exist")
-    if not os.access(parent, os.W_OK):
-        raise OutputError(path, f"{option}: directory '{parent}' is not writable")
-    if figure:
-        from matplotlib.figure import Figure
+    from pkdyn.files import output_target
 
-        supported = Figure().canvas.get_supported_filetypes()
-        fmt = p.suffix.lower().lstrip(".")
-        if fmt not in supported:
-            known = ", ".join(f".{k}" for k in sorted(supported))
-            what = f"unknown figure format '{p.suffix}'" if fmt else "no file extension"
-            raise OutputError(path, f"{option}: {what}; name the file with one of {known}")
+    output_target(path, option)
+    if figure:
+        check_figure(option, path)
     return path
+
+
+def check_figure(option: str, path: str) -> None:
+    """Refuse a figure file whose extension names no matplotlib format.
+
+    Raises:
+        OutputError: No extension, or an unknown one (the message lists the known ones).
+
+    """
+    from matplotlib.figure import Figure
+
+    from pkdyn.files import shown
+
+    p = Path(path)
+    supported = Figure().canvas.get_supported_filetypes()
+    fmt = p.suffix.lower().lstrip(".")
+    if fmt not in supported:
+        known = ", ".join(f".{k}" for k in sorted(supported))
+        what = f"unknown figure format '{p.suffix}'" if fmt else "no file extension"
+        raise OutputError(shown(path), f"{option}: {what}; name the file with one of {known}")
 
 
 def load(args: argparse.Namespace, geometry: bool = False) -> Any:

@@ -34,7 +34,12 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
     if args.family:
         d["family"] = args.family
     if args.range:
-        d["ranges"] = {r.name: [r.low, r.high] for r in (Range.parse(t) for t in _flat(args.range))}
+        ranges: dict[str, list[float]] = {}
+        for r in (Range.parse(t) for t in _flat(args.range)):
+            if r.name in ranges:
+                raise InvalidInputError("--range", f"'{r.name}' is given twice")
+            ranges[r.name] = [r.low, r.high]
+        d["ranges"] = ranges
     fixed = params(_flat(args.fix))
     if fixed:
         d["fixed"] = fixed
@@ -49,7 +54,10 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
     if args.require:
         from pkdyn.design.requirement import Requirement
 
-        d["requirement"] = Requirement.parse(args.require, args.samples or 5).as_dict()
+        samples = 5 if args.samples is None else args.samples
+        d["requirement"] = Requirement.parse(args.require, samples).as_dict()
+    elif args.samples is not None:
+        raise InvalidInputError("--samples", "applies to a required workspace (--require)")
     if args.trajectory:
         d["trajectory"] = args.trajectory
     opts = {
@@ -77,7 +85,15 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
         d["seed"] = args.seed
     if args.parametrisation:
         d["parametrisation"] = args.parametrisation
-    settings = {k: v for k, v in (("length", args.length),) if v is not None}
+    settings = {
+        k: v
+        for k, v in (
+            ("length", args.length),
+            ("actuator_stiffness", args.actuator_stiffness),
+            ("material", args.material),
+        )
+        if v is not None
+    }
     if settings:
         d["settings"] = settings
     return d
@@ -86,6 +102,10 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
 def _study(args: argparse.Namespace) -> Any:
     from pkdyn.design.study import Study
 
+    for name in _flat(args.plugin):
+        from pkdyn.design.plugins import load_plugin
+
+        load_plugin(name)
     d = _definition(args)
     if args.study:
         base = Study.load(args.study).as_dict()
@@ -118,9 +138,13 @@ def _clavel_chart(args: argparse.Namespace) -> None:
     if args.family not in (None, "delta"):
         raise InvalidInputError("--clavel-chart", "applies to the delta family")
     spans = {"r": (0.4, 1.0), "b": (1.5, 3.0)}
+    given: set[str] = set()
     for r in (Range.parse(t) for t in _flat(args.range)):
         if r.name not in spans:
             raise InvalidInputError("--range", f"the chart sweeps r and b, not '{r.name}'")
+        if r.name in given:
+            raise InvalidInputError("--range", f"'{r.name}' is given twice")
+        given.add(r.name)
         spans[r.name] = (r.low, r.high)
     study = clavel_chart_study(
         spans["r"], spans["b"], grid=args.grid or 4, **params(_flat(args.fix))
@@ -157,15 +181,37 @@ def _plain(rec: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+def _check_options(args: argparse.Namespace) -> None:
+    """The options that are not part of the study, checked before any work."""
+    from pkdyn.cli._common import output_path
+    from pkdyn.design.executors import check_timeout
+    from pkdyn.design.table import output_paths
+
+    check_timeout(args.timeout, "--timeout")
+    if args.workers is not None and args.workers < 1:
+        raise InvalidInputError("--workers", f"must be >= 1, got {args.workers}")
+    if args.out is not None:
+        output_paths(args.out)
+    output_path("--plot", args.plot, figure=True)
+    output_path("--urdf", args.urdf)
+    output_path("--save-study", args.save_study)
+    if args.verify is not None:
+        if args.verify < 2:
+            raise InvalidInputError("--verify", f"samples per axis must be >= 2, got {args.verify}")
+        if not args.require and not args.study:
+            raise InvalidInputError("--verify", "checks a required workspace: give --require")
+
+
 def _cmd_design(args: argparse.Namespace) -> None:
+    _check_options(args)
     if args.clavel_chart:
         _clavel_chart(args)
         return
-    from pkdyn.cli._common import output_path
-
-    output_path("--plot", args.plot, figure=True)
-    output_path("--urdf", args.urdf)
     study = _study(args)
+    if args.verify is not None:
+        from pkdyn.design.result import check_verify
+
+        check_verify(study, args.verify)
     if args.save_study:
         from pkdyn.files import atomic_write
 
@@ -195,6 +241,14 @@ def register(sub: Any) -> None:
     )
     sp.add_argument("family", nargs="?", help="library family (any registered family)")
     sp.add_argument("--study", metavar="FILE.yaml", help="study file (options given override it)")
+    sp.add_argument(
+        "--plugin",
+        action="append",
+        nargs="+",
+        metavar="MODULE",
+        help="load a plug-in first (a module name or a .py file) whose metrics or "
+        "parametrisations the study names; a study file never imports code by itself",
+    )
     sp.add_argument("--save-study", metavar="FILE.yaml", help="write the study file and run it")
     sp.add_argument("--range", action="append", nargs="+", metavar="NAME=LOW:HIGH")
     sp.add_argument(
@@ -206,7 +260,8 @@ def register(sub: Any) -> None:
         help="fixed builder parameter",
     )
     sp.add_argument(
-        "--parametrisation", help="clavel (r, b) or mel (scale factors), or module:attr"
+        "--parametrisation",
+        help="clavel (r, b) or mel (scale factors), or module:attr of a --plugin",
     )
     sp.add_argument(
         "--metric",
@@ -231,6 +286,14 @@ def register(sub: Any) -> None:
     sp.add_argument("--depth", type=float, help="adept: pick line below home [m]")
     sp.add_argument("--dt", type=float, help="duty cycle sample period [s]")
     sp.add_argument("--length", type=float, help="characteristic length for 1/cond [m]")
+    sp.add_argument(
+        "--actuator-stiffness",
+        type=float,
+        nargs="+",
+        metavar="K",
+        help="actuator stiffness for stiffness_min / f1_min [N m/rad or N/m]",
+    )
+    sp.add_argument("--material", help="link material for stiffness_min / f1_min (steel...)")
     how = sp.add_mutually_exclusive_group()
     how.add_argument("--n", type=int, help="number of designs (lhs, sobol, random)")
     how.add_argument("--grid", type=int, help="full grid, values per variable")
@@ -239,10 +302,18 @@ def register(sub: Any) -> None:
     sp.add_argument("--generations", type=int, help="nsga2 generations")
     sp.add_argument("--population", type=int, help="nsga2 population")
     sp.add_argument("--seed", type=int)
-    sp.add_argument("--workers", type=int, help="local worker processes (default: all cores)")
+    sp.add_argument(
+        "--workers",
+        type=int,
+        help="local worker processes (default: the usable cores, at most one per design; more "
+        "are capped, with a warning)",
+    )
     sp.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786")
     sp.add_argument(
-        "--timeout", type=float, default=10.0, help="seconds to reach the scheduler (10)"
+        "--timeout",
+        type=float,
+        default=10.0,
+        help="seconds to wait for the scheduler to answer, or for a worker (10; at most 3600)",
     )
     sp.add_argument("--out", metavar="FILE.csv", help="results table (.csv and .parquet)")
     sp.add_argument("--no-resume", action="store_true", help="ignore earlier partial results")

@@ -63,10 +63,24 @@ def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
 
 def _fastest_options(args: argparse.Namespace) -> dict[str, Any]:
     """The path's nominal parametrisation: ``cycle_time / dt`` samples (default 1 s)."""
+    if args.cycles != 1:
+        raise InvalidInputError(
+            "--cycles", "--fastest traverses the path once (its time is the path parameter)"
+        )
     opts = _trajectory_options(args)
     if args.trajectory == "adept":
         opts["cycle_time"] = 1.0 if args.cycle_time is None else args.cycle_time
         opts["cycles"] = 1
+    from pkdyn.dynamics.fastest import MAX_PATH_SAMPLES
+
+    length = args.cycle_time if args.cycle_time is not None else 1.0
+    if args.dt > 0.0 and length / args.dt > MAX_PATH_SAMPLES:  # before building the path
+        raise InvalidInputError(
+            "--dt",
+            f"{length:g} s of path every {args.dt:g} s is {length / args.dt:.3g} samples, more "
+            f"than the {MAX_PATH_SAMPLES:,} --fastest accepts (each is mapped, then solved "
+            "by toppra); a longer --dt",
+        )
     return opts
 
 
@@ -76,9 +90,21 @@ def _cmd_size(args: argparse.Namespace) -> None:
 
     output_path("--csv", args.csv)
     output_path("--plot", args.plot, figure=True)
+    output_path("--operating-points", args.operating_points, figure=True)
+    catalog = None
+    if args.catalog:  # read (and refused) before any work
+        from pkdyn.dynamics.motors import load_catalog
+
+        catalog = load_catalog(args.catalog)
+        if args.gearboxes:
+            catalog = catalog + load_catalog(args.gearboxes)
+    elif args.gearboxes:
+        raise InvalidInputError("--gearboxes", "needs --catalog (the motors to pair them with)")
     robot = load(args)
     if args.payload < 0.0 or not np.isfinite(args.payload):
         raise InvalidInputError("--payload", f"must be >= 0 kg, got {args.payload}")
+    if args.show < 0:
+        raise InvalidInputError("--show", f"must be >= 0, got {args.show}")
     if args.operating_points and not args.catalog:
         raise InvalidInputError("--operating-points", "needs --catalog (the motors to plot)")
     fast = None
@@ -93,13 +119,9 @@ def _cmd_size(args: argparse.Namespace) -> None:
         traj = named_trajectory(robot, args.trajectory, **_trajectory_options(args))
         result = size(robot, traj, payload=args.payload)
     selection = None
-    if args.catalog:
-        from pkdyn.dynamics.motors import load_catalog
+    if catalog is not None:
         from pkdyn.dynamics.selection import select_drives
 
-        catalog = load_catalog(args.catalog)
-        if args.gearboxes:
-            catalog = catalog + load_catalog(args.gearboxes)
         selection = select_drives(
             robot,
             traj,

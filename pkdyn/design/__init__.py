@@ -19,6 +19,7 @@ from pkdyn.design.context import Conditions, DesignContext
 from pkdyn.design.goals import Constraint, Objective
 from pkdyn.design.metrics import GROUPS, METRICS, Metric, metric, resolve_metrics
 from pkdyn.design.parametrisations import PARAMETRISATIONS, Parametrisation
+from pkdyn.design.plugins import load_plugin
 from pkdyn.design.requirement import Requirement
 from pkdyn.design.result import StudyResult
 from pkdyn.design.run import run_study
@@ -40,6 +41,7 @@ __all__ = [
     "Requirement",
     "Study",
     "StudyResult",
+    "load_plugin",
     "metric",
     "resolve_metrics",
     "run_study",

@@ -16,15 +16,23 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from pkdyn.design import fields
 from pkdyn.design.duty import DutyFigures, duty_figures
 from pkdyn.design.required import RequiredCheck, required_check
 from pkdyn.design.requirement import Requirement
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.robot import Robot
 from pkdyn.workspace.clavel import AB_MIN, GAMMA_MAX, ClavelFigures
+from pkdyn.workspace.limits import check_kinds
 from pkdyn.workspace.translation import TranslationWorkspace
 
-__all__ = ["Conditions", "DesignContext"]
+__all__ = ["MAX_CLAVEL_RAYS", "MAX_WORKSPACE_SAMPLES", "Conditions", "DesignContext"]
+
+MAX_WORKSPACE_SAMPLES = 100
+"""Most grid samples per axis of a design's translation workspace (10^6 poses)."""
+
+MAX_CLAVEL_RAYS = 720
+"""Most directions of the numeric Clavel measurement."""
 
 T = TypeVar("T")
 
@@ -46,6 +54,11 @@ class Conditions:
         ab_min: Clavel's limit 2, (alpha + beta)_min [rad].
         workspace_samples: Grid samples per axis of the translation workspace (volume, GCI).
         clavel_rays: Directions of the numeric Clavel measurement.
+        actuator_stiffness: Joint-side actuator stiffness for the precision metrics
+            (``stiffness_min``, ``f1_min``), one or one per actuator [N m/rad or N/m];
+            ``None``: the description's ``<pkdyn:stiffness>``.
+        material: Material of the links for the precision metrics (a preset name of
+            :mod:`pkdyn.precision.material`); ``None``: rigid links (or the description's).
 
     """
 
@@ -59,17 +72,54 @@ class Conditions:
     ab_min: float = AB_MIN
     workspace_samples: int = 21
     clavel_rays: int = 24
+    actuator_stiffness: float | tuple[float, ...] | None = None
+    material: str | None = None
     _tasks: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "limits", tuple(self.limits))
-        object.__setattr__(self, "trajectory_options", dict(self.trajectory_options))
-        if not (math.isfinite(self.payload) and self.payload >= 0.0):
-            raise InvalidInputError("payload", f"must be >= 0 kg, got {self.payload}")
-        if self.length is not None and not (math.isfinite(self.length) and self.length > 0):
-            raise InvalidInputError("length", f"must be > 0 m, got {self.length}")
-        if self.workspace_samples < 3:
-            raise InvalidInputError("workspace_samples", "need at least 3 samples per axis")
+        set_ = object.__setattr__
+        limits = fields.names("limits", self.limits)
+        check_kinds(limits)
+        set_(self, "limits", limits)
+        set_(
+            self,
+            "trajectory_options",
+            fields.mapping("trajectory_options", self.trajectory_options),
+        )
+        set_(self, "payload", fields.number("payload", self.payload, 0.0, unit="kg"))
+        if self.length is not None:
+            set_(self, "length", fields.number("length", self.length, 0.0, open_low=True, unit="m"))
+        for name in ("gamma_max", "ab_min"):
+            angle = fields.number(
+                name, getattr(self, name), 0.0, math.pi, open_low=True, unit="rad"
+            )
+            set_(self, name, angle)
+        set_(
+            self,
+            "workspace_samples",
+            fields.integer("workspace_samples", self.workspace_samples, 3, MAX_WORKSPACE_SAMPLES),
+        )
+        set_(
+            self, "clavel_rays", fields.integer("clavel_rays", self.clavel_rays, 3, MAX_CLAVEL_RAYS)
+        )
+        if self.actuator_stiffness is not None:
+            try:
+                k = np.atleast_1d(np.asarray(self.actuator_stiffness, dtype=float))
+            except (TypeError, ValueError):
+                raise InvalidInputError(
+                    "actuator_stiffness",
+                    f"expected numbers [N m/rad or N/m], got {self.actuator_stiffness!r}",
+                ) from None
+            if k.ndim != 1 or not np.all(k > 0.0):  # (NaN fails too)
+                raise InvalidInputError(
+                    "actuator_stiffness", f"{k.tolist()}: stiffnesses must be > 0 [N m/rad or N/m]"
+                )
+            value = float(k[0]) if k.size == 1 else tuple(float(x) for x in k)
+            object.__setattr__(self, "actuator_stiffness", value)
+        if self.material is not None:
+            from pkdyn.precision.material import as_material
+
+            as_material(self.material)
 
     def as_dict(self) -> dict[str, Any]:
         """Plain form for study files."""
@@ -84,6 +134,14 @@ class Conditions:
             "ab_min": self.ab_min,
             "workspace_samples": self.workspace_samples,
             "clavel_rays": self.clavel_rays,
+            "actuator_stiffness": None
+            if self.actuator_stiffness is None
+            else (
+                self.actuator_stiffness
+                if isinstance(self.actuator_stiffness, float)
+                else list(self.actuator_stiffness)
+            ),
+            "material": self.material,
         }
 
     @classmethod

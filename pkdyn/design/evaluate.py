@@ -21,7 +21,7 @@ import pinocchio as pin
 
 from pkdyn.design.context import DesignContext
 from pkdyn.design.study import Study
-from pkdyn.exceptions import PkdynError
+from pkdyn.exceptions import PkdynError, StudyError
 from pkdyn.model.build import build_geometry
 from pkdyn.model.loader import load_string
 from pkdyn.model.robot import Robot
@@ -84,10 +84,15 @@ def evaluate_design(study: Study, index: int, x: Any) -> Row:
     Returns:
         The row (infeasible with a reason when the design fails or breaks a constraint).
 
+    Raises:
+        StudyError: The memory ran out (a property of the machine and the study's sampling,
+            not of the design: never recorded as an infeasible design).
+
     """
     xs = tuple(float(v) for v in x)
     metrics = study.metric_list
     values = [float("nan")] * len(metrics)
+    exhausted = ""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         where = "build: "
@@ -99,8 +104,16 @@ def evaluate_design(study: Study, index: int, x: Any) -> Row:
                 values[k] = m(robot, ctx)
         except PkdynError as err:
             return Row(index, xs, False, _reason(err, where), tuple(values))
+        except MemoryError:
+            exhausted = where  # not a property of the design: stop the study, below
         except Exception as err:  # a user metric's bug, a numerical failure: record it
             return Row(index, xs, False, _reason(err, where + "error: "), tuple(values))
+    if exhausted:
+        raise StudyError(
+            f"design {index}",
+            f"the memory ran out ({exhausted.rstrip(': ')}); lower the required samples, the "
+            "duty cycle's samples or the workers",
+        )
     by_name = dict(zip(study.metric_names, values, strict=True))
     broken = [
         f"{c.metric} = {by_name[c.metric]:.6g} breaks {c}"

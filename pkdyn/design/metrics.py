@@ -34,6 +34,12 @@ Built-in metrics (:data:`METRICS`; groups of them: :data:`GROUPS`):
   m/s], ``peak_power`` [W] (largest over the actuators), ``effort_margin``, ``speed_margin``
   (smallest ``1 - peak / limit``), and per actuator ``peak_effort_<k>``, ``rms_effort_<k>``,
   ``peak_speed_<k>`` (``k`` = 1, 2, ... in actuator order);
+- on the required workspace, precision (:mod:`pkdyn.precision`, with the study's
+  ``actuator_stiffness`` and ``material``): ``stiffness_min`` [N/m] (smallest principal
+  translational stiffness; 0 when a required pose is singular), ``f1_min`` [Hz] (lowest natural
+  frequency);
+- on the required workspace: ``error_max`` [m], the largest worst-case platform position error
+  of actuator errors of :data:`pkdyn.precision.accuracy.DEFAULT_RESOLUTION` (1e-4 rad, 1e-5 m);
 - ``base_radius`` [m]: largest distance of a base joint from the z axis (a footprint);
 - ``moving_mass`` [kg]: every body but the base.
 """
@@ -103,6 +109,9 @@ class Metric:
 METRICS: dict[str, Metric] = {}
 """Metrics known by name (built-ins and those registered with :func:`metric`)."""
 
+_BUILTIN: set[str] = set()
+"""The built-in metric and group names (a plug-in may not replace them), filled below."""
+
 
 def metric(
     name: str, unit: str, summary: str = "", geometry: bool = False
@@ -121,6 +130,10 @@ def metric(
     """
 
     def wrap(fn: MetricFn) -> MetricFn:
+        if name in _BUILTIN:
+            raise InvalidInputError(
+                "metric", f"'{name}' is a built-in name: give your metric another one"
+            )
         METRICS[name] = Metric(name, unit, fn, summary or (fn.__doc__ or "").strip(), geometry)
         return fn
 
@@ -292,6 +305,65 @@ def _per_actuator(name: str) -> Metric | None:
     return Metric(name, unit, fn, f"{m.group(1).replace('_', ' ')} of actuator {k}")
 
 
+# ---------------------------------------------------------------------- precision
+
+
+def _precision(ctx: DesignContext, frequency: bool) -> np.ndarray:
+    """Stiffness (or lowest frequency) at the reached required poses (0: singular)."""
+    from pkdyn.precision.maps import pose_figures
+
+    def run() -> np.ndarray:
+        chk = ctx.required()
+        ok = chk.reached
+        if not ok.any():
+            raise InvalidInputError("stiffness_min", "no required pose reached")
+        c = ctx.conditions
+        fig = pose_figures(
+            ctx.robot,
+            chk.P[ok],
+            chk.R[ok],
+            c.actuator_stiffness,
+            material=c.material,
+            frequency=frequency,
+            progress=False,
+        )
+        values = fig.f1 if frequency else fig.stiffness_min
+        return np.where(fig.valid, values, 0.0)
+
+    return ctx.cached("precision_f1" if frequency else "precision_k", run)
+
+
+@metric(
+    "stiffness_min",
+    "N/m",
+    "smallest translational stiffness over the required workspace",
+    geometry=True,  # the links' beams are read from their cylinders
+)
+def _stiffness_min(robot: Robot, ctx: DesignContext) -> float:
+    return float(np.min(_precision(ctx, False)))
+
+
+@metric("f1_min", "Hz", "lowest natural frequency over the required workspace", geometry=True)
+def _f1_min(robot: Robot, ctx: DesignContext) -> float:
+    return float(np.min(_precision(ctx, True)))
+
+
+@metric(
+    "error_max",
+    "m",
+    "largest worst-case position error over the reached required poses (actuator resolution "
+    "1e-4 rad or 1e-5 m)",
+)
+def _error_max(robot: Robot, ctx: DesignContext) -> float:
+    from pkdyn.precision.accuracy import largest_position_error
+
+    chk = ctx.required()
+    ok = chk.reached
+    if not ok.any():
+        raise InvalidInputError("error_max", "no required pose reached")
+    return largest_position_error(robot, chk.P[ok], chk.R[ok])
+
+
 @metric("base_radius", "m", "largest distance from the z axis of a joint on the base")
 def _base_radius(robot: Robot, ctx: DesignContext) -> float:
     model = robot.model
@@ -321,6 +393,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
         "clavel_z_h",
     ),
     "required": ("contains", "inv_cond_min", "inv_cond_mean", "interference_margin"),
+    "precision": ("stiffness_min", "f1_min"),
     "sizing": (
         "peak_effort",
         "rms_effort",
@@ -333,20 +406,23 @@ GROUPS: dict[str, tuple[str, ...]] = {
 }
 """Names that stand for several metrics (``--metric sizing``)."""
 
+_BUILTIN.update(METRICS, GROUPS)
+
 
 def resolve_metrics(items: Sequence[str | Metric]) -> list[Metric]:
     """Metrics from names, group names and :class:`Metric` objects, without repeats.
 
     Args:
         items: Metric names (built-in or registered), group names (:data:`GROUPS`), per-actuator
-            names (``peak_effort_2``), ``module:function`` of a registered-by-import metric, or
-            :class:`Metric` objects.
+            names (``peak_effort_2``), ``module:attribute`` of a loaded plug-in
+            (:mod:`pkdyn.design.plugins`), or :class:`Metric` objects.
 
     Returns:
         The metrics, in order of first mention.
 
     Raises:
-        InvalidInputError: An unknown name (the message lists the known ones).
+        InvalidInputError: An unknown name (the message lists the known ones), or a
+            ``module:attribute`` whose module is not a loaded plug-in.
 
     """
     out: dict[str, Metric] = {}
@@ -361,26 +437,36 @@ def resolve_metrics(items: Sequence[str | Metric]) -> list[Metric]:
                     "metric",
                     f"unknown metric '{name}'; known: {', '.join(sorted(METRICS))}, groups "
                     f"{', '.join(GROUPS)}, per actuator peak_effort_<k> rms_effort_<k> "
-                    "peak_speed_<k>, or module:function",
+                    "peak_speed_<k>, or module:attribute of a plug-in (--plugin MODULE)",
                 )
             out.setdefault(m.name, m)
     return list(out.values())
 
 
 def _imported(name: str) -> Metric | None:
-    """``module:attribute`` naming a :class:`Metric` (or a function registered on import)."""
+    """A metric of a plug-in: ``module:attribute``, or a plain name an installed one registers.
+
+    ``module:attribute`` names a :class:`Metric` (or a function registered with
+    :func:`metric`) of a loaded plug-in; an unknown plain name is looked for in the installed
+    plug-ins (entry points).
+
+    Raises:
+        InvalidInputError: A module that is not a loaded plug-in, or an attribute that is not a
+            metric.
+
+    """
+    from pkdyn.design import plugins
+
     module, sep, attr = name.partition(":")
     if not sep:
-        return None
-    import importlib
-
-    try:
-        obj: Any = getattr(importlib.import_module(module), attr)
-    except (ImportError, AttributeError):
-        return None
+        plugins.load_entry_points()
+        return METRICS.get(name)
+    obj: Any = plugins.resolve(name, "metric")
     if isinstance(obj, Metric):
         return obj
     for m in METRICS.values():
         if m.fn is obj:
             return m
-    return None
+    raise InvalidInputError(
+        "metric", f"'{name}' is neither a Metric nor a function registered with @metric"
+    )

@@ -4,12 +4,12 @@ A study may sweep quantities a family's builder does not take directly: Clavel's
 ``r = (ra - rb) / la`` and ``b = lb / la`` (seed 000), or scale factors of Merlet's MEL hexapod
 (seed 002), whose joint centres are 6 x 3 tables. A :class:`Parametrisation` names its inputs
 and returns the builder parameters they set. Built-ins: :data:`PARAMETRISATIONS`; a study may
-also name ``module:attribute`` of its own :class:`Parametrisation`.
+also name ``module:attribute`` of its own :class:`Parametrisation` in a plug-in the user loaded
+(:mod:`pkdyn.design.plugins`).
 """
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -112,24 +112,27 @@ PARAMETRISATIONS: dict[str, Parametrisation] = {
 
 
 def parametrisation(name: str) -> Parametrisation:
-    """A built-in parametrisation, or ``module:attribute`` naming a :class:`Parametrisation`.
+    """A built-in parametrisation, or ``module:attribute`` of a loaded plug-in.
 
     Raises:
-        InvalidInputError: Unknown name, or an attribute that is not a parametrisation.
+        InvalidInputError: Unknown name, a module that is not a loaded plug-in
+            (:mod:`pkdyn.design.plugins`: a study never imports code), or an attribute that is
+            not a parametrisation.
 
     """
+    from pkdyn.design import plugins
+
+    if not isinstance(name, str):
+        raise InvalidInputError("parametrisation", f"expected a name, got {name!r}")
     if name in PARAMETRISATIONS:
         return PARAMETRISATIONS[name]
-    module, sep, attr = name.partition(":")
-    if sep:
-        try:
-            obj = getattr(importlib.import_module(module), attr)
-        except (ImportError, AttributeError) as err:
-            raise InvalidInputError("parametrisation", f"cannot import '{name}': {err}") from None
+    if ":" in name:
+        obj = plugins.resolve(name, "parametrisation")
         if isinstance(obj, Parametrisation):
             return obj
         raise InvalidInputError("parametrisation", f"'{name}' is not a Parametrisation")
     raise InvalidInputError(
         "parametrisation",
-        f"unknown '{name}' (built-in: {', '.join(PARAMETRISATIONS)}; or module:attribute)",
+        f"unknown '{name}' (built-in: {', '.join(PARAMETRISATIONS)}; or module:attribute of a "
+        "plug-in loaded with --plugin MODULE)",
     )

@@ -21,14 +21,19 @@ be missed, so raise ``samples`` for a final check.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from pkdyn.design import fields
 from pkdyn.exceptions import InvalidInputError
 
-__all__ = ["KINDS", "Requirement"]
+__all__ = ["KINDS", "MAX_REQUIRED_POSES", "Requirement"]
+
+MAX_REQUIRED_POSES = 100_000
+"""Most sampled poses in a required workspace (each design checks them all)."""
 
 KINDS = {
     "box": ("dx", "dy", "dz"),
@@ -72,34 +77,62 @@ class Requirement:
     _cache: dict[str, Any] = field(default_factory=dict, repr=False, compare=False, init=False)
 
     def __post_init__(self) -> None:
-        if self.kind not in KINDS:
-            raise InvalidInputError(
-                "requirement", f"unknown shape '{self.kind}' (use {', '.join(KINDS)})"
-            )
-        need = KINDS[self.kind]
-        size = {k: float(v) for k, v in self.size.items()}
-        bad = [k for k in size if k not in need]
+        kind = fields.text("requirement", self.kind, tuple(KINDS))
+        need = KINDS[kind]
+        raw = fields.mapping(f"requirement {kind}", self.size)
+        bad = [k for k in raw if k not in need]
         if bad:
             raise InvalidInputError(
-                "requirement", f"{self.kind}: unknown size '{bad[0]}' (use {', '.join(need)})"
+                "requirement", f"{kind}: unknown size '{bad[0]}' (use {', '.join(need)})"
             )
+        size: dict[str, float] = {}
         for k in need:
-            v = size.get(k, 0.0 if k in ("H", "yaw") else math.nan)
-            if not (math.isfinite(v) and v >= 0.0):
-                raise InvalidInputError(
-                    "requirement", f"{self.kind}: {k} must be a finite size >= 0, got {v}"
-                )
-            size[k] = v
-        if self.kind != "orientation" and max(size.values()) == 0.0:
-            raise InvalidInputError("requirement", f"{self.kind}: every size is 0")
+            if k not in raw and k not in ("H", "yaw"):
+                raise InvalidInputError("requirement", f"{kind}: give its size {k}")
+            size[k] = fields.number(f"requirement {kind} {k}", raw.get(k, 0.0), 0.0)
+        if kind != "orientation" and max(size.values()) == 0.0:
+            raise InvalidInputError("requirement", f"{kind}: every size is 0")
+        if kind == "orientation" and max(size.values()) > math.pi:
+            raise InvalidInputError(
+                "requirement", f"orientation: angle ranges are at most pi rad, got {size}"
+            )
         object.__setattr__(self, "size", size)
-        c = tuple(float(x) for x in self.center)
-        if len(c) != 3 or not all(math.isfinite(x) for x in c):
-            raise InvalidInputError("requirement", f"centre must be 3 finite numbers, got {c}")
+        center = self.center
+        if isinstance(center, str) or not isinstance(center, Sequence) or len(center) != 3:
+            raise InvalidInputError(
+                "requirement", f"centre must be 3 finite numbers [x, y, z], got {center!r}"
+            )
+        c = tuple(fields.number("requirement centre", x) for x in center)
         object.__setattr__(self, "center", c)
-        if int(self.samples) < 2:
-            raise InvalidInputError("requirement", f"samples must be >= 2, got {self.samples}")
-        object.__setattr__(self, "samples", int(self.samples))
+        samples = fields.integer("requirement samples (--samples)", self.samples, 2)
+        object.__setattr__(self, "samples", samples)
+        count = self.count
+        if count > MAX_REQUIRED_POSES:
+            raise InvalidInputError(
+                "requirement",
+                f"{kind} at {samples} samples per axis is {count:,} poses per design, more than "
+                f"{MAX_REQUIRED_POSES:,} (a pose check is microseconds to a millisecond, and "
+                "every design checks them all); use fewer --samples",
+            )
+
+    @property
+    def count(self) -> int:
+        """Number of sampled poses (see the module docstring), computed without sampling."""
+        return self.count_at(self.samples)
+
+    def count_at(self, samples: int) -> int:
+        """Number of poses this requirement would have at ``samples`` per axis."""
+        s, z = int(samples), self.size
+        if self.kind == "box":
+            return int(np.prod([s if z[k] > 0.0 else 1 for k in ("dx", "dy", "dz")]))
+        if self.kind == "cylinder":
+            disc = 1 + 3 * (s - 2) * (s - 1) + 12 * (s - 1) if z["D"] > 0.0 else 1
+            return disc * (s if z["H"] > 0.0 else 1)
+        return (
+            (s if z["roll"] > 0.0 else 1)
+            * (s if z["pitch"] > 0.0 else 1)
+            * (s if z["yaw"] > 0.0 else 1)
+        )
 
     @classmethod
     def parse(cls, text: str, samples: int = 5) -> Requirement:
@@ -111,11 +144,17 @@ class Requirement:
             InvalidInputError: Malformed text or values.
 
         """
+        if not isinstance(text, str):
+            raise InvalidInputError("requirement", f"expected KIND:K=V,..., got {text!r}")
         kind, _, rest = text.partition(":")
         size: dict[str, float] = {}
         center = [0.0, 0.0, 0.0]
+        seen: set[str] = set()
         for item in filter(None, (s.strip() for s in rest.split(","))):
             key, sep, value = item.partition("=")
+            if key.strip() in seen:
+                raise InvalidInputError("--require", f"'{key.strip()}' is given twice")
+            seen.add(key.strip())
             try:
                 val = float(value)
             except ValueError:
@@ -129,18 +168,22 @@ class Requirement:
         return cls(kind.strip(), size, (center[0], center[1], center[2]), samples)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> Requirement:
-        """From the study-file form (see :meth:`as_dict`)."""
+    def from_dict(cls, data: Mapping[str, Any] | str) -> Requirement:
+        """From the study-file form (see :meth:`as_dict`).
+
+        Raises:
+            InvalidInputError: Not a mapping (or ``KIND:K=V`` text), a field of the wrong type.
+
+        """
         if isinstance(data, str):
             return cls.parse(data)
-        d = dict(data)
-        try:
-            kind = str(d.pop("kind"))
-        except KeyError:
-            raise InvalidInputError("requirement", "needs a 'kind'") from None
+        d = fields.mapping("requirement", data)
+        if "kind" not in d:
+            raise InvalidInputError("requirement", "needs a 'kind'")
+        kind = d.pop("kind")
         center = d.pop("center", (0.0, 0.0, 0.0))
-        samples = int(d.pop("samples", 5))
-        return cls(kind, d, tuple(center), samples)  # type: ignore[arg-type]
+        samples = d.pop("samples", 5)
+        return cls(kind, d, center, samples)
 
     def as_dict(self) -> dict[str, Any]:
         """Plain form for study files."""

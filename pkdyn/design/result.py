@@ -13,10 +13,48 @@ import numpy as np
 from pkdyn.design.pareto import non_dominated
 from pkdyn.design.study import Study
 from pkdyn.design.table import Table
-from pkdyn.exceptions import StudyError
+from pkdyn.exceptions import InvalidInputError, StudyError
 from pkdyn.files import atomic_write
 
-__all__ = ["StudyResult"]
+__all__ = ["StudyResult", "check_verify"]
+
+
+def check_verify(study: Study, samples: int, candidates: int = 50) -> Study:
+    """The study with its requirement sampled ``samples`` per axis, for :meth:`StudyResult.verify`.
+
+    Refused before any work when the denser requirement, checked on up to ``candidates``
+    designs, exceeds the budgets (:data:`pkdyn.design.requirement.MAX_REQUIRED_POSES` poses,
+    :data:`pkdyn.design.study.MAX_STUDY_WORK` pose checks).
+
+    Raises:
+        InvalidInputError: No required workspace, bad numbers, or too many poses.
+
+    """
+    from pkdyn.design import fields
+    from pkdyn.design.requirement import MAX_REQUIRED_POSES
+    from pkdyn.design.study import MAX_STUDY_WORK
+
+    samples = fields.integer("--verify (samples per axis)", samples, 2)
+    candidates = fields.integer("candidates", candidates, 1)
+    req = study.requirement
+    if req is None:
+        raise InvalidInputError("--verify", "the study has no required workspace to check")
+    count = req.count_at(samples)
+    if count > MAX_REQUIRED_POSES:
+        raise InvalidInputError(
+            "--verify",
+            f"{req.kind} at {samples} samples per axis is {count:,} poses, more than "
+            f"{MAX_REQUIRED_POSES:,}; use fewer samples per axis",
+        )
+    dense = dataclasses.replace(req, samples=samples)
+    work = candidates * dense.count
+    if work > MAX_STUDY_WORK:
+        raise InvalidInputError(
+            "--verify",
+            f"{candidates} candidates x {dense.count:,} poses = {work:.3g} pose checks, more "
+            f"than {MAX_STUDY_WORK:.0e}; use fewer samples per axis",
+        )
+    return dataclasses.replace(study, requirement=dense)
 
 
 def _param_text(v: Any) -> str:
@@ -98,15 +136,16 @@ class StudyResult:
         Returns:
             The position, or ``None`` if none of the candidates passes.
 
+        Raises:
+            InvalidInputError: A denser requirement beyond the budgets (:func:`check_verify`).
+            StudyError: The memory runs out (never read as "no design passes").
+
         """
         from pkdyn.design.evaluate import evaluate_design
 
-        req = self.study.requirement
-        if req is None:
+        if self.study.requirement is None:
             return self.best()
-        dense = dataclasses.replace(
-            self.study, requirement=dataclasses.replace(req, samples=samples)
-        )
+        dense = check_verify(self.study, samples, candidates)
         feas = np.flatnonzero(self.table.feasible)
         if self.study.objective_list:
             feas = feas[np.lexsort(self.objective_matrix()[feas].T[::-1])]

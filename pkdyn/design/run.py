@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import os
 import time
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -23,10 +24,10 @@ from pkdyn.design.evaluate import Row, evaluate_designs, pack
 from pkdyn.design.executors import Executor, SerialExecutor, make_executor
 from pkdyn.design.optimize import nsga2_rows
 from pkdyn.design.result import StudyResult
-from pkdyn.design.study import Study
+from pkdyn.design.study import MAX_STUDY_FILE, Study
 from pkdyn.design.table import PartialFile, Table, output_paths
-from pkdyn.exceptions import StudyError
-from pkdyn.files import atomic_write
+from pkdyn.exceptions import InvalidInputError, PkdynError, StudyError
+from pkdyn.files import atomic_write, read_text
 from pkdyn.progress import progress as progress_bar
 
 __all__ = ["run_study"]
@@ -47,11 +48,18 @@ def _evaluate(
     done: dict[int, Row],
     partial: PartialFile | None,
 ) -> Iterator[Row]:
-    """Rows of ``items``: those already done, then the others as the executor finishes them."""
-    for i, _ in items:
-        if i in done:
-            yield done[i]
-    todo = [it for it in items if it[0] not in done]
+    """Rows of ``items``: those already done, then the others as the executor finishes them.
+
+    A row already done counts only if it holds the design the sampler proposes at its index
+    (NSGA-II proposes its designs as it goes: a partial file may differ from them).
+    """
+    todo = []
+    for i, x in items:
+        r = done.get(i)
+        if r is not None and r.x == tuple(x):
+            yield r
+        else:
+            todo.append((i, x))
     for rows in ex.map_chunks(evaluate_designs, payload, _chunks(todo, ex.workers)):
         if partial is not None:
             partial.append(rows)
@@ -61,20 +69,72 @@ def _evaluate(
 
 
 def _complete(paths: dict[str, Path], study: Study, header: list[str]) -> list[Row] | None:
-    """Rows of a complete earlier run of the same study at these paths, else ``None``."""
+    """Rows of an earlier complete run of the same study (same digest) here, else ``None``."""
     import yaml
 
-    if not (paths["study"].exists() and paths["csv"].exists()):
+    if not (paths["study"].is_file() and paths["csv"].is_file()):
         return None
     try:
-        meta = yaml.safe_load(paths["study"].read_text())
-        if not isinstance(meta, dict) or meta.get("results", {}).get("digest") != study.digest():
+        meta = yaml.safe_load(
+            read_text(paths["study"], MAX_STUDY_FILE, lambda m: StudyError("study file", m))
+        )
+        results = meta.get("results") if isinstance(meta, dict) else None
+        if not isinstance(results, dict) or results.get("digest") != study.digest():
             return None
         with open(paths["csv"], newline="") as fh:
             rows = Table.read_rows(fh, header)
-    except (OSError, yaml.YAMLError, StudyError):
+    except (OSError, yaml.YAMLError, PkdynError, RecursionError):
         return None
-    return rows if len(rows) == meta["results"].get("designs") else None
+    return rows  # (checked row by row by _belonging)
+
+
+def _belonging(study: Study, rows: list[Row], source: Path) -> dict[int, Row]:
+    """The rows of an earlier run that belong to ``study``, by index; a warning counts the rest.
+
+    A row belongs if its index is one of the study's designs and its design variables are
+    those the sampler gives at that index (NSGA-II, which proposes its designs as it goes:
+    inside the ranges, whole numbers where the parameter is an integer; each is compared with
+    the proposal when it comes). Of repeated indices the last row is kept (a design evaluated
+    again after a restart is appended after the first).
+    """
+    total = study.total
+    X = None if study.sampler == "nsga2" else study.designs()
+    ranges = study.space.ranges
+    integral = study.space.integral
+    kept: dict[int, Row] = {}
+    dropped = {"index": 0, "values": 0, "repeated": 0}
+    for r in rows:
+        if not 0 <= r.index < total:
+            dropped["index"] += 1
+            continue
+        if X is not None:
+            ok = r.x == tuple(float(v) for v in X[r.index])
+        else:
+            ok = len(r.x) == len(ranges) and all(
+                rg.low <= v <= rg.high and (not whole or v == round(v))
+                for rg, v, whole in zip(ranges, r.x, integral, strict=True)
+            )
+        if not ok:
+            dropped["values"] += 1
+            continue
+        if r.index in kept:
+            dropped["repeated"] += 1
+        kept[r.index] = r
+    if any(dropped.values()):
+        what = {
+            "index": f"an index outside 0..{total - 1}",
+            "values": "design values the sampler does not give at their index",
+            "repeated": "an index given again (the last row kept)",
+        }
+        parts = [f"{n} with {what[k]}" for k, n in dropped.items() if n]
+        n = sum(dropped.values())
+        warnings.warn(
+            f"{source}: {n} row{'s' if n > 1 else ''} that do not belong to this study dropped "
+            f"({', '.join(parts)}); {len(kept)} kept, the others are evaluated",
+            UserWarning,
+            stacklevel=3,
+        )
+    return kept
 
 
 def run_study(
@@ -94,23 +154,33 @@ def run_study(
         study: The study.
         out: Table file (``.csv`` or ``.parquet``; both are written, and ``<stem>.study.yaml``);
             ``None`` keeps the results in memory only.
-        workers: Local worker processes (default: the machine's cores; 1: this process).
+        workers: Local worker processes (default: the usable cores, at most one per design;
+            1: this process; more than the machine or the study justify are capped, with a
+            warning).
         client: A Dask :class:`distributed.Client` to run on.
         scheduler: A Dask scheduler address to connect to (``tcp://host:8786``).
-        resume: Skip the designs an earlier run of the same study at ``out`` finished.
+        resume: Skip the designs an earlier run of the same study at ``out`` finished (rows
+            that do not belong to the study are dropped, with a warning).
         progress: Progress bar over designs (default: on a terminal).
         executor: An executor to use (overrides ``workers``, ``client``, ``scheduler``).
-        scheduler_timeout: How long to try to reach ``scheduler`` [s].
+        scheduler_timeout: How long to wait for the scheduler and for workers [s] (at most
+            :data:`pkdyn.design.executors.MAX_TIMEOUT`).
 
     Returns:
         The results.
 
     Raises:
-        StudyError: Unreachable scheduler, a partial file of another study, or a required
-            workspace that no design reaches (the complete table is written first).
+        StudyError: Unreachable scheduler, a cluster or a worker process lost (the designs
+            finished are kept: the same call resumes), a partial file of another study, a
+            design that exhausts the memory, or a required workspace that no design reaches
+            (the complete table is written first).
         OutputError: The output cannot be written.
 
     """
+    if not isinstance(study, Study):
+        raise InvalidInputError(
+            "study", f"expected a pkdyn.design.Study, got {type(study).__name__}"
+        )
     t0 = time.perf_counter()
     variables = study.space.names
     units = study.units
@@ -118,21 +188,23 @@ def run_study(
     header = empty.header()
     paths = output_paths(out) if out is not None else {}
     done: dict[int, Row] = {}
+    results: dict[int, Row] = {}
     partial = None
-    if paths and not paths["csv"].parent.is_dir():
-        raise StudyError(str(out), f"directory '{paths['csv'].parent}' does not exist")
+    parallel = study.n if study.sampler == "nsga2" else study.total
     ex = (
         executor
         if executor is not None
-        else make_executor(workers, client, scheduler, scheduler_timeout)
+        else make_executor(workers, client, scheduler, scheduler_timeout, designs=parallel)
     )
+    failed = True
     try:
         if paths:
             partial = PartialFile(paths["partial"], study.digest(), header)
             if resume:
                 complete = _complete(paths, study, header)
+                source = paths["csv"] if complete is not None else paths["partial"]
                 rows = complete if complete is not None else partial.load()
-                done = {r.index: r for r in rows}
+                done = _belonging(study, rows, source)
             partial.open(sorted(done.values(), key=lambda r: r.index))
         payload: Any = study if isinstance(ex, SerialExecutor) else pack(study)
         if study.sampler == "nsga2":
@@ -141,14 +213,15 @@ def run_study(
             X = study.designs()
             items = [(i, [float(v) for v in x]) for i, x in enumerate(X)]
             stream = _evaluate(ex, payload, items, done, partial)
-        for _ in progress_bar(stream, "designs", "design", progress, total=study.total):
-            pass
+        for row in progress_bar(stream, "designs", "design", progress, total=study.total):
+            results[row.index] = row
+        failed = False
     finally:
         if partial is not None:
             partial.close()
         if executor is None:
-            ex.close()
-    table = Table(variables, study.metric_names, units, list(done.values()))
+            ex.close(abort=failed)
+    table = Table(variables, study.metric_names, units, list(results.values()))
     result = StudyResult(study, table, time.perf_counter() - t0, ex.name, paths)
     if paths:
         meta = {"digest": study.digest(), "units": json.dumps(units)}

@@ -12,6 +12,7 @@ from __future__ import annotations
 import ast
 import dataclasses
 import math
+import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -42,6 +43,13 @@ class Range:
     high: float
 
     def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise InvalidInputError("range", f"a range needs a parameter name, got {self.name!r}")
+        for bound in (self.low, self.high):
+            if isinstance(bound, bool) or not isinstance(bound, numbers.Real):
+                raise InvalidInputError(
+                    f"range '{self.name}'", f"bounds must be numbers, got {bound!r}"
+                )
         if not (math.isfinite(self.low) and math.isfinite(self.high)):
             raise InvalidInputError(
                 f"range '{self.name}'", f"bounds must be finite, got {self.low}:{self.high}"
@@ -131,6 +139,19 @@ class DesignSpace:
             "fixed",
             {k: _coerce(fam.name, k, v, getattr(default, k, 0.0)) for k, v in self.fixed.items()},
         )
+        for k, v in self.fixed.items():
+            bad = _not_finite(v)
+            if bad is not None:
+                raise ParameterError(fam.name, k, f"fixed at {bad}: give a finite number")
+        if self._mapping is not None:
+            missing = [n for n in self._mapping.inputs if n not in names and n not in self.fixed]
+            if missing:
+                raise ParameterError(
+                    fam.name,
+                    missing[0],
+                    f"the parametrisation '{self._mapping.name}' needs it: give it a range or a "
+                    f"fixed value (it reads {', '.join(self._mapping.inputs)})",
+                )
         for name in names:
             if name in fields and not isinstance(getattr(default, name), int | float):
                 raise ParameterError(fam.name, name, "not a number: it cannot take a range")
@@ -142,9 +163,15 @@ class DesignSpace:
         """The registered family."""
         return family(self.family)
 
-    @property
+    @cached_property
     def _mapping(self) -> Parametrisation | None:
+        """The parametrisation, resolved once (and shipped resolved to the workers)."""
         return None if self.parametrisation is None else parametrisation(self.parametrisation)
+
+    @cached_property
+    def integral(self) -> tuple[bool, ...]:
+        """Per design variable: whether it is a whole number (an integer parameter)."""
+        return tuple(isinstance(getattr(self._defaults, r.name, 0.0), int) for r in self.ranges)
 
     @cached_property
     def _defaults(self) -> Any:
@@ -167,9 +194,8 @@ class DesignSpace:
         if u.shape[1] != self.dimension:
             raise InvalidInputError("samples", f"expected {self.dimension} columns, got {u.shape}")
         x = np.column_stack([r.at(u[:, k]) for k, r in enumerate(self.ranges)])
-        default = self._defaults
-        for k, r in enumerate(self.ranges):
-            if isinstance(getattr(default, r.name, 0.0), int):
+        for k, whole in enumerate(self.integral):
+            if whole:
                 x[:, k] = np.round(x[:, k])
         return x
 
@@ -230,6 +256,15 @@ def _coerce(family: str, name: str, value: Any, default: Any) -> Any:
         raise ParameterError(
             family, name, f"cannot use {value!r} (expected {type(default).__name__})"
         ) from None
+
+
+def _not_finite(v: Any) -> str | None:
+    """The first NaN or infinite number in a fixed value (a number or nested tuples), else None."""
+    if isinstance(v, tuple | list):
+        return next((b for b in (_not_finite(x) for x in v) if b is not None), None)
+    if isinstance(v, numbers.Real) and not isinstance(v, bool) and not math.isfinite(float(v)):
+        return str(float(v))
+    return None
 
 
 def _plain(v: Any) -> Any:

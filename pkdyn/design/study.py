@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -34,17 +34,56 @@ from typing import Any, cast
 
 import numpy as np
 
+from pkdyn.design import fields
 from pkdyn.design.context import Conditions
 from pkdyn.design.goals import Constraint, Objective
 from pkdyn.design.metrics import METRICS, Metric, resolve_metrics
 from pkdyn.design.requirement import Requirement
-from pkdyn.design.samplers import check_count, unit_points
+from pkdyn.design.samplers import SAMPLERS, check_count, unit_points
 from pkdyn.design.space import DesignSpace, Range
+from pkdyn.dynamics.trajectory import TRAJECTORIES, task_at_home
 from pkdyn.exceptions import InvalidInputError, StudyError
+from pkdyn.files import read_text
 
-__all__ = ["Study"]
+__all__ = ["MAX_SEED", "MAX_STUDY_FILE", "MAX_STUDY_WORK", "Study"]
 
-_CONDITION_KEYS = ("limits", "length", "gamma_max", "ab_min", "workspace_samples", "clavel_rays")
+MAX_SEED = 2**32 - 1
+"""Largest seed (the samplers' and NSGA-II's generators take 32-bit seeds)."""
+
+MAX_STUDY_FILE = 1_000_000
+"""Largest study file read [bytes]."""
+
+MAX_STUDY_WORK = 20_000_000
+"""Most pose checks, duty-cycle samples or workspace grid points a study may ask for, over all
+its designs (each is microseconds in closed form, up to a millisecond on the numeric path)."""
+
+_CONDITION_KEYS = (
+    "limits",
+    "length",
+    "gamma_max",
+    "ab_min",
+    "workspace_samples",
+    "clavel_rays",
+    "actuator_stiffness",
+    "material",
+)
+
+
+def _ranges(value: Any) -> tuple[Range, ...]:
+    """Ranges from ``{name: [low, high]}``, or a list of :class:`Range` s or ``NAME=LOW:HIGH``."""
+    if isinstance(value, Mapping):
+        items = []
+        for k, v in value.items():
+            if not isinstance(k, str):
+                raise InvalidInputError("ranges", f"names are strings, got {k!r}")
+            if isinstance(v, str) or not isinstance(v, Sequence) or len(v) != 2:
+                raise InvalidInputError(f"range '{k}'", f"expected [low, high], got {v!r}")
+            lo = fields.number(f"range '{k}' low", v[0])
+            hi = fields.number(f"range '{k}' high", v[1])
+            items.append(Range(k, lo, hi))
+        return tuple(items)
+    rs = fields.names("ranges", value, (Range,), "NAME: [LOW, HIGH] entries or NAME=LOW:HIGH")
+    return tuple(r if isinstance(r, Range) else Range.parse(r) for r in rs)
 
 
 @dataclass(frozen=True)
@@ -70,7 +109,8 @@ class Study:
         seed: Seed of the sampler or of NSGA-II.
         parametrisation: Name of a parametrisation (:mod:`pkdyn.design.parametrisations`).
         settings: Other conditions: ``limits``, ``length`` [m], ``gamma_max``, ``ab_min`` [rad],
-            ``workspace_samples``, ``clavel_rays`` (see :class:`pkdyn.design.Conditions`).
+            ``workspace_samples``, ``clavel_rays``, ``actuator_stiffness``, ``material`` (see
+            :class:`pkdyn.design.Conditions`).
         name: A label for reports.
 
     Raises:
@@ -99,55 +139,93 @@ class Study:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        ranges = self.ranges
-        if isinstance(ranges, Mapping):
-            items = []
-            for k, v in ranges.items():
-                try:
-                    lo, hi = (float(x) for x in v)
-                except (TypeError, ValueError):
-                    raise InvalidInputError(
-                        f"range '{k}'", f"expected [low, high], got {v!r}"
-                    ) from None
-                items.append(Range(str(k), lo, hi))
-            ranges = items
-        set_(self, "ranges", tuple(r if isinstance(r, Range) else Range.parse(r) for r in ranges))
-        set_(self, "fixed", dict(self.fixed))
-        set_(self, "metrics", tuple(self.metrics))
+        set_(self, "family", fields.text("family", self.family))
+        set_(self, "ranges", _ranges(self.ranges))
+        set_(self, "fixed", fields.mapping("fixed", self.fixed))
+        set_(self, "metrics", fields.names("metrics", self.metrics, (Metric,), "metric names"))
         set_(
             self,
             "constraints",
             tuple(
-                c if isinstance(c, Constraint) else Constraint.parse(c) for c in self.constraints
+                c if isinstance(c, Constraint) else Constraint.parse(c)
+                for c in fields.names("constraints", self.constraints, (Constraint,), "NAME>=VALUE")
             ),
         )
         set_(
             self,
             "objectives",
-            tuple(o if isinstance(o, Objective) else Objective.parse(o) for o in self.objectives),
+            tuple(
+                o if isinstance(o, Objective) else Objective.parse(o)
+                for o in fields.names(
+                    "objectives", self.objectives, (Objective,), "min:NAME or max:NAME"
+                )
+            ),
         )
         req = self.requirement
         if req is not None and not isinstance(req, Requirement):
-            req = Requirement.parse(req) if isinstance(req, str) else Requirement.from_dict(req)
+            if isinstance(req, str):
+                req = Requirement.parse(req)
+            else:
+                req = Requirement.from_dict(fields.mapping("requirement", req))
         set_(self, "requirement", req)
-        set_(self, "trajectory_options", dict(self.trajectory_options))
-        set_(self, "settings", dict(self.settings))
+        set_(self, "trajectory", fields.text("trajectory", self.trajectory, TRAJECTORIES))
+        opts = fields.mapping("trajectory_options", self.trajectory_options)
+        set_(self, "trajectory_options", opts)
+        set_(self, "settings", fields.mapping("settings", self.settings))
         bad = [k for k in self.settings if k not in _CONDITION_KEYS]
         if bad:
             raise InvalidInputError(
                 "settings", f"unknown '{bad[0]}' (use {', '.join(_CONDITION_KEYS)})"
             )
-        set_(self, "n", int(self.n))
-        set_(self, "generations", int(self.generations))
-        set_(self, "seed", int(self.seed))
-        if not (math.isfinite(self.payload) and self.payload >= 0.0):
-            raise InvalidInputError("payload", f"must be >= 0 kg, got {self.payload}")
+        set_(self, "payload", fields.number("payload", self.payload, 0.0, unit="kg"))
+        set_(self, "sampler", fields.text("sampler", self.sampler, SAMPLERS))
+        set_(self, "n", fields.integer("n", self.n, 1))
+        set_(self, "generations", fields.integer("generations", self.generations, 1))
+        set_(self, "seed", fields.integer("seed", self.seed, 0, MAX_SEED))
+        if self.parametrisation is not None:
+            fields.text("parametrisation", self.parametrisation)
+        set_(self, "name", fields.text("name", self.name))
         # validate now: bad input fails before any design is evaluated
         _ = self.space, self.conditions, self.metric_list
         set_(self, "fixed", dict(self.space.fixed))  # text values converted by the space
         _ = self.total
         if self.sampler == "nsga2" and not self.objectives:
             raise InvalidInputError("objectives", "nsga2 needs at least one objective")
+        self._check_work(self._check_duty_cycle())
+
+    def _check_duty_cycle(self) -> int:
+        """Build the duty cycle about a stand-in home: its options fail now, not per design.
+
+        Returns:
+            Its number of samples.
+
+        """
+        with warnings.catch_warnings():
+            if not self.uses_duty:  # options checked; a coarse dt matters only when used
+                warnings.simplefilter("ignore")
+            task = task_at_home(np.zeros(6), range(6), self.trajectory, **self.trajectory_options)
+        return int(task.t.size)
+
+    def _check_work(self, duty_samples: int) -> None:
+        """Refuse a study whose pose checks or duty-cycle samples exceed the budgets."""
+        designs = self.total
+        budgets = []
+        if self.requirement is not None:
+            budgets.append(("required poses", self.requirement.count, "--require samples"))
+        if self.uses_duty:
+            budgets.append(("duty-cycle samples", duty_samples, "--dt or the cycles"))
+        if any(m.name in ("workspace_volume", "gci") for m in self.metric_list):
+            s = self.conditions.workspace_samples
+            budgets.append(("workspace grid points", s**3, "workspace_samples"))
+        for what, per_design, fix in budgets:
+            work = designs * per_design
+            if work > MAX_STUDY_WORK:
+                raise InvalidInputError(
+                    "study",
+                    f"{designs} designs x {per_design} {what} = {work:.3g} evaluations, more "
+                    f"than the {MAX_STUDY_WORK:.0e} a study may ask (hours of computing); "
+                    f"lower the designs or {fix}",
+                )
 
     # ------------------------------------------------------------------ derived
 
@@ -317,14 +395,13 @@ class Study:
         """
         import yaml
 
+        text = read_text(path, MAX_STUDY_FILE, lambda msg: StudyError(str(path), msg))
         try:
-            text = Path(path).read_text()
-        except OSError as err:
-            raise StudyError(str(path), f"cannot be read ({err.strerror or err})") from None
-        try:
-            data = yaml.safe_load(text)
+            data = yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
         except yaml.YAMLError as err:
             raise StudyError(str(path), f"not valid YAML ({err})".replace("\n", " ")) from None
+        except RecursionError:
+            raise StudyError(str(path), "nested too deeply to be a study file") from None
         return cls.from_dict(data, str(path))
 
     def digest(self) -> str:

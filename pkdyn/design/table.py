@@ -27,7 +27,7 @@ import numpy as np
 
 from pkdyn.design.evaluate import Row
 from pkdyn.exceptions import OutputError, StudyError
-from pkdyn.files import atomic_path, atomic_write
+from pkdyn.files import atomic_path, atomic_write, output_target, shown
 
 __all__ = ["PartialFile", "Table", "output_paths"]
 
@@ -195,25 +195,32 @@ class Table:
 
 
 def output_paths(out: str | os.PathLike[str]) -> dict[str, Path]:
-    """The files of a study written to ``out`` (``.csv`` or ``.parquet``).
+    """The files of a study written to ``out`` (``.csv`` or ``.parquet``), each checked.
+
+    Every one must be a file pkdyn may write (:func:`pkdyn.files.output_target`: a regular
+    file or a new name, never a FIFO, a device or a directory, a name the file system accepts).
 
     Returns:
         ``csv``, ``parquet``, ``study`` (the study file, ``<stem>.study.yaml``) and ``partial``.
 
     Raises:
-        OutputError: Another suffix.
+        OutputError: Another suffix, or one of the files cannot be written.
 
     """
     p = Path(out)
     if p.suffix not in (".csv", ".parquet"):
-        raise OutputError(str(p), "a study table is .csv or .parquet (both are written)")
+        raise OutputError(shown(p), "a study table is .csv or .parquet (both are written)")
     stem = p.with_suffix("")
-    return {
+    paths = {
         "csv": stem.with_suffix(".csv"),
         "parquet": stem.with_suffix(".parquet"),
         "study": stem.parent / f"{stem.name}.study.yaml",
         "partial": stem.parent / f".{stem.name}.partial.csv",
     }
+    for key, path in paths.items():
+        what = {"csv": "the CSV table", "parquet": "the Parquet table", "study": "the study file"}
+        output_target(path, "" if key == p.suffix[1:] else what.get(key, "the partial file"))
+    return paths
 
 
 class PartialFile:

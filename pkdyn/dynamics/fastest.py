@@ -47,10 +47,14 @@ from pkdyn.dynamics.trajectory import JointTrajectory, TaskTrajectory, map_task_
 from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
 from pkdyn.model.robot import Robot
 
-__all__ = ["FastestResult", "fastest_trajectory", "joint_path"]
+__all__ = ["MAX_PATH_SAMPLES", "FastestResult", "fastest_trajectory", "joint_path"]
 
 ACTIVE_TOL = 1e-3
 """A limit counts as active at a sample when it is used to within this fraction."""
+
+MAX_PATH_SAMPLES = 100_000
+"""Most samples of a path :func:`fastest_trajectory` accepts (its grid: mapped, then solved by
+toppra up to ``max_iter`` times)."""
 
 _XMAX = 1e8
 """Cap on ``sd^2`` where no speed limit applies (rest points of the path) [1/s^2 in path
@@ -415,9 +419,16 @@ def fastest_trajectory(
             stroke (sample named).
         InfeasibleEffortError: The efforts needed to hold the path at rest exceed the limits
             (sample and actuator named), or toppra finds no feasible speed.
-        InvalidInputError: Bad limits or payload.
+        InvalidInputError: Bad limits or payload, or more than :data:`MAX_PATH_SAMPLES` samples.
 
     """
+    if path.t.size > MAX_PATH_SAMPLES:
+        raise InvalidInputError(
+            "path",
+            f"{path.t.size:,} samples, more than {MAX_PATH_SAMPLES:,} (each is mapped, then "
+            f"solved up to {max_iter} times by toppra: about {path.t.size * 3e-3 / 60:.0f} min "
+            "or more); sample the path more coarsely (a longer dt)",
+        )
     if isinstance(path, TaskTrajectory):
         path = joint_path(robot, path, q_init=q_init, progress=progress)
     if path.q.shape[1] != robot.nq:

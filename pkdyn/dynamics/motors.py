@@ -32,10 +32,13 @@ import numpy as np
 import yaml
 
 from pkdyn.exceptions import CatalogError
+from pkdyn.files import read_text
 
 __all__ = [
     "EXAMPLE",
     "GEARBOX_FIELDS",
+    "MAX_CATALOG_BYTES",
+    "MAX_CATALOG_ENTRIES",
     "MOTOR_FIELDS",
     "Catalog",
     "Field",
@@ -44,6 +47,12 @@ __all__ = [
     "example_catalog",
     "load_catalog",
 ]
+
+MAX_CATALOG_BYTES = 2_000_000
+"""Largest catalog file read [bytes] (about 6,000 entries; YAML is read at about 1 MB/s)."""
+
+MAX_CATALOG_ENTRIES = 10_000
+"""Most motors (and most gearboxes) in one catalog."""
 
 EXAMPLE = "example"
 """Name that stands for the example catalog shipped with pkdyn (CLI ``--catalog example``)."""
@@ -340,9 +349,11 @@ def _unique(source: str, kind: str, names: list[str]) -> None:
 
 def _from_yaml(text: str, source: str) -> Catalog:
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except yaml.YAMLError as err:
         raise CatalogError(source, None, None, f"not valid YAML ({err})") from None
+    except RecursionError:
+        raise CatalogError(source, None, None, "nested too deeply to be a catalog") from None
     if not isinstance(data, Mapping) or not (
         "motors" in data or "gearboxes" in data
     ):  # a list alone is ambiguous
@@ -359,6 +370,10 @@ def _from_yaml(text: str, source: str) -> Catalog:
         items = data.get(key) or []
         if not isinstance(items, list):
             raise CatalogError(source, None, key, "expected a list of entries")
+        if len(items) > MAX_CATALOG_ENTRIES:
+            raise CatalogError(
+                source, None, key, f"{len(items)} entries, more than {MAX_CATALOG_ENTRIES}"
+            )
         lists[key] = items
     motors = tuple(_motor(source, i, m) for i, m in enumerate(lists["motors"]))
     gears = tuple(_gearbox(source, i, g) for i, g in enumerate(lists["gearboxes"]))
@@ -380,6 +395,10 @@ def _from_csv(text: str, source: str) -> Catalog:
         if m.group(2):
             units[m.group(1)] = m.group(2)
     gear = "ratio" in names
+    if len(rows) - 1 > MAX_CATALOG_ENTRIES:
+        raise CatalogError(
+            source, None, None, f"{len(rows) - 1} entries, more than {MAX_CATALOG_ENTRIES}"
+        )
     out_m: list[Motor] = []
     out_g: list[Gearbox] = []
     for i, row in enumerate(rows[1:]):
@@ -408,7 +427,8 @@ def load_catalog(path: str | Path) -> Catalog:
         Its motors and gearboxes (SI units).
 
     Raises:
-        CatalogError: Unreadable file, unknown field or unit, missing field, or a value that is
+        CatalogError: Unreadable file (or not a regular file: a FIFO, a device; or larger than
+            :data:`MAX_CATALOG_BYTES`), unknown field or unit, missing field, or a value that is
             not positive or outside any plausible range (the message names the entry, the field
             and the likely fix).
 
@@ -417,10 +437,7 @@ def load_catalog(path: str | Path) -> Catalog:
         return example_catalog()
     p = Path(path)
     source = str(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        raise CatalogError(source, None, None, f"cannot be read ({err})") from None
+    text = read_text(p, MAX_CATALOG_BYTES, lambda msg: CatalogError(source, None, None, msg))
     cat = _from_csv(text, source) if p.suffix.lower() == ".csv" else _from_yaml(text, source)
     _unique(source, "motor", [m.name for m in cat.motors])
     _unique(source, "gearbox", [g.name for g in cat.gearboxes])

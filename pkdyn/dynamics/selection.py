@@ -54,6 +54,7 @@ from solvers.numerics import lstsq, null_space
 
 __all__ = [
     "CRITERIA",
+    "MAX_PAIR_SAMPLES",
     "ActuatorSelection",
     "Candidate",
     "Check",
@@ -62,6 +63,10 @@ __all__ = [
     "actuator_inertia",
     "select_drives",
 ]
+
+MAX_PAIR_SAMPLES = 50_000_000
+"""Most (motor x gearbox pairs) x actuators x trajectory samples one selection checks (about
+5 us each: a few minutes)."""
 
 CRITERIA = ("rated_torque", "mass", "price")
 """Ranking criteria of the feasible pairs (smallest first)."""
@@ -592,8 +597,8 @@ def select_drives(
         The selection (``.feasible``, ``.choice()``, ``.table()``, ``.as_json()``).
 
     Raises:
-        InvalidInputError: Unknown criterion, a catalog without motors, or prices missing for
-            the ``price`` criterion.
+        InvalidInputError: Unknown criterion, a catalog without motors, prices missing for the
+            ``price`` criterion, or more pairs x samples than :data:`MAX_PAIR_SAMPLES`.
 
     """
     if criterion not in CRITERIA:
@@ -602,6 +607,16 @@ def select_drives(
         )
     if not catalog.motors:
         raise InvalidInputError("catalog", f"{catalog.source or 'the catalog'} lists no motors")
+    n_pairs = len(catalog.motors) * max(1, len(catalog.gearboxes) + 1)
+    work = n_pairs * len(robot.actuators) * int(trajectory.t.size)
+    if work > MAX_PAIR_SAMPLES:
+        raise InvalidInputError(
+            "catalog",
+            f"{len(catalog.motors)} motors x {len(catalog.gearboxes)} gearboxes on "
+            f"{len(robot.actuators)} actuators along {trajectory.t.size} samples is {work:.3g} "
+            f"pair-samples, more than {MAX_PAIR_SAMPLES:.0e} (about {work * 5e-6 / 60:.0f} min): "
+            "split the catalog, or sample the trajectory more coarsely (--dt)",
+        )
     if criterion == "price":
         missing = [m.name for m in catalog.motors if m.price is None] + [
             g.name for g in catalog.gearboxes if g.price is None

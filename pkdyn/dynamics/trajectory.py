@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -64,6 +64,7 @@ __all__ = [
     "named_trajectory",
     "point_to_point",
     "sinusoid",
+    "task_at_home",
 ]
 
 TRAJECTORIES = ("adept", "sine", "p2p")
@@ -651,19 +652,50 @@ def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:
         InvalidInputError: Unknown name or option.
 
     """
-    if name not in TRAJECTORIES:
+    _check_named(name, options)
+    return task_at_home(_home_pose(robot), robot.task_rows, name, **options)
+
+
+def _check_named(name: Any, options: Mapping[str, Any]) -> None:
+    if not isinstance(name, str) or name not in TRAJECTORIES:
         raise InvalidInputError(
             "trajectory", f"unknown trajectory {name!r} (one of {', '.join(TRAJECTORIES)})"
         )
-    unknown = sorted(set(options) - set(_OPTIONS[name]) - {"dt"})
+    unknown = sorted(set(options) - set(_OPTIONS[name]) - {"dt"}, key=str)
     if unknown:
         raise InvalidInputError(
             "trajectory",
             f"{name}: unexpected option {unknown[0]!r} (valid: {', '.join(_OPTIONS[name])}, dt)",
         )
-    home = _home_pose(robot)
+
+
+def task_at_home(
+    home: Sequence[float] | np.ndarray,
+    task_rows: Sequence[int] | np.ndarray,
+    name: str,
+    **options: Any,
+) -> TaskTrajectory:
+    """:func:`named_task` about a given home pose, for the given task components (no robot).
+
+    A design study checks its duty cycle's options with it before any design is built.
+
+    Args:
+        home: Home pose ``[x, y, z, roll, pitch, yaw]`` [m, rad].
+        task_rows: The controlled components (0..5: x, y, z, rx, ry, rz).
+        name: ``adept``, ``sine`` or ``p2p``.
+        **options: See :func:`named_task`.
+
+    Returns:
+        The platform trajectory.
+
+    Raises:
+        InvalidInputError: Unknown name or option, a bad value, too many samples.
+
+    """
+    _check_named(name, options)
+    home = _pose6(home, "home")
     task_mask = np.zeros(6, dtype=bool)
-    task_mask[robot.task_rows] = True
+    task_mask[np.asarray(task_rows, dtype=int)] = True
     opts = dict(options)
     dt = _number(name, opts, "dt", 1e-3)
     if name == "adept":

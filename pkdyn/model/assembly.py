@@ -409,6 +409,11 @@ CONTINUATION_STEP = 0.1
 """Largest actuator step [rad; m for prismatic actuators, times the robot's size] and platform
 step [rad; times the size for translations] of one solve in a continuation."""
 
+MAX_CONTINUATION_STEPS = 1000
+"""Most steps of one continuation: a target farther than that many steps (100 robot sizes or
+rad) gets longer steps (and is out of reach of any mechanism of bounded links), so the work
+stays bounded whatever the target."""
+
 
 def _size(robot: Robot) -> float:
     """Characteristic length [m] (:attr:`Robot.length_scale`)."""
@@ -434,7 +439,7 @@ def _fk_continuation(
     """
     a0 = np.array(start[robot.actuated_q], dtype=float)
     scale = CONTINUATION_STEP * robot.actuator_scale
-    n = int(np.ceil(np.max(np.abs(qa - a0) / scale, initial=0.0)))
+    n = int(np.ceil(min(np.max(np.abs(qa - a0) / scale, initial=0.0), MAX_CONTINUATION_STEPS)))
     if n <= 1 or robot.closure_set.nc == 0:
         return None
     q = np.array(start, dtype=float)
@@ -462,7 +467,7 @@ def _ik_continuation(
     d = pin.log6(M0.actInv(target)).vector
     d[:3] = target.translation - M0.translation  # world-frame translation
     step = np.where(np.arange(6) < 3, CONTINUATION_STEP * _size(robot), CONTINUATION_STEP)
-    n = int(np.ceil(np.max(np.abs(d[rows]) / step[rows], initial=0.0)))
+    n = int(np.ceil(min(np.max(np.abs(d[rows]) / step[rows], initial=0.0), MAX_CONTINUATION_STEPS)))
     if n <= 1:
         return None
     task = FramePoseTask(robot.model, robot.platform_frame, rows)

@@ -19,10 +19,20 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
   spring about a rest position, and damping / friction overriding ``<dynamics>``);
   ``<pkdyn:spring name stiffness rest_length>`` with two ``<pkdyn:frame>`` children: a linear
   spring between two frames.
+- Compliance (:mod:`pkdyn.precision`): ``<pkdyn:stiffness value>`` in a ``<transmission>`` (or
+  its ``<actuator>``): the actuator's joint-side stiffness [N m/rad or N/m];
+  ``<pkdyn:material name [E G density]>``: the material of the links modelled as beams;
+  ``<pkdyn:compliance link [material E G density inner_radius] [compliance xyz rpy]
+  [rigid]>``: one link's beam material and tube bore, or its compliance given directly.
 - ``<pkdyn:family name>`` with ``<pkdyn:param name value>`` children: the library family and
   parameters the file was written from (``pkdyn urdf FAMILY``); the file then loads exactly as
   the family does (its parameters, home configuration and closed forms), after a check that its
   model is the builder's.
+- ``<pkdyn:home q>``: the home configuration to assemble (actuator coordinates, or a full
+  configuration in Pinocchio's order), as ``pkdyn.load(..., home=)`` takes it: written by
+  ``pkdyn calibrate`` so that a calibrated robot loads in the assembly mode it was measured in.
+- ``<pkdyn:encoder gain>`` in a transmission's ``<actuator>``: the actuated joint's coordinate is
+  ``gain`` times the actuator's reading (a calibrated scale error of the encoder or screw).
 
 The URDF part is validated by :mod:`pkdyn.model.validate` (numbers, physics, tree), the pkdyn
 elements here (unknown elements, mistyped namespaces, duplicates).
@@ -53,6 +63,8 @@ __all__ = [
     "PassiveSpec",
     "SpringSpec",
     "FamilySpec",
+    "MaterialSpec",
+    "ComplianceSpec",
     "Description",
     "parse_description",
 ]
@@ -181,6 +193,10 @@ class ActuatorSpec:
             (``pkdyn:efficiency backdrive``; default ``efficiency``).
         viscous: Motor viscous friction [N m s/rad] (``pkdyn:motor_friction viscous``).
         coulomb: Motor Coulomb friction [N m] (``pkdyn:motor_friction coulomb``).
+        stiffness: Joint-side stiffness of the actuator and its transmission [N m/rad or N/m]
+            (``pkdyn:stiffness value``), ``None`` when not described.
+        encoder_gain: Joint coordinate per unit of the actuator's reading (``pkdyn:encoder
+            gain``, > 0; default 1), from a geometric calibration.
 
     """
 
@@ -194,6 +210,8 @@ class ActuatorSpec:
     backdrive_efficiency: float | None = None
     viscous: float = 0.0
     coulomb: float = 0.0
+    stiffness: float | None = None
+    encoder_gain: float = 1.0
 
 
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
@@ -271,6 +289,49 @@ class FamilySpec:
     params: tuple[tuple[str, str], ...] = ()
 
 
+@dataclass(frozen=True)
+class MaterialSpec:
+    """``<pkdyn:material>``: a material by preset name, or with its own constants.
+
+    Attributes:
+        name: Preset name (``steel``, ``aluminium``, ``carbon``: :mod:`pkdyn.precision.material`)
+            or the name of a material given by its constants.
+        E: Young's modulus [Pa] (``None``: the preset's).
+        G: Shear modulus [Pa] (``None``: the preset's).
+        density: Density [kg/m^3] (``None``: the preset's).
+
+    """
+
+    name: str
+    E: float | None = None
+    G: float | None = None
+    density: float | None = None
+
+
+@dataclass(frozen=True, eq=False)  # SE3 field: no boolean ==
+class ComplianceSpec:
+    """``<pkdyn:compliance link>``: how one link deforms (:mod:`pkdyn.precision`).
+
+    Attributes:
+        link: Link name.
+        material: The link's material when it is modelled as a beam (``None``: the robot's
+            ``<pkdyn:material>``, or the one given by argument).
+        inner_radius: Bore of a hollow tube [m] (0: solid).
+        compliance: Diagonal compliance (6,) [m/N x3, rad/(N m) x3] of the link's tip part with
+            respect to its root, in the frame ``frame`` (given instead of a beam), or ``None``.
+        frame: Placement of that frame in the link frame.
+        rigid: The link does not deform (no beam even with a material).
+
+    """
+
+    link: str
+    material: MaterialSpec | None = None
+    inner_radius: float = 0.0
+    compliance: tuple[float, ...] | None = None
+    frame: pin.SE3 = field(default_factory=pin.SE3.Identity)
+    rigid: bool = False
+
+
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
 class Description:
     """Everything a pkdyn description says beyond the URDF tree."""
@@ -285,6 +346,9 @@ class Description:
     passive: tuple[PassiveSpec, ...] = ()
     springs: tuple[SpringSpec, ...] = ()
     family: FamilySpec | None = None
+    home: tuple[float, ...] | None = None
+    material: MaterialSpec | None = None
+    compliance: tuple[ComplianceSpec, ...] = ()
 
 
 def _vec(source: str, el: ET.Element, attr: str, default: str, n: int = 3) -> np.ndarray:
@@ -452,7 +516,10 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
         jname = joint.get("name", "")
         effort, velocity = limits.get(jname, (math.inf, math.inf))
         drive = _drive(source, f"transmission '{tname}'", t if act is None else act)
-        out.append(ActuatorSpec(aname, jname, reduction, effort, velocity, **drive))
+        stiffness = _actuator_stiffness(source, f"transmission '{tname}'", t, act)
+        out.append(
+            ActuatorSpec(aname, jname, reduction, effort, velocity, **drive, stiffness=stiffness)
+        )
     return out
 
 
@@ -465,6 +532,7 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
         ("efficiency", "backdrive", "backdrive_efficiency", 0.0, 1.0),
         ("motor_friction", "viscous", "viscous", 0.0, math.inf),
         ("motor_friction", "coulomb", "coulomb", 0.0, math.inf),
+        ("encoder", "gain", "encoder_gain", 0.0, math.inf),
     )
     for tag, attr, key, lo, hi in fields:
         child = el.find(_NS + tag)
@@ -475,9 +543,11 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
         except DescriptionError as err:
             msg = str(err).split(": ")[-1]
             raise DescriptionError(source, f"{where} {err.culprit}", msg) from None
-        ok = lo < value <= hi if key.endswith("efficiency") else lo <= value < hi
+        positive = key.endswith("efficiency") or key == "encoder_gain"
+        ok = lo < value <= hi if positive else lo <= value < hi
         if not ok:
             interval = "(0, 1]" if key.endswith("efficiency") else "[0, inf)"
+            interval = "(0, inf)" if key == "encoder_gain" else interval
             raise DescriptionError(
                 source,
                 f"{where} <pkdyn:{tag}> {attr}='{child.get(attr)}'",
@@ -485,6 +555,96 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
             )
         out[key] = value
     return out
+
+
+def _actuator_stiffness(
+    source: str, where: str, transmission: ET.Element, actuator: ET.Element | None
+) -> float | None:
+    """``<pkdyn:stiffness value>`` of a transmission or of its actuator [N m/rad or N/m]."""
+    found = [el.find(_NS + "stiffness") for el in (transmission, actuator) if el is not None]
+    given = [el for el in found if el is not None]
+    if not given:
+        return None
+    if len(given) > 1:
+        raise DescriptionError(
+            source, f"{where} <pkdyn:stiffness>", "given twice (transmission and actuator)"
+        )
+    value = _float(source, given[0], "value")
+    if not (math.isfinite(value) and value > 0.0):
+        raise DescriptionError(
+            source,
+            f"{where} <pkdyn:stiffness> value='{given[0].get('value')}'",
+            "must be a finite stiffness > 0 [N m/rad or N/m]",
+        )
+    return value
+
+
+def _positive(source: str, el: ET.Element, attr: str, zero: bool = False) -> float | None:
+    """An optional finite attribute > 0 (>= 0 with ``zero``)."""
+    if el.get(attr) is None:
+        return None
+    value = _float(source, el, attr)
+    if not math.isfinite(value) or value < 0.0 or (value == 0.0 and not zero):
+        bound = ">= 0" if zero else "> 0"
+        raise DescriptionError(
+            source, f"<{_tag(el)}> {attr}='{el.get(attr)}'", f"must be a finite number {bound}"
+        )
+    return value
+
+
+def _material(source: str, el: ET.Element, name: str | None) -> MaterialSpec | None:
+    """The material an element names (``name`` attribute) and its optional constants."""
+    E, G, rho = (_positive(source, el, a) for a in ("E", "G", "density"))
+    if name is None and E is None and G is None and rho is None:
+        return None
+    return MaterialSpec(name or "custom", E, G, rho)
+
+
+def _material_element(source: str, root: ET.Element) -> MaterialSpec | None:
+    found = root.findall(_NS + "material")
+    if not found:
+        return None
+    if len(found) > 1:
+        raise DescriptionError(
+            source, "<pkdyn:material>", f"given {len(found)} times; give the robot's one material"
+        )
+    name = found[0].get("name")
+    if not name:
+        raise DescriptionError(source, "<pkdyn:material>", "missing attribute 'name'")
+    return _material(source, found[0], name)
+
+
+def _compliance(source: str, el: ET.Element, links: set[str]) -> ComplianceSpec:
+    link = el.get("link")
+    if not link:
+        raise DescriptionError(source, "<pkdyn:compliance>", "missing attribute 'link'")
+    where = f"pkdyn:compliance link '{link}'"
+    if link not in links:
+        raise DescriptionError(source, where, "no link of that name in the URDF")
+    rigid_text = el.get("rigid", "false").strip().lower()
+    if rigid_text not in ("true", "false", "1", "0"):
+        raise DescriptionError(source, f"{where} rigid='{rigid_text}'", "expected true or false")
+    rigid = rigid_text in ("true", "1")
+    compliance = None
+    if el.get("compliance") is not None:
+        values = _values(source, f"{where} compliance", el.get("compliance", ""), False)
+        if len(values) != 6 or min(values) <= 0.0:
+            raise DescriptionError(
+                source,
+                f"{where} compliance",
+                "expected 6 values > 0: m/N along x y z, rad/(N m) about x y z of the frame",
+            )
+        compliance = values
+    bore = _positive(source, el, "inner_radius", zero=True) or 0.0
+    material = _material(source, el, el.get("material"))
+    if sum((rigid, compliance is not None, material is not None or bore > 0.0)) > 1:
+        raise DescriptionError(
+            source,
+            where,
+            "give one of: rigid, compliance (with xyz / rpy), or a beam's material / inner_radius",
+        )
+    frame = _frame(source, el, links) if el.get("link") else pin.SE3.Identity()
+    return ComplianceSpec(link, material, bore, compliance, frame.placement, rigid)
 
 
 _PASSIVE_FIELDS = ("stiffness", "rest", "damping", "friction")
@@ -561,7 +721,17 @@ def _spring(source: str, el: ET.Element, links: set[str]) -> SpringSpec:
     return SpringSpec(name, f1, f2, k[0], L0[0])
 
 
-ELEMENTS = ("closure", "joint", "platform", "passive", "spring", "family")
+ELEMENTS = (
+    "closure",
+    "joint",
+    "platform",
+    "passive",
+    "spring",
+    "family",
+    "material",
+    "compliance",
+    "home",
+)
 """The top-level pkdyn elements (children of ``<robot>``)."""
 
 
@@ -665,7 +835,28 @@ def parse_description(xml_text: str, source: str) -> Description:
         passive=_passive(source, root),
         springs=springs,
         family=_family(source, root),
+        home=_home(source, root),
+        material=_material_element(source, root),
+        compliance=_compliances(source, root, links),
     )
+
+
+def _home(source: str, root: ET.Element) -> tuple[float, ...] | None:
+    found = root.findall(_NS + "home")
+    if not found:
+        return None
+    if len(found) > 1:
+        raise DescriptionError(source, "<pkdyn:home>", f"given {len(found)} times")
+    text = found[0].get("q")
+    if text is None:
+        raise DescriptionError(source, "<pkdyn:home>", "missing attribute 'q'")
+    return _values(source, "<pkdyn:home> q", text, True)
+
+
+def _compliances(source: str, root: ET.Element, links: set[str]) -> tuple[ComplianceSpec, ...]:
+    out = tuple(_compliance(source, el, links) for el in root.findall(_NS + "compliance"))
+    _unique(source, "pkdyn:compliance link", [c.link for c in out])
+    return out
 
 
 def _family(source: str, root: ET.Element) -> FamilySpec | None:

@@ -301,6 +301,8 @@ def load_string(
         params, family_home = from_description(parts.desc, parts.model, source)
         if home is None:
             home, user_home = family_home, False
+    if parts.desc.home is not None and home is None:  # <pkdyn:home>: the described home
+        home, user_home = parts.desc.home, False
     robot = _robot(parts, source, params)
     return _assembled(
         robot, parts, home, tol, user_home if user_home is not None else home is not None

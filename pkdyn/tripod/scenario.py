@@ -91,6 +91,7 @@ from pkdyn.tripod.redundancy import RedundancySettings, SwingSolution, plan_swin
 from pkdyn.tripod.xfkmb import actuator_lengths, bikmx, xfkmb
 
 __all__ = [
+    "MAX_SCENARIO_SAMPLES",
     "WALKER_TOL",
     "Phase",
     "WalkPlan",
@@ -143,7 +144,13 @@ class WalkPlan:
             )
         if len(self.step) != 2 or not np.all(np.isfinite(self.step)):
             raise InvalidInputError("step", f"expected two finite numbers, got {self.step!r}")
-        if int(self.cycles) != self.cycles or self.cycles < 1:
+        if (
+            isinstance(self.cycles, bool)
+            or not isinstance(self.cycles, int | float | np.integer | np.floating)
+            or not math.isfinite(self.cycles)
+            or int(self.cycles) != self.cycles
+            or self.cycles < 1
+        ):
             raise InvalidInputError("cycles", f"must be a positive integer, got {self.cycles!r}")
         for name in ("swing_time", "reconfiguration_time", "dt"):
             value = getattr(self, name)
@@ -153,6 +160,8 @@ class WalkPlan:
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0.0:
                 raise InvalidInputError(name, f"must be >= 0, got {value!r}")
+        if self.tilt >= 0.5 * math.pi:
+            raise InvalidInputError("tilt", f"must be below pi/2 rad, got {self.tilt!r}")
 
 
 @dataclass
@@ -440,6 +449,46 @@ def _walker_swing(
     return mode, r, jt, sol
 
 
+MAX_SCENARIO_SAMPLES = 200_000
+"""Most samples of a scenario (each is mapped to joint space and checked: a few ms)."""
+
+
+def _check_work(p: tripod.Params, plan: WalkPlan, branches: int) -> None:
+    """Refuse a plan whose samples exceed :data:`MAX_SCENARIO_SAMPLES` or whose lift is absurd.
+
+    Raises:
+        InvalidInputError: Too many samples (the estimate given), or a lift longer than the
+            actuators.
+
+    """
+    if plan.lift > p.stroke_max:
+        raise InvalidInputError(
+            "lift",
+            f"{plan.lift:g} m is more than the longest actuator ({p.stroke_max:g} m): no foot "
+            "can be lifted that high",
+        )
+    swing = plan.swing_time / plan.dt
+    moves = plan.reconfiguration_time / plan.dt
+    per_cycle = branches * (swing + moves) + moves
+    if plan.machining is not None:
+        per_cycle += _machining_duration(plan.machining) / plan.dt
+    total = plan.cycles * per_cycle
+    if total > MAX_SCENARIO_SAMPLES:
+        raise InvalidInputError(
+            "scenario",
+            f"{plan.cycles:g} cycles of about {per_cycle:.3g} samples (dt = {plan.dt:g} s) is "
+            f"{total:.3g} samples, more than {MAX_SCENARIO_SAMPLES:,} (each is mapped and "
+            f"checked, a few ms: about {total * 3e-3 / 3600:.2g} h); fewer cycles, shorter "
+            "phases or a longer dt",
+        )
+
+
+def _machining_duration(m: MachiningPlan) -> float:
+    """Upper bound of a machining cycle's duration [s] (every move, plunge and retract)."""
+    holes = len(m.holes_y)
+    return (holes + 3) * m.move_time + 2 * (holes + 1) * m.plunge_time + m.contour_time
+
+
 def plan_scenario(
     robot: Robot, plan: WalkPlan | None = None, progress: bool | None = None
 ) -> list[Phase]:
@@ -457,6 +506,8 @@ def plan_scenario(
 
     Raises:
         PkdynError: Not the library tripod.
+        InvalidInputError: More samples than :data:`MAX_SCENARIO_SAMPLES`, or a lift longer
+            than the actuators (refused before any work).
         TrajectoryError: ``XFKMB_i`` finds no reconfiguration pose within the strokes (step
             too long), or a phase leaves the workspace or meets a parallel singularity; the
             walker: a new foothold out of reach or legs that would interfere (the message names
@@ -480,6 +531,7 @@ def plan_scenario(
     step = np.array(plan.step, dtype=float)
     per_cycle = 2 * len(branches) + (2 if plan.machining is not None else 1)
     n_phases = plan.cycles * per_cycle
+    _check_work(p, plan, len(branches))
 
     def add(phase: Phase) -> np.ndarray:
         nonlocal t0

@@ -7,6 +7,8 @@ The core never imports this package. Entry points take plain arrays::
     scene = animate(robot, t, Q, singular=True)   # t (N,) [s], Q (N, nq)
     scene.add_points("workspace", P)              # (N, 3) [m]
     scene.save_html("delta.html")                 # opens without a server or network
+
+    scene = animate_mode(model, modes(model, q), index=0)   # a natural mode, slowed down
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from pkdyn.viewer.animation import chain, check_trajectory
 from pkdyn.viewer.camera import Camera, bounding_box, frame_box, project
 from pkdyn.viewer.highlight import closest_pair, singularity_labels
 from pkdyn.viewer.html import static_html
+from pkdyn.viewer.modes import animate_mode
 from pkdyn.viewer.scene import Scene
 from pkdyn.viewer.window import OfflineWindow
 
@@ -28,6 +31,7 @@ __all__ = [
     "OfflineWindow",
     "Scene",
     "animate",
+    "animate_mode",
     "bounding_box",
     "chain",
     "closest_pair",

@@ -49,6 +49,7 @@ from pkdyn.model.assembly import solve_pose
 from pkdyn.model.description import ConeLimit
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
+from pkdyn.workers import usable_cores, worker_count, worker_init
 from pkdyn.workspace.limits import (
     LIMIT_KINDS,
     REACHABLE,
@@ -232,7 +233,9 @@ class NumericEvaluator(PoseEvaluator):
         warm_start: Start each solve from the previous solution (then from ``q_home``); without
             it every pose is solved from ``q_home``.
         workers: Processes for large grids (default: two when the machine has two cores and
-            ``fork`` exists; 1: serial).
+            ``fork`` exists; 1: serial; more than the usable cores or the grid's longest axis
+            are capped, with a warning). They die with this process
+            (:func:`pkdyn.workers.worker_init`).
 
     """
 
@@ -454,7 +457,9 @@ class NumericEvaluator(PoseEvaluator):
         n = int(np.prod(shape))
         workers = self.workers
         if workers is None:
-            workers = 2 if (os.cpu_count() or 1) >= 2 and n >= PARALLEL_SAMPLES else 1
+            workers = 2 if usable_cores() >= 2 and n >= PARALLEL_SAMPLES else 1
+        elif workers > 1:
+            workers = worker_count(workers, shape[int(np.argmax(shape))], "workers")
         axis = int(np.argmax(shape))
         if workers < 2 or shape[axis] < 2 or "fork" not in multiprocessing.get_all_start_methods():
             return self._grid_serial(xs, ys, zs, R, kinds, margin, progress)
@@ -467,7 +472,8 @@ class NumericEvaluator(PoseEvaluator):
         global _WORKER
         _WORKER = self
         try:
-            with multiprocessing.get_context("fork").Pool(len(jobs)) as pool:
+            ctx = multiprocessing.get_context("fork")
+            with ctx.Pool(len(jobs), initializer=worker_init, initargs=(os.getpid(),)) as pool:
                 results = pool.map(_grid_job, jobs)
         finally:
             _WORKER = None

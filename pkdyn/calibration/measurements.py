@@ -1,0 +1,285 @@
+"""Calibration measurements: actuator readings and what was measured of the platform.
+
+Kinds (:data:`KINDS`):
+
+- ``pose``: the platform frame's position [m] and orientation (roll, pitch, yaw [rad], fixed
+  axes x, y, z) in the measurement frame, which is the robot's world frame;
+- ``position``: its position only;
+- ``point`` (implicit, self-calibration): the platform origin was held on one fixed but unknown
+  point per ``group`` (a ball socket on the table) while the actuators moved; nothing is
+  measured but the readings;
+- ``plane`` (implicit): the platform origin touched one unknown plane per ``group`` (a probe on
+  a surface plate).
+
+Implicit kinds add unknowns (the point's 3 coordinates, the plane's normal and offset) that the
+calibration identifies with the robot's parameters.
+
+CSV file (:func:`read_csv`): one row per measurement, columns ``qa_<actuator>`` (actuator
+readings [rad or m], every actuator, by name) and ``x y z`` (position), ``x y z rx ry rz``
+(pose), or ``group`` (implicit kinds, which the caller names). Missing or extra columns, empty
+or non-numeric cells and NaN are refused with one line naming them.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.pose import pose_to_vector
+from pkdyn.model.robot import Robot
+
+__all__ = ["KINDS", "Measurements", "read_csv", "write_csv"]
+
+KINDS = ("pose", "position", "point", "plane")
+"""Measurement kinds (module docstring)."""
+
+ROWS = {"pose": 6, "position": 3, "point": 3, "plane": 1}
+"""Residual rows per measurement of each kind."""
+
+
+@dataclass(eq=False)  # numpy fields: no boolean ==
+class Measurements:
+    """Actuator readings and platform measurements.
+
+    Attributes:
+        kind: One of :data:`KINDS`.
+        qa: Actuator readings (N, n_a) [rad or m], in actuator order.
+        position: Measured platform positions (N, 3) [m] (``pose`` and ``position``).
+        rpy: Measured roll, pitch, yaw (N, 3) [rad] (``pose``).
+        group: Group of each measurement (N,) int (``point`` and ``plane``: one unknown point
+            or plane per group).
+
+    """
+
+    kind: str
+    qa: np.ndarray
+    position: np.ndarray | None = None
+    rpy: np.ndarray | None = None
+    group: np.ndarray | None = None
+    _rotations: np.ndarray | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise InvalidInputError("kind", f"'{self.kind}': use one of {', '.join(KINDS)}")
+        self.qa = _finite("qa", np.atleast_2d(np.asarray(self.qa, dtype=float)))
+        n = len(self.qa)
+        needs = {
+            "pose": ("position", "rpy"),
+            "position": ("position",),
+            "point": ("group",),
+            "plane": ("group",),
+        }[self.kind]
+        for name in ("position", "rpy", "group"):
+            value = getattr(self, name)
+            if name in needs and value is None:
+                raise InvalidInputError(name, f"{self.kind} measurements need {name}")
+            if value is None:
+                continue
+            arr = np.asarray(value, dtype=float)
+            want = n if name == "group" else 3 * n
+            if arr.size != want:
+                shape = f"{n} values" if name == "group" else f"{n} rows of 3 values"
+                raise InvalidInputError(name, f"expected {shape}, got {arr.shape}")
+            arr = arr.reshape(-1) if name == "group" else arr.reshape(n, 3)
+            arr = _finite(name, arr)
+            if name == "group":
+                if np.any(arr != np.round(arr)):
+                    raise InvalidInputError("group", "groups are whole numbers")
+                arr = arr.astype(int)
+            setattr(self, name, arr)
+
+    def __len__(self) -> int:
+        return len(self.qa)
+
+    def check_groups(self) -> None:
+        """Refuse implicit groups too small to fix their unknowns (a point: 2, a plane: 4).
+
+        Raises:
+            InvalidInputError: The first group that is too small.
+
+        """
+        if self.group is None:
+            return
+        need = 2 if self.kind == "point" else 4
+        for g in np.unique(self.group):
+            n = int(np.sum(self.group == g))
+            if n < need:
+                raise InvalidInputError(
+                    "group",
+                    f"group {g} has {n} calibration measurements; a {self.kind} group needs at "
+                    f"least {need}",
+                )
+
+    @property
+    def rows(self) -> int:
+        """Residual rows per measurement."""
+        return ROWS[self.kind]
+
+    @property
+    def rotations(self) -> np.ndarray:
+        """Measured rotation matrices (N, 3, 3) (``pose``)."""
+        if self._rotations is None:
+            assert self.rpy is not None
+            self._rotations = np.array([pin.rpy.rpyToMatrix(*r) for r in self.rpy])
+        return self._rotations
+
+    def subset(self, idx: np.ndarray | Sequence[int]) -> Measurements:
+        """The measurements of some rows."""
+        i = np.asarray(idx, dtype=int)
+        return Measurements(
+            self.kind,
+            self.qa[i],
+            None if self.position is None else self.position[i],
+            None if self.rpy is None else self.rpy[i],
+            None if self.group is None else self.group[i],
+        )
+
+    @classmethod
+    def from_placements(
+        cls, qa: np.ndarray, placements: Sequence[pin.SE3], kind: str = "pose"
+    ) -> Measurements:
+        """Measurements of platform placements (``pose`` or ``position``).
+
+        Args:
+            qa: Actuator readings (N, n_a).
+            placements: Platform placements (N).
+            kind: ``pose`` or ``position``.
+
+        Returns:
+            The measurements.
+
+        """
+        vec = [pose_to_vector(M) for M in placements]
+        P = np.array([v[0] for v in vec]).reshape(-1, 3)
+        rpy = np.array([v[1] for v in vec]).reshape(-1, 3) if kind == "pose" else None
+        return cls(kind, qa, P, rpy)
+
+
+def _finite(name: str, arr: np.ndarray) -> np.ndarray:
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        row = int(np.argwhere(bad)[0][0])
+        raise InvalidInputError(name, f"row {row + 1} holds NaN or an infinite value")
+    return arr
+
+
+def _columns(robot: Robot, kind: str) -> list[str]:
+    qa = [f"qa_{a}" for a in robot.actuator_names]
+    tail = {
+        "pose": ["x", "y", "z", "rx", "ry", "rz"],
+        "position": ["x", "y", "z"],
+        "point": ["group"],
+        "plane": ["group"],
+    }[kind]
+    return qa + tail
+
+
+def read_csv(path: str | os.PathLike[str], robot: Robot, kind: str | None = None) -> Measurements:
+    """Measurements from a CSV file (module docstring).
+
+    Args:
+        path: The file.
+        robot: The robot (its actuator names give the ``qa_<actuator>`` columns).
+        kind: ``point`` or ``plane`` for implicit measurements (a ``group`` column); default:
+            ``pose`` when ``rx ry rz`` are present, else ``position``.
+
+    Returns:
+        The measurements.
+
+    Raises:
+        InvalidInputError: Missing or extra columns, non-numeric or NaN cells, no rows, or an
+            unreadable file (one line naming what is wrong).
+
+    """
+    p = Path(path)
+    try:
+        with p.open(newline="") as fh:
+            rows = list(csv.reader(fh))
+    except (OSError, UnicodeDecodeError) as err:
+        raise InvalidInputError(str(path), f"cannot read the measurements ({err})") from None
+    rows = [r for r in rows if any(c.strip() for c in r)]
+    if not rows:
+        raise InvalidInputError(str(path), "is empty: expected a header and one row per pose")
+    header = [c.strip() for c in rows[0]]
+    if kind is None:
+        kind = "pose" if {"rx", "ry", "rz"} & set(header) else "position"
+    if kind not in KINDS:
+        raise InvalidInputError("kind", f"'{kind}': use one of {', '.join(KINDS)}")
+    want = _columns(robot, kind)
+    missing = [c for c in want if c not in header]
+    extra = [c for c in header if c not in want]
+    dupes = sorted({c for c in header if header.count(c) > 1})
+    if missing or extra or dupes:
+        parts = []
+        if missing:
+            parts.append(f"missing column(s) {', '.join(missing)}")
+        if extra:
+            parts.append(f"unexpected column(s) {', '.join(extra)}")
+        if dupes:
+            parts.append(f"repeated column(s) {', '.join(dupes)}")
+        raise InvalidInputError(
+            str(path),
+            f"{'; '.join(parts)} (a {kind} CSV has exactly: {' '.join(want)})",
+        )
+    data = np.empty((len(rows) - 1, len(want)))
+    if len(data) == 0:
+        raise InvalidInputError(str(path), "has a header but no measurement rows")
+    col = [header.index(c) for c in want]
+    for i, r in enumerate(rows[1:], start=2):
+        if len(r) != len(header):
+            raise InvalidInputError(
+                str(path), f"line {i} has {len(r)} cells, the header {len(header)}"
+            )
+        for j, c in enumerate(col):
+            text = r[c].strip()
+            try:
+                v = float(text)
+            except ValueError:
+                raise InvalidInputError(
+                    str(path), f"line {i}, column {want[j]}: '{text}' is not a number"
+                ) from None
+            if not np.isfinite(v):
+                raise InvalidInputError(
+                    str(path), f"line {i}, column {want[j]}: {text} (give finite numbers)"
+                )
+            data[i - 2, j] = v
+    n_a = len(robot.actuators)
+    qa = data[:, :n_a]
+    if kind == "pose":
+        return Measurements(kind, qa, data[:, n_a : n_a + 3], data[:, n_a + 3 : n_a + 6])
+    if kind == "position":
+        return Measurements(kind, qa, data[:, n_a : n_a + 3])
+    return Measurements(kind, qa, group=data[:, n_a])
+
+
+def write_csv(path: str | os.PathLike[str], robot: Robot, m: Measurements) -> None:
+    """Write measurements as a CSV file :func:`read_csv` reads back (atomically).
+
+    Args:
+        path: The file.
+        robot: The robot (actuator names).
+        m: The measurements.
+
+    """
+    from pkdyn.files import atomic_write
+
+    cols = _columns(robot, m.kind)
+    if m.kind == "pose":
+        assert m.position is not None and m.rpy is not None
+        data = np.hstack([m.qa, m.position, m.rpy])
+    elif m.kind == "position":
+        assert m.position is not None
+        data = np.hstack([m.qa, m.position])
+    else:
+        assert m.group is not None
+        data = np.hstack([m.qa, m.group[:, None]])
+    lines = [",".join(cols)] + [",".join(repr(float(v)) for v in row) for row in data]
+    with atomic_write(path) as fh:
+        fh.write("\n".join(lines) + "\n")

@@ -1,0 +1,97 @@
+"""``pkdyn calibrate``: geometric calibration from measured poses, a calibrated URDF written."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from pkdyn.cli._common import emit, load, output_path, robot_command
+
+__all__ = ["register"]
+
+
+def _cmd_calibrate(args: argparse.Namespace) -> None:
+    from pkdyn.calibration import calibrate, read_csv
+    from pkdyn.calibration.writer import write_calibrated
+
+    output_path("-o", args.output)
+    robot = load(args)
+    m = read_csv(args.measurements, robot, args.implicit)
+    res = calibrate(
+        robot,
+        m,
+        model=args.model,
+        noise=args.noise,
+        holdout=args.holdout,
+        robust=args.robust,
+        gains=args.gains,
+        seed=args.seed,
+    )
+    write_calibrated(res, args.output)
+    out = res.as_dict()
+    out["output"] = args.output
+    lines = [
+        f"{res.model.kind} model: {res.identifiability.rank} of {res.model.size} parameters "
+        f"identified from {res.calibration_rows.size} poses ({m.kind})",
+        f"position error RMS: {res.before.position_rms:.4g} m before, "
+        f"{res.after.position_rms:.4g} m after (calibration poses)",
+    ]
+    if res.validation_after is not None and res.validation_before is not None:
+        lines.append(
+            f"held-out poses ({res.validation_rows.size}): {res.validation_before.position_rms:.4g}"
+            f" m before, {res.validation_after.position_rms:.4g} m after"
+        )
+    unid = out["unidentifiable"]
+    if unid:
+        names = ", ".join(u["name"] for u in unid[:8]) + (" ..." if len(unid) > 8 else "")
+        lines.append(f"not identifiable (held at nominal): {names}")
+    if res.not_assembling:
+        lines.append(f"not assembling (held at nominal): {len(res.not_assembling)} parameters")
+    idx = res.identifiability.indices
+    lines.append(
+        "observability: "
+        + ", ".join(f"{k} = {v:.3g}" for k, v in idx.items())
+        + " (O4: noise amplification index)"
+    )
+    lines.append(f"written: {args.output}")
+    emit(args, out, "\n".join(lines))
+
+
+def register(sub: Any) -> None:
+    """Add this module's sub-commands to the ``pkdyn`` parser."""
+    sp = robot_command(sub, "calibrate", "geometric calibration from measured platform poses")
+    sp.add_argument(
+        "--measurements",
+        required=True,
+        metavar="FILE.csv",
+        help="CSV: qa_<actuator> columns and the measured x y z [rx ry rz] (m, rad), or "
+        "a group column with --implicit",
+    )
+    sp.add_argument("-o", "--output", required=True, help="calibrated URDF to write")
+    sp.add_argument(
+        "--model",
+        default="auto",
+        choices=("auto", "placements", "shortcuts", "family"),
+        help="parameters: every placement, the family shortcuts (Delta, Gough-Stewart), or the "
+        "family dimensions (default: shortcuts when the family has them)",
+    )
+    sp.add_argument("--gains", action="store_true", help="identify actuator gains too")
+    sp.add_argument(
+        "--noise",
+        nargs="+",
+        type=float,
+        metavar="SIGMA",
+        help="measurement noise: position [m] [orientation [rad]] (default: estimated)",
+    )
+    sp.add_argument(
+        "--holdout", type=float, default=0.2, help="fraction held out for validation (0.2)"
+    )
+    sp.add_argument("--robust", default="huber", choices=("huber", "cauchy", "none"))
+    sp.add_argument(
+        "--implicit",
+        choices=("point", "plane"),
+        help="self-calibration: the platform held on one unknown point / plane per group",
+    )
+    sp.add_argument("--seed", type=int, default=0, help="seed of the hold-out split")
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=_cmd_calibrate)

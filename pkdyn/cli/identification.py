@@ -1,0 +1,102 @@
+"""``pkdyn identify``: dynamic parameters from a measured motion, written as a description."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+import numpy as np
+
+from pkdyn.cli._common import emit, load, output_path, robot_command
+
+__all__ = ["register"]
+
+
+def _write_predicted(path: str, t: np.ndarray, names: list[str], tau: np.ndarray) -> None:
+    from pkdyn.files import atomic_write
+
+    with atomic_write(path) as fh:
+        fh.write(",".join(["t", *(f"tau_{n}" for n in names)]) + "\n")
+        np.savetxt(fh, np.column_stack([t, tau]), delimiter=",", fmt="%.10g")
+
+
+def _cmd_identify(args: argparse.Namespace) -> None:
+    from pkdyn.exceptions import InvalidInputError
+    from pkdyn.identification import identify, read_measurements
+    from pkdyn.identification.filtering import derivatives
+
+    output_path("-o", args.output)
+    output_path("--csv", args.csv)
+    if args.csv and not args.predict:
+        raise InvalidInputError("--csv", "needs --predict (the motion to predict)")
+    robot = load(args)
+    names = robot.actuator_names
+    data = read_measurements(args.data, names, need_tau=True)
+    other = read_measurements(args.predict, names, need_tau=False) if args.predict else None
+    res = identify(robot, data, parameters=args.parameters, cutoff=args.cutoff)
+    payload: dict[str, Any] = res.as_json()
+    text = [res.table()]
+    if other is not None:
+        qa, qd, qdd = other.qa, other.qa_dot, other.qa_ddot
+        if qd is None or qdd is None:
+            qa, qd, qdd = derivatives(other.t, other.qa, args.cutoff)
+        tau = res.predict(other.t, qa, qd, qdd)
+        pred: dict[str, Any] = {"file": args.predict, "samples": int(other.t.size)}
+        if other.tau is not None:
+            err = tau - other.tau
+            rms = np.sqrt(np.mean(err**2, axis=0))
+            scale = np.sqrt(np.mean(other.tau**2, axis=0))
+            pred["rms_error"] = dict(zip(names, rms.tolist(), strict=True))
+            pred["relative_rms_error"] = dict(
+                zip(names, (rms / np.where(scale > 0, scale, 1.0)).tolist(), strict=True)
+            )
+            text.append(
+                f"prediction of {args.predict}: RMS error "
+                + ", ".join(f"{n} {r:.3g}" for n, r in zip(names, rms, strict=True))
+            )
+        if args.csv:
+            _write_predicted(args.csv, other.t, names, tau)
+            pred["csv"] = args.csv
+        payload["prediction"] = pred
+    res.write_urdf(args.output)
+    payload["output"] = args.output
+    text.append(f"identified description written to {args.output}")
+    emit(args, payload, "\n".join(text))
+
+
+def register(sub: Any) -> None:
+    """Add ``identify`` to the ``pkdyn`` parser."""
+    sp = robot_command(
+        sub, "identify", "identify masses, inertias, friction, rotor inertias from a motion"
+    )
+    sp.add_argument(
+        "--data",
+        required=True,
+        metavar="FILE.csv",
+        help="measured motion: columns t, qa_<actuator>, optional qa_dot_*, qa_ddot_*, "
+        "and tau_<actuator> (joint-side efforts)",
+    )
+    sp.add_argument(
+        "-o", "--output", required=True, metavar="FILE.urdf", help="identified description"
+    )
+    sp.add_argument(
+        "--parameters",
+        default="inertia,friction,rotor",
+        metavar="GROUPS",
+        help="groups to identify, among inertia, payload, friction, rotor "
+        "(default inertia,friction,rotor; payload: a load on the platform)",
+    )
+    sp.add_argument(
+        "--cutoff",
+        type=float,
+        default=None,
+        metavar="HZ",
+        help="cut-off of the zero-phase position filter when rates are not given "
+        "(default 5%% of the sampling rate)",
+    )
+    sp.add_argument("--predict", metavar="OTHER.csv", help="another motion to predict")
+    sp.add_argument(
+        "--csv", metavar="PREDICTED.csv", help="write t and tau_<actuator> of --predict"
+    )
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=_cmd_identify)

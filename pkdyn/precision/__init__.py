@@ -1,0 +1,64 @@
+"""Precision: stiffness and compliance, natural frequencies, accuracy of any closed-loop robot.
+
+- :mod:`~pkdyn.precision.material`, :mod:`~pkdyn.precision.beam`: materials and the beam model
+  of a rod or tube (6x6 compliance);
+- :mod:`~pkdyn.precision.links`: which links deform (beams read from the geometry, or described
+  compliances);
+- :mod:`~pkdyn.precision.elastic`: the virtual-joint model (actuator springs, joint springs, a
+  6-DOF virtual spring per compliant link);
+- :mod:`~pkdyn.precision.condensation`, :mod:`~pkdyn.precision.equilibrium`: condensation onto
+  the platform, the loaded equilibrium and its tangent stiffness;
+- :mod:`~pkdyn.precision.stiffness`: :func:`stiffness` (``K``, compliance, principal
+  stiffnesses, deflection);
+- :mod:`~pkdyn.precision.modes`: natural frequencies and mode shapes;
+- :mod:`~pkdyn.precision.vectorised`, :mod:`~pkdyn.precision.maps`: closed forms of the library
+  Gough-Stewart and Delta, figures over many poses and maps over workspace slices (the design
+  metrics ``stiffness_min`` and ``f1_min`` use them).
+- :mod:`~pkdyn.precision.parameters`: the placements manufacturing errors move, and parameter
+  models of them (every placement, family shortcuts, family dimensions);
+- :mod:`~pkdyn.precision.perturbation`: robots with those errors, built exactly;
+- :mod:`~pkdyn.precision.sensitivity`: first-order sensitivity of the platform pose to actuator
+  and geometric errors through the loops (shared with :mod:`pkdyn.calibration`);
+- :mod:`~pkdyn.precision.accuracy`: error budgets (worst case, RMS, Monte Carlo, ranking of the
+  tolerances) and pose-error maps.
+
+Layering: may import :mod:`pkdyn.model`, :mod:`pkdyn.analysis`, :mod:`pkdyn.workspace` and
+below; never design, calibration, viewer, plotting or the CLI.
+"""
+
+from pkdyn.precision.beam import Section, centre_compliance, tip_compliance
+from pkdyn.precision.elastic import ElasticModel, actuator_stiffness, elastic_model
+from pkdyn.precision.links import LinkCompliance, link_compliances
+from pkdyn.precision.maps import PoseFigures, PrecisionMap, pose_figures, precision_map
+from pkdyn.precision.material import ALUMINIUM, CARBON, MATERIALS, STEEL, Material, as_material
+from pkdyn.precision.modes import Modes, mode_trajectory, modes
+from pkdyn.precision.stiffness import Principal, Stiffness, stiffness, stiffness_json, transport
+
+__all__ = [
+    "ALUMINIUM",
+    "CARBON",
+    "MATERIALS",
+    "STEEL",
+    "ElasticModel",
+    "LinkCompliance",
+    "Material",
+    "Modes",
+    "PoseFigures",
+    "PrecisionMap",
+    "Principal",
+    "Section",
+    "Stiffness",
+    "actuator_stiffness",
+    "as_material",
+    "centre_compliance",
+    "elastic_model",
+    "link_compliances",
+    "mode_trajectory",
+    "modes",
+    "pose_figures",
+    "precision_map",
+    "stiffness",
+    "stiffness_json",
+    "tip_compliance",
+    "transport",
+]

@@ -1,0 +1,141 @@
+r"""Beam model of a link: the 6x6 compliance of a straight rod or tube clamped at one end.
+
+A link of length ``L`` along its local ``z`` axis, clamped at its root (``z = 0``), loaded at its
+tip (``z = L``) by a wrench ``w = [F; M]`` (force; moment about the tip), tip frame axes. Its tip
+moves by ``d = [delta; phi]`` (translation; rotation vector), ``d = C w``, with (Euler-Bernoulli
+bending, Timoshenko shear, Saint-Venant torsion, circular section: ``I_x = I_y = I``)
+
+.. math::
+
+    C = \begin{bmatrix}
+      \frac{L^3}{3EI} + \frac{L}{\kappa G A} & 0 & 0 & 0 & \frac{L^2}{2EI} & 0 \\
+      0 & \frac{L^3}{3EI} + \frac{L}{\kappa G A} & 0 & -\frac{L^2}{2EI} & 0 & 0 \\
+      0 & 0 & \frac{L}{EA} & 0 & 0 & 0 \\
+      0 & -\frac{L^2}{2EI} & 0 & \frac{L}{EI} & 0 & 0 \\
+      \frac{L^2}{2EI} & 0 & 0 & 0 & \frac{L}{EI} & 0 \\
+      0 & 0 & 0 & 0 & 0 & \frac{L}{GJ}
+    \end{bmatrix}
+
+(``kappa``: Cowper's shear coefficient of a circular tube, 0 with ``shear=False``: the
+Euler-Bernoulli beam). Expressed at the beam's **elastic centre** (its mid-point, the tip body's
+motion taken there) the coupling terms vanish: the compliance is diagonal,
+``diag(L^3/(12EI) + L/(kappa G A), same, L/(EA), L/(EI), L/(EI), L/(GJ))``. pkdyn's virtual-joint
+model (:mod:`pkdyn.precision.elastic`) puts each link's 6-DOF virtual spring there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import InvalidInputError
+from pkdyn.precision.material import Material
+
+__all__ = ["Section", "centre_compliance", "tip_compliance"]
+
+
+@dataclass(frozen=True)
+class Section:
+    """A circular cross-section, solid or hollow.
+
+    Attributes:
+        radius: Outer radius [m].
+        inner_radius: Bore radius [m] (0: a solid rod).
+
+    Raises:
+        InvalidInputError: Radii not finite, ``radius <= 0`` or ``inner_radius`` outside
+            ``[0, radius)``.
+
+    """
+
+    radius: float
+    inner_radius: float = 0.0
+
+    def __post_init__(self) -> None:
+        r, ri = self.radius, self.inner_radius
+        if not (math.isfinite(r) and r > 0.0):
+            raise InvalidInputError("radius", f"must be a finite length > 0 m, got {r}")
+        if not (math.isfinite(ri) and 0.0 <= ri < r):
+            raise InvalidInputError("inner_radius", f"must lie in [0, radius = {r:g}) m, got {ri}")
+
+    @property
+    def area(self) -> float:
+        """Cross-section area ``A`` [m^2]."""
+        return math.pi * (self.radius**2 - self.inner_radius**2)
+
+    @property
+    def second_moment(self) -> float:
+        """Second moment of area about a diameter ``I`` [m^4]."""
+        return math.pi / 4.0 * (self.radius**4 - self.inner_radius**4)
+
+    @property
+    def polar_moment(self) -> float:
+        """Torsion constant ``J = 2 I`` of a circular section [m^4]."""
+        return 2.0 * self.second_moment
+
+    def shear_coefficient(self, poisson: float) -> float:
+        """Cowper's shear coefficient ``kappa`` of a circular tube (0.886 for a solid rod).
+
+        ``6 (1 + nu) (1 + m^2)^2 / ((7 + 6 nu) (1 + m^2)^2 + (20 + 12 nu) m^2)`` with
+        ``m = inner_radius / radius``.
+        """
+        m2 = (self.inner_radius / self.radius) ** 2
+        nu = poisson
+        return 6 * (1 + nu) * (1 + m2) ** 2 / ((7 + 6 * nu) * (1 + m2) ** 2 + (20 + 12 * nu) * m2)
+
+    def mass(self, length: float, material: Material) -> float:
+        """Mass of a straight piece of this section [kg] (``density A L``)."""
+        return material.density * self.area * length
+
+
+def _check_length(length: float) -> None:
+    if not (math.isfinite(length) and length > 0.0):
+        raise InvalidInputError("length", f"must be a finite length > 0 m, got {length}")
+
+
+def centre_compliance(
+    length: float, section: Section, material: Material, shear: bool = True
+) -> np.ndarray:
+    """Diagonal compliance (6,) of a cantilever beam at its elastic centre (mid-point).
+
+    Args:
+        length: Beam length ``L`` [m].
+        section: Cross-section.
+        material: Material.
+        shear: Include Timoshenko's shear deflection (``False``: Euler-Bernoulli).
+
+    Returns:
+        ``[cx, cy, cz, crx, cry, crz]`` [m/N x3, rad/(N m) x3], beam axis ``z``.
+
+    """
+    _check_length(length)
+    L, E, G = length, material.E, material.G
+    A, I, J = section.area, section.second_moment, section.polar_moment
+    bend = L**3 / (12.0 * E * I)
+    if shear:
+        bend += L / (section.shear_coefficient(material.poisson) * G * A)
+    return np.array([bend, bend, L / (E * A), L / (E * I), L / (E * I), L / (G * J)])
+
+
+def tip_compliance(
+    length: float, section: Section, material: Material, shear: bool = True
+) -> np.ndarray:
+    """Compliance (6, 6) of a cantilever beam at its tip (the module's matrix ``C``).
+
+    Args:
+        length: Beam length ``L`` [m].
+        section: Cross-section.
+        material: Material.
+        shear: Include Timoshenko's shear deflection.
+
+    Returns:
+        ``C`` mapping the tip wrench [N, N m] to the tip displacement [m, rad], tip axes.
+
+    """
+    c = centre_compliance(length, section, material, shear)
+    # the tip body seen from the mid-point: transport the diagonal compliance by L / 2
+    X = pin.SE3(np.eye(3), np.array([0.0, 0.0, length / 2.0])).toActionMatrixInverse()
+    return np.asarray(X @ np.diag(c) @ X.T)

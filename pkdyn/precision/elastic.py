@@ -1,0 +1,418 @@
+"""The virtual-joint model (VJM) of a robot: its springs, and a virtual joint per compliant link.
+
+Pashkevich, Chablat and Wenger's virtual-joint method (2009) on the whole tree:
+
+- each **actuator** is a spring on its joint coordinate, of joint-side stiffness ``k_a``
+  [N m/rad or N/m] (the motor, its transmission and its servo loop held at a commanded
+  position): the description's ``<pkdyn:stiffness>`` or the ``actuator_stiffness`` argument;
+  ``inf`` holds the coordinate rigidly;
+- **passive joints** carry the robot's own springs (``robot.passive``: joint springs and
+  two-frame springs);
+- each **compliant link** (:mod:`pkdyn.precision.links`) gets a 6-DOF virtual joint (Pinocchio's
+  free-flyer) at its elastic centre, between its root (the body and its parent joint) and
+  everything it carries, with a diagonal spring (the link's compliance inverted) about the
+  undeformed placement. A beam's mass is lumped on its two halves: the half next to the tip (a
+  uniform half rod or tube of half the link's mass) moves with the tip, the rest of the link's
+  inertia with the root (when the link's inertia does not contain such a half rod, all of it
+  stays on the root); a described compliance keeps the link's inertia on its root;
+- the loop closures (and any other rows of ``robot.closure_set``) stay rigid constraints,
+  re-made on the new tree; hinges built from two points, welds and redundant closures keep
+  their rank deficiency (the analyses use rank-revealing null spaces).
+
+:func:`elastic_model` returns this as an :class:`ElasticModel`: a :class:`pkdyn.Robot` of the
+extended tree (the robot itself when no link is compliant) whose ``passive`` holds the joint
+springs and the links' virtual springs, plus the actuators' stiffness. The extended robot is an
+ordinary robot: the statics, the forward dynamics and the viewer take it unchanged, which the
+tests use to check the linear analyses against nonlinear equilibria and simulations.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.robot import Robot
+from pkdyn.precision.links import LinkCompliance, link_compliances
+from pkdyn.precision.material import Material
+from solvers import ClosureSet, FrameSpring, PassiveForces
+
+__all__ = ["DEFLECTION_SUFFIX", "ElasticModel", "actuator_stiffness", "elastic_model"]
+
+DEFLECTION_SUFFIX = "/deflection"
+"""Name suffix of a link's virtual joint (``bar1a_upper/deflection``)."""
+
+
+@dataclass(eq=False)  # numpy / Pinocchio fields
+class ElasticModel:
+    """A robot with its sources of compliance (see the module docstring).
+
+    Attributes:
+        robot: The extended robot (the loaded robot itself when no link is compliant); its
+            ``passive`` holds the joint springs and the virtual link springs, not the actuators.
+        base: The robot as loaded.
+        actuator_stiffness: Joint-side stiffness of each actuator (n_a,) [N m/rad or N/m];
+            ``inf``: held rigidly.
+        links: The compliant links.
+        q_index: Index in the extended ``q`` of each coordinate of the robot's ``q`` (nq,).
+        v_index: Index in the extended ``v`` of each coordinate of the robot's ``v`` (nv,).
+        deflection_v: Velocity indices of each link's virtual joint (n_links, 6): translation
+            then rotation of the tip part, in the virtual joint's frame [m, rad].
+
+    """
+
+    robot: Robot
+    base: Robot
+    actuator_stiffness: np.ndarray
+    links: tuple[LinkCompliance, ...]
+    q_index: np.ndarray
+    v_index: np.ndarray
+    deflection_v: np.ndarray
+
+    @property
+    def nv(self) -> int:
+        """Size of the extended velocity vector."""
+        return self.robot.nv
+
+    @property
+    def rigid_v(self) -> np.ndarray:
+        """Extended velocity indices held rigidly (actuators of infinite stiffness)."""
+        return np.asarray(self.robot.actuated_v)[~np.isfinite(self.actuator_stiffness)]
+
+    def spring_stiffness(self) -> np.ndarray:
+        """Diagonal stiffness per extended velocity coordinate (nv,) at rest [N m/rad or N/m].
+
+        The finite actuators, the joint springs and the virtual link springs (about their rest
+        positions; the two-frame springs, and springs away from rest, add terms that
+        :func:`pkdyn.precision.stiffness.stiffness` evaluates).
+        """
+        out = np.zeros(self.nv)
+        P = self.robot.passive
+        if P is not None:
+            out += P.stiffness
+        k = self.actuator_stiffness
+        out[np.asarray(self.robot.actuated_v)] += np.where(np.isfinite(k), k, 0.0)
+        return out
+
+    def embed(self, q: np.ndarray) -> np.ndarray:
+        """Extended configuration of a configuration of the robot, links undeformed."""
+        if self.robot is self.base:
+            return np.array(q, dtype=float)
+        out = pin.neutral(self.robot.model)
+        out[self.q_index] = q
+        return out
+
+    def restrict(self, q: np.ndarray) -> np.ndarray:
+        """The robot's coordinates (nq,) of an extended configuration (deflections dropped)."""
+        return np.array(np.asarray(q, dtype=float)[self.q_index])
+
+
+def actuator_stiffness(
+    robot: Robot, value: float | Sequence[float] | np.ndarray | None = None
+) -> np.ndarray:
+    """Each actuator's joint-side stiffness, given or described.
+
+    Args:
+        robot: The robot.
+        value: One stiffness for every actuator or one per actuator [N m/rad or N/m] (``inf``:
+            rigid); ``None``: the description's ``<pkdyn:stiffness>`` of each transmission.
+
+    Returns:
+        Stiffness (n_a,).
+
+    Raises:
+        InvalidInputError: A stiffness that is NaN, negative or zero, a wrong count, or (with
+            ``value=None``) an actuator whose stiffness is not described.
+
+    """
+    names = robot.actuator_names
+    n_a = len(names)
+    if value is None:
+        missing = [a.name for a in robot.actuators if a.stiffness is None]
+        if missing:
+            raise InvalidInputError(
+                "actuator_stiffness",
+                f"{robot.name}: no stiffness described for actuator '{missing[0]}': give one "
+                "(actuator_stiffness=..., --actuator-stiffness K) or describe "
+                "<pkdyn:stiffness value=...> in its transmission",
+            )
+        return np.array([float(a.stiffness) for a in robot.actuators])  # type: ignore[arg-type]
+    try:
+        arr = np.atleast_1d(np.asarray(value, dtype=float)).reshape(-1)
+    except (TypeError, ValueError):
+        raise InvalidInputError("actuator_stiffness", f"{value!r} is not a number") from None
+    if arr.size not in (1, n_a):
+        raise InvalidInputError(
+            "actuator_stiffness",
+            f"{arr.size} values for {n_a} actuators ({', '.join(names)}): give 1 or {n_a}",
+        )
+    arr = np.array(np.broadcast_to(arr, (n_a,)))
+    for name, k in zip(names, arr, strict=True):
+        if math.isnan(k) or k <= 0.0:
+            raise InvalidInputError(
+                "actuator_stiffness",
+                f"{k:g} for actuator '{name}': a stiffness must be > 0 [N m/rad or N/m] "
+                "(inf: rigid)",
+            )
+    return arr
+
+
+def elastic_model(
+    robot: Robot,
+    actuator_stiffness: float | Sequence[float] | np.ndarray | None = None,
+    material: str | Material | None = None,
+    links: bool = True,
+    shear: bool = True,
+) -> ElasticModel:
+    """The virtual-joint model of a robot (see the module docstring).
+
+    Args:
+        robot: The robot (loaded with its geometry when links are modelled as beams).
+        actuator_stiffness: One stiffness or one per actuator [N m/rad or N/m], ``inf`` for a
+            rigid one; ``None``: the description's ``<pkdyn:stiffness>``.
+        material: Material of every slender link (a preset name or a
+            :class:`~pkdyn.precision.material.Material`); ``None``: the description's.
+        links: Model the links' compliance (``False``: rigid links, the actuators' and the joint
+            springs' compliance only: Gosselin's ``K = J^T K_a J``).
+        shear: Timoshenko's shear deflection in the beams.
+
+    Returns:
+        The elastic model.
+
+    Raises:
+        InvalidInputError: A bad stiffness or material (the value is named).
+        PkdynError: Compliant links on a robot whose closure set has rows other than point and
+            weld closures (not supported yet).
+
+    """
+    k_a = _actuator_stiffness(robot, actuator_stiffness)
+    found = link_compliances(robot, material, shear) if links else []
+    if not found:
+        return ElasticModel(
+            robot,
+            robot,
+            k_a,
+            (),
+            np.arange(robot.nq),
+            np.arange(robot.nv),
+            np.zeros((0, 6), dtype=int),
+        )
+    cs = robot.closure_set
+    if cs.nc != sum(3 if item[0] else 6 for item in cs.items):
+        raise PkdynError(
+            f"{robot.name}: compliant links need a closure set of point and weld closures only "
+            "(this one has other rows); analyse it with rigid links (links=False)"
+        )
+    ext, q_index, v_index, defl = _extended(robot, found)
+    return ElasticModel(ext, robot, k_a, tuple(found), q_index, v_index, defl)
+
+
+_actuator_stiffness = actuator_stiffness
+
+
+def _extended(
+    robot: Robot, links: Sequence[LinkCompliance]
+) -> tuple[Robot, np.ndarray, np.ndarray, np.ndarray]:
+    """The robot with a free-flyer virtual joint at each compliant link's elastic centre."""
+    model = robot.model
+    comp = {lc.joint: lc for lc in links}
+    new = pin.Model()
+    new.name = model.name
+    new.gravity = model.gravity
+    jmap = {0: 0}
+    carrier: dict[int, tuple[int, pin.SE3]] = {0: (0, pin.SE3.Identity())}
+    virtual: dict[int, int] = {}
+    for j in range(1, model.njoints):
+        jm = model.joints[j]
+        pj, off = carrier[model.parents[j]]
+        sq = slice(jm.idx_q, jm.idx_q + jm.nq)
+        sv = slice(jm.idx_v, jm.idx_v + jm.nv)
+        nid = new.addJoint(
+            pj,
+            jm,
+            off * model.jointPlacements[j],
+            model.names[j],
+            model.effortLimit[sv],
+            model.velocityLimit[sv],
+            model.lowerPositionLimit[sq],
+            model.upperPositionLimit[sq],
+        )
+        lc = comp.get(j)
+        tip, root = _split(model, j, lc) if lc is not None else (None, model.inertias[j])
+        new.appendBodyToJoint(nid, root, pin.SE3.Identity())
+        jmap[j] = nid
+        carrier[j] = (nid, pin.SE3.Identity())
+        if lc is not None:
+            big = np.full(6, 1e3)
+            lo = np.concatenate([np.full(3, -1e3), np.full(4, -1.0)])
+            vid = new.addJoint(
+                nid,
+                pin.JointModelFreeFlyer(),
+                lc.placement,
+                f"{model.names[j]}{DEFLECTION_SUFFIX}",
+                big,
+                big,
+                lo,
+                -lo,
+            )
+            if tip is not None:
+                new.appendBodyToJoint(vid, tip, pin.SE3.Identity())
+            virtual[j] = vid
+            carrier[j] = (vid, lc.placement.inverse())
+    q_index = np.zeros(model.nq, dtype=int)
+    v_index = np.zeros(model.nv, dtype=int)
+    for j in range(1, model.njoints):
+        old, nj = model.joints[j], new.joints[jmap[j]]
+        q_index[old.idx_q : old.idx_q + old.nq] = np.arange(nj.idx_q, nj.idx_q + nj.nq)
+        v_index[old.idx_v : old.idx_v + old.nv] = np.arange(nj.idx_v, nj.idx_v + nj.nv)
+    for name in ("armature", "damping", "friction", "rotorInertia", "rotorGearRatio"):
+        values = np.array(getattr(new, name))
+        values[v_index] = np.asarray(getattr(model, name))
+        setattr(new, name, values)
+    platform = robot.platform_frame
+    for fid, f in enumerate(model.frames):
+        if fid == 0:
+            continue
+        pj, placement = jmap[f.parentJoint], f.placement
+        if fid == platform and f.parentJoint in virtual:
+            pj, off = carrier[f.parentJoint]
+            placement = off * placement
+        new.addFrame(pin.Frame(f.name, pj, f.parentFrame, placement, f.type, f.inertia), False)
+    cms = pin.StdVec_RigidConstraintModel()
+    for cm in robot.constraint_models:
+        j1, o1 = carrier[cm.joint1_id]
+        j2, o2 = carrier[cm.joint2_id]
+        c = pin.RigidConstraintModel(
+            cm.type, new, j1, o1 * cm.joint1_placement, j2, o2 * cm.joint2_placement,
+            cm.reference_frame,
+        )  # fmt: skip
+        c.name = cm.name
+        cms.append(c)
+    defl = np.array(
+        [np.arange(new.joints[virtual[lc.joint]].idx_v, new.joints[virtual[lc.joint]].idx_v + 6)
+         for lc in links]
+    )  # fmt: skip
+    q_home = pin.neutral(new)
+    q_home[q_index] = robot.q_home
+    ext = dataclasses.replace(
+        robot,
+        model=new,
+        data=new.createData(),
+        visual_model=_geometry(robot.visual_model, jmap),
+        collision_model=_geometry(robot.collision_model, jmap),
+        constraint_models=cms,
+        closure_set=ClosureSet(new, list(cms)),
+        actuated_joints=np.array([jmap[int(j)] for j in robot.actuated_joints], dtype=int),
+        actuated_q=q_index[np.asarray(robot.actuated_q, dtype=int)],
+        actuated_v=v_index[np.asarray(robot.actuated_v, dtype=int)],
+        passive_v=np.setdiff1d(np.arange(new.nv), v_index[np.asarray(robot.actuated_v)]),
+        q_home=q_home,
+        params=None,
+        passive=_passive(robot, new, q_index, v_index, carrier, links, defl),
+    )
+    return ext, q_index, v_index, defl
+
+
+def _split(
+    model: pin.Model, joint: int, lc: LinkCompliance
+) -> tuple[pin.Inertia | None, pin.Inertia]:
+    """``(tip part in the virtual joint's frame, root part in the joint frame)`` of a body.
+
+    Links merged into the body by fixed joints (their inertia is on their ``FIXED_JOINT``
+    frame) go with the end of the beam they are nearer; the beam link's own inertia is split
+    into a uniform half rod (or tube) at its tip and the rest, when the rest is a valid inertia
+    (else it stays whole on the root).
+    """
+    inertia = model.inertias[joint]
+    if lc.length is None or lc.section is None or inertia.mass <= 0.0:
+        return None, inertia
+    h = 0.5 * lc.length
+    tip_pt = lc.placement.act(np.array([0.0, 0.0, h]))
+    root_pt = lc.placement.act(np.array([0.0, 0.0, -h]))
+    main = pin.Inertia(inertia)
+    tip = pin.Inertia.Zero()
+    for f in model.frames:
+        if f.parentJoint != joint or f.type != pin.FrameType.FIXED_JOINT or f.inertia.mass <= 0:
+            continue
+        part = f.placement.act(f.inertia)
+        main = main - part
+        o = np.asarray(f.placement.translation)
+        if np.linalg.norm(o - tip_pt) < np.linalg.norm(o - root_pt):
+            tip = tip + part
+    if main.mass > 0.0:
+        m = 0.5 * float(main.mass)
+        r2 = lc.section.radius**2 + lc.section.inner_radius**2
+        I_t = m * (h * h / 12.0 + r2 / 4.0)
+        half = pin.Inertia(m, np.array([0.0, 0.0, 0.5 * h]), np.diag([I_t, I_t, 0.5 * m * r2]))
+        if _valid(main - lc.placement.act(half)):
+            tip = tip + lc.placement.act(half)
+    if tip.mass <= 0.0:
+        return None, inertia
+    root = inertia - tip
+    if not _valid(root):
+        return None, inertia
+    return lc.placement.actInv(tip), root
+
+
+def _valid(inertia: pin.Inertia) -> bool:
+    """A physical inertia: positive mass, rotational inertia about the centre of mass >= 0."""
+    I = np.asarray(inertia.inertia)
+    scale = max(float(np.trace(I)), 1e-300)
+    return bool(inertia.mass > 0.0 and np.linalg.eigvalsh(0.5 * (I + I.T))[0] >= -1e-9 * scale)
+
+
+def _geometry(gm: pin.GeometryModel, jmap: dict[int, int]) -> pin.GeometryModel:
+    out = pin.GeometryModel()
+    for g in gm.geometryObjects:
+        h = g.copy()
+        h.parentJoint = jmap[g.parentJoint]
+        out.addGeometryObject(h)
+    return out
+
+
+def _passive(
+    robot: Robot,
+    new: pin.Model,
+    q_index: np.ndarray,
+    v_index: np.ndarray,
+    carrier: dict[int, tuple[int, pin.SE3]],
+    links: Sequence[LinkCompliance],
+    defl: np.ndarray,
+) -> PassiveForces:
+    """The robot's passive elements on the extended tree, plus the virtual link springs."""
+    P = robot.passive
+    stiffness, damping, friction = np.zeros(new.nv), np.zeros(new.nv), np.zeros(new.nv)
+    rest = pin.neutral(new)
+    springs: list[FrameSpring] = []
+    smoothing = 1e-2
+    if P is not None:
+        stiffness[v_index] = P.stiffness
+        damping[v_index] = P.damping
+        friction[v_index] = P.friction
+        rest[q_index] = P.rest
+        smoothing = P.smoothing
+        for s in P.springs:
+            j1, o1 = carrier[s.joint1]
+            j2, o2 = carrier[s.joint2]
+            springs.append(
+                dataclasses.replace(
+                    s, joint1=j1, placement1=o1 * s.placement1, joint2=j2,
+                    placement2=o2 * s.placement2,
+                )
+            )  # fmt: skip
+    for lc, iv in zip(links, defl, strict=True):
+        stiffness[iv] = lc.stiffness
+    return PassiveForces(
+        new,
+        stiffness=stiffness,
+        rest=rest,
+        damping=damping,
+        friction=friction,
+        smoothing=smoothing,
+        springs=springs,
+    )

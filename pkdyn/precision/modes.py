@@ -1,0 +1,293 @@
+r"""Natural frequencies and mode shapes of any loaded robot about a static equilibrium.
+
+The constrained dynamics linearised about an equilibrium ``q`` (no load, or a wrench and the
+weight: the loaded mode's tangent stiffness): in the allowed motions ``u = N z`` of the
+virtual-joint model (:mod:`pkdyn.precision.condensation`; independent coordinates of the
+closures, the actuators and the links' deflections), small free vibrations obey
+
+.. math::
+
+    M_z \ddot z + K_z z = 0, \qquad M_z = N^T M(q) N, \quad K_z = N^T K_u N
+
+with ``M(q)`` the joint-space mass matrix of the extended tree (Pinocchio's ``crba``, rotor
+inertias included as the armature). The modes solve ``K_z x = omega^2 M_z x``; frequencies
+``f = omega / (2 pi)`` [Hz], ascending. Directions without stiffness that leave the platform
+still (the spin of a Delta's bars) have ``omega = 0``: they are reported as internal mobilities,
+not as modes (the elastic modes are mass-orthogonal to them: they carry no spin momentum).
+Directions without mass (a massless virtual link tip between two springs) are condensed out
+statically (Guyan) before the eigenproblem. Mode shapes are mass-normalised (``x^T M_z x = 1``)
+and given as joint motions (the robot's velocity coordinates), link deflections and platform
+motions (reference point and rotation, world axes).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+import scipy.linalg
+
+from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.pose import as_finite
+from pkdyn.model.robot import Robot
+from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
+from pkdyn.precision.elastic import ElasticModel, elastic_model
+from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
+from pkdyn.precision.material import Material
+from pkdyn.precision.stiffness import _check_assembled, _point, _wrench
+from solvers import numerics, solve_lm
+
+__all__ = ["Modes", "mass_matrix", "mode_trajectory", "modes", "modes_json"]
+
+_MASSLESS = 1e-12
+"""Mass eigenvalues below this fraction of the largest are zero."""
+_ZERO_FREQ = 1e-10
+"""Eigenvalues ``omega^2`` below this fraction of the largest are internal mobilities."""
+
+
+@dataclass(eq=False)  # numpy fields
+class Modes:
+    """Natural frequencies and mode shapes (see the module docstring).
+
+    Attributes:
+        q: Configuration (nq,) of the equilibrium (link deflections dropped).
+        q_elastic: Extended configuration of the equilibrium (the elastic model's robot).
+        frequencies: Natural frequencies (n,) [Hz], ascending.
+        shapes: Mode shapes in the extended velocity coordinates (n, nv_ext), mass-normalised.
+        joints: Joint motions of each mode (n, nv) (the robot's velocity coordinates).
+        deflections: Each compliant link's deflection per mode (n, n_links, 6) [m, rad].
+        platform: Platform motion per mode (n, 6): reference point [m], rotation [rad], world.
+        internal: Internal mobilities without stiffness (not modes).
+        condensed: Directions without mass condensed out statically.
+        point: Reference point, platform frame [m].
+
+    """
+
+    q: np.ndarray
+    q_elastic: np.ndarray
+    frequencies: np.ndarray
+    shapes: np.ndarray
+    joints: np.ndarray
+    deflections: np.ndarray
+    platform: np.ndarray
+    internal: int
+    condensed: int
+    point: np.ndarray
+
+    @property
+    def f1(self) -> float:
+        """Lowest natural frequency [Hz]."""
+        return float(self.frequencies[0])
+
+    def to_json(self, count: int | None = None) -> dict[str, Any]:
+        """JSON-ready dict: ``frequencies`` [Hz], ``platform`` motions, ``internal_mobilities``.
+
+        Args:
+            count: Report the lowest ``count`` modes (default: all).
+
+        """
+        n = self.frequencies.size if count is None else min(count, self.frequencies.size)
+        unit = np.linalg.norm(self.platform[:n], axis=1, keepdims=True)
+        return {
+            "frequencies": [float(f) for f in self.frequencies[:n]],
+            "platform": [
+                [float(x) for x in row] for row in self.platform[:n] / np.maximum(unit, 1e-300)
+            ],
+            "internal_mobilities": self.internal,
+            "modes": int(self.frequencies.size),
+            "point": [float(x) for x in self.point],
+            "convention": "frequencies ascending [Hz]; platform: direction of each mode's "
+            "platform motion [translation of the point, rotation], world axes, unit norm",
+        }
+
+
+def mass_matrix(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """Joint-space mass matrix (nv, nv) at ``q``, symmetric, rotor inertias included."""
+    M = np.array(pin.crba(robot.model, robot.data, q))
+    return np.triu(M) + np.triu(M, 1).T
+
+
+def _eigen(red: Reduced, M: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """``(omega^2, z shapes (nz, n), condensed)``, internal mobilities included first."""
+    N, Kz = red.N, red.Kz
+    Mz = N.T @ M @ N
+    Mz = 0.5 * (Mz + Mz.T)
+    Ks = 0.5 * (Kz + Kz.T)
+    mu, W = np.linalg.eigh(Mz)
+    massless = negligible(mu, _MASSLESS)
+    if not massless.any():
+        lam, X = scipy.linalg.eigh(Ks, Mz)
+        return lam, X, 0
+    P, Q = W[:, ~massless], W[:, massless]
+    Kpp, Kpq, Kqq = P.T @ Ks @ P, P.T @ Ks @ Q, Q.T @ Ks @ Q
+    G = numerics.lstsq(Kqq, np.eye(Kqq.shape[0]), 1e-12)  # (massless and free: dropped)
+    Kc = Kpp - Kpq @ G @ Kpq.T
+    lam, Xp = scipy.linalg.eigh(0.5 * (Kc + Kc.T), np.diag(mu[~massless]))
+    X = P @ Xp - Q @ (G @ Kpq.T @ Xp)
+    return lam, X, int(massless.sum())
+
+
+def modes(
+    robot: Robot | ElasticModel,
+    q: Sequence[float] | np.ndarray,
+    actuator_stiffness: float | Sequence[float] | np.ndarray | None = None,
+    *,
+    material: str | Material | None = None,
+    links: bool = True,
+    point: Sequence[float] | np.ndarray | None = None,
+    wrench: Sequence[float] | np.ndarray | None = None,
+    gravity: bool = False,
+) -> Modes:
+    """Natural frequencies [Hz] and mode shapes of a robot about an equilibrium.
+
+    Args:
+        robot: The robot (with its geometry when links are beams), or an
+            :class:`~pkdyn.precision.elastic.ElasticModel`.
+        q: Assembled configuration (nq,): the equilibrium without load (actuators at their
+            commanded positions).
+        actuator_stiffness: Joint-side stiffness, one or one per actuator [N m/rad or N/m];
+            ``None``: the description's ``<pkdyn:stiffness>``.
+        material: Material of the slender links; ``None``: the description's, if any.
+        links: Model the links' compliance.
+        point: Reference point of the platform motions, platform frame [m].
+        wrench: A static wrench on the platform (6, world axes, moment about the point): the
+            vibrations are about the loaded equilibrium, geometric terms included.
+        gravity: The weight is part of the load (equilibrium and geometric terms).
+
+    Returns:
+        The modes.
+
+    Raises:
+        InvalidInputError: Bad stiffness, material, point or wrench, or ``q`` not assembled.
+        SingularConfigurationError: A motion without stiffness moves the platform.
+        PkdynError: No elastic mode at all.
+
+    """
+    base = robot.base if isinstance(robot, ElasticModel) else robot
+    if base.platform_frame is None:
+        raise InvalidInputError("robot", f"{base.name} declares no platform frame")
+    qq = as_finite("q", q, base.nq)
+    _check_assembled(base, qq)
+    p = _point(point)
+    w = _wrench(base, wrench)
+    em = (
+        robot
+        if isinstance(robot, ElasticModel)
+        else elastic_model(robot, actuator_stiffness, material, links)
+    )
+    q_ext = em.embed(qq)
+    if w is None and not gravity:
+        red = reduce(em, q_ext, p)
+    else:
+        load = np.zeros(6) if w is None else w
+        eq = loaded_equilibrium(em, q_ext, p, load, gravity)
+        qa_rest = np.array(q_ext[np.asarray(em.robot.actuated_q)])
+        q_ext = eq.q
+
+        def tangent(N: np.ndarray) -> np.ndarray:
+            return tangent_along(em, eq.q, eq.lambdas, qa_rest, p, load, gravity, N)
+
+        red = reduce(em, q_ext, p, tangent)
+    _, internal = compliance(em, red)  # raises when the platform moves without stiffness
+    lam, X, condensed = _eigen(red, mass_matrix(em.robot, q_ext))
+    elastic = ~negligible(lam, max(_ZERO_FREQ, red.free_tol)) & (lam > 0.0)
+    if not elastic.any():
+        raise PkdynError(f"{base.name}: no spring resists any motion: there is no elastic mode")
+    lam, X = lam[elastic], X[:, elastic]
+    free = int((~elastic).sum())
+    U = (red.N @ X).T  # (n, nv_ext)
+    return Modes(
+        q=em.restrict(q_ext),
+        q_elastic=q_ext,
+        frequencies=np.sqrt(lam) / (2.0 * np.pi),
+        shapes=U,
+        joints=U[:, em.v_index],
+        deflections=U[:, em.deflection_v] if em.links else np.zeros((U.shape[0], 0, 6)),
+        platform=(red.Jz @ X).T,
+        internal=max(internal, free),
+        condensed=condensed,
+        point=p,
+    )
+
+
+def modes_json(robot: Robot, q: np.ndarray, count: int | None = None, **kwargs: Any) -> dict:
+    """JSON-ready :func:`modes` for the CLI (keys of :meth:`Modes.to_json`)."""
+    return modes(robot, q, **kwargs).to_json(count)
+
+
+def mode_trajectory(
+    em: ElasticModel,
+    result: Modes,
+    index: int = 0,
+    amplitude: float | None = None,
+    period: float = 2.0,
+    cycles: int = 2,
+    samples: int = 48,
+) -> tuple[np.ndarray, np.ndarray]:
+    """A mode played slowly, for display: ``q(t) = q ⊕ a sin(2 pi t / period) u``, assembled.
+
+    Args:
+        em: The elastic model the modes were computed on.
+        result: The modes.
+        index: Mode number, 0 = lowest frequency.
+        amplitude: Largest displacement of a joint origin or of the platform point [m]
+            (default: 5 % of the robot's size).
+        period: Displayed period [s] (the real one is ``1 / frequency``).
+        cycles: Number of periods.
+        samples: Samples per period.
+
+    Returns:
+        ``(t, Q)``: times (N,) [s] and configurations of ``em.robot`` (N, nq_ext).
+
+    Raises:
+        InvalidInputError: No such mode, or a non-positive amplitude, period or count.
+
+    """
+    n = result.frequencies.size
+    if not 0 <= index < n:
+        raise InvalidInputError("mode", f"{index + 1} is not a mode number: 1 to {n}")
+    for what, value in (("period", period), ("cycles", cycles), ("samples", samples)):
+        if not (np.isfinite(value) and value > 0):
+            raise InvalidInputError(what, f"must be > 0, got {value}")
+    r = em.robot
+    q0 = result.q_elastic
+    u = result.shapes[index]
+    size = _largest_motion(r, q0, u)
+    a = (0.05 * r.length_scale if amplitude is None else float(amplitude)) / max(size, 1e-300)
+    if not (np.isfinite(a) and a > 0.0):
+        raise InvalidInputError("amplitude", f"must be > 0 m, got {amplitude}")
+    t = np.linspace(0.0, cycles * period, int(cycles * samples) + 1)
+    Q = np.empty((t.size, r.nq))
+    free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
+    cs, data = r.closure_set, r.data
+    for i, ti in enumerate(t):
+        qi = pin.integrate(r.model, q0, a * np.sin(2.0 * np.pi * ti / period) * u)
+        if cs.nc:
+            qi = solve_lm(
+                r.model,
+                qi,
+                lambda x: cs.local_residual(data, x),
+                lambda x: cs.local_jacobian_after_residual(data, x),
+                free=free,
+                tol=1e-10,
+            ).q
+        Q[i] = qi
+    return t, Q
+
+
+def _largest_motion(robot: Robot, q: np.ndarray, u: np.ndarray) -> float:
+    """Largest displacement [m] of a joint origin or the platform frame per unit of ``u``."""
+    model, data = robot.model, robot.data
+    pin.framesForwardKinematics(model, data, q)
+    before = [M.translation.copy() for M in data.oMi] + [
+        data.oMf[robot.platform_frame].translation.copy() if robot.platform_frame else np.zeros(3)
+    ]
+    h = 1e-6
+    pin.framesForwardKinematics(model, data, pin.integrate(model, q, h * u))
+    after = [M.translation for M in data.oMi] + [
+        data.oMf[robot.platform_frame].translation if robot.platform_frame else np.zeros(3)
+    ]
+    return max(float(np.linalg.norm(b - a)) for a, b in zip(before, after, strict=True)) / h

@@ -1,0 +1,156 @@
+"""A robot with its placements moved: the nonlinear model of geometric errors.
+
+:func:`perturbed` applies parameters of a :class:`~pkdyn.precision.parameters.ParameterModel`
+exactly (``M -> M exp(xi)`` for every placement); :func:`with_placements` puts given placements
+(e.g. those a family builder gives for other dimensions). Both return a new
+:class:`pkdyn.Robot` (copies of the model, its closures and description; the original is left
+alone) assembled near the original's home, with ``params`` dropped: the family's closed forms no
+longer describe it. The actuator gains of a model are returned beside it (:class:`Perturbed`):
+the joint coordinate of an actuator reading ``qa`` is ``(1 + gain) qa``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.model.assembly import forward_geometry
+from pkdyn.model.description import FrameRef
+from pkdyn.model.robot import Robot
+from pkdyn.precision.parameters import ParameterModel, Placement, local_placement
+from solvers import ClosureSet
+
+__all__ = ["Perturbed", "perturbed", "with_placements"]
+
+
+@dataclass(eq=False)
+class Perturbed:
+    """A robot with geometric errors, and the relative gains of its actuators.
+
+    Attributes:
+        robot: The robot with the moved placements.
+        gains: Relative actuator gains (n_a,): joint coordinate = ``(1 + gains) * reading``.
+
+    """
+
+    robot: Robot
+    gains: np.ndarray
+
+    def joint_coordinates(self, readings: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Actuated joint coordinates from actuator readings (..., n_a) [rad or m]."""
+        return (1.0 + self.gains) * np.asarray(readings, dtype=float)
+
+
+def perturbed(robot: Robot, model: ParameterModel, p: Sequence[float] | np.ndarray) -> Perturbed:
+    """The robot with parameters ``p`` of ``model`` applied (nonlinear: ``M exp(E p)``).
+
+    Args:
+        robot: The nominal robot (the model's).
+        model: The parameter model.
+        p: Parameter values (n_par,) [m, rad, -]: errors from the nominal robot.
+
+    Returns:
+        The perturbed robot and its actuator gains.
+
+    """
+    p = np.asarray(p, dtype=float)
+    xi = model.twists(p)
+    new = [
+        local_placement(robot, pl) * pin.exp6(pin.Motion(x))
+        for pl, x in zip(model.placements, xi, strict=True)
+    ]
+    moved = [bool(np.any(x != 0.0)) for x in xi]
+    out = _rebuilt(robot, model.placements, new, moved)
+    return Perturbed(out, model.gains(p))
+
+
+def with_placements(robot: Robot, where: Sequence[Placement], values: Sequence[pin.SE3]) -> Robot:
+    """The robot with the given placements replaced.
+
+    Args:
+        robot: The robot.
+        where: Placements (:func:`pkdyn.precision.parameters.placements`).
+        values: Their new values (in the parent joint frame for joints, in the joint frame of
+            the placed frame for closure frames and the platform).
+
+    Returns:
+        The new robot, assembled near ``robot``'s home.
+
+    """
+    moved = [
+        not local_placement(robot, pl).isApprox(M, 0.0) for pl, M in zip(where, values, strict=True)
+    ]
+    return _rebuilt(robot, list(where), list(values), moved)
+
+
+def _rebuilt(
+    robot: Robot, where: Sequence[Placement], values: Sequence[pin.SE3], moved: Sequence[bool]
+) -> Robot:
+    model = pin.Model(robot.model)
+    desc = robot.description
+    platform = desc.platform
+    frames: dict[tuple[str, int], pin.SE3] = {}
+    for pl, M, m in zip(where, values, moved, strict=True):
+        if not m:
+            continue
+        if pl.kind == "joint":
+            model.jointPlacements[pl.joint] = M
+        elif pl.kind == "closure":
+            frames[(pl.closure, pl.side)] = M
+        else:
+            assert robot.platform_frame is not None
+            old = model.frames[robot.platform_frame].placement
+            model.frames[robot.platform_frame].placement = M
+            if platform is not None:  # the link-frame placement moves by the same right factor
+                fr = platform.frame
+                delta = old.actInv(M)
+                platform = dataclasses.replace(
+                    platform, frame=FrameRef(fr.link, fr.placement * delta)
+                )
+    cms = pin.StdVec_RigidConstraintModel()
+    for cm, owner in zip(robot.constraint_models, robot.constraint_owner, strict=True):
+        f1, f2 = _first_frames(robot, owner)  # a hinge's arm models are offsets of these
+        new1 = frames.get((owner, 1), f1) * f1.actInv(cm.joint1_placement)
+        new2 = frames.get((owner, 2), f2) * f2.actInv(cm.joint2_placement)
+        c = pin.RigidConstraintModel(
+            cm.type, model, cm.joint1_id, new1, cm.joint2_id, new2, cm.reference_frame
+        )
+        c.name = cm.name
+        cms.append(c)
+    new_closures = []
+    for c in desc.closures:
+        ref = []
+        for side, fr in ((1, c.frame1), (2, c.frame2)):
+            if (c.name, side) in frames:
+                f_old = _first_frames(robot, c.name)[side - 1]
+                fr = FrameRef(fr.link, fr.placement * f_old.actInv(frames[(c.name, side)]))
+            ref.append(fr)
+        new_closures.append(dataclasses.replace(c, frame1=ref[0], frame2=ref[1]))
+    desc = dataclasses.replace(desc, closures=tuple(new_closures), platform=platform)
+    # the constraint layer's other rows (joint couplings) depend on no placement: kept
+    extra = tuple(getattr(robot.closure_set, "couplings", ()))
+    closure_set = ClosureSet(model, list(cms), *((extra,) if extra else ()))
+    out = dataclasses.replace(
+        robot,
+        model=model,
+        data=model.createData(),
+        description=desc,
+        constraint_models=cms,
+        closure_set=closure_set,
+        params=None,
+    )
+    out.q_home = forward_geometry(
+        out, robot.q_home[robot.actuated_q], q_init=robot.q_home, check_limits=False
+    ).q
+    return out
+
+
+def _first_frames(robot: Robot, closure: str) -> tuple[pin.SE3, pin.SE3]:
+    """The two frames of a closure (placements of its first constraint model)."""
+    k = robot.constraint_owner.index(closure)
+    cm = robot.constraint_models[k]
+    return pin.SE3(cm.joint1_placement), pin.SE3(cm.joint2_placement)

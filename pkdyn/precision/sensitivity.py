@@ -1,0 +1,315 @@
+"""First-order sensitivity of the platform pose to actuator and geometric errors, through the loops.
+
+The one derivative accuracy analysis and geometric calibration both need: how the platform pose
+of a closed-loop robot moves when an actuator coordinate or a placement of the description
+(:mod:`pkdyn.precision.parameters`) changes, the actuators held at their readings.
+
+**Pose error convention** (the task convention of :mod:`pkdyn.analysis.kinematics`): ``dx`` (6,)
+stacks the displacement of the platform frame origin in world axes [m] and the small rotation
+of the platform in its own frame [rad] (``log3(R0^T R)``).
+
+**Placement errors act as twists.** An error ``xi`` of a placement ``M`` (``M exp(xi)``) moves
+every body downstream of it (a joint's subtree; for a closure frame or the platform, that frame
+alone) by the world twist ``V = Ad(oF) xi``, ``oF`` the world placement of the placed frame. A
+point ``p`` on a moved body moves by ``v + w x p``, a frame ``R`` turns by ``R^T w`` in its axes.
+The closure residuals ``c(q, p)`` (:class:`solvers.ClosureSet`: points ``p1 - p2``, welds
+``log6(c1Mc2)``) and the platform pose ``x(q, p)`` then change at fixed ``q`` by ``C dp`` and
+``X dp``. Gains change the actuated coordinates, ``dqa = diag(qa) G dp``.
+
+**Through the loops.** With the actuators at their readings, the passive coordinates move to
+keep the closures: ``Jc_p dq_p + Jc_a dqa + C dp = 0`` (minimum-norm ``dq_p``: internal
+mobilities, like the spin of a Delta's bars, stay still), so that
+
+    dx = J dqa + K dp,   J = Jx_a - Jx_p Jc_p^+ Jc_a,   K = X + J diag(qa) G - Jx_p Jc_p^+ C
+
+with ``Jc`` the closure Jacobian of the robot's constraint layer (``robot.closure_set``: any
+scalar rows it holds besides the rigid closures, e.g. joint couplings, take part in the
+elimination; they depend on no placement) and ``Jx`` the platform Jacobian. ``J`` is the direct
+kinematic Jacobian of :func:`pkdyn.analysis.kinematics.kinematic_models` (all six pose rows).
+Placement errors the passive joints cannot absorb (an over-constrained mechanism: the
+out-of-plane errors of a planar five-bar) leave a closure residual at first order, reported in
+:attr:`PoseSensitivity.closure_gap`: the mechanism would not assemble without deforming.
+
+The derivative is with respect to the parameters ``p`` of a :class:`ParameterModel` at a robot
+already perturbed by ``at`` (the placement ``M0 exp(xi(at))`` moves by ``exp(Jexp6(xi) dxi)``),
+so that a calibration's Gauss-Newton steps use the exact Jacobian.
+"""
+
+from __future__ import annotations
+
+import weakref
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
+from pkdyn.model.pose import as_finite
+from pkdyn.model.robot import Robot
+from pkdyn.precision.parameters import ParameterModel, placement_frames
+from solvers import numerics
+
+__all__ = ["PARALLEL_TOL", "PoseSensitivity", "pose_sensitivity"]
+
+PARALLEL_TOL = 1e-8
+"""Relative singular value of the passive closure Jacobian below which a configuration is
+treated as a parallel singularity (the platform is not determined by the actuators)."""
+
+_RANK_TOL = 1e-10
+"""Relative cut-off of the passive closure Jacobian's structural rank (redundant rows, e.g. the
+out-of-plane rows of a planar hinge, fall to ~1e-16)."""
+
+
+@dataclass
+class PoseSensitivity:
+    """Platform pose sensitivities at one configuration.
+
+    Attributes:
+        q: The configuration (nq,).
+        pose: Platform placement at ``q``.
+        J: Pose per actuator coordinate (6, n_a) [m or rad per rad or m].
+        K: Pose per parameter (6, n_par) [m or rad per parameter unit].
+        closure_gap: Closure residual per parameter that no passive motion absorbs (nc, n_par)
+            [m or rad per unit]: zero for parameters the mechanism accommodates.
+
+    """
+
+    q: np.ndarray
+    pose: pin.SE3
+    J: np.ndarray
+    K: np.ndarray
+    closure_gap: np.ndarray
+
+    @property
+    def position(self) -> np.ndarray:
+        """Position rows of ``K`` (3, n_par) [m per unit]."""
+        return self.K[:3]
+
+
+def _skew(p: np.ndarray) -> np.ndarray:
+    """Skew matrices (..., 3, 3) of vectors (..., 3)."""
+    out = np.zeros(p.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -p[..., 2], p[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = p[..., 2], -p[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -p[..., 1], p[..., 0]
+    return out
+
+
+@dataclass
+class _Plan:
+    """What a parameter model moves on a robot structure (indices only, no placements).
+
+    Entities are the two sides of every constraint model, then the platform; ``mask[e, k]``
+    says whether used placement ``k`` moves entity ``e``.
+    """
+
+    used: np.ndarray  # placement indices with non-zero rows in E or the gains
+    rows: np.ndarray  # their E rows (6 per placement)
+    mask: np.ndarray  # (n_entities, n_used) float
+    points: np.ndarray  # (n_points, 2): constraint index, row offset
+    welds: np.ndarray  # (n_welds, 2)
+    platform: int  # entity index of the platform (-1: none)
+
+
+def _plan(robot: Robot, model: ParameterModel) -> _Plan:
+    key = id(model)
+    plan = _PLANS.get(key)
+    if plan is not None:
+        return plan
+    n_pl = len(model.placements)
+    used = np.flatnonzero(np.any(model.E.reshape(n_pl, 6, -1) != 0.0, axis=(1, 2)))
+    own: dict[tuple[str, int], int] = {}
+    platform_k = -1
+    for k, pl in enumerate(model.placements):
+        if pl.kind == "closure":
+            own[(pl.closure, pl.side)] = k
+        elif pl.kind == "platform":
+            platform_k = k
+
+    def moves(joint: int, mine: int) -> np.ndarray:
+        support = set(int(j) for j in robot.model.supports[joint]) if joint > 0 else set()
+        return np.array(
+            [
+                (model.placements[k].kind == "joint" and model.placements[k].joint in support)
+                or k == mine
+                for k in used
+            ],
+            dtype=float,
+        )
+
+    masks: list[np.ndarray] = []
+    points: list[tuple[int, int]] = []
+    welds: list[tuple[int, int]] = []
+    offsets = robot.closure_set.offsets
+    for i, (cm, owner) in enumerate(
+        zip(robot.constraint_models, robot.constraint_owner, strict=True)
+    ):
+        masks.append(moves(int(cm.joint1_id), own.get((owner, 1), -1)))
+        masks.append(moves(int(cm.joint2_id), own.get((owner, 2), -1)))
+        (points if cm.type == pin.ContactType.CONTACT_3D else welds).append((i, int(offsets[i])))
+    platform = -1
+    if robot.platform_frame is not None:
+        platform = len(masks)
+        masks.append(moves(int(robot.model.frames[robot.platform_frame].parentJoint), platform_k))
+    plan = _Plan(
+        used,
+        (6 * used[:, None] + np.arange(6)[None, :]).reshape(-1),
+        np.array(masks).reshape(len(masks), used.size),
+        np.asarray(points, dtype=np.int64).reshape(-1, 2),
+        np.asarray(welds, dtype=np.int64).reshape(-1, 2),
+        platform,
+    )
+    _PLANS[key] = plan
+    weakref.finalize(model, _PLANS.pop, key, None)
+    return plan
+
+
+_PLANS: dict[int, _Plan] = {}
+
+
+def _rigid_jacobians(
+    robot: Robot, model: ParameterModel, data: pin.Data, at: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """``C`` (nc, n_par) and ``X`` (6, n_par): closures and platform per parameter, fixed ``q``."""
+    plan = _plan(robot, model)
+    n_par = model.size
+    C = np.zeros((robot.closure_set.nc, n_par))
+    X = np.zeros((6, n_par))
+    if plan.used.size == 0:
+        return C, X
+    where = [model.placements[k] for k in plan.used]
+    frames = placement_frames(robot, data, tuple(where))
+    T = np.array([F.toActionMatrix() for F in frames])  # world twist per placement twist
+    if at is not None:
+        xi = model.twists(at)[plan.used]
+        T = np.einsum("kij,kjl->kil", T, np.array([pin.Jexp6(pin.Motion(x)) for x in xi]))
+    E = model.E[plan.rows].reshape(plan.used.size, 6, n_par)
+    Y = np.einsum("kij,kjn->kin", T, E)  # world twist per parameter, each used placement
+    S = np.einsum("ek,kin->ein", plan.mask, Y)  # world twist of each entity per parameter
+    cms = robot.constraint_models
+    if plan.points.size:
+        idx = plan.points[:, 0]
+        pts = [cms[int(i)] for i in idx]
+        p1 = np.array([(data.oMi[c.joint1_id] * c.joint1_placement).translation for c in pts])
+        p2 = np.array([(data.oMi[c.joint2_id] * c.joint2_placement).translation for c in pts])
+        S1, S2 = S[2 * idx], S[2 * idx + 1]
+        d1 = S1[:, :3] - np.einsum("sij,sjn->sin", _skew(p1), S1[:, 3:])
+        d2 = S2[:, :3] - np.einsum("sij,sjn->sin", _skew(p2), S2[:, 3:])
+        rows = (plan.points[:, 1][:, None] + np.arange(3)[None, :]).reshape(-1)
+        C[rows] = (d1 - d2).reshape(-1, n_par)
+    for i, o in plan.welds:
+        cm = cms[int(i)]
+        oM1 = data.oMi[cm.joint1_id] * cm.joint1_placement
+        oM2 = data.oMi[cm.joint2_id] * cm.joint2_placement
+        op = pin.Jlog6(oM1.actInv(oM2)) @ oM2.inverse().toActionMatrix()
+        C[o : o + 6] = op @ (S[2 * i + 1] - S[2 * i])
+    if plan.platform >= 0:
+        assert robot.platform_frame is not None
+        oMf = data.oMf[robot.platform_frame]
+        Sp = S[plan.platform]
+        X[:3] = Sp[:3] - _skew(oMf.translation) @ Sp[3:]
+        X[3:] = oMf.rotation.T @ Sp[3:]
+    return C, X
+
+
+def _platform_jacobian(robot: Robot, data: pin.Data) -> np.ndarray:
+    """(6, nv): linear velocity (world) and angular velocity (platform frame) of the platform."""
+    assert robot.platform_frame is not None
+    lin = pin.getFrameJacobian(
+        robot.model, data, robot.platform_frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    )[:3]
+    ang = pin.getFrameJacobian(robot.model, data, robot.platform_frame, pin.ReferenceFrame.LOCAL)[
+        3:
+    ]
+    return np.vstack([lin, ang])
+
+
+def _structural_rank(robot: Robot) -> int:
+    """Rank of the passive closure Jacobian at home (cached on the robot's model object)."""
+    key = id(robot.model)
+    rank = _RANKS.get(key)
+    if rank is None:
+        Jc = robot.closure_set.jacobian(robot.data, robot.q_home)[:, robot.passive_v]
+        rank = numerics.rank(Jc, _RANK_TOL, 1.0)
+        _RANKS[key] = rank
+        weakref.finalize(robot.model, _RANKS.pop, key, None)
+    return rank
+
+
+_RANKS: dict[int, int] = {}
+
+
+def pose_sensitivity(
+    robot: Robot,
+    q: Sequence[float] | np.ndarray,
+    model: ParameterModel | None = None,
+    at: Sequence[float] | np.ndarray | None = None,
+) -> PoseSensitivity:
+    """Platform pose per actuator coordinate and per geometric parameter, at ``q``.
+
+    Args:
+        robot: The robot (already perturbed by ``at`` when given: ``perturbed(...).robot``).
+        q: An assembled configuration (nq,).
+        model: The parameter model (``None``: actuator sensitivity only, ``K`` empty).
+        at: Parameters (n_par,) the robot is perturbed by (default zero: the nominal robot).
+
+    Returns:
+        ``J``, ``K`` and the closure gap (module docstring).
+
+    Raises:
+        InvalidInputError: No platform frame, or malformed ``q`` / ``at``.
+        SingularConfigurationError: A parallel singularity (the actuators do not determine
+            the platform).
+
+    """
+    if robot.platform_frame is None:
+        raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
+    qq = as_finite("q", q, robot.nq)
+    m, data = robot.model, robot.data
+    cs = robot.closure_set
+    r = _structural_rank(robot) if cs.nc else 0  # (at home: before the kinematics at q)
+    if cs.nc:  # (runs the kinematics and joint Jacobians at q; coupling rows need q)
+        Jc = cs.jacobian(data, qq)
+    else:
+        Jc = np.zeros((0, robot.nv))
+        pin.computeJointJacobians(m, data, qq)
+    pin.updateFramePlacements(m, data)
+    Jx = _platform_jacobian(robot, data)
+    a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)
+    qa = qq[robot.actuated_q]
+    # passive elimination: Jc_p^+ by SVD, structural rank from home
+    Jcp = Jc[:, p]
+    if Jcp.size:
+        U, s, Vt = np.linalg.svd(Jcp, full_matrices=True)
+        if r and s[r - 1] <= PARALLEL_TOL * s[0]:
+            raise SingularConfigurationError(
+                "parallel",
+                f"parallel singularity: the passive joints of {robot.name} are not determined by "
+                f"the actuators (closure Jacobian margin {s[r - 1] / s[0]:.3g}); sensitivities "
+                "are unbounded here",
+            )
+        Ur, sr, Vr = U[:, :r], s[:r], Vt[:r].T
+        U0 = U[:, r:]
+    else:
+        Ur, sr, Vr = np.zeros((Jc.shape[0], 0)), np.zeros(0), np.zeros((p.size, 0))
+        U0 = np.eye(Jc.shape[0])
+
+    def eliminate(rhs: np.ndarray) -> np.ndarray:
+        """Platform motion of closure residual rates ``rhs`` absorbed by the passive joints."""
+        dqp = -(Vr @ ((Ur.T @ rhs) / sr[:, None]))
+        return Jx[:, p] @ dqp
+
+    J = Jx[:, a] + eliminate(Jc[:, a])
+    if model is None:
+        K = np.zeros((6, 0))
+        gap = np.zeros((Jc.shape[0], 0))
+    else:
+        p_at = None if at is None else as_finite("at", at, model.size)
+        reading = qa if p_at is None else qa / (1.0 + model.gains(p_at))
+        C, X = _rigid_jacobians(robot, model, data, p_at)
+        Dg = reading[:, None] * model.G  # actuated coordinate per parameter (gains)
+        rhs = C + Jc[:, a] @ Dg
+        K = X + Jx[:, a] @ Dg + eliminate(rhs)
+        gap = U0 @ (U0.T @ rhs)
+    return PoseSensitivity(qq, pin.SE3(data.oMf[robot.platform_frame]), J, K, gap)

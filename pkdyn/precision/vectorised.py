@@ -1,0 +1,317 @@
+"""Stiffness and lowest frequency of the library Gough-Stewart and Delta, vectorised over poses.
+
+With the actuators' stiffness alone (rigid links, no other spring) the virtual-joint model
+reduces to Gosselin's ``K = J^T K_a J``; where the inverse kinematic Jacobian ``J`` has a closed
+form, whole maps follow at once (numpy), without solving any pose:
+
+- Gough-Stewart (Merlet): leg ``i`` from ``A_i`` to ``B_i`` (unit vector ``u_i``) moves at
+  ``rho_dot_i = u_i . v_c + ((B_i - c) x u_i) . omega`` for the reference point ``c``: ``J`` has
+  rows ``[u_i, (B_i - c) x u_i]`` (world axes: the precision convention) and
+  ``K = sum_i k_i J_i^T J_i`` (6 x 6);
+- Delta (Clavel's reduced model, :func:`pkdyn.analysis.screws.delta_AB`): ``J`` has rows
+  ``d_i / (d_i . dC'_i/dalpha_i)`` (3 x 3, the nacelle translates), and the nacelle's reduced mass
+  matrix ``M_x`` is the inertial part of :class:`pkdyn.dynamics.delta.DeltaDynamics` (arms about
+  their axes with the rotor inertia, bars with no spin momentum, nacelle), so the natural
+  frequencies solve ``K x = omega^2 M_x x`` per pose.
+
+The tests check both against the general path (:func:`pkdyn.precision.stiffness`,
+:func:`pkdyn.precision.modes.modes`) to round-off.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkdyn.analysis.kinematics import SINGULAR_TOL
+from pkdyn.closed_form import delta as delta_cf
+from pkdyn.dynamics.delta import DeltaDynamics, has_delta_dynamics
+from pkdyn.model.robot import Robot
+
+__all__ = [
+    "VectorisedFigures",
+    "delta_figures",
+    "gough_stewart_figures",
+    "gough_stewart_stiffness",
+    "inv3",
+    "sym3_min_eig",
+    "vectorised",
+]
+
+_FREE = 1e-12
+"""Eigenvalues of ``K`` below this fraction of the largest: a parallel singularity."""
+
+
+@dataclass(eq=False)  # numpy fields
+class VectorisedFigures:
+    """Per pose figures of a vectorised evaluation (NaN where not valid).
+
+    Attributes:
+        valid: Pose reached and not singular (N,).
+        stiffness_min: Smallest principal translational stiffness (N,) [N/m].
+        deflection: Translation of the reference point under the wrench (N,) [m] (NaN without).
+        f1: Lowest natural frequency (N,) [Hz] (NaN when not computed).
+
+    """
+
+    valid: np.ndarray
+    stiffness_min: np.ndarray
+    deflection: np.ndarray
+    f1: np.ndarray
+
+
+def sym3_min_eig(A: np.ndarray) -> np.ndarray:
+    """Smallest eigenvalue of symmetric 3x3 matrices (N, 3, 3), closed form (trigonometric).
+
+    Smith's method (1961): ``A = q I + p B`` with ``det(B) / 2 = cos(3 phi)``.
+    """
+    a00, a11, a22 = A[:, 0, 0], A[:, 1, 1], A[:, 2, 2]
+    a01, a02, a12 = A[:, 0, 1], A[:, 0, 2], A[:, 1, 2]
+    q = (a00 + a11 + a22) / 3.0
+    p1 = a01**2 + a02**2 + a12**2
+    b00, b11, b22 = a00 - q, a11 - q, a22 - q
+    p = np.sqrt(np.maximum((b00**2 + b11**2 + b22**2 + 2.0 * p1) / 6.0, 0.0))
+    safe = np.where(p > 0.0, p, 1.0)
+    det = (
+        b00 * (b11 * b22 - a12 * a12)
+        - a01 * (a01 * b22 - a12 * a02)
+        + a02 * (a01 * a12 - b11 * a02)
+    ) / safe**3
+    phi = np.arccos(np.clip(0.5 * det, -1.0, 1.0)) / 3.0
+    return np.where(p > 0.0, q + 2.0 * p * np.cos(phi + 2.0 * np.pi / 3.0), q)
+
+
+def inv3(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverses (N, 3, 3) and determinants (N,) of 3x3 matrices, by the adjugate."""
+    a, b, c = A[:, 0, 0], A[:, 0, 1], A[:, 0, 2]
+    d, e, f = A[:, 1, 0], A[:, 1, 1], A[:, 1, 2]
+    g, h, i = A[:, 2, 0], A[:, 2, 1], A[:, 2, 2]
+    co = np.stack(
+        [
+            np.stack([e * i - f * h, c * h - b * i, b * f - c * e], -1),
+            np.stack([f * g - d * i, a * i - c * g, c * d - a * f], -1),
+            np.stack([d * h - e * g, b * g - a * h, a * e - b * d], -1),
+        ],
+        -2,
+    )
+    det = a * co[:, 0, 0] + b * co[:, 1, 0] + c * co[:, 2, 0]
+    safe = np.where(det != 0.0, det, 1.0)
+    return co / safe[:, None, None], det
+
+
+def _mv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+    return np.matmul(A, x[..., None])[..., 0]
+
+
+def _gram(J: np.ndarray, k: np.ndarray, a: slice, b: slice) -> np.ndarray:
+    """Block ``J[:, :, a]^T diag(k) J[:, :, b]`` (N, |a|, |b|)."""
+    return np.matmul(np.swapaxes(J[:, :, a] * k[None, :, None], 1, 2), J[:, :, b])
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products of (..., 3) arrays (faster than ``np.cross`` on many short rows)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
+def _gs_rows(
+    A: np.ndarray, B: np.ndarray, P: np.ndarray, R: np.ndarray, point: np.ndarray | None
+) -> np.ndarray:
+    """Rows ``[u_i, (B_i - c) x u_i]`` (N, 6, 6) of the Gough-Stewart's inverse Jacobian."""
+    P = np.atleast_2d(np.asarray(P, dtype=float))
+    R = np.asarray(R, dtype=float)
+    p = np.zeros(3) if point is None else np.asarray(point, dtype=float)
+    if R.ndim == 2:  # one orientation (a translation map): rotate the joints once
+        Bw = P[:, None, :] + (B @ R.T)[None]
+        c = P + R @ p
+    else:
+        Bw = P[:, None, :] + np.matmul(R[:, None], B[None, :, :, None])[..., 0]
+        c = P + _mv(R, np.broadcast_to(p, P.shape))
+    J = np.empty((P.shape[0], B.shape[0], 6))
+    u = Bw - A[None]
+    u /= np.sqrt(np.sum(u * u, axis=-1, keepdims=True))
+    J[..., :3] = u
+    J[..., 3:] = _cross(Bw - c[:, None, :], u)
+    return J
+
+
+def gough_stewart_stiffness(
+    A: np.ndarray,
+    B: np.ndarray,
+    P: np.ndarray,
+    R: np.ndarray,
+    k: np.ndarray,
+    point: np.ndarray | None = None,
+) -> np.ndarray:
+    """``K = J^T diag(k) J`` (N, 6, 6) of a Gough-Stewart platform (module docstring).
+
+    Args:
+        A: Base joint centres (6, 3) [m], world.
+        B: Platform joint centres (6, 3) [m], platform frame.
+        P: Platform frame origins (N, 3) [m].
+        R: Platform rotations (N, 3, 3) or (3, 3).
+        k: Leg stiffnesses (6,) [N/m].
+        point: Reference point, platform frame [m] (default: the origin).
+
+    Returns:
+        Stiffness matrices [N/m, N, N m/rad], world axes, moments about the point.
+
+    """
+    J = _gs_rows(A, B, P, R, point)
+    return _gram(J, np.asarray(k, dtype=float), slice(0, 6), slice(0, 6))
+
+
+def gough_stewart_figures(
+    robot: Robot,
+    P: np.ndarray,
+    R: np.ndarray,
+    k: np.ndarray,
+    point: np.ndarray | None = None,
+    wrench: np.ndarray | None = None,
+) -> VectorisedFigures:
+    """Figures of a library Gough-Stewart at poses ``(P, R)`` (no frequency: NaN).
+
+    The translational principal stiffnesses (moments free) are the eigenvalues of the Schur
+    complement ``S = K_tt - K_tr K_rr^-1 K_rt`` (the inverse of the compliance's translation
+    block), the deflection ``S^-1 (F - K_tr K_rr^-1 M)``: 3 x 3 closed forms.
+    """
+    prm = robot.params
+    J = _gs_rows(prm.a, prm.b, P, R, point)
+    N = J.shape[0]
+    k = np.asarray(k, dtype=float)
+    t, r = slice(0, 3), slice(3, 6)
+    Ktt, Ktr, Krr = _gram(J, k, t, t), _gram(J, k, t, r), _gram(J, k, r, r)
+    Krr_inv, det_r = inv3(Krr)
+    G = np.matmul(Ktr, Krr_inv)
+    S = Ktt - np.matmul(G, np.swapaxes(Ktr, 1, 2))
+    S = 0.5 * (S + np.swapaxes(S, 1, 2))
+    kmin = sym3_min_eig(S)
+    top = np.einsum("nii->n", Ktt)
+    ok = np.isfinite(kmin) & (det_r > 0.0) & (kmin > _FREE * top)
+    kmin = np.where(ok, kmin, np.nan)
+    defl = np.full(N, np.nan)
+    if wrench is not None:
+        S_inv, _ = inv3(S)
+        w = np.asarray(wrench, dtype=float)
+        F = w[:3][None] - _mv(G, np.broadcast_to(w[3:], (N, 3)))
+        defl = np.where(ok, np.linalg.norm(_mv(S_inv, F), axis=-1), np.nan)
+    return VectorisedFigures(ok, kmin, defl, np.full(N, np.nan))
+
+
+def _delta_jacobian(
+    dd: DeltaDynamics, P: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(ok, J_inv, E', d)`` with the arm data of :class:`DeltaDynamics` (N poses)."""
+    alpha, ok = delta_cf.inverse(dd.params, P - dd.f_off)
+    alpha = np.where(np.isfinite(alpha), alpha, 0.0)
+    c, s = np.cos(alpha), np.sin(alpha)
+    E = dd.O[None] + dd._in_world(c, s, dd.elbow)
+    d = P[:, None, :] + dd.attach[None] - E
+    E1 = _cross(dd.axis[None], E - dd.O[None])
+    g = np.sum(d * E1, axis=-1)
+    scale = np.sqrt(np.sum(d * d, axis=-1) * np.sum(E1 * E1, axis=-1))
+    ok = ok & np.all(np.abs(g) > SINGULAR_TOL * scale, axis=1)
+    g = np.where(ok[:, None], g, 1.0)
+    return ok, d / g[..., None], E1, d
+
+
+def _outer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a[:, :, None] * b[:, None, :]
+
+
+def _delta_mass(dd: DeltaDynamics, Jinv: np.ndarray, E1: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Nacelle-space mass matrix (N, 3, 3) of the kinetic energy, as a sum of outer products.
+
+    With the arm rate ``alpha_dot_k = J_k . P_dot`` (``J_k`` row ``k`` of ``J_inv``), the elbow
+    moves at ``E'_k alpha_dot_k``; per arm: the arm about its axis ``I_k J_k J_k^T``; its bars
+    (centre of mass ``(1 - f) E + f P``, sums ``m_ee, m_ep, m_pp`` of
+    :class:`pkdyn.dynamics.delta.DeltaDynamics`) ``m_ee |E'|^2 J J^T + m_ep (E' J^T + J E'^T) +
+    m_pp I`` and, turning at ``u x (P_dot - E_dot) / L`` with no spin, ``I_t / L^2 X^T X`` with
+    ``X^T X = I - u u^T - e J^T - J e^T + |u x E'|^2 J J^T`` (``e = E' - u (u . E')``); the
+    nacelle ``m I``.
+    """
+    N = Jinv.shape[0]
+    scalar = dd.nacelle_mass + float(np.sum(dd.m_pp))
+    M = np.zeros((N, 3, 3))
+    for k in range(3):
+        J, e1 = Jinv[:, k], E1[:, k]
+        u = d[:, k] / dd.length[k]
+        b = dd.inertia_t[k] / dd.length[k] ** 2
+        ue = np.sum(u * e1, axis=-1)
+        e = e1 - u * ue[:, None]
+        ux = np.sum(e1 * e1, axis=-1) - ue**2  # |u x E'|^2
+        a = dd.arm_axial[k] + dd.m_ee[k] * np.sum(e1 * e1, axis=-1) + b * ux
+        M += a[:, None, None] * _outer(J, J)
+        M += dd.m_ep[k] * (_outer(e1, J) + _outer(J, e1))
+        M -= b * (_outer(u, u) + _outer(e, J) + _outer(J, e))
+        scalar += b
+    M += scalar * np.eye(3)[None]
+    return 0.5 * (M + np.swapaxes(M, 1, 2))
+
+
+def _chol3(M: np.ndarray) -> np.ndarray:
+    """Lower Cholesky factors (N, 3, 3) of symmetric positive definite 3x3 matrices."""
+    L = np.zeros_like(M)
+    L[:, 0, 0] = np.sqrt(M[:, 0, 0])
+    L[:, 1, 0] = M[:, 1, 0] / L[:, 0, 0]
+    L[:, 2, 0] = M[:, 2, 0] / L[:, 0, 0]
+    L[:, 1, 1] = np.sqrt(M[:, 1, 1] - L[:, 1, 0] ** 2)
+    L[:, 2, 1] = (M[:, 2, 1] - L[:, 2, 0] * L[:, 1, 0]) / L[:, 1, 1]
+    L[:, 2, 2] = np.sqrt(M[:, 2, 2] - L[:, 2, 0] ** 2 - L[:, 2, 1] ** 2)
+    return L
+
+
+def delta_figures(
+    robot: Robot,
+    P: np.ndarray,
+    k: np.ndarray,
+    wrench: np.ndarray | None = None,
+    frequency: bool = False,
+) -> VectorisedFigures:
+    """Figures of a library Delta (three arms, ball-jointed bars) at nacelle positions ``P``.
+
+    ``K = J^T K_a J`` (3 x 3); the smallest principal stiffness is its smallest eigenvalue, the
+    deflection ``|K^-1 F|``; the lowest frequency the smallest root of ``det(K - w^2 M_x) = 0``
+    (``L^-1 K L^-T`` with ``M_x = L L^T``): 3 x 3 closed forms.
+    """
+    dd = DeltaDynamics(robot)
+    P = np.atleast_2d(np.asarray(P, dtype=float))
+    N = P.shape[0]
+    ok, Jinv, E1, d = _delta_jacobian(dd, P)
+    k = np.asarray(k, dtype=float)
+    K = _gram(Jinv, k, slice(0, 3), slice(0, 3))
+    kmin = sym3_min_eig(K)
+    ok = ok & (kmin > _FREE * np.einsum("nii->n", K))
+    kmin = np.where(ok, kmin, np.nan)
+    defl = np.full(N, np.nan)
+    if wrench is not None:
+        C, _ = inv3(K)
+        F = np.broadcast_to(np.asarray(wrench, dtype=float)[:3], (N, 3))
+        defl = np.where(ok, np.linalg.norm(_mv(C, F), axis=-1), np.nan)
+    f1 = np.full(N, np.nan)
+    if frequency and ok.any():
+        M = _delta_mass(dd, Jinv[ok], E1[ok], d[ok])
+        L_inv, _ = inv3(_chol3(M))
+        A = np.matmul(np.matmul(L_inv, K[ok]), np.swapaxes(L_inv, 1, 2))
+        A = 0.5 * (A + np.swapaxes(A, 1, 2))
+        f1[ok] = np.sqrt(np.maximum(sym3_min_eig(A), 0.0)) / (2.0 * np.pi)
+    return VectorisedFigures(ok, kmin, defl, f1)
+
+
+def vectorised(robot: Robot, frequency: bool = False) -> str | None:
+    """Which closed form applies to a robot: ``delta``, ``gough_stewart`` or ``None``.
+
+    Library robots only, with no spring of their own (``robot.passive``); the Gough-Stewart has
+    no frequency closed form here.
+    """
+    if robot.passive is not None or robot.params is None:
+        return None
+    if has_delta_dynamics(robot):
+        return "delta"
+    if robot.family == "gough_stewart" and not frequency:
+        return "gough_stewart"
+    return None
