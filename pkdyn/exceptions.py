@@ -22,6 +22,7 @@ __all__ = [
     "SingularConfigurationError",
     "TrajectoryError",
     "InfeasibleEffortError",
+    "LimitsExceededError",
     "SimulationError",
     "OutputError",
     "StudyError",
@@ -53,6 +54,14 @@ def _rebuild(cls: type[PkdynError], args: tuple[object, ...], state: dict[str, o
     return err
 
 
+def close_match(name: str, known: list[str]) -> str:
+    """``; did you mean 'x'?`` with the closest of ``known`` to ``name``, or ``""``."""
+    import difflib
+
+    close = difflib.get_close_matches(name, known, n=2, cutoff=0.6)
+    return "; did you mean " + " or ".join(f"'{c}'" for c in close) + "?" if close else ""
+
+
 class DescriptionError(PkdynError):
     """A robot description (URDF, extension element or YAML sidecar) is malformed.
 
@@ -76,7 +85,7 @@ class UnknownRobotError(PkdynError):
         self.known = known
         super().__init__(
             f"unknown robot '{name}': not a file and not one of the library robots "
-            f"({', '.join(known)})"
+            f"({', '.join(known)}){close_match(name, known)}"
         )
 
 
@@ -120,15 +129,18 @@ class LoopClosureError(DescriptionError, AssemblyError):
 
     Attributes:
         source: File or robot the description came from.
-        culprit: ``closure '<name>'``.
-        closure: Name of the closure with the largest residual.
+        culprit: ``closure '<name>'`` (``coupling '<name>'`` when a joint coupling
+            contradicts the closures).
+        closure: Name of the closure (or coupling) with the largest residual.
         residual: Its residual at the best configuration found [m or rad].
 
     """
 
-    def __init__(self, source: str, closure: str, residual: float, message: str) -> None:
+    def __init__(
+        self, source: str, closure: str, residual: float, message: str, kind: str = "closure"
+    ) -> None:
         self.source = source
-        self.culprit = f"closure '{closure}'"
+        self.culprit = f"{kind} '{closure}'"
         self.closure = closure
         self.residual = residual
         PkdynError.__init__(self, message)
@@ -201,6 +213,22 @@ class InfeasibleEffortError(PkdynError):
         self.sample = sample
         self.actuator = actuator
         super().__init__(message)
+
+
+class LimitsExceededError(PkdynError):
+    """A motion was sized and exceeds actuator limits: the report stands, the answer is no.
+
+    Raised by the command line after printing the sizing (``pkdyn size``): the margins are
+    reported, and the exit status says the motion is not feasible.
+
+    Attributes:
+        exceeded: One phrase per limit exceeded (``motor1 speed by 9.04 %``).
+
+    """
+
+    def __init__(self, what: str, exceeded: list[str], hint: str) -> None:
+        self.exceeded = exceeded
+        super().__init__(f"{what}: limits exceeded: {'; '.join(exceeded)}; {hint}")
 
 
 class SimulationError(PkdynError):

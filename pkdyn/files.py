@@ -34,7 +34,7 @@ from typing import IO, Any
 
 from pkdyn.exceptions import OutputError, PkdynError
 
-__all__ = ["atomic_path", "atomic_write", "output_target", "read_text", "shown"]
+__all__ = ["atomic_path", "atomic_write", "check_writable", "output_target", "read_text", "shown"]
 
 _KIND = {
     stat.S_IFIFO: "a FIFO (named pipe)",
@@ -203,13 +203,38 @@ def _temporary(path: Path) -> Path:
             dir=path.parent, prefix=f".{path.stem[:40]}.", suffix=path.suffix[:40]
         )
     except FileNotFoundError:
-        raise OutputError(shown(path), f"directory '{shown(path.parent)}' does not exist") from None
+        if not path.parent.is_dir():
+            raise OutputError(
+                shown(path), f"directory '{shown(path.parent)}' does not exist"
+            ) from None
+        raise OutputError(  # /proc, /sys: directories that take no new file
+            shown(path),
+            f"directory '{shown(path.parent)}' does not accept new files; choose another",
+        ) from None
+    except PermissionError:
+        raise OutputError(
+            shown(path), f"no permission to create files in directory '{shown(path.parent)}'"
+        ) from None
     except OSError as err:
         if err.errno == errno.ENAMETOOLONG:
             raise OutputError(shown(path), "the name is too long for the file system") from None
         raise OutputError(shown(path), err.strerror or str(err)) from None
     os.close(fd)
     return Path(tmp)
+
+
+def check_writable(path: str | os.PathLike[str]) -> None:
+    """Make sure ``path`` can be written, before any work: create and remove a temporary file.
+
+    Permission checks (``os.access``) do not tell: root passes them everywhere, and virtual
+    file systems (``/proc``) refuse new files whatever the permissions say.
+
+    Raises:
+        OutputError: A directory, a missing directory, no permission, or a directory that takes
+            no new file.
+
+    """
+    _temporary(Path(path)).unlink(missing_ok=True)
 
 
 def _commit(tmp: Path, path: Path) -> None:

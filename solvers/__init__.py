@@ -3,7 +3,9 @@
 Nothing here knows about Deltas or hexapods: inputs are a ``pin.Model``, rigid constraint models
 (3D point or 6D weld) and index sets. Depends on pinocchio, numpy (and proxsuite) only.
 
-Modules: :mod:`~solvers.closure` (closure residuals, Jacobians, drift), :mod:`~solvers.lm`
+Modules: :mod:`~solvers.closure` (closure residuals, Jacobians, drift), :mod:`~solvers.coupling`
+(scalar joint couplings: gears, mimic joints), :mod:`~solvers.energy` (kinetic energy with every
+armature), :mod:`~solvers.lm`
 (Levenberg-Marquardt on the configuration manifold), :mod:`~solvers.pose_task`,
 :mod:`~solvers.actuation` (actuation selection, drives), :mod:`~solvers.passive` (springs,
 dampers, friction), :mod:`~solvers.integrators`
@@ -17,6 +19,7 @@ stepping), :mod:`~solvers.sampled` (kinematics and closure errors of many sample
 from typing import TYPE_CHECKING, Any
 
 from solvers.closure import ClosureSet
+from solvers.coupling import JointCoupling
 from solvers.lm import SolveResult, solve_lm
 from solvers.pose_task import FramePoseTask
 
@@ -81,6 +84,7 @@ __all__ = [
     "InverseResult",
     "InverseTrajectory",
     "IntegrationError",
+    "JointCoupling",
     "PassiveForces",
     "SampledKinematics",
     "SolveResult",

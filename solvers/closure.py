@@ -10,10 +10,15 @@ Conventions (exact derivatives, checked against finite differences in the tests)
 Both are derivatives with respect to a velocity-space increment ``dq`` applied as
 ``pin.integrate(model, q, dq)``.
 
+- Scalar joint couplings (:mod:`solvers.coupling`, gears and mimic joints): one row each,
+  after the rigid constraints: ``r = (x_j - x_j0) - p(x_s - x_s0)`` [rad or m]; Jacobian ``+1``
+  at the driven joint, ``-p'`` at the source.
+
 Second derivative along a motion ``(q, v, a)``: ``d^2 r / dt^2 = J a + gamma(q, v)``, with the
 acceleration drift ``gamma`` of :meth:`ClosureSet.drift` (classical accelerations of the contact
 points at ``a = 0`` for points; for welds the relative spatial acceleration at ``a = 0``, exact
-when the weld's relative velocity vanishes, as it does on a closed mechanism).
+when the weld's relative velocity vanishes, as it does on a closed mechanism; ``-p'' v_s^2`` for
+couplings).
 """
 
 from __future__ import annotations
@@ -22,6 +27,8 @@ from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
+
+from solvers.coupling import CouplingRows, JointCoupling
 
 __all__ = ["ClosureSet"]
 
@@ -36,14 +43,30 @@ class ClosureSet:
     convention of this module by ``-Jlog6(c1Mc2) Ad(c2Mc1)``): one ``getConstraintsJacobian``
     call and a few copies per evaluation.
 
+    Rows: the rigid constraints in order (``n_rigid`` rows), then one row per coupling;
+    ``names``, ``sizes`` and ``offsets`` list both (a coupling has size 1).
+
+    The coupling rows need the configuration: :meth:`jacobian_after_residual` and
+    :meth:`local_jacobian_after_residual` use the one of the last residual call when not given
+    it, :meth:`jacobian_at` needs it when there are couplings.
+
     Args:
         model: The kinematic tree.
         constraints: CONTACT_3D / CONTACT_6D rigid constraint models (their reference frame is
             ignored: residuals use the conventions of this module).
+        couplings: Scalar joint couplings (default: none).
+
+    Raises:
+        ValueError: A malformed coupling (:class:`solvers.coupling.CouplingRows`).
 
     """
 
-    def __init__(self, model: pin.Model, constraints: Sequence[pin.RigidConstraintModel]) -> None:
+    def __init__(
+        self,
+        model: pin.Model,
+        constraints: Sequence[pin.RigidConstraintModel],
+        couplings: Sequence[JointCoupling] = (),
+    ) -> None:
         self.model = model
         self._items: list[tuple[bool, int, pin.SE3, int, pin.SE3]] = []
         self.names: list[str] = []
@@ -55,6 +78,13 @@ class ClosureSet:
             )
             self.names.append(cm.name)
             self.sizes.append(3 if is_point else 6)
+        self.n_rigid = int(sum(self.sizes))
+        self.couplings = tuple(couplings)
+        self._rows = CouplingRows(model, self.couplings) if self.couplings else None
+        self._q_last: np.ndarray | None = None
+        for c in self.couplings:
+            self.names.append(c.name)
+            self.sizes.append(1)
         self.offsets = np.concatenate([[0], np.cumsum(self.sizes)]).astype(int)
         self.nc = int(self.offsets[-1])
         self._cms = pin.StdVec_RigidConstraintModel()
@@ -68,7 +98,7 @@ class ClosureSet:
         self._entries = [
             (is_point, int(o), cm, cd)
             for (is_point, *_), o, cm, cd in zip(
-                self._items, self.offsets[:-1], self._cms, self._cds, strict=True
+                self._items, self.offsets[: len(self._items)], self._cms, self._cds, strict=True
             )
         ]
         self._welds = [(int(o), cd) for is_point, o, _, cd in self._entries if not is_point]
@@ -83,13 +113,17 @@ class ClosureSet:
         self._loc_entries = [
             (is_point, int(o), cm, cd)
             for (is_point, *_), o, cm, cd in zip(
-                self._items, self.offsets[:-1], self._loc_cms, self._loc_cds, strict=True
+                self._items,
+                self.offsets[: len(self._items)],
+                self._loc_cms,
+                self._loc_cds,
+                strict=True,
             )
         ]
 
     @property
     def items(self) -> list[tuple[bool, int, pin.SE3, int, pin.SE3]]:
-        """Per closure: ``(is_point, joint1, placement1, joint2, placement2)``."""
+        """Per rigid closure: ``(is_point, joint1, placement1, joint2, placement2)``."""
         return self._items
 
     @staticmethod
@@ -113,12 +147,27 @@ class ClosureSet:
 
         """
         pin.forwardKinematics(self.model, data, q)
-        return self._residual(data)
+        return self._residual(data, q)
 
-    def _residual(self, data: pin.Data) -> np.ndarray:
+    @property
+    def coupling_rows(self) -> CouplingRows | None:
+        """The coupling evaluator (``None`` without couplings)."""
+        return self._rows
+
+    def _coupling_q(self, q: np.ndarray | None) -> np.ndarray:
+        if q is not None:
+            return np.asarray(q)
+        if self._q_last is None:
+            raise ValueError("the coupling rows need the configuration q")
+        return self._q_last
+
+    def _residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
         """Residual from the joint placements of ``data`` (updates the constraint datas)."""
         model = self.model
         r = np.empty(self.nc)
+        if self._rows is not None:
+            self._q_last = np.array(q, dtype=float)
+            r[self.n_rigid :] = self._rows.residual(self._q_last)
         for is_point, o, cm, cd in self._entries:
             cm.calc(model, data, cd)
             if is_point:
@@ -140,8 +189,8 @@ class ClosureSet:
 
         """
         pin.computeJointJacobians(self.model, data, q)
-        r = self._residual(data)
-        return r, self._constraint_jacobian(data)
+        r = self._residual(data, q)
+        return r, self._constraint_jacobian(data, q)
 
     def local_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
         """Closure residual in the contact frame of ``joint1`` (runs the forward kinematics).
@@ -169,7 +218,12 @@ class ClosureSet:
                 r[o : o + 3] = cd.c1Mc2.translation
             else:
                 r[o : o + 6] = pin.log6(cd.c1Mc2).vector
-        return np.negative(r, out=r)
+        nr = self.n_rigid
+        np.negative(r[:nr], out=r[:nr])
+        if self._rows is not None:
+            self._q_last = np.array(q, dtype=float)
+            r[nr:] = self._rows.residual(self._q_last)
+        return r
 
     def local_jacobian_after_residual(
         self, data: pin.Data, q: np.ndarray | None = None
@@ -177,13 +231,20 @@ class ClosureSet:
         """Jacobian (nc, nv) of :meth:`local_residual`, exact at closure.
 
         At the configuration of the last :meth:`local_residual` call (``data`` untouched since;
-        see :meth:`jacobian_after_residual`); ``q``, that configuration, is not used (it lets a
-        solver call ``partial(local_jacobian_after_residual, data)(q)``).
+        see :meth:`jacobian_after_residual`); ``q``, that configuration, is used by the coupling
+        rows only (default: the last residual's).
         """
         model = self.model
         pin.computeJointJacobians(model, data)
-        J = pin.getConstraintsJacobian(model, data, self._loc_cms, self._loc_cds)
-        return np.reshape(J, (self.nc, model.nv))
+        if self._rows is None:
+            J = pin.getConstraintsJacobian(model, data, self._loc_cms, self._loc_cds)
+            return np.reshape(J, (self.nc, model.nv))
+        out = np.zeros((self.nc, model.nv))
+        if self.n_rigid:
+            J = pin.getConstraintsJacobian(model, data, self._loc_cms, self._loc_cds)
+            out[: self.n_rigid] = np.reshape(J, (self.n_rigid, model.nv))
+        self._rows.jacobian(self._coupling_q(q), out[self.n_rigid :])
+        return out
 
     def jacobian_after_residual(self, data: pin.Data, q: np.ndarray | None = None) -> np.ndarray:
         """Closure Jacobian (nc, nv) at the configuration of the last :meth:`residual` call.
@@ -194,20 +255,22 @@ class ClosureSet:
 
         Args:
             data: The data the last :meth:`residual` call used, untouched since.
-            q: That call's configuration (not used: see :meth:`local_jacobian_after_residual`).
+            q: That call's configuration (used by the coupling rows only; default: the last
+                residual's).
 
         Returns:
             Jacobian (nc, nv).
 
         """
         pin.computeJointJacobians(self.model, data)
-        return self._constraint_jacobian(data)
+        return self._constraint_jacobian(data, q)
 
-    def jacobian_at(self, data: pin.Data) -> np.ndarray:
+    def jacobian_at(self, data: pin.Data, q: np.ndarray | None = None) -> np.ndarray:
         """Closure Jacobian (nc, nv) from ``data`` after ``pin.computeJointJacobians(q)``.
 
         Args:
             data: Pinocchio data whose placements and joint Jacobians are those of ``q``.
+            q: That configuration (nq,), needed by the coupling rows when there are couplings.
 
         Returns:
             Jacobian (nc, nv).
@@ -216,12 +279,22 @@ class ClosureSet:
         model = self.model
         for _, _, cm, cd in self._entries:
             cm.calc(model, data, cd)
-        return self._constraint_jacobian(data)
+        if self._rows is not None and q is None:
+            raise ValueError("jacobian_at needs the configuration q when there are couplings")
+        return self._constraint_jacobian(data, q)
 
-    def _constraint_jacobian(self, data: pin.Data) -> np.ndarray:
+    def _constraint_jacobian(self, data: pin.Data, q: np.ndarray | None = None) -> np.ndarray:
         """Pinocchio's constraint Jacobian (constraint datas up to date) in this convention."""
-        J = pin.getConstraintsJacobian(self.model, data, self._cms, self._cds)
-        J = np.reshape(J, (self.nc, self.model.nv))
+        nv = self.model.nv
+        if self._rows is None:
+            J = pin.getConstraintsJacobian(self.model, data, self._cms, self._cds)
+            J = np.reshape(J, (self.nc, nv))
+        else:
+            J = np.zeros((self.nc, nv))
+            if self.n_rigid:
+                Jr = pin.getConstraintsJacobian(self.model, data, self._cms, self._cds)
+                J[: self.n_rigid] = np.reshape(Jr, (self.n_rigid, nv))
+            self._rows.jacobian(self._coupling_q(q), J[self.n_rigid :])
         for o, cd in self._welds:
             M = cd.c1Mc2
             J[o : o + 6] = -pin.Jlog6(M).dot(M.toActionMatrixInverse()).dot(J[o : o + 6])
@@ -239,7 +312,7 @@ class ClosureSet:
 
         """
         pin.computeJointJacobians(self.model, data, q)
-        return self.jacobian_at(data)
+        return self.jacobian_at(data, q)
 
     def drift(self, data: pin.Data, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Acceleration drift ``gamma`` (nc,): ``d^2 r/dt^2 = J a + gamma`` (runs the kinematics).
@@ -260,19 +333,16 @@ class ClosureSet:
         pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
         g = np.zeros(self.nc)
         zero = pin.Motion.Zero()
+        classic = pin.classicAcceleration
         for k, (is_point, j1, M1, j2, M2) in enumerate(self._items):
             o = self.offsets[k]
-            if is_point:
-                acc = []
-                for j, M in ((j1, M1), (j2, M2)):
-                    if j == 0:
-                        acc.append(np.zeros(3))
-                        continue
-                    vp = M.actInv(data.v[j])
-                    ap = M.actInv(data.a[j])
-                    lin = ap.linear + np.cross(vp.angular, vp.linear)
-                    acc.append((data.oMi[j] * M).rotation @ lin)
-                g[o : o + 3] = acc[0] - acc[1]
+            if is_point:  # classical accelerations of the two contact points, world axes
+                if j1:
+                    lin = classic(data.v[j1], data.a[j1], M1)
+                    g[o : o + 3] = (data.oMi[j1] * M1).rotation.dot(lin)
+                if j2:
+                    lin = classic(data.v[j2], data.a[j2], M2)
+                    g[o : o + 3] -= (data.oMi[j2] * M2).rotation.dot(lin)
                 continue
             c1Mc2 = (data.oMi[j1] * M1).actInv(data.oMi[j2] * M2)
             v1 = c1Mc2.actInv(M1.actInv(data.v[j1])) if j1 else zero
@@ -281,6 +351,8 @@ class ClosureSet:
             a2 = M2.actInv(data.a[j2]) if j2 else zero
             nu = v2 - v1
             g[o : o + 6] = pin.Jlog6(c1Mc2) @ (a2 - a1 + nu.cross(v1)).vector
+        if self._rows is not None:
+            g[self.n_rigid :] = self._rows.drift(np.asarray(q), np.asarray(v))
         return g
 
     def split(self, r: np.ndarray) -> dict[str, float]:

@@ -39,6 +39,16 @@ of a hinge closure. On top of it:
 - actuation: efforts ``tau(t, q, v) -> (n_a,)`` mapped to generalized forces by an
   :class:`Actuation` selection.
 
+Joint couplings (:mod:`solvers.coupling`: gears, mimic joints), which ``pin.constraintDynamics``
+cannot take (it accepts 3D / 6D rigid constraints only and rejects mimic joints): the rigid
+closures stay Pinocchio's, the couplings' forces ``C^T mu`` are added to the generalized forces.
+The constrained acceleration is affine in the force, ``a(tau + C^T mu) = a(tau) + G mu``; ``G``
+is read from ``k`` more calls with probe forces (``k`` couplings), ``mu`` solves the couplings'
+acceleration equations ``C a = -gamma_c - Kd C v - Kp r_c`` (the same Baumgarte gains, minimum
+norm when couplings are redundant with the closures) and a last call at ``tau + C^T mu`` gives
+the acceleration and the rigid forces; ``k + 2`` calls per evaluation (``aba`` when there are no
+rigid closures). Without couplings nothing changes: one call.
+
 Units: SI. Pinocchio's constraint forces (``data.lambda_c``, for ``J =
 pin.getConstraintsJacobian``) are, per constraint model, the force (3D) or wrench (6D) on
 ``joint1``'s body at its contact frame, expressed in that frame. The recorded
@@ -55,8 +65,12 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pinocchio as pin
 
+from solvers import numerics
 from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
+from solvers.control_step import ProjectedEulerStep
+from solvers.coupling import JointCoupling
+from solvers.energy import KineticEnergy
 from solvers.integrators import COMMUTATIVE_JOINTS, DOPRI5, RK4, Tableau
 from solvers.passive import PassiveForces
 from solvers.projection import ProjectionError, project_state
@@ -124,6 +138,8 @@ class ForwardDynamics:
             blowing-up state would otherwise shrink the steps without end).
         max_speed: Largest joint speed [rad/s or m/s] accepted; beyond, the state is taken as
             blowing up and the run stops with :class:`IntegrationError`.
+        couplings: Scalar joint couplings (:mod:`solvers.coupling`); with any, the
+            evaluation adds their forces to the closures' (see the module docstring).
 
     Raises:
         ValueError: Unknown integrator or inconsistent sizes.
@@ -149,6 +165,7 @@ class ForwardDynamics:
         prox_max_iter: int = 30,
         max_substeps: int = 100_000,
         max_speed: float = 1e4,
+        couplings: Sequence[JointCoupling] = (),
     ) -> None:
         if integrator not in ("rk4", "dopri5", "euler"):
             raise ValueError(f"unknown integrator {integrator!r} (rk4, dopri5 or euler)")
@@ -162,6 +179,7 @@ class ForwardDynamics:
         self.model = model
         self.data = model.createData()
         self._kin = model.createData()  # kinematics for residuals, energies, projections
+        self.kinetic_energy = KineticEnergy(model)
         self.actuation = actuation if actuation is not None else Actuation([])
         if self.actuation.n and int(self.actuation.v_index.max()) >= model.nv:
             raise ValueError(f"actuated velocity index out of range (nv = {model.nv})")
@@ -183,8 +201,14 @@ class ForwardDynamics:
             c.setBaumgarteCorrectorParameters(corrector)
             self.constraint_models.append(c)
             self.constraint_datas.append(c.createData())
-        self.closure_set = ClosureSet(model, list(self.constraint_models))
+        self.closure_set = ClosureSet(model, list(self.constraint_models), couplings)
         self.nc = self.closure_set.nc
+        self._coupled = bool(self.closure_set.couplings)
+        self._pd = (float(gains[0]), float(gains[1]))  # Baumgarte gains of the couplings
+        n_k = len(self.closure_set.couplings)
+        self._C = np.zeros((n_k, model.nv))  # the couplings' Jacobian rows
+        self._mu = np.zeros(n_k)  # the couplings' forces at the last evaluation
+        self._probe = 1.0  # probe force [N m or N]: of the order of the couplings' forces
         # conversion of Pinocchio's multipliers to the ClosureSet convention (see the module doc)
         pts = [k for k, cm in enumerate(self.constraint_models) if cm.type == _POINT]
         self._pt_rows = np.array([self.closure_set.offsets[k] for k in pts], dtype=int)
@@ -193,7 +217,7 @@ class ForwardDynamics:
             [self.constraint_models[k].joint1_placement.rotation for k in pts]
         ).reshape(-1, 3, 3)
         self.prox = pin.ProximalSettings(prox_accuracy, prox_accuracy, prox_mu, prox_max_iter)
-        if self.nc:
+        if self.closure_set.n_rigid:
             pin.initConstraintDynamics(
                 model, self.data, self.constraint_models, self.constraint_datas
             )
@@ -207,6 +231,7 @@ class ForwardDynamics:
         self._gains = None if np.all(act_gains == 1.0) else act_gains
         self._h_max = 0.0  # largest dopri5 substep of the current run
         self._substeps = 1  # fixed steps per output step (euler, rk4)
+        self._control: ProjectedEulerStep | None = None  # the Euler control-loop step
 
     def _euler_gains(self, h: float) -> None:
         """Automatic Baumgarte gains of the Euler step ``h``: critically damped at ``0.5 / h``."""
@@ -216,6 +241,7 @@ class ForwardDynamics:
         corrector = pin.BaumgarteCorrectorParameters(w * w, 2.0 * w)
         for cm in self.constraint_models:
             cm.setBaumgarteCorrectorParameters(corrector)
+        self._pd = (w * w, 2.0 * w)
         self._gains_step = h
 
     # ------------------------------------------------------------------ dynamics
@@ -238,6 +264,8 @@ class ForwardDynamics:
 
     def _accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Acceleration as a view on ``data.ddq`` (overwritten by the next call)."""
+        if self._coupled:
+            return self._coupled_accel(q, v, tau)
         if self.nc:
             return pin.constraintDynamics(
                 self.model,
@@ -250,6 +278,48 @@ class ForwardDynamics:
                 self.prox,
             )
         return pin.aba(self.model, self.data, q, v, tau)
+
+    def _rigid(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Acceleration under the rigid closures alone (a copy); forces in ``data.lambda_c``."""
+        if self.closure_set.n_rigid:
+            return np.array(
+                pin.constraintDynamics(
+                    self.model,
+                    self.data,
+                    q,
+                    v,
+                    tau,
+                    self.constraint_models,
+                    self.constraint_datas,
+                    self.prox,
+                )
+            )
+        return np.array(pin.aba(self.model, self.data, q, v, tau))
+
+    def _coupled_accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Acceleration with the couplings' forces added (see the module docstring).
+
+        The couplings' forces are left in ``self._mu``, the rigid ones in ``data.lambda_c``.
+        """
+        rows = self.closure_set.coupling_rows
+        assert rows is not None
+        C = rows.jacobian(q, self._C)
+        kp, kd = self._pd
+        c = -rows.drift(q, v) - kd * C.dot(v) - kp * rows.residual(q)
+        a0 = self._rigid(q, v, tau)
+        s = self._probe
+        G = np.empty((C.shape[1], C.shape[0]))
+        for i in range(C.shape[0]):
+            G[:, i] = (self._rigid(q, v, tau + s * C[i]) - a0) / s
+        CG = C.dot(G)
+        b = c - C.dot(a0)
+        if CG.shape == (1, 1):  # one coupling: numerics.lstsq's rule, without its SVD
+            mu = b / CG[0] if CG[0, 0] != 0.0 else np.zeros(1)
+        else:
+            mu = numerics.lstsq(CG, b, 1e-12)
+        self._mu = mu
+        self._probe = max(float(np.abs(mu).max()), 1e-6)
+        return self._rigid(q, v, tau + C.T.dot(mu))
 
     def _generalized(
         self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
@@ -407,7 +477,8 @@ class ForwardDynamics:
         w_act, w_fric = h * first.p_act, h * first.p_fric
         if n == 1:
             return q, v, w_act, w_fric, None
-        if tau_fn is None and self.nc and self.passive is None:  # the bare loop
+        if tau_fn is None and self.nc and self.passive is None and not self._coupled:
+            # the bare loop
             data, prox = self.data, self.prox
             cms, cds = self.constraint_models, self.constraint_datas
             dynamics, zero = pin.constraintDynamics, self._zero_nv
@@ -489,6 +560,13 @@ class ForwardDynamics:
         """Advance a state by one step ``dt`` (with the projection check if ``project``).
 
         For a control loop: no recording. ``dopri5`` keeps its substep size between calls.
+        ``euler`` with ``project`` (the control-loop step, :mod:`solvers.control_step`) ends
+        every step on the closures (residual within ``project_tol``) by one Newton correction
+        with the factorization of the dynamics evaluated at the new state, which the next call
+        reuses when given the state this one returned; it costs less than twice a raw Euler
+        step (``bench/dynamics.py``). With joint couplings the step is the general one. The
+        other integrators check the residual after the step
+        and project above ``project_tol``.
 
         Args:
             t: Time [s].
@@ -505,6 +583,13 @@ class ForwardDynamics:
                 ``dopri5`` underflowed.
 
         """
+        if self.integrator == "euler" and self.project and self.nc and not self._coupled:
+            # (the couplings' forces are not in pin.constraintDynamics' factorization: a coupled
+            # robot takes the general step below, projected when its residual exceeds the
+            # tolerance)
+            if self._control is None:
+                self._control = ProjectedEulerStep(self)
+            return self._control.step(t, q, v, dt, tau)
         if self.integrator == "euler":
             if self._auto_gains and dt != self._gains_step:
                 self._euler_gains(dt)
@@ -538,9 +623,17 @@ class ForwardDynamics:
             lambda_c: ``data.lambda_c`` (nc,) of ``pin.constraintDynamics``.
 
         Returns:
-            The multipliers (nc,) [N, N m], as returned by the inverse dynamics.
+            The multipliers (nc,) [N, N m], as returned by the inverse dynamics (with couplings,
+            their forces at the last evaluation follow the rigid closures').
 
         """
+        if self._coupled:
+            n = self.closure_set.n_rigid
+            rigid = self._rigid_forces(kin, np.asarray(lambda_c, dtype=float)[:n])
+            return np.concatenate([rigid, self._mu])
+        return self._rigid_forces(kin, lambda_c)
+
+    def _rigid_forces(self, kin: pin.Data, lambda_c: np.ndarray) -> np.ndarray:
         out = -np.asarray(lambda_c, dtype=float)
         if self._pt_rows.size:
             R = np.array([kin.oMi[j].rotation for j in self._pt_joint1]) @ self._pt_rot1

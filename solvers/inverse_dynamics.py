@@ -12,7 +12,9 @@ to the mechanism, e.g. a machining wrench or a payload's weight).
 ``lambda`` is the multiplier in that convention: for a 3D point closure, the world-frame force
 [N] applied at the contact point of ``joint1``'s body (the opposite force acts on ``joint2``'s
 body); for a 6D weld, the wrench [N, N m] applied on ``joint2``'s body at its contact frame,
-expressed in that frame (the opposite on ``joint1``'s). Among all multipliers the minimum-norm
+expressed in that frame (the opposite on ``joint1``'s); for a joint coupling
+(:mod:`solvers.coupling`), the generalized force [N m or N] on the driven joint (the source
+receiving ``-p'`` times it). Among all multipliers the minimum-norm
 one is returned (the limit of a vanishing regularisation ``eps |lambda|^2``), which settles the
 redundant equations of hinge closures.
 
@@ -64,6 +66,8 @@ from proxsuite import proxqp
 from solvers import numerics
 from solvers.actuation import Actuation
 from solvers.closure import ClosureSet
+from solvers.coupling import JointCoupling
+from solvers.energy import KineticEnergy
 from solvers.sampled import SampledKinematics
 
 _BATCH = 256  # samples per batch of :meth:`InverseDynamics.trajectory`
@@ -192,6 +196,9 @@ class InverseDynamics:
             ``max(1, |M a + h|)``.
         eps: Absolute accuracy of the QP [N m or N].
         max_iter: Iteration cap of the QP.
+        couplings: Scalar joint couplings (:mod:`solvers.coupling`), rows of ``J`` after the
+            rigid closures; their multipliers are the generalized forces [N m or N] on the
+            driven joints.
 
     Raises:
         ValueError: Inconsistent sizes or bounds.
@@ -210,11 +217,12 @@ class InverseDynamics:
         consistency_tol: float = 1e-7,
         eps: float = 1e-11,
         max_iter: int = 200,
+        couplings: Sequence[JointCoupling] = (),
     ) -> None:
         self.model = model
         self.data = model.createData()
         self._kin = model.createData()
-        self.closure_set = ClosureSet(model, list(constraints))
+        self.closure_set = ClosureSet(model, list(constraints), couplings)
         self.actuation = actuation
         n = actuation.n
         if n == 0:
@@ -244,6 +252,7 @@ class InverseDynamics:
         self._perm = np.concatenate([self._vp, self._va])
         self._gmin = float(np.min(np.abs(actuation.gains)))
         self._sampled: SampledKinematics | None = None
+        self._kinetic = KineticEnergy(model)
 
     def passive_forces(self, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
         """Generalized forces (nv,) of everything but the actuators, closures and wrenches.
@@ -582,7 +591,7 @@ class InverseDynamics:
             stop = n
             bad = None
             if check_tol is not None and nc:
-                bad = self._first_inconsistent(kin, n, v[s:e], a[s:e], check_tol)
+                bad = self._first_inconsistent(kin, q[s:e], v[s:e], a[s:e], check_tol)
                 if bad is not None:
                     stop = bad[0]
             done = self._solve_unique_batch(b[:stop], J[:stop], out, s)
@@ -627,23 +636,27 @@ class InverseDynamics:
         ke, pe = out.kinetic[s:], out.potential[s:]
         passive = self.passive_forces
         for i in range(n):
-            b[i] = rnea(model, kd, q[i], v[i], a[i])  # also the joint velocities, accelerations
-            f = passive(q[i], v[i])
+            qi, vi = q[i], v[i]
+            b[i] = rnea(model, kd, qi, vi, a[i])  # also the joint velocities, accelerations
+            f = passive(qi, vi)
             if f is not None:
                 b[i] -= f
             ke[i] = kinetic(model, kd)
-            jac(model, kd, q[i])  # placements and world Jacobian
+            jac(model, kd, qi)  # placements and world Jacobian
             pe[i] = potential(model, kd)
             if nc:
                 capture(i, kd)
-                J[i] = jacobian_at(kd)
+                J[i] = jacobian_at(kd, qi)
+        if self._kinetic.active:  # the armature Pinocchio's kinetic energy leaves out
+            ke[:n] += self._kinetic.missing_batch(v)
         return b, J
 
     def _first_inconsistent(
-        self, kin: SampledKinematics, n: int, v: np.ndarray, a: np.ndarray, tol: float
+        self, kin: SampledKinematics, q: np.ndarray, v: np.ndarray, a: np.ndarray, tol: float
     ) -> tuple[int, str, str, float] | None:
         """First sample of a batch breaking the closure check, the kind, closure and error."""
-        r, ev, ea = kin.closure_errors(n, v)
+        n = q.shape[0]
+        r, ev, ea = kin.closure_errors(n, v, q, a)
         checks = (
             ("configuration", r, np.ones(n)),
             ("velocity", ev, np.maximum(1.0, np.abs(v).max(axis=1))),

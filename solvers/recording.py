@@ -145,7 +145,7 @@ class Recorder:
             self.lam[k] = fd.closure_forces(kin, fd.data.lambda_c)
         else:
             self.res[k] = 0.0
-        self.ke[k] = pin.computeKineticEnergy(model, kin, q, v)
+        self.ke[k] = fd.kinetic_energy(model, kin, q, v)
         self.pe[k] = pin.computePotentialEnergy(model, kin, q)
         if fd.passive is not None:
             self.el[k] = fd.passive.potential(q)

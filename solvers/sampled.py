@@ -23,7 +23,9 @@ every body, cancels in the differences below. Per closure (conventions of
 - 6D weld: residual ``log6(c1Mc2)``; velocity and acceleration errors: the relative twist
   ``X(oMc2)^-1 (V_2 - V_1)`` and its rate ``X(oMc2)^-1 (A_2 - A_1)`` in the contact frame of
   ``joint2`` (equal to ``J v`` and ``J a + gamma`` up to the factor ``Jlog6(c1Mc2) = I + O(|r|)``;
-  the rate is exact when the relative twist vanishes, as the drift of ``ClosureSet`` is).
+  the rate is exact when the relative twist vanishes, as the drift of ``ClosureSet`` is);
+- joint coupling (:mod:`solvers.coupling`): residual, ``J v`` and ``J a + gamma`` from the
+  configurations, velocities and accelerations themselves [rad or m, per s, per s^2].
 """
 
 from __future__ import annotations
@@ -118,11 +120,12 @@ class SampledKinematics:
                 ``pin.computeJointJacobians(model, data, q)`` at the sample.
 
         """
-        oMi = data.oMi.tolist()
-        acc = data.a_gf.tolist()
         captured = self._captured
-        self.H[k, 1:] = [oMi[j].homogeneous for j in captured]
-        self.acc[k, 1:] = [acc[j].vector for j in captured]
+        if captured:
+            oMi = data.oMi.tolist()
+            acc = data.a_gf.tolist()
+            self.H[k, 1:] = [oMi[j].homogeneous for j in captured]
+            self.acc[k, 1:] = [acc[j].vector for j in captured]
         self.Jw[k] = data.J
 
     def _velocities(self, n: int, v: np.ndarray) -> np.ndarray:
@@ -137,15 +140,26 @@ class SampledKinematics:
         lin = np.einsum("nkij,nkj->nki", R, acc[..., :3]) + _cross(p, ang)
         return np.concatenate([lin, ang], axis=-1)
 
-    def closure_errors(self, n: int, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def closure_errors(
+        self,
+        n: int,
+        v: np.ndarray,
+        q: np.ndarray | None = None,
+        a: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Closure residual, velocity and acceleration errors of the first ``n`` samples.
 
         Args:
             n: Number of captured samples.
             v: Their velocities (n, nv) (the accelerations are those captured).
+            q: Their configurations (n, nq); needed by coupling rows only.
+            a: Their accelerations (n, nv); needed by coupling rows only.
 
         Returns:
             Residual, velocity error and acceleration error, each (n, nc) (module doc).
+
+        Raises:
+            ValueError: The closures have couplings and ``q`` or ``a`` is missing.
 
         """
         nc = self.closure_set.nc
@@ -154,6 +168,17 @@ class SampledKinematics:
         ea = np.empty((n, nc))
         if not nc:
             return r, ev, ea
+        coupled = self.closure_set.coupling_rows
+        if coupled is not None:
+            if q is None or a is None:
+                raise ValueError("coupling rows need the configurations and accelerations")
+            o = self.closure_set.n_rigid
+            qq, vv, aa = q[:n], v[:n], a[:n]
+            r[:, o:] = coupled.residual(qq)
+            ev[:, o:] = coupled.velocity_error(qq, vv)
+            ea[:, o:] = coupled.acceleration_error(qq, vv, aa)
+            if o == 0:
+                return r, ev, ea
         V = self._velocities(n, v)
         A = self._accelerations(n)
         H = self.H[:n]

@@ -56,7 +56,7 @@ def test_urdf_to_file_loads(tmp_path, capsys):
     code, _, _ = run(capsys, "urdf", "gough_stewart", "--param", "leg_radius=0.01", "-o", str(path))
     assert code == 0
     robot = pkdyn.load(str(path), geometry=False)
-    assert robot.dof() == 6
+    assert robot.mobility() == 6
 
 
 @pytest.mark.parametrize(

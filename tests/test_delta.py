@@ -24,9 +24,10 @@ def _workspace_points(robot, n, rng):
 
 def test_mobility_counts_match_clavel(delta):
     # 12 ball joints: 9 = 3 + 6 internal (bar spin); universal at one bar end: 3 (seed 000)
-    assert delta.dof() == 9
+    assert delta.mobility() == 9 and delta.mobility_split() == (3, 6)
+    assert delta.dof() == 3  # one meaning of dof: what the platform can do, as pkdyn info says
     assert delta.loops == 5
-    assert pkdyn.load("delta", bar_joint="universal", geometry=False).dof() == 3
+    assert pkdyn.load("delta", bar_joint="universal", geometry=False).mobility() == 3
 
 
 def test_closed_form_ik_solves_eq1(delta):

@@ -100,7 +100,7 @@ def test_planar_four_bar_has_one_degree_of_freedom():
     # Grubler in the plane: 3 joints, one loop of a hinge -> 1 dof (the hinge's 6 spatial
     # equations have rank 2 here)
     robot = pkdyn.load(FOUR_BAR, geometry=False)
-    assert robot.dof() == 1
+    assert robot.mobility() == 1
 
 
 def test_point_closure_and_spherical_joint():
@@ -115,7 +115,7 @@ def test_point_closure_and_spherical_joint():
     assert robot.constraint_models[0].type == pin.ContactType.CONTACT_3D
     assert robot.constraint_owner == ["coupler_rocker"]
     assert robot.closure_set.nc == 3
-    assert robot.dof() == 5 - 3
+    assert robot.mobility() == 5 - 3
 
 
 def test_cone_limit_is_parsed():
@@ -142,7 +142,7 @@ def test_weld_closure_on_the_base_and_universal_joint():
     assert cm.joint2_id == robot.model.getJointId("wrist")
     assert robot.constraint_owner == ["tool_weld"]
     assert robot.closure_set.nc == 6
-    assert robot.dof() == 7 - 6
+    assert robot.mobility() == 7 - 6
 
 
 def test_universal_joint_turns_about_axis_then_axis2():

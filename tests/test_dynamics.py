@@ -268,7 +268,7 @@ def test_cli_size_json_csv_plot(tmp_path, capsys):
     ("args", "needle"),
     [
         (["size", "delta", "--cycle-time", "0"], "--cycle-time"),
-        (["size", "delta", "--cycle-time", "0.2"], "velocity limit"),
+        (["size", "delta", "--cycle-time", "0.2"], "limits exceeded: motor1 speed by"),
         (["size", "delta", "--payload", "-2"], "payload"),
         (["size", "delta", "--param", "effort=nan"], "effort"),
         (["simulate", "delta", "--dt", "-1"], "dt"),
@@ -308,7 +308,7 @@ def quattro():
 
 def test_four_armed_delta_is_redundantly_actuated(quattro):
     robot, jt = quattro
-    assert len(robot.actuators) == 4 and robot.dof() == 3
+    assert len(robot.actuators) == 4 and robot.mobility() == 3
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
 
 

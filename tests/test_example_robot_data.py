@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import logging
+import warnings
 import zlib
 from pathlib import Path
 
@@ -67,19 +68,38 @@ def _upper(M: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("path", URDFS, ids=_id)
 def test_plain_urdf_matches_pinocchio(path):
-    """The loader adds nothing to a plain URDF: the same model as ``pin.buildModelFromUrdf``."""
+    """The loader adds nothing to a plain URDF but its ``<mimic>`` couplings: the same model as
+    ``pin.buildModelFromUrdf`` (whose mimic joints stay tree joints too), assembled on them."""
     ref = _plain_model(path)
-    robot = pkdyn.load(path, geometry=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # mimics of joints that do not exist (one file)
+        robot = pkdyn.load(path, geometry=False)
     model = robot.model
     assert robot.closures == ()
     assert len(robot.constraint_models) == 0
-    assert robot.closure_set.nc == 0
+    assert robot.closure_set.nc == len(robot.couplings)
+    total, broken = _mimics(path)
+    assert len(robot.couplings) == total - broken
+    if robot.couplings:
+        assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
     assert (model.nq, model.nv, model.njoints) == (ref.nq, ref.nv, ref.njoints)
     assert list(model.names) == list(ref.names)
     for a, b in zip(model.inertias, ref.inertias, strict=True):
         assert a.isApprox(b, 1e-14)
     for a, b in zip(model.jointPlacements, ref.jointPlacements, strict=True):
         assert a.isApprox(b, 1e-14)
+
+
+def _mimics(path: Path) -> tuple[int, int]:
+    """Mimic elements of a file, and those whose joints are not both moving 1-DoF joints."""
+    import xml.etree.ElementTree as ET
+
+    joints = ET.parse(path).getroot().findall("joint")
+    kinds = {j.get("name"): j.get("type") for j in joints}
+    ok = ("revolute", "continuous", "prismatic")
+    mimics = [(j.get("name"), m.get("joint")) for j in joints if (m := j.find("mimic")) is not None]
+    broken = sum(1 for a, b in mimics if not (kinds.get(a) in ok and kinds.get(b) in ok))
+    return len(mimics), broken
 
 
 def _yourdfpy_model(path: Path) -> yourdfpy.URDF:

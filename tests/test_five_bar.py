@@ -39,7 +39,7 @@ def _elbows(p, theta):
 
 def test_loads_with_two_dof_at_home(robot):
     p = robot.params
-    assert robot.dof() == 2
+    assert robot.mobility() == 2
     assert robot.nv == 4
     assert robot.actuated_joint_names == ["proximal1", "proximal2"]
     assert robot.actuator_names == ["motor1", "motor2"]

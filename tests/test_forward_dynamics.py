@@ -25,7 +25,7 @@ def robots() -> dict[str, pkdyn.Robot]:
 def _tangent_velocity(robot: pkdyn.Robot, q: np.ndarray, vmax: float, seed: int = 0):
     """A velocity in the null space of the closure Jacobian, largest component ``vmax``."""
     J = robot.closure_set.jacobian(robot.model.createData(), q)
-    v = null_space(J) @ np.random.default_rng(seed).standard_normal(robot.dof(q))
+    v = null_space(J) @ np.random.default_rng(seed).standard_normal(robot.mobility(q))
     return vmax * v / np.max(np.abs(v))
 
 

@@ -69,7 +69,7 @@ def test_spherical_ujoint_and_fixed_joint_types(tmp_path):
     )
     assert not fixed.model.existJointName("mot2")
     assert fixed.model.existFrame("mot2", pin.FrameType.FIXED_JOINT)
-    assert fixed.nq == 3 and fixed.dof() == 1
+    assert fixed.nq == 3 and fixed.mobility() == 1
 
 
 def test_free_flyer_and_platform(tmp_path):
@@ -98,7 +98,7 @@ def test_gepetto_battobot_legs():
     assert {"JointModelUniversal", "JointModelSpherical"} <= shorts
     assert robot.closure_set.nc == 36 and len(robot.actuators) == 12
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-9
-    assert robot.dof() == 12
+    assert robot.mobility() == 12
 
 
 def test_name_mot_names_are_literal(tmp_path):
@@ -271,7 +271,7 @@ def test_onshape_closing_frames_close_loops(tmp_path, z, kind):
         robot = pkdyn.load(path, geometry=False)  # rpy 1.5708: the %g rounding of pi/2
     assert [(c.name, c.kind) for c in robot.closures] == [("closing_pin", kind)]
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
-    assert robot.dof() == 1
+    assert robot.mobility() == 1
 
 
 def test_reachy_mini_onshape_export_loads_with_the_cad_rounding_warning():

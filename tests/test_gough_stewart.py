@@ -30,7 +30,7 @@ def test_mel_geometry_from_seed():
 
 
 def test_mobility_six(gough_stewart):
-    assert gough_stewart.dof() == 6
+    assert gough_stewart.mobility() == 6
     assert gough_stewart.loops == 5
 
 

@@ -72,11 +72,11 @@ def test_straight_four_bar_gets_a_non_singular_home(ground):
     a, b = _tips(robot, robot.q_home)
     assert np.linalg.norm(a - b) < 1e-12
     assert not singular(robot, robot.q_home)
-    assert robot.dof() == 1
+    assert robot.mobility() == 1
     # the straight line itself is singular (the closure Jacobian loses a rank there)
     if ground == CRANK + COUPLER + ROCKER:
         assert singular(robot, pin.neutral(robot.model))
-        assert robot.dof(pin.neutral(robot.model)) == 2
+        assert robot.mobility(pin.neutral(robot.model)) == 2
 
 
 def test_a_given_home_is_kept_and_its_singularity_reported():
@@ -124,7 +124,7 @@ def test_cad_rounded_overconstrained_loop_is_closed_with_a_warning():
     ):
         robot = _load(text)
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
-    assert robot.dof() == 1
+    assert robot.mobility() == 1
     (moved,) = robot.closures
     assert moved.frame2.placement.translation[2] == pytest.approx(-3e-6, abs=1e-9)
 

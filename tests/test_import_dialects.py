@@ -48,7 +48,7 @@ def test_gazebo_joint_closes_the_urdf_four_bar_like_its_sdformat_twin():
     whole = pkdyn.load(GAZEBO / "four_bar.sdf")  # the coupler in one piece, the loop in the graph
     assert [(c.name, c.kind) for c in urdf.closures] == [("coupler_splice", "weld")]
     assert [c.kind for c in whole.closures] == ["hinge"]
-    assert urdf.dof() == sdf.dof() == whole.dof() == 1 == mobility(urdf).mobility
+    assert urdf.mobility() == sdf.mobility() == whole.mobility() == 1 == mobility(urdf).mobility
     # the URDF's assembled configurations, joint by joint, assemble the SDFormat models too, and
     # put the mass at the same place (two importers, three descriptions, one linkage)
     rng = np.random.default_rng(0)
@@ -107,7 +107,7 @@ def test_gazebo_revolute_joint_is_a_hinge_about_its_axis():
     )
     robot = pkdyn.load_string(text, "g.urdf")
     assert [(c.name, c.kind) for c in robot.closures] == [("coupler_splice", "hinge")]
-    assert robot.dof() == 2  # two bars jointed at E: a five-bar
+    assert robot.mobility() == 2  # two bars jointed at E: a five-bar
 
 
 # ------------------------------------------------------------------ Drake's dialect
@@ -145,7 +145,7 @@ DRAKE_URDF = """<?xml version="1.0"?>
 def test_drake_dialect_implicit_world_undeclared_prefix_and_comments(ns):
     robot = pkdyn.load_string(DRAKE_URDF.format(ns=ns), "drake.urdf")
     assert [(c.name, c.kind) for c in robot.closures] == [("ball_constraint1", "point")]
-    assert robot.dof() == 1 and pkdyn.closure_residual(robot, robot.q_home) < 1e-12
+    assert robot.mobility() == 1 and pkdyn.closure_residual(robot, robot.q_home) < 1e-12
 
 
 def test_lenient_parsing_still_refuses_entities():
@@ -166,7 +166,7 @@ def test_strandbeest_xacro_loads_with_its_drake_constraints():
     assert len(robot.closures) == 36 and {c.kind for c in robot.closures} == {"point"}
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-9
     # the crossbar floats (no joint holds it in Drake): 6 + the crank's 1
-    assert robot.dof() == 7 and robot.model.names[1] == "crossbar_root_joint"
+    assert robot.mobility() == 7 and robot.model.names[1] == "crossbar_root_joint"
     # the crank drives every leg: hold the crossbar and the crank, nothing else moves
     J = robot.closure_set.jacobian(robot.model.createData(), robot.q_home)
     crank = robot.model.joints[robot.model.getJointId("joint_crossbar_crank")].idx_v
@@ -251,7 +251,7 @@ def test_gazebo_stewart_with_revolute2_joints():
         assert robot.model.upperPositionLimit[j.idx_q] == pytest.approx(0.786)
     assert len(robot.closures) == 6 and {c.kind for c in robot.closures} == {"hinge"}
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-9
-    assert robot.dof() == 12  # base and platform both float: 6 + 6
+    assert robot.mobility() == 12  # base and platform both float: 6 + 6
 
 
 REV2_LOOP = """<sdf version="1.7"><model name="m">
@@ -342,7 +342,7 @@ def test_weld_torquescale_zero_is_a_point_constraint_at_the_anchor():
     robot = pkdyn.load(PUBLIC / "mujoco_testdata" / "weld.xml")
     kinds = {c.name: c.kind for c in robot.closures}
     assert kinds["anchor no torques"] == "point" and kinds["weak torques"] == "weld"
-    assert robot.dof() == 3  # MuJoCo's own count for this model: beam2 turns about its anchor
+    assert robot.mobility() == 3  # MuJoCo's own count for this model: beam2 turns about its anchor
     point = next(c for c in robot.closures if c.name == "anchor no torques")
     np.testing.assert_allclose(point.frame2.placement.translation, [0.0, -2.0, 0.0])
 
@@ -350,7 +350,7 @@ def test_weld_torquescale_zero_is_a_point_constraint_at_the_anchor():
 def test_onshape_mjcf_closing_sites_are_closed_once():
     robot = _quiet(pkdyn.load, PUBLIC / "reachy_mini_mjcf" / "reachy_mini.xml", geometry=False)
     assert [c.name for c in robot.closures] == [f"connect{k}" for k in range(1, 6)]
-    assert robot.dof() == 15
+    assert robot.mobility() == 15
 
 
 def test_kangaroo_like_names_the_closure_that_cannot_be_assembled():

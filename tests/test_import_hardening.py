@@ -174,7 +174,7 @@ def test_deep_nesting_is_refused_with_a_clear_message(tmp_path, make, words):
 
 def test_deep_sdf_frame_chain_is_walked_iteratively():
     robot = pkdyn.load_string(_sdf_chain(3000), "chain.sdf", geometry=False)  # no RecursionError
-    assert robot.dof() == 1
+    assert robot.mobility() == 1
     data = robot.model.createData()
     pin.forwardKinematics(robot.model, data, robot.q_home)
     assert data.oMi[1].translation[2] == pytest.approx(1.0 + 3.0, abs=1e-9)  # 3000 x 1 mm
@@ -271,7 +271,7 @@ def test_mjcf_with_1e5_bodies_is_refused_up_front():
 
 def test_zero_norm_quaternions_are_refused():
     text = mjcf(extra='<keyframe><key name="home" qpos="0.1 0.2"/></keyframe>')
-    assert pkdyn.load_string(text, "m.xml").dof() == 2  # the well-formed key loads
+    assert pkdyn.load_string(text, "m.xml").mobility() == 2  # the well-formed key loads
     free = (
         '<mujoco><worldbody><body name="f"><freejoint/><geom size="0.1"/></body></worldbody>'
         '<keyframe><key name="home" qpos="0 0 1 0 0 0 0"/></keyframe></mujoco>'
@@ -343,7 +343,7 @@ def test_zero_inertia_is_refused_in_pkdyn_descriptions_and_kept_as_a_point_mass_
         '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
     )
     plain = f'<robot name="r"><link name="base"/>{link}{joint}</robot>'
-    assert pkdyn.load_string(plain, "plain.urdf").dof() == 1  # a point mass off the axis
+    assert pkdyn.load_string(plain, "plain.urdf").mobility() == 1  # a point mass off the axis
     ns = 'xmlns:pkdyn="urn:pkdyn:urdf:1"'
     strict = plain.replace('<robot name="r">', f'<robot name="r" {ns}>').replace(
         "</robot>", '<pkdyn:platform link="a"/></robot>'

@@ -99,7 +99,7 @@ def test_delta_with_spinning_bars_needs_consistent_bar_accelerations(robots):
     motion can be produced. Those of a forward-dynamics solve are; a random one is not."""
     robot = robots["delta"]
     act = _actuation(robot)
-    assert robot.dof() == 9
+    assert robot.mobility() == 9
     inv = InverseDynamics(robot.model, robot.constraint_models, act)
     rng = np.random.default_rng(4)
     q, v, _ = _consistent_state(robot, 4)
@@ -110,7 +110,7 @@ def test_delta_with_spinning_bars_needs_consistent_bar_accelerations(robots):
     # an acceleration the closures allow but the actuators cannot produce: the bars' spin
     # accelerations are off (the bars' axial inertia is tiny, hence the large acceleration)
     J = robot.closure_set.jacobian(robot.data, q)
-    delta = scipy.linalg.null_space(J, rcond=1e-9) @ rng.standard_normal(robot.dof(q))
+    delta = scipy.linalg.null_space(J, rcond=1e-9) @ rng.standard_normal(robot.mobility(q))
     with pytest.raises(InfeasibleError) as err:
         inv.solve(q, v, a + 1e3 * delta, sample=7)
     assert err.value.actuator is None and err.value.sample == 7

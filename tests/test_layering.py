@@ -16,6 +16,7 @@ RANK = {
     "workers": 1,
     "progress": 1,
     "files": 1,
+    "inputs": 1,
     "model": 2,
     "closed_form": 3,
     "library": 4,

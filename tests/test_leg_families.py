@@ -21,7 +21,7 @@ def test_ankle_home_is_level_for_any_geometry(params):
     m = robot.model
     for j in ("ankle_pitch", "ankle_roll"):
         assert robot.q_home[m.joints[m.getJointId(j)].idx_q] == pytest.approx(0.0, abs=1e-12)
-    assert robot.dof() == 2
+    assert robot.mobility() == 2
     # the rods keep their length: crank end to heel point
     theta = robot.q_home[robot.actuated_q]
     C = ankle_cf.crank_points(robot.params, theta)[0]

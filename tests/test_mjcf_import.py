@@ -190,7 +190,7 @@ def test_cassie_closures_actuators_home(cassie):
     assert np.max(np.abs(pin.difference(cassie.model, key, cassie.q_home))) < 0.05
     # 6 (floating base) + 2 x (10 joints + 3 for the Achilles ball - 6 closure equations + the
     # Achilles rod's spin about its axis)
-    assert cassie.dof() == 22
+    assert cassie.mobility() == 22
     assert cassie.loops == 4
 
 
@@ -318,7 +318,7 @@ def test_several_grounded_branches_with_inertias_from_geoms(tmp_path):
     _compare_with_mujoco(robot, mj)
     assert [c.name for c in robot.closures] == ["tips"]
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
-    assert robot.dof() == 2  # a planar five-bar (point closure of rank 2 in the plane)
+    assert robot.mobility() == 2  # a planar five-bar (point closure of rank 2 in the plane)
     a = {x.name: x for x in robot.actuators}
     assert a["actuator1"].effort == pytest.approx(6.0)  # |ctrl| <= 3, gear 2
     assert a["p_r1"].effort == pytest.approx(5.0)  # forcerange only (a position servo)
@@ -355,7 +355,7 @@ def test_weld_equality_by_bodies(tmp_path):
     robot = pkdyn.load(path)
     assert [(c.name, c.kind) for c in robot.closures] == [("glue", "weld")]
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
-    assert robot.dof() == 1  # the weld also locks the relative rotation in the plane
+    assert robot.mobility() == 1  # the weld also locks the relative rotation in the plane
 
 
 # ---------------------------------------------------------------------------------- bad input
@@ -372,8 +372,8 @@ def _load_text(tmp_path, text, name="bad.xml"):
     [
         (
             '<connect name="tips"',
-            '<joint joint1="l1" joint2="r1"/><connect name="tips"',
-            r"<joint> \(line 24\).*polynomial joint couplings",
+            '<joint joint1="l1" joint2="r1" polycoef="0 1 0 0 0 0"/><connect name="tips"',
+            r"<joint name='joint1'> \(line 24\).*polycoef='0 1 0 0 0 0': 6 coefficients",
         ),
         (
             '<joint name="l2" axis="0 1 0"/>',

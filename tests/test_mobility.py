@@ -244,7 +244,7 @@ def test_generic_configuration_is_assembled_and_matches_dof(delta_ball):
     robot, res = delta_ball
     assert pkdyn.closure_residual(robot, res.q) < 1e-10
     assert not np.allclose(res.q, robot.q_home)
-    assert res.mobility == robot.dof(res.q)
+    assert res.mobility == robot.mobility(res.q)
     assert res.rank == res.closure_rows == 18
     again = mobility(robot, seed=0)
     np.testing.assert_array_equal(again.q, res.q)

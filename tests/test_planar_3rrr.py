@@ -52,7 +52,7 @@ def _pose6(X):
 
 def test_loads_with_three_dof_at_home(robot):
     p = robot.params
-    assert robot.dof() == 3
+    assert robot.mobility() == 3
     assert robot.nv == 9  # planar joint (3) + 3 x (actuated + elbow)
     assert robot.actuated_joint_names == ["proximal1", "proximal2", "proximal3"]
     assert robot.actuator_names == ["motor1", "motor2", "motor3"]
@@ -186,7 +186,7 @@ def test_fk_of_closed_form_ik_round_trip_1000_poses(robot):
 def test_mirror_elbow_mode():
     r = pkdyn.load("planar_3rrr", elbow=-1, geometry=False)
     p = r.params
-    assert r.dof() == 3
+    assert r.mobility() == 3
     q, _ = cf.chain_angles(p, p.home_pose, -1)
     assert np.all(q[0, :, 1] < 0)
     X = _poses(p, 10, np.random.default_rng(17))

@@ -84,7 +84,7 @@ def test_loads_and_assembles(model):
 def test_mobility_report(model):
     robot, _, dof, _, _ = model
     mob = mobility(robot)
-    assert mob.mobility == dof == robot.dof()
+    assert mob.mobility == dof == robot.mobility()
     assert mob.loops == robot.loops >= 1
     assert mob.as_json()["mobility"] == dof
 

@@ -124,7 +124,7 @@ def test_four_bar_loop_closed_by_a_revolute_joint(tmp_path):
     assert [(c.name, c.kind) for c in robot.closures] == [("coupler_rocker", "hinge")]
     assert robot.nq == 3 and robot.loops == 1
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
-    assert robot.dof() == 1
+    assert robot.mobility() == 1
     i = robot.model.joints[robot.model.getJointId("world_rocker")].idx_v
     assert robot.model.damping[i] == 0.2 and robot.model.effortLimit[i] == 50.0
     assert robot.model.upperPositionLimit[i] == 3.0
@@ -159,7 +159,7 @@ def test_ball_and_fixed_cut_joints(tmp_path, kind, closure, dof):
     robot = _load(tmp_path, _four_bar_text(kind))
     assert [c.kind for c in robot.closures] == [closure]
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
-    assert robot.dof() == dof  # parallel axes keep a ball-closed four-bar planar; weld: rigid
+    assert robot.mobility() == dof  # parallel axes keep a ball-closed four-bar planar; weld: rigid
 
 
 def test_universal_cut_joint_trades_places_with_the_revolute_beside_it(tmp_path):
@@ -216,7 +216,7 @@ def test_drake_ball_and_weld_constraints_in_sdf(tmp_path):
     robot = _load(tmp_path, weld, "w.sdf")
     assert [c.kind for c in robot.closures] == ["point", "weld"]
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
-    assert robot.dof() == 0
+    assert robot.mobility() == 0
 
 
 def test_drake_ball_constraint_in_urdf(tmp_path):
@@ -270,7 +270,7 @@ def test_example_robot_data_cassie_sdf():
         np.testing.assert_allclose(M.translation, x[:3], atol=1e-12)
         np.testing.assert_allclose(M.rotation, pin.rpy.rpyToMatrix(x[3:]), atol=1e-12)
     # 6 + 2 x (10 revolute joints - 2 x 2 independent equations of the planar rod loops)
-    assert robot.dof() == 18
+    assert robot.mobility() == 18
     mob = mobility(robot)
     assert mob.loops == 4
 

@@ -79,7 +79,7 @@ def test_loaded_robot_is_assembled():
     A, B = _loop_frames(robot, robot.q_home)
     assert np.linalg.norm(A.translation - B.translation) < 1e-10
     # planar five-bar: 4 joints, a point closure of rank 2 in the plane
-    assert robot.dof() == 2
+    assert robot.mobility() == 2
 
 
 def test_forward_geometry_closes_the_loop():
@@ -111,7 +111,7 @@ def test_explicit_sidecar_6d_weld(tmp_path):
     A, B = _loop_frames(robot, robot.q_home)
     assert np.linalg.norm(A.translation - B.translation) < 1e-10
     np.testing.assert_allclose(A.rotation, B.rotation, atol=1e-10)
-    assert robot.dof() == 1  # the weld also locks the relative rotation in the plane
+    assert robot.mobility() == 1  # the weld also locks the relative rotation in the plane
     qa = robot.q_home[robot.actuated_q] + np.array([0.02, 0.0])
     with pytest.raises(pkdyn.AssemblyError):  # one actuator too many for a weld
         pkdyn.forward_geometry(robot, qa)

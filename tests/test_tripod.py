@@ -80,7 +80,7 @@ def joint_placement(robot: pkdyn.Robot, name: str) -> pin.SE3:
 
 def test_loads_with_six_dof_and_actuator_order(robot):
     assert robot.nv == 6 + 3 * 8
-    assert robot.dof() == 6
+    assert robot.mobility() == 6
     assert robot.actuated_joint_names == [f"branch{i}_q{s}" for i in (1, 2, 3) for s in "LR"]
     assert robot.actuator_names == [f"{s}{i}" for i in (1, 2, 3) for s in "LR"]
     assert [a.name for a in robot.actuators] == ["L1", "R1", "L2", "R2", "L3", "R3"]
@@ -305,6 +305,6 @@ def test_bad_parameter_names_it(name, value):
 
 def test_other_parameters_build_and_assemble():
     r = pkdyn.load("tripod", geometry=False, r_p=0.25, theta=0.25, nacelle_height=0.65)
-    assert r.dof() == 6
+    assert r.mobility() == 6
     assert pkdyn.closure_residual(r, r.q_home) < 1e-10
     assert r.platform_placement(r.q_home).translation[2] == pytest.approx(0.65 - P.tool_offset)

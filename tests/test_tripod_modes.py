@@ -123,17 +123,17 @@ def test_both_modes_have_six_degrees_of_freedom(robot):
     st = Stance.default(P)
     q = pp_configuration(robot, st, tilted(st, 1))
     pp = mode_robot(robot, st, pp_mode(), q)
-    assert pp.dof(q) == 6
+    assert pp.mobility(q) == 6
     for b in BRANCHES:
         be = mode_robot(robot, st, be_mode(robot, q, b), q)
         assert pkdyn.closure_residual(be, q) < 1e-12
-        assert be.dof(q) == 6  # 30 - (6 hinges + 12 clamps + 2 + 1 + 1 + 2 locks)
+        assert be.mobility(q) == 6  # 30 - (6 hinges + 12 clamps + 2 + 1 + 1 + 2 locks)
         assert f"branch{b}_foothold" not in be.constraint_owner
         assert be.platform_frame == robot.model.getFrameId(f"branch{b}_foot")
     # without the locks the released branch would add 6 DOF
     m = be_mode(robot, q, 1)
     free = mode_robot(robot, st, type(m)("BE", 1), q)
-    assert free.dof(q) == 12
+    assert free.mobility(q) == 12
 
 
 def test_be_foot_moves_with_locks_and_supports_held(robot):

@@ -104,7 +104,7 @@ def test_walker_modes_leave_two_degrees_of_freedom_to_the_nacelle(walker):
     st = Stance.default(P4)
     q0 = walker.q_home
     pp = mode_robot(walker, st, pp_mode())
-    assert pp.dof(q0) == 6  # eight actuators on a 6-DOF nacelle: redundant actuation
+    assert pp.mobility(q0) == 6  # eight actuators on a 6-DOF nacelle: redundant actuation
     for b in branch_numbers(walker):
         mode = be_mode(walker, q0, b)
         assert (
@@ -118,7 +118,7 @@ def test_walker_modes_leave_two_degrees_of_freedom_to_the_nacelle(walker):
             ]
         )
         be = mode_robot(walker, st, mode, q0)
-        assert be.dof(q0) == 8  # the foot takes 6, two are left to the nacelle
+        assert be.mobility(q0) == 8  # the foot takes 6, two are left to the nacelle
         clamped = [o for o in be.constraint_owner if o.endswith("_foothold")]
         assert len(clamped) == 3 and f"branch{b}_foothold" not in clamped
         # with the supports' q1 locked as the tripod's, the foot could not follow a 6D path
@@ -131,7 +131,7 @@ def test_walker_modes_leave_two_degrees_of_freedom_to_the_nacelle(walker):
             if s != b
         )
         over = Mode("BE", b, mode.locks + extra)
-        assert mode_robot(walker, st, over, q0).dof(q0) == 5
+        assert mode_robot(walker, st, over, q0).mobility(q0) == 5
 
 
 def _q1(robot, b):

@@ -1,11 +1,18 @@
 """Minimum distances between the bodies of a robot, with coal, and analytic segment distances.
 
-:func:`distance_report` computes, with coal (through Pinocchio's geometry data), the distance
-between every selected pair of collision geometries of ``robot.collision_model`` at a
-configuration: leg against leg, leg against platform, leg against base. By default every pair is
-checked except two geometries on the same body, or on bodies joined by a physical tree joint or
-by a loop closure (they touch by construction); the platform's free-flyer is a modelling device,
-so the platform is checked against the base. A negative distance is a penetration depth.
+**Interference, the one definition** (used by :func:`distance_report`, the ``collisions``
+command and both workspace paths, closed form and numeric): two collision geometries of
+``robot.collision_model`` interfere when coal's distance between them is below the safety
+margin. Every pair is checked - leg against leg, leg against platform, leg against base,
+platform against base - except two geometries on the same body, or on bodies joined by a
+physical tree joint or by a loop closure (they touch by construction; the platform's free-flyer
+is a modelling device, so the platform is checked against the base), and pairs that already
+overlap at the home configuration (parts nested by design, a rod in its cylinder):
+:func:`interference_checker` builds that set and lists the overlapping pairs it leaves out. A
+negative distance is a penetration depth.
+
+:func:`distance_report` computes the distances of that set (or of explicit pairs) at a
+configuration.
 
 :func:`segment_distance` is the vectorised analytic distance between segments (Ericson's
 closest-point algorithm); legs modelled as cylinders of radius ``r`` along ``A_i B_i``
@@ -32,6 +39,7 @@ __all__ = [
     "CollisionChecker",
     "collision_pairs",
     "distance_report",
+    "interference_checker",
     "segment_distance",
 ]
 
@@ -78,6 +86,7 @@ class CollisionReport:
         pairs: Every checked pair, closest first.
         in_collision: ``min_distance < margin``.
         margin: Safety margin [m] the report was made with.
+        excluded: Pairs left out because they overlap at home (parts nested by design).
 
     """
 
@@ -85,6 +94,7 @@ class CollisionReport:
     pairs: list[PairDistance] = field(default_factory=list)
     in_collision: bool = False
     margin: float = 0.0
+    excluded: list[tuple[str, str]] = field(default_factory=list)
 
     @property
     def colliding(self) -> list[PairDistance]:
@@ -99,6 +109,7 @@ class CollisionReport:
             "in_collision": self.in_collision,
             "margin": self.margin,
             "pairs": [p.as_json() for p in self.pairs],
+            "excluded": [list(p) for p in self.excluded],
         }
 
 
@@ -195,8 +206,8 @@ class CollisionChecker:
         self.ids = collision_pairs(robot, pairs)
         if not self.ids:
             raise PkdynError(
-                f"{robot.name}: no collision geometry pair to check (load with geometry=True and "
-                "give the links <collision> elements)"
+                f"{robot.name}: no collision geometry pair to check: give the links <collision> "
+                "elements in the description (in Python, also load it with geometry=True)"
             )
         self.geometry_model = robot.collision_model.copy()
         self.geometry_model.removeAllCollisionPairs()
@@ -209,6 +220,7 @@ class CollisionChecker:
         self.data = robot.model.createData()
         names = [g.name for g in self.geometry_model.geometryObjects]
         self.names = [(names[i], names[j]) for i, j in self.ids]
+        self.excluded: list[tuple[str, str]] = []  # (interference_checker: overlap at home)
 
     def distances(self, q: np.ndarray) -> np.ndarray:
         """Signed distance of every pair (in ``self.ids`` order) at ``q`` [m]."""
@@ -234,7 +246,38 @@ class CollisionChecker:
         ]
         pairs.sort(key=lambda p: p.distance)
         dmin = pairs[0].distance
-        return CollisionReport(dmin, pairs, bool(dmin < margin), float(margin))
+        return CollisionReport(dmin, pairs, bool(dmin < margin), float(margin), self.excluded)
+
+
+def interference_checker(robot: Robot) -> CollisionChecker:
+    """The pairs of the interference definition (module docstring), as a checker.
+
+    Every default pair (:func:`collision_pairs`) except those closer than 0 at
+    ``robot.q_home``; those are listed in the checker's ``excluded`` attribute.
+
+    Args:
+        robot: The robot (loaded with ``geometry=True``).
+
+    Returns:
+        The checker (``excluded``: the name pairs left out).
+
+    Raises:
+        PkdynError: The robot has no collision geometry pair to check, or every pair overlaps
+            at home.
+
+    """
+    full = CollisionChecker(robot)
+    d = full.distances(robot.q_home)
+    keep = [n for n, x in zip(full.names, d, strict=True) if x >= 0.0]
+    excluded = [n for n, x in zip(full.names, d, strict=True) if x < 0.0]
+    if not keep:
+        raise PkdynError(
+            f"{robot.name}: every collision pair already overlaps at home: no interference "
+            "to check (give the parts collision geometry that does not overlap at rest)"
+        )
+    checker = full if not excluded else CollisionChecker(robot, keep)
+    checker.excluded = excluded
+    return checker
 
 
 def distance_report(
@@ -249,8 +292,9 @@ def distance_report(
         robot: The robot (loaded with ``geometry=True``).
         q: Configuration (nq,), normally assembled.
         margin: Safety margin [m]: the report is ``in_collision`` when a pair is closer.
-        pairs: Explicit pairs of geometry or link names; default: every pair except those on
-            the same body or on bodies joined by a physical joint or a loop closure.
+        pairs: Explicit pairs of geometry or link names; default: the interference definition
+            (every pair except those on the same body, on bodies joined by a physical joint or
+            a loop closure, and those overlapping at home: listed in ``excluded``).
 
     Returns:
         The report, pairs sorted closest first.
@@ -262,7 +306,8 @@ def distance_report(
     """
     if not np.isfinite(margin):
         raise InvalidInputError("margin", f"must be a finite distance [m], got {margin}")
-    return CollisionChecker(robot, pairs).report(q, margin)
+    checker = interference_checker(robot) if pairs is None else CollisionChecker(robot, pairs)
+    return checker.report(q, margin)
 
 
 def segment_distance(

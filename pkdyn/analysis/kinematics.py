@@ -50,12 +50,13 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
 from pkdyn.model.pose import as_finite
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 from solvers import FramePoseTask, numerics
 
 __all__ = [
     "TASK_NAMES",
     "SINGULAR_TOL",
+    "NEAR_SERIAL_TOL",
     "NEAR_SINGULAR_TOL",
     "COND_MAX",
     "ASSEMBLY_TOL",
@@ -83,7 +84,20 @@ configuration built to be singular is singular to ~1e-10 in the loaded model. A 
 1e-6 rad from a singularity keeps a margin near 1e-6: near-singular, not singular."""
 
 NEAR_SINGULAR_TOL = 1e-4
-"""Below this margin a configuration is flagged near-singular."""
+"""Below this parallel margin (of ``A``) a configuration is flagged near-singular.
+
+The documented distance: a configuration is *near-singular* when it lies within about 1e-4 of
+the robot's size (in platform pose: 0.1 mm on a 1 m robot, 1e-4 rad) of a singular one. A
+parallel margin grows linearly with that distance (0.77 times the rotation on the 3-RRR), so
+its threshold is 1e-4; a serial margin like its square root (:data:`NEAR_SERIAL_TOL`)."""
+
+NEAR_SERIAL_TOL = 1e-2
+"""Below this serial margin (of ``B``) a configuration is flagged near-singular.
+
+Serial singularities lie on the workspace boundary, where the inverse model folds: the margin
+grows like the square root of the distance to it (0.54 sqrt(d / 1 m) on the Delta: 5.4e-4 at
+1 um from its lowest point, 5.4e-3 at 0.1 mm), so the distance of :data:`NEAR_SINGULAR_TOL`
+(1e-4 of the size) is a margin of sqrt(1e-4) = 1e-2."""
 
 COND_MAX = 1e16
 """Condition numbers are reported finite, capped at this value (exactly singular matrices)."""
@@ -147,7 +161,9 @@ def platform_jacobian(robot: Robot, q: np.ndarray) -> np.ndarray:
 
     """
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
     pin.computeJointJacobians(robot.model, robot.data, q)
     oMf = pin.updateFramePlacement(robot.model, robot.data, robot.platform_frame)
     task = FramePoseTask(robot.model, robot.platform_frame, np.arange(6))
@@ -259,13 +275,14 @@ class KinematicModels:
         matrix, jac = ("A", "J") if which == "parallel" else ("B", "J_inv")
         cond = self.cond_A if which == "parallel" else self.cond_B
         margin = self.margin_A if which == "parallel" else self.margin_B
+        near = NEAR_SINGULAR_TOL if which == "parallel" else NEAR_SERIAL_TOL
         if margin < SINGULAR_TOL:
             raise SingularConfigurationError(
                 which,
                 f"{which} singularity: {matrix} is singular (scale-aware margin {margin:.3g}, "
                 f"condition number {cond:.3g}), so {jac} does not exist at this configuration",
             )
-        if margin < NEAR_SINGULAR_TOL:
+        if margin < near:
             warnings.warn(
                 f"near a {which} singularity: scale-aware margin of {matrix} is {margin:.3g} "
                 f"(condition number {cond:.3g})",

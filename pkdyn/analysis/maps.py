@@ -35,6 +35,7 @@ from pkdyn.analysis.dexterity import (
 )
 from pkdyn.analysis.kinematics import (
     COND_MAX,
+    NEAR_SERIAL_TOL,
     NEAR_SINGULAR_TOL,
     SINGULAR_TOL,
     relation_margins,
@@ -73,7 +74,7 @@ class Conditioning:
         lci: Local conditioning index of ``J`` (N,).
         manipulability: ``sqrt(det(J J^T))`` (N,).
         kind: 0 regular, 1 serial, 2 parallel, 3 both, -1 unreachable (N,).
-        near: Regular but within the near-singular threshold (N,).
+        near: Within the near-singular thresholds, singular ones included (N,).
 
     """
 
@@ -109,6 +110,7 @@ def conditioning(
     tol: float = SINGULAR_TOL,
     near_tol: float = NEAR_SINGULAR_TOL,
     scale: float | None = None,
+    near_serial_tol: float = NEAR_SERIAL_TOL,
 ) -> Conditioning:
     """Indicators from stacks of ``A`` (N, m, m) and ``B`` (N, m, n_a) matrices.
 
@@ -120,9 +122,11 @@ def conditioning(
         length: Characteristic length for the angular rows of ``J`` [m].
         tol: Singular threshold on the scale-aware margins
             (:func:`pkdyn.analysis.kinematics.relation_margins`, revolute actuators).
-        near_tol: Near-singular threshold.
+        near_tol: Near-singular threshold of the parallel margin.
         scale: The robot's length [m] for the margins (default 1 m); the kinds are the same
             for any length of the robot's order.
+        near_serial_tol: Near-singular threshold of the serial margin (it grows like the
+            square root of the distance to the singularity).
 
     Returns:
         The indicators (N,).
@@ -139,7 +143,6 @@ def conditioning(
     L = 1.0 if scale is None else float(scale)
     x_scale = np.array([L if t in ("x", "y", "z") else 1.0 for t in task])
     sA, sB, _ = relation_margins(A0, B0, np.ones(B0.shape[-1]), x_scale)
-    margin = np.minimum(sA[..., -1], sB[..., -1])
     parallel = sA[..., -1] < tol
     serial = sB[..., -1] < tol
     As = np.where(parallel[:, None, None], np.eye(m), A0)
@@ -149,7 +152,7 @@ def conditioning(
     lci = np.where(parallel, 0.0, local_conditioning_index(Jh))
     w = np.where(parallel, np.nan, manipulability(Jh))
     kind = parallel.astype(int) * 2 + serial.astype(int)
-    near = (kind == 0) & (margin < near_tol)
+    near = (sA[..., -1] < near_tol) | (sB[..., -1] < near_serial_tol)  # (singular ones too)
     nan = np.full(ok.shape, np.nan)
     return Conditioning(
         valid=ok,

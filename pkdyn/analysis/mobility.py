@@ -2,12 +2,13 @@
 
 Two counts are reported side by side (seed 000, section 1.3.3; seed 001, Pasqui):
 
-- **Grübler-Kutzbach** from the topology alone: ``MO = sum f_i - d * loops``, where ``f_i`` are
-  the mobilities of the physical joints (tree joints, plus each closure: point 3, hinge 1,
-  weld 0), ``loops`` the number of independent loops (:attr:`pkdyn.Robot.loops`) and ``d`` the
-  dimension of the motion space (6, or 3 for a planar mechanism).
-- **Rank-based** (Pasqui): ``Ic = sum f_i`` kinematic unknowns, ``Ec = d * loops`` closure
-  equations of rank ``rc``; mobility ``m = Ic - rc`` and degree of hyperstatism
+- **Grübler-Kutzbach** from the topology alone: ``MO = sum f_i - d * loops - n_k``, where
+  ``f_i`` are the mobilities of the physical joints (tree joints, plus each closure: point 3,
+  hinge 1, weld 0), ``loops`` the number of independent loops (:attr:`pkdyn.Robot.loops`), ``d``
+  the dimension of the motion space (6, or 3 for a planar mechanism) and ``n_k`` the number of
+  joint couplings (gears, mimic joints: one scalar equation each).
+- **Rank-based** (Pasqui): ``Ic = sum f_i`` kinematic unknowns, ``Ec = d * loops + n_k``
+  closure and coupling equations of rank ``rc``; mobility ``m = Ic - rc`` and degree of hyperstatism
   ``h = Ec - rc``; ``m = m_u + m_i`` (useful and internal mobilities). In a pkdyn model the
   free-flyer / planar joint of a platform adds coordinates that the closures then determine,
   so ``m`` is computed as ``nv - rank(J_c)`` at a generic assembled configuration (``J_c`` the
@@ -87,8 +88,9 @@ class MobilityResult:
         d: Dimension of the motion space: 3 (planar mechanism) or 6.
         loops: Number of independent loops (cyclomatic number of the joint graph).
         joint_mobility: ``Ic = sum f_i`` over the physical joints and closures.
-        grubler: Grübler-Kutzbach count ``MO = Ic - d * loops``.
-        equations: ``Ec = d * loops``, number of closure equations in Pasqui's sense.
+        grubler: Grübler-Kutzbach count ``MO = Ic - d * loops - couplings``.
+        equations: ``Ec = d * loops + couplings``, number of closure (and coupling) equations
+            in Pasqui's sense.
         nv: Velocity coordinates of the model (modelling joints included).
         closure_rows: Rows of the closure Jacobian of the model (a hinge gives 6 rows).
         rank: Rank of the closure Jacobian ``J_c`` (closure_rows x nv) at ``q``; the platform's
@@ -105,6 +107,7 @@ class MobilityResult:
             the ground), excluded from ``mobility`` as from Grübler's count.
         q: Assembled configuration the ranks were computed at (nq,).
         singular_values: Singular values of ``J_c``, decreasing.
+        couplings: Number of joint couplings (one row of ``J_c`` each).
 
     """
 
@@ -126,6 +129,7 @@ class MobilityResult:
     floating: int
     q: np.ndarray = field(repr=False, compare=False)
     singular_values: np.ndarray = field(repr=False, compare=False)
+    couplings: int = 0
 
     @property
     def internal_names(self) -> tuple[str, ...]:
@@ -137,7 +141,8 @@ class MobilityResult:
 
         Returns:
             ``robot, grubler, mobility, useful, internal, hyperstatism, rank, d, loops,
-            joint_mobility, equations, closure_rank, internal_names`` (integers, strings).
+            joint_mobility, equations, closure_rank, couplings, internal_names`` (integers,
+            strings).
 
         """
         return {
@@ -153,6 +158,7 @@ class MobilityResult:
             "joint_mobility": self.joint_mobility,
             "equations": self.equations,
             "closure_rank": self.closure_rank,
+            "couplings": self.couplings,
             "internal_names": list(self.internal_names),
         }
 
@@ -215,7 +221,8 @@ def mobility(
     m = N.shape[1]
     if d is None:
         d = 3 if _plane_normal(robot, physical) is not None else 6
-    Ec = d * loops
+    n_k = len(robot.closure_set.couplings)
+    Ec = d * loops + n_k
     rc = Ic - m
 
     useful, V = m, np.zeros((model.nv, 0))
@@ -247,6 +254,7 @@ def mobility(
         floating=len(float_v),
         q=qq,
         singular_values=sv,
+        couplings=n_k,
     )
 
 
@@ -263,11 +271,14 @@ def format_mobility(result: MobilityResult) -> str:
     """
     r = result
     space = "planar, d = 3" if r.d == 3 else "spatial, d = 6"
+    coupled = f" - {r.couplings}" if r.couplings else ""
     lines = [
         f"{r.robot}: mobility {r.mobility} = {r.useful} useful + {r.internal} internal "
-        f"({space}, {r.loops} loop{'' if r.loops == 1 else 's'})",
-        f"  Grübler-Kutzbach: MO = sum f_i - d * loops = {r.joint_mobility} - {r.d} * {r.loops} "
-        f"= {r.grubler}",
+        f"({space}, {r.loops} loop{'' if r.loops == 1 else 's'}"
+        + (f", {r.couplings} coupling{'' if r.couplings == 1 else 's'}" if r.couplings else "")
+        + ")",
+        f"  Grübler-Kutzbach: MO = sum f_i - d * loops{' - couplings' if coupled else ''} = "
+        f"{r.joint_mobility} - {r.d} * {r.loops}{coupled} = {r.grubler}",
         f"  rank (Pasqui): Ic = {r.joint_mobility}, Ec = {r.equations}, rc = {r.closure_rank}; "
         f"m = Ic - rc = {r.mobility}, h = Ec - rc = {r.hyperstatism}",
         f"  closure Jacobian: {r.closure_rows} x {r.nv}, rank {r.rank}",

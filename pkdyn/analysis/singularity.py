@@ -31,10 +31,12 @@ value (:func:`pkdyn.analysis.kinematics.relation_margins`: rates made dimensionl
 robot's length, relations orthonormalised), all in ``[0, 1]`` (0: exactly singular). The
 decisions use the margins, which see what a condition number cannot: every Delta arm stretched
 along its bars at once shrinks ``B`` as a whole, ``cond(B)`` stays near 1. Below
-:data:`pkdyn.analysis.kinematics.SINGULAR_TOL` a matrix is singular; below
-:data:`pkdyn.analysis.kinematics.NEAR_SINGULAR_TOL` the configuration is *near-singular*: ``kind``
-stays ``"regular"``, ``near`` is set and a
-:class:`pkdyn.analysis.kinematics.NearSingularityWarning` is issued.
+:data:`pkdyn.analysis.kinematics.SINGULAR_TOL` a matrix is singular. ``near`` is set within
+about 1e-4 of the robot's size (in pose) of a singularity: a parallel margin below
+:data:`pkdyn.analysis.kinematics.NEAR_SINGULAR_TOL`, or a serial one below
+:data:`pkdyn.analysis.kinematics.NEAR_SERIAL_TOL` (it grows like the square root of the
+distance); a singular configuration is near too. A regular near-singular configuration also
+issues a :class:`pkdyn.analysis.kinematics.NearSingularityWarning`.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.analysis.kinematics import (
+    NEAR_SERIAL_TOL,
     NEAR_SINGULAR_TOL,
     SINGULAR_TOL,
     KinematicModels,
@@ -82,8 +85,8 @@ class SingularityReport:
         margin: Smallest scale-aware margin of ``A``, ``B`` and the 6D relations
             (:func:`pkdyn.analysis.kinematics.relation_margins`), in ``[0, 1]``: ``kind`` and
             ``near`` are decided on it (0: exactly singular).
-        near: Near-singular (within :data:`pkdyn.analysis.kinematics.NEAR_SINGULAR_TOL`), not
-            singular.
+        near: Within about 1e-4 of the robot's size of a singular configuration (see the module
+            docstring); set for singular configurations too.
         constraint: The parallel singularity lets the platform move in uncontrolled
             components (only these).
         parallel_directions: (k, m) unit platform velocities (task components) in the
@@ -187,6 +190,7 @@ def classify(
     q: Sequence[float] | np.ndarray,
     tol: float = SINGULAR_TOL,
     near_tol: float = NEAR_SINGULAR_TOL,
+    near_serial_tol: float = NEAR_SERIAL_TOL,
 ) -> SingularityReport:
     """Classify a configuration as regular, serial, parallel or both.
 
@@ -199,7 +203,8 @@ def classify(
         robot: Any loaded robot with a platform.
         q: Assembled configuration (nq,).
         tol: Margin below which a matrix is singular.
-        near_tol: Margin below which a configuration is flagged near-singular (warning).
+        near_tol: Parallel margin below which a configuration is flagged near-singular.
+        near_serial_tol: Serial margin below which a configuration is flagged near-singular.
 
     Returns:
         The report; condition numbers are finite.
@@ -251,9 +256,11 @@ def classify(
     }[(parallel, serial)]
     worst = max(cond_A, cond_B, cond_P)
     margin = min(margin_A, margin_B, margin_P)
-    near = kind == "regular" and margin < near_tol
-    if near:
-        which = "parallel" if min(margin_A, margin_P) <= margin_B else "serial"
+    near_parallel = min(margin_A, margin_P) < near_tol
+    near_serial = margin_B < near_serial_tol
+    near = near_parallel or near_serial
+    if near and kind == "regular":
+        which = "parallel" if near_parallel else "serial"
         warnings.warn(
             f"{robot.name}: near a {which} singularity (scale-aware margin {margin:.3g}, "
             f"condition number {worst:.3g}); velocities and efforts are ill-conditioned here",

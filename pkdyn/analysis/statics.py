@@ -41,7 +41,9 @@ from pkdyn.model.robot import Robot
 from solvers import numerics
 
 __all__ = [
+    "Reaction",
     "StaticsResult",
+    "closure_reactions",
     "actuator_efforts",
     "platform_wrench",
     "static_equilibrium",
@@ -110,6 +112,71 @@ def platform_wrench(
     return km.J_inv.T @ as_finite("tau", tau, km.n_a)
 
 
+@dataclass(frozen=True)
+class Reaction:
+    """The reaction of one closure: one force and one moment.
+
+    What the closure's second body (its ``frame2`` link) exerts on the first, world axes, the
+    moment about the closure point (``frame1``'s origin). A ``point`` closure carries no moment;
+    a ``hinge``, built from two point constraints along its axis (whose individual forces are
+    only defined up to an exchange along the axis), gets their resultant and the moment of the
+    second about the first's point (normal to the axis); a ``weld`` carries both.
+
+    Attributes:
+        force: Force (3,) [N].
+        moment: Moment (3,) [N m] about ``point``.
+        point: The closure point (3,) [m], world frame.
+
+    """
+
+    force: np.ndarray
+    moment: np.ndarray
+    point: np.ndarray
+
+    def to_json(self) -> dict[str, list[float]]:
+        """``{"force", "moment", "point"}`` as lists."""
+        return {
+            "force": self.force.tolist(),
+            "moment": self.moment.tolist(),
+            "point": self.point.tolist(),
+        }
+
+
+def closure_reactions(robot: Robot, q: np.ndarray, lambdas: np.ndarray) -> dict[str, Reaction]:
+    """One force and one moment per closure from the constraint forces (see :class:`Reaction`).
+
+    Args:
+        robot: The robot.
+        q: Configuration (nq,).
+        lambdas: Closure forces (nc,) in the convention of the module docstring.
+
+    Returns:
+        ``{closure name: Reaction}``, in the description's order.
+
+    """
+    model, data = robot.model, robot.model.createData()
+    pin.forwardKinematics(model, data, q)
+    cs = robot.closure_set
+    out: dict[str, Reaction] = {}
+    for k, (is_point, j1, M1, j2, M2) in enumerate(cs.items):
+        lam = np.asarray(lambdas[cs.offsets[k] : cs.offsets[k + 1]], dtype=float)
+        owner = robot.constraint_owner[k]
+        p = (data.oMi[j1] * M1).translation
+        if is_point:
+            force, moment = lam.copy(), np.zeros(3)
+        else:  # the wrench body 1 exerts on body 2, contact frame: minus it, in world axes
+            R = (data.oMi[j2] * M2).rotation
+            force, moment = -(R @ lam[:3]), -(R @ lam[3:])
+        if owner in out:  # a hinge's second point: add it to the first, with its moment
+            first = out[owner]
+            out[owner] = Reaction(
+                first.force + force, first.moment + np.cross(p - first.point, force), first.point
+            )
+        else:
+            out[owner] = Reaction(force, moment, np.array(p))
+    return out
+
+
 @dataclass
 class StaticsResult:
     """Static equilibrium of the whole mechanism.
@@ -117,7 +184,7 @@ class StaticsResult:
     Attributes:
         tau: Actuator efforts (n_a,) [N m or N].
         lambdas: Closure forces (nc,) [N, N m] (convention in the module docstring).
-        reactions: Closure forces by constraint name.
+        reactions: One force and one moment per closure, by closure name (:class:`Reaction`).
         residual: Norm of the unbalanced generalised force [N m or N] (round-off when the
             equilibrium exists).
 
@@ -125,14 +192,14 @@ class StaticsResult:
 
     tau: np.ndarray
     lambdas: np.ndarray
-    reactions: dict[str, np.ndarray]
+    reactions: dict[str, Reaction]
     residual: float
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dict."""
         return {
             "tau": self.tau.tolist(),
-            "reactions": {k: v.tolist() for k, v in self.reactions.items()},
+            "reactions": {k: v.to_json() for k, v in self.reactions.items()},
             "residual": self.residual,
         }
 
@@ -198,11 +265,7 @@ def static_equilibrium(
             f"{robot.name}: parallel singularity: actuator efforts are not unique here",
         )
     tau, lam = sol[:n_a], sol[n_a:]
-    cs = robot.closure_set
-    reactions = {
-        name: lam[cs.offsets[k] : cs.offsets[k + 1]].copy() for k, name in enumerate(cs.names)
-    }
-    return StaticsResult(tau, lam, reactions, residual)
+    return StaticsResult(tau, lam, closure_reactions(robot, km.q, lam), residual)
 
 
 def statics_json(

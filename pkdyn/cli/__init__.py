@@ -24,8 +24,6 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from pkdyn import __version__
-from pkdyn.cli._common import Parser
 from pkdyn.exceptions import PkdynError
 
 __all__ = ["EXIT_CODES", "Command", "commands", "main"]
@@ -90,6 +88,9 @@ _EPILOG = "exit codes: " + ", ".join(f"{k} {v.split(' (')[0]}" for k, v in EXIT_
 
 def _parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The parser; given the arguments, with only the named command's module (quick start)."""
+    from pkdyn import __version__
+    from pkdyn.cli._common import Parser  # (numpy: imported inside main's handlers)
+
     first = next((a for a in (sys.argv[1:] if argv is None else argv) if a[:1] != "-"), None)
     modules = (COMMANDS[first],) if first in COMMANDS else COMMAND_MODULES
     p = Parser(
@@ -196,6 +197,16 @@ def _quiet_stdout() -> None:
         pass
 
 
+def _last_word(message: str) -> None:
+    """Print the one line of an interrupted run, deaf to a second Ctrl-C or SIGTERM meanwhile."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        try:
+            signal.signal(sig, signal.SIG_IGN)
+        except ValueError:  # not the main thread
+            pass
+    print(message, file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line.
 
@@ -210,9 +221,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     try:  # (only the main thread may install handlers)
         previous = signal.signal(signal.SIGTERM, _on_sigterm)
+        previous_int = signal.getsignal(signal.SIGINT)
         handlers = True
     except ValueError:
-        previous, handlers = None, False
+        previous, previous_int, handlers = None, None, False
     shown = warnings.showwarning
     filters = list(warnings.filters)
     try:
@@ -233,10 +245,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         return 1
     except KeyboardInterrupt:
-        print("pkdyn: interrupted", file=sys.stderr)
+        _last_word("pkdyn: interrupted")
         return 130
     except _Terminated:
-        print("pkdyn: terminated", file=sys.stderr)
+        _last_word("pkdyn: terminated")
         return 143
     except BrokenPipeError:
         _quiet_stdout()
@@ -246,4 +258,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         warnings.filters[:] = filters  # type: ignore[index]
         if handlers:
             signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+            signal.signal(
+                signal.SIGINT, signal.default_int_handler if previous_int is None else previous_int
+            )
     return 0

@@ -11,7 +11,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from pkdyn.exceptions import InvalidInputError, OutputError
+from pkdyn.exceptions import InvalidInputError, OutputError, close_match
 
 __all__ = [
     "Parser",
@@ -54,7 +54,17 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"pkdyn: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"pkdyn: error: {message}{_did_you_mean(message)} (see {self.prog} --help)\n")
+
+
+def _did_you_mean(message: str) -> str:
+    """``; did you mean 'fk'?`` for an argparse "invalid choice" close to a valid one."""
+    import re
+
+    m = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+    if m is None:
+        return ""
+    return close_match(m[1], re.findall(r"'([^']*)'", m[2]))
 
 
 def params(items: Sequence[str] | None) -> dict[str, Any]:
@@ -116,6 +126,12 @@ def output_path(option: str, path: str | None, figure: bool = False) -> str | No
     output_target(path, option)
     if figure:
         check_figure(option, path)
+    from pkdyn.files import check_writable
+
+    try:
+        check_writable(path)  # (root passes os.access; /proc takes no new file)
+    except OutputError as err:
+        raise OutputError(path, f"{option}: {str(err).split(': ', 1)[1]}") from None
     return path
 
 
@@ -203,11 +219,11 @@ def fmt(v: np.ndarray) -> str:
     return " ".join(f"{x:.6f}" for x in v)
 
 
-def configuration(args: argparse.Namespace) -> tuple[Any, np.ndarray]:
+def configuration(args: argparse.Namespace, geometry: bool = False) -> tuple[Any, np.ndarray]:
     """The robot and the assembled configuration named by ``--pose`` or ``--qa``."""
     import pkdyn
 
-    robot = load(args)
+    robot = load(args, geometry=geometry)
     if args.qa is not None:
         return robot, pkdyn.forward_geometry(robot, args.qa, check_limits=False).q
     return robot, pkdyn.inverse_geometry(robot, args.pose, check_limits=False).q

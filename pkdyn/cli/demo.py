@@ -165,13 +165,20 @@ def run_sizing_demo(
             res = size(robot, jt, payload=m)
             grid[(T, m)] = res
             pk = max(a.peak for a in res.actuators)
-            mg = min(a.margin for a in res.actuators)
-            sm = min(a.speed_margin for a in res.actuators)
+            mg = float(np.nanmin([a.margin for a in res.actuators] + [np.inf]))
+            sm = float(np.nanmin([a.speed_margin for a in res.actuators] + [np.inf]))
             flag = " " if res.feasible else "!"
-            cells.append(f"{pk:8.2f} ({100 * mg:4.0f}%,{100 * sm:4.0f}%){flag}")
+            cells.append(f"{pk:8.2f} ({_pct(mg)},{_pct(sm)}){flag}")
         print(f"{T:6.2f}s |" + "".join(f"{c:>24}" for c in cells))
     print("! = a limit is exceeded (negative margin).")
     return {"detail": detail, "grid": grid}
+
+
+def _pct(margin: float) -> str:
+    """A margin in whole percent (``-`` without a limit), never ``-0%``."""
+    from pkdyn.dynamics.sizing import percent
+
+    return percent(margin if np.isfinite(margin) else np.nan, 4, 0).rstrip()
 
 
 def run_geometry_demo(samples: int = 200, seed: int = 0) -> list[dict[str, float]]:

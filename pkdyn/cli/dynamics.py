@@ -8,7 +8,8 @@ from typing import Any
 import numpy as np
 
 from pkdyn.cli._common import emit, load, output_path, robot_command
-from pkdyn.exceptions import InvalidInputError
+from pkdyn.exceptions import InvalidInputError, LimitsExceededError
+from pkdyn.inputs import non_negative
 
 __all__ = ["register"]
 
@@ -16,8 +17,28 @@ __all__ = ["register"]
 def _cmd_simulate(args: argparse.Namespace) -> None:
     from pkdyn.dynamics import simulate
 
-    robot = load(args)
+    output_path("--csv", args.csv)
+    output_path("--plot", args.plot, figure=True)
+    output_path("--html", args.html)
+    robot = load(args, geometry=args.html is not None)
     res = simulate(robot, args.duration, args.dt, integrator=args.integrator, step=args.step)
+    if args.csv:
+        from pkdyn.dynamics.simulation_output import write_simulation_csv
+
+        write_simulation_csv(robot, res, args.csv)
+    if args.plot:
+        from pkdyn.plotting.dynamics import plot_simulation
+
+        plot_simulation(robot, res, path=args.plot)
+    if args.html:
+        from pkdyn.viewer import Scene
+
+        scene = Scene(robot, res.q[0])
+        try:
+            scene.animate(res.t, res.q)
+            scene.save_html(args.html)
+        finally:
+            scene.close()
     payload = {
         "robot": robot.name,
         "duration": float(res.t[-1] - res.t[0]),
@@ -61,6 +82,31 @@ def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
     return opts
 
 
+def _trajectory_file(args: argparse.Namespace, robot: Any) -> Any:
+    """The task trajectory of ``--trajectory FILE.csv``, or ``None`` for a named one."""
+    from pkdyn.dynamics.trajectory import TRAJECTORIES
+
+    if args.trajectory in TRAJECTORIES:
+        return None
+    if not args.trajectory.lower().endswith(".csv"):
+        from pkdyn.exceptions import close_match
+
+        raise InvalidInputError(
+            "--trajectory",
+            f"'{args.trajectory}': one of {', '.join(TRAJECTORIES)} or a .csv file"
+            + close_match(args.trajectory, list(TRAJECTORIES)),
+        )
+    for option, given in (
+        ("--cycle-time", args.cycle_time is not None),
+        ("--cycles", args.cycles != 1),
+    ):
+        if given:
+            raise InvalidInputError(option, "does not apply to a trajectory read from a file")
+    from pkdyn.dynamics.trajectory_file import read_task_csv
+
+    return read_task_csv(robot, args.trajectory)
+
+
 def _fastest_options(args: argparse.Namespace) -> dict[str, Any]:
     """The path's nominal parametrisation: ``cycle_time / dt`` samples (default 1 s)."""
     if args.cycles != 1:
@@ -101,22 +147,30 @@ def _cmd_size(args: argparse.Namespace) -> None:
     elif args.gearboxes:
         raise InvalidInputError("--gearboxes", "needs --catalog (the motors to pair them with)")
     robot = load(args)
-    if args.payload < 0.0 or not np.isfinite(args.payload):
-        raise InvalidInputError("--payload", f"must be >= 0 kg, got {args.payload}")
+    non_negative("--payload", args.payload, "kg")
     if args.show < 0:
         raise InvalidInputError("--show", f"must be >= 0, got {args.show}")
     if args.operating_points and not args.catalog:
         raise InvalidInputError("--operating-points", "needs --catalog (the motors to plot)")
     fast = None
+    from_file = _trajectory_file(args, robot)
     if args.fastest:
         from pkdyn.dynamics.fastest import fastest_trajectory
 
-        task = named_task(robot, args.trajectory, **_fastest_options(args))
+        task = from_file or named_task(robot, args.trajectory, **_fastest_options(args))
         fast = fastest_trajectory(robot, task, payload=args.payload)
         traj = fast.trajectory
         result = sizing_from_efforts(robot, fast.efforts, args.payload)
     else:
-        traj = named_trajectory(robot, args.trajectory, **_trajectory_options(args))
+        # speeds are reported (their margins), not refused: a sizing answers how far off it is
+        if from_file is not None:
+            from pkdyn.dynamics.trajectory import map_task_trajectory
+
+            traj = map_task_trajectory(robot, from_file, check_speeds=False)
+        else:
+            traj = named_trajectory(
+                robot, args.trajectory, check_speeds=False, **_trajectory_options(args)
+            )
         result = size(robot, traj, payload=args.payload)
     selection = None
     if catalog is not None:
@@ -171,6 +225,12 @@ def _cmd_size(args: argparse.Namespace) -> None:
         payload["selection"] = selection.as_json()
         text.append(selection.table(show=args.show))
     emit(args, payload, "\n".join(text))
+    if not result.feasible:  # the report stands; the exit status and one line say no
+        raise LimitsExceededError(
+            f"{robot.name} on {result.trajectory} with {args.payload:g} kg",
+            result.exceeded,
+            "see the margins above (a longer cycle or a lighter payload)",
+        )
 
 
 def register(sub: Any) -> None:
@@ -180,10 +240,23 @@ def register(sub: Any) -> None:
     sp.add_argument("--dt", type=float, default=1e-3, help="output time step [s]")
     sp.add_argument("--integrator", choices=("dopri5", "rk4", "euler"), default="dopri5")
     sp.add_argument("--step", type=float, default=None, help="integration step [s] (default: --dt)")
+    sp.add_argument(
+        "--csv",
+        metavar="FILE",
+        help="write the time series (t, qa_, qa_dot_, tau_, energies, closure_residual)",
+    )
+    sp.add_argument("--plot", metavar="FILE.png", help="plot actuators, energies, closures vs time")
+    sp.add_argument("--html", metavar="FILE", help="save a meshcat animation (static HTML)")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_simulate)
     sp = robot_command(sub, "size", "actuator efforts, speeds and powers along a trajectory")
-    sp.add_argument("--trajectory", choices=("adept", "sine", "p2p"), default="adept")
+    sp.add_argument(
+        "--trajectory",
+        default="adept",
+        metavar="NAME|FILE.csv",
+        help="adept, sine, p2p, or a CSV file: a column t [s] and qa_<actuator> columns "
+        "(actuator space) or the controlled pose components among x y z roll pitch yaw",
+    )
     sp.add_argument("--payload", type=float, default=0.0, help="payload mass [kg]")
     sp.add_argument(
         "--cycle-time",

@@ -25,6 +25,8 @@ from pkdyn.cli._common import (
     units,
 )
 from pkdyn.exceptions import OutputError, PkdynError
+from pkdyn.model.description import CouplingSpec
+from pkdyn.model.robot import PLATFORM_HINT
 
 __all__ = ["register"]
 
@@ -63,6 +65,17 @@ def _cmd_info(args: argparse.Namespace) -> None:
         "actuation": actuation,
         "loops": robot.loops,
         "closures": closures,
+        "couplings": [
+            {
+                "name": c.name,
+                "joint": c.joint,
+                "source": c.source,
+                "coefficients": list(c.coefficients),
+                "joint_ref": c.joint_ref,
+                "source_ref": c.source_ref,
+            }
+            for c in robot.couplings
+        ],
     }
     from pkdyn.model.passive import passive_summary
 
@@ -80,9 +93,19 @@ def _cmd_info(args: argparse.Namespace) -> None:
         f"loops={robot.loops}",
         "actuated: " + ", ".join(limits(a) for a in actuation),
         "closures: " + ", ".join(f"{c['name']} ({c['type']})" for c in closures),
-        "passive: " + (_passive_text(passive) or "none"),
     ]
+    if robot.couplings:
+        lines.append("couplings: " + ", ".join(_coupling_text(c) for c in robot.couplings))
+    lines.append("passive: " + (_passive_text(passive) or "none"))
     emit(args, payload, "\n".join(lines))
+
+
+def _coupling_text(c: CouplingSpec) -> str:
+    """``name (joint = p(source))`` of a coupling, coefficients constant term first."""
+    coef = " ".join(f"{v:.6g}" for v in c.coefficients)
+    if c.source is None:
+        return f"{c.name} ({c.joint} locked at {c.joint_ref + c.coefficients[0]:.6g})"
+    return f"{c.name} ({c.joint} from {c.source}, coefficients {coef})"
 
 
 def _values(x: list[float]) -> str:
@@ -150,7 +173,9 @@ def _cmd_fk(args: argparse.Namespace) -> None:
     robot = load(args)
     res = pkdyn.forward_geometry(robot, args.qa)
     if res.placement is None:
-        raise PkdynError(f"{robot.name} declares no platform frame; nothing to report")
+        raise PkdynError(
+            f"{robot.name} declares no platform frame, so no pose to report; {PLATFORM_HINT}"
+        )
     payload = {
         "position": res.position.tolist(),
         "rpy": res.rpy.tolist(),
@@ -213,11 +238,20 @@ def _cmd_statics(args: argparse.Namespace) -> None:
 
     robot, q = configuration(args)
     out = statics_json(robot, q, args.wrench, gravity=args.gravity)
-    text = "\n".join(
+    lines = [
         f"{n}: {t:.6g} {u[2]}"
         for n, t, u in zip(out["actuators"], out["tau"], units(robot), strict=True)
-    )
-    emit(args, out, text)
+    ]
+    for name, r in out["reactions"].items():
+        lines.append(
+            f"closure {name}: force {_vector(r['force'])} N, moment {_vector(r['moment'])} N m "
+            f"about {_vector(r['point'])} m (on its first body, world axes)"
+        )
+    emit(args, out, "\n".join(lines))
+
+
+def _vector(v: list[float]) -> str:
+    return "[" + " ".join(f"{x + 0.0:.4g}" for x in v) + "]"  # (+ 0.0: no negative zero)
 
 
 def register(sub: Any) -> None:

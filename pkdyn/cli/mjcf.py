@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from pkdyn.cli._common import load, output_path, robot_command
-from pkdyn.exceptions import PkdynError
+from pkdyn.inputs import positive
 
 __all__ = ["register"]
 
@@ -15,8 +15,7 @@ __all__ = ["register"]
 def _cmd_mjcf(args: argparse.Namespace) -> None:
     from pkdyn.model.formats.mjcf import MjcfOptions, to_mjcf, write_mjcf
 
-    if not args.timestep > 0.0:
-        raise PkdynError(f"--timestep must be > 0 s, got {args.timestep}")
+    positive("--timestep", args.timestep, "s")
     output_path("-o", args.output)
     robot = load(args, geometry=True)
     options = MjcfOptions(timestep=args.timestep, contacts=not args.no_contacts)

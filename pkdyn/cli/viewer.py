@@ -34,26 +34,50 @@ def _read_points(path: str) -> np.ndarray:
     return P
 
 
-def _wait_for_stop() -> None:
+class _Stop(Exception):  # noqa: N818 (a stop request, not an error)
+    """The live viewer was asked to stop by a signal (its number)."""
+
+    def __init__(self, signum: int) -> None:
+        self.signum = signum
+        super().__init__(signum)
+
+
+def _wait_for_stop() -> int:
     """Block until Ctrl-C, SIGTERM or SIGHUP (the live scene's server is closed afterwards).
 
     The handlers are installed explicitly: a process started in the background inherits an
     ignored SIGINT, and meshcat's server runs in its own session, so it would outlive us.
+
+    Returns:
+        The signal that stopped it.
+
     """
 
     def stop(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt
+        raise _Stop(signum)
 
     signals = [signal.SIGINT, signal.SIGTERM, signal.SIGHUP]
     previous = {s: signal.signal(s, stop) for s in signals}
     try:
         while True:
             time.sleep(3600)
-    except KeyboardInterrupt:
+    except _Stop as err:
         print("pkdyn: viewer stopped", flush=True)
+        return err.signum
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
+
+
+def _exit_for(signum: int) -> None:
+    """Leave as the signal asks: 130 (Ctrl-C), 143 (SIGTERM), 129 (SIGHUP): ``EXIT_CODES``."""
+    from pkdyn.cli import _Terminated
+
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
+    if signum == signal.SIGTERM:
+        raise _Terminated
+    raise SystemExit(128 + signum)
 
 
 def _configuration(robot: Any, args: argparse.Namespace) -> np.ndarray | None:
@@ -104,9 +128,10 @@ def _cmd_view(args: argparse.Namespace) -> None:
             print(f"wrote {out} ({size:.1f} MB): {', '.join(what)}")
             return
         print(f"pkdyn: viewer at {scene.url} ({', '.join(what)}); Ctrl-C to stop", flush=True)
-        _wait_for_stop()
+        signum = _wait_for_stop()
     finally:
         scene.close()
+    _exit_for(signum)
 
 
 def register(sub: Any) -> None:

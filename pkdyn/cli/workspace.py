@@ -4,28 +4,26 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Callable
 from typing import Any
 
-from pkdyn.cli._common import emit, load, output_path, posed_command, robot_command
+from pkdyn.cli._common import (
+    configuration,
+    emit,
+    load,
+    output_path,
+    posed_command,
+    robot_command,
+)
 
 __all__ = ["register"]
-
-
-def _posed_robot(args: argparse.Namespace) -> tuple[Any, Any]:
-    """Robot with geometry and the configuration named by ``--pose`` or ``--qa``."""
-    import pkdyn
-
-    robot = load(args, geometry=True)
-    if args.qa is not None:
-        return robot, pkdyn.forward_geometry(robot, args.qa, check_limits=False).q
-    return robot, pkdyn.inverse_geometry(robot, args.pose, check_limits=False).q
 
 
 def _cmd_collisions(args: argparse.Namespace) -> None:
     from pkdyn.analysis.collisions import distance_report
     from pkdyn.exceptions import InvalidInputError
 
-    robot, q = _posed_robot(args)
+    robot, q = configuration(args, geometry=True)
     pairs = []
     for item in args.pair or []:
         a, sep, b = item.partition(",")
@@ -78,11 +76,29 @@ def _cmd_clavel(args: argparse.Namespace, robot: Any) -> None:
     emit(args, payload, "\n".join(lines))
 
 
+def _sampled(
+    args: argparse.Namespace,
+    robot: Any,
+    compute: Callable[..., Any],
+    options: dict[str, Any],
+    plot: Callable[..., Any],
+    to_json: Callable[[Any], dict[str, Any]],
+    title: Callable[[Any], str] | None = None,
+) -> tuple[dict[str, Any], str]:
+    """Run one sampled workspace, plot it if asked: its JSON and text (every ``--kind``)."""
+    result = compute(robot, **options, progress=False if args.json else None)
+    if args.plot:
+        extra = {} if title is None else {"title": title(result)}
+        plot(result, path=args.plot, **extra)
+    out = to_json(result)
+    return out, _text(out)
+
+
 def _translation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], str]:
+    from pkdyn.plotting.workspace import plot_translation_workspace
     from pkdyn.workspace.translation import translation_workspace
 
-    ws = translation_workspace(
-        robot,
+    options = dict(
         rpy=args.rpy,
         bounds=_box(args.bounds),
         step=args.step,
@@ -90,16 +106,14 @@ def _translation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], 
         limits=args.limits,
         margin=args.margin,
         method=args.method,
-        progress=False if args.json else None,
     )
-    if args.plot:
-        from pkdyn.plotting.workspace import plot_translation_workspace
-
-        plot_translation_workspace(ws, path=args.plot)
-    return ws.as_json(), _text(ws.as_json())
+    return _sampled(
+        args, robot, translation_workspace, options, plot_translation_workspace, _as_json
+    )
 
 
 def _orientation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], str]:
+    from pkdyn.plotting.workspace import plot_orientation_workspace
     from pkdyn.workspace.orientation import mel_study, orientation_workspace
 
     if args.mel:
@@ -125,8 +139,7 @@ def _orientation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], 
         return payload, "\n".join(
             ["MEL prototype study (Merlet ch. 3), allowed solid angle:", *lines]
         )
-    ow = orientation_workspace(
-        robot,
+    options = dict(
         center=args.center,
         N=args.vector,
         X1=args.x1,
@@ -136,34 +149,35 @@ def _orientation(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], 
         n2=args.n2,
         limits=args.limits,
         margin=args.margin,
-        progress=False if args.json else None,
     )
-    if args.plot:
-        from pkdyn.plotting.workspace import plot_orientation_workspace
-
-        plot_orientation_workspace(ow, path=args.plot)
-    return ow.as_json(), _text(ow.as_json())
+    return _sampled(
+        args, robot, orientation_workspace, options, plot_orientation_workspace, _as_json
+    )
 
 
 def _dextrous(args: argparse.Namespace, robot: Any) -> tuple[dict[str, Any], str]:
+    from pkdyn.plotting.workspace import plot_translation_workspace
     from pkdyn.workspace.dextrous import dextrous_json, dextrous_workspace
 
-    ws = dextrous_workspace(
-        robot,
+    options = dict(
         bounds=_box(args.bounds),
         step=args.step,
         samples=args.samples,
         joint_limits=args.joint_limits,
-        progress=False if args.json else None,
     )
-    if args.plot:
-        from pkdyn.plotting.workspace import plot_translation_workspace
+    return _sampled(
+        args,
+        robot,
+        dextrous_workspace,
+        options,
+        plot_translation_workspace,
+        dextrous_json,
+        title=lambda ws: f"{ws.robot}: dextrous workspace, {ws.volume:.4g} m^3",
+    )
 
-        plot_translation_workspace(
-            ws, path=args.plot, title=f"{ws.robot}: dextrous workspace, {ws.volume:.4g} m^3"
-        )
-    out = dextrous_json(ws)
-    return out, _text(out)
+
+def _as_json(result: Any) -> dict[str, Any]:
+    return dict(result.as_json())
 
 
 def _box(values: list[float] | None) -> Any:
@@ -256,27 +270,14 @@ def register(sub: Any) -> None:
         metavar=("X", "Y", "Z"),
         help="orientation: fixed point C [m]",
     )
-    sp.add_argument(
-        "--vector",
-        nargs=3,
-        type=float,
-        default=[0.0, 0.0, 1.0],
-        help="orientation: platform-fixed vector N",
-    )
-    sp.add_argument(
-        "--x1",
-        nargs=3,
-        type=float,
-        default=[1.0, 0.0, 0.0],
-        help="orientation: first rotation axis",
-    )
-    sp.add_argument(
-        "--x2",
-        nargs=3,
-        type=float,
-        default=[0.0, 0.0, 1.0],
-        help="orientation: second rotation axis",
-    )
+    for flag, default, what in (
+        ("--vector", (0.0, 0.0, 1.0), "platform-fixed vector N"),
+        ("--x1", (1.0, 0.0, 0.0), "first rotation axis"),
+        ("--x2", (0.0, 0.0, 1.0), "second rotation axis"),
+    ):
+        sp.add_argument(
+            flag, nargs=3, type=float, default=list(default), help=f"orientation: {what}"
+        )
     sp.add_argument("--n1", type=int, default=180, help="orientation: theta1 samples")
     sp.add_argument("--n2", type=int, default=360, help="orientation: theta2 samples")
     sp.add_argument(

@@ -6,6 +6,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.model.robot import Robot
+from solvers.energy import KineticEnergy
 
 __all__ = ["elastic_energy", "mechanical_energy"]
 
@@ -23,7 +24,7 @@ def mechanical_energy(robot: Robot, q: np.ndarray, v: np.ndarray) -> tuple[float
 
     """
     model, data = robot.model, robot.data
-    kinetic = float(pin.computeKineticEnergy(model, data, q, v))
+    kinetic = KineticEnergy(model)(model, data, q, v)  # with every joint's armature
     potential = float(pin.computePotentialEnergy(model, data, q))
     return kinetic, potential
 

@@ -16,9 +16,11 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from pkdyn.dynamics.actuation import actuation, drives
+from pkdyn.dynamics.callbacks import user_efforts
 from pkdyn.exceptions import InvalidInputError, SimulationError
+from pkdyn.inputs import callable_input, count, positive
 from pkdyn.model.passive import FRICTION_SMOOTHING
-from pkdyn.model.pose import as_finite
+from pkdyn.model.pose import as_configuration, as_finite
 from pkdyn.model.robot import Robot
 from solvers import ForwardDynamics, ForwardResult, IntegrationError, PassiveForces
 
@@ -85,27 +87,28 @@ def simulate(
             limit, or the closures cannot be kept.
 
     """
-    for what, val in (("duration", duration), ("dt", dt)):
-        if not np.isfinite(val) or val <= 0.0:
-            raise InvalidInputError(what, f"must be > 0 s, got {val}")
+    duration = positive("duration", duration, "s")
+    dt = positive("dt", dt, "s")
+    record_every = count("record_every", record_every)
+    if step is not None:
+        step = positive("step", step, "s")
+    if not isinstance(integrator, str) or integrator not in ("dopri5", "rk4", "euler"):
+        raise InvalidInputError("integrator", f"unknown {integrator!r} (dopri5, rk4 or euler)")
     if dt > duration:
         raise InvalidInputError(
             "dt", f"{dt:g} s is longer than the duration {duration:g} s: no step would be taken"
         )
     _check_work(robot, duration, dt, record_every)
-    if integrator not in ("dopri5", "rk4", "euler"):
-        raise InvalidInputError("integrator", f"unknown {integrator!r} (dopri5, rk4 or euler)")
-    if record_every < 1:
-        raise InvalidInputError("record_every", f"must be >= 1, got {record_every}")
-    if step is not None and not (np.isfinite(step) and step > 0.0):
-        raise InvalidInputError("step", f"must be > 0 s, got {step}")
     if step is not None and duration / min(step, dt) > MAX_STEPS:
         raise InvalidInputError(
             "step",
             f"{duration:g} s in integration steps of {min(step, dt):g} s is "
             f"{duration / min(step, dt):.3g} steps; at most {MAX_STEPS:.0e}: use a longer step",
         )
-    q = robot.q_home if q0 is None else as_finite("q0", q0, robot.nq)
+    for what, fn in (("torque", torque), ("motor_torque", motor_torque)):
+        if fn is not None:
+            callable_input(what, fn)
+    q = robot.q_home if q0 is None else as_configuration(robot.model, "q0", q0)
     v = np.zeros(robot.nv) if v0 is None else as_finite("v0", v0, robot.nv)
     fd = ForwardDynamics(
         robot.model,
@@ -113,26 +116,20 @@ def simulate(
         actuation(robot),
         passive=_passive(robot, passive, viscous, coulomb),
         integrator=integrator,
+        couplings=robot.closure_set.couplings,
     )
     if torque is not None and motor_torque is not None:
         raise InvalidInputError("motor_torque", "give either torque or motor_torque, not both")
     drv = drives(robot)
-    if torque is None and (motor_torque is not None or not drv.lossless):
-        torque = _through_drives(robot, motor_torque)
-    tau_fn = torque
+    tau_fn = None
     if torque is not None:
-        n_a = len(robot.actuators)
-
-        def tau_fn(t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-            out = np.asarray(torque(t, q, v), dtype=float).reshape(-1)
-            if out.size != n_a or not np.all(np.isfinite(out)):
-                raise SimulationError(f"torque function returned {out!r} ({n_a} finite values)", t)
-            return out
-
+        tau_fn = user_efforts("torque", torque, len(robot.actuators))
+    elif motor_torque is not None or not drv.lossless:
+        tau_fn = _through_drives(robot, motor_torque)
     try:
         out = fd.simulate(q, v, duration, dt, tau=tau_fn, record_every=record_every, step=step)
     except IntegrationError as err:
-        raise SimulationError(str(err), err.time) from None
+        raise SimulationError(_untimed(str(err), err.time), err.time) from None
     g = max(float(np.linalg.norm(robot.model.gravity.linear)), 1.0)
     mass = sum(robot.model.inertias[j].mass for j in range(robot.model.njoints))
     out.energy_scale = float(mass * g * robot.length_scale)
@@ -166,6 +163,12 @@ def _check_work(robot: Robot, duration: float, dt: float, record_every: int) -> 
             f"{need / 1e9:.3g} GB (at most {MAX_RECORD_BYTES / 1e9:.3g} GB); record every "
             f"{every} steps or fewer",
         )
+
+
+def _untimed(message: str, time: float) -> str:
+    """A solver's message without its leading ``t = ... s:`` (the error adds its own)."""
+    prefix = f"t = {time:.6g} s: "
+    return message[len(prefix) :] if message.startswith(prefix) else message
 
 
 def _extra(name: str, x: float | Sequence[float], nv: int) -> np.ndarray:
@@ -206,15 +209,10 @@ def _through_drives(robot: Robot, motor_torque: TorqueFn | None) -> TorqueFn:
     n_a = len(robot.actuators)
     zero = np.zeros(n_a)
 
+    motor = None if motor_torque is None else user_efforts("motor_torque", motor_torque, n_a)
+
     def joint_side(t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        if motor_torque is None:
-            tau_m = zero
-        else:
-            tau_m = np.asarray(motor_torque(t, q, v), dtype=float).reshape(-1)
-            if tau_m.size != n_a or not np.all(np.isfinite(tau_m)):
-                raise SimulationError(
-                    f"motor torque function returned {tau_m!r} ({n_a} finite values)", t
-                )
+        tau_m = zero if motor is None else motor(t, q, v)
         return drv.joint_effort(tau_m, v[va])
 
     return joint_side

@@ -20,7 +20,7 @@ import numpy as np
 from pkdyn.dynamics.actuation import actuation
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.progress import progress as progress_bar
 from solvers import InconsistentMotionError, InverseDynamics
 from solvers import InfeasibleError as _SolverInfeasible
@@ -93,7 +93,9 @@ def _wrench_series(robot: Robot, wrench: Any, n: int) -> np.ndarray | None:
     if W.shape != (n, 6) or not np.all(np.isfinite(W)):
         raise InvalidInputError("wrench", f"expected 6 finite values or ({n}, 6), got {W.shape}")
     if robot.platform_frame is None:
-        raise InvalidInputError("wrench", f"{robot.name} declares no platform to apply it to")
+        raise InvalidInputError(
+            "wrench", f"{robot.name} declares no platform to apply it to; {PLATFORM_HINT}"
+        )
     return W
 
 
@@ -178,6 +180,7 @@ def inverse_dynamics(
         lower=lower,
         upper=upper,
         weights=weights,
+        couplings=robot.closure_set.couplings,
     )
     elements = robot.passive if passive else None
     F_passive = None if elements is None else elements.forces(traj.q, traj.v)  # vectorised

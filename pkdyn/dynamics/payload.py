@@ -9,8 +9,9 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.inputs import non_negative
 from pkdyn.model.pose import as_finite
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 
 __all__ = ["with_payload"]
 
@@ -34,13 +35,15 @@ def with_payload(
         A robot whose platform body includes the payload (same joints, closures and home).
 
     Raises:
-        InvalidInputError: Negative or non-finite mass, or a robot without platform.
+        InvalidInputError: Negative, non-finite or absurd (beyond 1e9 kg) mass, or a robot
+            without platform.
 
     """
-    if not np.isfinite(mass) or mass < 0.0:
-        raise InvalidInputError("payload", f"payload mass must be >= 0 kg, got {mass}")
+    mass = non_negative("payload", mass, "kg")
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform to carry a payload")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform to carry a payload; {PLATFORM_HINT}"
+        )
     c = as_finite("offset", offset, 3)
     I3 = np.zeros((3, 3)) if inertia is None else np.asarray(inertia, dtype=float).reshape(3, 3)
     model = pin.Model(robot.model)

@@ -32,7 +32,7 @@ from pkdyn.dynamics.trajectory import (
 from pkdyn.exceptions import InvalidInputError, TrajectoryError
 from pkdyn.model.assembly import DEFAULT_TOL
 from pkdyn.model.pose import pose_from_vector
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 from solvers import FramePoseTask, solve_lm
 
 __all__ = ["map_redundant_trajectory"]
@@ -84,7 +84,9 @@ def map_redundant_trajectory(
 
     """
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
     iq, iv = _indices(robot, joints)
     N, m = task.t.size, iq.size
     arrays = [np.asarray(x, dtype=float) for x in (values, rates, accelerations)]

@@ -29,7 +29,14 @@ from pkdyn.exceptions import OutputError
 from pkdyn.files import atomic_write
 from pkdyn.model.robot import Robot
 
-__all__ = ["FEASIBLE_TOL", "ActuatorSizing", "SizingResult", "size", "sizing_from_efforts"]
+__all__ = [
+    "FEASIBLE_TOL",
+    "ActuatorSizing",
+    "SizingResult",
+    "percent",
+    "size",
+    "sizing_from_efforts",
+]
 
 
 FEASIBLE_TOL = 1e-6
@@ -48,9 +55,9 @@ class ActuatorSizing:
         peak_speed: Peak ``|speed|``, joint side [rad/s or m/s].
         peak_power: Peak ``|effort x speed|`` [W].
         limit: Effort limit, joint side (URDF ``effort``; ``inf`` when absent).
-        margin: ``1 - peak / limit`` (negative: limit exceeded).
-        speed_limit: Speed limit, joint side (URDF ``velocity``).
-        speed_margin: ``1 - peak_speed / speed_limit``.
+        margin: ``1 - peak / limit`` (negative: limit exceeded; NaN without a limit).
+        speed_limit: Speed limit, joint side (URDF ``velocity``; ``inf`` when absent).
+        speed_margin: ``1 - peak_speed / speed_limit`` (NaN without a limit).
         reduction: Transmission reduction (motor speed = reduction x joint speed).
         motor_peak: Peak ``|effort|`` on the motor side [N m or N].
         motor_rms: RMS effort on the motor side [N m or N].
@@ -132,7 +139,22 @@ class SizingResult:
     def feasible(self) -> bool:
         """All peaks within the effort and speed limits (to :data:`FEASIBLE_TOL`)."""
         tol = -FEASIBLE_TOL
-        return all(a.margin >= tol and a.speed_margin >= tol for a in self.actuators)
+        return all(
+            not (m < tol) for a in self.actuators for m in (a.margin, a.speed_margin)
+        )  # (NaN: no limit)
+
+    @property
+    def exceeded(self) -> list[str]:
+        """The limits exceeded, one phrase each (``motor1 torque by 16 %``); empty if feasible."""
+        out = []
+        for a in self.actuators:
+            for what, m in (
+                ("torque" if not a.prismatic else "force", a.margin),
+                ("speed", a.speed_margin),
+            ):
+                if m < -FEASIBLE_TOL:
+                    out.append(f"{a.name} {what} by {-100 * m:.3g} %")
+        return out
 
     def as_json(self) -> dict[str, Any]:
         """JSON-ready summary (``actuators``: list of per-actuator dicts)."""
@@ -161,9 +183,10 @@ class SizingResult:
                 f"{'':>8} {'[W]':>8} {f'[{me}]':>9} {f'[{me}]':>9}"
             )
         for a in self.actuators:
+            limit = f"{a.limit:8.3g}" if math.isfinite(a.limit) else f"{'-':>8}"
             rows.append(
-                f"{a.name:<10} {a.peak:9.3f} {a.rms:9.3f} {a.limit:8.3g} {100 * a.margin:6.1f}% "
-                f"{a.peak_speed:8.3f} {100 * a.speed_margin:7.1f}% {a.peak_power:8.1f} "
+                f"{a.name:<10} {a.peak:9.3f} {a.rms:9.3f} {limit} {percent(a.margin)} "
+                f"{a.peak_speed:8.3f} {percent(a.speed_margin, 7)} {a.peak_power:8.1f} "
                 f"{a.motor_peak:9.4f} {a.motor_rms:9.4f}"
                 + (f"  {a.units[0]}, {a.units[1]}, motor {a.units[2]}" if mixed else "")
             )
@@ -210,11 +233,20 @@ def _rms(t: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def _margin(peak: float, limit: float) -> float:
+    """``1 - peak / limit``; NaN where there is no limit (no margin to report)."""
     if not math.isfinite(limit):
-        return 1.0
+        return math.nan
     if limit <= 0.0:
         return -math.inf
     return 1.0 - peak / limit
+
+
+def percent(margin: float, width: int = 6, digits: int = 1) -> str:
+    """A margin as a percentage for tables: ``-`` without a limit, never ``-0.0%``."""
+    if math.isnan(margin):
+        return f"{'-':>{width}} "
+    v = round(100.0 * margin, digits)
+    return f"{v + 0.0:{width}.{digits}f}%"  # (+ 0.0 turns -0.0 into 0.0)
 
 
 def size(

@@ -49,7 +49,7 @@ from pkdyn.exceptions import (
 )
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.pose import pose_from_vector, pose_to_vector
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.progress import progress as progress_bar
 from solvers import numerics
 
@@ -461,6 +461,7 @@ def map_task_trajectory(
     q_init: np.ndarray | None = None,
     check_limits: bool = True,
     progress: bool | None = None,
+    check_speeds: bool = True,
 ) -> JointTrajectory:
     """Joint-space trajectory ``(q, v, a)`` of the mechanism following a platform trajectory.
 
@@ -475,6 +476,8 @@ def map_task_trajectory(
         check_limits: Raise if an actuator leaves its position or velocity limits.
         progress: Progress bar: ``True`` / ``False`` force it on / off, ``None`` (default) shows
             it when stderr is a terminal and there are more than 2000 samples.
+        check_speeds: With ``check_limits``, also raise beyond a velocity limit (``False``: a
+            sizing reports the speed margin instead).
 
     Returns:
         The joint trajectory.
@@ -486,7 +489,9 @@ def map_task_trajectory(
 
     """
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
     model, data = robot.model, robot.data
     rows = robot.task_rows
     N = task.t.size
@@ -578,7 +583,7 @@ def map_task_trajectory(
             a, _, _ = _lstsq(K, rhs, 1e-10)
             bias = pin.rnea(model, data, q, v, a)
             a = a - Nint @ np.linalg.solve(NMN, Nint.T @ bias)
-        if check_limits:
+        if check_limits and check_speeds:
             fast = np.flatnonzero(np.abs(v[robot.actuated_v]) > vel_limit * (1.0 + 1e-9))
             if fast.size:
                 i = int(fast[0])
@@ -599,7 +604,9 @@ def map_task_trajectory(
 
 def _home_pose(robot: Robot) -> np.ndarray:
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
     pin.framesForwardKinematics(robot.model, robot.data, robot.q_home)
     M = robot.data.oMf[robot.platform_frame]
     pos, rpy = pose_to_vector(M)
@@ -607,7 +614,11 @@ def _home_pose(robot: Robot) -> np.ndarray:
 
 
 def named_trajectory(
-    robot: Robot, name: str, check_limits: bool = True, **options: Any
+    robot: Robot,
+    name: str,
+    check_limits: bool = True,
+    check_speeds: bool = True,
+    **options: Any,
 ) -> JointTrajectory:
     """A built-in trajectory of ``robot`` (see :func:`named_task`), mapped to joint space.
 
@@ -615,6 +626,7 @@ def named_trajectory(
         robot: The robot.
         name: ``adept``, ``sine`` or ``p2p``.
         check_limits: Raise if an actuator leaves its position or velocity limits.
+        check_speeds: With ``check_limits``, also raise beyond a velocity limit.
         **options: See :func:`named_task`.
 
     Returns:
@@ -625,7 +637,8 @@ def named_trajectory(
         TrajectoryError: The trajectory leaves the workspace or meets a singularity.
 
     """
-    return map_task_trajectory(robot, named_task(robot, name, **options), check_limits=check_limits)
+    task = named_task(robot, name, **options)
+    return map_task_trajectory(robot, task, check_limits=check_limits, check_speeds=check_speeds)
 
 
 def named_task(robot: Robot, name: str, **options: Any) -> TaskTrajectory:

@@ -8,6 +8,7 @@ from collections.abc import Callable, Iterable
 import numpy as np
 
 from pkdyn.exceptions import ParameterError
+from pkdyn.inputs import MAX_MAGNITUDE
 
 __all__ = ["finite", "in_range", "middle_of_reach", "positive", "within_limits"]
 
@@ -17,6 +18,10 @@ def positive(family: str, **values: float) -> None:
     for k, v in values.items():
         if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
             raise ParameterError(family, k, f"must be a positive finite number, got {v!r}")
+        if v > MAX_MAGNITUDE:
+            raise ParameterError(
+                family, k, f"{v:g} is beyond any plausible value (at most {MAX_MAGNITUDE:g})"
+            )
 
 
 def finite(family: str, **values: float) -> None:

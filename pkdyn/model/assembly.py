@@ -19,10 +19,15 @@ from functools import partial
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import AssemblyError, JointLimitError, UnreachablePoseError
+from pkdyn.exceptions import (
+    AssemblyError,
+    InvalidInputError,
+    JointLimitError,
+    UnreachablePoseError,
+)
 from pkdyn.model.families import FAMILIES, Family
 from pkdyn.model.pose import as_finite, pose_from_vector, pose_to_vector
-from pkdyn.model.robot import Robot
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 from solvers import FramePoseTask, SolveResult, solve_lm
 
 __all__ = [
@@ -103,7 +108,7 @@ def _worst(robot: Robot, q: np.ndarray) -> tuple[str, float]:
     if robot.closure_set.nc == 0:
         return "-", 0.0
     per = robot.closure_set.split(robot.closure_set.residual(robot.data, q))
-    owners = dict(zip(robot.closure_set.names, robot.constraint_owner, strict=True))
+    owners = dict(zip(robot.closure_set.names, robot.row_owners, strict=True))
     name = max(per, key=lambda k: per[k])
     return owners[name], per[name]
 
@@ -223,6 +228,7 @@ def forward_geometry(
     """
     qa = as_finite("actuated coordinates", qa, len(robot.actuators))
     start = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
+    _refuse_far_actuators(robot, start, qa)
     q0 = start.copy()
     q0[robot.actuated_q] = qa
     if check_limits:
@@ -314,7 +320,9 @@ def inverse_geometry(
 
     Args:
         robot: The robot.
-        pose: ``[x, y, z]`` or ``[x, y, z, roll, pitch, yaw]`` [m, rad], or a placement.
+        pose: ``[x, y, z]`` or ``[x, y, z, roll, pitch, yaw]`` [m, rad], a placement, or
+            only the controlled components in that order when they are neither 3 nor 6 (a
+            five-bar: ``[x, y]``).
         q_init: Initial configuration (nq,) (default ``robot.q_home``).
         tol: Residual threshold [m or rad].
         check_limits: Raise if an actuator ends outside its limits.
@@ -328,12 +336,16 @@ def inverse_geometry(
         JointLimitError: The pose needs an actuator outside its limits.
 
     """
-    target = pose_from_vector(pose)
     if robot.platform_frame is None:
-        raise UnreachablePoseError("-", 0.0, f"{robot.name} declares no platform frame")
+        raise UnreachablePoseError(
+            "-", 0.0, f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
+    partial = _partial_pose(robot, pose)
+    target = pose_from_vector(pose if partial is None else partial)
     task = FramePoseTask(robot.model, robot.platform_frame, robot.task_rows)
     task.target = target
     q0 = robot.q_home if q_init is None else as_finite("q_init", q_init, robot.nq)
+    _refuse_far_pose(robot, q0, target)
     fam = _family_of(robot) if q_init is None else None
     seeded = None
     if fam is not None:  # the family's working mode, from its closed form
@@ -358,10 +370,76 @@ def inverse_geometry(
             f"{np.array2string(rpy, precision=4)} rad is out of reach (closest configuration "
             f"misses it by {pose_err:.3g}; closure '{name}' residual {res:.3g})",
         )
-    _check_uncontrolled(robot, pose, target, sol.q)
+    if partial is None:  # (a partial pose gives no uncontrolled component)
+        _check_uncontrolled(robot, pose, target, sol.q)
     if check_limits:
         check_actuator_limits(robot, sol.q)
     return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.nc]), initial=0.0)))
+
+
+FAR = 100.0
+"""Farthest a requested pose may lie from the platform's start (in robot sizes), or actuator
+values from the start's (in actuator scales: rad, or robot sizes for prismatic actuators),
+before they are refused as out of reach: the continuation towards them takes one solve per
+tenth of a size (1,000 at this distance), and absurd values (1e308) would overflow."""
+
+
+def _refuse_far_pose(robot: Robot, start: np.ndarray, target: pin.SE3) -> None:
+    """Refuse a target more than :data:`FAR` robot sizes from the platform's start position."""
+    size = _size(robot)
+    d = float(np.max(np.abs(target.translation - robot.platform_placement(start).translation)))
+    if d > FAR * size:  # (the largest component: no overflow)
+        pos = np.array2string(target.translation, precision=4)
+        raise UnreachablePoseError(
+            "-",
+            0.0,
+            f"{robot.name}: pose {pos} m lies {d:.3g} m from the platform's position along an "
+            f"axis, more than {FAR:g} times the robot's size ({size:.3g} m): out of reach",
+        )
+
+
+def _refuse_far_actuators(robot: Robot, start: np.ndarray, qa: np.ndarray) -> None:
+    """Refuse actuator values more than :data:`FAR` actuator scales from the start's."""
+    a0 = start[robot.actuated_q]
+    d = np.abs(qa - a0) / robot.actuator_scale
+    if d.size and float(np.max(d)) > FAR:
+        k = int(np.argmax(d))
+        unit = "m" if robot.actuator_prismatic[k] else "rad"
+        raise InvalidInputError(
+            "actuated coordinates",
+            f"{robot.actuators[k].name} = {qa[k]:.6g} {unit} is {d[k]:.3g} times its scale "
+            f"({robot.actuator_scale[k]:.3g} {unit}) from its start {a0[k]:.6g} {unit}: beyond "
+            "any reachable value",
+        )
+
+
+_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
+
+
+def _partial_pose(robot: Robot, pose: Sequence[float] | np.ndarray | pin.SE3) -> np.ndarray | None:
+    """A full pose vector from the controlled components only, or ``None`` for a full pose.
+
+    A pose of ``n`` values that is neither ``x y z`` nor ``x y z roll pitch yaw`` gives the
+    robot's ``n`` controlled components, in the order ``x y z roll pitch yaw`` (a five-bar:
+    ``x y``; a four-bar knee: its one); the others are those of the home pose (placeholders:
+    the robot does not control them).
+    """
+    if isinstance(pose, pin.SE3):
+        return None
+    values = as_finite("pose", pose)
+    rows = np.asarray(robot.task_rows, dtype=int)
+    if values.size in (3, 6):
+        return None
+    if values.size != rows.size:
+        names = " ".join(_NAMES[int(r)] for r in rows)
+        raise InvalidInputError(
+            "pose",
+            f"expected x y z [roll pitch yaw] (3 or 6 values) or the {rows.size} components "
+            f"{robot.name} controls ({names}), got {values.size}",
+        )
+    home = np.concatenate(pose_to_vector(robot.platform_placement(robot.q_home)))
+    home[rows] = values
+    return home
 
 
 UNCONTROLLED_TOL = 1e-9
@@ -401,7 +479,12 @@ def _check_uncontrolled(
             "-",
             0.0,
             f"{robot.name} controls only {task} of its platform: {what} cannot be imposed; "
-            "give those components as the robot reaches them, or only the controlled ones",
+            "give those components as the robot reaches them"
+            + (
+                f", or only the {len(robot.task_rows)} controlled ones"
+                if len(robot.task_rows) not in (3, 6)
+                else ""
+            ),
         )
 
 

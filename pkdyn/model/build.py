@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import re
 import sys
@@ -12,8 +13,9 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
-from pkdyn.model.description import ClosureSpec, FrameRef, JointSpec
+from pkdyn.model.description import ClosureSpec, CouplingSpec, FrameRef, JointSpec
 from pkdyn.model.validate import check_data_size
+from solvers.coupling import MAX_COEFFICIENTS, JointCoupling
 
 __all__ = [
     "HINGE_ARM",
@@ -24,6 +26,7 @@ __all__ = [
     "replace_joints",
     "resolve_frame",
     "constraint_models",
+    "joint_couplings",
 ]
 
 HINGE_ARM = 0.1
@@ -415,3 +418,67 @@ def constraint_models(
             out.append(cm2)
             owner.append(c.name)
     return out, owner
+
+
+def _coupled_joint(model: pin.Model, name: str, source: str, what: str) -> int:
+    """Joint id of a 1-DoF joint named by a coupling, or a :class:`DescriptionError`."""
+    if not model.existJointName(name):
+        raise DescriptionError(source, what, f"names joint '{name}', which is not a moving joint")
+    jid = model.getJointId(name)
+    jm = model.joints[jid]
+    if jm.nv != 1:
+        raise DescriptionError(
+            source,
+            what,
+            f"joint '{name}' has {jm.nv} degrees of freedom; couplings relate revolute, "
+            "continuous or prismatic joints (1 coordinate)",
+        )
+    return int(jid)
+
+
+def joint_couplings(
+    model: pin.Model, couplings: Sequence[CouplingSpec], source: str
+) -> list[JointCoupling]:
+    """The solver couplings (:class:`solvers.coupling.JointCoupling`) of coupling specs.
+
+    Args:
+        model: The model.
+        couplings: Coupling specifications.
+        source: File or robot name, for error messages.
+
+    Returns:
+        One coupling per spec, joints resolved to Pinocchio joint ids.
+
+    Raises:
+        DescriptionError: A coupling names a missing joint or one that is not 1-DoF, couples
+            a joint to itself, has no or more than 5 coefficients or non-finite numbers, or
+            two couplings share a name.
+
+    """
+    out: list[JointCoupling] = []
+    names: set[str] = set()
+    for c in couplings:
+        what = f"coupling '{c.name}'"
+        if c.name in names:
+            raise DescriptionError(source, what, "coupling names must be unique")
+        names.add(c.name)
+        n = len(c.coefficients)
+        if not 1 <= n <= MAX_COEFFICIENTS:
+            raise DescriptionError(
+                source, what, f"{n} polynomial coefficients; give 1 to {MAX_COEFFICIENTS}"
+            )
+        values = (*c.coefficients, c.joint_ref, c.source_ref)
+        if not all(math.isfinite(float(x)) for x in values):
+            raise DescriptionError(
+                source, what, "coefficients and reference positions must be finite numbers"
+            )
+        jid = _coupled_joint(model, c.joint, source, what)
+        sid = None if c.source is None else _coupled_joint(model, c.source, source, what)
+        if sid == jid:
+            raise DescriptionError(source, what, f"joint '{c.joint}' cannot drive itself")
+        out.append(
+            JointCoupling(
+                c.name, jid, sid, tuple(float(x) for x in c.coefficients), c.joint_ref, c.source_ref
+            )
+        )
+    return out

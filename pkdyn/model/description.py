@@ -19,6 +19,13 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
   spring about a rest position, and damping / friction overriding ``<dynamics>``);
   ``<pkdyn:spring name stiffness rest_length>`` with two ``<pkdyn:frame>`` children: a linear
   spring between two frames.
+- ``<pkdyn:coupling name joint [source] [multiplier offset | polycoef] [joint_ref
+  source_ref]>``: a scalar relation between two 1-DoF joint coordinates (a gear pair, a rack,
+  a cam law): ``joint - joint_ref = offset + multiplier (source - source_ref)``, or the polynomial
+  ``sum_k polycoef[k] (source - source_ref)^k`` (1 to 5 coefficients); without ``source`` the
+  joint is locked at ``joint_ref + offset``. The standard URDF ``<mimic joint multiplier
+  offset>`` of a joint is read as the coupling ``<joint name>_mimic`` (the joint stays a tree
+  joint).
 - Compliance (:mod:`pkdyn.precision`): ``<pkdyn:stiffness value>`` in a ``<transmission>`` (or
   its ``<actuator>``): the actuator's joint-side stiffness [N m/rad or N/m];
   ``<pkdyn:material name [E G density]>``: the material of the links modelled as beams;
@@ -49,6 +56,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.validate import check_urdf, unit_vector
+from pkdyn.model.warn import warn
 
 __all__ = [
     "NAMESPACE",
@@ -63,6 +71,7 @@ __all__ = [
     "PassiveSpec",
     "SpringSpec",
     "FamilySpec",
+    "CouplingSpec",
     "MaterialSpec",
     "ComplianceSpec",
     "Description",
@@ -290,6 +299,34 @@ class FamilySpec:
 
 
 @dataclass(frozen=True)
+class CouplingSpec:
+    """Scalar holonomic relation between two 1-DoF joint coordinates.
+
+    ``(q[joint] - joint_ref) = sum_k coefficients[k] * (q[source] - source_ref)**k``
+    (MuJoCo joint equality: ``polycoef``, refs = ``qpos0``; URDF ``<mimic>``:
+    ``(offset, multiplier)``, refs 0); with ``source`` ``None`` the joint is held at
+    ``joint_ref + coefficients[0]``. A continuous joint's coordinate is its angle [rad].
+
+    Attributes:
+        name: Coupling name (the equality, mimic or ``pkdyn:coupling`` it came from).
+        joint: Driven (dependent) joint name.
+        source: Driving joint name, or ``None`` for a locked joint.
+        coefficients: Polynomial coefficients, constant term first (1 to 5 of them)
+            [rad or m per (rad or m)^k].
+        joint_ref: Reference coordinate of ``joint`` [rad or m].
+        source_ref: Reference coordinate of ``source`` [rad or m].
+
+    """
+
+    name: str
+    joint: str
+    source: str | None
+    coefficients: tuple[float, ...]
+    joint_ref: float = 0.0
+    source_ref: float = 0.0
+
+
+@dataclass(frozen=True)
 class MaterialSpec:
     """``<pkdyn:material>``: a material by preset name, or with its own constants.
 
@@ -346,6 +383,7 @@ class Description:
     passive: tuple[PassiveSpec, ...] = ()
     springs: tuple[SpringSpec, ...] = ()
     family: FamilySpec | None = None
+    couplings: tuple[CouplingSpec, ...] = ()
     home: tuple[float, ...] | None = None
     material: MaterialSpec | None = None
     compliance: tuple[ComplianceSpec, ...] = ()
@@ -702,6 +740,96 @@ def _passive(source: str, root: ET.Element) -> tuple[PassiveSpec, ...]:
     return tuple(PassiveSpec(name, **f) for name, f in fields.items())
 
 
+def _number(source: str, culprit: str, text: str) -> float:
+    """One finite number of a coupling attribute."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise DescriptionError(source, culprit, f"'{text}' is not a number") from None
+    if not math.isfinite(value):
+        raise DescriptionError(source, culprit, f"{text} is not a finite number")
+    return value
+
+
+def _coupling(source: str, el: ET.Element) -> CouplingSpec:
+    """A ``<pkdyn:coupling>`` element."""
+    name = el.get("name")
+    if not name:
+        raise DescriptionError(source, "<pkdyn:coupling>", "missing attribute 'name'")
+    what = f"coupling '{name}'"
+    joint = el.get("joint")
+    if not joint:
+        raise DescriptionError(source, what, "missing attribute 'joint' (the driven joint)")
+    src = el.get("source") or None
+    poly = el.get("polycoef")
+    if poly is not None and (el.get("multiplier") is not None or el.get("offset") is not None):
+        raise DescriptionError(source, what, "give polycoef or multiplier/offset, not both")
+    if poly is not None:
+        coef = tuple(_number(source, f"{what} polycoef", t) for t in poly.split())
+        if not 1 <= len(coef) <= 5:
+            raise DescriptionError(
+                source, f"{what} polycoef='{poly}'", f"{len(coef)} coefficients; give 1 to 5"
+            )
+    else:
+        offset = _number(source, f"{what} offset", el.get("offset", "0"))
+        multiplier = _number(source, f"{what} multiplier", el.get("multiplier", "1"))
+        coef = (offset, multiplier)
+    if src is None:
+        if (poly is not None and any(coef[1:])) or el.get("multiplier") is not None:
+            raise DescriptionError(
+                source, what, "a coupling without source locks its joint: give offset only"
+            )
+        coef = coef[:1]
+    refs = [_number(source, f"{what} {a}", el.get(a, "0")) for a in ("joint_ref", "source_ref")]
+    return CouplingSpec(name, joint, src, coef, refs[0], refs[1])
+
+
+_ONE_DOF = ("revolute", "continuous", "prismatic")
+
+
+def _mimics(source: str, root: ET.Element, strict: bool) -> list[CouplingSpec]:
+    """Couplings of the URDF ``<mimic joint multiplier offset>`` elements.
+
+    A mimic between joints that are not both moving 1-DoF joints of the file is an error in a
+    pkdyn description (``strict``) and, in a plain URDF, left out with one warning (Pinocchio
+    and most URDF tools load such files: the joint then moves freely).
+    """
+    kinds = {j.get("name", ""): j.get("type", "") for j in root.findall("joint")}
+    out = []
+    skipped: list[str] = []
+    for j in root.findall("joint"):
+        m = j.find("mimic")
+        if m is None:
+            continue
+        jname = j.get("name", "?")
+        what = f"joint '{jname}' <mimic>"
+        src = m.get("joint")
+        if not src:
+            raise DescriptionError(source, what, "missing attribute 'joint'")
+        multiplier = _number(source, f"{what} multiplier", m.get("multiplier", "1"))
+        offset = _number(source, f"{what} offset", m.get("offset", "0"))
+        bad = next((n for n in (jname, src) if kinds.get(n) not in _ONE_DOF), None)
+        if bad is not None:
+            why = (
+                f"names joint '{bad}', which does not exist"
+                if bad not in kinds
+                else f"joint '{bad}' is {kinds[bad] or 'untyped'}, not a revolute, continuous "
+                "or prismatic joint"
+            )
+            if strict:
+                raise DescriptionError(source, what, why)
+            skipped.append(f"{what} {why}")
+            continue
+        out.append(CouplingSpec(f"{jname}_mimic", jname, src, (offset, multiplier)))
+    if skipped:
+        warn(
+            f"{source}: {len(skipped)} <mimic> element(s) left out (the joints move freely): "
+            + "; ".join(skipped[:3])
+            + (" ..." if len(skipped) > 3 else "")
+        )
+    return out
+
+
 def _spring(source: str, el: ET.Element, links: set[str]) -> SpringSpec:
     name = el.get("name")
     if not name:
@@ -731,6 +859,7 @@ ELEMENTS = (
     "material",
     "compliance",
     "home",
+    "coupling",
 )
 """The top-level pkdyn elements (children of ``<robot>``)."""
 
@@ -824,6 +953,10 @@ def parse_description(xml_text: str, source: str) -> Description:
     for n in spring_names:
         if spring_names.count(n) > 1:
             raise DescriptionError(source, f"spring '{n}'", "spring names must be unique")
+    couplings = tuple(_mimics(source, root, extended)) + tuple(
+        _coupling(source, el) for el in root.findall(_NS + "coupling")
+    )
+    _unique(source, "coupling", [c.name for c in couplings])
     return Description(
         name=root.get("name", source),
         closures=closures,
@@ -835,6 +968,7 @@ def parse_description(xml_text: str, source: str) -> Description:
         passive=_passive(source, root),
         springs=springs,
         family=_family(source, root),
+        couplings=couplings,
         home=_home(source, root),
         material=_material_element(source, root),
         compliance=_compliances(source, root, links),

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 from types import ModuleType
 from typing import Any
 
-from pkdyn.exceptions import ParameterError, UnknownRobotError
+from pkdyn.exceptions import ParameterError, UnknownRobotError, close_match
+from pkdyn.inputs import MAX_MAGNITUDE
 
 __all__ = ["FAMILIES", "Family", "export_urdf", "family", "from_description", "register"]
 
@@ -110,7 +111,10 @@ class Family:
         for key, value in overrides.items():
             if key not in fields:
                 raise ParameterError(
-                    self.name, key, f"unknown; valid parameters: {', '.join(sorted(fields))}"
+                    self.name,
+                    key,
+                    f"unknown; valid parameters: {', '.join(sorted(fields))}"
+                    + close_match(key, sorted(fields)),
                 )
             f = fields[key]  # the field's default, without building (validating) an instance
             factory: Any = f.default_factory
@@ -149,7 +153,26 @@ class Family:
                 raise ParameterError(
                     self.name, key, f"cannot use {value!r} (expected {kind})"
                 ) from None
+            _check_magnitude(self.name, key, kwargs[key])
         return self.params(**kwargs)
+
+
+def _check_magnitude(family: str, name: str, value: Any) -> None:
+    """Refuse a numeric parameter beyond :data:`pkdyn.inputs.MAX_MAGNITUDE` (SI units).
+
+    Such a value is a typing or unit error, and the builders' arithmetic on it (squares of
+    lengths, inertias) would overflow before any check of the geometry could name it.
+    """
+    values = value if isinstance(value, tuple) else (value,)
+    for v in values:
+        if isinstance(v, tuple):
+            _check_magnitude(family, name, v)
+        elif isinstance(v, int | float) and not isinstance(v, bool) and abs(v) > MAX_MAGNITUDE:
+            raise ParameterError(
+                family,
+                name,
+                f"{v:g} is beyond any plausible value (at most {MAX_MAGNITUDE:g} in SI units)",
+            )
 
 
 FAMILIES: dict[str, Family] = {}

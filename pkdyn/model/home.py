@@ -41,12 +41,21 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, LoopClosureError
-from pkdyn.model.description import ClosureSpec, FrameRef
+from pkdyn.model.description import ClosureSpec, CouplingSpec, FrameRef
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn
-from solvers import SolveResult, numerics, solve_lm
+from solvers import ClosureSet, SolveResult, numerics, solve_lm
 
-__all__ = ["ASSEMBLY_TOL", "EXACT_TOL", "RANK_RTOL", "HomeResult", "find_home", "rank"]
+__all__ = [
+    "ASSEMBLY_TOL",
+    "EXACT_TOL",
+    "NEAR_DEAD_CENTRE",
+    "RANK_RTOL",
+    "HomeResult",
+    "dead_centre_distance",
+    "find_home",
+    "rank",
+]
 
 ASSEMBLY_TOL = 1e-4
 """Default assembly tolerance [m or rad]: the largest closure error of a description pkdyn
@@ -76,8 +85,11 @@ class HomeResult:
     Attributes:
         q: The assembled home configuration (nq,).
         closures: The closures, with second frames moved when CAD rounding was absorbed.
-        moved: Closures whose frame was moved, with the distance [m or rad].
+        moved: Closures whose frame was moved (couplings whose constant term was adjusted),
+            with the distance [m or rad].
         searched: Whether the configuration came from the search (step 3).
+        couplings: The joint couplings, constant terms adjusted when CAD rounding was
+            absorbed (``None``: unchanged).
 
     """
 
@@ -85,6 +97,7 @@ class HomeResult:
     closures: list[ClosureSpec]
     moved: dict[str, float]
     searched: bool
+    couplings: list[CouplingSpec] | None = None
 
 
 def _solve(robot: Robot, q0: np.ndarray, free: np.ndarray | None, max_iter: int) -> SolveResult:
@@ -105,7 +118,7 @@ def _per_closure(robot: Robot, residual: np.ndarray) -> dict[str, float]:
     out: dict[str, float] = {}
     cs = robot.closure_set
     for name, owner, a, b in zip(
-        cs.names, robot.constraint_owner, cs.offsets[:-1], cs.offsets[1:], strict=True
+        cs.names, robot.row_owners, cs.offsets[:-1], cs.offsets[1:], strict=True
     ):
         del name
         out[owner] = max(out.get(owner, 0.0), float(np.max(np.abs(residual[a:b]), initial=0.0)))
@@ -194,6 +207,49 @@ def _moved_closures(
     return out, moved
 
 
+def _moved_couplings(
+    robot: Robot, residual: np.ndarray, tol: float
+) -> tuple[list[CouplingSpec], dict[str, float]]:
+    """Couplings whose constant term absorbs a residual between ``EXACT_TOL`` and ``tol``."""
+    cs = robot.closure_set
+    out: list[CouplingSpec] = []
+    adjusted: dict[str, float] = {}
+    for k, c in enumerate(robot.couplings):
+        r = float(residual[cs.n_rigid + k])
+        if EXACT_TOL < abs(r) <= tol:
+            coef = (c.coefficients[0] + r, *c.coefficients[1:])
+            c = dataclasses.replace(c, coefficients=coef)
+            adjusted[c.name] = abs(r)
+        out.append(c)
+    return out, adjusted
+
+
+def _contradicting_coupling(robot: Robot, best: SolveResult, per: dict[str, float]) -> str | None:
+    """The coupling to blame when the closures assemble without the couplings, else ``None``.
+
+    Then (or when there are no closures) the couplings contradict the closures or one
+    another: the one with the largest residual at the best configuration is named.
+    """
+    if not robot.couplings:
+        return None
+    names = [c.name for c in robot.couplings]
+    if robot.closure_set.n_rigid:
+        rigid = ClosureSet(robot.model, list(robot.constraint_models))
+        data = robot.model.createData()
+        sol = solve_lm(
+            robot.model,
+            best.q,
+            lambda q: rigid.residual(data, q),
+            lambda q: rigid.jacobian(data, q),
+            None,
+            _SOLVE_TOL,
+            100,
+        )
+        if not sol.converged:
+            return None
+    return max(names, key=lambda k: per.get(k, 0.0))
+
+
 def find_home(
     robot: Robot,
     q0: np.ndarray,
@@ -243,19 +299,51 @@ def find_home(
     if sol.converged or _worst(robot, sol) > tol:
         found, best = _search(robot, q, free, sol)
     if found is not None:
+        d = dead_centre_distance(robot, found)
+        if d is not None:
+            warn(
+                f"{robot.source}: the home found by search lies {d[0]:.3g} {d[1]} of actuator "
+                f"'{d[2]}' motion from a singular configuration (a dead centre: the closures "
+                "cannot be followed beyond it); give another home (home=..., --home)"
+            )
         return HomeResult(found, closures, {}, True)
     assert best is not None
     per = _per_closure(robot, best.residual)
     name = max(per, key=lambda k: per[k])
     if per[name] <= tol:  # an inconsistent description, within the tolerance
         new, moved = _moved_closures(robot, best.q, per, tol)
+        couplings, adjusted = _moved_couplings(robot, best.residual, tol)
+        what = "closure" if name not in adjusted else "coupling"
+        also = (
+            f" ({len(adjusted)} coupling(s) also off: their constant terms were adjusted)"
+            if adjusted
+            else ""
+        )
         warn(
-            f"{robot.source}: {len(moved)} closure(s) cannot be closed exactly (closure "
+            f"{robot.source}: {len(moved)} closure(s) cannot be closed exactly ({what} "
             f"'{name}' is off by {per[name]:.2g} at best: the description is inconsistent "
             f"within the assembly tolerance {tol:g}, as CAD rounding makes it); their second "
-            "frames were moved onto the first ones"
+            f"frames were moved onto the first ones{also}"
         )
-        return HomeResult(best.q, new, moved, False)
+        return HomeResult(
+            best.q, new, {**moved, **adjusted}, False, couplings if adjusted else None
+        )
+    coupling = _contradicting_coupling(robot, best, per)
+    if coupling is not None:
+        c = next(c for c in robot.couplings if c.name == coupling)
+        raise LoopClosureError(
+            robot.source,
+            coupling,
+            per[coupling],
+            f"{robot.source}: coupling '{coupling}' (joint '{c.joint}' "
+            f"{'from ' + repr(c.source) if c.source else 'locked'}) contradicts the closures: "
+            f"the mechanism cannot be assembled with it (residual {per[coupling]:.3g} at best, "
+            "while the closures alone assemble); check its coefficients and reference "
+            "positions",
+            kind="coupling",
+        )
+    coupled = {c.name for c in robot.couplings}
+    name = max((k for k in per if k not in coupled), key=lambda k: per[k])
     spec = next(c for c in robot.closures if c.name == name)
     raise LoopClosureError(
         robot.source,
@@ -267,6 +355,75 @@ def find_home(
         f"{_RESTARTS} random starts); check its frames and the joint types along its loop, "
         "or give an assembled configuration (home=..., --home)",
     )
+
+
+NEAR_DEAD_CENTRE = 0.1
+"""Actuator motion [rad; for a prismatic actuator, times the robot's size] within which a
+searched home's singular configuration (dead centre) draws a warning."""
+
+_DEAD_CENTRE_STEPS = 20
+
+
+def dead_centre_distance(robot: Robot, q: np.ndarray) -> tuple[float, str, str] | None:
+    """The actuator motion from ``q`` to a singular configuration, if within the warning range.
+
+    Each actuator is moved alone, both ways, in :data:`_DEAD_CENTRE_STEPS` steps up to
+    :data:`NEAR_DEAD_CENTRE`, the passive joints following the closures: a dead centre is where
+    they cannot follow (the solve fails: a fold) or where the passive coordinates stop
+    determining the configuration (``rank J_passive < rank J``).
+
+    Args:
+        robot: The robot.
+        q: An assembled, non-singular configuration (nq,).
+
+    Returns:
+        ``(distance, unit, actuator)`` of the nearest one found, or ``None`` (also for a
+        redundantly actuated robot, whose actuators cannot move one at a time).
+
+    """
+    if not robot.closure_set.nc or not robot.actuated_v.size:
+        return None
+    if robot.actuated_v.size > robot.mobility(q):
+        # redundant actuation (the four-branch walker): one actuator cannot move alone, so
+        # "moving it until the passive joints cannot follow" measures nothing
+        return None
+    best: tuple[float, str, str, float] | None = None
+    for k, name in enumerate(robot.actuator_names):
+        prismatic = bool(robot.actuator_prismatic[k])
+        reach = NEAR_DEAD_CENTRE * (robot.length_scale if prismatic else 1.0)
+        h = reach / _DEAD_CENTRE_STEPS
+        iq = int(robot.actuated_q[k])
+        for sign in (-1.0, 1.0):
+            qk = np.array(q, dtype=float)
+            for _ in range(_DEAD_CENTRE_STEPS):
+                nxt = _regular(robot, qk, iq, qk[iq] + sign * h)
+                if nxt is not None:
+                    qk = nxt
+                    continue
+                lo, hi = 0.0, h  # bisect the step that fails
+                for _ in range(30):
+                    mid = 0.5 * (lo + hi)
+                    if _regular(robot, qk, iq, qk[iq] + sign * mid) is not None:
+                        lo = mid
+                    else:
+                        hi = mid
+                d = abs(float(qk[iq] - q[iq])) + 0.5 * (lo + hi)
+                scale = robot.length_scale if prismatic else 1.0
+                if best is None or d / scale < best[0] / best[3]:
+                    best = (d, "m" if prismatic else "rad", name, scale)
+                break
+    return None if best is None else best[:3]
+
+
+def _regular(robot: Robot, start: np.ndarray, iq: int, value: float) -> np.ndarray | None:
+    """The configuration with coordinate ``iq`` at ``value`` (from ``start``), if regular."""
+    qs = np.array(start, dtype=float)
+    qs[iq] = value
+    sol = _solve(robot, qs, robot.passive_v, 40)
+    if not sol.converged:
+        return None
+    J = robot.closure_set.jacobian(robot.data, sol.q)
+    return sol.q if rank(J[:, robot.passive_v]) == rank(J) else None
 
 
 def _worst(robot: Robot, sol: SolveResult) -> float:

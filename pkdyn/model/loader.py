@@ -32,6 +32,7 @@ from pkdyn.model.build import (
     check_model_size,
     constraint_models,
     geometry_models,
+    joint_couplings,
     resolve_frame,
 )
 from pkdyn.model.description import (
@@ -220,6 +221,7 @@ class _Parts:
     collision: pin.GeometryModel
     q_ref: np.ndarray
     missing_meshes: tuple[str, ...] = ()
+    preload: bool = False  # spring rests outside the joint limits accepted (MJCF springref)
 
 
 def load_string(
@@ -289,9 +291,16 @@ def load_string(
             tuple(b for b, body in mech.bodies.items() if not body.virtual),
             tuple(j.name for j in mech.joints),
             passive=tuple(built.passive),
+            couplings=tuple(built.couplings),
         )
         parts = _Parts(
-            built.model, desc, built.visual, built.collision, q_ref, tuple(mech.missing_meshes)
+            built.model,
+            desc,
+            built.visual,
+            built.collision,
+            q_ref,
+            tuple(mech.missing_meshes),
+            preload=fmt == "mjcf",
         )
         if not geometry:
             parts.visual, parts.collision = pin.GeometryModel(), pin.GeometryModel()
@@ -433,7 +442,11 @@ def _with_sidecar(parts: _Parts, side: Sidecar | None, source: str) -> _Parts:
         actuators.append(dataclasses.replace(a, effort=eff, velocity=vel))
     platform = desc.platform if side.platform is None else side.platform
     parts.desc = dataclasses.replace(
-        desc, closures=tuple(closures), actuators=tuple(actuators), platform=platform
+        desc,
+        closures=tuple(closures),
+        actuators=tuple(actuators),
+        platform=platform,
+        couplings=desc.couplings + tuple(side.couplings),
     )
     return parts
 
@@ -485,6 +498,12 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         if names.count(n) > 1:
             raise DescriptionError(source, f"closure '{n}'", "closure names must be unique")
     cms, owner = constraint_models(model, desc.closures, source)
+    couplings = joint_couplings(model, desc.couplings, source)
+    clash = {c.name for c in desc.couplings} & set(names)
+    if clash:
+        raise DescriptionError(
+            source, f"coupling '{sorted(clash)[0]}'", "a closure has the same name"
+        )
     actuated_joints, actuated_q, actuated_v = _actuation(model, list(desc.actuators), source)
     desc = dataclasses.replace(desc, actuators=_reflected(model, desc.actuators, actuated_v))
     platform_frame = None
@@ -501,7 +520,13 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
     is_passive[actuated_v] = False
     passive = np.flatnonzero(is_passive)  # (not setdiff1d: it imports numpy.ma, 10 ms)
     elements = passive_forces(
-        model, desc.passive, desc.springs, source, desc.joint_names, desc.joints
+        model,
+        desc.passive,
+        desc.springs,
+        source,
+        desc.joint_names,
+        desc.joints,
+        preload=parts.preload,
     )
     return Robot(
         name=desc.name,
@@ -513,7 +538,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         description=desc,
         constraint_models=vec,
         constraint_owner=owner,
-        closure_set=ClosureSet(model, cms),
+        closure_set=ClosureSet(model, cms, couplings),
         actuators=tuple(desc.actuators),
         actuated_joints=actuated_joints,
         actuated_q=actuated_q,
@@ -586,6 +611,8 @@ def _assembled(
     res = find_home(robot, q0, qa, tol, user=user)
     if res.moved:
         parts.desc = dataclasses.replace(parts.desc, closures=tuple(res.closures))
+        if res.couplings is not None:
+            parts.desc = dataclasses.replace(parts.desc, couplings=tuple(res.couplings))
         robot = _robot(parts, robot.source, robot.params)
     robot.q_home = res.q
     return robot

@@ -126,6 +126,7 @@ def passive_forces(
     source: str,
     joint_names: Sequence[str] = (),
     joints: Sequence[JointSpec] = (),
+    preload: bool = False,
 ) -> PassiveForces | None:
     """Check the passive elements against the model and build their solver forces.
 
@@ -140,6 +141,9 @@ def passive_forces(
         joint_names: Every joint of the URDF, fixed ones included (to tell a fixed joint from a
             missing one).
         joints: The joint upgrades (their cone / pyramid limits bound the rest rotation).
+        preload: Accept a rest position outside the joint limits (a spring preloaded over the
+            whole range, as MuJoCo's ``springref`` may be: the Menagerie grippers rest their
+            linkage springs at 2.62 rad on joints limited to 0.8 rad).
 
     Returns:
         The forces, or ``None`` when nothing is passive.
@@ -187,7 +191,8 @@ def passive_forces(
         friction[iv] = values["friction"]
         if spec.rest:
             qj = rest_configuration(jm, values["rest"])
-            _check_rest(source, model, jid, qj, values["rest"], upgrades.get(name))
+            if not preload:
+                _check_rest(source, model, jid, qj, values["rest"], upgrades.get(name))
             q_rest[jm.idx_q : jm.idx_q + jm.nq] = qj
     frame_springs = []
     for sp in springs:

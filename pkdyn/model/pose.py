@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
 
-__all__ = ["as_finite", "pose_from_vector", "pose_to_vector"]
+__all__ = ["as_configuration", "as_finite", "pose_from_vector", "pose_to_vector"]
 
 
 def as_finite(
@@ -38,6 +38,59 @@ def as_finite(
     if not np.isfinite(arr).all():
         bad = np.flatnonzero(~np.isfinite(arr))
         raise InvalidInputError(name, f"value #{bad[0] + 1} is {arr[bad[0]]}; give finite numbers")
+    return arr
+
+
+UNIT_NORM_TOL = 1e-3
+"""Largest departure from 1 of the norm of a joint's quaternion (or cosine-sine pair) that
+:func:`as_configuration` normalises; beyond it the configuration is refused."""
+
+
+def _unit_part(j: pin.JointModel) -> slice | None:
+    """Coordinates of a joint that must have norm 1 (quaternion, cosine-sine), if any."""
+    kind = j.shortname()
+    if kind == "JointModelFreeFlyer":
+        return slice(3, 7)
+    if kind == "JointModelPlanar":
+        return slice(2, 4)
+    if j.nq > j.nv:  # spherical (quaternion), unbounded revolute (cos, sin)
+        return slice(0, j.nq)
+    return None
+
+
+def as_configuration(model: pin.Model, name: str, q: Sequence[float] | np.ndarray) -> np.ndarray:
+    """Validate a configuration: ``nq`` finite values, unit quaternions (normalised).
+
+    Args:
+        model: The kinematic tree.
+        name: Name of the input, for the message (``q0``).
+        q: The configuration (nq,).
+
+    Returns:
+        A float copy, each quaternion or cosine-sine pair normalised.
+
+    Raises:
+        InvalidInputError: Wrong size, non-finite values, or a joint whose quaternion (or
+            cosine-sine pair) is zero or does not have norm 1 to :data:`UNIT_NORM_TOL`.
+
+    """
+    arr = as_finite(name, q, model.nq)
+    for jid in range(1, model.njoints):
+        j = model.joints[jid]
+        part = _unit_part(j)
+        if part is None:
+            continue
+        seg = arr[j.idx_q + part.start : j.idx_q + part.stop]
+        norm = float(np.linalg.norm(seg))
+        what = "quaternion" if seg.size == 4 else "cosine-sine pair"
+        if not abs(norm - 1.0) <= UNIT_NORM_TOL:
+            raise InvalidInputError(
+                name,
+                f"joint '{model.names[jid]}': its {what} {np.round(seg, 6).tolist()} has norm "
+                f"{norm:.6g}; a rotation needs norm 1 (coordinates {j.idx_q + part.start}.."
+                f"{j.idx_q + part.stop - 1} of the configuration)",
+            )
+        seg /= norm
     return arr
 
 

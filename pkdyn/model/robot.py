@@ -10,12 +10,18 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import PkdynError
-from pkdyn.model.description import ActuatorSpec, ClosureSpec, Description
+from pkdyn.model.description import ActuatorSpec, ClosureSpec, CouplingSpec, Description
 from pkdyn.model.families import FAMILIES
 from solvers import ClosureSet, PassiveForces
 from solvers.numerics import rank
 
-__all__ = ["MODELLING_JOINTS", "Robot"]
+__all__ = ["PLATFORM_HINT", "MODELLING_JOINTS", "Robot"]
+
+PLATFORM_HINT = (
+    'declare one: <pkdyn:platform link="LINK" task="x y z"/> in the URDF (urdf/README.md), '
+    "or 'platform: {frame: LINK}' in its YAML sidecar"
+)
+"""How to declare a platform, for the messages of the commands that need one."""
 
 MODELLING_JOINTS = ("JointModelFreeFlyer", "JointModelPlanar")
 """Joint models that place a platform or floating base: modelling devices, not hardware."""
@@ -35,7 +41,8 @@ class Robot:
         description: The parsed extension elements.
         constraint_models: Pinocchio rigid constraint models (a ``hinge`` gives two).
         constraint_owner: Closure name of each constraint model.
-        closure_set: Residual / Jacobian evaluator of the closures.
+        closure_set: Residual / Jacobian evaluator of the closures, then the joint couplings
+            (one row each, see :mod:`solvers.coupling`).
         actuators: Actuators in actuator order.
         actuated_joints: Joint id of each actuator.
         actuated_q: Configuration index of each actuator (nq indexing).
@@ -119,6 +126,16 @@ class Robot:
     def closures(self) -> tuple[ClosureSpec, ...]:
         """Loop closures of the description."""
         return self.description.closures
+
+    @property
+    def couplings(self) -> tuple[CouplingSpec, ...]:
+        """Joint couplings of the description (gears, mimic joints, locked joints)."""
+        return self.description.couplings
+
+    @property
+    def row_owners(self) -> list[str]:
+        """Closure or coupling name of each entry of ``closure_set`` (its ``names`` order)."""
+        return list(self.constraint_owner) + [c.name for c in self.closure_set.couplings]
 
     @property
     def actuator_prismatic(self) -> np.ndarray:
@@ -207,7 +224,27 @@ class Robot:
         return out
 
     def dof(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
+        """Degrees of freedom of the platform at ``q`` (default ``q_home``): the Delta's 3.
+
+        The word's one meaning, as ``pkdyn info`` prints it: the motions allowed by the
+        closures that move the platform's controlled pose components (:meth:`mobility_split`);
+        without a platform, every motion the closures allow. :meth:`mobility` counts the
+        internal mobilities too (the Delta's six bar spins: 9).
+
+        Args:
+            q: Configuration (nq,).
+            tol: Relative singular-value threshold of the ranks.
+
+        Returns:
+            Number of degrees of freedom of the platform.
+
+        """
+        return self.mobility_split(q, tol)[0]
+
+    def mobility(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
         """Mobility at ``q`` (default ``q_home``): nv minus the rank of the closure Jacobian.
+
+        The closure Jacobian includes the joint couplings' rows.
 
         Args:
             q: Configuration (nq,).
@@ -215,7 +252,8 @@ class Robot:
                 closure Jacobian's entries are of order one in SI units).
 
         Returns:
-            Number of degrees of freedom, internal mobilities included.
+            Number of independent motions, internal mobilities included
+            (``dof + internal`` of :meth:`mobility_split`).
 
         """
         qq = self.q_home if q is None else q
@@ -230,8 +268,8 @@ class Robot:
         The motions allowed by the closures (null space of the closure Jacobian) are split into
         those that move the platform's controlled pose components (``dof``) and those that
         leave them still (``internal``, e.g. the spin of a Delta's ball-jointed bars).
-        ``dof + internal == self.dof(q)``. A robot without a platform frame has no internal
-        mobility by this definition.
+        ``dof + internal == self.mobility(q)``. A robot without a platform frame has no
+        internal mobility by this definition.
 
         Args:
             q: Configuration (nq,).
@@ -270,7 +308,9 @@ class Robot:
         return (
             f"<Robot {self.name!r} from {self.source!r}: nq={self.nq} nv={self.nv}, "
             f"{len(self.actuators)} actuators ({', '.join(a.name for a in self.actuators)}), "
-            f"{len(self.closures)} closures, {self.loops} loops, platform task: {task}>"
+            f"{len(self.closures)} closures, {self.loops} loops"
+            + (f", {len(self.couplings)} couplings" if self.couplings else "")
+            + f", platform task: {task}>"
         )
 
     def platform_placement(self, q: np.ndarray) -> pin.SE3:
@@ -284,7 +324,7 @@ class Robot:
 
         """
         if self.platform_frame is None:
-            raise PkdynError(f"{self.name} declares no platform frame (add a <pkdyn:platform>)")
+            raise PkdynError(f"{self.name} declares no platform frame; {PLATFORM_HINT}")
         pin.framesForwardKinematics(self.model, self.data, q)
         return pin.SE3(self.data.oMf[self.platform_frame])
 

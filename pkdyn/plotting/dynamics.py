@@ -11,7 +11,7 @@ import numpy as np
 from pkdyn.dynamics.sizing import SizingResult
 from pkdyn.plotting._save import save_figure
 
-__all__ = ["plot_efforts"]
+__all__ = ["plot_efforts", "plot_simulation"]
 
 
 def plot_efforts(
@@ -60,6 +60,54 @@ def plot_efforts(
         if title is not None
         else f"{result.robot}: {result.trajectory}, payload {result.payload:g} kg "
         f"(peak {peak:.3g}, {np.round(result.duration, 4):g} s)"
+    )
+    fig.tight_layout()
+    if path is not None:
+        save_figure(fig, path, dpi=120)
+    return fig
+
+
+def plot_simulation(
+    robot: Any, result: Any, path: str | Path | None = None, title: str | None = None
+) -> Any:
+    """Actuator positions and speeds, energies and closure residual of a simulation.
+
+    Args:
+        robot: The simulated robot.
+        result: Its :func:`pkdyn.dynamics.simulate` result.
+        path: Save the figure there (format from the suffix, e.g. ``.png``).
+        title: Figure title (default: robot and duration).
+
+    Returns:
+        The matplotlib Figure.
+
+    """
+    from matplotlib.figure import Figure
+
+    from pkdyn.dynamics.simulation_output import simulation_columns
+
+    cols = simulation_columns(robot, result)
+    t = cols["t"]
+    fig = Figure(figsize=(8.0, 9.0))
+    axes = fig.subplots(4, 1, sharex=True)
+    for name in robot.actuator_names:
+        (line,) = axes[0].plot(t, cols[f"qa_{name}"], label=name)
+        axes[1].plot(t, cols[f"qa_dot_{name}"], color=line.get_color())
+    for key in ("kinetic", "potential", "work", "dissipated", "energy_balance"):
+        axes[2].plot(t, cols[key], label=key.replace("_", " "))
+    axes[3].semilogy(t, np.maximum(cols["closure_residual"], 1e-17))
+    axes[0].set_ylabel("actuators [rad or m]")
+    axes[1].set_ylabel("speeds [rad/s or m/s]")
+    axes[2].set_ylabel("energy [J]")
+    axes[3].set_ylabel("closure residual")
+    axes[3].set_xlabel("time [s]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    if robot.actuator_names:
+        axes[0].legend(loc="upper right", fontsize="small", ncol=min(6, len(robot.actuator_names)))
+    axes[2].legend(loc="upper right", fontsize="small", ncol=3)
+    fig.suptitle(
+        title if title is not None else f"{robot.name}: {float(t[-1] - t[0]):g} s simulated"
     )
     fig.tight_layout()
     if path is not None:

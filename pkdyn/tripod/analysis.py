@@ -329,6 +329,7 @@ def _analyse_phase(
             for cm, o in zip(r.constraint_models, r.constraint_owner, strict=True)
             if o not in lock_names
         ],
+        r.closure_set.couplings,
     )
     data = r.model.createData()
     lo = r.model.lowerPositionLimit[r.actuated_q]
@@ -336,7 +337,7 @@ def _analyse_phase(
     branches = branch_numbers(robot)
     clamped = [b for b in branches if b != phase.branch]
     targets = phase.mode.lock_targets()
-    redundant = len(r.actuators) > r.dof(jt.q[0])
+    redundant = len(r.actuators) > r.mobility(jt.q[0])
     effort = _efforts(r, phase, allocation, redundant)
     res = np.empty(N)
     lock = np.zeros(N)

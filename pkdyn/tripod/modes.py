@@ -352,7 +352,7 @@ def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = 
         name=f"{robot.name}[{mode.kind}{'' if mode.branch is None else mode.branch}]",
         constraint_models=vec,
         constraint_owner=owner,
-        closure_set=ClosureSet(model, cms),
+        closure_set=ClosureSet(model, cms, robot.closure_set.couplings),
         platform_frame=platform,
         task_rows=np.arange(6),
         q_home=np.array(robot.q_home if q is None else q, dtype=float),

@@ -72,6 +72,7 @@ from pkdyn.dynamics.trajectory import (
     point_to_point,
 )
 from pkdyn.exceptions import InvalidInputError, PkdynError, TrajectoryError, UnreachablePoseError
+from pkdyn.inputs import count, non_negative, positive, real
 from pkdyn.library import tripod
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.pose import pose_to_vector
@@ -138,30 +139,48 @@ class WalkPlan:
     redundancy: RedundancySettings = field(default_factory=RedundancySettings)
 
     def __post_init__(self) -> None:
-        if not (self.surface_radius > 1.0):
+        radius = self.surface_radius
+        if not (isinstance(radius, int | float) and not isinstance(radius, bool) and radius > 1.0):
             raise InvalidInputError(
-                "surface_radius", f"must be > 1 m (inf: a plane), got {self.surface_radius!r}"
+                "surface_radius", f"must be > 1 m (inf: a plane), got {radius!r}"
             )
-        if len(self.step) != 2 or not np.all(np.isfinite(self.step)):
-            raise InvalidInputError("step", f"expected two finite numbers, got {self.step!r}")
-        if (
-            isinstance(self.cycles, bool)
-            or not isinstance(self.cycles, int | float | np.integer | np.floating)
-            or not math.isfinite(self.cycles)
-            or int(self.cycles) != self.cycles
-            or self.cycles < 1
-        ):
-            raise InvalidInputError("cycles", f"must be a positive integer, got {self.cycles!r}")
-        for name in ("swing_time", "reconfiguration_time", "dt"):
-            value = getattr(self, name)
-            if not np.isfinite(value) or value <= 0.0:
-                raise InvalidInputError(name, f"must be > 0, got {value!r}")
-        for name in ("lift", "tilt"):
-            value = getattr(self, name)
-            if not np.isfinite(value) or value < 0.0:
-                raise InvalidInputError(name, f"must be >= 0, got {value!r}")
-        if self.tilt >= 0.5 * math.pi:
-            raise InvalidInputError("tilt", f"must be below pi/2 rad, got {self.tilt!r}")
+        if not isinstance(self.step, tuple | list | np.ndarray) or len(self.step) != 2:
+            raise InvalidInputError("step", f"expected two numbers (dx, dy) [m], got {self.step!r}")
+        for k, x in zip(("dx", "dy"), self.step, strict=True):
+            real(f"step {k}", x, "m", bound=MAX_STEP)
+        n = count("cycles", self.cycles, maximum=MAX_CYCLES)
+        times = [positive(k, getattr(self, k), "s") for k in ("swing_time", "reconfiguration_time")]
+        dt = positive("dt", self.dt, "s")
+        if min(times) < 2.0 * dt:
+            raise InvalidInputError(
+                "dt",
+                f"{dt:g} s samples the {min(times):g} s move fewer than 2 times: the motion "
+                f"would be missed; use dt <= {min(times) / 10:.3g} s",
+            )
+        non_negative("lift", self.lift, "m", bound=MAX_STEP)
+        non_negative("tilt", self.tilt, "rad", bound=math.pi / 2)
+        samples = n * PHASES_PER_CYCLE * max(times) / dt
+        if samples > MAX_SAMPLES:
+            raise InvalidInputError(
+                "dt",
+                f"{n} cycles of phases up to {max(times):g} s sampled every {dt:g} s are up to "
+                f"{samples:.3g} samples (each an inverse geometry and dynamics, ~1 ms); at most "
+                f"{MAX_SAMPLES:.0e}: fewer cycles, shorter phases or a longer dt",
+            )
+
+
+MAX_STEP = 1.0
+"""Largest foot displacement per cycle and foot lift [m]: beyond the walker's size."""
+
+MAX_CYCLES = 1000
+"""Most walking cycles of one scenario."""
+
+PHASES_PER_CYCLE = 10
+"""Most phases of one cycle (the walker: a reconfiguration and a swing per branch, machining
+and the return to level)."""
+
+MAX_SAMPLES = 200_000
+"""Most samples of one scenario (the default plan has 800): larger plans are refused up front."""
 
 
 @dataclass

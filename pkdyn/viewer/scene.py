@@ -74,7 +74,10 @@ class Scene:
         viewer: meshcat.Visualizer | None = None,
     ) -> None:
         if robot.visual_model.ngeoms == 0 and robot.collision_model.ngeoms == 0:
-            raise PkdynError(f"{robot.name} has no geometry to draw (load it with geometry=True)")
+            raise PkdynError(
+                f"{robot.name} has no geometry to draw: give the links <visual> or <collision> "
+                "elements (in Python, load with geometry=True)"
+            )
         if robot.missing_meshes:
             from pkdyn.model.warn import missing_list
 

@@ -8,8 +8,9 @@ description, not of the builder's parameters:
 - ``stroke``: arm angles within the arm joints' limits;
 - ``joint``: each bar's upper ball (or universal) joint inside its cone: the bar direction
   (from the elbow to its closure point on the nacelle) in the joint frame;
-- ``interference``: arms and bars as cylinders of their collision radius; bars of different
-  arms against each other and bars against the other arms.
+- ``interference``: the one definition of :mod:`pkdyn.analysis.collisions` (coal distances
+  between the collision geometries: bars, arms, nacelle and base), the geometry placed from the
+  arm angles and the nacelle position (:mod:`pkdyn.workspace.placed_interference`).
 """
 
 from __future__ import annotations
@@ -23,6 +24,12 @@ from pkdyn.exceptions import PkdynError
 from pkdyn.model.description import ConeLimit, PyramidLimit
 from pkdyn.model.robot import Robot
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, direction_margin
+from pkdyn.workspace.placed_interference import (
+    AxialBody,
+    PlacedInterference,
+    Placements,
+    RigidBody,
+)
 
 __all__ = ["DeltaEvaluator"]
 
@@ -93,6 +100,23 @@ class DeltaEvaluator(PoseEvaluator):
                     spec.limit if spec is not None else None,
                 )
             )
+        self._arm_joints = [int(j) for j in arms]
+        self._bar_joints = [int(j) for j in bar_joints]
+        self._bar_points = [
+            np.array(
+                next(
+                    cm.joint1_placement.translation
+                    for cm in robot.constraint_models
+                    if int(cm.joint1_id) == j
+                )
+            )
+            for j in bar_joints
+        ]
+        self._interference: PlacedInterference | None = None
+        if robot.platform_frame is not None:  # joint frame = (R_home, 0) * frame^-1, at P = 0
+            fp = model.frames[robot.platform_frame].placement
+            home = robot.platform_placement(robot.q_home)
+            self._nacelle_joint = pin.SE3(home.rotation, np.zeros(3)) * fp.inverse()
         self.lb = float(robot.params.lb)
         radius = {
             int(g.parentJoint): float(getattr(g.geometry, "radius", 0.0))
@@ -139,17 +163,47 @@ class DeltaEvaluator(PoseEvaluator):
                 d = np.einsum("nji,nj->ni", R_arm[:, k] @ Mb.rotation, u)
                 bad |= direction_margin(lim, d) < 0.0
             out[todo[bad]] = LIMIT_KINDS.index("joint")
-            todo, Pk, tip = todo[~bad], Pk[~bad], tip[~bad]
+            todo, Pk, tip, R_arm = todo[~bad], Pk[~bad], tip[~bad], R_arm[~bad]
             E = [e[~bad] for e in E]
         if "interference" in kinds and todo.size:
-            bad = self._interference(Pk, E, tip, margin)
+            bad = self.interference.bad(self._placements(Pk, R_arm, E), todo.size, margin)
             out[todo[bad]] = LIMIT_KINDS.index("interference")
         return out
 
-    def _interference(
-        self, P: np.ndarray, E: list[np.ndarray], tip: np.ndarray, margin: float
-    ) -> np.ndarray:
-        return self._clearance(P, E, tip) < margin
+    @property
+    def interference(self) -> PlacedInterference:
+        """The interference definition on the Delta's poses (built on first use).
+
+        Bars lie on their axes from the elbow to the nacelle, arms and nacelle are rigid (the
+        nacelle keeps its home orientation).
+        """
+        if self._interference is None:
+            model = self.robot.model
+            bodies: dict[int, RigidBody | AxialBody] = {
+                j: RigidBody(f"arm{k}") for k, j in enumerate(self._arm_joints)
+            }
+            for b, j in enumerate(self._bar_joints):
+                p = self._bar_points[b]
+                bodies[j] = AxialBody(f"bar{b}", p / np.linalg.norm(p))
+            assert self.robot.platform_frame is not None
+            frame = model.frames[self.robot.platform_frame]
+            bodies[int(frame.parentJoint)] = RigidBody("nacelle")
+            self._interference = PlacedInterference(self.robot, bodies)
+        return self._interference
+
+    def _placements(self, P: np.ndarray, R_arm: np.ndarray, E: list[np.ndarray]) -> Placements:
+        """Placements of :attr:`interference`'s bodies at nacelle positions ``P`` (N, 3)."""
+        n = P.shape[0]
+        O = np.array([m.translation for m in self.M_arm])
+        out: Placements = {
+            f"arm{k}": (R_arm[:, k], np.broadcast_to(O[k], (n, 3))) for k in range(3)
+        }
+        for b, (_, _, p_nac, _) in enumerate(self.bars):
+            d = P + p_nac - E[b]
+            out[f"bar{b}"] = (E[b], d / np.linalg.norm(d, axis=-1, keepdims=True))
+        M = self._nacelle_joint  # the nacelle joint frame when the platform frame is at 0
+        out["nacelle"] = (np.array(M.rotation), P + M.translation)
+        return out
 
     def _clearance(self, P: np.ndarray, E: list[np.ndarray], tip: np.ndarray) -> np.ndarray:
         if self.bar_r <= 0.0:
@@ -178,10 +232,11 @@ class DeltaEvaluator(PoseEvaluator):
         return np.min(d - np.array(radii)[:, None], axis=0)
 
     def clearance(self, P: np.ndarray) -> np.ndarray:
-        """Smallest distance between the cylinders checked for ``interference`` [m].
+        """Smallest distance between the bars and the arms, as axis distances minus radii [m].
 
         Bars of different arms against each other and bars against the other arms, as
-        cylinders of their collision radius (negative: they overlap).
+        capsules of their collision radius (negative: they overlap): a clearance figure (design
+        metric); the ``interference`` verdicts use the full definition (:attr:`interference`).
 
         Args:
             P: Nacelle positions (N, 3) [m].

@@ -10,8 +10,10 @@ universal joint on the base and whose body is closed on the platform by a ``poin
   between the joint coordinate and ``|A_i B_i|``, zero for the library);
 - base joint: the leg direction inside the joint's cone or pyramid (the limit axis must be the
   leg direction in the joint's child frame, so the limit depends on ``v_i`` only);
-- interference: the distance between leg axes below ``r_i + r_j`` plus the safety margin, legs
-  as cylinders of the radius of their collision geometry.
+- interference: the one definition of :mod:`pkdyn.analysis.collisions` (coal distances between
+  the collision geometries: leg against leg, base and platform; platform against base), the
+  geometry placed from the leg vectors (:mod:`pkdyn.workspace.placed_interference`: each
+  leg's two bodies on its axis, the platform rigid).
 
 For a fixed orientation every component of ``v_i`` and every projection ``v_i . n`` is a sum
 of one function of ``x``, one of ``y`` and one of ``z``; :meth:`HexapodEvaluator.grid` uses that
@@ -31,8 +33,14 @@ from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.description import ConeLimit, PyramidLimit
 from pkdyn.model.robot import Robot
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, direction_margin
+from pkdyn.workspace.placed_interference import (
+    AxialBody,
+    PlacedInterference,
+    Placements,
+    RigidBody,
+)
 
-__all__ = ["HexapodLegs", "HexapodEvaluator"]
+__all__ = ["HexapodLegs", "HexapodEvaluator", "leg_interference", "leg_placements"]
 
 _PRISMATIC_AXES = {"PX": (1.0, 0.0, 0.0), "PY": (0.0, 1.0, 0.0), "PZ": (0.0, 0.0, 1.0)}
 
@@ -221,6 +229,76 @@ class HexapodLegs:
         return np.any(self.pair_distances(v) < margin, axis=1)
 
 
+def leg_interference(robot: Robot) -> PlacedInterference:
+    """The interference definition on a leg robot's poses (placed from the leg vectors).
+
+    Each leg's two bodies (the base joint's child and the prismatic joint's) lie on its axis:
+    the first placed at ``A_i``, the second at ``B_i`` (its closure point); the platform is
+    rigid.
+
+    Args:
+        robot: A leg robot loaded with geometry.
+
+    Returns:
+        The evaluator; feed it :func:`leg_placements`.
+
+    Raises:
+        PkdynError: No collision geometry, or a leg shape not symmetric about its axis.
+
+    """
+    model = robot.model
+    bodies: dict[int, RigidBody | AxialBody] = {}
+    for i, jp in enumerate(robot.actuated_joints):
+        jp = int(jp)
+        e = _prismatic_axis(model.joints[jp])
+        assert e is not None
+        b_offset = float(_closure_point(robot, jp) @ e)
+        bodies[int(model.parents[jp])] = AxialBody(
+            f"leg{i}", model.jointPlacements[jp].rotation @ e, 0.0, i
+        )
+        bodies[jp] = AxialBody(f"rod{i}", e, b_offset, i)
+    assert robot.platform_frame is not None
+    bodies[int(model.frames[robot.platform_frame].parentJoint)] = RigidBody("platform")
+    return PlacedInterference(robot, bodies)
+
+
+def leg_placements(
+    robot: Robot, legs: HexapodLegs, P: np.ndarray, R: np.ndarray, v: np.ndarray
+) -> Placements:
+    """The bodies' placements of :func:`leg_interference` at platform poses.
+
+    Args:
+        robot: The leg robot.
+        legs: Its legs.
+        P: Platform positions (N, 3) [m].
+        R: Platform orientation (3, 3) or per pose (N, 3, 3).
+        v: Leg vectors (N, n, 3) of those poses [m].
+
+    """
+    n = v.shape[0]
+    P = np.atleast_2d(np.asarray(P, dtype=float))
+    assert robot.platform_frame is not None
+    fp = robot.model.frames[robot.platform_frame].placement  # the frame in its joint
+    Rj = R @ fp.rotation.T  # (3, 3) when one orientation for every pose
+    tj = P - (fp.translation @ Rj.T if Rj.ndim == 2 else Rj @ fp.translation)
+    out: Placements = {"platform": (Rj, tj)}
+    u = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    for i in range(legs.n):
+        out[f"leg{i}"] = (np.broadcast_to(legs.A[i], (n, 3)), u[:, i])
+        out[f"rod{i}"] = (legs.A[i] + v[:, i], u[:, i])
+    return out
+
+
+def _closure_point(robot: Robot, jp: int) -> np.ndarray:
+    """The platform joint centre on leg body ``jp`` (its closure point), in ``jp``'s frame."""
+    for cm in robot.constraint_models:
+        if cm.joint1_id == jp:
+            return np.array(cm.joint1_placement.translation)
+        if cm.joint2_id == jp:
+            return np.array(cm.joint2_placement.translation)
+    raise PkdynError(f"{robot.name}: leg joint '{robot.model.names[jp]}' has no closure")
+
+
 def _leg_radius(robot: Robot, *joints: int) -> float:
     """Largest cylinder/capsule/sphere radius of the collision geometry on these joints' bodies."""
     r = 0.0
@@ -252,14 +330,30 @@ class HexapodEvaluator(PoseEvaluator):
     def __init__(self, robot: Robot) -> None:
         super().__init__(robot)
         self.legs = HexapodLegs.from_robot(robot)
+        self._interference: PlacedInterference | None = None
+
+    @property
+    def interference(self) -> PlacedInterference:
+        """The interference of the robot's collision geometry (built on first use)."""
+        if self._interference is None:
+            self._interference = leg_interference(self.robot)
+        return self._interference
+
+    def _interference_bad(
+        self, P: np.ndarray, R: np.ndarray, v: np.ndarray, margin: float
+    ) -> np.ndarray:
+        return self.interference.bad(leg_placements(self.robot, self.legs, P, R, v), len(v), margin)
 
     def _need_radius(self, kinds: tuple[str, ...]) -> None:
-        if "interference" in kinds and not np.any(self.legs.radius > 0):
+        if "interference" in kinds and not self.robot.collision_model.ngeoms:
             raise InvalidInputError(
                 "limits",
-                f"{self.robot.name}: leg interference needs the legs' collision geometry "
-                "(load the robot with geometry=True)",
+                f"{self.robot.name}: interference needs collision geometry: give the links "
+                "<collision> elements (in Python, load with geometry=True), or leave "
+                "interference out (--limits stroke joint; limits=('stroke', 'joint'))",
             )
+        if "interference" in kinds:
+            self.interference  # noqa: B018 (built now: a shape it cannot place raises here)
 
     def violations(
         self, P: np.ndarray, R: np.ndarray, kinds: tuple[str, ...], margin: float
@@ -276,7 +370,9 @@ class HexapodEvaluator(PoseEvaluator):
             elif kind == "joint":
                 bad = self.legs.joint_bad(vv)
             else:
-                bad = self.legs.interference_bad(vv, margin)
+                Pk = np.atleast_2d(np.asarray(P, dtype=float))[todo]
+                Rk = R if R.ndim == 2 else R[todo]
+                bad = self._interference_bad(Pk, Rk, vv, margin)
             out[todo[bad]] = LIMIT_KINDS.index(kind)
         return out
 
@@ -318,7 +414,7 @@ class HexapodEvaluator(PoseEvaluator):
             ia, ib = np.nonzero(out == REACHABLE)
             if ia.size:
                 P = np.column_stack([xs[ia], ys[ib], np.full(ia.size, z)])
-                bad = legs.interference_bad(legs.leg_vectors(P, R), margin)
+                bad = self._interference_bad(P, R, legs.leg_vectors(P, R), margin)
                 out[ia[bad], ib[bad]] = LIMIT_KINDS.index("interference")
         return out
 

@@ -44,7 +44,7 @@ from collections.abc import Iterator
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.analysis.collisions import CollisionChecker
+from pkdyn.analysis.collisions import CollisionChecker, interference_checker
 from pkdyn.model.assembly import solve_pose
 from pkdyn.model.description import ConeLimit
 from pkdyn.model.robot import Robot
@@ -281,11 +281,8 @@ class NumericEvaluator(PoseEvaluator):
     def checker(self) -> CollisionChecker:
         """The coal checker (built on first use; pairs overlapping at home left out)."""
         if self._checker is None:
-            full = CollisionChecker(self.robot)
-            d = full.distances(self.robot.q_home)
-            keep = [n for n, x in zip(full.names, d, strict=True) if x >= 0.0]
-            self.excluded_pairs = [n for n, x in zip(full.names, d, strict=True) if x < 0.0]
-            self._checker = full if not self.excluded_pairs else CollisionChecker(self.robot, keep)
+            self._checker = interference_checker(self.robot)
+            self.excluded_pairs = self._checker.excluded
         return self._checker
 
     # ------------------------------------------------------------------ one pose

@@ -34,8 +34,9 @@ from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.description import PyramidLimit
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
-from pkdyn.workspace.legs import HexapodLegs
+from pkdyn.workspace.legs import HexapodLegs, leg_interference, leg_placements
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, check_kinds, pyramid_normals
+from pkdyn.workspace.placed_interference import PlacedInterference
 
 __all__ = [
     "OrientationWorkspace",
@@ -215,6 +216,7 @@ class OrientationWorkspace:
 
 def _codes(
     legs: HexapodLegs,
+    inter: PlacedInterference | None,
     C: np.ndarray,
     R: np.ndarray,
     kinds: tuple[str, ...],
@@ -231,7 +233,9 @@ def _codes(
         elif kind == "joint":
             bad = legs.joint_bad(vv)
         else:
-            bad = legs.interference_bad(vv, margin)
+            assert inter is not None
+            Ck = np.broadcast_to(C, (todo.size, 3))
+            bad = inter.bad(leg_placements(inter.robot, legs, Ck, R[todo], vv), todo.size, margin)
         out[todo[bad]] = LIMIT_KINDS.index(kind)
     return out
 
@@ -278,10 +282,16 @@ def orientation_workspace(
     """
     legs = HexapodLegs.from_robot(robot, "the orientation workspace")
     kinds = check_kinds(limits)
-    if "interference" in kinds and not np.any(legs.radius > 0):
-        raise InvalidInputError(
-            "limits", f"{robot.name}: leg interference needs collision geometry (geometry=True)"
-        )
+    inter = None
+    if "interference" in kinds:
+        if not robot.collision_model.ngeoms:
+            raise InvalidInputError(
+                "limits",
+                f"{robot.name}: interference needs collision geometry: give the links "
+                "<collision> elements (in Python, load with geometry=True), or leave "
+                "interference out (--limits stroke joint; limits=('stroke', 'joint'))",
+            )
+        inter = leg_interference(robot)
     if n1 < 2 or n2 < 8:
         raise InvalidInputError("samples", "need n1 >= 2 and n2 >= 8")
     if n1 * n2 > MAX_ORIENTATIONS:
@@ -304,8 +314,8 @@ def orientation_workspace(
     arcs: list[list[tuple[float, float]]] = []
     for i in progress_bar(range(n1), "orientation workspace", "row", progress, leave=False):
         R = rotations(x1, x2, R0, np.full(n2, t1[i]), t2)
-        codes[i] = _codes(legs, C, R, kinds, margin)
-        arcs.append(_arcs(legs, C, x1, x2, R0, float(t1[i]), t2, kinds, margin, tol))
+        codes[i] = _codes(legs, inter, C, R, kinds, margin)
+        arcs.append(_arcs(legs, inter, C, x1, x2, R0, float(t1[i]), t2, kinds, margin, tol))
     return OrientationWorkspace(
         robot=robot.name,
         center=C,
@@ -324,6 +334,7 @@ def orientation_workspace(
 
 def _arcs(
     legs: HexapodLegs,
+    inter: PlacedInterference | None,
     C: np.ndarray,
     x1: np.ndarray,
     x2: np.ndarray,
@@ -347,7 +358,7 @@ def _arcs(
         cuts.append(pyramid_roots(legs, C, x1, x2, R0, t1))
     b = np.unique(np.concatenate(cuts) % (2 * math.pi))
     mid = 0.5 * (b + np.append(b[1:], b[0] + 2 * math.pi))
-    ok = _codes(legs, C, rotations(x1, x2, R0, np.full(mid.size, t1), mid), kinds, margin)
+    ok = _codes(legs, inter, C, rotations(x1, x2, R0, np.full(mid.size, t1), mid), kinds, margin)
     ok = ok == REACHABLE
     if ok.all():
         return [(0.0, 2 * math.pi)]
@@ -360,7 +371,7 @@ def _arcs(
     a, bb = np.where(inside_lo, lo, hi), np.where(inside_lo, hi, lo)  # a allowed, bb not
     while np.max(np.abs(bb - a)) > tol:
         m = 0.5 * (a + bb)
-        good = _codes(legs, C, rotations(x1, x2, R0, np.full(m.size, t1), m), kinds, margin)
+        good = _codes(legs, inter, C, rotations(x1, x2, R0, np.full(m.size, t1), m), kinds, margin)
         g = good == REACHABLE
         a, bb = np.where(g, m, a), np.where(g, bb, m)
     ends = a % (2 * math.pi)

@@ -22,7 +22,8 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
-from pkdyn.model.robot import Robot
+from pkdyn.inputs import count, positive
+from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, check_kinds
 
 __all__ = [
@@ -230,6 +231,10 @@ def evaluator_for(
 def _grid_axes(
     box: np.ndarray, step: float | None, n: int, dims: Sequence[int], home: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    if step is None:
+        n = count("samples", n, minimum=2, maximum=MAX_GRID_SAMPLES)
+    else:
+        step = positive("step", step, "m")
     axes = []
     for d in range(3):
         if d not in dims:
@@ -239,17 +244,17 @@ def _grid_axes(
         if not hi > lo:
             raise InvalidInputError("bounds", f"{AXES[d]}: need min < max, got {lo}, {hi}")
         if step is None:
-            if n < 2:
-                raise InvalidInputError("samples", f"{n}: need at least 2 samples per axis")
             axes.append(np.linspace(lo, hi, n))
             continue
-        k = int(np.floor((hi - lo) / step + 1e-9)) + 1
-        if not step > 0 or k < 2:
-            raise InvalidInputError("step", f"{step} m leaves fewer than 2 samples along {AXES[d]}")
-        if k > MAX_GRID_SAMPLES:
+        cells = (hi - lo) / step
+        if cells > MAX_GRID_SAMPLES:
             raise InvalidInputError(
-                "step", f"{step} m gives {k:.3g} samples along {AXES[d]} alone; use a coarser step"
+                "step",
+                f"{step:g} m gives {cells:.3g} samples along {AXES[d]} alone; use a coarser step",
             )
+        k = int(np.floor(cells + 1e-9)) + 1
+        if k < 2:
+            raise InvalidInputError("step", f"{step} m leaves fewer than 2 samples along {AXES[d]}")
         axes.append(lo + step * np.arange(k))
     total = float(np.prod([a.size for a in axes]))
     if total > MAX_GRID_SAMPLES:
@@ -305,13 +310,22 @@ def translation_workspace(
 
     """
     if robot.platform_frame is None:
-        raise PkdynError(f"{robot.name} declares no platform frame: no workspace to sample")
+        raise PkdynError(
+            f"{robot.name} declares no platform frame: no workspace to sample; {PLATFORM_HINT}"
+        )
     rpy_a = np.asarray(rpy, dtype=float)
     if rpy_a.shape != (3,) or not np.all(np.isfinite(rpy_a)):
         raise InvalidInputError("rpy", "expected 3 finite angles [rad]")
     if not np.isfinite(margin):
         raise InvalidInputError("margin", f"must be a finite distance [m], got {margin}")
     kinds = check_kinds(limits)
+    if "interference" in kinds and not robot.collision_model.ngeoms:
+        raise InvalidInputError(
+            "limits",
+            f"{robot.name}: interference needs collision geometry: give the links <collision> "
+            "elements (in Python, load with geometry=True), or leave interference out "
+            "(--limits stroke joint; limits=('stroke', 'joint'))",
+        )
     ev = evaluator if evaluator is not None else evaluator_for(robot, method, progress)
     R = pin.rpy.rpyToMatrix(rpy_a)
     dims = tuple(int(d) for d in robot.task_rows if d < 3)

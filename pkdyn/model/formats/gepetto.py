@@ -14,7 +14,12 @@ Keys (Gepetto's, then pkdyn's additions):
   ``joint_name: []`` to keep them revolute);
 - ``free_flyer: true``: a free-flyer root joint (Gepetto's loader option for legged robots);
 - ``platform: {frame, xyz, rpy, task}``: pkdyn's platform frame (a link or frame name, an
-  optional placement in it, the controlled pose components, e.g. ``"x y z"``).
+  optional placement in it, the controlled pose components, e.g. ``"x y z"``);
+- ``couplings``: a list of joint couplings (gears, mimic joints), each a mapping with
+  ``joint`` (the driven joint), optional ``name`` (default ``coupling1``, ``coupling2``...),
+  ``source``, and either ``multiplier`` / ``offset`` or ``polycoef`` (1 to 5 coefficients,
+  constant term first), optional ``joint_ref`` / ``source_ref``: the ``pkdyn:coupling`` element
+  of urdf/README.md in YAML.
 
 Sidecars are read defensively: a regular file of bounded size, YAML without anchors or aliases
 (no alias bomb can expand), at most :data:`MAX_NODES` nodes, typed keys (a ``name_mot`` written
@@ -38,6 +43,7 @@ from pkdyn.model.description import (
     TASK_COMPONENTS,
     ActuatorSpec,
     ClosureSpec,
+    CouplingSpec,
     FrameRef,
     PlatformSpec,
 )
@@ -53,7 +59,16 @@ MAX_DEPTH = 50
 """Deepest nesting of YAML collections in a sidecar (a sidecar nests 3 levels)."""
 
 _TYPES = {"3d": "point", "6d": "weld"}
-_KEYS = ("closed_loop", "type", "name_mot", "joint_name", "joint_type", "free_flyer", "platform")
+_KEYS = (
+    "closed_loop",
+    "type",
+    "name_mot",
+    "joint_name",
+    "joint_type",
+    "free_flyer",
+    "platform",
+    "couplings",
+)
 _UJOINT = re.compile(r"^UJOINT_([XYZ])([XYZ])$")
 
 
@@ -69,6 +84,7 @@ class Sidecar:
         free_flyer: Add a free-flyer root joint.
         platform: Platform frame, if declared.
         by_convention: ``joint_types`` came from Gepetto's naming convention.
+        couplings: Joint couplings (pkdyn's ``couplings`` key).
 
     """
 
@@ -79,6 +95,7 @@ class Sidecar:
     free_flyer: bool = False
     platform: PlatformSpec | None = None
     by_convention: bool = False
+    couplings: list[CouplingSpec] = field(default_factory=list)
 
 
 class _Loader(yaml.SafeLoader):
@@ -204,7 +221,70 @@ def read_sidecar(path: str | os.PathLike[str]) -> Sidecar:
     side.free_flyer = ff
     if data.get("platform") is not None:
         side.platform = _platform(src, data["platform"])
+    side.couplings = _couplings(src, data.get("couplings"))
     return side
+
+
+_COUPLING_KEYS = (
+    "name",
+    "joint",
+    "source",
+    "multiplier",
+    "offset",
+    "polycoef",
+    "joint_ref",
+    "source_ref",
+)
+
+
+def _scalar(src: str, key: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise DescriptionError(src, key, f"expected a number, got {value!r}")
+    out = float(value)
+    if not np.isfinite(out):
+        raise DescriptionError(src, key, f"expected a finite number, got {value!r}")
+    return out
+
+
+def _couplings(src: str, value: Any) -> list[CouplingSpec]:
+    """The ``couplings`` key: a list of mappings (see the module docstring)."""
+    if value is None:
+        return []
+    if not isinstance(value, list):
+        raise DescriptionError(src, "couplings", "expected a list of mappings")
+    out = []
+    for k, item in enumerate(value):
+        key = f"couplings[{k}]"
+        if not isinstance(item, dict):
+            raise DescriptionError(src, key, "expected a mapping with 'joint' and 'source'")
+        unknown = [str(x) for x in item if x not in _COUPLING_KEYS]
+        if unknown:
+            raise DescriptionError(
+                src, f"{key}.{unknown[0]}", f"unknown key; use {', '.join(_COUPLING_KEYS)}"
+            )
+        name = str(item.get("name", f"coupling{k + 1}"))
+        joint, source = item.get("joint"), item.get("source")
+        if not isinstance(joint, str) or not (source is None or isinstance(source, str)):
+            raise DescriptionError(src, key, "'joint' (and 'source') must be joint names")
+        if "polycoef" in item:
+            if "multiplier" in item or "offset" in item:
+                raise DescriptionError(src, key, "give polycoef or multiplier/offset, not both")
+            poly = item["polycoef"]
+            if not isinstance(poly, list) or not 1 <= len(poly) <= 5:
+                raise DescriptionError(
+                    src, f"{key}.polycoef", f"expected a list of 1 to 5 numbers, got {poly!r}"
+                )
+            coef = tuple(_scalar(src, f"{key}.polycoef", c) for c in poly)
+        else:
+            coef = (
+                _scalar(src, f"{key}.offset", item.get("offset", 0.0)),
+                _scalar(src, f"{key}.multiplier", item.get("multiplier", 1.0)),
+            )
+        if source is None:
+            coef = coef[:1]
+        refs = [_scalar(src, f"{key}.{r}", item.get(r, 0.0)) for r in ("joint_ref", "source_ref")]
+        out.append(CouplingSpec(name, joint, source, coef, refs[0], refs[1]))
+    return out
 
 
 def _numbers(src: str, key: str, value: Any, n: int) -> np.ndarray:

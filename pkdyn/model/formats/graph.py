@@ -35,7 +35,13 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
-from pkdyn.model.description import ActuatorSpec, ClosureSpec, FrameRef, PassiveSpec
+from pkdyn.model.description import (
+    ActuatorSpec,
+    ClosureSpec,
+    CouplingSpec,
+    FrameRef,
+    PassiveSpec,
+)
 from pkdyn.model.validate import unit_vector
 from pkdyn.model.warn import warn
 
@@ -154,6 +160,7 @@ class Mechanism:
         actuators: Actuators.
         gravity: Gravity vector [m/s^2].
         home: Named configurations (joint name -> coordinates, Pinocchio convention).
+        couplings: Joint couplings (joint names, coordinates in the file's convention).
         missing_meshes: Mesh files that were not found (their shapes are left out).
 
     """
@@ -164,6 +171,7 @@ class Mechanism:
     joints: list[Joint] = field(default_factory=list)
     closures: list[ClosureSpec] = field(default_factory=list)
     actuators: list[ActuatorSpec] = field(default_factory=list)
+    couplings: list[CouplingSpec] = field(default_factory=list)
     gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
     home: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
     missing_meshes: list[str] = field(default_factory=list)
@@ -190,6 +198,7 @@ class Built:
         cut: Names of the joints that became closures.
         passive: Springs, dampers and friction of the moving tree joints (the rest position as
             the displacement from the joint's zero configuration).
+        couplings: The mechanism's joint couplings (on tree joints).
 
     """
 
@@ -201,6 +210,7 @@ class Built:
     joint_ids: dict[str, int]
     cut: list[str]
     passive: list[PassiveSpec] = field(default_factory=list)
+    couplings: list[CouplingSpec] = field(default_factory=list)
 
     def configuration(self, values: dict[str, np.ndarray], base: np.ndarray) -> np.ndarray:
         """A configuration with some joints set (joint name -> coordinates).
@@ -491,7 +501,27 @@ def build(mech: Mechanism) -> Built:
                 )
                 go.meshColor = np.asarray(g.rgba, dtype=float)
                 gm.addGeometryObject(go)
-    return Built(model, visual, collision, closures, q, joint_ids, [j.name for j in cut], passive)
+    cut_names = {j.name for j in cut}
+    for c in mech.couplings:
+        for jname in (c.joint, c.source):
+            if jname in cut_names:
+                raise DescriptionError(
+                    mech.source,
+                    f"coupling '{c.name}'",
+                    f"joint '{jname}' closes a loop (it became a closure and has no coordinate); "
+                    "a coupled joint must be a tree joint",
+                )
+    return Built(
+        model,
+        visual,
+        collision,
+        closures,
+        q,
+        joint_ids,
+        [j.name for j in cut],
+        passive,
+        list(mech.couplings),
+    )
 
 
 def _passive(j: Joint, jm: pin.JointModel) -> PassiveSpec:

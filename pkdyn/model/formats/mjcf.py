@@ -16,7 +16,10 @@ geoms). Visual geoms are in group 2 without contacts, collision geoms in group 3
 between bodies linked by a joint or a closure are excluded. Closures become equality constraints
 between two sites placed at the Pinocchio contact frames (``<name>_1`` on ``joint1``'s body,
 ``<name>_2`` on ``joint2``'s): a ``point`` closure a ``connect``, a ``weld`` a ``weld``, a
-``hinge`` the same two ``connect`` as its two Pinocchio point constraints. Each actuator is a
+``hinge`` the same two ``connect`` as its two Pinocchio point constraints. Joint couplings
+become ``joint`` equalities named after the coupling (``joint1`` the driven joint, ``joint2``
+the source, ``polycoef`` the polynomial re-expanded about ``qpos0 = 0``: MuJoCo's
+``qpos - qpos0`` convention with the exported joints' zero ``ref``). Each actuator is a
 ``motor`` on its joint with ``gear`` = the transmission reduction, so its control is the
 motor-side effort; ``ctrlrange`` and ``forcerange`` are the URDF (joint-side) effort limit
 divided by the reduction. A keyframe ``home`` holds the assembled home configuration.
@@ -53,12 +56,14 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import OutputError, PkdynError
+from pkdyn.exceptions import OutputError
 from pkdyn.files import atomic_write
+from pkdyn.inputs import positive
 from pkdyn.model.formats.mjcf_mujoco import actuator_efforts, mujoco_model
 from pkdyn.model.formats.mjcf_state import JointMap, StateMap
 from pkdyn.model.formats.mjcf_state import quat_wxyz as _quat_wxyz
 from pkdyn.model.robot import Robot
+from solvers.coupling import MAX_COEFFICIENTS, JointCoupling
 
 __all__ = [
     "JointMap",
@@ -258,12 +263,11 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
 
     Raises:
         DescriptionError: A joint has no MuJoCo equivalent.
-        PkdynError: Invalid options.
+        InvalidInputError: A timestep that is not a positive finite number of seconds.
 
     """
     opt = options or MjcfOptions()
-    if not opt.timestep > 0.0:
-        raise PkdynError(f"MJCF timestep must be > 0, got {opt.timestep}")
+    positive("timestep", opt.timestep, "s")
     model = robot.model
     smap = StateMap(robot)
     names = smap.body_names
@@ -321,6 +325,11 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
         _sub(elements[cm.joint2_id], "site", name=s2, **_pose_attrs(cm.joint2_placement))
         tag = "connect" if cm.type == pin.ContactType.CONTACT_3D else "weld"
         _sub(equality, tag, name=cm.name, site1=s1, site2=s2)
+    for c in robot.closure_set.couplings:
+        attrs = {"name": c.name, "joint1": model.names[c.joint]}
+        if c.source is not None:
+            attrs["joint2"] = model.names[c.source]
+        _sub(equality, "joint", polycoef=_fmt(_polycoef(c)), **attrs)
     if len(equality) == 0:
         root.remove(equality)
     _tendons(root, robot, elements)
@@ -337,6 +346,23 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
     _sub(keyframe, "key", name="home", qpos=_fmt(smap.qpos(robot.q_home)))
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _polycoef(c: JointCoupling) -> np.ndarray:
+    """MuJoCo ``polycoef`` (5,) of a coupling, about ``qpos0 = 0`` of both joints.
+
+    ``x_j = x_j0 + p(x_s - x_s0)`` expanded in powers of ``x_s`` (binomial theorem); a locked
+    joint keeps the constant term only.
+    """
+    out = np.zeros(MAX_COEFFICIENTS)
+    if c.source is None:
+        out[0] = c.joint_ref + c.coefficients[0]
+        return out
+    for k, ck in enumerate(c.coefficients):
+        for i in range(k + 1):
+            out[i] += ck * math.comb(k, i) * (-c.source_ref) ** (k - i)
+    out[0] += c.joint_ref
+    return out
 
 
 def _excluded_pairs(robot: Robot) -> list[tuple[int, int]]:

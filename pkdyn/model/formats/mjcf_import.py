@@ -19,8 +19,11 @@ What is read (attributes with their default classes, see :mod:`~pkdyn.model.form
   collision); a mesh file that cannot be found is left out with one warning naming the files;
 - ``<equality>``: ``connect`` -> ``point`` closure, ``weld`` -> ``weld`` closure, by bodies
   (the second anchor / relative pose taken at ``qpos0``, as MuJoCo does) or by sites; named
-  after the equality (unnamed ones ``connect1``, ``weld2``...). ``joint``, ``tendon``,
-  ``distance`` and ``flex`` equalities are refused with a message naming them;
+  after the equality (unnamed ones ``connect1``, ``weld2``...). ``joint`` -> a joint coupling
+  (:class:`~pkdyn.model.description.CouplingSpec`: ``joint1 - qpos0 = polycoef(joint2 -
+  qpos0)``, up to 5 coefficients, on hinge and slide joints; ``joint1`` alone is locked at
+  ``qpos0 + polycoef[0]``). ``tendon``, ``distance`` and ``flex`` equalities are refused with a
+  message naming them;
 - ``<actuator>`` on joints: ``gear`` -> reduction, joint-side effort limit from ``forcerange``
   x gear (motors and proportional ``general`` actuators also from ``ctrlrange`` x gain x gear);
   actuators on tendons, sites or bodies are left out with a warning;
@@ -44,7 +47,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.model.description import ActuatorSpec, ClosureSpec, FrameRef
+from pkdyn.model.description import ActuatorSpec, ClosureSpec, CouplingSpec, FrameRef
 from pkdyn.model.formats import mjcf_spec as spec
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
 from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml, read_text
@@ -80,6 +83,7 @@ class _Reader:
     lost_inertia: list[str] = field(default_factory=list)  # bodies whose mesh mass is missing
     mj_joints: list[tuple[str, str]] = field(default_factory=list)  # (name, type), qpos order
     joint_types: dict[str, str] = field(default_factory=dict)
+    joint_refs: dict[str, float] = field(default_factory=dict)
     sites: dict[str, tuple[str, pin.SE3]] = field(default_factory=dict)
     geometry: bool = True
 
@@ -338,6 +342,7 @@ def _body(r: _Reader, el: ET.Element, parent: str, oMp: pin.SE3, cls: str) -> No
             mech.add_body(Body(child, oMb, virtual=True), doc.where(el, name))
         r.mj_joints.append((jname, p.type))
         r.joint_types[jname] = p.type
+        r.joint_refs[jname] = float(p.ref) if p.type in ("hinge", "slide") else 0.0
         mech.joints.append(_joint(r, jel, p, jname, prev, child, oMb))
         prev = child
     if not props:  # a body without joints is welded to its parent
@@ -532,7 +537,7 @@ def _primitive_inertia(r: _Reader, el: ET.Element, g: spec.GeomProps) -> pin.Ine
 
 
 def _unique(mech: Mechanism, name: str) -> str:
-    used = {c.name for c in mech.closures}
+    used = {c.name for c in mech.closures} | {c.name for c in mech.couplings}
     out, k = name, 1
     while out in used:
         out, k = f"{name}_{k}", k + 1
@@ -569,21 +574,23 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
     for el in eq:
         tag = el.tag
         counts[tag] = counts.get(tag, 0) + 1
-        if tag in ("joint", "tendon", "distance", "flex"):
+        if tag in ("tendon", "distance", "flex"):
             what = {
-                "joint": "polynomial joint couplings",
                 "tendon": "tendon couplings",
                 "distance": "distance constraints",
                 "flex": "flex constraints",
             }[tag]
             raise doc.error(el, f"{what} are not supported; remove this equality to load the model")
-        if tag not in ("connect", "weld"):
+        if tag not in ("connect", "weld", "joint"):
             raise doc.error(el, f"unknown equality <{tag}>")
         a = r.defs.attrs(el, "main")
         if a.get("active", "true") == "false":
             warn(f"{mech.source}: {doc.where(el)} is inactive (active='false'); not used")
             continue
         name = _unique(mech, a.get("name") or f"{tag}{counts[tag]}")
+        if tag == "joint":
+            mech.couplings.append(_coupling(r, el, a, name))
+            continue
         torquescale = 1.0
         if tag == "weld" and "torquescale" in a:
             torquescale = float(spec.vector(doc, el, "torquescale", a["torquescale"], 1)[0])
@@ -595,6 +602,45 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
             raise doc.error(el, "both sides are on the same body; nothing to close")
         kind = "point" if tag == "connect" or torquescale == 0.0 else "weld"
         mech.closures.append(ClosureSpec(name, kind, f1, f2))
+
+
+def _coupling(r: _Reader, el: ET.Element, a: dict[str, str], name: str) -> CouplingSpec:
+    """A ``<joint>`` equality: ``joint1 - qpos0 = polycoef(joint2 - qpos0)``."""
+    doc = r.doc
+    joints: list[str | None] = []
+    for attr in ("joint1", "joint2"):
+        jname = a.get(attr)
+        if jname is None:
+            joints.append(None)
+            continue
+        if jname not in r.joint_types:
+            raise doc.error(el, f"{attr}='{jname}' is not a joint of this model", name)
+        if r.joint_types[jname] not in ("hinge", "slide"):
+            raise doc.error(
+                el,
+                f"{attr}='{jname}' is a {r.joint_types[jname]} joint; joint equalities relate "
+                "hinge and slide joints",
+                name,
+            )
+        joints.append(jname)
+    j1, j2 = joints
+    if j1 is None:
+        raise doc.error(el, "missing attribute 'joint1'", name)
+    text = a.get("polycoef", "0 1 0 0 0")
+    try:
+        coef = tuple(float(t) for t in text.split())
+    except ValueError:
+        raise doc.error(el, f"polycoef='{text}': expected numbers", name) from None
+    if not 1 <= len(coef) <= 5:
+        raise doc.error(el, f"polycoef='{text}': {len(coef)} coefficients; give 1 to 5", name)
+    if not all(math.isfinite(c) for c in coef):
+        raise doc.error(el, f"polycoef='{text}': NaN and infinite values are not allowed", name)
+    if j2 == j1:
+        raise doc.error(el, f"joint1 and joint2 are both '{j1}'", name)
+    if j2 is None:
+        coef = coef[:1]
+    ref2 = r.joint_refs[j2] if j2 is not None else 0.0
+    return CouplingSpec(name, j1, j2, coef, r.joint_refs[j1], ref2)
 
 
 def _equality_frames(

@@ -361,6 +361,47 @@ class UrdfWriter:
             f'  <pkdyn:closure name="{name}" type="{kind}"{extra}>{frames}</pkdyn:closure>'
         )
 
+    def coupling(
+        self,
+        name: str,
+        joint: str,
+        source: str | None,
+        coefficients: Sequence[float],
+        joint_ref: float = 0.0,
+        source_ref: float = 0.0,
+    ) -> None:
+        """Add a joint coupling (``pkdyn:coupling``, see urdf/README.md).
+
+        Written with ``multiplier`` / ``offset`` when the polynomial is affine, else with
+        ``polycoef``; the references only when non-zero.
+
+        Args:
+            name: Coupling name.
+            joint: Driven joint.
+            source: Source joint, or ``None`` (the joint is locked at ``joint_ref +
+                coefficients[0]``).
+            coefficients: Polynomial coefficients, constant term first (1 to 5).
+            joint_ref: Reference position of ``joint`` [rad or m].
+            source_ref: Reference position of ``source`` [rad or m].
+
+        """
+        attrs = f'name="{name}" joint="{joint}"'
+        c = [float(x) for x in coefficients]
+        if source is not None:
+            attrs += f' source="{source}"'
+            if len(c) <= 2 or not any(c[2:]):
+                c = (c + [0.0])[:2]
+                attrs += f' multiplier="{_f(c[1])}" offset="{_f(c[0])}"'
+            else:
+                attrs += f' polycoef="{_v(c)}"'
+        else:
+            attrs += f' offset="{_f(c[0])}"'
+        if joint_ref:
+            attrs += f' joint_ref="{_f(joint_ref)}"'
+        if source_ref and source is not None:
+            attrs += f' source_ref="{_f(source_ref)}"'
+        self._ext.append(f"  <pkdyn:coupling {attrs}/>")
+
     def transmission(
         self,
         joint: str,

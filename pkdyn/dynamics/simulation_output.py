@@ -1,0 +1,73 @@
+"""A simulation's time series as a CSV file: actuators, energies, closure residual."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from pkdyn.exceptions import OutputError
+from pkdyn.files import atomic_write
+from pkdyn.model.robot import Robot
+from solvers import ForwardResult
+
+__all__ = ["simulation_columns", "write_simulation_csv"]
+
+
+def simulation_columns(robot: Robot, result: ForwardResult) -> dict[str, np.ndarray]:
+    """The recorded series by column name.
+
+    ``t`` [s]; per actuator ``<a>`` (``robot.actuator_names``): ``qa_<a>`` [rad or m],
+    ``qa_dot_<a>`` [rad/s or m/s], ``tau_<a>`` (joint-side effort) [N m or N]; ``kinetic``,
+    ``potential``, ``work`` (of the efforts), ``dissipated`` (dampers and friction) [J];
+    ``energy_balance`` (``kinetic + potential - work + dissipated`` minus its start value: 0
+    for an exact integration) [J]; ``closure_residual`` [m or rad].
+
+    Args:
+        robot: The simulated robot.
+        result: Its :func:`pkdyn.dynamics.simulate` result.
+
+    Returns:
+        ``{name: (N,) array}`` in column order.
+
+    """
+    out: dict[str, np.ndarray] = {"t": result.t}
+    names = robot.actuator_names
+    qa = result.q[:, robot.actuated_q]
+    qd = result.v[:, robot.actuated_v]
+    for prefix, data in (("qa", qa), ("qa_dot", qd), ("tau", result.tau)):
+        for k, name in enumerate(names):
+            out[f"{prefix}_{name}"] = data[:, k]
+    out["kinetic"] = result.kinetic
+    out["potential"] = result.potential
+    out["work"] = result.work
+    out["dissipated"] = result.dissipated
+    balance = result.energy - result.work + result.dissipated
+    out["energy_balance"] = balance - balance[0]
+    out["closure_residual"] = result.closure_residual
+    return out
+
+
+def write_simulation_csv(robot: Robot, result: ForwardResult, path: str | Path) -> None:
+    """Write :func:`simulation_columns` as a CSV file (written whole or not at all).
+
+    Args:
+        robot: The simulated robot.
+        result: Its simulation result.
+        path: Output file.
+
+    Raises:
+        OutputError: The file cannot be written (an existing file is left intact).
+
+    """
+    cols = simulation_columns(robot, result)
+    rows = np.column_stack(list(cols.values()))
+    try:
+        with atomic_write(path, newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(list(cols))
+            for row in rows:
+                w.writerow([f"{x:.10g}" for x in row])
+    except OSError as err:
+        raise OutputError(str(path), err.strerror or str(err)) from None
