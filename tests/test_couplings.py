@@ -210,7 +210,7 @@ def test_gear_statics_by_virtual_work(gears):
         st = static_equilibrium(gears, q, [0, 0, 0, 0, moment, 0], gravity=True)
         assert st.tau[0] == pytest.approx(tau, rel=1e-9)
         # the coupling reaction is the generalized force on the driven joint
-        assert st.reactions["mesh"][0] == pytest.approx(dV2 - moment, rel=1e-9)
+        assert st.couplings["mesh"] == pytest.approx(dV2 - moment, rel=1e-9)
         if moment:
             # actuator_efforts: tau = -J^T F (no gravity)
             assert actuator_efforts(gears, q, [moment])[0] == pytest.approx(

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -187,6 +187,8 @@ class StaticsResult:
         reactions: One force and one moment per closure, by closure name (:class:`Reaction`).
         residual: Norm of the unbalanced generalised force [N m or N] (round-off when the
             equilibrium exists).
+        couplings: The reaction of each joint coupling, by coupling name: the generalized
+            force on its driven joint [N m or N] (the source joint receives ``-p'`` times it).
 
     """
 
@@ -194,14 +196,18 @@ class StaticsResult:
     lambdas: np.ndarray
     reactions: dict[str, Reaction]
     residual: float
+    couplings: dict[str, float] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dict."""
-        return {
+        out: dict[str, Any] = {
             "tau": self.tau.tolist(),
             "reactions": {k: v.to_json() for k, v in self.reactions.items()},
             "residual": self.residual,
         }
+        if self.couplings:
+            out["couplings"] = dict(self.couplings)
+        return out
 
 
 def static_equilibrium(
@@ -265,7 +271,9 @@ def static_equilibrium(
             f"{robot.name}: parallel singularity: actuator efforts are not unique here",
         )
     tau, lam = sol[:n_a], sol[n_a:]
-    return StaticsResult(tau, lam, closure_reactions(robot, km.q, lam), residual)
+    cs = robot.closure_set
+    couplings = {c.name: float(lam[cs.n_rigid + k]) for k, c in enumerate(cs.couplings)}
+    return StaticsResult(tau, lam, closure_reactions(robot, km.q, lam), residual, couplings)
 
 
 def statics_json(
