@@ -41,7 +41,10 @@ MODULES = (
     ("precision", "Precision: stiffness and frequency maps, closed forms and general path"),
     ("design", "Design studies: designs/s on 1 and 2 workers, a 10,000-design Delta study"),
     ("sizing", "Sizing: fastest cycle (toppra) and motor selection"),
-    ("identification", "Dynamic identification: a Delta from 1e5 samples (issue 27)"),
+    (
+        "identification",
+        "Dynamic identification: a Delta and a Gough-Stewart from 1e5 samples (issue 27)",
+    ),
     ("calibration", "Geometric calibration and pose sensitivities (issues 26, 27)"),
     ("cli_latency", "Command-line start-up: pkdyn commands against importing Pinocchio and numpy"),
 )

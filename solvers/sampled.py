@@ -47,6 +47,88 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
+def _relative_motion(d: np.ndarray, oMc2: np.ndarray) -> np.ndarray:
+    """Spatial motions (n, 6), world axes at the origin, in contact frames ``oMc2`` (n, 4, 4)."""
+    R2, p2 = oMc2[:, :3, :3], oMc2[:, :3, 3]
+    lin = d[:, :3] + _cross(d[:, 3:], p2)  # at the contact point
+    return np.concatenate(
+        [np.einsum("nji,nj->ni", R2, lin), np.einsum("nji,nj->ni", R2, d[:, 3:])], axis=1
+    )
+
+
+_CONSTANT_SUBSPACE = {
+    "JointModelRX",
+    "JointModelRY",
+    "JointModelRZ",
+    "JointModelRevoluteUnaligned",
+    "JointModelRUBX",
+    "JointModelRUBY",
+    "JointModelRUBZ",
+    "JointModelRevoluteUnboundedUnaligned",
+    "JointModelPX",
+    "JointModelPY",
+    "JointModelPZ",
+    "JointModelPrismaticUnaligned",
+    "JointModelSpherical",
+    "JointModelFreeFlyer",
+    "JointModelTranslation",
+    "JointModelPlanar",
+}
+"""Joints whose motion subspace is constant in their own frame: the time variation of their
+world Jacobian columns is ``V x column`` (``V``: their body's spatial velocity), as Pinocchio's
+``computeJointJacobiansTimeVariation`` computes it."""
+
+_DRIFT_CHECK_TOL = 1e-10
+
+
+def _drift_model(model: pin.Model) -> pin.Model | None:
+    """The tree with every universal joint split into two revolute joints, or ``None``.
+
+    An intermediate massless body between the two revolute joints makes every joint's motion
+    subspace constant in its frame: same coordinates, same placements and world Jacobian, and
+    the time variation of the world Jacobian gives the bodies' accelerations exactly (Pinocchio
+    leaves out the universal joint's bias acceleration there). ``None`` when another joint type
+    is present or the check against Pinocchio's forward kinematics at a random state fails.
+    """
+    out = pin.Model()
+    out.gravity = model.gravity
+    ids = {0: 0}
+    for j in range(1, model.njoints):
+        jm = model.joints[j]
+        kind = jm.shortname()
+        parent, placement, name = (
+            ids[int(model.parents[j])],
+            model.jointPlacements[j],
+            model.names[j],
+        )
+        if kind == "JointModelUniversal":
+            u = jm.extract()
+            mid = out.addJoint(
+                parent, pin.JointModelRevoluteUnaligned(u.axis1), placement, f"{name}_axis1"
+            )
+            ids[j] = out.addJoint(
+                mid, pin.JointModelRevoluteUnaligned(u.axis2), pin.SE3.Identity(), name
+            )
+        elif kind in _CONSTANT_SUBSPACE:
+            ids[j] = out.addJoint(parent, jm, placement, name)
+        else:
+            return None
+    if out.nq != model.nq or out.nv != model.nv:
+        return None
+    rng = np.random.default_rng(0)
+    q = pin.integrate(model, pin.neutral(model), rng.standard_normal(model.nv))
+    v = rng.standard_normal(model.nv)
+    data, data2 = model.createData(), out.createData()
+    pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
+    pin.computeJointJacobiansTimeVariation(out, data2, q, v)
+    for j in range(1, model.njoints):
+        A = data2.dJ @ (ClosureSet._support_mask(model, j) * v)
+        ref = data.oMi[j].act(data.a[j]).vector
+        if np.abs(A - ref).max() > _DRIFT_CHECK_TOL * max(1.0, np.abs(ref).max()):
+            return None
+    return out
+
+
 class SampledKinematics:
     """Buffers of per-sample kinematics and their vectorised evaluation (see the module doc).
 
@@ -95,6 +177,7 @@ class SampledKinematics:
             [[items[k][2].translation for k in pts], [items[k][4].translation for k in pts]]
         ).reshape(2, len(pts), 3)
         self._pt_rows = (self._pt_offsets[:, None] + np.arange(3)).reshape(-1)
+        self._point_columns(nv)
         self._welds = [
             (
                 int(closure_set.offsets[k]),
@@ -110,6 +193,37 @@ class SampledKinematics:
             int(f): (slot.get(int(model.frames[f].parentJoint), 0), model.frames[f].placement)
             for f in frames
         }
+        self.Q = np.empty((self.size, model.nq))  # for the coupling rows
+        self._pending = np.zeros(self.size, dtype=bool)  # captured, placements not decoded
+        self._aux: tuple[pin.Model, pin.Data, np.ndarray] | None = None  # built on first use
+        self.Jaux = np.empty((self.size, 6, 3 * len(self._captured)))
+        self._drift: tuple[pin.Model, pin.Data] | None = None
+        self._drift_checked = False
+        self._data = model.createData()
+        self._drift_from_dJ = False
+
+    def _point_columns(self, nv: int) -> None:
+        """Index tables of the point closures' Jacobian rows.
+
+        Per point closure: the coordinates supporting either side (padded with coordinate 0,
+        weight 0), each side's weights on them (1: supports that side) and where each entry of
+        the closure's 3 rows lands in a flattened ``(nc, nv + 1)`` Jacobian (padding: column
+        ``nv``, dropped).
+        """
+        K = self._pt_offsets.size
+        sides = [self.masks[self._pt_slot[s]] for s in (0, 1)]  # (K, nv) each
+        union = [np.flatnonzero(sides[0][k] + sides[1][k]) for k in range(K)]
+        cu = max((u.size for u in union), default=0) or 1
+        self._pt_cols = np.zeros((K, cu), dtype=int)
+        self._pt_w = np.zeros((2, K, cu))
+        target = np.full((K, 3, cu), nv, dtype=int)
+        for k, u in enumerate(union):
+            self._pt_cols[k, : u.size] = u
+            for s in (0, 1):
+                self._pt_w[s, k, : u.size] = sides[s][k, u]
+            target[k, :, : u.size] = u
+        rows = self._pt_offsets[:, None, None] + np.arange(3)[None, :, None]
+        self._pt_flat = (rows * (nv + 1) + target).reshape(-1)
 
     def capture(self, k: int, data: pin.Data) -> None:
         """Copy sample ``k``'s kinematics from ``data``.
@@ -127,6 +241,8 @@ class SampledKinematics:
             self.H[k, 1:] = [oMi[j].homogeneous for j in captured]
             self.acc[k, 1:] = [acc[j].vector for j in captured]
         self.Jw[k] = data.J
+        self._pending[k] = False
+        self._drift_from_dJ = False
 
     def _velocities(self, n: int, v: np.ndarray) -> np.ndarray:
         """World spatial velocities (n, nj, 6) of the captured bodies at the origin."""
@@ -183,33 +299,233 @@ class SampledKinematics:
         A = self._accelerations(n)
         H = self.H[:n]
         if self._pt_offsets.size:
-            side = []
-            for s in (0, 1):
-                slot = self._pt_slot[s]
-                Hs = H[:, slot]  # (n, K, 4, 4)
-                p = np.einsum("nkij,kj->nki", Hs[..., :3, :3], self._pt_local[s]) + Hs[..., :3, 3]
-                Vs, As = V[:, slot], A[:, slot]
-                w = Vs[..., 3:]
-                vp = Vs[..., :3] + _cross(w, p)
-                ap = As[..., :3] + _cross(As[..., 3:], p) + _cross(w, vp)
-                side.append((p, vp, ap))
+            side = self._point_sides(H, V, A)
             rows = self._pt_rows
             r[:, rows] = (side[0][0] - side[1][0]).reshape(n, -1)
             ev[:, rows] = (side[0][1] - side[1][1]).reshape(n, -1)
             ea[:, rows] = (side[0][2] - side[1][2]).reshape(n, -1)
         for o, s1, M1, s2, M2 in self._welds:
-            oMc1 = H[:, s1] @ M1
             oMc2 = H[:, s2] @ M2
-            R2, p2 = oMc2[:, :3, :3], oMc2[:, :3, 3]
             for err, X in ((ev, V), (ea, A)):
-                d = X[:, s2] - X[:, s1]  # relative motion, world axes at the origin
-                lin = d[:, :3] + _cross(d[:, 3:], p2)  # ... at the contact point of joint2
-                err[:, o : o + 3] = np.einsum("nji,nj->ni", R2, lin)
-                err[:, o + 3 : o + 6] = np.einsum("nji,nj->ni", R2, d[:, 3:])
-            c1Mc2 = np.linalg.solve(oMc1, oMc2)
+                err[:, o : o + 6] = _relative_motion(X[:, s2] - X[:, s1], oMc2)
+            c1Mc2 = np.linalg.solve(H[:, s1] @ M1, oMc2)
             for k in range(n):
                 r[k, o : o + 6] = pin.log6(c1Mc2[k]).vector
         return r, ev, ea
+
+    def _point_sides(
+        self, H: np.ndarray, V: np.ndarray, A: np.ndarray
+    ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per side of the point closures: contact points, velocities, classical accelerations.
+
+        Each (n, K, 3), world axes.
+        """
+        side = []
+        for s in (0, 1):
+            slot = self._pt_slot[s]
+            Hs = H[:, slot]  # (n, K, 4, 4)
+            p = np.einsum("nkij,kj->nki", Hs[..., :3, :3], self._pt_local[s]) + Hs[..., :3, 3]
+            Vs, As = V[:, slot], A[:, slot]
+            w = Vs[..., 3:]
+            vp = Vs[..., :3] + _cross(w, p)
+            ap = As[..., :3] + _cross(As[..., 3:], p) + _cross(w, vp)
+            side.append((p, vp, ap))
+        return side
+
+    def acceleration_errors(self, n: int, v: np.ndarray) -> np.ndarray:
+        """The closures' acceleration drift ``gamma`` of samples captured at zero acceleration.
+
+        Args:
+            n: Number of samples captured by :meth:`capture_configuration` (placements decoded
+                by :meth:`update_placements`) and :meth:`capture_drift`, rows ``0..n-1``.
+            v: Their velocities (n, nv).
+
+        Returns:
+            ``gamma`` (n, nc): the acceleration errors of :meth:`closure_errors` at ``a = 0``
+            (no residual: no ``log6``); coupling rows ``-p'' v_s^2``.
+
+        """
+        ea = np.empty((n, self.closure_set.nc))
+        if not ea.shape[1]:
+            return ea
+        coupled = self.closure_set.coupling_rows
+        if coupled is not None:
+            o = self.closure_set.n_rigid
+            ea[:, o:] = coupled.drift(self.Q[:n], v[:n])
+            if o == 0:
+                return ea
+        V = self._velocities(n, v)
+        if self._drift_from_dJ:  # world accelerations d/dt(J_w) S_j v (no gravity offset)
+            A = np.swapaxes((self.dJw[:n] * v[:, None, :]) @ self.masks.T, 1, 2)
+        else:
+            A = self._accelerations(n)
+        H = self.H[:n]
+        if self._pt_offsets.size:
+            side = self._point_sides(H, V, A)
+            ea[:, self._pt_rows] = (side[0][2] - side[1][2]).reshape(n, -1)
+        for o, s1, _, s2, M2 in self._welds:
+            ea[:, o : o + 6] = _relative_motion(A[:, s2] - A[:, s1], H[:, s2] @ M2)
+        return ea
+
+    def capture_configuration(self, k: int, q: np.ndarray) -> None:
+        """Joint Jacobians and placements of sample ``k`` (one Pinocchio call, one array read).
+
+        The placements of the captured joints are decoded, for many samples at once, by
+        :meth:`update_placements` (:meth:`residuals_and_jacobians` does it).
+
+        Args:
+            k: Buffer row.
+            q: Configuration (nq,).
+
+        """
+        self.Q[k] = q
+        if not self._captured:
+            return
+        self._pending[k] = True
+        if self._aux is None:
+            # placements read from one array: a spherical leaf joint at the origin of each
+            # captured joint, whose world Jacobian columns are [[o]x R; R]
+            aux = pin.Model(self.model)
+            for j in self._captured:
+                aux.addJoint(j, pin.JointModelSpherical(), pin.SE3.Identity(), f"_pkdyn_aux_{j}")
+            self._aux = (aux, aux.createData(), pin.neutral(aux))
+        aux, aux_data, qx = self._aux
+        qx[: self.model.nq] = q
+        pin.computeJointJacobians(aux, aux_data, qx)
+        Jx = aux_data.J
+        nv = self.model.nv
+        self.Jw[k] = Jx[:, :nv]
+        self.Jaux[k] = Jx[:, nv:]
+
+    def update_placements(self, rows: np.ndarray) -> None:
+        """Placements of rows captured by :meth:`capture_configuration`, from their Jacobians.
+
+        Args:
+            rows: Buffer rows (m,).
+
+        """
+        nj = len(self._captured)
+        rows = rows[self._pending[rows]]  # decoded already: left as they are
+        if not nj or not rows.size:
+            return
+        self._pending[rows] = False
+        X = self.Jaux[rows].reshape(rows.size, 6, nj, 3).transpose(0, 2, 1, 3)  # (m, nj, 6, 3)
+        R, L = X[:, :, 3:], X[:, :, :3]  # columns r_i and o x r_i
+        # sum_i r_i x (o x r_i) = 3 o - sum_i r_i (r_i . o) = 2 o
+        H = np.empty((rows.size, nj, 4, 4))
+        H[:, :, :3, :3] = R
+        H[:, :, 0, 3] = 0.5 * (R[:, :, 1] * L[:, :, 2] - R[:, :, 2] * L[:, :, 1]).sum(axis=-1)
+        H[:, :, 1, 3] = 0.5 * (R[:, :, 2] * L[:, :, 0] - R[:, :, 0] * L[:, :, 2]).sum(axis=-1)
+        H[:, :, 2, 3] = 0.5 * (R[:, :, 0] * L[:, :, 1] - R[:, :, 1] * L[:, :, 0]).sum(axis=-1)
+        H[:, :, 3] = (0.0, 0.0, 0.0, 1.0)
+        self.H[rows, 1:] = H
+
+    def capture_drift(self, k: int, q: np.ndarray, v: np.ndarray) -> None:
+        """Sample ``k``'s body accelerations at zero joint acceleration.
+
+        For :meth:`acceleration_errors` (placements captured already by
+        :meth:`capture_configuration` and decoded by :meth:`update_placements`): one Pinocchio
+        call and one array read.
+
+        Args:
+            k: Buffer row.
+            q: Configuration (nq,).
+            v: Velocity (nv,).
+
+        """
+        if not self._drift_checked:
+            # accelerations at zero joint acceleration from the time variation of the world
+            # Jacobian where that is exact, else from rnea
+            model = _drift_model(self.model) if self._captured else None
+            self._drift = None if model is None else (model, model.createData())
+            self.dJw = np.empty((self.size, 6, self.model.nv))
+            self._drift_checked = True
+        if self._drift is not None:
+            pin.computeJointJacobiansTimeVariation(self._drift[0], self._drift[1], q, v)
+            self.dJw[k] = self._drift[1].dJ
+            self._drift_from_dJ = True
+        elif self._captured:
+            pin.rnea(self.model, self._data, q, v, np.zeros(self.model.nv))
+            acc = self._data.a_gf.tolist()
+            self.acc[k, 1:] = [acc[j].vector for j in self._captured]
+            self._drift_from_dJ = False
+
+    def _point_positions(self, H: np.ndarray, side: int) -> np.ndarray:
+        """World positions (m, K, 3) of one side's contact points, from placements (m, nj, 4, 4)."""
+        Hs = H[:, self._pt_slot[side]]
+        loc = self._pt_local[side]
+        R = Hs[..., :3, :3]
+        return (
+            R[..., 0] * loc[:, 0, None] + R[..., 1] * loc[:, 1, None] + R[..., 2] * loc[:, 2, None]
+        ) + Hs[..., :3, 3]
+
+    def residuals_and_jacobians(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Closure residuals and Jacobians of captured samples (:class:`ClosureSet` conventions).
+
+        Point rows: ``J = J_lin(p1) - J_lin(p2)``, the linear velocity of a point ``p`` of body
+        ``j`` being ``(J_w,lin - [p]x J_w,ang) S_j v``. Weld rows:
+        ``J = Jlog6(c1Mc2) X(oMc2)^-1 J_w (S_2 - S_1)`` (the relative twist in the contact frame
+        of ``joint2``; ``log6`` and ``Jlog6`` by Pinocchio, sample by sample).
+
+        Args:
+            rows: Buffer rows (m,) of the samples (captured by :meth:`capture_configuration`).
+
+        Returns:
+            Residuals (m, nc) [m, rad] and Jacobians (m, nc, nv).
+
+        """
+        m, nc, nv = rows.size, self.closure_set.nc, self.model.nv
+        r = np.empty((m, nc))
+        J = np.empty((m, nc, nv))
+        if not nc:
+            return r, J
+        coupled = self.closure_set.coupling_rows
+        if coupled is not None:
+            o = self.closure_set.n_rigid
+            Q = self.Q[rows]
+            r[:, o:] = coupled.residual(Q)
+            Jc = J[:, o:]
+            Jc[:] = 0.0
+            Jc[:, coupled.rows, coupled.sv] = -coupled.slopes(Q)  # (then the driven joint)
+            Jc[:, coupled.rows, coupled.jv] = 1.0
+            if o == 0:
+                return r, J
+        self.update_placements(rows)
+        H, Jw = self.H[rows], self.Jw[rows]
+        if self._pt_offsets.size:
+            # linear velocity of a point p of a body per coordinate: J_lin - [p]x J_ang on the
+            # coordinates supporting the body; J = that of side 1 - that of side 2, on the
+            # coordinates supporting either side (cross product linear in p)
+            p = [self._point_positions(H, s) for s in (0, 1)]  # (m, K, 3) each
+            r[:, self._pt_rows] = (p[0] - p[1]).reshape(m, -1)
+            w0, w1 = self._pt_w
+            G = Jw[:, :, self._pt_cols]  # (m, 6, K, c)
+            P = w0[..., None] * p[0][:, :, None] - w1[..., None] * p[1][:, :, None]
+            px, py, pz = P[..., 0], P[..., 1], P[..., 2]  # (m, K, c)
+            ax, ay, az = G[:, 3], G[:, 4], G[:, 5]
+            wd = w0 - w1
+            Jp = np.empty((m, self._pt_offsets.size, 3, G.shape[3]))
+            Jp[:, :, 0] = wd * G[:, 0] - (py * az - pz * ay)
+            Jp[:, :, 1] = wd * G[:, 1] - (pz * ax - px * az)
+            Jp[:, :, 2] = wd * G[:, 2] - (px * ay - py * ax)
+            Jx = np.zeros((m, nc * (nv + 1)))
+            Jx[:, self._pt_flat] = Jp.reshape(m, -1)
+            J[:, self._pt_rows] = Jx.reshape(m, nc, nv + 1)[:, self._pt_rows, :nv]
+        for o, s1, M1, s2, M2 in self._welds:
+            oMc1 = H[:, s1] @ M1
+            oMc2 = H[:, s2] @ M2
+            R2, p2 = oMc2[:, :3, :3], oMc2[:, :3, 3]
+            D = Jw * (self.masks[s2] - self.masks[s1])  # relative motion, world axes at origin
+            D_lin = D[:, :3] - np.cross(p2[:, :, None], D[:, 3:], axis=1)  # ... at c2's origin
+            twist = np.concatenate(
+                [np.swapaxes(R2, 1, 2) @ D_lin, np.swapaxes(R2, 1, 2) @ D[:, 3:]], axis=1
+            )
+            c1Mc2 = np.linalg.solve(oMc1, oMc2)
+            for k in range(m):
+                M = pin.SE3(c1Mc2[k])
+                r[k, o : o + 6] = pin.log6(M).vector
+                J[k, o : o + 6] = pin.Jlog6(M) @ twist[k]
+        return r, J
 
     def frame_force(self, n: int, frame: int, W: np.ndarray) -> np.ndarray:
         """Generalized forces (n, nv) of wrenches applied at a frame's origin.

@@ -4,11 +4,19 @@ Helpers used by several test modules live here (import them with ``from conftest
 the headless-browser client of the viewer tests is in :mod:`support.browser`.
 """
 
+import signal
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import pkdyn
+
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    # started in the background by a non-interactive shell (`make test &`): SIGINT is ignored,
+    # and the ignored disposition is inherited by every process the signal tests start (a
+    # Ctrl-C would then never reach them); the tests need the interactive default
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="session")

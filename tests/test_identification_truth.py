@@ -15,11 +15,18 @@ robot, must
   parameters from 800 samples: 1.5 times; the nominal model is tens of noise levels off);
 - report the parameters the efforts cannot see (not invent them): they are listed, and changing
   them changes no effort.
+
+The same holds for a robot with a joint coupling: the UFACTORY xArm7 gripper of MuJoCo
+Menagerie (two four-bar fingers, their drivers coupled by a joint equality; exported back to
+MuJoCo as one), its actuator on the driver joint and its joints' ``frictionloss`` (a MuJoCo
+constraint force with no counterpart in pkdyn) removed.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import warnings
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -62,11 +69,12 @@ def perturbed(robot, rng):
     )
 
 
-def multisine(robot, samples, dt, amp, seed, harmonics=5, f0=0.25):
+def multisine(robot, samples, dt, amp, seed, harmonics=5, f0=0.25, center=None):
     rng = np.random.default_rng(seed)
     t = np.arange(samples) * dt
     n = len(robot.actuators)
-    qa = np.tile(robot.q_home[robot.actuated_q], (t.size, 1))
+    mid = robot.q_home[robot.actuated_q] if center is None else center
+    qa = np.tile(mid, (t.size, 1))
     qd, qdd = np.zeros_like(qa), np.zeros_like(qa)
     for h in range(1, harmonics + 1):
         w = 2 * np.pi * f0 * h
@@ -149,4 +157,61 @@ def test_recovers_a_perturbed_robot_from_mujoco_efforts(name):
     moved[unseen] += 0.1
     b2 = MotionSampler(nominal).batch(t2[:50], qa2[:50], qd2[:50], qdd2[:50])
     W, known = ClosedLoopRegressor(nominal, ps).full(b2)
+    np.testing.assert_allclose(W @ moved, W @ res.theta, rtol=0, atol=1e-9 * np.abs(tau2).max())
+
+
+XARM_HAND = Path(__file__).parent / "data" / "public" / "menagerie_xarm7_hand" / "hand.xml"
+
+
+@pytest.fixture(scope="module")
+def xarm_gripper(tmp_path_factory):
+    text = XARM_HAND.read_text().replace('tendon="split"', 'joint="left_driver_joint"')
+    d = tmp_path_factory.mktemp("xarm")
+    (d / "gripper.xml").write_text(text.replace('frictionloss="1"', 'frictionloss="0"'))
+    (d / "gripper.yaml").write_text(
+        "platform: {frame: left_finger, xyz: [0.0, -0.024, 0.041], task: y}\n"
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the tendon's other actuator references: left out
+        return pkdyn.load(d / "gripper.xml")
+
+
+def test_recovers_a_perturbed_coupled_gripper_from_mujoco_efforts(xarm_gripper):
+    nominal = xarm_gripper
+    assert len(nominal.couplings) == 1 and nominal.closure_set.n_rigid == 6
+    rng = np.random.default_rng(7)
+    truth = perturbed(nominal, rng)
+    mid = np.array([0.4])  # mid-stroke (0 .. 0.85 rad)
+    t, qa, qd, qdd = multisine(nominal, 600, 5e-3, 0.15, 1, center=mid)
+    tau = mujoco_efforts(truth, t, qa, qd, qdd)
+    ps_true = parameter_set(truth)
+    tau_reg = predict_efforts(truth, ps_true, ps_true.nominal, t, qa, qd, qdd)
+    assert np.abs(tau - tau_reg).max() < 1e-9 * np.abs(tau).max()  # observed 1e-12
+    noise = 0.01 * np.sqrt(np.mean(tau**2, axis=0))
+    res = identify(
+        nominal, Measurements(t, qa, qd, qdd, tau + noise * rng.standard_normal(tau.shape))
+    )
+    sel = res.parameters.identified
+    z = (res.estimate.theta - res.base.K @ ps_true.nominal[sel]) / res.estimate.std
+    assert np.abs(z).max() < 4.5 and np.sqrt(np.mean(z**2)) < 2.0, z  # observed 2.1, 1.5
+    np.testing.assert_allclose(res.estimate.sigma, noise, rtol=0.15)
+    # the coupling groups the two fingers: their inertia about the common axis is one base
+    # parameter with the rotor inertia
+    assert any(
+        "left_outer_knuckle.Ixx" in f and "right_outer_knuckle.Ixx" in f and "rotor" in f
+        for f in res.base.formulas()
+    )
+    t2, qa2, qd2, qdd2 = multisine(nominal, 200, 5e-3, 0.15, 2, center=mid)
+    tau2 = mujoco_efforts(truth, t2, qa2, qd2, qdd2)
+    err = np.sqrt(np.mean((res.predict(t2, qa2, qd2, qdd2) - tau2) ** 2, axis=0))
+    ps0 = parameter_set(nominal)
+    tau0 = predict_efforts(nominal, ps0, ps0.nominal, t2, qa2, qd2, qdd2)
+    err0 = np.sqrt(np.mean((tau0 - tau2) ** 2, axis=0))
+    assert np.all(err < noise) and np.all(err0 > 2 * noise), (err / noise, err0 / noise)
+    unseen = [ps0.index(p) for p in res.base.unidentifiable]
+    assert len(unseen) >= 30  # a translating finger's rotational inertia, among others
+    moved = res.theta.copy()
+    moved[unseen] = 1.5 * moved[unseen] + 0.1
+    b2 = MotionSampler(nominal, None).batch(t2[:50], qa2[:50], qd2[:50], qdd2[:50])
+    W, _ = ClosedLoopRegressor(nominal, ps0).full(b2)
     np.testing.assert_allclose(W @ moved, W @ res.theta, rtol=0, atol=1e-9 * np.abs(tau2).max())

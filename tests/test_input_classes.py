@@ -457,14 +457,16 @@ def test_home_found_near_a_dead_centre_is_reported():
 
 
 def test_redundant_actuation_has_no_dead_centre_warning():
-    """The walker's eight actuators cannot move one at a time: no dead-centre warning."""
+    """Redundant actuators cannot move one at a time: no dead-centre warning."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         walker = pkdyn.load("tripod", branches=4, geometry=False)
+        four_arms = pkdyn.load("delta", arms=4, geometry=False)
     from pkdyn.model.home import dead_centre_distance
 
-    assert walker.actuated_v.size > walker.mobility()
-    assert dead_centre_distance(walker, walker.q_home) is None
+    for robot in (walker, four_arms):
+        assert robot.actuated_v.size > robot.dof()
+        assert dead_centre_distance(robot, robot.q_home) is None
 
 
 @pytest.mark.parametrize("sig, code", [("SIGINT", 130), ("SIGTERM", 143)])

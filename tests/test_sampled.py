@@ -77,6 +77,50 @@ def test_closure_errors_equal_the_closure_set_state_by_state(name):
                 np.testing.assert_allclose(ev[k, rows], twist, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize(
+    ("name", "kw"),
+    [
+        *[(n, {}) for n in ROBOTS],
+        ("delta", {"bar_joint": "universal"}),
+        ("rssr_point", {}),
+        ("four_bar_hinge", {}),
+        ("weld_universal", {}),
+    ],
+)
+def test_batched_residuals_jacobians_and_drift_equal_the_closure_set(name, kw):
+    """The fast captures (one Pinocchio call per sample): residuals and Jacobians of random,
+    unassembled states equal ClosureSet's (points and welds); the drift from the time variation
+    of the world Jacobian (universal joints split in two revolute joints) equals the drift from
+    rnea's accelerations (:meth:`capture`) and, on point rows, ClosureSet's ``gamma``."""
+    path = CLOSURES / f"{name}.urdf"
+    robot = pkdyn.load(str(path) if path.exists() else name, geometry=False, **kw)
+    model, cs = robot.model, robot.closure_set
+    rng = np.random.default_rng(4)
+    qs = [pin.integrate(model, robot.q_home, 0.3 * rng.standard_normal(model.nv)) for _ in range(5)]
+    V = rng.standard_normal((5, model.nv))
+    sk = SampledKinematics(model, cs, size=8)
+    for k, q in enumerate(qs):
+        sk.capture_configuration(k, q)
+    r, J = sk.residuals_and_jacobians(np.arange(5))
+    data = model.createData()
+    for k, q in enumerate(qs):
+        r0, J0 = cs.residual_and_jacobian(data, q)
+        np.testing.assert_allclose(r[k], r0, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(J[k], J0, rtol=0, atol=1e-12)
+    for k, q in enumerate(qs):
+        sk.capture_drift(k, q, V[k])
+    fast = sk.acceleration_errors(5, V)
+    ref = SampledKinematics(model, cs, size=8)  # rnea's accelerations
+    _capture(robot, ref, [(q, V[k], np.zeros(model.nv)) for k, q in enumerate(qs)])
+    np.testing.assert_allclose(fast, ref.acceleration_errors(5, V), rtol=0, atol=1e-11)
+    for k, q in enumerate(qs):
+        gamma = cs.drift(data, q, V[k])
+        for i, (is_point, *_) in enumerate(cs.items):
+            rows = slice(cs.offsets[i], cs.offsets[i + 1])
+            if is_point:
+                np.testing.assert_allclose(fast[k, rows], gamma[rows], rtol=0, atol=1e-11)
+
+
 @pytest.mark.parametrize("name", ["gough_stewart", "weld_universal"])
 def test_acceleration_error_is_the_rate_of_the_velocity_error(name):
     """Along q(t) = q (+) (t v + t^2/2 a), v(t) = v + t a from a closure-consistent velocity, the

@@ -187,8 +187,9 @@ class StaticsResult:
         reactions: One force and one moment per closure, by closure name (:class:`Reaction`).
         residual: Norm of the unbalanced generalised force [N m or N] (round-off when the
             equilibrium exists).
-        couplings: The reaction of each joint coupling, by coupling name: the generalized
-            force on its driven joint [N m or N] (the source joint receives ``-p'`` times it).
+        couplings: The force of each joint coupling (:mod:`solvers.coupling`), by coupling
+            name: the generalized force [N m or N] it applies to its driven joint (the source
+            receives ``-p'`` times it, ``p'`` the law's derivative).
 
     """
 
@@ -200,14 +201,12 @@ class StaticsResult:
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dict."""
-        out: dict[str, Any] = {
+        return {
             "tau": self.tau.tolist(),
             "reactions": {k: v.to_json() for k, v in self.reactions.items()},
+            "couplings": dict(self.couplings),
             "residual": self.residual,
         }
-        if self.couplings:
-            out["couplings"] = dict(self.couplings)
-        return out
 
 
 def static_equilibrium(
@@ -272,7 +271,7 @@ def static_equilibrium(
         )
     tau, lam = sol[:n_a], sol[n_a:]
     cs = robot.closure_set
-    couplings = {c.name: float(lam[cs.n_rigid + k]) for k, c in enumerate(cs.couplings)}
+    couplings = {c.name: float(lam[cs.n_rigid + i]) for i, c in enumerate(cs.couplings)}
     return StaticsResult(tau, lam, closure_reactions(robot, km.q, lam), residual, couplings)
 
 
@@ -291,7 +290,7 @@ def statics_json(
         gravity: Include the robot's weight.
 
     Returns:
-        ``{"tau", "actuators", "reactions", "residual"}``.
+        ``{"tau", "actuators", "reactions", "couplings", "residual"}``.
 
     """
     res = static_equilibrium(robot, q, F, gravity)

@@ -22,11 +22,11 @@ import sys
 import warnings
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NoReturn
 
 from pkdyn.exceptions import PkdynError
 
-__all__ = ["EXIT_CODES", "Command", "commands", "main"]
+__all__ = ["EXIT_CODES", "Command", "commands", "main", "run"]
 
 #: Command modules, in the order their commands appear in ``pkdyn --help``.
 COMMAND_MODULES = (
@@ -205,6 +205,24 @@ def _last_word(message: str) -> None:
         except ValueError:  # not the main thread
             pass
     print(message, file=sys.stderr)
+
+
+def run() -> NoReturn:
+    """The ``pkdyn`` program (console script and ``python -m pkdyn``): :func:`main`, then exit.
+
+    After an interrupt (exit 130 or 143) the one line is the last word: the standard error is
+    closed to what the interpreter's shutdown may still print (a worker pool's threads
+    stopping mid-write). In-process callers of :func:`main` keep their standard error.
+    """
+    code = main()
+    if code in (130, 143):
+        try:
+            sys.stderr.flush()
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stderr.fileno())
+        except (OSError, ValueError, AttributeError):
+            pass
+    sys.exit(code)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

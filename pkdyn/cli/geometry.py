@@ -247,6 +247,8 @@ def _cmd_statics(args: argparse.Namespace) -> None:
             f"closure {name}: force {_vector(r['force'])} N, moment {_vector(r['moment'])} N m "
             f"about {_vector(r['point'])} m (on its first body, world axes)"
         )
+    for name, f in out["couplings"].items():
+        lines.append(f"coupling {name}: {f + 0.0:.6g} (N m or N, on its driven joint)")
     emit(args, out, "\n".join(lines))
 
 

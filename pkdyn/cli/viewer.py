@@ -42,11 +42,14 @@ class _Stop(Exception):  # noqa: N818 (a stop request, not an error)
         super().__init__(signum)
 
 
-def _wait_for_stop() -> int:
-    """Block until Ctrl-C, SIGTERM or SIGHUP (the live scene's server is closed afterwards).
+def _wait_for_stop(announce: str) -> int:
+    """Print ``announce``, then block until Ctrl-C, SIGTERM or SIGHUP.
 
-    The handlers are installed explicitly: a process started in the background inherits an
-    ignored SIGINT, and meshcat's server runs in its own session, so it would outlive us.
+    The live scene's server is closed afterwards.
+
+    The handlers are installed explicitly, before the announcement (a signal sent as soon as it
+    is read must find them): a process started in the background inherits an ignored SIGINT,
+    and meshcat's server runs in its own session, so it would outlive us.
 
     Returns:
         The signal that stopped it.
@@ -59,6 +62,7 @@ def _wait_for_stop() -> int:
     signals = [signal.SIGINT, signal.SIGTERM, signal.SIGHUP]
     previous = {s: signal.signal(s, stop) for s in signals}
     try:
+        print(announce, flush=True)
         while True:
             time.sleep(3600)
     except _Stop as err:
@@ -127,8 +131,7 @@ def _cmd_view(args: argparse.Namespace) -> None:
             size = out.stat().st_size / 1e6
             print(f"wrote {out} ({size:.1f} MB): {', '.join(what)}")
             return
-        print(f"pkdyn: viewer at {scene.url} ({', '.join(what)}); Ctrl-C to stop", flush=True)
-        signum = _wait_for_stop()
+        signum = _wait_for_stop(f"pkdyn: viewer at {scene.url} ({', '.join(what)}); Ctrl-C to stop")
     finally:
         scene.close()
     _exit_for(signum)

@@ -26,11 +26,12 @@ from pkdyn.identification.base import BaseParameters, base_parameters
 from pkdyn.identification.data import Measurements
 from pkdyn.identification.estimation import Accumulator
 from pkdyn.identification.filtering import derivatives
-from pkdyn.identification.motion import BATCH, MotionBatch, MotionSampler
+from pkdyn.identification.motion import BATCH, SINGULAR_RTOL, MotionBatch, MotionSampler
 from pkdyn.identification.parameters import ParameterSet, parameter_set
 from pkdyn.identification.physical import consistent_parameters
 from pkdyn.identification.regressor import ClosedLoopRegressor
 from pkdyn.identification.result import IdentificationResult
+from pkdyn.identification.threads import single_blas_thread
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
 from solvers import numerics
@@ -42,6 +43,10 @@ MAX_SAMPLES = 2_000_000
 
 PARALLEL_SAMPLES = 20_000
 """From this many samples on, two worker processes share the samples by default."""
+
+SPLIT_STEP = 0.05
+"""Actuator travel [rad, or a tenth of the actuator scale] between the samples of the coarse
+pass that finds where the worker processes start."""
 
 _WORK: dict[str, Any] = {}  # the job of the worker processes (inherited by fork)
 
@@ -81,7 +86,12 @@ def check_identifiable(robot: Robot) -> None:
 
 
 def _random_batches(robot: Robot, n: int, seed: int) -> list[MotionBatch]:
-    """Joint motions of ``n`` random samples near home, closure-consistent (structural rows)."""
+    """Joint motions of ``n`` random samples near home, closure-consistent (structural rows).
+
+    The samples of a draw are solved together (batched Newton from home); the few that do not
+    converge, or are singular, are replaced by the next draw, and after four draws by samples
+    solved one at a time.
+    """
     rng = np.random.default_rng(seed)
     n_a = len(robot.actuators)
     lo = robot.model.lowerPositionLimit[robot.actuated_q]
@@ -92,20 +102,45 @@ def _random_batches(robot: Robot, n: int, seed: int) -> list[MotionBatch]:
     spread = np.where(finite, np.minimum(spread, 0.2 * (hi - lo)), spread)
     sampler = MotionSampler(robot)
     out: list[MotionBatch] = []
-    tries = 0
-    while len(out) < n and tries < 4 * n:
-        tries += 1
-        qa = qa0 + spread * rng.uniform(-1.0, 1.0, n_a)
+    got, draws = 0, 0
+    while got < n and draws < 4:
+        draws += 1
+        m = min(BATCH, n - got)
+        qa = qa0 + spread * rng.uniform(-1.0, 1.0, (m, n_a))
         if finite.any():
             qa = np.where(finite, np.clip(qa, lo, hi), qa)
-        qd = robot.actuator_scale * rng.standard_normal(n_a)
-        qdd = robot.actuator_scale * rng.standard_normal(n_a) * 10.0
+        qd = robot.actuator_scale * rng.standard_normal((m, n_a))
+        qdd = robot.actuator_scale * rng.standard_normal((m, n_a)) * 10.0
+        Q = np.tile(robot.q_home, (m, 1))
+        Q[:, robot.actuated_q] = qa
+        J = np.zeros((m, robot.closure_set.nc, robot.nv))
+        failed = sampler.newton_batch(Q, np.arange(m), J)
+        keep = np.setdiff1d(np.arange(m), failed)
+        if failed.size:  # the buffers of the kept samples moved to rows 0..k-1
+            for k, i in enumerate(keep):
+                sampler.kin.capture_configuration(k, Q[i])
+        b, err = sampler.rates(Q[keep], J[keep], qd[keep], qdd[keep])
+        ok = np.flatnonzero(err <= SINGULAR_RTOL)
+        if ok.size < keep.size:
+            P = None if b.passive_map is None else b.passive_map[ok]
+            b = MotionBatch(b.q[ok], b.v[ok], b.a[ok], b.J[ok], 0, P)
+        out.append(b)
+        got += ok.size
+    tries = 0
+    while got < n and tries < 4 * n:  # sample by sample (Levenberg-Marquardt where needed)
+        tries += 1
+        qa1 = qa0 + spread * rng.uniform(-1.0, 1.0, n_a)
+        if finite.any():
+            qa1 = np.where(finite, np.clip(qa1, lo, hi), qa1)
+        qd1 = robot.actuator_scale * rng.standard_normal(n_a)
+        qdd1 = robot.actuator_scale * rng.standard_normal(n_a) * 10.0
         sampler.restart(robot.q_home)
         try:
-            out.append(sampler.batch(np.zeros(1), qa[None], qd[None], qdd[None]))
+            out.append(sampler.batch(np.zeros(1), qa1[None], qd1[None], qdd1[None]))
         except Exception:  # noqa: BLE001 - a random sample out of reach: draw another
             continue
-    if len(out) < n:
+        got += 1
+    if got < n:
         raise InvalidInputError(
             "robot", f"{robot.name}: random motions near home could not be assembled"
         )
@@ -168,12 +203,22 @@ def _worker(
 
 
 def _split_configurations(robot: Robot, splits: list[int]) -> list[np.ndarray]:
-    """Assembled configurations at the split samples, followed from home on a coarse grid."""
+    """Assembled configurations at the split samples, followed from home on a coarse grid.
+
+    The grid keeps the samples where the actuators have moved :data:`SPLIT_STEP` (in units of
+    a tenth of their scale for prismatic ones) since the last kept sample: its cost follows the
+    length of the motion, not the number of samples, and a fast motion is followed as closely
+    as a slow one.
+    """
     w = _WORK
     t, qa = w["t"], w["qa"]
     last = splits[-1]
-    step = max(1, last // 2000)
-    idx = np.union1d(np.arange(0, last + 1, step), splits)
+    unit = robot.actuator_scale * np.where(robot.actuator_prismatic, 0.1, 1.0)
+    step = np.abs(np.diff(qa[: last + 1], axis=0) / unit).max(axis=1, initial=0.0)
+    travel = np.concatenate([[0.0], np.cumsum(step)])
+    cells = np.floor(travel / SPLIT_STEP)
+    kept = np.flatnonzero(np.diff(cells, prepend=-1.0) > 0)
+    idx = np.union1d(kept, splits)
     sampler = MotionSampler(robot)
     Q, _ = sampler.configurations(qa[idx], t[idx])
     return [Q[int(np.searchsorted(idx, k))] for k in splits]
@@ -216,7 +261,14 @@ def prior_weights(effect: np.ndarray, nominal: np.ndarray, base: BaseParameters)
         unseen[names.index(n)] = True
     seen = ~unseen & (effect > 0.0) & (nominal != 0.0)
     typical = float(np.median(effect[seen] * np.abs(nominal[seen]))) if seen.any() else 1.0
-    scale = np.where(nominal != 0.0, np.abs(nominal), np.abs(nominal).max(initial=1.0) or 1.0)
+    # the size of a parameter: its nominal value, at least a hundredth of the largest of its
+    # kind (a first moment or product of inertia of 1e-19 from rounding is zero, not a scale
+    # that would freeze it)
+    kind = np.array([n.rsplit(".", 1)[-1] for n in base.names])
+    mag = np.abs(nominal)
+    floor = np.array([mag[kind == k].max() for k in kind])
+    floor = np.where(floor > 0.0, 1e-2 * floor, mag.max(initial=1.0) or 1.0)
+    scale = np.maximum(mag, floor)
     out[unseen] = typical / scale[unseen]
     tiny = out <= 0.0
     out[tiny] = 1e-12 * max(float(out.max(initial=0.0)), 1.0)
@@ -256,6 +308,18 @@ def identify(
         TrajectoryError: A sample that cannot be assembled.
 
     """
+    with single_blas_thread():
+        return _identify(robot, data, parameters, cutoff, progress, workers)
+
+
+def _identify(
+    robot: Robot,
+    data: Measurements,
+    parameters: Sequence[str] | str | None,
+    cutoff: float | None,
+    progress: bool | None,
+    workers: int | None,
+) -> IdentificationResult:
     start = time.perf_counter()
     check_identifiable(robot)
     n_a = len(robot.actuators)

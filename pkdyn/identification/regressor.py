@@ -63,6 +63,7 @@ class ClosedLoopRegressor:
         self._cols = np.concatenate(
             [np.arange(10 * (j - 1), 10 * j) for j in ps.bodies] or [np.zeros(0, dtype=int)]
         ).astype(int)
+        self._all_cols = bool(np.array_equal(self._cols, np.arange(10 * (model.njoints - 1))))
         self._payload_cols = None
         if ps.payload_joint is not None:
             j = ps.payload_joint
@@ -76,11 +77,12 @@ class ClosedLoopRegressor:
         self._sel = ps.identified
         self._known_theta = np.where(ps.identified, 0.0, ps.nominal)
 
-    def elimination(self, J: np.ndarray) -> np.ndarray:
+    def elimination(self, J: np.ndarray, passive_map: np.ndarray | None = None) -> np.ndarray:
         """The maps ``T`` (n, n_a, nv) from generalized forces to actuator efforts.
 
         Args:
             J: Closure Jacobians (n, nc, nv).
+            passive_map: ``J_p^+ J_a`` (n, n_p, n_a) if known (:class:`MotionBatch`).
 
         Returns:
             ``T`` per sample.
@@ -91,9 +93,10 @@ class ClosedLoopRegressor:
         T = np.zeros((n, n_a, nv))
         T[:, np.arange(n_a), self.va] = 1.0
         if J.shape[1] and self.vp.size:
-            Jp, Ja = J[:, :, self.vp], J[:, :, self.va]
             # lambda = (J_p^T)^+ b_p  ->  T_p = -J_a^T (J_p^T)^+ = -((J_p)^+ J_a)^T
-            T[:, :, self.vp] = -np.swapaxes(passive_solve(Jp, Ja), 1, 2)
+            if passive_map is None:
+                passive_map = passive_solve(J[:, :, self.vp], J[:, :, self.va])
+            T[:, :, self.vp] = -np.swapaxes(passive_map, 1, 2)
         return T
 
     def full(self, batch: MotionBatch) -> tuple[np.ndarray, np.ndarray]:
@@ -116,13 +119,14 @@ class ClosedLoopRegressor:
         reg = pin.computeJointTorqueRegressor
         for i in range(n):
             Yt[i] = reg(model, data, q[i], v[i], a[i])
-        T = self.elimination(batch.J)
+        T = self.elimination(batch.J, batch.passive_map)
         n_a = self.va.size
         W = np.zeros((n, n_a, ps.p))
         nbody = 10 * len(ps.bodies)
-        W[:, :, :nbody] = T @ Yt[:, :, self._cols]
+        TY = T @ Yt  # (gathering the columns of the small product, not of Yt)
+        W[:, :, :nbody] = TY if self._all_cols else TY[:, :, self._cols]
         if self._payload_cols is not None:
-            W[:, :, ps.payload_slice] = (T @ Yt[:, :, self._payload_cols]) @ self._payload_L
+            W[:, :, ps.payload_slice] = TY[:, :, self._payload_cols] @ self._payload_L
         qd, qdd = v[:, self.va], a[:, self.va]
         N = self.reduction
         for i in range(n_a):
@@ -131,14 +135,15 @@ class ClosedLoopRegressor:
                 N[i] * qd[:, i] / DRIVE_SMOOTHING
             )
             W[:, i, ps.drive_column(i, "rotor_inertia")] = N[i] ** 2 * qdd[:, i]
+        passive = self.robot.passive
+        if not self._has_known_armature and passive is None:
+            return W, np.zeros((n, n_a))
         b = np.zeros((n, model.nv))
         if self._has_known_armature:
             b += self._armature_known * a
-        passive = self.robot.passive
         if passive is not None:
             b -= passive.forces(q, v)
-        known = np.einsum("nij,nj->ni", T, b)
-        return W, known
+        return W, (T @ b[..., None])[..., 0]
 
     def rows(self, batch: MotionBatch) -> tuple[np.ndarray, np.ndarray]:
         """Regressor of the identified parameters and the efforts of everything held.

@@ -383,9 +383,11 @@ def dead_centre_distance(robot: Robot, q: np.ndarray) -> tuple[float, str, str] 
     """
     if not robot.closure_set.nc or not robot.actuated_v.size:
         return None
-    if robot.actuated_v.size > robot.mobility(q):
-        # redundant actuation (the four-branch walker): one actuator cannot move alone, so
-        # "moving it until the passive joints cannot follow" measures nothing
+    _, J = robot.closure_set.residual_and_jacobian(robot.data, q)
+    N = numerics.null_space(J, scale=1.0)
+    if rank(N[robot.actuated_v]) < robot.actuated_v.size:
+        # redundant actuation (a four-arm Delta, the four-branch walker): one actuator cannot
+        # move alone, so "moving it until the passive joints cannot follow" measures nothing
         return None
     best: tuple[float, str, str, float] | None = None
     for k, name in enumerate(robot.actuator_names):
