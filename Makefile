@@ -1,8 +1,8 @@
 # pkdyn: two entry points, each working on a fresh machine with python3 and make.
 #   make demo   -- size the motors of the default DELTA 580 on the Adept cycle
 #   make test   -- lint, type-check and run the whole test suite
-#   make bench  -- benchmarks (figures recorded in README.md)
-#   make docs   -- HTML API reference and executed notebooks in docs/_build/html
+#   make bench  -- benchmarks (figures recorded in bench/results.md and docs/guide/benchmarks.md)
+#   make docs   -- the user guide, API reference and executed notebooks in docs/_build/html
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
@@ -22,8 +22,8 @@ demo: $(STAMP)
 	$(VENV)/bin/pkdyn demo
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check pkdyn solvers tests bench
-	$(VENV)/bin/ruff format --check pkdyn solvers tests bench
+	$(VENV)/bin/ruff check pkdyn solvers tests bench docs/_ext docs/conf.py
+	$(VENV)/bin/ruff format --check pkdyn solvers tests bench docs/_ext docs/conf.py
 	$(VENV)/bin/mypy
 
 # Headless Chromium for the viewer's browser test (tests/test_viewer.py skips, saying why, when it
@@ -51,10 +51,12 @@ $(DOCS_STAMP): $(STAMP)
 	$(PY) -m pip install --quiet -e ".[dev,docs]"
 	touch $(DOCS_STAMP)
 
+# warnings are errors (all reported); the notebooks are executed (PKDYN_DOCS_EXECUTE=off: not)
 docs: $(DOCS_STAMP)
 	rm -rf docs/_autosummary
-	$(VENV)/bin/sphinx-build -q -b html docs docs/_build/html
-	@echo "API reference and notebooks: docs/_build/html/index.html"
+	$(VENV)/bin/sphinx-build -q -W --keep-going -b html docs docs/_build/html
+	@echo "user guide, API reference and notebooks: docs/_build/html/index.html"
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache docs/_build docs/_autosummary docs/notebooks
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache docs/_build docs/_autosummary docs/notebooks \
+	  docs/_generated

@@ -1,12 +1,12 @@
 """Design-study throughput (issue 15): designs per second on 1 and 2 workers, a 10,000-design run.
 
-The study is the worked Delta design of the README (``delta_study`` below): per design, the
-library Delta is built (URDF, Pinocchio model, collision geometry), Clavel's figures, the
-required cylinder (D = 0.4 m, H = 0.1 m: reach and limits, worst and mean 1/cond, bar
-clearances, on 425 poses) and the 0.5 s Adept cycle with 1 kg (arm torques, speeds, powers on
-501 samples, closed form) are computed. Designs are Latin-hypercube samples of ``la``, ``lb``,
-``ra``; about half of them fail part-way (a fifth cannot be built: home out of reach; more leave
-the arm limits on the cycle), as in a real study.
+The study is the worked Delta design of the user guide, docs/guide/design.md (``delta_study``
+below): per design, the library Delta is built (URDF, Pinocchio model, collision geometry), Clavel's
+figures, the required cylinder (D = 0.4 m, H = 0.1 m: reach and limits, worst and mean 1/cond, bar
+clearances, on 425 poses) and the 0.5 s Adept cycle with 1 kg (arm torques, speeds, powers on 501
+samples, closed form) are computed. Designs are Latin-hypercube samples of ``la``, ``lb``, ``ra``;
+about half of them fail part-way (a fifth cannot be built: home out of reach; more leave the arm
+limits on the cycle), as in a real study.
 
 - designs/s: ``run_study`` on a warm executor (workers started), 1 worker (this process) and a
   pool of 2 processes, timed on alternating batches; scaling efficiency = rate(2) / (2 rate(1));
@@ -41,7 +41,7 @@ TARGET_S = 600.0
 
 
 def delta_study(n: int, seed: int = 0) -> Study:
-    """The worked Delta study (README), ``n`` Latin-hypercube designs."""
+    """The worked Delta study (docs/guide/design.md), ``n`` Latin-hypercube designs."""
     return Study(
         "delta",
         {"la": (0.15, 0.35), "lb": (0.30, 0.70), "ra": (0.08, 0.22)},

@@ -1,6 +1,8 @@
 """Sphinx configuration of pkdyn's documentation (``make docs``).
 
-The API reference is generated from the docstrings (autodoc + napoleon, Google style) of every
+The user guide (``guide/``, MyST Markdown) is written by hand, except its command-line
+reference, generated from the parsers at every build (``_ext/cli_reference.py``). The API
+reference is generated from the docstrings (autodoc + napoleon, Google style) of every
 public module of ``pkdyn`` and ``solvers`` (autosummary, recursive; each module's ``__all__``
 selects what is shown). The notebooks of ``notebooks/`` are copied here and executed when the
 documentation is built (myst-nb), so their plots are those of the current code.
@@ -10,10 +12,12 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 from pathlib import Path
 
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
+sys.path.insert(0, str(DOCS / "_ext"))
 
 project = "pkdyn"
 author = "pkdyn developers"
@@ -25,7 +29,11 @@ extensions = [
     "sphinx.ext.napoleon",
     "sphinx.ext.viewcode",
     "myst_nb",
+    "cli_reference",
 ]
+
+# MyST: anchors for the headings of the guide (links such as `loading.md#tolerance-and-home`)
+myst_heading_anchors = 3
 
 # API reference: one page per public module, members from __all__, Google docstrings
 autosummary_generate = True
@@ -75,6 +83,7 @@ def setup(app):  # noqa: ANN001
     app.connect("autodoc-skip-member", _skip_reexports)
 
 
-exclude_patterns = ["_build", "Thumbs.db", ".DS_Store"]
+# _generated/: pages included by others (the command-line reference), not documents of their own
+exclude_patterns = ["_build", "_generated", "Thumbs.db", ".DS_Store"]
 html_theme = "furo"
 html_title = "pkdyn"

@@ -2,4 +2,5 @@
 
 from pkdyn.cli import run
 
-run()
+if __name__ == "__main__":  # importing the module (e.g. the docs build) runs nothing
+    run()

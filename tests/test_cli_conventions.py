@@ -3,6 +3,7 @@ codes, signals (one line, 130 / 143), outputs written whole or not at all."""
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -12,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import pkdyn
-from pkdyn.cli import COMMANDS, EXIT_CODES, main
+from pkdyn.cli import COMMANDS, EXIT_CODES, commands, main
 from pkdyn.model.families import FAMILIES
 
 PKDYN = str(Path(sys.executable).with_name("pkdyn"))
@@ -222,10 +223,11 @@ def test_broken_pipe_is_quiet():
     assert "Traceback" not in proc.stderr and "Exception ignored" not in proc.stderr, proc.stderr
 
 
-def test_exit_codes_documented_in_readme():
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+def test_exit_codes_documented_in_the_guide():
+    page = Path(__file__).resolve().parents[1] / "docs" / "guide" / "conventions.md"
+    text = page.read_text(encoding="utf-8")
     for code in EXIT_CODES:
-        assert f"`{code}`" in readme, code
+        assert f"`{code}`" in text, code
 
 
 def test_env_without_bytecode_cache_still_runs():
@@ -254,3 +256,34 @@ def test_each_command_parses_alone_and_has_its_help(command, capsys):
     full = next(a for a in _parser(["--help"])._actions if hasattr(a, "choices") and a.choices)
     assert command in sub.choices and set(sub.choices) < set(full.choices)
     assert set(full.choices) == set(COMMANDS)  # every registered command has its quick start
+
+
+# Sphinx markup a terminal would show as it is: roles (:func:`x`), literals (``x``), `x`
+RST = re.compile(r":[a-z]+(?::[a-z]+)?:`|``|(?<![\w'])`[^`\s][^`]*`")
+
+
+def test_markup_detector_sees_roles_and_literals_not_plain_text():
+    for marked in (":func:`pkdyn.load`", "``None``", "see :py:meth:`x`", "the `x` value"):
+        assert RST.search(marked), marked
+    for plain in ("|x| <= 1", "x: y", "don't", "a 'quoted' word", "10:30"):
+        assert not RST.search(plain), plain
+
+
+@pytest.mark.parametrize("command", list(commands()), ids=lambda c: " ".join(c.words) or "pkdyn")
+def test_every_help_is_plain_text(command):
+    text = command.parser.format_help() + command.help
+    found = RST.search(text)
+    assert found is None, f"pkdyn {' '.join(command.words)} --help shows {found.group(0)!r}"
+
+
+def test_the_parameter_list_is_plain_text(capsys):
+    assert main(["list", "--params"]) == 0
+    text = capsys.readouterr().out
+    assert "z_home = None  # Nacelle height" in text
+    found = RST.search(text)
+    assert found is None, f"pkdyn list --params shows {found.group(0)!r}"
+    assert main(["list", "--json"]) == 0
+    docs = [
+        p["doc"] for f in json.loads(capsys.readouterr().out)["families"] for p in f["parameters"]
+    ]
+    assert not [d for d in docs if RST.search(d)]

@@ -47,8 +47,9 @@ CROSS = {  # cross-checked robots: name -> builder parameters
     "tripod": {},
 }
 IMPEDANCES = (0.9999, 0.9998, 0.9996)
-# bounds of the README's table (relative accelerations): MuJoCo's stiffest soft closures, and
-# extrapolated to rigid ones; the tripod's welded feet are the softest (README: 1.8e-2, 2.3e-7)
+# bounds of the table of docs/guide/evidence.md (relative accelerations): MuJoCo's stiffest soft
+# closures, and extrapolated to rigid ones; the tripod's welded feet are the softest (1.8e-2,
+# 2.3e-7)
 SOFT = {"tripod": 3e-2}
 RIGID = {"tripod": 1e-6}
 

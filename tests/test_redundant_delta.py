@@ -55,7 +55,7 @@ def test_least_efforts_weigh_no_more_than_with_the_fourth_arm_idle(run):
 
 def test_four_arms_need_less_than_three(run):
     """The Adept cycle (0.5 s, 1 kg): below the three-armed DELTA 580's 20.8 N m, the same
-    with ball-jointed or universal-jointed bars (README figure: 15.2 N m)."""
+    with ball-jointed or universal-jointed bars (guide figure: 15.2 N m)."""
     robot, traj, ef = run
     three = with_payload(pkdyn.load("delta", geometry=False), 1.0)
     t3 = inverse_dynamics(three, named_trajectory(three, "adept", cycle_time=0.5, dt=0.004))

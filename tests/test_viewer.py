@@ -166,7 +166,7 @@ def test_page_is_self_contained(delta):
     assert "<link" not in page and "cdn" not in page.lower().replace("cdnjs", "")
     assert page.count("<script>") == 2 and "MeshCat.Viewer" in page
     assert len(page_commands(page)) > delta.visual_model.ngeoms
-    # README: "meshcat's viewer code is inlined (about 0.9 MB)" (recorded: 0.88 MB)
+    # docs/guide/viewer.md: "meshcat's viewer code is inlined (about 0.9 MB)" (recorded: 0.88 MB)
     assert 0.8e6 < len(page.encode()) < 1.0e6
 
 

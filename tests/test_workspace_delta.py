@@ -187,11 +187,11 @@ def test_cli_clavel_json(capsys):
 
 
 def test_delta_580_figures():
-    """The DELTA 580 figures of the README (Clavel's limits: gamma_max 40 deg, (alpha+beta)_min
-    30 deg): the closed form from the seed's dimensionless formulas (section 1.4, z_T' with its
-    minus sign) with ra = 150, rb = 25, la = 200, lb = 380 mm (seed's table: r = 0.625, b = 1.9),
-    the mechanism's measurement (clavel_numeric, default resolution) to 2e-10 m, and the whole
-    workspace's volume (recorded figure of the numeric measurement)."""
+    """The DELTA 580 figures of docs/guide/workspace.md (Clavel's limits: gamma_max 40 deg,
+    (alpha+beta)_min 30 deg): the closed form from the seed's dimensionless formulas (section 1.4,
+    z_T' with its minus sign) with ra = 150, rb = 25, la = 200, lb = 380 mm (seed's table: r =
+    0.625, b = 1.9), the mechanism's measurement (clavel_numeric, default resolution) to 2e-10 m,
+    and the whole workspace's volume (recorded figure of the numeric measurement)."""
     p = pkdyn.load("delta", geometry=False).params
     r, b, la, g = 0.625, 1.9, 0.2, GAMMA_MAX
     assert ((p.ra - p.rb) / p.la, p.lb / p.la, p.la) == pytest.approx((r, b, la), abs=1e-15)
@@ -205,7 +205,7 @@ def test_delta_580_figures():
     cf = clavel_closed_form(p)
     for key, value in seed.items():
         assert getattr(cf, key) == pytest.approx(value, rel=1e-12), key
-    # as printed in the README
+    # as printed in the guide
     readme = {"D": 0.4885, "S": 0.2067, "H": 0.1831, "Hmax": 0.3367, "V": 0.0378, "zh": -0.2297}
     for key, value in readme.items():
         assert round(getattr(cf, key), 4) == value, key

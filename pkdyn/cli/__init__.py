@@ -20,12 +20,13 @@ import os
 import signal
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from typing import Any, NoReturn
 
 from pkdyn.exceptions import PkdynError
 
-__all__ = ["EXIT_CODES", "main", "run"]
+__all__ = ["EXIT_CODES", "Command", "commands", "main", "run"]
 
 #: Command modules, in the order their commands appear in ``pkdyn --help``.
 COMMAND_MODULES = (
@@ -103,6 +104,52 @@ def _parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     for name in modules:
         importlib.import_module(f"pkdyn.cli.{name}").register(target)
     return p
+
+
+@dataclass(frozen=True)
+class Command:
+    """One command of the ``pkdyn`` parser, for references and checks of the help texts.
+
+    Attributes:
+        words: The command words after ``pkdyn`` (``("tripod", "scenario")``; ``()``: the
+            top-level parser itself).
+        aliases: Other names of the last word (``fk`` for ``forward-geometry``).
+        help: The one-line help shown in the parent's list of commands.
+        parser: The command's own parser.
+
+    """
+
+    words: tuple[str, ...]
+    aliases: tuple[str, ...]
+    help: str
+    parser: argparse.ArgumentParser
+
+
+def commands() -> Iterator[Command]:
+    """Every command of ``pkdyn``, sub-commands after their parent, in ``pkdyn --help`` order.
+
+    The first is the top-level parser (``words == ()``); an alias is reported with its
+    command, not apart.
+    """
+    top = _parser([])
+    yield Command((), (), "", top)
+    yield from _sub_commands(top, ())
+
+
+def _sub_commands(parser: argparse.ArgumentParser, words: tuple[str, ...]) -> Iterator[Command]:
+    for action in parser._actions:
+        if not isinstance(action, argparse._SubParsersAction):
+            continue
+        helps = {a.dest: a.help or "" for a in action._choices_actions}
+        names: dict[int, list[str]] = {}
+        for name, sp in action.choices.items():
+            names.setdefault(id(sp), []).append(name)
+        for name, sp in action.choices.items():
+            first, *aliases = names[id(sp)]
+            if name != first:
+                continue
+            yield Command((*words, name), tuple(aliases), helps.get(name, ""), sp)
+            yield from _sub_commands(sp, (*words, name))
 
 
 class _Skipped:

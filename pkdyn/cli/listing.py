@@ -9,7 +9,32 @@ from typing import Any
 
 from pkdyn.cli._common import emit
 
-__all__ = ["family_parameters", "register"]
+__all__ = ["family_parameters", "plain_text", "register"]
+
+
+_ROLE = re.compile(r":[\w:]+:`~?([^`<]*?)\s*(?:<[^`>]*>)?`")
+_LITERAL = re.compile(r"``(.+?)``|`([^`]+)`")
+
+
+def plain_text(text: str) -> str:
+    """Docstring text as plain text, for a terminal: no Sphinx roles, no literal markup.
+
+    A role keeps its target (only the last dotted part when the target starts with a tilde), or
+    its title when it has one; literals and interpreted text lose their backquotes.
+
+    Args:
+        text: Docstring text (reStructuredText).
+
+    Returns:
+        The text without markup.
+
+    """
+
+    def role(m: re.Match[str]) -> str:
+        return m.group(1).rsplit(".", 1)[-1] if m.group(0).count("`~") else m.group(1)
+
+    text = _ROLE.sub(role, text)
+    return _LITERAL.sub(lambda m: m.group(1) or m.group(2), text)
 
 
 def _attribute_docs(doc: str) -> dict[str, str]:
@@ -62,7 +87,7 @@ def family_parameters(name: str) -> list[dict[str, Any]]:
                 "name": f.name,
                 "default": value,
                 "type": type(value).__name__ if value is not None else "float",
-                "doc": docs.get(f.name, ""),
+                "doc": plain_text(docs.get(f.name, "")),
             }
         )
     return out

@@ -32,10 +32,10 @@ class DutyFigures:
 
     Attributes:
         actuators: Actuator (joint) names.
-        peak: Peak |effort| (n_a,) [N m or N].
+        peak: Peak ``|effort|`` (n_a,) [N m or N].
         rms: RMS effort over time (n_a,) [N m or N].
-        peak_speed: Peak |speed| (n_a,) [rad/s or m/s].
-        peak_power: Peak |effort x speed| (n_a,) [W].
+        peak_speed: Peak ``|speed|`` (n_a,) [rad/s or m/s].
+        peak_power: Peak ``|effort x speed|`` (n_a,) [W].
         effort_limit: Effort limits (n_a,) [N m or N] (``inf`` when absent).
         speed_limit: Speed limits (n_a,) [rad/s or m/s].
         duration: Trajectory duration [s].

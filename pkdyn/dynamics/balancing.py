@@ -103,12 +103,12 @@ class BalancingResult:
 
     @property
     def peak_before(self) -> np.ndarray:
-        """Peak |torque| per actuator without the springs (n_a,)."""
+        """Peak ``|torque|`` per actuator without the springs (n_a,)."""
         return np.max(np.abs(self.tau_before), axis=0)
 
     @property
     def peak_after(self) -> np.ndarray:
-        """Peak |torque| per actuator with the springs (n_a,)."""
+        """Peak ``|torque|`` per actuator with the springs (n_a,)."""
         return np.max(np.abs(self.tau_after), axis=0)
 
     def table(self) -> str:
@@ -219,7 +219,7 @@ def balance_springs(
         samples: A duty cycle (joint trajectory: inverse dynamics) or assembled configurations
             (N, nq) over the workspace at rest (statics), gravity included.
         metric: ``rms`` (sum over actuators of the mean square torque) or ``peak`` (largest
-            |torque|).
+            ``|torque|``).
         groups: Group index of each spring; a group shares stiffness and free length (default:
             one group).
         payload: Payload at the platform frame [kg] during the samples.

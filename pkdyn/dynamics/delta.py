@@ -9,7 +9,7 @@ thousand times faster; design studies (:mod:`pkdyn.design`) size thousands of De
 Kinematics (seed 000, eq. 1): arm ``k`` turns by ``alpha_k`` about the fixed axis ``a_k``
 through ``O_k``; its two bars run from the elbow points ``E_b`` to the nacelle points
 ``A_b = P + delta_b``, and both bars of arm ``k`` share the vector ``d_k = A_b - E_b`` with
-``|d_k| = lb``. With ``E'_k = a_k x (E_k - O_k)`` (``dE/d alpha``) and ``E''_k = a_k x E'_k``:
+``|d_k| = lb``. With ``E'_k = a_k x (E_k - O_k)`` (``dE/d alpha``) and ``E''_k = a_k x E'_k``::
 
     alpha_dot_k  = d_k . P_dot / (d_k . E'_k)
     alpha_ddot_k = (d_k . P_ddot - alpha_dot_k^2 d_k . E''_k + |d_dot_k|^2) / (d_k . E'_k)

@@ -5,7 +5,7 @@ kind (a header row of field names; gearboxes are recognised by a ``ratio`` colum
 SI numbers, or strings with a unit (``"3000 rpm"``, ``"0.4 kg cm^2"``, ``"90 %"``); a CSV
 header may carry the unit of its column in brackets (``max_speed [rpm]``). See
 :data:`MOTOR_FIELDS` and :data:`GEARBOX_FIELDS` for the fields, their units and whether they
-are required; the reference with an example is in the README ("Motor and gearbox catalogs").
+are required; the reference with an example is in the user guide (``docs/guide/drives.md``).
 
 Motor envelope (a simplified one, from the catalog's corner points): the peak torque is
 available up to the rated speed and falls linearly to the rated torque at the maximum speed;

@@ -183,10 +183,10 @@ class Candidate:
         gearbox: The gearbox (``None``: the robot's own transmission).
         reduction: Total reduction ``N`` (motor speed / joint speed).
         checks: Every requirement with its figures.
-        motor_peak: Peak |motor torque| [N m].
+        motor_peak: Peak ``|motor torque|`` [N m].
         motor_rms: RMS motor torque (thermal figure) [N m].
-        mean_speed: Time mean of |motor speed| [rad/s] (the RMS point's speed).
-        peak_speed: Peak |motor speed| [rad/s].
+        mean_speed: Time mean of ``|motor speed|`` [rad/s] (the RMS point's speed).
+        peak_speed: Peak ``|motor speed|`` [rad/s].
         inertia_ratio: ``(J_load / N^2 + J_gearbox) / J_motor``.
         reflected_inertia: ``N^2 (J_motor + J_gearbox)`` seen by the joint [kg m^2 or kg].
         copper_loss: Mean copper loss ``R (tau_rms / k_t)^2`` [W] (``None`` without ``k_t``

@@ -63,10 +63,10 @@ class ActuatorSizing:
         motor_rms: RMS effort on the motor side [N m or N].
         motor_peak_speed: Peak motor speed [rad/s or m/s].
         reflected_inertia: Rotor inertia seen by the joint, ``N^2 J`` [kg m^2 or kg].
-        rotor_peak: Peak |effort| that accelerates the rotor, ``N^2 J |qa_ddot|``, joint side
+        rotor_peak: Peak ``|effort|`` that accelerates the rotor, ``N^2 J |qa_ddot|``, joint side
             [N m or N].
         efficiency: Gearbox efficiency when driving.
-        motor_mean_speed: Time mean of the motor's |speed| [rad/s] (with ``motor_rms``: the
+        motor_mean_speed: Time mean of the motor's ``|speed|`` [rad/s] (with ``motor_rms``: the
             RMS operating point).
         loss: Mean power lost in the drive, motor friction and gearbox [W].
         prismatic: The actuator drives a prismatic joint: joint-side efforts in N and speeds in

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 import numpy as np
 
 from pkdyn.exceptions import ParameterError
 from pkdyn.inputs import MAX_MAGNITUDE
 
-__all__ = ["in_range", "middle_of_reach", "positive"]
+__all__ = ["finite", "in_range", "middle_of_reach", "positive", "within_limits"]
 
 
 def positive(family: str, **values: float) -> None:
@@ -22,6 +22,27 @@ def positive(family: str, **values: float) -> None:
             raise ParameterError(
                 family, k, f"{v:g} is beyond any plausible value (at most {MAX_MAGNITUDE:g})"
             )
+
+
+def finite(family: str, **values: float) -> None:
+    """Raise :class:`ParameterError` unless every value is a finite number."""
+    for k, v in values.items():
+        if not math.isfinite(v):
+            raise ParameterError(family, k, f"must be finite, got {v!r}")
+
+
+def within_limits(family: str, q: Iterable[float], q_min: float, q_max: float) -> None:
+    """Raise :class:`ParameterError` for a home actuated angle outside ``[q_min, q_max]`` [rad].
+
+    The error names ``q_min`` or ``q_max``, whichever the first angle outside breaks.
+    """
+    out = [float(v) for v in q if not q_min <= v <= q_max]
+    if out:
+        raise ParameterError(
+            family,
+            "q_min" if out[0] < q_min else "q_max",
+            f"home actuated angle {out[0]:.6g} rad lies outside [q_min, q_max]",
+        )
 
 
 def in_range(family: str, name: str, value: float, lo: float, hi: float) -> None:

@@ -5,13 +5,11 @@ from __future__ import annotations
 import math
 from typing import Protocol
 
-from pkdyn.library._colors import BLUE, ORANGE
+from pkdyn.library._check import in_range, positive
+from pkdyn.library._links import driven_rod, passive_rod
 from pkdyn.model.formats.urdf_writer import UrdfWriter
 
-__all__ = ["PASSIVE_VELOCITY", "write_rr_chain"]
-
-PASSIVE_VELOCITY = 1e3
-"""Velocity limit written on passive revolute joints [rad/s] (effort 0: they are not driven)."""
+__all__ = ["check_chain", "write_rr_chain"]
 
 
 class ChainParams(Protocol):
@@ -39,6 +37,31 @@ class ChainParams(Protocol):
     def reduction(self) -> float: ...  # noqa: D102
 
 
+def check_chain(family: str, p: ChainParams) -> None:
+    """Check the chain's parameters: lengths, masses, radius, drive, actuator range.
+
+    The lengths, masses, radius, effort, velocity and reduction must be positive, and
+    ``-pi <= q_min <= q_max <= pi``.
+
+    Raises:
+        ParameterError: The first parameter that breaks these rules, named.
+
+    """
+    positive(
+        family,
+        l1=p.l1,
+        l2=p.l2,
+        proximal_mass=p.proximal_mass,
+        distal_mass=p.distal_mass,
+        link_radius=p.link_radius,
+        effort=p.effort,
+        velocity=p.velocity,
+        reduction=p.reduction,
+    )
+    in_range(family, "q_min", p.q_min, -math.pi, p.q_max)
+    in_range(family, "q_max", p.q_max, p.q_min, math.pi)
+
+
 def write_rr_chain(
     w: UrdfWriter,
     p: ChainParams,
@@ -59,27 +82,29 @@ def write_rr_chain(
 
     """
     prox, dist = f"proximal{k}", f"distal{k}"
-    r = p.link_radius
-    w.rod(prox, p.proximal_mass, r, (0, 0, z_prox), (p.l1, 0, z_prox), BLUE)
-    w.joint(
+    r, z = p.link_radius, (0.0, 0.0, 1.0)
+    driven_rod(
+        w,
         prox,
-        "revolute",
         "base",
-        prox,
+        ((0, 0, z_prox), (p.l1, 0, z_prox)),
+        p.proximal_mass,
+        r,
         xyz=(float(base_xy[0]), float(base_xy[1]), 0.0),
-        axis=(0.0, 0.0, 1.0),
+        axis=z,
         limit=(p.q_min, p.q_max, p.effort, p.velocity),
+        actuator=f"motor{k}",
+        reduction=p.reduction,
     )
-    w.transmission(prox, f"motor{k}", p.reduction)
-    w.rod(dist, p.distal_mass, r, (0, 0, z_dist), (p.l2, 0, z_dist), ORANGE)
-    w.joint(
+    passive_rod(
+        w,
         dist,
-        "revolute",
         prox,
-        dist,
+        ((0, 0, z_dist), (p.l2, 0, z_dist)),
+        p.distal_mass,
+        r,
         xyz=(p.l1, 0.0, 0.0),
         rpy=(0.0, 0.0, elbow_rpy_z),
-        axis=(0.0, 0.0, 1.0),
-        limit=(-math.pi, math.pi, 0.0, PASSIVE_VELOCITY),
+        axis=z,
     )
     return prox, dist

@@ -37,6 +37,7 @@ from pkdyn.closed_form import delta as cf
 from pkdyn.exceptions import ParameterError, UnreachablePoseError
 from pkdyn.library._check import in_range, middle_of_reach, positive
 from pkdyn.library._colors import BLUE, GREY, ORANGE
+from pkdyn.library._links import driven_rod, passive_rod
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rpy_z_to
 
 __all__ = [
@@ -183,8 +184,6 @@ _SIGNED = {
     "rotor_inertia",
     "efficiency",
 }
-_PASSIVE_VELOCITY = 1e3
-"""Velocity limit written on passive revolute joints [rad/s] (effort 0: they are not driven)."""
 
 
 def home(p: Params) -> list[float]:
@@ -313,16 +312,8 @@ def _hinged_bar(
     x, y = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
     w.universal(f"{bar}_upper", arm, bar, (p.la, sign * s, 0.0), pitch, y, x, cone=cone)
     if side == "a":
-        w.rod(beam, p.bar_mass, p.bar_radius, (0, 0, 0), (0, -2 * s, 0), ORANGE)
-        w.joint(
-            beam,
-            "revolute",
-            bar,
-            beam,
-            xyz=(0.0, 0.0, p.lb),
-            axis=x,
-            limit=(-np.pi, np.pi, 0.0, _PASSIVE_VELOCITY),
-        )
+        rod = ((0, 0, 0), (0, -2 * s, 0))
+        passive_rod(w, beam, bar, rod, p.bar_mass, p.bar_radius, xyz=(0.0, 0.0, p.lb), axis=x)
         return
     zero = (0.0, 0.0, 0.0)
     w.closure(f"loop{i}b", "hinge", (bar, (0.0, 0.0, p.lb), zero), (beam, (0, -2 * s, 0), zero), x)
@@ -366,18 +357,23 @@ def build_urdf(p: Params) -> str:
             (np.pi / 2, 0, 0),
             BLUE,
         )
-        w.rod(arm, p.arm_mass, p.arm_radius, (0, 0, 0), (p.la, 0, 0), BLUE, [elbow])
-        w.joint(
+        driven_rod(
+            w,
             arm,
-            "revolute",
             "base",
-            arm,
+            ((0, 0, 0), (p.la, 0, 0)),
+            p.arm_mass,
+            p.arm_radius,
             xyz=p.ra * u,
             rpy=(0.0, 0.0, theta),
             axis=(0.0, 1.0, 0.0),
             limit=(p.alpha_min, p.alpha_max, p.effort, p.velocity),
+            actuator=f"motor{i}",
+            reduction=p.reduction,
+            rotor_inertia=p.rotor_inertia,
+            efficiency=p.efficiency,
+            extra_visuals=[elbow],
         )
-        w.transmission(arm, f"motor{i}", p.reduction, p.rotor_inertia, p.efficiency)
         R_arm = _arm_rotation(theta, alpha)
         O = p.ra * u
         hinged = p.parallelogram == "hinge"

@@ -35,9 +35,9 @@ import pinocchio as pin
 
 from pkdyn.closed_form.five_bar import MODES, _wrap, elbow_points, forward, inverse
 from pkdyn.exceptions import ParameterError
-from pkdyn.library._check import in_range, middle_of_reach, positive
+from pkdyn.library._check import in_range, middle_of_reach, positive, within_limits
 from pkdyn.library._colors import GREY
-from pkdyn.library._planar import write_rr_chain
+from pkdyn.library._planar import check_chain, write_rr_chain
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 
 __all__ = [
@@ -103,19 +103,8 @@ class Params:
     reduction: float = 10.0
 
     def __post_init__(self) -> None:
-        positive(
-            NAME,
-            d=self.d,
-            l1=self.l1,
-            l2=self.l2,
-            proximal_mass=self.proximal_mass,
-            distal_mass=self.distal_mass,
-            effector_mass=self.effector_mass,
-            link_radius=self.link_radius,
-            effort=self.effort,
-            velocity=self.velocity,
-            reduction=self.reduction,
-        )
+        check_chain(NAME, self)
+        positive(NAME, d=self.d, effector_mass=self.effector_mass)
         in_range(NAME, "x_home", self.x_home, -math.inf, math.inf)
         if self.y_home is not None:
             in_range(NAME, "y_home", self.y_home, -math.inf, math.inf)
@@ -125,8 +114,6 @@ class Params:
                 "working_mode",
                 f"must be one of {', '.join(MODES)}, got {self.working_mode!r}",
             )
-        in_range(NAME, "q_min", self.q_min, -math.pi, self.q_max)
-        in_range(NAME, "q_max", self.q_max, self.q_min, math.pi)
         if self.y_home is None:
             self._derived  # noqa: B018  (raises if nothing is reachable)
             return
@@ -139,13 +126,7 @@ class Params:
                 "(each base point must lie between |l1 - l2| and l1 + l2 from it); leave y_home "
                 "unset to derive it",
             )
-        out = [float(v) for v in theta[0] if not self.q_min <= v <= self.q_max]
-        if out:
-            raise ParameterError(
-                NAME,
-                "q_min" if out[0] < self.q_min else "q_max",
-                f"home actuated angle {out[0]:.6g} rad lies outside [q_min, q_max]",
-            )
+        within_limits(NAME, theta[0], self.q_min, self.q_max)
 
     def _reachable(self, y: np.ndarray) -> np.ndarray:
         theta, ok = inverse(self, np.column_stack([np.full_like(y, self.x_home), y]))

@@ -25,9 +25,9 @@ import numpy as np
 
 from pkdyn.closed_form.four_bar_knee import motor_from_knee
 from pkdyn.exceptions import ParameterError
-from pkdyn.library._check import in_range, positive
-from pkdyn.library._colors import BLUE, GREY, ORANGE
-from pkdyn.library._planar import PASSIVE_VELOCITY
+from pkdyn.library._check import finite, in_range, positive
+from pkdyn.library._colors import GREY
+from pkdyn.library._links import PASSIVE_VELOCITY, driven_rod, passive_rod
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
@@ -95,8 +95,7 @@ class Params:
             velocity=self.velocity,
             reduction=self.reduction,
         )
-        if not math.isfinite(self.x_motor):
-            raise ParameterError(NAME, "x_motor", f"must be finite, got {self.x_motor!r}")
+        finite(NAME, x_motor=self.x_motor)
         in_range(NAME, "knee_min", self.knee_min, -math.pi, self.knee_max)
         in_range(NAME, "knee_max", self.knee_max, self.knee_min, math.pi)
         in_range(NAME, "knee_home", self.knee_home, self.knee_min, self.knee_max)
@@ -130,27 +129,30 @@ def build_urdf(p: Params) -> str:
         visuals=[Shape("cylinder", (1.5 * r, p.a), (0.0, -0.03, 0.5 * p.a), rgba=GREY)],
         collisions=[Shape("cylinder", (1.5 * r, p.a), (0.0, -0.03, 0.5 * p.a))],
     )
-    w.rod("crank", p.crank_mass, r, (0.0, 0.0, 0.0), (p.r1, 0.0, 0.0), BLUE)
-    w.joint(
+    y = (0.0, 1.0, 0.0)
+    driven_rod(
+        w,
         "crank",
-        "revolute",
         "thigh",
-        "crank",
+        ((0.0, 0.0, 0.0), (p.r1, 0.0, 0.0)),
+        p.crank_mass,
+        r,
         xyz=(p.x_motor, 0.0, p.a),
-        axis=(0.0, 1.0, 0.0),
+        axis=y,
         limit=(-math.pi, math.pi, p.effort, p.velocity),
+        actuator="motor",
+        reduction=p.reduction,
     )
-    w.transmission("crank", "motor", p.reduction)
     end = (p.r3 - p.x_motor - p.r1, 0.0, -p.a)  # lever end seen from the crank end, at zero
-    w.rod("coupler", p.coupler_mass, r, (0.0, 0.0, 0.0), end, ORANGE)
-    w.joint(
+    passive_rod(
+        w,
         "coupler",
-        "revolute",
         "crank",
-        "coupler",
+        ((0.0, 0.0, 0.0), end),
+        p.coupler_mass,
+        r,
         xyz=(p.r1, 0.0, 0.0),
-        axis=(0.0, 1.0, 0.0),
-        limit=(-math.pi, math.pi, 0.0, PASSIVE_VELOCITY),
+        axis=y,
     )
     L = p.shank_length
     m = p.shank_mass + p.foot_mass
@@ -169,20 +171,14 @@ def build_urdf(p: Params) -> str:
         ],
         collisions=[Shape("cylinder", (r, L), (0.0, 0.0, -0.5 * L))],
     )
-    w.joint(
-        "knee",
-        "revolute",
-        "thigh",
-        "shank",
-        axis=(0.0, 1.0, 0.0),
-        limit=(p.knee_min, p.knee_max, 0.0, PASSIVE_VELOCITY),
-    )
+    knee_limit = (p.knee_min, p.knee_max, 0.0, PASSIVE_VELOCITY)
+    w.joint("knee", "revolute", "thigh", "shank", axis=y, limit=knee_limit)
     w.closure(
         "coupler_pin",
         "hinge",
         ("coupler", end, (0.0, 0.0, 0.0)),
         ("shank", (p.r3, 0.0, 0.0), (0.0, 0.0, 0.0)),
-        axis=(0.0, 1.0, 0.0),
+        axis=y,
     )
     w.platform("shank", ("ry",), xyz=(0.0, 0.0, -L))
     return w.to_string(

@@ -31,9 +31,9 @@ import pinocchio as pin
 
 from pkdyn.closed_form.parallel_ankle import crank_points, foot_points, inverse
 from pkdyn.exceptions import ParameterError
-from pkdyn.library._check import positive
-from pkdyn.library._colors import BLUE, GREY, ORANGE
-from pkdyn.library._planar import PASSIVE_VELOCITY
+from pkdyn.library._check import finite, positive
+from pkdyn.library._colors import GREY, ORANGE
+from pkdyn.library._links import PASSIVE_VELOCITY, driven_rod
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rod_inertia
 
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home"]
@@ -108,10 +108,7 @@ class Params:
             velocity=self.velocity,
             reduction=self.reduction,
         )
-        for name in ("x_motor", "x_foot", "z_foot"):
-            v = getattr(self, name)
-            if not math.isfinite(v):
-                raise ParameterError(NAME, name, f"must be finite, got {v!r}")
+        finite(NAME, x_motor=self.x_motor, x_foot=self.x_foot, z_foot=self.z_foot)
         _, ok = inverse(self, np.zeros(2))
         if not ok[0]:
             raise ParameterError(
@@ -194,18 +191,20 @@ def build_urdf(p: Params) -> str:
     for k, side in enumerate(("l", "r")):
         sign = 1.0 if side == "l" else -1.0
         crank = f"crank_{side}"
-        w.rod(crank, p.crank_mass, r, (0.0, 0.0, 0.0), (-p.crank, 0.0, 0.0), BLUE)
         t0 = float(theta0[k])
-        w.joint(
+        driven_rod(
+            w,
             crank,
-            "revolute",
             "shank",
-            crank,
+            ((0.0, 0.0, 0.0), (-p.crank, 0.0, 0.0)),
+            p.crank_mass,
+            r,
             xyz=(p.x_motor, sign * p.d, p.h),
             axis=(0.0, 1.0, 0.0),
             limit=(t0 - p.motor_limit, t0 + p.motor_limit, p.effort, p.velocity),
+            actuator=f"motor_{side}",
+            reduction=p.reduction,
         )
-        w.transmission(crank, f"motor_{side}", p.reduction)
         rod = f"rod_{side}"
         # rod frame: z along the rod from its lower end up, at the home configuration, given
         # in the crank frame (turned by theta0 about y)

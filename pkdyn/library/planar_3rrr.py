@@ -26,9 +26,9 @@ import numpy as np
 
 from pkdyn.closed_form import planar_3rrr as cf
 from pkdyn.exceptions import ParameterError
-from pkdyn.library._check import in_range, positive
+from pkdyn.library._check import in_range, positive, within_limits
 from pkdyn.library._colors import GREY
-from pkdyn.library._planar import write_rr_chain
+from pkdyn.library._planar import check_chain, write_rr_chain
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter
 
 __all__ = ["NAME", "SUMMARY", "Params", "build_urdf", "home", "resolved"]
@@ -96,20 +96,8 @@ class Params:
     reduction: float = 10.0
 
     def __post_init__(self) -> None:
-        positive(
-            NAME,
-            l1=self.l1,
-            l2=self.l2,
-            h=self.h,
-            base_radius=self.base_radius,
-            proximal_mass=self.proximal_mass,
-            distal_mass=self.distal_mass,
-            platform_mass=self.platform_mass,
-            link_radius=self.link_radius,
-            effort=self.effort,
-            velocity=self.velocity,
-            reduction=self.reduction,
-        )
+        check_chain(NAME, self)
+        positive(NAME, h=self.h, base_radius=self.base_radius, platform_mass=self.platform_mass)
         for name in ("base_angles", "platform_angles"):
             _angles(name, getattr(self, name))
         if self.base_points:
@@ -123,8 +111,6 @@ class Params:
         for name in ("x_home", "y_home", "phi_home"):
             if getattr(self, name) is not None:
                 in_range(NAME, name, getattr(self, name), -math.inf, math.inf)
-        in_range(NAME, "q_min", self.q_min, -math.pi, self.q_max)
-        in_range(NAME, "q_max", self.q_max, self.q_min, math.pi)
         q, ok = cf.inverse(self, self.home_pose, self.elbow)
         if not ok[0]:
             raise ParameterError(
@@ -133,13 +119,7 @@ class Params:
                 f"home pose {self.home_pose.tolist()} is out of reach with these lengths "
                 "(check l1, l2, h and the base points)",
             )
-        out = [float(v) for v in q[0] if not self.q_min <= v <= self.q_max]
-        if out:
-            raise ParameterError(
-                NAME,
-                "q_min" if out[0] < self.q_min else "q_max",
-                f"home actuated angle {out[0]:.6g} rad lies outside [q_min, q_max]",
-            )
+        within_limits(NAME, q[0], self.q_min, self.q_max)
 
     @property
     def base_xy(self) -> np.ndarray:

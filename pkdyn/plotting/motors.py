@@ -37,7 +37,7 @@ def plot_operating_points(
     The motor side of the drive, first quadrant (``|speed|``, ``|torque|``): the continuous
     region (rated torque up to the rated speed, falling to zero at the maximum speed), the peak
     region (peak torque up to the rated speed, falling to the rated torque at the maximum
-    speed), the trajectory's samples and the RMS point (mean |speed|, RMS torque).
+    speed), the trajectory's samples and the RMS point (mean ``|speed|``, RMS torque).
 
     Args:
         selection: A motor selection (the best pair of each actuator is drawn, or the closest
