@@ -15,15 +15,21 @@ import numbers
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = [
     "MAX_MAGNITUDE",
     "callable_input",
     "count",
+    "flag",
+    "instance",
     "non_negative",
     "positive",
     "real",
+    "seed",
+    "vector",
 ]
 
 MAX_MAGNITUDE = 1e9
@@ -141,3 +147,95 @@ def callable_input(name: str, value: Any) -> Callable[..., Any]:
             name, f"expected a function, got {value!r} ({type(value).__name__})"
         )
     return value
+
+
+def seed(name: str, value: Any) -> int:
+    """A random seed: a whole number in ``[0, 2**32)`` (numpy refuses negative seeds).
+
+    Raises:
+        InvalidInputError: Not a whole number, or out of range.
+
+    """
+    return count(name, value, 0, 2**32 - 1)
+
+
+def flag(name: str, value: Any) -> bool:
+    """A yes/no option: ``True`` or ``False`` (a numpy bool too), nothing else.
+
+    Raises:
+        InvalidInputError: Any other value (a string ``"no"`` would otherwise count as true).
+
+    """
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
+    raise InvalidInputError(name, f"expected True or False, got {value!r} ({type(value).__name__})")
+
+
+def instance(name: str, value: Any, kind: type | tuple[type, ...], what: str) -> Any:
+    """``value`` if it is an instance of ``kind``.
+
+    Args:
+        name: The input's name, for the message.
+        value: What was given.
+        kind: Accepted type(s).
+        what: What is expected, in words (``a Robot (pkdyn.load)``).
+
+    Raises:
+        InvalidInputError: Another type.
+
+    """
+    if not isinstance(value, kind):
+        raise InvalidInputError(name, f"expected {what}, got {type(value).__name__} {value!r:.60}")
+    return value
+
+
+def vector(
+    name: str,
+    value: Any,
+    size: int | tuple[int, ...] | None = None,
+    unit: str = "",
+    *,
+    bound: float = MAX_MAGNITUDE,
+    infinite: bool = False,
+) -> np.ndarray:
+    """A flat array of finite real numbers, each of magnitude at most ``bound``.
+
+    Args:
+        name: The input's name, for the message.
+        value: A number or a sequence of numbers.
+        size: Accepted length(s), or ``None`` for any.
+        unit: Unit, for the message.
+        bound: Largest magnitude accepted.
+        infinite: ``+inf`` is accepted (a rigid stiffness).
+
+    Returns:
+        A float array copy (n,).
+
+    Raises:
+        InvalidInputError: Strings, complex numbers or nested ragged lists; the wrong count; NaN,
+            infinite or absurd values.
+
+    """
+    if isinstance(value, str | bytes | dict) or np.iscomplexobj(value):
+        raise InvalidInputError(name, f"expected numbers, got {value!r:.60}")
+    try:
+        arr = np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InvalidInputError(name, f"expected numbers, got {value!r:.60}") from None
+    sizes = (size,) if isinstance(size, int) else size
+    if sizes is not None and arr.size not in sizes:
+        want = " or ".join(str(s) for s in sizes)
+        raise InvalidInputError(name, f"expected {want} values, got {arr.size}")
+    ok = np.isfinite(arr) | (infinite & (arr == np.inf))
+    if not ok.all():
+        k = int(np.flatnonzero(~ok)[0])
+        raise InvalidInputError(name, f"value #{k + 1} is {arr[k]}; give finite numbers")
+    big = np.isfinite(arr) & (np.abs(arr) > bound)
+    if big.any():
+        k = int(np.flatnonzero(big)[0])
+        raise InvalidInputError(
+            name,
+            f"value #{k + 1} = {arr[k]:g}{_unit(unit)} is beyond any plausible value "
+            f"(at most {bound:g})",
+        )
+    return arr

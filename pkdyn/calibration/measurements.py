@@ -9,24 +9,30 @@ Kinds (:data:`KINDS`):
   point per ``group`` (a ball socket on the table) while the actuators moved; nothing is
   measured but the readings;
 - ``plane`` (implicit): the platform origin touched one unknown plane per ``group`` (a probe on
-  a surface plate).
+  a surface plate);
+- ``joints`` (implicit, extra sensors): redundant encoders on passive joints read their
+  coordinates [rad or m] (``q_<joint>`` columns, any subset of the robot's passive 1-DoF
+  joints); the platform is not measured at all. A joint encoder's zero is the rotation (or
+  translation) of the joint's placement along its axis, which the placement model holds.
 
 Implicit kinds add unknowns (the point's 3 coordinates, the plane's normal and offset) that the
 calibration identifies with the robot's parameters.
 
 CSV file (:func:`read_csv`): one row per measurement, columns ``qa_<actuator>`` (actuator
 readings [rad or m], every actuator, by name) and ``x y z`` (position), ``x y z rx ry rz``
-(pose), or ``group`` (implicit kinds, which the caller names). Missing or extra columns, empty
-or non-numeric cells and NaN are refused with one line naming them.
+(pose), ``group`` (``point`` and ``plane``, which the caller names), or ``q_<joint>`` (``joints``:
+read whenever such columns are present). Missing or extra columns, empty or non-numeric cells
+and NaN are refused with one line naming them.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -35,13 +41,21 @@ from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.pose import pose_to_vector
 from pkdyn.model.robot import Robot
 
-__all__ = ["KINDS", "Measurements", "read_csv", "write_csv"]
+__all__ = ["KINDS", "Measurements", "measurable_joints", "read_csv", "write_csv"]
 
-KINDS = ("pose", "position", "point", "plane")
+KINDS = ("pose", "position", "point", "plane", "joints")
 """Measurement kinds (module docstring)."""
 
+MAX_BYTES = 16_000_000
+"""Largest measurements file read [bytes] (about 150,000 rows of six numbers)."""
+MAX_ROWS = 20_000
+"""Most measurements accepted: each calibration iteration solves the forward geometry at every
+pose (about a millisecond each), and a few hundred well chosen poses identify any model."""
+MAX_GROUP = 2**31 - 1
+"""Largest group number of implicit measurements."""
+
 ROWS = {"pose": 6, "position": 3, "point": 3, "plane": 1}
-"""Residual rows per measurement of each kind."""
+"""Residual rows per measurement of each kind (``joints``: one per measured joint)."""
 
 
 @dataclass(eq=False)  # numpy fields: no boolean ==
@@ -55,6 +69,8 @@ class Measurements:
         rpy: Measured roll, pitch, yaw (N, 3) [rad] (``pose``).
         group: Group of each measurement (N,) int (``point`` and ``plane``: one unknown point
             or plane per group).
+        joints: Names of the measured passive joints (``joints``).
+        q: Their measured coordinates (N, len(joints)) [rad or m] (``joints``).
 
     """
 
@@ -63,32 +79,64 @@ class Measurements:
     position: np.ndarray | None = None
     rpy: np.ndarray | None = None
     group: np.ndarray | None = None
+    joints: tuple[str, ...] = ()
+    q: np.ndarray | None = None
     _rotations: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
             raise InvalidInputError("kind", f"'{self.kind}': use one of {', '.join(KINDS)}")
-        self.qa = _finite("qa", np.atleast_2d(np.asarray(self.qa, dtype=float)))
+        from pkdyn.inputs import MAX_MAGNITUDE
+
+        self.qa = _finite("qa", _array("qa", self.qa, 2))
+        if len(self.qa) > MAX_ROWS:
+            raise InvalidInputError(
+                "qa",
+                f"{len(self.qa)} measurements: at most {MAX_ROWS} (each calibration iteration "
+                "solves the forward geometry at every pose)",
+            )
         n = len(self.qa)
         needs = {
             "pose": ("position", "rpy"),
             "position": ("position",),
             "point": ("group",),
             "plane": ("group",),
+            "joints": (),
         }[self.kind]
+        if self.kind == "joints":
+            self.joints = tuple(str(j) for j in self.joints)
+            if not self.joints or self.q is None:
+                raise InvalidInputError(
+                    "joints", "joints measurements need the joint names and their coordinates q"
+                )
+            q = _finite("q", _array("q", self.q, 2))
+            if q.shape != (n, len(self.joints)):
+                raise InvalidInputError(
+                    "q", f"expected {n} rows of {len(self.joints)} values, got {q.shape}"
+                )
+            if np.any(np.abs(q) > MAX_MAGNITUDE):
+                raise InvalidInputError("q", "a joint coordinate beyond any plausible value")
+            if len(set(self.joints)) != len(self.joints):
+                raise InvalidInputError("joints", f"a joint is named twice: {self.joints}")
+            self.q = q
         for name in ("position", "rpy", "group"):
             value = getattr(self, name)
             if name in needs and value is None:
                 raise InvalidInputError(name, f"{self.kind} measurements need {name}")
             if value is None:
                 continue
-            arr = np.asarray(value, dtype=float)
+            arr = _array(name, value, 1 if name == "group" else 2)
             want = n if name == "group" else 3 * n
             if arr.size != want:
                 shape = f"{n} values" if name == "group" else f"{n} rows of 3 values"
                 raise InvalidInputError(name, f"expected {shape}, got {arr.shape}")
             arr = arr.reshape(-1) if name == "group" else arr.reshape(n, 3)
             arr = _finite(name, arr)
+            if np.any(np.abs(arr) > MAX_MAGNITUDE):
+                row = int(np.argwhere(np.abs(arr) > MAX_MAGNITUDE)[0][0])
+                raise InvalidInputError(
+                    name, f"row {row + 1} holds a value beyond any plausible one (at most 1e9)"
+                )
             if name == "group":
                 if np.any(arr != np.round(arr)):
                     raise InvalidInputError("group", "groups are whole numbers")
@@ -120,7 +168,7 @@ class Measurements:
     @property
     def rows(self) -> int:
         """Residual rows per measurement."""
-        return ROWS[self.kind]
+        return len(self.joints) if self.kind == "joints" else ROWS[self.kind]
 
     @property
     def rotations(self) -> np.ndarray:
@@ -139,6 +187,8 @@ class Measurements:
             None if self.position is None else self.position[i],
             None if self.rpy is None else self.rpy[i],
             None if self.group is None else self.group[i],
+            self.joints,
+            None if self.q is None else self.q[i],
         )
 
     @classmethod
@@ -162,6 +212,20 @@ class Measurements:
         return cls(kind, qa, P, rpy)
 
 
+def _array(name: str, value: Any, ndim: int) -> np.ndarray:
+    """``value`` as a float array of at most ``ndim`` dimensions (2: rows of values)."""
+    if isinstance(value, str | bytes | dict) or np.iscomplexobj(value):
+        raise InvalidInputError(name, f"expected an array of numbers, got {value!r:.60}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(name, f"expected an array of numbers, got {value!r:.60}") from None
+    arr = np.atleast_2d(arr) if ndim == 2 else arr
+    if arr.ndim > ndim:
+        raise InvalidInputError(name, f"expected {ndim} dimensions at most, got shape {arr.shape}")
+    return arr
+
+
 def _finite(name: str, arr: np.ndarray) -> np.ndarray:
     bad = ~np.isfinite(arr)
     if bad.any():
@@ -170,8 +234,21 @@ def _finite(name: str, arr: np.ndarray) -> np.ndarray:
     return arr
 
 
-def _columns(robot: Robot, kind: str) -> list[str]:
+def measurable_joints(robot: Robot) -> list[str]:
+    """Names of the passive 1-DoF joints (revolute or prismatic) an encoder could read."""
+    act = {int(j) for j in robot.actuated_joints}
+    out = []
+    for jid in range(1, robot.model.njoints):
+        j = robot.model.joints[jid]
+        if jid not in act and j.nq == 1 and j.nv == 1:
+            out.append(str(robot.model.names[jid]))
+    return out
+
+
+def _columns(robot: Robot, kind: str, joints: Sequence[str] = ()) -> list[str]:
     qa = [f"qa_{a}" for a in robot.actuator_names]
+    if kind == "joints":
+        return qa + [f"q_{j}" for j in joints]
     tail = {
         "pose": ["x", "y", "z", "rx", "ry", "rz"],
         "position": ["x", "y", "z"],
@@ -198,21 +275,47 @@ def read_csv(path: str | os.PathLike[str], robot: Robot, kind: str | None = None
             unreadable file (one line naming what is wrong).
 
     """
-    p = Path(path)
-    try:
-        with p.open(newline="") as fh:
-            rows = list(csv.reader(fh))
-    except (OSError, UnicodeDecodeError) as err:
-        raise InvalidInputError(str(path), f"cannot read the measurements ({err})") from None
+    from pkdyn.files import read_text
+
+    text = read_text(
+        path, MAX_BYTES, lambda msg: InvalidInputError(str(path), f"measurements file {msg}")
+    )
+    rows = list(csv.reader(io.StringIO(text.lstrip("\ufeff"), newline="")))
     rows = [r for r in rows if any(c.strip() for c in r)]
+    if len(rows) - 1 > MAX_ROWS:
+        raise InvalidInputError(
+            str(path),
+            f"{len(rows) - 1} measurements: at most {MAX_ROWS} (each calibration iteration "
+            "solves the forward geometry at every pose; a few hundred well chosen poses "
+            "suffice, see pkdyn.calibration.selection)",
+        )
     if not rows:
         raise InvalidInputError(str(path), "is empty: expected a header and one row per pose")
     header = [c.strip() for c in rows[0]]
+    sensors = [c[2:] for c in header if c.startswith("q_")]
     if kind is None:
-        kind = "pose" if {"rx", "ry", "rz"} & set(header) else "position"
+        if sensors:
+            kind = "joints"
+        else:
+            kind = "pose" if {"rx", "ry", "rz"} & set(header) else "position"
     if kind not in KINDS:
         raise InvalidInputError("kind", f"'{kind}': use one of {', '.join(KINDS)}")
-    want = _columns(robot, kind)
+    if kind == "joints":
+        known = measurable_joints(robot)
+        for name in sensors:
+            if name not in known:
+                from pkdyn.exceptions import close_match
+
+                raise InvalidInputError(
+                    str(path),
+                    f"column q_{name}: '{name}' is not a passive 1-DoF joint of {robot.name}"
+                    f"{close_match(name, known)} (measurable: {', '.join(known) or 'none'})",
+                )
+        if not sensors:
+            raise InvalidInputError(
+                str(path), "joints measurements need q_<joint> columns (passive joint encoders)"
+            )
+    want = _columns(robot, kind, list(dict.fromkeys(sensors)))
     missing = [c for c in want if c not in header]
     extra = [c for c in header if c not in want]
     dupes = sorted({c for c in header if header.count(c) > 1})
@@ -256,6 +359,8 @@ def read_csv(path: str | os.PathLike[str], robot: Robot, kind: str | None = None
         return Measurements(kind, qa, data[:, n_a : n_a + 3], data[:, n_a + 3 : n_a + 6])
     if kind == "position":
         return Measurements(kind, qa, data[:, n_a : n_a + 3])
+    if kind == "joints":
+        return Measurements(kind, qa, joints=tuple(c[2:] for c in want[n_a:]), q=data[:, n_a:])
     return Measurements(kind, qa, group=data[:, n_a])
 
 
@@ -270,8 +375,11 @@ def write_csv(path: str | os.PathLike[str], robot: Robot, m: Measurements) -> No
     """
     from pkdyn.files import atomic_write
 
-    cols = _columns(robot, m.kind)
-    if m.kind == "pose":
+    cols = _columns(robot, m.kind, m.joints)
+    if m.kind == "joints":
+        assert m.q is not None
+        data = np.hstack([m.qa, m.q])
+    elif m.kind == "pose":
         assert m.position is not None and m.rpy is not None
         data = np.hstack([m.qa, m.position, m.rpy])
     elif m.kind == "position":

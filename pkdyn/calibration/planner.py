@@ -41,6 +41,9 @@ from solvers import numerics
 
 __all__ = ["ITERATIONS", "CalibrationPlan", "plan_calibration"]
 
+MAX_RUNS = 20_000
+"""Most simulated calibrations of one plan (trials x noise levels x pose counts)."""
+
 ITERATIONS = 3
 """Gauss-Newton iterations of a simulated calibration."""
 
@@ -171,14 +174,39 @@ def plan_calibration(
         InvalidInputError: Bad target, statistic or counts.
 
     """
-    if not target > 0.0:
-        raise InvalidInputError("target", f"{target}: give a position accuracy > 0 m")
+    from pkdyn import inputs
+
+    inputs.instance("robot", robot, Robot, "a Robot (pkdyn.load)")
+    try:
+        target = inputs.positive("target", target, "m", bound=robot.length_scale)
+    except InvalidInputError:
+        raise InvalidInputError(
+            "target", f"{target}: give a position accuracy > 0 m (at most the robot's size)"
+        ) from None
     if statistic not in ("rms", "max"):
         raise InvalidInputError("statistic", f"'{statistic}': use rms or max")
-    if not 1 <= trials <= 1000:
-        raise InvalidInputError("trials", f"{trials}: give 1 to 1,000")
+    try:
+        trials = inputs.count("trials", trials, 1, 1000)
+    except InvalidInputError:
+        raise InvalidInputError("trials", f"{trials}: give 1 to 1,000") from None
+    candidates = inputs.count("candidates", candidates, 4, 5000)
+    validation = inputs.count("validation", validation, 1, 5000)
+    seed = inputs.seed("seed", seed)
+    noise_arr = inputs.vector("noise", noise, None, "m", bound=robot.length_scale)
+    if noise_arr.size == 0 or np.any(noise_arr <= 0.0):
+        raise InvalidInputError("noise", f"{list(noise_arr)}: give noise levels > 0 m")
+    noise = [float(s) for s in noise_arr]
+    if poses is not None:
+        poses = [inputs.count("poses", n, 1, 5000) for n in inputs.vector("poses", poses)]
+    runs = trials * len(noise) * (4 if poses is None else len(poses))
+    if runs > MAX_RUNS:
+        raise InvalidInputError(
+            "trials",
+            f"{trials} trials x {len(noise)} noise levels x the pose counts = {runs} simulated "
+            f"calibrations, more than {MAX_RUNS}: fewer trials or settings",
+        )
     pm = parameter_model(robot, model) if isinstance(model, str) else model
-    tol = np.asarray(tolerance, dtype=float)
+    tol = inputs.vector("tolerance", tolerance, None, "m, rad", bound=1e3)
     t = pm.tolerances(float(tol[0]), float(tol[1])) if tol.size == 2 and pm.size != 2 else tol
     if t.shape != (pm.size,):
         raise InvalidInputError("tolerance", f"give (length, angle) or {pm.size} values")

@@ -19,6 +19,7 @@ parameters are selected.
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -66,8 +67,16 @@ def candidate_poses(
         InvalidInputError: A count outside 1..5,000, or a robot without a platform.
 
     """
-    if not 1 <= int(count) <= 5000:
-        raise InvalidInputError("count", f"{count}: give 1 to 5,000 candidate poses")
+    from pkdyn import inputs
+
+    inputs.instance("robot", robot, Robot, "a Robot (pkdyn.load)")
+    try:
+        count = inputs.count("count", count, 1, 5000)
+    except InvalidInputError:
+        raise InvalidInputError("count", f"{count}: give 1 to 5,000 candidate poses") from None
+    spread = inputs.positive("spread", spread, "x the robot's size", bound=10.0)
+    rotation = inputs.non_negative("rotation", rotation, "rad", bound=math.pi)
+    seed = inputs.seed("seed", seed)
     if robot.platform_frame is None:
         raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
     rng = np.random.default_rng(seed)
@@ -186,9 +195,24 @@ def select_poses(
         InvalidInputError: Unknown index, or more poses asked than candidates.
 
     """
+    from pkdyn import inputs
+
     if index not in INDICES:
         raise InvalidInputError("index", f"'{index}': use one of {', '.join(INDICES)}")
+    if isinstance(blocks, str | bytes | dict) or np.iscomplexobj(blocks):
+        raise InvalidInputError("blocks", "expected an array (M, rows, n_par) (design_matrix)")
+    try:
+        blocks = np.asarray(blocks, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            "blocks", "expected an array (M, rows, n_par) (design_matrix)"
+        ) from None
+    if blocks.ndim != 3 or not np.all(np.isfinite(blocks)):
+        raise InvalidInputError(
+            "blocks", f"expected finite (M, rows, n_par) Jacobian blocks, got shape {blocks.shape}"
+        )
     M, d, _ = blocks.shape
+    count = inputs.count("count", count, 1, max(M, 1))
     if not 1 <= count <= M:
         raise InvalidInputError("count", f"{count} poses asked from {M} candidates")
     ident = identifiability(blocks.reshape(M * d, -1), [str(k) for k in range(blocks.shape[2])], M)

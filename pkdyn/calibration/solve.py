@@ -106,6 +106,8 @@ class ErrorStats:
         orientation_rms: RMS of the rotation error norm [rad] (``pose`` only, else 0).
         orientation_max: Largest rotation error norm [rad].
         count: Number of measurements.
+        joint_rms: RMS of the measured joints' coordinate errors [rad or m] (``joints``).
+        joint_max: Largest of them [rad or m].
 
     """
 
@@ -114,6 +116,8 @@ class ErrorStats:
     orientation_rms: float = 0.0
     orientation_max: float = 0.0
     count: int = 0
+    joint_rms: float = 0.0
+    joint_max: float = 0.0
 
     def as_dict(self) -> dict[str, float]:
         """JSON-ready form."""
@@ -125,6 +129,11 @@ def _stats(kind: str, res: np.ndarray) -> ErrorStats:
     n = len(res)
     if n == 0:
         return ErrorStats(0.0, 0.0)
+    if kind == "joints":
+        e = np.abs(res)
+        return ErrorStats(
+            0.0, 0.0, count=n, joint_rms=float(np.sqrt(np.mean(e**2))), joint_max=float(e.max())
+        )
     pos = np.linalg.norm(res[:, :3] if kind != "plane" else res[:, :1], axis=1)
     rot = np.linalg.norm(res[:, 3:6], axis=1) if kind == "pose" else np.zeros(n)
     return ErrorStats(
@@ -287,6 +296,15 @@ class _Problem:
         self.normal0: list[np.ndarray] = []
         self.tangents: list[np.ndarray] = []
         self.last_gap = np.zeros(model.size)
+        self.jq = np.zeros(0, dtype=int)
+        self.jv = np.zeros(0, dtype=int)
+        self.revolute = np.zeros(0, dtype=bool)
+        if m.kind == "joints":
+            ids = [robot.model.getJointId(j) for j in m.joints]
+            joints = [robot.model.joints[i] for i in ids]
+            self.jq = np.array([j.idx_q for j in joints], dtype=int)
+            self.jv = np.array([j.idx_v for j in joints], dtype=int)
+            self.revolute = np.array(["Prismatic" not in j.shortname() for j in joints])
 
     # -- nuisance parameters of implicit measurements
     def init_nuisance(self, positions: np.ndarray) -> np.ndarray:
@@ -342,10 +360,17 @@ class _Problem:
             poses.append(g.placement)
         return P, qs, poses
 
-    def raw_residuals(self, poses: list[pin.SE3], y: np.ndarray) -> np.ndarray:
-        """Unweighted residuals (N, rows) [m, rad]."""
+    def raw_residuals(
+        self, poses: list[pin.SE3], y: np.ndarray, qs: list[np.ndarray] | None = None
+    ) -> np.ndarray:
+        """Unweighted residuals (N, rows) [m, rad] (``joints``: of the configurations ``qs``)."""
         m = self.m
         out = np.zeros((len(poses), m.rows))
+        if m.kind == "joints":
+            assert qs is not None and m.q is not None
+            Q = np.array([q[self.jq] for q in qs]).reshape(len(poses), -1)
+            d = Q - m.q
+            return np.where(self.revolute, np.angle(np.exp(1j * d)), d)
         for i, M in enumerate(poses):
             if m.kind in ("pose", "position"):
                 assert m.position is not None
@@ -366,6 +391,8 @@ class _Problem:
     def row_sigma(self) -> np.ndarray:
         """Standard deviation of each residual row (rows,)."""
         s_pos, s_rot = self.sigma
+        if self.m.kind == "joints":
+            return np.where(self.revolute, s_rot, s_pos)
         per = np.array([s_pos, s_pos, s_pos, s_rot, s_rot, s_rot])[: self.m.rows]
         return per
 
@@ -389,6 +416,10 @@ class _Problem:
                 g = np.max(np.abs(sens.closure_gap), axis=0)
                 self.last_gap = np.maximum(self.last_gap, g)
             K = sens.K[:, cols]
+            if m.kind == "joints":
+                assert sens.joints is not None
+                out[i, :, : cols.size] = sens.joints[self.jv][:, cols]
+                continue
             if m.kind in ("pose", "position"):
                 out[i, :3, : cols.size] = K[:3]
                 if m.kind == "pose":
@@ -418,6 +449,36 @@ def _inverse(A: np.ndarray) -> np.ndarray:
         return np.linalg.inv(A)
     except np.linalg.LinAlgError:
         return numerics.lstsq(A, np.eye(A.shape[0]), numerics.machine_rtol(A))
+
+
+def _rank(J: np.ndarray) -> int:
+    """Rank of a Jacobian with its columns normalised (:data:`RTOL`)."""
+    if J.size == 0:
+        return 0
+    W = J / np.maximum(np.linalg.norm(J, axis=0), 1e-300)
+    s = np.linalg.svd(W, compute_uv=False)
+    return int(np.sum(s > RTOL * s[0])) if s.size and s[0] > 0 else 0
+
+
+def _scaled_readings(m: Measurements, gain: np.ndarray) -> Measurements:
+    """The measurements with their readings multiplied by the encoder gains (joint coords)."""
+    return Measurements(m.kind, m.qa * gain, m.position, m.rpy, m.group, m.joints, m.q)
+
+
+def _check_far(robot: Robot, m: Measurements, rows: np.ndarray, positions: np.ndarray) -> None:
+    """Refuse a measured position more than 100 robot sizes from the nominal model's."""
+    if m.position is None:
+        return
+    gap = np.linalg.norm(m.position - positions, axis=1)
+    far = np.flatnonzero(gap > 100.0 * robot.length_scale)
+    if far.size:
+        i = int(far[0])
+        raise InvalidInputError(
+            "measurements",
+            f"row {int(rows[i]) + 1}: the measured position lies {gap[i]:.3g} m from the nominal "
+            f"{robot.name}'s, more than 100 times its size ({robot.length_scale:.3g} m): a unit "
+            "or frame error (positions in metres, in the robot's world frame)",
+        )
 
 
 def _nominal_configurations(robot: Robot, m: Measurements, rows: np.ndarray) -> list[np.ndarray]:
@@ -460,7 +521,13 @@ def _structural_rank(
         qa = qa + rng.normal(0.0, 0.02, qa.size) * robot.actuator_scale
         try:
             q = forward_geometry(robot, qa, q_init=qs[i], check_limits=False).q
-            K = pose_sensitivity(robot, q, model).K[: min(m.rows, 6) if m.kind != "plane" else 3]
+            sens = pose_sensitivity(robot, q, model)
+            if m.kind == "joints":
+                assert sens.joints is not None
+                ids = [robot.model.getJointId(j) for j in m.joints]
+                K = sens.joints[[robot.model.joints[k].idx_v for k in ids]]
+            else:
+                K = sens.K[: min(m.rows, 6) if m.kind != "plane" else 3]
         except PkdynError:
             continue
         rows.append(K[:, keep])
@@ -473,15 +540,26 @@ def _structural_rank(
 
 
 def _sigma(robot: Robot, noise: float | Sequence[float] | None) -> tuple[tuple[float, float], bool]:
+    from pkdyn.inputs import vector
+
     if noise is None:
         s = 1e-5
         return (s, s / robot.length_scale), False
-    arr = np.atleast_1d(np.asarray(noise, dtype=float))
+    try:
+        arr = vector("noise", noise, (1, 2))
+    except InvalidInputError:
+        arr = np.array([np.nan])
     if arr.size not in (1, 2) or not np.all(np.isfinite(arr)) or np.any(arr <= 0.0):
         raise InvalidInputError(
             "noise",
-            f"{noise!r}: give the position noise [m] and optionally the orientation "
+            f"{noise!r:.60}: give the position noise [m] and optionally the orientation "
             "noise [rad], > 0",
+        )
+    if arr[0] > robot.length_scale or (arr.size == 2 and arr[1] > math.pi):
+        raise InvalidInputError(
+            "noise",
+            f"{noise!r:.60}: a measurement noise larger than the robot ({robot.length_scale:.3g} "
+            "m) or than pi rad measures nothing; give the standard deviation [m] [rad]",
         )
     s_pos = float(arr[0])
     s_rot = float(arr[1]) if arr.size == 2 else s_pos / robot.length_scale
@@ -534,8 +612,29 @@ def calibrate(
             poses are needed).
 
     """
+    from pkdyn.inputs import count, flag, instance, positive, real, vector
+    from pkdyn.inputs import seed as _seed
+
+    instance("robot", robot, Robot, "a Robot (pkdyn.load)")
+    instance(
+        "measurements", measurements, Measurements, "Measurements (pkdyn.calibration.read_csv)"
+    )
+    if validation is not None:
+        instance("validation", validation, Measurements, "Measurements or None")
     if robust not in ROBUST:
         raise InvalidInputError("robust", f"'{robust}': use {', '.join(ROBUST)}")
+    holdout = real("holdout", holdout)
+    rtol = positive("rtol", rtol, bound=0.5)
+    gains = flag("gains", gains)
+    max_iter = count("max_iter", max_iter, 1, 10_000)
+    seed = _seed("seed", seed)
+    if prior is not None:
+        pr = vector("prior", prior, 3, "m, rad, -", bound=1e3)
+        if np.any(pr <= 0.0):
+            raise InvalidInputError("prior", f"{tuple(pr)}: give three standard deviations > 0")
+        prior = (float(pr[0]), float(pr[1]), float(pr[2]))
+    if not isinstance(model, str | ParameterModel):
+        instance("model", model, (str, ParameterModel), "a ParameterModel or its kind's name")
     if len(measurements.qa[0]) != len(robot.actuators):
         raise InvalidInputError(
             "measurements",
@@ -544,6 +643,13 @@ def calibrate(
         )
     pm = parameter_model(robot, model, gains) if isinstance(model, str) else model
     sigma, known = _sigma(robot, noise)
+    # readings -> the nominal robot's joint coordinates (its <pkdyn:encoder gain>, 1 unless it
+    # was calibrated before); the relative gains estimated here multiply them
+    base_gain = np.array([float(a.encoder_gain) for a in robot.actuators])
+    if np.any(base_gain != 1.0):
+        measurements = _scaled_readings(measurements, base_gain)
+        if validation is not None:
+            validation = _scaled_readings(validation, base_gain)
     if validation is not None:
         if validation.kind != measurements.kind:
             raise InvalidInputError("validation", "must be measurements of the same kind")
@@ -564,6 +670,7 @@ def calibrate(
     P0, qs0, poses0 = prob.solve(zero)
     prob.qs = qs0
     positions0 = np.array([M.translation for M in poses0])
+    _check_far(robot, cal, cal_rows, positions0)
     y0 = prob.init_nuisance(positions0)
     J_all = prob.jacobian(P0, qs0, poses0, zero, y0, np.arange(pm.size))
     gaps = prob.last_gap
@@ -579,6 +686,16 @@ def calibrate(
         prior_all = np.concatenate([_prior(pm, prior)[keep], _nuisance_prior(robot, prob)])
     ident = identifiability(W0, names, len(cal), scale_all, rtol, prior_all)
     n_values = len(cal) * cal.rows
+    own = _rank(J0)  # what these poses can tell apart, noise aside
+    if own < min(n_values, keep.size + prob.n_nuis):
+        r_struct = _structural_rank(robot, pm, cal, qs0, keep) + prob.n_nuis
+        if own < r_struct:
+            warnings.warn(
+                f"these {len(cal)} poses identify {own} of the {r_struct} parameters that "
+                f"poses spread over the workspace would ({pm.kind} model): the others are held "
+                "at nominal; measure more varied poses (pkdyn.calibration.selection)",
+                stacklevel=2,
+            )
     if ident.rank >= n_values or n_values <= keep.size + prob.n_nuis:
         r_struct = _structural_rank(robot, pm, cal, qs0, keep) + prob.n_nuis
         if n_values <= r_struct:
@@ -605,8 +722,8 @@ def calibrate(
         y[nuis_cols] = y[nuis_cols] + z[cols.size :]
         return p, y
 
-    def weighted(poses: list[pin.SE3], y: np.ndarray) -> np.ndarray:
-        return prob.raw_residuals(poses, y).reshape(-1) / row_sigma
+    def weighted(poses: list[pin.SE3], y: np.ndarray, qs_: list[np.ndarray]) -> np.ndarray:
+        return prob.raw_residuals(poses, y, qs_).reshape(-1) / row_sigma
 
     def jac(
         P: Perturbed, qs_: list[np.ndarray], poses: list[pin.SE3], p: np.ndarray, y: np.ndarray
@@ -627,7 +744,7 @@ def calibrate(
     z = np.zeros(cols.size + nuis_cols.size)
     p, y = unpack(z)
     P, qcur, poses = P0, qs0, poses0
-    r = weighted(poses, y)
+    r = weighted(poses, y, qcur)
     J0z = np.hstack([J_all.reshape(len(cal) * cal.rows, -1)[:, cols], J0[:, n_rob:][:, nuis_cols]])
     J = J0z / row_sigma[:, None]  # exact at the nominal robot; refreshed while nonlinear
     fresh = True
@@ -655,7 +772,7 @@ def calibrate(
                 p_new, y_new = unpack(z_new)
                 try:
                     P_new, q_new, poses_new = prob.solve(p_new)
-                    r_new = weighted(poses_new, y_new)
+                    r_new = weighted(poses_new, y_new, q_new)
                     cost_new = total(r_new, z_new, wr)
                 except PkdynError:
                     cost_new = math.inf
@@ -711,8 +828,8 @@ def calibrate(
     std = np.full(pm.size, np.nan)
     std[cols] = std_z[: cols.size]
     # errors before / after
-    res_before = prob.raw_residuals(poses0, y0)
-    res_after = prob.raw_residuals(poses, y)
+    res_before = prob.raw_residuals(poses0, y0, qs0)
+    res_after = prob.raw_residuals(poses, y, qcur)
     val_before = val_after = None
     if len(val):
         vq = _nominal_configurations(robot, val, val_rows)
@@ -720,10 +837,10 @@ def calibrate(
         vprob.groups, vprob.normal0, vprob.tangents = prob.groups, prob.normal0, prob.tangents
         _, vq0, vposes0 = vprob.solve(zero)
         vprob.qs = vq0
-        val_before = _stats(val.kind, vprob.raw_residuals(vposes0, y0))
+        val_before = _stats(val.kind, vprob.raw_residuals(vposes0, y0, vq0))
         try:
-            _, _, vposes = vprob.solve(p)
-            val_after = _stats(val.kind, vprob.raw_residuals(vposes, y))
+            _, vq1, vposes = vprob.solve(p)
+            val_after = _stats(val.kind, vprob.raw_residuals(vposes, y, vq1))
         except PkdynError as err:
             raise InvalidInputError(
                 "validation", f"the calibrated robot cannot reach a validation pose ({err})"

@@ -144,8 +144,12 @@ def calibrated_urdf(result: CalibrationResult, xml: str | None = None) -> str:
     home.set("q", " ".join(repr(float(v)) for v in result.robot.q_home))
     note = (
         f" calibrated by pkdyn from {result.calibration_rows.size} poses: {model.kind} model, "
-        f"{result.identifiability.rank} parameters identified; RMS position error "
-        f"{result.before.position_rms:.3g} m -> {result.after.position_rms:.3g} m "
+        f"{result.identifiability.rank} parameters identified; RMS error "
+        + (
+            f"{result.before.position_rms:.3g} m -> {result.after.position_rms:.3g} m "
+            if result.before.joint_rms == 0.0
+            else f"(passive joints) {result.before.joint_rms:.3g} -> {result.after.joint_rms:.3g} "
+        )
     )
     root.insert(0, ET.Comment(note))
     ET.indent(root, space="  ")

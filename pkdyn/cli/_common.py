@@ -20,6 +20,7 @@ __all__ = [
     "configuration",
     "emit",
     "fmt",
+    "gains_of",
     "load",
     "output_path",
     "params",
@@ -167,7 +168,9 @@ def load(args: argparse.Namespace, geometry: bool = False) -> Any:
         from pkdyn.model.formats.xacro_files import parse_xacro_args
 
         extra["xacro_args"] = parse_xacro_args(args.xacro_arg)
-    return pkdyn.load(args.robot, geometry=geometry, **extra, **params(args.param))
+    robot = pkdyn.load(args.robot, geometry=geometry, **extra, **params(args.param))
+    _resolve_readings(args, robot)
+    return robot
 
 
 def _non_finite(value: Any, where: str = "") -> str | None:
@@ -230,17 +233,60 @@ def configuration(args: argparse.Namespace, geometry: bool = False) -> tuple[Any
 
 
 def qa_argument(parser: Any, required: bool = False) -> None:
-    """Add ``--qa QA...`` (actuator coordinates, in actuator order; ``--q`` is an alias)."""
-    parser.add_argument(
+    """Add ``--qa QA...`` (joint coordinates) and ``--readings R...`` (encoder readings).
+
+    ``--qa`` (alias ``--q``): the actuated joint coordinates, in actuator order. ``--readings``:
+    the actuators' encoder readings, the description's ``<pkdyn:encoder gain>`` applied (joint
+    coordinate = gain x reading). One of them is required when ``required``.
+    """
+    where = parser.add_mutually_exclusive_group(required=True) if required else parser
+    where.add_argument(
         "--qa",
         "--q",
         dest="qa",
         nargs="+",
         type=float,
-        required=required,
         metavar="QA",
-        help="actuator coordinates in actuator order (rad or m)",
+        help="actuated joint coordinates in actuator order (rad or m)",
     )
+    where.add_argument(
+        "--readings",
+        nargs="+",
+        type=float,
+        metavar="R",
+        help="actuator (encoder) readings in actuator order: the description's "
+        "<pkdyn:encoder gain> applied (joint coordinate = gain x reading)",
+    )
+
+
+def gains_of(robot: Any) -> np.ndarray:
+    """The actuators' encoder gains (n_a,): joint coordinate = gain x reading."""
+    return np.array([float(a.encoder_gain) for a in robot.actuators])
+
+
+def _resolve_readings(args: argparse.Namespace, robot: Any) -> None:
+    """Turn ``--readings`` into ``args.qa`` (joint coordinates).
+
+    ``--qa`` on a robot with encoder gains, where readings and coordinates differ, prints a note.
+    """
+    readings = getattr(args, "readings", None)
+    gains = gains_of(robot)
+    if readings is not None:
+        from pkdyn.inputs import vector
+
+        r = vector("--readings", readings, len(gains), "rad or m")
+        args.qa = [float(v) for v in gains * r]
+    elif getattr(args, "qa", None) is not None and np.any(gains != 1.0):
+        import sys
+
+        listed = ", ".join(
+            f"{a.name} {g:.9g}" for a, g in zip(robot.actuators, gains, strict=True) if g != 1.0
+        )
+        print(
+            f"pkdyn: note: {robot.name} has encoder gains ({listed}): --qa are joint "
+            "coordinates; give encoder readings with --readings",
+            file=sys.stderr,
+        )
 
 
 def robot_command(

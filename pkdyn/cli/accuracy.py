@@ -33,6 +33,7 @@ def _tolerances(args: argparse.Namespace, robot: Any, model: Any) -> np.ndarray:
 def _cmd_accuracy(args: argparse.Namespace) -> None:
     import pkdyn
     from pkdyn.exceptions import InvalidInputError
+    from pkdyn.inputs import count, seed
     from pkdyn.precision.accuracy import (
         accuracy_map,
         actuator_errors,
@@ -43,6 +44,8 @@ def _cmd_accuracy(args: argparse.Namespace) -> None:
     from pkdyn.precision.parameters import parameter_model
 
     output_path("--plot", args.plot, figure=True)
+    count("--top", args.top, 0)
+    seed("--seed", args.seed)
     if args.plot and args.map is None:
         raise InvalidInputError("--plot", "plots a map: give --map xy|xz|yz")
     if not 1 <= len(args.tolerance) <= 3 or min(args.tolerance) < 0:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+import numpy as np
+
 from pkdyn.cli._common import emit, load, output_path, robot_command
 
 __all__ = ["register"]
@@ -30,21 +32,31 @@ def _cmd_calibrate(args: argparse.Namespace) -> None:
     write_calibrated(res, args.output)
     out = res.as_dict()
     out["output"] = args.output
+    field, unit, what = (
+        ("joint_rms", "rad or m", "passive joint error RMS")
+        if m.kind == "joints"
+        else ("position_rms", "m", "position error RMS")
+    )
     lines = [
         f"{res.model.kind} model: {res.identifiability.rank} of {res.model.size} parameters "
         f"identified from {res.calibration_rows.size} poses ({m.kind})",
-        f"position error RMS: {res.before.position_rms:.4g} m before, "
-        f"{res.after.position_rms:.4g} m after (calibration poses)",
+        f"{what}: {getattr(res.before, field):.4g} {unit} before, "
+        f"{getattr(res.after, field):.4g} {unit} after (calibration poses)",
     ]
     if res.validation_after is not None and res.validation_before is not None:
         lines.append(
-            f"held-out poses ({res.validation_rows.size}): {res.validation_before.position_rms:.4g}"
-            f" m before, {res.validation_after.position_rms:.4g} m after"
+            f"held-out poses ({res.validation_rows.size}): "
+            f"{getattr(res.validation_before, field):.4g} {unit} before, "
+            f"{getattr(res.validation_after, field):.4g} {unit} after"
         )
     unid = out["unidentifiable"]
     if unid:
         names = ", ".join(u["name"] for u in unid[:8]) + (" ..." if len(unid) > 8 else "")
         lines.append(f"not identifiable (held at nominal): {names}")
+    if len(res.outliers):
+        rows = np.asarray(res.outliers) + 2  # CSV lines (the header is line 1)
+        shown = ", ".join(str(int(r)) for r in rows[:8]) + (" ..." if len(rows) > 8 else "")
+        lines.append(f"outliers (down-weighted by the robust weights): CSV lines {shown}")
     if res.not_assembling:
         lines.append(f"not assembling (held at nominal): {len(res.not_assembling)} parameters")
     idx = res.identifiability.indices
@@ -64,8 +76,9 @@ def register(sub: Any) -> None:
         "--measurements",
         required=True,
         metavar="FILE.csv",
-        help="CSV: qa_<actuator> columns and the measured x y z [rx ry rz] (m, rad), or "
-        "a group column with --implicit",
+        help="CSV: qa_<actuator> columns (encoder readings) and the measured x y z [rx ry rz] "
+        "(m, rad), or a group column with --implicit, or q_<joint> columns (encoders on "
+        "passive joints: self-calibration from extra sensors)",
     )
     sp.add_argument("-o", "--output", required=True, help="calibrated URDF to write")
     sp.add_argument(

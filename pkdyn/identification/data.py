@@ -49,6 +49,31 @@ class Measurements:
     source: str = "data"
 
 
+MAX_BYTES = 512_000_000
+"""Largest motion file read [bytes] (several million samples)."""
+MAX_VALUE = 1e9
+"""Largest magnitude of a time, position, rate or effort in a motion file [SI units]."""
+MIN_STEP = 1e-9
+"""Smallest time step between samples [s]."""
+
+
+def _check_file(p: Path, src: str) -> None:
+    """Refuse a missing file, a directory, a FIFO or a device, or a file too large, unopened."""
+    import stat
+
+    try:
+        st = p.stat()
+    except OSError as err:
+        raise InvalidInputError(src, f"cannot be read ({err.strerror or err})") from None
+    if not stat.S_ISREG(st.st_mode):
+        kind = "a directory" if stat.S_ISDIR(st.st_mode) else "a FIFO, device or socket"
+        raise InvalidInputError(src, f"cannot be read: {kind}, not a regular file")
+    if st.st_size > MAX_BYTES:
+        raise InvalidInputError(
+            src, f"is {st.st_size / 1e6:.3g} MB, more than the {MAX_BYTES / 1e6:.3g} MB accepted"
+        )
+
+
 def _read_table(path: Path) -> tuple[list[str], np.ndarray]:
     try:
         text = path.read_text(encoding="utf-8")
@@ -100,8 +125,7 @@ def read_measurements(
     """
     p = Path(path)
     src = str(path)
-    if not p.is_file():
-        raise InvalidInputError(src, "no such file")
+    _check_file(p, src)
     header, X = _read_table(p)
     seen: set[str] = set()
     for h in header:
@@ -143,12 +167,25 @@ def read_measurements(
         )
     if X.shape[0] < 2:
         raise InvalidInputError(src, "fewer than 2 samples")
+    big = np.abs(X) > MAX_VALUE
+    if big.any():
+        row, col = (int(i) for i in np.argwhere(big)[0])
+        raise InvalidInputError(
+            src,
+            f"row {row + 2}, column '{header[col]}': {X[row, col]:g} is beyond any plausible "
+            f"value (at most {MAX_VALUE:g} in SI units)",
+        )
     idx = {h: i for i, h in enumerate(header)}
     t = X[:, idx["t"]]
     dt = np.diff(t)
     if np.any(dt <= 0.0):
         k = int(np.flatnonzero(dt <= 0.0)[0])
         raise InvalidInputError(src, f"row {k + 3}, column 't': times must increase")
+    if np.any(dt < MIN_STEP):
+        k = int(np.flatnonzero(dt < MIN_STEP)[0])
+        raise InvalidInputError(
+            src, f"row {k + 3}, column 't': a time step of {dt[k]:g} s (at least {MIN_STEP:g} s)"
+        )
 
     def cols(g: str) -> np.ndarray | None:
         names = groups[g]

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.exceptions import PkdynError
 from pkdyn.identification.motion import BATCH, MotionSampler
 from pkdyn.identification.parameters import parameter_set
 from pkdyn.identification.regressor import ClosedLoopRegressor
@@ -116,12 +116,16 @@ def excitation_trajectory(
     """
     from scipy.optimize import minimize
 
+    from pkdyn import inputs
     from pkdyn.identification.identify import check_identifiable, structural_base
 
-    if not period > 0.0 or harmonics < 2 or samples < 4:
-        raise InvalidInputError(
-            "excitation", "period must be > 0 s, harmonics >= 2 and samples >= 4"
-        )
+    period = inputs.positive("period", period, "s", bound=1e6)
+    harmonics = inputs.count("harmonics", harmonics, 2, 50)
+    samples = inputs.count("samples", samples, 4, 10_000)
+    max_iter = inputs.count("max_iter", max_iter, 0, 10_000)
+    seed = inputs.seed("seed", seed)
+    if amplitude is not None:
+        amplitude = inputs.positive("amplitude", amplitude, "rad or m", bound=1e3)
     check_identifiable(robot)
     n = len(robot.actuators)
     ps = parameter_set(robot, parameters)

@@ -232,7 +232,11 @@ def _parallel(robot: Robot, N: int, workers: int) -> list[tuple[list[np.ndarray]
     jobs: list[tuple[int, int, np.ndarray | None]] = [(bounds[0], bounds[1], None)] + [
         (bounds[k], bounds[k + 1], q) for k, q in zip(range(1, workers), starts, strict=True)
     ]
-    with multiprocessing.get_context("fork").Pool(workers) as pool:
+    from pkdyn.workers import worker_init
+
+    # workers deaf to Ctrl-C and tied to this process: an interruption is reported once, here
+    ctx = multiprocessing.get_context("fork")
+    with ctx.Pool(workers, initializer=worker_init, initargs=(os.getpid(),)) as pool:
         return pool.map(_worker, jobs)
 
 
@@ -321,6 +325,10 @@ def _identify(
     workers: int | None,
 ) -> IdentificationResult:
     start = time.perf_counter()
+    from pkdyn.inputs import instance
+
+    instance("robot", robot, Robot, "a Robot (pkdyn.load)")
+    instance("data", data, Measurements, "Measurements (pkdyn.identification.read_measurements)")
     check_identifiable(robot)
     n_a = len(robot.actuators)
     if data.tau is None:

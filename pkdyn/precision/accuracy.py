@@ -67,6 +67,10 @@ __all__ = [
     "worst_norm",
 ]
 
+MAX_ERROR = 1e3
+"""Largest resolution, backlash or tolerance accepted [m, rad or -]: first-order error budgets
+are about small errors; beyond it an input is a unit or typing mistake."""
+
 DEFAULT_RESOLUTION = (1e-4, 1e-5)
 """Actuator error assumed by the ``error_max`` design metric: (revolute [rad], prismatic [m])
 resolution, about a 16-bit encoder on a revolute joint and a 10 um linear scale."""
@@ -178,11 +182,14 @@ def _per_actuator(
     robot: Robot, name: str, value: float | Sequence[float] | np.ndarray
 ) -> np.ndarray:
     """One value per actuator (a single value applies to all), finite and >= 0."""
+    from pkdyn.inputs import vector
+
     n_a = len(robot.actuators)
-    arr = np.asarray(value, dtype=float).reshape(-1)
+    arr = vector(name, value, None, "rad or m", bound=MAX_ERROR)
+    if arr.size not in (1, n_a):
+        raise InvalidInputError(name, f"expected {n_a} values (or one for all), got {arr.size}")
     if arr.size == 1:
         arr = np.full(n_a, float(arr[0]))
-    arr = as_finite(name, arr, n_a)
     if np.any(arr < 0.0):
         k = int(np.flatnonzero(arr < 0.0)[0])
         raise InvalidInputError(
@@ -253,11 +260,16 @@ def _std(tol: np.ndarray, distribution: str) -> np.ndarray:
 def _tolerances(
     model: ParameterModel, tolerance: float | Sequence[float] | np.ndarray
 ) -> np.ndarray:
-    if np.ndim(tolerance) == 0:
-        t = np.full(model.size, float(tolerance))  # type: ignore[arg-type]
-    else:
-        t = np.asarray(tolerance, dtype=float).reshape(-1)
-    t = as_finite("tolerance", t, model.size)
+    from pkdyn.inputs import instance, vector
+
+    instance("model", model, ParameterModel, "a ParameterModel (parameter_model(robot))")
+    t = vector("tolerance", tolerance, None, "m, rad or -", bound=MAX_ERROR)
+    if t.size not in (1, model.size):
+        raise InvalidInputError(
+            "tolerance", f"expected {model.size} values (or one for all), got {t.size}"
+        )
+    if t.size == 1:
+        t = np.full(model.size, float(t[0]))
     if np.any(t < 0.0):
         k = int(np.flatnonzero(t < 0.0)[0])
         raise InvalidInputError("tolerance", f"{model.names[k]}: {t[k]:g} is negative; give >= 0")
@@ -440,11 +452,17 @@ def monte_carlo(
         InvalidInputError: Malformed tolerances, distribution or sample count.
 
     """
+    from pkdyn.inputs import count
+    from pkdyn.inputs import seed as _seed
+
     qq = as_finite("q", q, robot.nq)
     t = _tolerances(model, tolerance)
     _std(t, distribution)
-    if not 1 <= int(samples) <= 100_000:
-        raise InvalidInputError("samples", f"{samples}: give 1 to 100,000")
+    try:
+        samples = count("samples", samples, 1, 100_000)
+    except InvalidInputError:
+        raise InvalidInputError("samples", f"{samples}: give 1 to 100,000") from None
+    seed = _seed("seed", seed)
     gap = pose_sensitivity(robot, qq, model).closure_gap
     if gap.size:
         t = np.where(np.max(np.abs(gap), axis=0) > _GAP_TOL, 0.0, t)
@@ -529,13 +547,21 @@ def slice_grid(
         Positions (samples^2, 3) [m] and the grid shape.
 
     """
-    c = as_finite("center", center, 3)
+    from pkdyn.inputs import count, positive, vector
+
+    c = vector("center", center, 3, "m")
     if axes not in ("xy", "xz", "yz"):
         raise InvalidInputError("axes", f"'{axes}': use xy, xz or yz")
-    if not 2 <= int(samples) <= 201:
-        raise InvalidInputError("samples", f"{samples}: give 2 to 201 per side")
-    if not extent > 0.0:
-        raise InvalidInputError("extent", f"{extent}: give a half-width > 0 m")
+    try:
+        samples = count("samples", samples, 2, 201)
+    except InvalidInputError:
+        raise InvalidInputError("samples", f"{samples}: give 2 to 201 per side") from None
+    try:
+        extent = positive("extent", extent, "m", bound=1e3)
+    except InvalidInputError:
+        raise InvalidInputError(
+            "extent", f"{extent}: give a half-width > 0 m (at most 1e3)"
+        ) from None
     i, j = ("xyz".index(axes[0]), "xyz".index(axes[1]))
     u = np.linspace(-extent, extent, int(samples))
     U, V = np.meshgrid(u, u, indexing="ij")
@@ -578,8 +604,13 @@ def accuracy_map(
         The map.
 
     """
-    P = np.atleast_2d(np.asarray(positions, dtype=float))
-    if P.shape[1] != 3 or not np.all(np.isfinite(P)):
+    if isinstance(positions, str | bytes | dict):
+        raise InvalidInputError("positions", "expected finite (N, 3) positions [m]")
+    try:
+        P = np.atleast_2d(np.asarray(positions, dtype=float))
+    except (TypeError, ValueError):
+        raise InvalidInputError("positions", "expected finite (N, 3) positions [m]") from None
+    if P.ndim != 2 or P.shape[1] != 3 or not np.all(np.isfinite(P)):
         raise InvalidInputError("positions", "expected finite (N, 3) positions [m]")
     if P.shape[0] > 100_000:
         raise InvalidInputError("positions", f"{P.shape[0]} positions: give at most 100,000")

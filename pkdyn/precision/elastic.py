@@ -44,6 +44,10 @@ from solvers import ClosureSet, FrameSpring, PassiveForces
 
 __all__ = ["DEFLECTION_SUFFIX", "ElasticModel", "actuator_stiffness", "elastic_model"]
 
+MAX_STIFFNESS = 1e15
+"""Largest finite actuator stiffness accepted [N m/rad or N/m]: beyond it products with the
+other springs overflow (``inf`` stands for a rigid actuator)."""
+
 DEFLECTION_SUFFIX = "/deflection"
 """Name suffix of a link's virtual joint (``bar1a_upper/deflection``)."""
 
@@ -142,10 +146,12 @@ def actuator_stiffness(
                 "<pkdyn:stiffness value=...> in its transmission",
             )
         return np.array([float(a.stiffness) for a in robot.actuators])  # type: ignore[arg-type]
+    if isinstance(value, bool | str | bytes | dict) or np.iscomplexobj(value):
+        raise InvalidInputError("actuator_stiffness", f"{value!r:.60} is not a number")
     try:
         arr = np.atleast_1d(np.asarray(value, dtype=float)).reshape(-1)
     except (TypeError, ValueError):
-        raise InvalidInputError("actuator_stiffness", f"{value!r} is not a number") from None
+        raise InvalidInputError("actuator_stiffness", f"{value!r:.60} is not a number") from None
     if arr.size not in (1, n_a):
         raise InvalidInputError(
             "actuator_stiffness",
@@ -158,6 +164,12 @@ def actuator_stiffness(
                 "actuator_stiffness",
                 f"{k:g} for actuator '{name}': a stiffness must be > 0 [N m/rad or N/m] "
                 "(inf: rigid)",
+            )
+        if math.isfinite(k) and k > MAX_STIFFNESS:
+            raise InvalidInputError(
+                "actuator_stiffness",
+                f"{k:g} for actuator '{name}' is beyond any plausible stiffness (at most "
+                f"{MAX_STIFFNESS:g} N m/rad or N/m; give inf for a rigid actuator)",
             )
     return arr
 

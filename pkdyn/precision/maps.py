@@ -37,7 +37,7 @@ from pkdyn.precision.condensation import translational
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.material import Material
 from pkdyn.precision.modes import modes
-from pkdyn.precision.stiffness import _wrench
+from pkdyn.precision.stiffness import _point, _wrench
 from pkdyn.precision.vectorised import delta_figures, gough_stewart_figures, vectorised
 from pkdyn.progress import progress as progress_bar
 from pkdyn.workspace.limits import REACHABLE
@@ -51,6 +51,10 @@ FIELDS = {
 }
 """Map fields: unit and label."""
 
+MAX_GENERAL_POSES = 200_000
+"""Most poses evaluated on the general (pose-by-pose) path in one call: about 100 s."""
+GENERAL_RATE = 2e3
+"""Order of magnitude of the general path's speed [poses/s], for the estimate in messages."""
 MAX_POSES = 4_000_000
 """Largest number of poses of one evaluation (refused up front beyond)."""
 
@@ -76,7 +80,14 @@ class PoseFigures:
 
 
 def _poses(P: np.ndarray, R: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    P = np.atleast_2d(np.asarray(P, dtype=float))
+    if isinstance(P, str | bytes | dict) or np.iscomplexobj(P):
+        raise InvalidInputError("P", f"expected finite positions (N, 3) [m], got {P!r:.60}")
+    try:
+        P = np.atleast_2d(np.asarray(P, dtype=float))
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            "P", f"expected finite positions (N, 3) [m], got {P!r:.60}"
+        ) from None
     if P.ndim != 2 or P.shape[1] != 3 or not np.all(np.isfinite(P)):
         raise InvalidInputError("P", f"expected finite positions (N, 3) [m], got {P.shape}")
     if P.shape[0] > MAX_POSES:
@@ -133,7 +144,7 @@ def pose_figures(
     P, Rs = _poses(P, R)
     em = elastic_model(robot, actuator_stiffness, material, links)
     w = _wrench(robot, wrench)
-    p = np.zeros(3) if point is None else as_finite("point", point, 3)
+    p = _point(point, robot)
     kind = vectorised(robot, frequency) if not em.links else None
     if method == "closed" and kind is None:
         raise InvalidInputError(
@@ -150,6 +161,13 @@ def pose_figures(
     if method != "general" and kind == "delta" and np.all(np.isfinite(em.actuator_stiffness)):
         f = delta_figures(robot, P, em.actuator_stiffness, w, frequency)
         return PoseFigures(f.valid, f.stiffness_min, f.deflection, f.f1, "closed form")
+    if P.shape[0] > MAX_GENERAL_POSES:
+        raise InvalidInputError(
+            "P",
+            f"{P.shape[0]} poses on the general (pose-by-pose) path would take about "
+            f"{P.shape[0] / GENERAL_RATE / 60:.0f} min at ~{GENERAL_RATE:.0f} poses/s; give at "
+            f"most {MAX_GENERAL_POSES} (a coarser grid)",
+        )
     return _general(em, P, Rs, p, w, frequency, progress)
 
 
@@ -281,8 +299,11 @@ def precision_map(
 
     if len(plane) != 2 or any(c not in _AXES for c in plane) or plane[0] == plane[1]:
         raise InvalidInputError("plane", f"'{plane}': two of x, y, z, e.g. xy")
-    if not 2 <= samples <= 2001:
-        raise InvalidInputError("samples", f"{samples}: give 2 to 2001 per axis")
+    from pkdyn.inputs import count, vector
+
+    samples = count("samples", samples, 2, 2001)
+    if value is not None:
+        value = float(vector("value", value, 1, "m", bound=100.0 * robot.length_scale)[0])
     R = pin.rpy.rpyToMatrix(*as_finite("rpy", rpy, 3))
     iu, iv = _AXES[plane[0]], _AXES[plane[1]]
     iw = 3 - iu - iv
@@ -292,7 +313,7 @@ def precision_map(
         box = ev.default_bounds(R)
         b = np.array([box[iu, 0], box[iu, 1], box[iv, 0], box[iv, 1]])
     else:
-        b = as_finite("bounds", bounds, 4)
+        b = vector("bounds", bounds, 4, "m", bound=100.0 * robot.length_scale)
         if not (b[0] < b[1] and b[2] < b[3]):
             raise InvalidInputError("bounds", f"{b.tolist()}: need u_min < u_max, v_min < v_max")
     u = np.linspace(b[0], b[1], samples)

@@ -37,7 +37,7 @@ from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
-from pkdyn.precision.stiffness import _check_assembled, _point, _wrench
+from pkdyn.precision.stiffness import _check_assembled, _point, _wrench, check_compliant
 from solvers import numerics, solve_lm
 
 __all__ = ["Modes", "mass_matrix", "mode_trajectory", "modes", "modes_json"]
@@ -166,18 +166,23 @@ def modes(
         PkdynError: No elastic mode at all.
 
     """
+    from pkdyn.inputs import flag, instance
+
+    instance("robot", robot, (Robot, ElasticModel), "a Robot (pkdyn.load) or an ElasticModel")
+    gravity, links = flag("gravity", gravity), flag("links", links)
     base = robot.base if isinstance(robot, ElasticModel) else robot
     if base.platform_frame is None:
         raise InvalidInputError("robot", f"{base.name} declares no platform frame")
     qq = as_finite("q", q, base.nq)
     _check_assembled(base, qq)
-    p = _point(point)
+    p = _point(point, base)
     w = _wrench(base, wrench)
     em = (
         robot
         if isinstance(robot, ElasticModel)
         else elastic_model(robot, actuator_stiffness, material, links)
     )
+    check_compliant(em)
     q_ext = em.embed(qq)
     if w is None and not gravity:
         red = reduce(em, q_ext, p)

@@ -72,6 +72,10 @@ class PoseSensitivity:
         K: Pose per parameter (6, n_par) [m or rad per parameter unit].
         closure_gap: Closure residual per parameter that no passive motion absorbs (nc, n_par)
             [m or rad per unit]: zero for parameters the mechanism accommodates.
+        joints: Joint velocity coordinates per parameter (nv, n_par) [rad or m per unit]: how
+            the loops (and couplings) move every joint when a parameter changes at fixed
+            actuator readings (the actuated rows: the gains' effect); what encoders on
+            passive joints see.
 
     """
 
@@ -80,6 +84,7 @@ class PoseSensitivity:
     J: np.ndarray
     K: np.ndarray
     closure_gap: np.ndarray
+    joints: np.ndarray | None = None
 
     @property
     def position(self) -> np.ndarray:
@@ -295,12 +300,16 @@ def pose_sensitivity(
         Ur, sr, Vr = np.zeros((Jc.shape[0], 0)), np.zeros(0), np.zeros((p.size, 0))
         U0 = np.eye(Jc.shape[0])
 
+    def passive(rhs: np.ndarray) -> np.ndarray:
+        """Passive joint rates absorbing closure residual rates ``rhs``."""
+        return -(Vr @ ((Ur.T @ rhs) / sr[:, None]))
+
     def eliminate(rhs: np.ndarray) -> np.ndarray:
         """Platform motion of closure residual rates ``rhs`` absorbed by the passive joints."""
-        dqp = -(Vr @ ((Ur.T @ rhs) / sr[:, None]))
-        return Jx[:, p] @ dqp
+        return Jx[:, p] @ passive(rhs)
 
     J = Jx[:, a] + eliminate(Jc[:, a])
+    V = None
     if model is None:
         K = np.zeros((6, 0))
         gap = np.zeros((Jc.shape[0], 0))
@@ -312,4 +321,7 @@ def pose_sensitivity(
         rhs = C + Jc[:, a] @ Dg
         K = X + Jx[:, a] @ Dg + eliminate(rhs)
         gap = U0 @ (U0.T @ rhs)
-    return PoseSensitivity(qq, pin.SE3(data.oMf[robot.platform_frame]), J, K, gap)
+        V = np.zeros((robot.nv, model.size))
+        V[a] = Dg
+        V[p] = passive(rhs)
+    return PoseSensitivity(qq, pin.SE3(data.oMf[robot.platform_frame]), J, K, gap, V)

@@ -191,8 +191,17 @@ def transport(K: np.ndarray, r: np.ndarray) -> np.ndarray:
 def _wrench(robot: Robot, wrench: Sequence[float] | np.ndarray | None) -> np.ndarray | None:
     if wrench is None:
         return None
+    from pkdyn.inputs import MAX_MAGNITUDE
+
     rows = np.asarray(robot.task_rows, dtype=int)
-    arr = np.atleast_1d(np.asarray(wrench, dtype=float)).reshape(-1)
+    if isinstance(wrench, str | bytes | dict) or np.iscomplexobj(wrench):
+        raise InvalidInputError("wrench", f"expected numbers [N, N m], got {wrench!r:.60}")
+    try:
+        arr = np.atleast_1d(np.asarray(wrench, dtype=float)).reshape(-1)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            "wrench", f"expected numbers [N, N m], got {wrench!r:.60}"
+        ) from None
     if arr.size not in (6, rows.size):
         raise InvalidInputError(
             "wrench",
@@ -202,6 +211,13 @@ def _wrench(robot: Robot, wrench: Sequence[float] | np.ndarray | None) -> np.nda
     if not np.all(np.isfinite(arr)):
         k = int(np.flatnonzero(~np.isfinite(arr))[0])
         raise InvalidInputError("wrench", f"component {k + 1} is {arr[k]}: give finite values")
+    if np.any(np.abs(arr) > MAX_MAGNITUDE):
+        k = int(np.argmax(np.abs(arr)))
+        raise InvalidInputError(
+            "wrench",
+            f"component {k + 1} = {arr[k]:g} is beyond any plausible force or moment "
+            f"(at most {MAX_MAGNITUDE:g} N, N m)",
+        )
     if arr.size == 6:
         return arr
     out = np.zeros(6)
@@ -252,8 +268,30 @@ def _check_assembled(robot: Robot, q: np.ndarray) -> None:
         )
 
 
-def _point(point: Sequence[float] | np.ndarray | None) -> np.ndarray:
-    return np.zeros(3) if point is None else as_finite("point", point, 3)
+def check_compliant(em: ElasticModel) -> None:
+    """Refuse a model with nothing compliant (every actuator rigid, no spring, rigid links).
+
+    Raises:
+        InvalidInputError: Nothing deforms: the stiffness is infinite, not undefined.
+
+    """
+    if not em.links and not np.any(em.spring_stiffness() > 0.0):
+        raise InvalidInputError(
+            "actuator_stiffness",
+            f"{em.base.name}: every actuator is rigid (inf) and nothing else is compliant (no "
+            "joint spring, rigid links): the stiffness is infinite; give finite actuator "
+            "stiffnesses or a material for the links",
+        )
+
+
+def _point(point: Sequence[float] | np.ndarray | None, robot: Robot | None = None) -> np.ndarray:
+    """The reference point (3,) [m], checked: finite, within 100 robot sizes of the platform."""
+    if point is None:
+        return np.zeros(3)
+    from pkdyn.inputs import vector
+
+    reach = 100.0 * robot.length_scale if robot is not None else 1e9
+    return vector("point", point, 3, "m", bound=reach)
 
 
 def _result(
@@ -340,12 +378,16 @@ def stiffness(
             one (stiffness unbounded).
 
     """
+    from pkdyn.inputs import flag, instance
+
+    instance("robot", robot, (Robot, ElasticModel), "a Robot (pkdyn.load) or an ElasticModel")
+    loaded, gravity, links = flag("loaded", loaded), flag("gravity", gravity), flag("links", links)
     base = robot.base if isinstance(robot, ElasticModel) else robot
     if base.platform_frame is None:
         raise InvalidInputError("robot", f"{base.name} declares no platform frame")
     qq = as_finite("q", q, base.nq)
     _check_assembled(base, qq)
-    p = _point(point)
+    p = _point(point, base)
     w = _wrench(base, wrench)
     if loaded and w is None and not gravity:
         raise InvalidInputError("loaded", "the loaded mode needs a wrench (or gravity=True)")
@@ -354,6 +396,7 @@ def stiffness(
         if isinstance(robot, ElasticModel)
         else elastic_model(robot, actuator_stiffness, material, links)
     )
+    check_compliant(em)
     q_ext = em.embed(qq)
     if not loaded:
         return _result(em, reduce(em, q_ext, p), qq, p, w, None, False)
