@@ -17,6 +17,7 @@ RANK = {
     "progress": 1,
     "files": 1,
     "inputs": 1,
+    "threads": 1,
     "model": 2,
     "closed_form": 3,
     "library": 4,

@@ -37,6 +37,7 @@ from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel, parameter_model
 from pkdyn.precision.perturbation import perturbed
 from pkdyn.progress import progress
+from pkdyn.threads import one_blas_thread
 from solvers import numerics
 
 __all__ = ["ITERATIONS", "CalibrationPlan", "plan_calibration"]
@@ -134,6 +135,7 @@ def _positions(
     return out
 
 
+@one_blas_thread
 def plan_calibration(
     robot: Robot,
     target: float,

@@ -34,6 +34,7 @@ from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel
 from pkdyn.precision.sensitivity import pose_sensitivity
 from pkdyn.progress import progress
+from pkdyn.threads import one_blas_thread
 from pkdyn.workspace.limits import REACHABLE
 from pkdyn.workspace.numeric import configuration_violation
 
@@ -173,6 +174,7 @@ def _index_of(A: np.ndarray, index: str, poses: int) -> float:
     return observability(s, poses)[index]
 
 
+@one_blas_thread
 def select_poses(
     blocks: np.ndarray,
     count: int,

@@ -55,6 +55,7 @@ from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel, parameter_model
 from pkdyn.precision.perturbation import Perturbed, perturbed
 from pkdyn.precision.sensitivity import pose_sensitivity
+from pkdyn.threads import one_blas_thread
 from solvers import numerics
 
 __all__ = ["PRIOR", "ROBUST", "CalibrationResult", "ErrorStats", "calibrate", "parameter_scale"]
@@ -566,6 +567,7 @@ def _sigma(robot: Robot, noise: float | Sequence[float] | None) -> tuple[tuple[f
     return (s_pos, s_rot), True
 
 
+@one_blas_thread
 def calibrate(
     robot: Robot,
     measurements: Measurements,

@@ -207,6 +207,10 @@ def _last_word(message: str) -> None:
     print(message, file=sys.stderr)
 
 
+_SCIPY_COMMANDS = ("stiffness", "modes", "accuracy", "calibrate", "identify")
+"""Commands whose linear algebra goes through SciPy (imported before the BLAS limit is set)."""
+
+
 def run() -> NoReturn:
     """The ``pkdyn`` program (console script and ``python -m pkdyn``): :func:`main`, then exit.
 
@@ -251,7 +255,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         # libraries' deprecation notices are for developers, not for command-line users
         warnings.filterwarnings("ignore", category=DeprecationWarning)
         warnings.filterwarnings("ignore", category=PendingDeprecationWarning)
-        args.func(args)
+        from pkdyn.threads import single_blas_thread
+
+        if args.command in _SCIPY_COMMANDS:  # loaded first: its own BLAS limited too
+            import scipy.linalg  # noqa: F401
+        with single_blas_thread():  # (many small matrices: pkdyn.threads)
+            args.func(args)
     except PkdynError as err:
         text = " ".join(str(err).splitlines())
         print(f"pkdyn: error: {text}", file=sys.stderr)

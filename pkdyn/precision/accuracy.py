@@ -49,6 +49,7 @@ from pkdyn.precision.parameters import (
 from pkdyn.precision.perturbation import perturbed, with_placements
 from pkdyn.precision.sensitivity import pose_sensitivity
 from pkdyn.progress import progress
+from pkdyn.threads import one_blas_thread
 
 __all__ = [
     "DEFAULT_RESOLUTION",
@@ -418,6 +419,7 @@ def _draw(rng: np.random.Generator, t: np.ndarray, distribution: str) -> np.ndar
     return rng.normal(0.0, 1.0, t.size) * (t / 3.0)
 
 
+@one_blas_thread
 def monte_carlo(
     robot: Robot,
     q: Sequence[float] | np.ndarray,
@@ -571,6 +573,7 @@ def slice_grid(
     return P, (int(samples), int(samples))
 
 
+@one_blas_thread
 def accuracy_map(
     robot: Robot,
     positions: np.ndarray,

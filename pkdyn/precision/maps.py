@@ -40,6 +40,7 @@ from pkdyn.precision.modes import modes
 from pkdyn.precision.stiffness import _point, _wrench
 from pkdyn.precision.vectorised import delta_figures, gough_stewart_figures, vectorised
 from pkdyn.progress import progress as progress_bar
+from pkdyn.threads import one_blas_thread
 from pkdyn.workspace.limits import REACHABLE
 
 __all__ = ["FIELDS", "MAX_POSES", "PoseFigures", "PrecisionMap", "pose_figures", "precision_map"]
@@ -251,6 +252,7 @@ class PrecisionMap:
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
+@one_blas_thread
 def precision_map(
     robot: Robot,
     plane: str = "xy",
