@@ -257,7 +257,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         warnings.filterwarnings("ignore", category=PendingDeprecationWarning)
         from pkdyn.threads import single_blas_thread
 
-        if args.command in _SCIPY_COMMANDS:  # loaded first: its own BLAS limited too
+        if getattr(args, "command", None) in _SCIPY_COMMANDS:  # loaded first: BLAS limited too
             import scipy.linalg  # noqa: F401
         with single_blas_thread():  # (many small matrices: pkdyn.threads)
             args.func(args)
