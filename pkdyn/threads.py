@@ -3,10 +3,9 @@
 NumPy's and SciPy's OpenBLAS start one thread per core for products and factorizations above a
 small size. On the batches of pkdyn's precision, calibration and identification work (matrices of
 tens of rows, thousands of times) the threads spend more time waiting for each other than
-computing, and on a loaded machine they compete with the other processes. Measured on the shared
-2-core machine: a Gough-Stewart with steel links, stiffness 45-51 -> 716 poses/s, modes 120-270
--> 3.8 ms; a Gough-Stewart calibration from 100 poses 1.2-1.3 -> 0.55-0.9 s CPU; the constrained
-fit of an identification 14 -> 0.4 s CPU.
+computing, and on a loaded machine they compete with the other processes. Measured: the
+stiffness of the library Gough-Stewart with steel links, 229 -> 145 ms on the idle 2-core
+machine; the constrained fit of an identification, 14 -> 0.4 s of CPU under load.
 
 :func:`single_blas_thread` limits the BLAS libraries to one thread inside a block with
 ``threadpoolctl`` (a dependency of pkdyn; without it, nothing is changed); worker processes
