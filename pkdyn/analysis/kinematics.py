@@ -1,4 +1,4 @@
-"""Kinematic models of any loaded robot: parallel and serial matrices, Jacobians (issue 4).
+"""Kinematic models of any loaded robot: parallel and serial matrices, Jacobians.
 
 Pasqui's form of a parallel robot (seed 001): ``A(x, q) x_dot = B(x, q) qa_dot``, with ``A`` the
 *parallel* matrix (``m x m``, ``m`` = number of controlled pose components) and ``B`` the

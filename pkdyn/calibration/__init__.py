@@ -1,4 +1,4 @@
-"""Geometric calibration of closed-loop robots (issue 27).
+"""Geometric calibration of closed-loop robots.
 
 - :mod:`~pkdyn.calibration.measurements`: what was measured (full pose, position, or implicit:
   the platform on an unknown point or plane), CSV files;

@@ -1,4 +1,4 @@
-"""Accuracy: error budget of the platform pose for actuator and geometric errors (issue 26).
+"""Accuracy: error budget of the platform pose for actuator and geometric errors.
 
 At a configuration, the first-order sensitivities of :mod:`pkdyn.precision.sensitivity`
 (``dx = J dqa + K dp``, pose errors in the task convention: platform origin displacement in

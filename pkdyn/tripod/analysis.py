@@ -1,4 +1,4 @@
-"""Checks of the tripod scenario, phase by phase (seed 003; issue 8, item 5).
+"""Checks of the tripod scenario, phase by phase (seed 003).
 
 For every sample of every phase of :func:`pkdyn.tripod.scenario.plan_scenario`:
 

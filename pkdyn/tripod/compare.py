@@ -1,4 +1,4 @@
-"""The paper's question: does a fourth branch remove the interference? (seed 003, issue 19).
+"""The paper's question: does a fourth branch remove the interference? (seed 003).
 
 :func:`compare_walkers` runs the same walking plans with the tripod (``branches=3``) and with the
 four-branch walker (``branches=4``, its swings optimised by :mod:`pkdyn.tripod.redundancy`) and

@@ -1,4 +1,4 @@
-"""Redundancy resolution of the four-branch walker while a branch swings (seed 003, issue 19).
+"""Redundancy resolution of the four-branch walker while a branch swings (seed 003).
 
 The paper's conclusion: with three branches the swinging foot is driven by the six actuators with
 no redundancy, so the nacelle cannot choose a posture that avoids interference; a fourth branch
