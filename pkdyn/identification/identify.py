@@ -31,9 +31,9 @@ from pkdyn.identification.parameters import ParameterSet, parameter_set
 from pkdyn.identification.physical import consistent_parameters
 from pkdyn.identification.regressor import ClosedLoopRegressor
 from pkdyn.identification.result import IdentificationResult
-from pkdyn.identification.threads import single_blas_thread
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
+from pkdyn.threads import single_blas_thread
 from solvers import numerics
 
 __all__ = ["MAX_SAMPLES", "check_identifiable", "identify", "structural_base"]
