@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 import pytest
-from support.processes import DASK, DaskCluster, data_rows, wait_for
+from support.processes import DASK, DaskCluster, data_rows, serial_table, wait_for
 
 from pkdyn.cli import main
 from pkdyn.design.table import output_paths
@@ -45,14 +45,7 @@ def cluster(tmp_path_factory):
 @pytest.fixture(scope="module")
 def local_table(tmp_path_factory):
     """The study's table from a serial run in this process (no pause)."""
-    out = tmp_path_factory.mktemp("local") / "local.csv"
-    mp = pytest.MonkeyPatch()
-    mp.setenv("PKDYN_TEST_DELAY", "0")
-    try:
-        assert main([*STUDY, "--workers", "1", "--out", str(out)]) == 0
-    finally:
-        mp.undo()
-    return out.read_text()
+    return serial_table(tmp_path_factory.mktemp("local"), STUDY)
 
 
 def _killer(path: Path, kill, rows: int = 2) -> threading.Thread:

@@ -15,7 +15,7 @@ import warnings
 from pathlib import Path
 
 import pytest
-from support.processes import Processes, alive, children, data_rows, wait_for
+from support.processes import Processes, alive, children, data_rows, serial_table, wait_for
 
 import pkdyn.workers as workers_mod
 from pkdyn.cli import main
@@ -77,14 +77,7 @@ def test_executor_for_a_thousand_workers_and_four_designs(monkeypatch):
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
     """The study's table from a serial run in this process (no pause)."""
-    out = tmp_path_factory.mktemp("ref") / "ref.csv"
-    mp = pytest.MonkeyPatch()
-    mp.setenv("PKDYN_TEST_DELAY", "0")
-    try:
-        assert main([*STUDY, "--workers", "1", "--out", str(out)]) == 0
-    finally:
-        mp.undo()
-    return out.read_text()
+    return serial_table(tmp_path_factory.mktemp("ref"), STUDY)
 
 
 @pytest.fixture

@@ -160,3 +160,19 @@ class DaskCluster(Processes):
         with Client(self.address, timeout=30, set_as_default=False) as client:
             client.wait_for_workers(n, timeout=START_TIMEOUT)
             wait_for(lambda: len(client.nthreads()) == n, 30.0, f"{n} workers")
+
+
+def serial_table(directory: Path, study: list[str]) -> str:
+    """The table of ``pkdyn <study> --workers 1`` run in this process, with no test pause."""
+    import pytest
+
+    from pkdyn.cli import main
+
+    out = directory / "serial.csv"
+    mp = pytest.MonkeyPatch()
+    mp.setenv("PKDYN_TEST_DELAY", "0")
+    try:
+        assert main([*study, "--workers", "1", "--out", str(out)]) == 0
+    finally:
+        mp.undo()
+    return out.read_text()
