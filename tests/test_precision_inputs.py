@@ -580,24 +580,29 @@ def test_outputs_are_checked_before_the_work(capsys, files, target, needle, comm
 # signals: Ctrl-C during the long computations
 
 
+def _five_bar_motion(path: Path, n: int) -> Path:
+    """A five-bar motion file of ``n`` samples at 200 Hz (two sines, efforts made up)."""
+    five = pkdyn.load("five_bar", geometry=False)
+    t = np.arange(n) * 0.005
+    qa = five.q_home[five.actuated_q] + 0.3 * np.sin(np.outer(t, [1.3, 2.1]))
+    tau = 0.1 * np.sin(np.outer(t, [1.0, 2.0]))
+    np.savetxt(
+        path,
+        np.column_stack([t, qa, tau]),
+        delimiter=",",
+        comments="",
+        header="t,qa_motor1,qa_motor2,tau_motor1,tau_motor2",
+    )
+    return path
+
+
 @pytest.fixture(scope="module")
 def long_files(tmp_path_factory, files):
     d = tmp_path_factory.mktemp("long")
     rows = Path(files["good"]).read_text().splitlines()
     cal = d / "many.csv"
     cal.write_text(rows[0] + "\n" + "\n".join(rows[1:] * 200) + "\n")  # 6000 poses
-    five = pkdyn.load("five_bar", geometry=False)
-    t = np.arange(12_000) * 0.005
-    qa = five.q_home[five.actuated_q] + 0.3 * np.sin(np.outer(t, [1.3, 2.1]))
-    tau = 0.1 * np.sin(np.outer(t, [1.0, 2.0]))
-    motion = d / "long.csv"
-    np.savetxt(
-        motion,
-        np.column_stack([t, qa, tau]),
-        delimiter=",",
-        comments="",
-        header="t,qa_motor1,qa_motor2,tau_motor1,tau_motor2",
-    )
+    motion = _five_bar_motion(d / "long.csv", 12_000)
     return str(cal), str(motion), d
 
 
@@ -636,18 +641,7 @@ def test_ctrl_c_during_the_work_exits_130_without_traceback(capsys, long_files, 
 
 def test_ctrl_c_stops_identification_workers(tmp_path, files):
     """A real process: SIGINT while two workers share the samples; nothing is left running."""
-    five = pkdyn.load("five_bar", geometry=False)
-    t = np.arange(100_000) * 0.005
-    qa = five.q_home[five.actuated_q] + 0.3 * np.sin(np.outer(t, [1.3, 2.1]))
-    tau = 0.1 * np.sin(np.outer(t, [1.0, 2.0]))
-    motion = tmp_path / "workers.csv"
-    np.savetxt(
-        motion,
-        np.column_stack([t, qa, tau]),
-        delimiter=",",
-        comments="",
-        header="t,qa_motor1,qa_motor2,tau_motor1,tau_motor2",
-    )
+    motion = _five_bar_motion(tmp_path / "workers.csv", 100_000)
     exe = str(Path(sys.executable).with_name("pkdyn"))
     out = tmp_path / "w.urdf"
     proc = subprocess.Popen(
