@@ -149,3 +149,32 @@ def test_a_dead_worker_is_one_line(procs, tmp_path):
     assert "a local worker process died" in log[0] and "resume" in log[0]
     assert data_rows(output_paths(out)["partial"]) >= 1 and not out.exists()
     wait_for(lambda: not any(alive(k) for k in kids), 10.0, "the other workers to end")
+
+
+def _sleepy_chunk(payload, chunk):
+    import time
+
+    time.sleep(payload)
+    return chunk
+
+
+def test_a_broken_pool_is_stopped_before_close_returns():
+    """After a worker died, ``close(abort=True)`` returns with the pool's manager thread stopped
+    and its wake-up pipe closed: CPython 3.11's exit hook writes to the pipes of the managers
+    still alive, and one closing meanwhile printed a "Bad file descriptor" traceback after the
+    study's one line (seen once in ``test_a_dead_worker_is_one_line``)."""
+    from concurrent.futures import process as cf_process
+
+    from pkdyn.exceptions import StudyError
+
+    ex = ProcessExecutor(2)
+    chunks = ex.map_chunks(_sleepy_chunk, 0.2, [[k] for k in range(8)])
+    assert next(chunks) in ([0], [1], [2], [3], [4], [5], [6], [7])
+    pool = ex._pool
+    manager = pool._executor_manager_thread
+    wakeup = cf_process._threads_wakeups[manager]
+    os.kill(next(iter(pool._processes)), signal.SIGKILL)
+    with pytest.raises(StudyError, match="worker process died"):
+        list(chunks)
+    ex.close(abort=True)
+    assert not manager.is_alive() and wakeup._closed

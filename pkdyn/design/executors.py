@@ -189,12 +189,19 @@ class ProcessExecutor(Executor):
             pool.shutdown(wait=True, cancel_futures=True)
             return
         procs = list((getattr(pool, "_processes", None) or {}).values())
+        # the pool's manager thread, joined below: CPython 3.11's exit hook wakes every live
+        # manager through a pipe that the manager closes when it stops; a manager still
+        # stopping at exit (after a worker died, or an abort) races it and the interpreter
+        # prints an "Exception ignored ... Bad file descriptor" traceback after pkdyn's line
+        manager = getattr(pool, "_executor_manager_thread", None)
         pool.shutdown(wait=False, cancel_futures=True)
         for p in procs:
             if p.is_alive():
                 p.terminate()
         for p in procs:
             p.join(timeout=5.0)
+        if isinstance(manager, threading.Thread) and manager is not threading.current_thread():
+            manager.join(timeout=5.0)
 
 
 def _probe_scheduler(address: str, timeout: float) -> None:
