@@ -6,9 +6,8 @@ example is fine (the placeholders of pages written elsewhere).
 
 from __future__ import annotations
 
-import matplotlib
 import pytest
-from support.examples import ROOT, extract, link_repository, run_page
+from support.examples import ROOT, extract, run_page_in_scratch
 
 GUIDE = ROOT / "docs" / "guide"
 PAGES = sorted(p.name for p in GUIDE.glob("*.md"))
@@ -23,13 +22,7 @@ def test_the_guide_has_its_pages():
 def test_guide_examples_run(page, tmp_path, monkeypatch):
     path = GUIDE / page
     examples = extract(path.read_text(encoding="utf-8"), f"docs/guide/{page}")
-    link_repository(tmp_path)
-    monkeypatch.chdir(tmp_path)
-    monkeypatch.setenv("MPLBACKEND", "Agg")
-    matplotlib.use("Agg")
-    failure = run_page(path, examples)
-    if failure is not None:
-        pytest.fail(failure, pytrace=False)
+    run_page_in_scratch(path, examples, tmp_path, monkeypatch)
 
 
 def test_the_described_robot_is_what_the_page_says():

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import matplotlib
 import pytest
-from support.examples import ROOT, Example, PageError, extract, link_repository, run_page
+from support.examples import ROOT, Example, PageError, extract, run_page_in_scratch
 
 READMES = ["README.md", "urdf/README.md"]
 
@@ -63,10 +62,4 @@ def test_readme_examples_run(readme, tmp_path, monkeypatch):
     examples = extract(path.read_text(encoding="utf-8"), readme)
     if readme == "README.md":
         assert len(examples) > 10  # the extractor still finds the tour's examples
-    link_repository(tmp_path)
-    monkeypatch.chdir(tmp_path)
-    monkeypatch.setenv("MPLBACKEND", "Agg")
-    matplotlib.use("Agg")
-    failure = run_page(path, examples)
-    if failure is not None:
-        pytest.fail(failure, pytrace=False)
+    run_page_in_scratch(path, examples, tmp_path, monkeypatch)

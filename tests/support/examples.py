@@ -172,3 +172,26 @@ def run_page(path: Path, examples: list[Example]) -> str | None:
             except BaseException:  # noqa: BLE001 - any failure names the page line
                 return f"{where}: the Python block here failed\n{traceback.format_exc()}"
     return None
+
+
+def run_page_in_scratch(path: Path, examples: list[Example], scratch: Path, monkeypatch) -> None:
+    """Run a page's examples in ``scratch`` (the repository linked in, plots to files); a
+    failure fails the calling test with the page's line.
+
+    Args:
+        path: The page.
+        examples: Its examples (:func:`extract`).
+        scratch: An empty temporary directory (``tmp_path``).
+        monkeypatch: The test's ``monkeypatch`` (the directory and ``MPLBACKEND`` restored).
+
+    """
+    import matplotlib
+    import pytest
+
+    link_repository(scratch)
+    monkeypatch.chdir(scratch)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    matplotlib.use("Agg")
+    failure = run_page(path, examples)
+    if failure is not None:
+        pytest.fail(failure, pytrace=False)
