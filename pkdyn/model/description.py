@@ -72,6 +72,7 @@ __all__ = [
     "SpringSpec",
     "FamilySpec",
     "CouplingSpec",
+    "LinearCouplingSpec",
     "MaterialSpec",
     "ComplianceSpec",
     "Description",
@@ -324,6 +325,28 @@ class CouplingSpec:
     coefficients: tuple[float, ...]
     joint_ref: float = 0.0
     source_ref: float = 0.0
+
+
+@dataclass(frozen=True)
+class LinearCouplingSpec:
+    """Linear holonomic relation between any number of 1-DoF joint coordinates.
+
+    ``sum_i coefficient_i * q[joint_i] = offset`` [rad or m]: sums and differences of joint
+    coordinates along paths, with ratios (URDF+ ``<coupling>``: ``ratio * (sum of the
+    predecessor path) - (sum of the successor path) = 0``; a rotor geared to the sum of a knee
+    and an ankle angle). A continuous joint's coordinate is its angle [rad].
+
+    Attributes:
+        name: Coupling name.
+        terms: ``(joint name, coefficient)`` pairs, each joint once, at least two of them (or
+            one, which then holds that joint at ``offset / coefficient``).
+        offset: Right-hand side [rad or m].
+
+    """
+
+    name: str
+    terms: tuple[tuple[str, float], ...]
+    offset: float = 0.0
 
 
 @dataclass(frozen=True)
