@@ -18,6 +18,7 @@ RANK = {
     "files": 1,
     "inputs": 1,
     "threads": 1,
+    "results": 1,
     "model": 2,
     "closed_form": 3,
     "library": 4,

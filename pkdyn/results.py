@@ -1,0 +1,121 @@
+"""The one way results come out: ``table()``, ``to_json()`` and, where a picture helps, ``plot()``.
+
+Every result type a public function returns derives from :class:`Result`:
+
+- ``to_json()`` returns a dict of JSON values (numbers finite or ``None``, lists, strings,
+  booleans), with SI units stated in the key names or the docs of the result; the CLI prints it
+  with ``--json`` (``json.dumps(..., allow_nan=False)``).
+- ``table()`` returns the text the CLI prints (units on every figure).
+- ``plot(path=None, **options)`` draws the result with matplotlib (:mod:`pkdyn.plotting`) and
+  writes it to ``path`` when one is given (atomically); it returns the matplotlib figure.
+
+The core never imports the plotting layer: :mod:`pkdyn.plotting` registers its drawing
+functions here (:func:`register_plot`) when it is imported, and :meth:`Result.plot` imports it
+on first use (as an optional viewer would be), so the direction of imports stays downwards.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+__all__ = ["Result", "jsonable", "plotter_for", "register_plot"]
+
+_PLOTTERS: dict[type, Callable[..., Any]] = {}
+
+
+def register_plot(result_type: type) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Decorator of :mod:`pkdyn.plotting`: the drawing function of ``result_type``.
+
+    The function is called as ``fn(result, path=None, **options)`` and returns the figure.
+
+    Args:
+        result_type: A :class:`Result` subclass.
+
+    Returns:
+        The decorator (it returns the function unchanged).
+
+    """
+
+    def deco(fn: Callable[..., Any]) -> Callable[..., Any]:
+        _PLOTTERS[result_type] = fn
+        return fn
+
+    return deco
+
+
+def plotter_for(result_type: type) -> Callable[..., Any] | None:
+    """The drawing function registered for ``result_type`` or a base class, or ``None``.
+
+    Imports :mod:`pkdyn.plotting` (which registers the drawing functions) on first use.
+    """
+    if not _PLOTTERS:
+        importlib.import_module("pkdyn.plotting")
+    for cls in result_type.__mro__:
+        fn = _PLOTTERS.get(cls)
+        if fn is not None:
+            return fn
+    return None
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` with numpy arrays and scalars as lists and floats, non-finite floats as ``None``.
+
+    Args:
+        value: Numbers, arrays, sequences, mappings (string keys), strings, booleans, ``None``.
+
+    Returns:
+        A value ``json.dumps(..., allow_nan=False)`` accepts.
+
+    """
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, Mapping):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, Path):
+        return str(value)
+    tolist = getattr(value, "tolist", None)
+    if tolist is not None:  # numpy arrays and scalars
+        return jsonable(tolist())
+    if isinstance(value, int):
+        return int(value)
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    raise TypeError(f"{type(value).__name__} is not a JSON value")
+
+
+class Result:
+    """Base of every result type: ``table()``, ``to_json()``, ``plot()`` (module docstring)."""
+
+    def to_json(self) -> dict[str, Any]:
+        """The result as JSON values (finite numbers or ``None``), SI units."""
+        raise NotImplementedError(f"{type(self).__name__}.to_json")
+
+    def table(self) -> str:
+        """The result as the text the command line prints, units on every figure."""
+        raise NotImplementedError(f"{type(self).__name__}.table")
+
+    def plot(self, path: str | Path | None = None, **options: Any) -> Any:
+        """Draw the result (matplotlib); write it to ``path`` when given.
+
+        Args:
+            path: Figure file (``.png``, ``.pdf``, ``.svg``...), written to a temporary name
+                and renamed when complete; ``None``: only return the figure.
+            **options: Options of this result's drawing function.
+
+        Returns:
+            The matplotlib figure.
+
+        Raises:
+            NotImplementedError: This result type has no picture.
+
+        """
+        fn = plotter_for(type(self))
+        if fn is None:
+            raise NotImplementedError(f"{type(self).__name__} has no plot")
+        return fn(self, path=path, **options)
