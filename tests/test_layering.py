@@ -19,6 +19,7 @@ RANK = {
     "inputs": 1,
     "threads": 1,
     "results": 1,
+    "units": 1,
     "model": 2,
     "closed_form": 3,
     "library": 4,

@@ -1,0 +1,81 @@
+"""Figures with their units, the same way everywhere (tables, one-line reports, plots' labels).
+
+``quantity(5.328e-5, "m")`` -> ``"53.28 um"``; ``quantity(0.0005201, "m")`` -> ``"520.1 um"``;
+``quantity(2.0e4, "N m/rad")`` -> ``"20 kN m/rad"``; ``quantity(float("nan"), "m")`` -> ``"n/a"``.
+SI prefixes from pico to tera on the first unit symbol (``um`` is written with a plain ``u`` so that
+terminals and CSV files need no Unicode); units that take no prefix (``rad``, ``deg``, ``%``, ``s``
+above one second, dimensionless ``""``) keep their value in plain notation.
+
+:func:`vector` writes a short vector with one unit and shared precision (``[0.1, -0.2, 0] m``),
+never a negative zero.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+__all__ = ["quantity", "vector"]
+
+_PREFIXES = [
+    (1e12, "T"),
+    (1e9, "G"),
+    (1e6, "M"),
+    (1e3, "k"),
+    (1.0, ""),
+    (1e-3, "m"),
+    (1e-6, "u"),
+    (1e-9, "n"),
+    (1e-12, "p"),
+]
+
+_NO_PREFIX = {"", "rad", "deg", "%", "rad/s", "rad/s^2", "Hz"}
+"""Units written without an SI prefix (angles read better in plain radians, frequencies in Hz)."""
+
+
+def _plain(value: float, digits: int) -> str:
+    text = f"{value:.{digits}g}"
+    if text in ("-0", "-0.0"):
+        text = "0"
+    return text
+
+
+def quantity(value: float, unit: str = "", digits: int = 4) -> str:
+    """``value`` with ``digits`` significant digits, an SI prefix on ``unit`` where it helps.
+
+    Args:
+        value: The figure in SI units (``unit``).
+        unit: Its SI unit (``m``, ``N``, ``N m``, ``N/m``, ``s``, ``kg m^2``, ``rad``...).
+        digits: Significant digits (1 to 17).
+
+    Returns:
+        The text, e.g. ``"53.28 um"``; ``"n/a"`` for NaN, ``"inf m"`` for infinity.
+
+    """
+    v = float(value)
+    if math.isnan(v):
+        return "n/a"
+    if math.isinf(v):
+        return f"{'-' if v < 0 else ''}inf{(' ' + unit) if unit else ''}"
+    if unit in _NO_PREFIX or v == 0.0 or (unit == "s" and abs(v) >= 1.0):
+        return f"{_plain(v, digits)}{(' ' + unit) if unit else ''}"
+    mag = abs(v)
+    round_up = 1.0 - 0.5 * 10.0 ** (1 - digits)  # 999.99999 m shown as 1 km, not 1000 m
+    scale, prefix = next(((s, p) for s, p in _PREFIXES if mag >= s * round_up), _PREFIXES[-1])
+    return f"{_plain(v / scale, digits)} {prefix}{unit}"
+
+
+def vector(values: Iterable[float], unit: str = "", digits: int = 4) -> str:
+    """A short vector with one unit: ``[0.1, -0.2, 0] m`` (no negative zero, no exponent noise).
+
+    Args:
+        values: The components in SI units.
+        unit: Their common unit.
+        digits: Significant digits of each component.
+
+    Returns:
+        The text.
+
+    """
+    parts = ", ".join(_plain(float(x), digits) for x in values)
+    return f"[{parts}]{(' ' + unit) if unit else ''}"
