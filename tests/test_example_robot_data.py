@@ -69,7 +69,9 @@ def _upper(M: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("path", URDFS, ids=_id)
 def test_plain_urdf_matches_pinocchio(path):
     """The loader adds nothing to a plain URDF but its ``<mimic>`` couplings: the same model as
-    ``pin.buildModelFromUrdf`` (whose mimic joints stay tree joints too), assembled on them."""
+    ``pin.buildModelFromUrdf`` (whose mimic joints stay tree joints too), assembled on them;
+    an actuated ``continuous`` joint (a transmission on a wheel) has one coordinate, not
+    Pinocchio's (cos, sin) pair."""
     ref = _plain_model(path)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # mimics of joints that do not exist (one file)
@@ -82,7 +84,8 @@ def test_plain_urdf_matches_pinocchio(path):
     assert len(robot.couplings) == total - broken
     if robot.couplings:
         assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
-    assert (model.nq, model.nv, model.njoints) == (ref.nq, ref.nv, ref.njoints)
+    unbounded = sum(ref.joints[ref.getJointId(a.joint)].nq == 2 for a in robot.actuators)
+    assert (model.nq + unbounded, model.nv, model.njoints) == (ref.nq, ref.nv, ref.njoints)
     assert list(model.names) == list(ref.names)
     for a, b in zip(model.inertias, ref.inertias, strict=True):
         assert a.isApprox(b, 1e-14)

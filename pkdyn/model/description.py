@@ -550,7 +550,8 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
             continue
         joint = t.find("joint")
         if not strict and (
-            joint is None or kinds.get(joint.get("name", "")) not in ("revolute", "prismatic")
+            joint is None
+            or kinds.get(joint.get("name", "")) not in ("revolute", "prismatic", "continuous")
         ):
             continue
         if joint is None or not joint.get("name"):

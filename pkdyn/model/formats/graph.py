@@ -162,6 +162,7 @@ class Mechanism:
         home: Named configurations (joint name -> coordinates, Pinocchio convention).
         couplings: Joint couplings (joint names, coordinates in the file's convention).
         missing_meshes: Mesh files that were not found (their shapes are left out).
+        dropped_collisions: Collision shapes left out because they were malformed.
 
     """
 
@@ -175,6 +176,7 @@ class Mechanism:
     gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
     home: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
     missing_meshes: list[str] = field(default_factory=list)
+    dropped_collisions: list[str] = field(default_factory=list)
 
     def add_body(self, body: Body, where: str = "") -> Body:
         """Add a body; its name must be new."""

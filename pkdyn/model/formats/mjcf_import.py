@@ -47,10 +47,13 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from pkdyn.exceptions import DescriptionError
 from pkdyn.model.description import ActuatorSpec, ClosureSpec, CouplingSpec, FrameRef
 from pkdyn.model.formats import mjcf_spec as spec
+from pkdyn.model.formats import unread
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
 from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml, read_text
+from pkdyn.model.inertia import report
 from pkdyn.model.validate import unit_vector
 from pkdyn.model.warn import warn, warn_missing_meshes
 
@@ -86,6 +89,10 @@ class _Reader:
     joint_refs: dict[str, float] = field(default_factory=dict)
     sites: dict[str, tuple[str, pin.SE3]] = field(default_factory=dict)
     geometry: bool = True
+    repair: bool = False  # repair_inertias
+    repaired: list[tuple[str, np.ndarray, np.ndarray]] = field(default_factory=list)
+    rotors: list[str] = field(default_factory=list)  # bodies with inertia and no mass
+    mass_from_geoms: dict[str, bool] = field(default_factory=dict)  # inertiafromgeom, by body
 
 
 def _includes(doc: XmlDoc, root: ET.Element, base: Path | None) -> None:
@@ -176,7 +183,14 @@ def _sections(root: ET.Element, tag: str) -> list[ET.Element]:
     return [el for el in root if el.tag == tag]
 
 
-def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool = True) -> Mechanism:
+def read_mjcf(
+    text: str,
+    source: str,
+    path: Path | None = None,
+    geometry: bool = True,
+    ignore: frozenset[str] = frozenset(),
+    repair_inertias: bool = False,
+) -> Mechanism:
     """Read an MJCF document into a mechanism (see the module docstring).
 
     Args:
@@ -184,6 +198,8 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
         source: File or name, for messages.
         path: The file, for includes and mesh paths relative to it.
         geometry: Read the geometry (mesh files); without it, only inertias use the geoms.
+        ignore: Element names to leave out (:mod:`~pkdyn.model.formats.unread`).
+        repair_inertias: Replace invalid ``<inertial>`` tensors by the nearest valid ones.
 
     Returns:
         The mechanism: bodies, joints, closures, actuators, ``home`` configurations
@@ -200,10 +216,12 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
     base = path.parent if path is not None else None
     _includes(doc, root, base)
     _check_size(doc, root)
+    unread.check(doc, "mjcf", ignore)
+    unread.prune(doc, ignore)
     comp = spec.Compiler.read(doc, _sections(root, "compiler"))
     defs = spec.Defaults(doc, _sections(root, "default"))
     mech = Mechanism(root.get("model", "mujoco"), source)
-    r = _Reader(doc, comp, defs, mech, geometry=geometry)
+    r = _Reader(doc, comp, defs, mech, geometry=geometry, repair=repair_inertias)
     for opt in _sections(root, "option"):
         if "gravity" in opt.attrib:
             mech.gravity = spec.vector(doc, opt, "gravity", opt.attrib["gravity"], 3)
@@ -238,6 +256,7 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
     if r.missing:
         mech.missing_meshes = sorted(set(r.missing))
         warn_missing_meshes(source, mech.missing_meshes, r.lost_inertia)
+    report(source, [], r.repaired, r.rotors, "body")
     return mech
 
 
@@ -350,20 +369,26 @@ def _body(r: _Reader, el: ET.Element, parent: str, oMp: pin.SE3, cls: str) -> No
             Joint(f"{name}_fixed", "fixed", parent, name, oMb, where=doc.where(el, name))
         )
     body = mech.add_body(Body(name, oMb), doc.where(el, name))
-    _children(r, el, name, name, oMb, pin.SE3.Identity(), sub)
     inertial = [c for c in el if c.tag == "inertial"]
     if len(inertial) > 1:
         raise doc.error(inertial[1], "a body has at most one <inertial>")
     use_geoms = r.comp.inertiafromgeom == "true" or (
         r.comp.inertiafromgeom == "auto" and not inertial
     )
+    r.mass_from_geoms[name] = use_geoms
+    _children(r, el, name, name, oMb, pin.SE3.Identity(), sub)
     if use_geoms:
         body.inertia = _geom_inertia(r, el, sub)
         I = body.inertia
         if not (math.isfinite(I.mass) and np.all(np.isfinite(I.inertia))):
             raise doc.error(el, "the inertia inferred from the geoms is not finite", name)
     elif inertial:
-        body.inertia = spec.inertial_props(doc, inertial[0], r.comp).inertia
+        iprops = spec.inertial_props(doc, inertial[0], r.comp, r.repair)
+        body.inertia = iprops.inertia
+        if iprops.repaired is not None:
+            r.repaired.append((name, *iprops.repaired))
+        elif iprops.mass == 0.0 and np.any(iprops.inertia.inertia):
+            r.rotors.append(name)
 
 
 def _joint(
@@ -453,10 +478,26 @@ def _shape(r: _Reader, el: ET.Element, g: spec.GeomProps) -> tuple[Any, str, np.
 
 
 def _geom(r: _Reader, el: ET.Element, owner: str, bMf: pin.SE3, cls: str) -> None:
-    g = spec.geom_props(r.doc, el, cls, r.defs, r.comp)
-    if not r.geometry:
+    """A geom of body ``owner``.
+
+    A malformed one is left out with a warning when its body's inertia does not come from its
+    geoms (else it is an error, as in MuJoCo).
+    """
+    try:
+        g = spec.geom_props(r.doc, el, cls, r.defs, r.comp)
+        if not r.geometry:
+            return
+        shape = _shape(r, el, g)
+    except DescriptionError as err:
+        if r.mass_from_geoms.get(owner, False):
+            raise
+        attrs = {**r.defs.classes.get(cls, {}).get("geom", {}), **el.attrib}
+        visual = attrs.get("contype", "1").strip() == attrs.get("conaffinity", "1").strip() == "0"
+        kind = "visual" if visual else "collision"
+        warn(f"{err}; this {kind} geom is left out (its body's inertia does not come from it)")
+        if not visual:
+            r.mech.dropped_collisions.append(f"body '{owner}' {r.doc.where(el)}")
         return
-    shape = _shape(r, el, g)
     if shape is None:
         return
     body = r.mech.bodies[owner]

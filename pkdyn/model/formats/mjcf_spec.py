@@ -556,19 +556,38 @@ def geom_props(doc: XmlDoc, el: ET.Element, cls: str, defs: Defaults, comp: Comp
     )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: no boolean ==
 class InertialProps:
-    """An ``<inertial>``: mass and rotational inertia at the centre of mass, in the body frame."""
+    """An ``<inertial>``: mass and rotational inertia at the centre of mass, in the body frame.
+
+    Attributes:
+        mass: Mass [kg].
+        inertia: Spatial inertia in the body frame.
+        repaired: ``(before, after)`` principal-frame tensors (3, 3) when the file's tensor was
+            replaced by the nearest valid one (``repair=True``), else ``None``.
+
+    """
 
     mass: float
     inertia: pin.Inertia
+    repaired: tuple[np.ndarray, np.ndarray] | None = None
 
 
-def inertial_props(doc: XmlDoc, el: ET.Element, comp: Compiler) -> InertialProps:
+def inertial_props(
+    doc: XmlDoc, el: ET.Element, comp: Compiler, repair: bool = False
+) -> InertialProps:
     """Read an ``<inertial>`` element.
 
+    Args:
+        doc: The document.
+        el: The element.
+        comp: Compiler settings.
+        repair: Replace a tensor no rigid body has by the nearest valid one
+            (:mod:`pkdyn.model.inertia`) instead of refusing it.
+
     Raises:
-        DescriptionError: Missing or negative mass, missing inertia, malformed numbers.
+        DescriptionError: Missing or negative mass, missing inertia, malformed numbers, an
+            invalid tensor (without ``repair``).
 
     """
     a = dict(el.attrib)
@@ -583,10 +602,16 @@ def inertial_props(doc: XmlDoc, el: ET.Element, comp: Compiler) -> InertialProps
         I_local = np.diag(vector(doc, el, "diaginertia", a["diaginertia"], 3))
     else:
         raise doc.error(el, "needs diaginertia or fullinertia")
+    from pkdyn.model.inertia import nearest_valid_inertia
     from pkdyn.model.validate import inertia_problem
 
     problem = inertia_problem(mass, I_local, point_mass=False)
+    repaired = None
     if problem is not None:
-        raise doc.error(el, problem)
+        if not repair or mass < 0.0 or not np.all(np.isfinite(I_local)) or not np.any(I_local):
+            hint = "" if repair else " (or load with repair_inertias=True)"
+            raise doc.error(el, problem + hint)
+        fixed = nearest_valid_inertia(I_local)
+        repaired, I_local = (I_local, fixed), fixed
     R = M.rotation
-    return InertialProps(mass, pin.Inertia(mass, M.translation, R @ I_local @ R.T))
+    return InertialProps(mass, pin.Inertia(mass, M.translation, R @ I_local @ R.T), repaired)
