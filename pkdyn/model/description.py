@@ -56,7 +56,6 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.validate import check_urdf, unit_vector
-from pkdyn.model.warn import warn
 
 __all__ = [
     "NAMESPACE",
@@ -811,16 +810,15 @@ def _coupling(source: str, el: ET.Element) -> CouplingSpec:
 _ONE_DOF = ("revolute", "continuous", "prismatic")
 
 
-def _mimics(source: str, root: ET.Element, strict: bool) -> list[CouplingSpec]:
+def _mimics(source: str, root: ET.Element) -> list[CouplingSpec]:
     """Couplings of the URDF ``<mimic joint multiplier offset>`` elements.
 
-    A mimic between joints that are not both moving 1-DoF joints of the file is an error in a
-    pkdyn description (``strict``) and, in a plain URDF, left out with one warning (Pinocchio
-    and most URDF tools load such files: the joint then moves freely).
+    A mimic between joints that are not both moving 1-DoF joints of the file (a joint that does
+    not exist, a fixed joint...) is an error (``ignore_elements=("mimic",)`` leaves the file's
+    mimics out): the joint would otherwise move freely, a coupling silently lost.
     """
     kinds = {j.get("name", ""): j.get("type", "") for j in root.findall("joint")}
     out = []
-    skipped: list[str] = []
     for j in root.findall("joint"):
         m = j.find("mimic")
         if m is None:
@@ -840,17 +838,10 @@ def _mimics(source: str, root: ET.Element, strict: bool) -> list[CouplingSpec]:
                 else f"joint '{bad}' is {kinds[bad] or 'untyped'}, not a revolute, continuous "
                 "or prismatic joint"
             )
-            if strict:
-                raise DescriptionError(source, what, why)
-            skipped.append(f"{what} {why}")
-            continue
+            raise DescriptionError(
+                source, what, f"{why} (ignore_elements=('mimic',) leaves the mimics out)"
+            )
         out.append(CouplingSpec(f"{jname}_mimic", jname, src, (offset, multiplier)))
-    if skipped:
-        warn(
-            f"{source}: {len(skipped)} <mimic> element(s) left out (the joints move freely): "
-            + "; ".join(skipped[:3])
-            + (" ..." if len(skipped) > 3 else "")
-        )
     return out
 
 
@@ -977,7 +968,7 @@ def parse_description(xml_text: str, source: str) -> Description:
     for n in spring_names:
         if spring_names.count(n) > 1:
             raise DescriptionError(source, f"spring '{n}'", "spring names must be unique")
-    couplings = tuple(_mimics(source, root, extended)) + tuple(
+    couplings = tuple(_mimics(source, root)) + tuple(
         _coupling(source, el) for el in root.findall(_NS + "coupling")
     )
     _unique(source, "coupling", [c.name for c in couplings])

@@ -667,7 +667,7 @@ def _coupling(r: _Reader, el: ET.Element, a: dict[str, str], name: str) -> Coupl
     j1, j2 = joints
     if j1 is None:
         raise doc.error(el, "missing attribute 'joint1'", name)
-    text = a.get("polycoef", "0 1 0 0 0")
+    text = spec.complete(a.get("polycoef", spec.POLYCOEF), spec.POLYCOEF)  # as MuJoCo pads it
     try:
         coef = tuple(float(t) for t in text.split())
     except ValueError:

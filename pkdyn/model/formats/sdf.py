@@ -12,7 +12,8 @@ One ``<model>`` per file (directly under ``<sdf>`` or in a ``<world>``). What is
   ``use_parent_model_frame``), limits and dynamics (damping, friction, ``spring_stiffness``
   about ``spring_reference``: ``robot.passive``; a universal joint takes its first axis's);
 - ``revolute2`` joints (Gazebo's two-axis hinge: ``<axis>`` fixed in the parent, ``<axis2>``
-  carried by the first rotation, not necessarily orthogonal) as two revolute joints
+  carried by the first rotation, not necessarily orthogonal, but not parallel: that is a
+  revolute joint, refused naming it) as two revolute joints
   ``<name>_1``, ``<name>_2`` through a massless intermediate body, each axis with its own limits
   and dynamics; as a loop's cut joint, the second axis becomes a hinge closure;
 - the model's ``<pose>`` and ``<static>``;
@@ -587,6 +588,13 @@ def _revolute2(
     a2 = _axis(r, el.find("axis2"), oMj)
     if a2 is None:
         raise r.doc.error(el, "a revolute2 joint needs <axis2>")
+    if float(np.linalg.norm(np.cross(a1 if a1 is not None else z, a2))) < 1e-9:
+        raise r.doc.error(
+            el,
+            "the two axes of this revolute2 joint are parallel: it turns about one axis (one "
+            "degree of freedom, not two); make it a revolute joint, or give axis2 another "
+            "direction",
+        )
     mid = f"{name}#1"
     mech.add_body(Body(mid, oMj, virtual=True), where)
     out = []
