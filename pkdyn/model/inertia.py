@@ -10,8 +10,9 @@ positive semi-definite second-moment matrix ``S`` (whose eigenvalues are ``(l_j 
 valid tensor in the Frobenius norm. The valid tensors form a convex set invariant under rotations,
 so the nearest one keeps the principal axes ``R`` and replaces the principal moments by their
 Euclidean projection onto the cone ``{l : l_j + l_k - l_i >= 0 for every i}``
-(:func:`nearest_valid_moments`, an exact active-set solution of the 3-variable problem). A
-tensor that is already valid is left unchanged, bit for bit; the mass and the centre of mass are
+(:func:`nearest_valid_moments`, an exact active-set solution of the 3-variable problem), lifted
+by :data:`MARGIN` of their sum inside the cone so that rounding cannot undo it. A tensor that is
+already valid is left unchanged, bit for bit; the mass and the centre of mass are
 never changed; a negative or non-finite mass cannot be repaired and stays an error.
 
 A body with rotational inertia and no mass is accepted as it is (a rotor whose mass the link it
@@ -27,10 +28,16 @@ import numpy as np
 
 from pkdyn.model.warn import warn
 
-__all__ = ["massless_rotor", "nearest_valid_inertia", "nearest_valid_moments", "report"]
+__all__ = ["MARGIN", "massless_rotor", "nearest_valid_inertia", "nearest_valid_moments", "report"]
 
 _G = np.array([[-1.0, 1.0, 1.0], [1.0, -1.0, 1.0], [1.0, 1.0, -1.0]])  # rows: l_j + l_k - l_i
 _SHOWN = 4
+
+
+MARGIN = 1e-9
+"""A repaired tensor's principal moments are lifted by this fraction of their sum above the
+cone's boundary (each triangle inequality then holds by that much): rounding in another tool's
+eigen-decomposition (MuJoCo checks ``A + B >= C`` exactly) cannot make it invalid again."""
 
 
 def nearest_valid_moments(moments: np.ndarray) -> np.ndarray:
@@ -78,6 +85,7 @@ def nearest_valid_inertia(inertia: np.ndarray) -> np.ndarray:
     fixed = nearest_valid_moments(lam)
     if np.array_equal(fixed, lam):
         return I
+    fixed = fixed + MARGIN * max(float(fixed.sum()), 1.0)  # strictly inside, whatever rounds
     out = (R * fixed) @ R.T * scale
     return np.asarray(0.5 * (out + out.T))
 

@@ -330,7 +330,7 @@ def load_string(
             tuple(b for b, body in mech.bodies.items() if not body.virtual),
             tuple(j.name for j in mech.joints),
             passive=tuple(built.passive),
-            couplings=tuple(built.couplings),
+            couplings=tuple(built.couplings),  # type: ignore[arg-type]  # (until the core merge)
         )
         parts = _Parts(
             built.model,
@@ -510,7 +510,7 @@ def _urdf(
     desc = dataclasses.replace(
         desc,
         closures=desc.closures + tuple(extra),
-        couplings=desc.couplings + plus.couplings,  # type: ignore[operator]
+        couplings=desc.couplings + plus.couplings,  # type: ignore[operator]  # (core merge)
         actuators=actuators,
     )
     parts = _Parts(model, desc, visual, collision, _guess(model), tuple(missing))
@@ -527,7 +527,7 @@ def _revolute_axis(jm: pin.JointModel) -> np.ndarray:
     data = single.createData()
     pin.computeJointJacobians(single, data, pin.neutral(single))
     J = pin.getJointJacobian(single, data, 1, pin.ReferenceFrame.LOCAL)
-    return np.asarray(J[3:, 0], dtype=float)
+    return np.reshape(np.asarray(J, dtype=float), (6, -1))[3:, 0]  # a (6,) array when nv = 1
 
 
 def _one_coordinate(model: pin.Model, joints: list[str]) -> pin.Model:

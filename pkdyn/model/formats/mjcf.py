@@ -24,6 +24,10 @@ the source, ``polycoef`` the polynomial re-expanded about ``qpos0 = 0``: MuJoCo'
 motor-side effort; ``ctrlrange`` and ``forcerange`` are the URDF (joint-side) effort limit
 divided by the reduction. A keyframe ``home`` holds the assembled home configuration.
 
+Inertias MuJoCo refuses (:mod:`~pkdyn.model.formats.mjcf_inertia`): a massless rotor borrows a
+tiny mass from the body it turns in, at a point of its axis (the dynamics unchanged); a tensor
+breaking the triangle inequality is refused with the remedy (``repair_inertias=True``).
+
 Passive elements: joint damping, friction (``frictionloss``: MuJoCo's dry friction is a
 constraint, pkdyn's a smooth ``tanh`` law) and armature; joint springs as ``stiffness`` and
 ``springref`` (the rest position) on hinges and slides, ``stiffness`` on a ball joint whose spring
@@ -59,6 +63,7 @@ import pinocchio as pin
 from pkdyn.exceptions import OutputError
 from pkdyn.files import atomic_write
 from pkdyn.inputs import positive
+from pkdyn.model.formats.mjcf_inertia import mujoco_inertias
 from pkdyn.model.formats.mjcf_mujoco import actuator_efforts, mujoco_model
 from pkdyn.model.formats.mjcf_state import JointMap, StateMap
 from pkdyn.model.formats.mjcf_state import quat_wxyz as _quat_wxyz
@@ -269,6 +274,7 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
     opt = options or MjcfOptions()
     positive("timestep", opt.timestep, "s")
     model = robot.model
+    inertias = mujoco_inertias(robot)
     smap = StateMap(robot)
     names = smap.body_names
     root = ET.Element("mujoco", model=robot.name)
@@ -295,7 +301,7 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
         body = _sub(elements[model.parents[j]], "body", name=names[j])
         body.attrib.update(_pose_attrs(model.jointPlacements[j]))
         elements[j] = body
-        _inertial(body, model.inertias[j])
+        _inertial(body, inertias[j])
         jm = model.joints[j]
         for k, e in enumerate(smap.elements[j]):
             attrs = {"name": e.name, "type": e.type}

@@ -48,7 +48,13 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
-from pkdyn.model.description import ActuatorSpec, ClosureSpec, CouplingSpec, FrameRef
+from pkdyn.model.description import (
+    ActuatorSpec,
+    ClosureSpec,
+    CouplingSpec,
+    FrameRef,
+    LinearCouplingSpec,
+)
 from pkdyn.model.formats import mjcf_spec as spec
 from pkdyn.model.formats import unread
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
@@ -93,6 +99,7 @@ class _Reader:
     repaired: list[tuple[str, np.ndarray, np.ndarray]] = field(default_factory=list)
     rotors: list[str] = field(default_factory=list)  # bodies with inertia and no mass
     mass_from_geoms: dict[str, bool] = field(default_factory=dict)  # inertiafromgeom, by body
+    tendons: dict[str, list[tuple[str, float]]] = field(default_factory=dict)  # fixed tendons
 
 
 def _includes(doc: XmlDoc, root: ET.Element, base: Path | None) -> None:
@@ -236,18 +243,12 @@ def read_mjcf(
         mech.bodies["worldbody"].frames
     ):
         del mech.bodies["worldbody"]
+    for tendon in _sections(root, "tendon"):
+        _fixed_tendons(r, tendon)
     for eq in _sections(root, "equality"):
         _equalities(r, eq)
     for act in _sections(root, "actuator"):
         _actuators(r, act)
-    for tendon in _sections(root, "tendon"):
-        limited = [t for t in tendon if "range" in t.attrib or t.get("limited") == "true"]
-        if limited:
-            warn(
-                f"{source}: tendon limits are not modelled ({doc.where(limited[0])}"
-                + (f" and {len(limited) - 1} more" if len(limited) > 1 else "")
-                + ")"
-            )
     mech.home["qpos0"] = {}
     for keys in _sections(root, "keyframe"):
         for key in keys:
@@ -615,14 +616,10 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
     for el in eq:
         tag = el.tag
         counts[tag] = counts.get(tag, 0) + 1
-        if tag in ("tendon", "distance", "flex"):
-            what = {
-                "tendon": "tendon couplings",
-                "distance": "distance constraints",
-                "flex": "flex constraints",
-            }[tag]
+        if tag in ("distance", "flex"):
+            what = {"distance": "distance constraints", "flex": "flex constraints"}[tag]
             raise doc.error(el, f"{what} are not supported; remove this equality to load the model")
-        if tag not in ("connect", "weld", "joint"):
+        if tag not in ("connect", "weld", "joint", "tendon"):
             raise doc.error(el, f"unknown equality <{tag}>")
         a = r.defs.attrs(el, "main")
         if a.get("active", "true") == "false":
@@ -631,6 +628,9 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
         name = _unique(mech, a.get("name") or f"{tag}{counts[tag]}")
         if tag == "joint":
             mech.couplings.append(_coupling(r, el, a, name))
+            continue
+        if tag == "tendon":
+            mech.couplings.append(_tendon_coupling(r, el, a, name))
             continue
         torquescale = 1.0
         if tag == "weld" and "torquescale" in a:
@@ -682,6 +682,96 @@ def _coupling(r: _Reader, el: ET.Element, a: dict[str, str], name: str) -> Coupl
         coef = coef[:1]
     ref2 = r.joint_refs[j2] if j2 is not None else 0.0
     return CouplingSpec(name, j1, j2, coef, r.joint_refs[j1], ref2)
+
+
+def _fixed_tendons(r: _Reader, section: ET.Element) -> None:
+    """The ``<fixed>`` tendons: lengths ``L = sum coef_i qpos_i`` (couplings read them).
+
+    Spatial tendons are not read (:mod:`~pkdyn.model.formats.unread` names them); a fixed
+    tendon's stiffness, damping, friction and limits are not modelled (one warning).
+    """
+    doc = r.doc
+    unmodelled = []
+    for k, t in enumerate(e for e in section if e.tag == "fixed"):
+        name = t.get("name") or f"tendon{k + 1}"
+        terms: list[tuple[str, float]] = []
+        for j in t:
+            if j.tag != "joint":
+                raise doc.error(j, f"<{j.tag}> in a fixed tendon: a fixed tendon holds joints")
+            jname = j.get("joint", "")
+            if r.joint_types.get(jname) not in ("hinge", "slide"):
+                why = (
+                    "is not a joint of this model"
+                    if jname not in r.joint_types
+                    else f"is a {r.joint_types[jname]} joint; fixed tendons sum hinge and slide "
+                    "joints"
+                )
+                raise doc.error(j, f"joint='{jname}' {why}")
+            if "coef" not in j.attrib:
+                raise doc.error(j, "missing attribute 'coef'")
+            coef = float(spec.vector(doc, j, "coef", j.attrib["coef"], 1)[0])
+            terms.append((jname, coef))
+        if not terms:
+            raise doc.error(t, "a fixed tendon needs at least one <joint>")
+        r.tendons[name] = terms
+        a = dict(t.attrib)
+        if any(
+            float(a.get(key, "0") or 0) != 0.0 for key in ("stiffness", "damping", "frictionloss")
+        ):
+            unmodelled.append(t)
+        elif "range" in a or a.get("limited") == "true":
+            unmodelled.append(t)
+    if unmodelled:
+        warn(
+            f"{doc.source}: the stiffness, damping, friction and limits of fixed tendons are not "
+            f"modelled ({doc.where(unmodelled[0])}"
+            + (f" and {len(unmodelled) - 1} more" if len(unmodelled) > 1 else "")
+            + ")"
+        )
+
+
+def _tendon_coupling(
+    r: _Reader, el: ET.Element, a: dict[str, str], name: str
+) -> LinearCouplingSpec:
+    """A ``<tendon>`` equality of fixed tendons: a linear coupling of their joints.
+
+    MuJoCo holds ``L1 - L1_0 = p(L2 - L2_0)`` (``L_0`` the length at ``qpos0``; without
+    ``tendon2``, ``L1 - L1_0 = polycoef[0]``): with a linear ``p`` this is ``sum_i a_i q_i -
+    p1 sum_k b_k q_k = L1_0 + p0 - p1 L2_0``, one linear relation of the joints (a joint in both
+    tendons adds its coefficients). A polynomial of a tendon length is refused.
+    """
+    doc = r.doc
+    names = [a.get("tendon1"), a.get("tendon2")]
+    if not names[0]:
+        raise doc.error(el, "missing attribute 'tendon1'", name)
+    for n in names:
+        if n is not None and n not in r.tendons:
+            raise doc.error(el, f"tendon '{n}' is not a fixed tendon of this model", name)
+    text = spec.complete(a.get("polycoef", spec.POLYCOEF), spec.POLYCOEF)
+    p = spec.vector(doc, el, "polycoef", text, 5)
+    if names[1] is not None and np.any(p[2:]):
+        raise doc.error(
+            el,
+            f"polycoef='{a.get('polycoef')}': a polynomial of a tendon's length is not modelled "
+            "(a linear one is: polycoef='p0 p1')",
+            name,
+        )
+
+    def length0(tendon: str) -> float:
+        return sum(c * r.joint_refs[j] for j, c in r.tendons[tendon])
+
+    coefs: dict[str, float] = {}
+    for j, c in r.tendons[str(names[0])]:
+        coefs[j] = coefs.get(j, 0.0) + c
+    offset = length0(str(names[0])) + float(p[0])
+    if names[1] is not None:
+        for j, c in r.tendons[names[1]]:
+            coefs[j] = coefs.get(j, 0.0) - float(p[1]) * c
+        offset -= float(p[1]) * length0(names[1])
+    terms = tuple((j, c) for j, c in coefs.items() if c != 0.0)
+    if not terms:
+        raise doc.error(el, "the tendons' terms cancel: no relation left", name)
+    return LinearCouplingSpec(name, terms, offset)
 
 
 def _equality_frames(
