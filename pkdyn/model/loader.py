@@ -353,53 +353,83 @@ def load_string(
     if parts.desc.home is not None and home is None:  # <pkdyn:home>: the described home
         home, user_home = parts.desc.home, False
     robot = _robot(parts, source, params)
-    robot = _assembled(
+    if parts.declared is not None and home is None:
+        robot = _independent_actuation(robot, parts, params, tol)
+    return _assembled(
         robot, parts, home, tol, user_home if user_home is not None else home is not None
     )
-    if parts.declared is not None:
-        _check_independent(robot, parts.declared)
-    return robot
 
 
-def _check_independent(robot: Robot, declared: dict[str, bool]) -> None:
-    """Warn when URDF+'s independent coordinates do not match the mechanism (at home).
+def _independent_ranks(
+    robot: Robot, declared: dict[str, bool], actuated: list[str]
+) -> tuple[int, int, int, int]:
+    """Ranks of a declared independent set at the robot's (assembled) home.
 
-    The independent coordinates are the actuators' and those of the multi-DoF joints (a
-    floating base) not declared dependent; they should number the mobility and determine the
-    configuration (the closure Jacobian restricted to the other coordinates has full column
-    rank).
+    Returns ``(chosen, r, r_others, others)``: ``chosen`` the coordinates of the ``actuated``
+    joints and of the multi-DoF joints (a floating base) not declared dependent; ``r`` the rank
+    of the constraint Jacobian; ``r_others`` its rank on the other coordinates (``others`` of
+    them).
     """
     from solvers.numerics import rank
 
     model = robot.model
+    ids = [model.getJointId(n) for n in actuated]
     free = [
-        iv
+        jid
         for jid in range(1, model.njoints)
         if model.joints[jid].nv > 1 and declared.get(model.names[jid], True)
-        for iv in range(model.joints[jid].idx_v, model.joints[jid].idx_v + model.joints[jid].nv)
     ]
-    chosen = np.union1d(robot.actuated_v, np.asarray(free, dtype=int)).astype(int)
-    m = robot.mobility()
+    chosen = np.array(
+        sorted(
+            iv
+            for jid in ids + free
+            for iv in range(model.joints[jid].idx_v, model.joints[jid].idx_v + model.joints[jid].nv)
+        ),
+        dtype=int,
+    )
     others = np.setdiff1d(np.arange(robot.nv), chosen)
-    determined = True
-    if robot.closure_set.nc and others.size:
+    r = r_others = 0
+    if robot.closure_set.nc:
         _, J = robot.closure_set.residual_and_jacobian(robot.data, robot.q_home)
-        determined = rank(J[:, others], 1e-9, scale=1.0) == others.size
-    if chosen.size == m and determined:
-        return
-    names = [a.joint for a in robot.actuators]
+        r = rank(J, 1e-9, scale=1.0)
+        r_others = rank(J[:, others], 1e-9, scale=1.0) if others.size else 0
+    return chosen.size, r, r_others, others.size
+
+
+def _independent_actuation(robot: Robot, parts: _Parts, params: Any, tol: float) -> Robot:
+    """The robot with URDF+'s independent joints as actuators, or without when they conflict.
+
+    The mechanism is assembled without actuators first; at that home, the independent
+    coordinates are consistent when the constraints leave them free (the Jacobian has the same
+    rank on the other coordinates as on all: no relation among them); the other coordinates
+    are then determined when that rank is their number, else the mechanism has motions no
+    declared coordinate drives (said; the file's choice is kept). Independent coordinates the
+    constraints relate cannot all be driven: the actuators are left out, with a warning, rather
+    than assembled in conflict. The assembled home is where the actuated load starts.
+    """
+    assert parts.declared is not None
+    actuators = parts.desc.actuators
+    parts.desc = dataclasses.replace(parts.desc, actuators=())
+    bare = _assembled(_robot(parts, robot.source, params), parts, None, tol, False)
+    parts.q_ref = bare.q_home
+    names = [a.joint for a in actuators]
+    chosen, r, r_others, n_others = _independent_ranks(bare, parts.declared, names)
     shown = ", ".join(names[:4]) + (" ..." if len(names) > 4 else "")
-    why = (
-        f"they are {chosen.size} coordinates for a mobility of {m}"
-        if chosen.size != m
-        else "they do not determine the other coordinates"
-    )
-    warn(
-        f"{robot.source}: the joints URDF+ declares independent (the actuators: {shown or 'none'}"
-        f"{' and the floating base' if free else ''}) do not match the mechanism at home: "
-        f"{why}; give the actuators <transmission> elements or correct the independent "
-        "attributes"
-    )
+    what = f"{robot.source}: the joints URDF+ declares independent (the actuators {shown})"
+    if r_others < r:
+        warn(
+            f"{what} are related by the file's loops and couplings: {chosen} coordinates for a "
+            f"mobility of {robot.nv - r}; they are not made actuators (give the actuators "
+            "<transmission> elements, or correct the independent attributes)"
+        )
+        return bare
+    if r_others < n_others:
+        warn(
+            f"{what} leave {n_others - r_others} mobility(ies) undriven: {chosen} coordinates "
+            f"for a mobility of {robot.nv - r}"
+        )
+    parts.desc = dataclasses.replace(parts.desc, actuators=actuators)
+    return _robot(parts, robot.source, params)
 
 
 _URDF_JOINTS = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
@@ -499,6 +529,7 @@ def _urdf(
                 "loops are left open"
             )
     actuators = urdfplus.independent_actuators(root, plus, desc.actuators)
+    from_independent = bool(actuators) and not desc.actuators
     model = _one_coordinate(model, [a.joint for a in actuators])
     missing: list[str] = []
     if geometry:
@@ -515,7 +546,7 @@ def _urdf(
     )
     parts = _Parts(model, desc, visual, collision, _guess(model), tuple(missing))
     parts.dropped = tuple(dropped)
-    if actuators is not desc.actuators or (plus.independent and not desc.actuators):
+    if from_independent:
         parts.declared = plus.independent
     return parts
 
