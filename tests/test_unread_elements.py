@@ -162,9 +162,8 @@ def test_mjcf_unread_sections_are_named():
         '<sensor><jointpos joint="j"/></sensor><visual/><contact><exclude body1="a" '
         'body2="world"/></contact><tendon><spatial name="t"><site site="s"/></spatial></tendon>'
     )
-    messages = [
-        m for m in _messages(pkdyn.load_string, MJCF.format(extra=extra), "m.xml") if "not read" in m
-    ]
+    text = MJCF.format(extra=extra)
+    messages = [m for m in _messages(pkdyn.load_string, text, "m.xml") if "not read" in m]
     for words in ("<sensor> at the top", "<visual> at the top", "<contact> at the top"):
         assert any(words in m for m in messages), (words, messages)
     assert any("<spatial> in <tendon>" in m for m in messages)
