@@ -85,7 +85,7 @@ def test_plain_urdf_matches_pinocchio(path):
     model = robot.model
     assert robot.closures == ()
     assert len(robot.constraint_models) == 0
-    assert robot.closure_set.nc == len(robot.couplings)
+    assert robot.constraints.nk == len(robot.couplings)
     assert len(robot.couplings) == total
     if robot.couplings:
         assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12

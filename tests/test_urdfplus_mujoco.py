@@ -27,7 +27,8 @@ constraints are soft (``solref``/``solimp``), so its accelerations are not the r
   MuJoCo's constraint Jacobian (the constraint forces exist), and are ``tau0`` where the
   efforts are unique,
 
-both to 1e-9 relative (to the largest acceleration, or to ``|M a + b|``).
+both to 1e-9 relative (to the largest acceleration, or to ``|M a + b|``). Measured worst: forward
+1.2e-10 (the nv = 81 ladder), inverse 6.2e-11 (the explicit depth-40 chain), efforts 9.3e-11.
 """
 
 from __future__ import annotations
@@ -61,9 +62,12 @@ MODELS = [
     "robot-models/mit_humanoid_leg.urdf",
     "robot-models/mini_cheetah.urdf",
     "robot-models/mit_humanoid.urdf",
+    "robot-models/jvrc1_humanoid.urdf",
     "history/cassie_v4.urdf",
     "parallel_chains/explicit_depth5_loop_size6.urdf",
     "parallel_chains/implicit_depth5_loop_size5.urdf",
+    "parallel_chains/explicit_depth40_loop_size40.urdf",
+    "parallel_chains/implicit_depth40_loop_size41.urdf",
     "variable_four_bar/four_bar_branch_2_3.urdf",
 ]
 
@@ -141,12 +145,12 @@ def _states(robot, rng):
     out = []
     for q in (q0, None):
         if q is None:
-            J = robot.closure_set.jacobian(robot.model.createData(), q0)
+            J = robot.constraints.jacobian(robot.model.createData(), q0)
             N = null_space(J)
             step = N @ rng.standard_normal(N.shape[1])
             step *= 0.05 / max(float(np.abs(step).max()), 1e-12)
             q = project(robot, pin.integrate(robot.model, q0, step))
-        J = robot.closure_set.jacobian(robot.model.createData(), q)
+        J = robot.constraints.jacobian(robot.model.createData(), q)
         N = null_space(J)
         v = N @ rng.standard_normal(N.shape[1])
         out.append((q, v))
@@ -154,11 +158,10 @@ def _states(robot, rng):
 
 
 def _solvers(robot):
-    kw = {"couplings": robot.closure_set.couplings}
-    fd = ForwardDynamics(robot.model, list(robot.constraint_models), actuation(robot), **kw)
+    fd = ForwardDynamics(robot.model, robot.constraints, actuation(robot))
     inv = None
     if robot.actuators:
-        inv = InverseDynamics(robot.model, list(robot.constraint_models), actuation(robot), **kw)
+        inv = InverseDynamics(robot.model, robot.constraints, actuation(robot))
     return fd, inv
 
 
@@ -203,4 +206,4 @@ def test_inverse_dynamics_agree_with_mujoco(engines):
         assert float(np.abs(r).max()) < TOL * scale, robot.name
         if result.redundancy == 0:  # unique efforts: those that made the motion
             effort = max(1.0, float(np.abs(tau0).max()))
-            assert float(np.abs(result.tau - tau0).max()) < TOL * effort * 1e3, robot.name
+            assert float(np.abs(result.tau - tau0).max()) < TOL * effort, robot.name

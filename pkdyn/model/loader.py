@@ -329,7 +329,7 @@ def load_string(
             tuple(b for b, body in mech.bodies.items() if not body.virtual),
             tuple(j.name for j in mech.joints),
             passive=tuple(built.passive),
-            couplings=tuple(built.couplings),  # type: ignore[arg-type]  # (until the core merge)
+            couplings=tuple(built.couplings),
         )
         parts = _Parts(
             built.model,
@@ -388,8 +388,8 @@ def _independent_ranks(
     )
     others = np.setdiff1d(np.arange(robot.nv), chosen)
     r = r_others = 0
-    if robot.closure_set.nc:
-        _, J = robot.closure_set.residual_and_jacobian(robot.data, robot.q_home)
+    if robot.constraints.n:  # closures and couplings
+        _, J = robot.constraints.residual_and_jacobian(robot.data, robot.q_home)
         r = rank(J, 1e-9, scale=1.0)
         r_others = rank(J[:, others], 1e-9, scale=1.0) if others.size else 0
     return chosen.size, r, r_others, others.size
@@ -540,7 +540,7 @@ def _urdf(
     desc = dataclasses.replace(
         desc,
         closures=desc.closures + tuple(extra),
-        couplings=desc.couplings + plus.couplings,  # type: ignore[operator]  # (core merge)
+        couplings=desc.couplings + plus.couplings,
         actuators=actuators,
     )
     parts = _Parts(model, desc, visual, collision, _guess(model), tuple(missing))

@@ -725,6 +725,8 @@ def _coupling(r: _Reader, el: ET.Element, a: dict[str, str], name: str) -> Coupl
         raise doc.error(el, f"joint1 and joint2 are both '{j1}'", name)
     if j2 is None:
         coef = coef[:1]
+    given = len(a.get("polycoef", spec.POLYCOEF).split())
+    coef = coef[: max(given, 2)]  # beyond the linear term MuJoCo's completion adds zeros only
     ref2 = r.joint_refs[j2] if j2 is not None else 0.0
     return CouplingSpec(name, j1, j2, coef, r.joint_refs[j1], ref2)
 

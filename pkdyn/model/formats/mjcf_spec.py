@@ -464,7 +464,8 @@ def joint_props(
     for key in ("armature", "damping", "frictionloss", "stiffness"):
         first = _linear(doc, el, a, key) if key in ("damping", "stiffness") else None
         if key in a and (first if first is not None else _number(doc, el, a, key, 0.0)) < 0.0:
-            raise doc.error(el, f"{key}='{a[key]}' is negative (a negative {key} is not physical)")
+            text = el.get(key, a[key])  # as written (the class's completion not shown)
+            raise doc.error(el, f"{key}='{text}' is negative (a negative {key} is not physical)")
     return JointProps(
         name=a.get("name", ""),
         type=jtype,
