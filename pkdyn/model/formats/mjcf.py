@@ -22,9 +22,9 @@ couplings become ``joint`` equalities named after the coupling (``joint1`` the d
 ``qpos - qpos0`` convention with the exported joints' zero ``ref``); a linear coupling of one
 joint to one (a URDF+ rotor transmission) a joint equality too (its last term driven); a linear
 coupling ``sum a_i q_i = b`` of more joints a fixed tendon ``<name>/sum`` of length
-``sum a_i q_i`` and a ``tendon`` equality named after the coupling holding it at ``b``. Each actuator is a
-``motor`` on its joint with ``gear`` = the transmission reduction, so its control is the
-motor-side effort; ``ctrlrange`` and ``forcerange`` are the URDF (joint-side) effort limit
+``sum a_i q_i`` and a ``tendon`` equality named after the coupling holding it at ``b``. Each
+actuator is a ``motor`` on its joint with ``gear`` = the transmission reduction, so its control
+is the motor-side effort; ``ctrlrange`` and ``forcerange`` are the URDF (joint-side) effort limit
 divided by the reduction. A keyframe ``home`` holds the assembled home configuration.
 
 Inertias MuJoCo refuses (:mod:`~pkdyn.model.formats.mjcf_inertia`): a massless rotor borrows a
