@@ -172,3 +172,25 @@ def test_the_export_refuses_what_mujoco_refuses():
     robot, _ = _messages(pkdyn.load, DATA / "robot-models" / "planar_leg_linkage.urdf")
     with pytest.raises(DescriptionError, match="triangle inequality.*repair_inertias=True"):
         to_mjcf(robot)
+
+
+def test_a_massless_link_at_the_end_of_a_chain_is_named_on_load():
+    """A body with neither mass nor inertia on a moving joint that carries nothing: the reduced
+    mass matrix is singular and forward dynamics cannot run; the load names the joint."""
+    urdf = (
+        '<robot name="m"><link name="base"/><link name="a"><inertial><mass value="1"/>'
+        '<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+        '<link name="tip"/>'
+        '<joint name="j" type="revolute"><parent link="base"/><child link="a"/>'
+        '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        '<joint name="k" type="revolute"><parent link="a"/><child link="tip"/>'
+        '<origin xyz="0.1 0 0"/><axis xyz="0 0 1"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>'
+    )
+    with pytest.warns(UserWarning, match="joint\\(s\\) 'k' move no mass or inertia"):
+        pkdyn.load_string(urdf, "m.urdf")
+    coupled = urdf.replace(
+        '<origin xyz="0.1 0 0"/>', '<origin xyz="0.1 0 0"/><mimic joint="j" multiplier="2"/>'
+    )
+    _, messages = _messages(pkdyn.load_string, coupled, "m.urdf")
+    assert not any("no mass or inertia" in m for m in messages)  # the mimic carries it

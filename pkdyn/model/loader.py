@@ -352,10 +352,56 @@ def load_string(
     if parts.desc.home is not None and home is None:  # <pkdyn:home>: the described home
         home, user_home = parts.desc.home, False
     robot = _robot(parts, source, params)
-    if parts.declared is not None and home is None:
+    if parts.declared is not None and home is None:  # assembled, with or without actuators
         robot = _independent_actuation(robot, parts, params, tol)
-    return _assembled(
-        robot, parts, home, tol, user_home if user_home is not None else home is not None
+    else:
+        robot = _assembled(
+            robot, parts, home, tol, user_home if user_home is not None else home is not None
+        )
+    _check_massless(robot)
+    return robot
+
+
+def _check_massless(robot: Robot) -> None:
+    """Warn when massless bodies leave motions without inertia (undefined accelerations).
+
+    A body with neither mass nor rotational inertia moves nothing when its joint turns, unless
+    bodies with mass hang below it or a coupling ties its joint to one. The mass matrix reduced
+    to the motions the constraints allow (``N^T M N``) is then singular, and forward dynamics
+    cannot give those accelerations: the load names the joints (rotors with inertia and no
+    mass, and massless links carrying others, are fine).
+    """
+    from solvers.numerics import null_space
+
+    model = robot.model
+    if not any(model.inertias[j].mass == 0.0 for j in range(1, model.njoints)):
+        return
+    data = model.createData()
+    M = pin.crba(model, data, robot.q_home)
+    M = np.triu(M) + np.triu(M, 1).T
+    N = np.eye(robot.nv)
+    if robot.constraints.n:
+        N = null_space(robot.constraints.jacobian(model.createData(), robot.q_home))
+    Mr = N.T @ M @ N
+    if Mr.size == 0:
+        return
+    w, V = np.linalg.eigh(Mr)
+    scale = max(float(np.abs(w).max()), 1e-300)
+    dead = V[:, w <= 1e-12 * scale]
+    if dead.shape[1] == 0:
+        return
+    motion = np.abs(N @ dead).max(axis=1)
+    joints = [
+        model.names[j]
+        for j in range(1, model.njoints)
+        for iv in range(model.joints[j].idx_v, model.joints[j].idx_v + model.joints[j].nv)
+        if motion[iv] > 1e-6 * float(motion.max())
+    ]
+    names = ", ".join(f"'{n}'" for n in dict.fromkeys(joints))
+    warn(
+        f"{robot.source}: {dead.shape[1]} motion(s) of joint(s) {names} move no mass or "
+        "inertia (massless links): their accelerations are undefined and forward dynamics "
+        "cannot run; give the links an <inertial> or make the joints fixed"
     )
 
 
@@ -404,7 +450,12 @@ def _independent_actuation(robot: Robot, parts: _Parts, params: Any, tol: float)
     are then determined when that rank is their number, else the mechanism has motions no
     declared coordinate drives (said; the file's choice is kept). Independent coordinates the
     constraints relate cannot all be driven: the actuators are left out, with a warning, rather
-    than assembled in conflict. The assembled home is where the actuated load starts.
+    than assembled in conflict. The home is the one assembled without them: consistent
+    actuators do not make it singular (the test :func:`~pkdyn.model.home.find_home` would
+    make is the one above), so it is not searched again.
+
+    Returns:
+        The robot, assembled.
     """
     assert parts.declared is not None
     actuators = parts.desc.actuators
@@ -428,7 +479,18 @@ def _independent_actuation(robot: Robot, parts: _Parts, params: Any, tol: float)
             f"for a mobility of {robot.nv - r}"
         )
     parts.desc = dataclasses.replace(parts.desc, actuators=actuators)
-    return _robot(parts, robot.source, params)
+    jids, iq, iv = _actuation(bare.model, list(actuators), robot.source)
+    passive = np.ones(bare.nv, dtype=bool)
+    passive[iv] = False
+    return dataclasses.replace(  # the same model and constraints: no second Pinocchio data
+        bare,
+        description=parts.desc,
+        actuators=tuple(actuators),
+        actuated_joints=jids,
+        actuated_q=iq,
+        actuated_v=iv,
+        passive_v=np.flatnonzero(passive),
+    )
 
 
 _URDF_JOINTS = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
