@@ -456,6 +456,7 @@ def _independent_actuation(robot: Robot, parts: _Parts, params: Any, tol: float)
 
     Returns:
         The robot, assembled.
+
     """
     assert parts.declared is not None
     actuators = parts.desc.actuators
