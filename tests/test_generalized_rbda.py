@@ -98,17 +98,7 @@ def test_loads_with_its_hand_counted_mobility(name):
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-9
 
 
-@pytest.mark.parametrize(
-    "name",
-    [
-        "robot-models/four_bar",
-        "robot-models/mit_humanoid_leg",
-        "robot-models/mini_cheetah",
-        "history/cassie_v4",
-        "parallel_chains/explicit_depth40_loop_size40",
-        "parallel_chains/implicit_depth40_loop_size41",
-    ],
-)
+@pytest.mark.parametrize("name", list(COUNTS))
 def test_pkdyn_mobility_command_counts_the_same(name, capsys):
     code = main(["mobility", str(DATA / f"{name}.urdf"), "--json"])
     out = capsys.readouterr().out
