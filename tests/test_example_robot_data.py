@@ -85,6 +85,7 @@ def test_plain_urdf_matches_pinocchio(path):
     model = robot.model
     assert robot.closures == ()
     assert len(robot.constraint_models) == 0
+    assert robot.constraints.nc == 0
     assert robot.constraints.nk == len(robot.couplings)
     assert len(robot.couplings) == total
     if robot.couplings:
