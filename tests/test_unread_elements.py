@@ -167,3 +167,12 @@ def test_mjcf_unread_sections_are_named():
     for words in ("<sensor> at the top", "<visual> at the top", "<contact> at the top"):
         assert any(words in m for m in messages), (words, messages)
     assert any("<spatial> in <tendon>" in m for m in messages)
+
+
+def test_transmissions_pkdyn_does_not_read_are_named():
+    text = urdf(
+        '<transmission name="d"><type>transmission_interface/DifferentialTransmission</type>'
+        '<joint name="j"/></transmission>'
+    )
+    messages = _messages(pkdyn.load_string, text, "r.urdf")
+    assert any("'d' (DifferentialTransmission) not read" in m for m in messages), messages

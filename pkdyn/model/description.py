@@ -528,7 +528,7 @@ def _joint(source: str, el: ET.Element) -> JointSpec:
 
 
 def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[ActuatorSpec]:
-    """Actuators of the ``SimpleTransmission`` elements (other transmission types are ignored).
+    """Actuators of the ``SimpleTransmission`` elements (other types are left out, one warning).
 
     With ``strict=False`` (a plain URDF, without pkdyn elements), ros_control transmissions
     pkdyn cannot use (no joint, a joint absent from the URDF or not revolute / prismatic) are
@@ -545,10 +545,12 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
                 _float(source, lim, "velocity", math.inf),
             )
     out = []
+    other: list[str] = []
     for t in root.findall("transmission"):
         tname = t.get("name", "?")
         ttype = t.findtext("type") or t.get("type") or "SimpleTransmission"
         if not ttype.strip().endswith("SimpleTransmission"):
+            other.append(f"'{tname}' ({ttype.strip().rsplit('/', 1)[-1]})")
             continue
         joint = t.find("joint")
         if not strict and (
@@ -583,6 +585,13 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
         stiffness = _actuator_stiffness(source, f"transmission '{tname}'", t, act)
         out.append(
             ActuatorSpec(aname, jname, reduction, effort, velocity, **drive, stiffness=stiffness)
+        )
+    if other:
+        from pkdyn.model.warn import warn
+
+        warn(
+            f"{source}: transmission(s) {', '.join(other[:3])}{' ...' if len(other) > 3 else ''} "
+            "not read: pkdyn reads SimpleTransmission (one actuator on one joint)"
         )
     return out
 
