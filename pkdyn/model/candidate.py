@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.model.build import build_geometry, constraint_models, constraint_set
+from pkdyn.model.build import HINGE_ARM, build_geometry, constraint_set
 from pkdyn.model.description import (
     ActuatorSpec,
     ClosureSpec,
@@ -66,12 +66,45 @@ _MOVING = ("revolute", "continuous", "prismatic", "floating", "planar")
 
 def _num(x: Any) -> float:
     """A number as the URDF text carries it (the writer writes ``-0.0`` as ``0``)."""
-    v = float(x)
-    return 0.0 if v == 0.0 else v
+    return float(x) + 0.0  # (-0.0 + 0.0 is +0.0; any other number is unchanged)
 
 
 def _vec(v: Any) -> np.ndarray:
-    return np.array([_num(x) for x in v], dtype=float)
+    return np.array(v, dtype=float).reshape(-1) + 0.0
+
+
+_ROTATIONS: dict[tuple[str, float, float, float], np.ndarray] = {}
+"""Rotation matrices of the roll-pitch-yaw triples met (builders reuse a few), by reader."""
+
+
+def _rotation(reader: str, rpy: Any) -> np.ndarray:
+    key = (reader, _num(rpy[0]), _num(rpy[1]), _num(rpy[2]))
+    R = _ROTATIONS.get(key)
+    if R is None:
+        if len(_ROTATIONS) > 4096:
+            _ROTATIONS.clear()
+        R = _urdf_rotation(*key[1:]) if reader == "urdf" else pin.rpy.rpyToMatrix(*key[1:])
+        R.flags.writeable = False
+        _ROTATIONS[key] = R
+    return R
+
+
+def _urdf_rotation(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """The rotation of urdfdom's ``Rotation::setFromRPY`` quaternion, by Eigen."""
+    phi, the, psi = roll / 2.0, pitch / 2.0, yaw / 2.0
+    sp, cp = math.sin(phi), math.cos(phi)
+    st, ct = math.sin(the), math.cos(the)
+    ss, cs = math.sin(psi), math.cos(psi)
+    x = sp * ct * cs - cp * st * ss
+    y = cp * st * cs + sp * ct * ss
+    z = cp * ct * ss - sp * st * cs
+    w = cp * ct * cs + sp * st * ss
+    s = math.sqrt(x * x + y * y + z * z + w * w)
+    if s == 0.0:
+        x, y, z, w = 0.0, 0.0, 0.0, 1.0
+    else:
+        x, y, z, w = x / s, y / s, z / s, w / s
+    return np.asarray(pin.Quaternion(w, x, y, z).matrix())
 
 
 def urdf_pose(xyz: Any, rpy: Any) -> pin.SE3:
@@ -88,20 +121,7 @@ def urdf_pose(xyz: Any, rpy: Any) -> pin.SE3:
         The placement.
 
     """
-    phi, the, psi = _num(rpy[0]) / 2.0, _num(rpy[1]) / 2.0, _num(rpy[2]) / 2.0
-    sp, cp = math.sin(phi), math.cos(phi)
-    st, ct = math.sin(the), math.cos(the)
-    ss, cs = math.sin(psi), math.cos(psi)
-    x = sp * ct * cs - cp * st * ss
-    y = cp * st * cs + sp * ct * ss
-    z = cp * ct * ss - sp * st * cs
-    w = cp * ct * cs + sp * st * ss
-    s = math.sqrt(x * x + y * y + z * z + w * w)
-    if s == 0.0:
-        x, y, z, w = 0.0, 0.0, 0.0, 1.0
-    else:
-        x, y, z, w = x / s, y / s, z / s, w / s
-    return pin.SE3(pin.Quaternion(w, x, y, z).matrix(), _vec(xyz))
+    return pin.SE3(_rotation("urdf", rpy), _vec(xyz))
 
 
 def _axis_class(axis: Any) -> str:
@@ -120,11 +140,21 @@ def _axis_class(axis: Any) -> str:
 
 def _frame_pose(xyz: Any, rpy: Any) -> pin.SE3:
     """A pkdyn frame's placement as the description reader makes it."""
-    return pin.SE3(pin.rpy.rpyToMatrix(_vec(rpy)), _vec(xyz))
+    return pin.SE3(_rotation("pkdyn", rpy), _vec(xyz))
+
+
+_UNITS: dict[tuple[float, ...], np.ndarray] = {}
 
 
 def _unit(v: Any) -> np.ndarray:
-    return np.asarray(unit_vector(_vec(v)))
+    """A unit axis as the description reader makes it (cached: builders reuse a few)."""
+    key = tuple(_vec(v).tolist())
+    u = _UNITS.get(key)
+    if u is None:
+        if len(_UNITS) > 4096:
+            _UNITS.clear()
+        u = _UNITS[key] = np.asarray(unit_vector(np.array(key)))
+    return u.copy()
 
 
 def _skeleton(records: Sequence[Record]) -> tuple[Hashable, ...] | None:
@@ -331,6 +361,11 @@ class CandidateBuilder:
                 geometry[name] = [
                     cm.getGeometryId(f"{name}_{i}") for i in range(len(r.args["collisions"]))
                 ]
+        framed = [f.link for c in robot.closures for f in (c.frame1, c.frame2)]
+        if robot.description.platform is not None:
+            framed.append(robot.description.platform.frame.link)
+        if any(link not in body_frames for link in framed):
+            return None  # a frame on something else than a link: the URDF path
         rebuilds = int(bool(robot.description.joints)) + int(continuous_actuated)
         actuated = {
             a.joint: int(iv) for a, iv in zip(robot.actuators, robot.actuated_v, strict=True)
@@ -456,10 +491,18 @@ class CandidateBuilder:
             f = model.frames[t.body_frames[ref.link]]
             model.frames[robot.platform_frame].placement = f.placement * ref.placement
         source = robot.source
-        cms, _ = constraint_models(model, desc.closures, source)
-        vec = pin.StdVec_RigidConstraintModel()
-        for cm_ in cms:
-            vec.append(cm_)
+        vec = robot.constraint_models  # written in place, as constraint_models makes them
+        k = 0
+        for c in desc.closures:
+            f1 = model.frames[t.body_frames[c.frame1.link]]
+            f2 = model.frames[t.body_frames[c.frame2.link]]
+            M1, M2 = f1.placement * c.frame1.placement, f2.placement * c.frame2.placement
+            vec[k].joint1_placement, vec[k].joint2_placement = M1, M2
+            k += 1
+            if c.kind == "hinge":
+                off = pin.SE3(np.eye(3), HINGE_ARM * c.axis)
+                vec[k].joint1_placement, vec[k].joint2_placement = M1 * off, M2 * off
+                k += 1
         passive = robot.passive
         if passive is not None:
             passive = passive_forces(

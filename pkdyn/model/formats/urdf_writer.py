@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -63,6 +64,16 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
+_X = np.array([1.0, 0.0, 0.0])
+_EYE = np.eye(3)
+_Y = np.array([0.0, 1.0, 0.0])
+
+
+def _norm(v: np.ndarray) -> float:
+    """``np.linalg.norm`` of a vector, the same arithmetic (``sqrt(v . v)``) without its checks."""
+    return math.sqrt(float(v.dot(v)))
+
+
 def rpy_z_to(d: Vec) -> tuple[float, float, float]:
     """Roll-pitch-yaw [rad] of a rotation taking the z axis onto direction ``d``.
 
@@ -76,13 +87,12 @@ def rpy_z_to(d: Vec) -> tuple[float, float, float]:
     import pinocchio as pin
 
     z = np.asarray(d, dtype=float)
-    z = z / np.linalg.norm(z)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    z = z / _norm(z)
+    helper = _X if abs(z[0]) < 0.9 else _Y
     x = _cross(helper, z)
-    x /= np.linalg.norm(x)
+    x /= _norm(x)
     y = _cross(z, x)
-    R = np.column_stack([x, y, z])
-    rpy = pin.rpy.matrixToRpy(R)
+    rpy = pin.rpy.matrixToRpy(np.array([x, y, z]).T)
     return (float(rpy[0]), float(rpy[1]), float(rpy[2]))
 
 
@@ -100,7 +110,7 @@ def segment_origin(p0: Vec, p1: Vec) -> tuple[tuple[float, ...], tuple[float, fl
     a = np.asarray(p0, dtype=float)
     b = np.asarray(p1, dtype=float)
     mid = 0.5 * (a + b)
-    return tuple(float(x) for x in mid), rpy_z_to(b - a), float(np.linalg.norm(b - a))
+    return tuple(mid.tolist()), rpy_z_to(b - a), _norm(b - a)
 
 
 def rod_inertia(
@@ -120,13 +130,13 @@ def rod_inertia(
     """
     a = np.asarray(p0, dtype=float)
     b = np.asarray(p1, dtype=float)
-    L = float(np.linalg.norm(b - a))
+    L = _norm(b - a)
     d = (b - a) / L
     i_ax = 0.5 * mass * radius**2
     i_tr = mass * (3 * radius**2 + L**2) / 12.0
-    eye = np.eye(3)
-    inertia = i_tr * (eye - np.outer(d, d)) + i_ax * np.outer(d, d)
-    return tuple(float(x) for x in 0.5 * (a + b)), inertia
+    dd = d[:, None] * d[None, :]  # (np.outer's products)
+    inertia = i_tr * (_EYE - dd) + i_ax * dd
+    return tuple((0.5 * (a + b)).tolist()), inertia
 
 
 @dataclass(frozen=True)
