@@ -27,7 +27,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -35,7 +35,7 @@ import pinocchio as pin
 
 from pkdyn.closed_form import delta as cf
 from pkdyn.exceptions import ParameterError, UnreachablePoseError
-from pkdyn.library._check import in_range, middle_of_reach, positive
+from pkdyn.library._check import in_range, middle_of_reach, param_items, positive
 from pkdyn.library._colors import BLUE, GREY, ORANGE
 from pkdyn.library._links import driven_rod, passive_rod
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rpy_z_to
@@ -129,7 +129,7 @@ class Params:
         return 2.0 * np.pi * np.arange(self.arms) / self.arms
 
     def __post_init__(self) -> None:
-        positive(NAME, **{k: v for k, v in asdict(self).items() if k not in _SIGNED})
+        positive(NAME, **{k: v for k, v in param_items(self) if k not in _SIGNED})
         in_range(NAME, "rotor_inertia", self.rotor_inertia, 0.0, 1.0)
         if not 0.0 < self.efficiency <= 1.0:
             raise ParameterError(NAME, "efficiency", f"must lie in (0, 1], got {self.efficiency}")

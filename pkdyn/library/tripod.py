@@ -73,7 +73,7 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -87,7 +87,7 @@ from pkdyn.closed_form.tripod import (
     virtual_joints,
 )
 from pkdyn.exceptions import ParameterError
-from pkdyn.library._check import in_range, positive
+from pkdyn.library._check import in_range, param_items, positive
 from pkdyn.library._colors import BLUE, GREY, ORANGE
 from pkdyn.model.formats.urdf_writer import Shape, UrdfWriter, rod_inertia, segment_origin
 
@@ -190,7 +190,7 @@ class Params:
             raise ParameterError(
                 NAME, "branches", f"must be 3 (tripod) or 4 (walker), got {self.branches!r}"
             )
-        positive(NAME, **{k: v for k, v in asdict(self).items() if k != "tool_offset"})
+        positive(NAME, **{k: v for k, v in param_items(self) if k != "tool_offset"})
         in_range(NAME, "tool_offset", self.tool_offset, 0.0, math.inf)
         if self.theta >= np.pi / self.branches:
             raise ParameterError(
