@@ -48,13 +48,13 @@ from pkdyn.model.description import (
     PyramidLimit,
 )
 from pkdyn.model.families import Family, family
-from pkdyn.model.formats.urdf_writer import Record, UrdfWriter
-from pkdyn.model.home import ASSEMBLY_TOL, find_home
+from pkdyn.model.formats.urdf_writer import Record, Shape, UrdfWriter
+from pkdyn.model.home import ASSEMBLY_TOL
 from pkdyn.model.passive import passive_forces
 from pkdyn.model.robot import Robot
 from pkdyn.model.validate import unit_vector
 
-__all__ = ["CandidateBuilder", "urdf_pose"]
+__all__ = ["CandidateBuilder", "difference", "urdf_pose"]
 
 _IDENTITY = pin.SE3.Identity()
 _ZERO = pin.Inertia.Zero()
@@ -228,6 +228,30 @@ def _skeleton(records: Sequence[Record]) -> tuple[Hashable, ...] | None:
     return tuple(out)
 
 
+def _numbers(value: Any, out: list[float]) -> None:
+    if isinstance(value, bool | str) or value is None:
+        return
+    if isinstance(value, int | float):
+        out.append(value)
+    elif isinstance(value, np.ndarray):
+        out.extend(value.ravel().tolist())
+    elif isinstance(value, Shape):
+        for v in (value.size, value.xyz, value.rpy):
+            _numbers(v, out)
+    elif isinstance(value, tuple | list):
+        for v in value:
+            _numbers(v, out)
+
+
+def _finite(records: Sequence[Record]) -> bool:
+    """Whether every number the builder wrote is finite (else the URDF path names it)."""
+    out: list[float] = []
+    for r in records:
+        for v in r.args.values():
+            _numbers(v, out)
+    return bool(np.isfinite(np.array(out, dtype=float)).all())
+
+
 @dataclasses.dataclass(eq=False)
 class _Template:
     """A skeleton's robot, built by the URDF path, and where each element's numbers go."""
@@ -286,7 +310,7 @@ class CandidateBuilder:
 
         """
         layout = self.family.layout(params)
-        key = None if layout is None else _skeleton(layout.records)
+        key = None if layout is None or not _finite(layout.records) else _skeleton(layout.records)
         if layout is None or key is None:
             return self._urdf_robot(params, None)
         if key not in self._templates:
@@ -518,10 +542,10 @@ class CandidateBuilder:
             params=params,
             passive=passive,
         )
-        from pkdyn.model.loader import _guess
+        from pkdyn.model.loader import _guess, home_result
 
-        qa = np.asarray(self.family.home(params), dtype=float).reshape(-1)
-        res = find_home(out, _guess(model), qa, self.tol, user=False)
+        # as pkdyn.load assembles a family's home (load_string's: a home given, as the user's)
+        res = home_result(out, _guess(model), self.family.home(params), self.tol, True)
         if res.moved:
             return None
         out.q_home = res.q
