@@ -96,6 +96,13 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross`` of two 3-vectors: its products and differences, without its overhead."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("...i,...i->...", a, b)
 
@@ -148,7 +155,7 @@ class DeltaDynamics:
             np.array(
                 [
                     float(i.inertia[1, 1])
-                    + float(i.mass) * float(np.sum(np.cross(y, i.lever) ** 2))
+                    + float(i.mass) * float(np.sum(_cross3(y, np.asarray(i.lever)) ** 2))
                     for i in arm_I
                 ]
             )
@@ -178,7 +185,7 @@ class DeltaDynamics:
             It = float(Ic.trace() - z @ Ic @ z) / 2.0
             Ia = float(z @ Ic @ z)
             sym = It * (np.eye(3) - np.outer(z, z)) + Ia * np.outer(z, z)
-            if np.linalg.norm(np.cross(lever, z)) > 1e-12 or np.max(np.abs(Ic - sym)) > 1e-12 * (
+            if np.linalg.norm(_cross3(lever, z)) > 1e-12 or np.max(np.abs(Ic - sym)) > 1e-12 * (
                 1.0 + abs(It)
             ):
                 raise PkdynError(

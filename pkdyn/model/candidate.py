@@ -48,7 +48,7 @@ from pkdyn.model.description import (
     PyramidLimit,
 )
 from pkdyn.model.families import Family, family
-from pkdyn.model.formats.urdf_writer import Record, Shape, UrdfWriter
+from pkdyn.model.formats.urdf_writer import Record, UrdfWriter
 from pkdyn.model.home import ASSEMBLY_TOL
 from pkdyn.model.passive import passive_forces
 from pkdyn.model.robot import Robot
@@ -124,18 +124,30 @@ def urdf_pose(xyz: Any, rpy: Any) -> pin.SE3:
     return pin.SE3(_rotation("urdf", rpy), _vec(xyz))
 
 
+_AXES: dict[tuple[float, ...], str] = {}
+
+
 def _axis_class(axis: Any) -> str:
     """Which joint model Pinocchio's URDF parser picks for an axis: x, y, z or unaligned.
 
     Eigen's ``isApprox`` with its default precision (1e-12), as the parser tests it.
     """
-    a = _vec(axis)
+    key = tuple(float(x) for x in axis)
+    found = _AXES.get(key)
+    if found is not None:
+        return found
+    a = np.array(key)
     na = float(a @ a)
+    found = "u"
     for name, e in (("x", (1.0, 0.0, 0.0)), ("y", (0.0, 1.0, 0.0)), ("z", (0.0, 0.0, 1.0))):
         d = a - np.asarray(e)
         if float(d @ d) <= 1e-24 * min(na, 1.0):
-            return name
-    return "u"
+            found = name
+            break
+    if len(_AXES) > 4096:
+        _AXES.clear()
+    _AXES[key] = found
+    return found
 
 
 def _frame_pose(xyz: Any, rpy: Any) -> pin.SE3:
@@ -157,32 +169,48 @@ def _unit(v: Any) -> np.ndarray:
     return u.copy()
 
 
+def _total(v: Any) -> float:
+    """The sum of the numbers of a vector (NaN or infinite when one is)."""
+    return float(np.sum(v)) if isinstance(v, np.ndarray) else float(sum(v))
+
+
 def _skeleton(records: Sequence[Record]) -> tuple[Hashable, ...] | None:
     """What a candidate shares with every robot it can be written into; ``None``: unsupported.
 
     Names, kinds, parents, shape kinds and which optional numbers are written (an inertial, a
     limit, a rotor inertia...), and the joint model an axis makes Pinocchio pick; not the
-    numbers.
+    numbers. ``None`` also when a number is not finite (the URDF path names it).
     """
     out: list[Hashable] = []
+    total = 0.0  # NaN or infinite as soon as one number is (the magnitudes cannot overflow)
     for r in records:
         a = r.args
-        if r.kind == "link":
+        kind = r.kind
+        if kind == "link":
+            shapes = (*a["visuals"], *a["collisions"])
+            total += a["mass"] + _total(a["com"])
+            if a["inertia"] is not None:
+                total += _total(a["inertia"])
+            for sh in shapes:
+                total += _total(sh.size) + _total(sh.xyz) + _total(sh.rpy)
             out.append(
                 (
                     "link",
                     a["name"],
                     float(a["mass"]) > 0.0,
                     a["inertia"] is None,
-                    tuple(s.kind for s in a["visuals"]),
-                    tuple(s.kind for s in a["collisions"]),
+                    tuple(sh.kind for sh in a["visuals"]),
+                    tuple(sh.kind for sh in a["collisions"]),
                 )
             )
-        elif r.kind == "joint":
+        elif kind == "joint":
             axis = a["axis"]
             cls = None if axis is None else _axis_class(axis)
             if a["kind"] in ("revolute", "prismatic", "continuous") and cls == "u":
                 return None  # an unaligned axis: the joint model carries numbers (URDF path)
+            total += _total(a["xyz"]) + _total(a["rpy"])
+            if a["limit"] is not None:
+                total += _total(a["limit"])
             out.append(
                 (
                     "joint",
@@ -194,7 +222,8 @@ def _skeleton(records: Sequence[Record]) -> tuple[Hashable, ...] | None:
                     a["limit"] is None,
                 )
             )
-        elif r.kind == "transmission":
+        elif kind == "transmission":
+            total += a["reduction"] + a["rotor_inertia"] + a["efficiency"]
             out.append(
                 (
                     "transmission",
@@ -204,10 +233,14 @@ def _skeleton(records: Sequence[Record]) -> tuple[Hashable, ...] | None:
                     a["efficiency"] != 1.0,
                 )
             )
-        elif r.kind == "pkdyn_joint":
+        elif kind == "pkdyn_joint":
             # a universal joint's second axis is a number of its joint model (its first, of the
             # placeholder's: aligned, above): part of the skeleton
-            axis2 = None if a["axis2"] is None else tuple(_vec(a["axis2"]))
+            axis2 = None if a["axis2"] is None else tuple(_vec(a["axis2"]).tolist())
+            if a["cone"] is not None:
+                total += _total(a["cone"][0]) + a["cone"][1]
+            if a["pyramid"] is not None:
+                total += sum(_total(v) for v in a["pyramid"])
             out.append(
                 (
                     "pkdyn_joint",
@@ -218,38 +251,20 @@ def _skeleton(records: Sequence[Record]) -> tuple[Hashable, ...] | None:
                     a["pyramid"] is None,
                 )
             )
-        elif r.kind == "closure":
+        elif kind == "closure":
             f1, f2 = a["frame1"], a["frame2"]
+            total += _total(f1[1]) + _total(f1[2]) + _total(f2[1]) + _total(f2[2])
+            if a["axis"] is not None:
+                total += _total(a["axis"])
             out.append(("closure", a["name"], a["kind"], f1[0], f2[0], a["axis"] is None))
-        elif r.kind == "platform":
+        elif kind == "platform":
+            total += _total(a["xyz"]) + _total(a["rpy"])
             out.append(("platform", a["link"], tuple(a["task"])))
         else:
             return None  # couplings: the URDF path
+    if not math.isfinite(total):
+        return None
     return tuple(out)
-
-
-def _numbers(value: Any, out: list[float]) -> None:
-    if isinstance(value, bool | str) or value is None:
-        return
-    if isinstance(value, int | float):
-        out.append(value)
-    elif isinstance(value, np.ndarray):
-        out.extend(value.ravel().tolist())
-    elif isinstance(value, Shape):
-        for v in (value.size, value.xyz, value.rpy):
-            _numbers(v, out)
-    elif isinstance(value, tuple | list):
-        for v in value:
-            _numbers(v, out)
-
-
-def _finite(records: Sequence[Record]) -> bool:
-    """Whether every number the builder wrote is finite (else the URDF path names it)."""
-    out: list[float] = []
-    for r in records:
-        for v in r.args.values():
-            _numbers(v, out)
-    return bool(np.isfinite(np.array(out, dtype=float)).all())
 
 
 @dataclasses.dataclass(eq=False)
@@ -310,7 +325,7 @@ class CandidateBuilder:
 
         """
         layout = self.family.layout(params)
-        key = None if layout is None or not _finite(layout.records) else _skeleton(layout.records)
+        key = None if layout is None else _skeleton(layout.records)
         if layout is None or key is None:
             return self._urdf_robot(params, None)
         if key not in self._templates:
