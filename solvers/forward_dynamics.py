@@ -144,6 +144,9 @@ class ForwardDynamics:
         couplings: Joint couplings (:mod:`solvers.coupling`) when ``constraints`` are closures;
             with any, the evaluation adds their forces to the closures' (see the module
             docstring).
+        datas: Two Pinocchio datas of ``model`` to compute in (the dynamics', the
+            kinematics'), kept by the caller between runs (their size grows like nv^3);
+            default: new ones.
 
     Raises:
         ValueError: Unknown integrator or inconsistent sizes.
@@ -170,6 +173,7 @@ class ForwardDynamics:
         max_substeps: int = 100_000,
         max_speed: float = 1e4,
         couplings: Sequence[Coupling] | ConstraintSet = (),
+        datas: tuple[pin.Data, pin.Data] | None = None,
     ) -> None:
         if integrator not in ("rk4", "dopri5", "euler"):
             raise ValueError(f"unknown integrator {integrator!r} (rk4, dopri5 or euler)")
@@ -181,8 +185,10 @@ class ForwardDynamics:
         self.steps = 0
         self.rejected = 0
         self.model = model
-        self.data = model.createData()
-        self._kin = model.createData()  # kinematics for residuals, energies, projections
+        if datas is None:
+            datas = (model.createData(), model.createData())
+        self.data = datas[0]
+        self._kin = datas[1]  # kinematics for residuals, energies, projections
         self.kinetic_energy = KineticEnergy(model)
         self.actuation = actuation if actuation is not None else Actuation([])
         if self.actuation.n and int(self.actuation.v_index.max()) >= model.nv:

@@ -21,6 +21,7 @@ from pkdyn.exceptions import InvalidInputError, SimulationError
 from pkdyn.inputs import callable_input, count, positive
 from pkdyn.model.passive import FRICTION_SMOOTHING
 from pkdyn.model.pose import as_configuration, as_finite
+from pkdyn.model.reuse import kept_data
 from pkdyn.model.robot import Robot
 from solvers import ForwardDynamics, ForwardResult, IntegrationError, PassiveForces
 
@@ -116,6 +117,7 @@ def simulate(
         actuation(robot),
         passive=_passive(robot, passive, viscous, coulomb),
         integrator=integrator,
+        datas=(kept_data(robot, "forward"), kept_data(robot, "forward kinematics")),
     )
     if torque is not None and motor_torque is not None:
         raise InvalidInputError("motor_torque", "give either torque or motor_torque, not both")

@@ -26,6 +26,7 @@ import pinocchio as pin
 
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InvalidInputError, TrajectoryError
+from pkdyn.model.reuse import kept_data
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
 from solvers import numerics, solve_lm
 
@@ -81,7 +82,7 @@ def actuator_trajectory(
     QA = _samples(qa, (N, n_a), "qa")
     QD = _samples(qa_dot, (N, n_a), "qa_dot")
     QDD = _samples(qa_ddot, (N, n_a), "qa_ddot")
-    model, data = robot.model, robot.model.createData()
+    model, data = robot.model, kept_data(robot, "joint_motion")
     cs = robot.constraints
     held = [
         i
