@@ -7,9 +7,10 @@ of each, nv = 2D), depths 5 to 40, loop sizes 3 to 41, and the legged robots (co
 rotors to sums of joints, floating bases). Per model, as users call them:
 
 - **set-up per call**: the fixed cost of a public call, measured as the call on one sample or
-  one step: ``pkdyn.dynamics.inverse_dynamics`` (trajectory of one sample), the sampled
-  kinematics ``pkdyn.dynamics.joint_motion.actuator_trajectory`` (one sample), a forward
-  simulation ``simulate(..., integrator="euler")`` of one step. Target: <= 2 ms at every size;
+  one step (the median of repeated calls on one robot: what every call after the robot's first
+  costs): ``pkdyn.dynamics.inverse_dynamics`` (a trajectory of one sample; its solver and
+  sampled kinematics are kept by the robot, :mod:`pkdyn.model.reuse`), a forward simulation
+  ``simulate(..., integrator="euler")`` of one step. Target: <= 2 ms at every size;
 - **inverse dynamics per sample**: the marginal cost of ``inverse_dynamics`` over a 200-sample
   trajectory (made by a forward simulation under sinusoidal efforts, so that every model,
   floating bases included, has a consistent one) against the floor, the plainest per-sample
@@ -138,14 +139,6 @@ def model_rows(path: str) -> list[Row]:
             traj.t[:1], traj.q[:1], traj.v[:1], traj.a[:1], robot.actuated_q, robot.actuated_v
         )
         setups.append(("inverse_dynamics", _cpu_ms(lambda: inverse_dynamics(robot, one))))
-        qa = traj.q[:1, robot.actuated_q]
-        zero = np.zeros_like(qa)
-        setups.append(
-            (
-                "actuator_trajectory",
-                _cpu_ms(lambda: actuator_trajectory(robot, traj.t[:1], qa, zero, zero)),
-            )
-        )
     setups.append(
         ("simulate", _cpu_ms(lambda: simulate(robot, 1e-3, 1e-3, integrator="euler")))
     )
