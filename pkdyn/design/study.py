@@ -37,7 +37,7 @@ import numpy as np
 from pkdyn.design import fields
 from pkdyn.design.context import Conditions
 from pkdyn.design.goals import Constraint, Objective
-from pkdyn.design.metrics import METRICS, Metric, resolve_metrics
+from pkdyn.design.metrics import METRICS, VIBRATION_METRICS, Metric, resolve_metrics
 from pkdyn.design.requirement import Requirement
 from pkdyn.design.samplers import SAMPLERS, check_count, unit_points
 from pkdyn.design.space import DesignSpace, Range
@@ -66,6 +66,9 @@ _CONDITION_KEYS = (
     "clavel_rays",
     "actuator_stiffness",
     "material",
+    "damping_ratio",
+    "band",
+    "dwell",
 )
 
 
@@ -109,8 +112,8 @@ class Study:
         seed: Seed of the sampler or of NSGA-II.
         parametrisation: Name of a parametrisation (:mod:`pkdyn.design.parametrisations`).
         settings: Other conditions: ``limits``, ``length`` [m], ``gamma_max``, ``ab_min`` [rad],
-            ``workspace_samples``, ``clavel_rays``, ``actuator_stiffness``, ``material`` (see
-            :class:`pkdyn.design.Conditions`).
+            ``workspace_samples``, ``clavel_rays``, ``actuator_stiffness``, ``material``,
+            ``damping_ratio``, ``band``, ``dwell`` (see :class:`pkdyn.design.Conditions`).
         name: A label for reports.
 
     Raises:
@@ -275,7 +278,39 @@ class Study:
                 raise InvalidInputError(
                     f"metric '{used[0]}'", "needs a required workspace (--require KIND:...)"
                 )
+        vib = [m.name for m in metrics if m.name in VIBRATION_METRICS]
+        if vib:
+            self._check_vibration(vib[0])
         return metrics
+
+    def _check_vibration(self, name: str) -> None:
+        """Refuse up front the settings a vibration metric cannot be computed with.
+
+        The duty cycle must run from rest to rest (the settling follows a stop) and the
+        actuators need a stiffness (the settings' or, for every actuator of the family's
+        default robot, the description's).
+        """
+        if self.trajectory == "sine":
+            raise InvalidInputError(
+                f"metric '{name}'",
+                "needs a duty cycle from rest to rest (adept or p2p), not sine (it ends in "
+                "motion)",
+            )
+        if "actuator_stiffness" in self.settings:
+            return
+        import pkdyn
+
+        try:
+            robot = pkdyn.load(self.family, geometry=False)
+        except Exception:  # noqa: BLE001 (the defaults do not build: the designs will say)
+            return
+        missing = [a.name for a in robot.actuators if a.stiffness is None]
+        if missing:
+            raise InvalidInputError(
+                f"metric '{name}'",
+                f"needs the actuators' stiffness: {self.family} describes none for "
+                f"'{missing[0]}'; give settings actuator_stiffness (--actuator-stiffness K)",
+            )
 
     @property
     def metric_names(self) -> list[str]:
@@ -310,7 +345,7 @@ class Study:
     def uses_duty(self) -> bool:
         """Whether a metric runs the duty cycle (the sizing metrics)."""
         duty = {"peak_effort", "rms_effort", "peak_speed", "peak_power"}
-        duty |= {"effort_margin", "speed_margin"}
+        duty |= {"effort_margin", "speed_margin", *VIBRATION_METRICS}
         return any(m.name in duty or m.name.rsplit("_", 1)[0] in duty for m in self.metric_list)
 
     @property

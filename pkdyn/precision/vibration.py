@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -71,8 +72,12 @@ __all__ = [
     "DEFAULT_DWELL",
     "METHODS",
     "MAX_OUTPUT_POINTS",
+    "MODE_CUTOFF",
     "STEPS_PER_PERIOD",
+    "Setup",
     "VibrationResult",
+    "analyse",
+    "prepare",
     "vibration",
 ]
 
@@ -84,6 +89,10 @@ DEFAULT_BAND = 1e-4
 
 DEFAULT_DWELL = 0.5
 """Time after the motion within which the tool must settle when none is given [s]."""
+
+MODE_CUTOFF = 8.0
+"""Without a mode count, the modal method integrates the modes up to this multiple of the first
+frequency at the middle pose (the others respond quasi-statically)."""
 
 STEPS_PER_PERIOD = 16
 """Output steps per period of the highest mode resolved (the dense output's resolution)."""
@@ -242,8 +251,9 @@ def vibration(
         method: ``modal`` (fast) or ``multibody`` (the reference).
         shaper: ``zv`` or ``zvd`` to shape the command from the modes along the path.
         shaper_modes: Number of (lowest) modes the shaper targets.
-        modes: Modes integrated by the modal method (the lowest; the others respond
-            quasi-statically); ``None``: all.
+        modes: Modes integrated by the modal method, and resolved by the output step of both
+            methods (the lowest; the others respond quasi-statically in the modal method);
+            ``None``: those up to 8 times the first frequency at the middle pose.
         poses: Poses along the motion where the modes are computed (modal method).
         point: Reference point (tool), platform frame [m] (default: the platform origin).
         dt: Sample period of a named trajectory [s].
@@ -287,36 +297,129 @@ def vibration(
     task = _task(robot, trajectory, cycle_time, dt, profile)
     em = elastic_model(robot, actuator_stiffness, material, links)
     check_compliant(em)
-    emL = _with_payload(em, payload, p)
-    rest = max(dwell, RESIDUAL_WINDOW)
     cmd = command(em, task, payload, p, feedforward, progress)
-    mid = (cmd.t.size - 1) // 2
-    m_mid = modes_at(emL, cmd.joint.q[mid], point=p)
-    dmp = damping(emL, m_mid.f1, float(cmd.t[mid]), damping_ratio, actuator_damping)
-    c_all = _damping_c(emL, dmp)
+    setup = prepare(
+        robot, em, cmd, p, payload, feedforward, damping_ratio, actuator_damping, band, dwell,
+        modes, poses, progress,
+    )  # fmt: skip
     shaped: Shaper | None = None
     if shaper is not None:
-        shaped = _shaper(shaper, shaper_n, emL, cmd, p, poses, c_all)
+        shaped = _shaper(shaper, shaper_n, setup.elastic, cmd, p, poses, setup.c)
         cmd = command(em, shape(cmd.task, shaped), payload, p, feedforward, progress)
+    return analyse(setup, cmd, method, shaped)
+
+
+@dataclass(eq=False)  # numpy fields
+class Setup:
+    """What every analysis of one robot, model and load shares (:func:`prepare`).
+
+    Attributes:
+        robot: The robot as loaded.
+        em: Its elastic model.
+        elastic: The elastic model carrying the payload.
+        point: Reference point, platform frame [m].
+        payload: Payload [kg].
+        feedforward: The servos' feedforward.
+        damping: The damping.
+        c: Viscous coefficient per extended velocity coordinate (servos, links, own dampers).
+        kept: Modes integrated and resolved.
+        f1: Lowest frequency at the middle pose [Hz].
+        f_top: Highest of their frequencies at the middle pose [Hz].
+        band: Settling band [m].
+        dwell: Settling dwell [s].
+        poses: Poses along a motion for the modal method.
+        progress: Progress bars.
+
+    """
+
+    robot: Robot
+    em: ElasticModel
+    elastic: ElasticModel
+    point: np.ndarray
+    payload: float
+    feedforward: str
+    damping: Damping
+    c: np.ndarray
+    kept: int
+    f1: float
+    f_top: float
+    band: float
+    dwell: float
+    poses: int
+    progress: bool | None
+
+    @property
+    def rest(self) -> float:
+        """Time observed after a motion [s]: the dwell (at least the residual window) and two
+        periods of the first mode (see :mod:`pkdyn.precision.vibration_figures`)."""
+        return max(self.dwell, RESIDUAL_WINDOW) + 2.0 / self.f1
+
+    def sub(self, h: float, T: float) -> int:
+        """Output steps per sample interval ``h`` resolving the kept modes; the work checked.
+
+        Raises:
+            InvalidInputError: More than :data:`MAX_OUTPUT_POINTS` output points.
+
+        """
+        sub = max(1, int(math.ceil(h * self.f_top * STEPS_PER_PERIOD * 1.25)))
+        points = (T + self.rest) / h * sub
+        if points > MAX_OUTPUT_POINTS:
+            raise InvalidInputError(
+                "dt",
+                f"{T + self.rest:.3g} s resolved at {STEPS_PER_PERIOD} steps per period of "
+                f"{self.f_top:.4g} Hz is {points:.3g} output points (at most "
+                f"{MAX_OUTPUT_POINTS:.0e}): a shorter motion or dwell, fewer modes, or a "
+                "stiffer model",
+            )
+        return sub
+
+
+def prepare(
+    robot: Robot,
+    em: ElasticModel,
+    cmd: Command,
+    point: np.ndarray,
+    payload: float,
+    feedforward: str,
+    damping_ratio: float | None,
+    actuator_damping: float | Sequence[float] | np.ndarray | None,
+    band: float,
+    dwell: float,
+    modes: int | None,
+    poses: int,
+    progress: bool | None = None,
+) -> Setup:
+    """The shared part of the analyses of ``cmd``'s path: damping from its middle pose, modes kept.
+
+    Arguments as :func:`vibration` (checked already), the command built.
+    """
+    emL = _with_payload(em, payload, point)
+    mid = (cmd.t.size - 1) // 2
+    m_mid = modes_at(emL, cmd.joint.q[mid], point=point)
+    dmp = damping(emL, m_mid.f1, float(cmd.t[mid]), damping_ratio, actuator_damping)
+    f_mid = m_mid.frequencies
+    if modes is None:
+        kept = int(np.searchsorted(f_mid, MODE_CUTOFF * f_mid[0], side="right"))
+    else:
+        kept = min(modes, f_mid.size)
+    return Setup(
+        robot, em, emL, point, payload, feedforward, dmp, _damping_c(emL, dmp), kept,
+        float(f_mid[0]), float(f_mid[kept - 1]), band, dwell, poses, progress,
+    )  # fmt: skip
+
+
+def analyse(st: Setup, cmd: Command, method: str, shaped: Shaper | None = None) -> VibrationResult:
+    """The analysis of one command by one method (see :func:`vibration`)."""
+    emL, p = st.elastic, st.point
     T, h = cmd.duration, cmd.step
-    n_kept = m_mid.frequencies.size if modes is None else min(modes, m_mid.frequencies.size)
-    f_top = float(m_mid.frequencies[n_kept - 1])
-    sub = max(1, int(math.ceil(h * f_top * STEPS_PER_PERIOD * 1.25)))
-    points = (T + rest) / h * sub
-    if points > MAX_OUTPUT_POINTS:
-        raise InvalidInputError(
-            "dt",
-            f"{T + rest:.3g} s resolved at {STEPS_PER_PERIOD} steps per period of "
-            f"{f_top:.4g} Hz is {points:.3g} output points (at most {MAX_OUTPUT_POINTS:.0e}): "
-            "a shorter motion or dwell, fewer modes, or a stiffer model",
-        )
+    sub = st.sub(h, T)
+    n_kept = st.kept
     pm: PathModes | None = None
     if method == "modal":
-        pm = path_modes(emL, cmd.joint.q, pose_samples(cmd.t.size, poses), p, progress)
+        pm = path_modes(emL, cmd.joint.q, pose_samples(cmd.t.size, st.poses), p, st.progress)
         F = loads(emL, cmd.q, cmd.v, cmd.a, cmd.tau_ff)
-        r = modal_response(pm, cmd.t, F, c_all, modes, sub, rest)
-        w_end = 2.0 * np.pi * pm.frequencies[-1]
-        static = pm.platform[-1].T @ ((pm.shapes[-1] @ F[-1]) / w_end**2)
+        r = modal_response(pm, cmd.t[pm.samples], cmd.t, F, st.c, n_kept, sub, st.rest)
+        static = static_deflection(pm, F[-1])
         f_start, f_end = pm.frequencies[0, :n_kept], pm.frequencies[-1, :n_kept]
         dominant = _dominant(
             f_end, r.zeta_end, pm.platform[-1, :n_kept], r.eta_end, r.eta_dot_end, r.eta_static_end
@@ -326,61 +429,112 @@ def vibration(
         drift = None
         internal = pm.internal
     else:
-        link_c = c_all.copy()
+        link_c = st.c.copy()
         link_c[np.asarray(emL.robot.actuated_v)] = 0.0
         if emL.robot.passive is not None:
             link_c -= np.asarray(emL.robot.passive.damping)  # (the simulation adds its own)
-        mb = multibody_response(emL, cmd, link_c, dmp.actuator, p, sub, rest)
+        mb = multibody_response(emL, cmd, link_c, st.damping.actuator, p, sub, st.rest)
         m0 = modes_at(emL, cmd.joint.q[0], point=p)
         mE = modes_at(emL, cmd.joint.q[-1], point=p)
         f_start, f_end = m0.frequencies[:n_kept], mE.frequencies[:n_kept]
-        dominant = _dominant_multibody(emL, mE, n_kept, mb.u_end, mb.u_dot_end, cmd, c_all)
+        dominant = _dominant_multibody(emL, mE, n_kept, mb.u_end, mb.u_dot_end, cmd, st.c)
         static = mb.static_end
         t_out, d, dd = mb.t, mb.d, mb.d_dot
         t_c, u = mb.t_coarse, mb.u
         drift = mb.energy_drift
         internal = mE.internal
-    rows = np.asarray(robot.task_rows, dtype=int)
-    tr = [i for i, r_ in enumerate(rows) if r_ < 3]
-    fig = figures(t_out, d[:, rows][:, tr], dd[:, rows][:, tr], static[rows][tr], T, dwell, band)
-    from pkdyn.analysis.kinematics import TASK_NAMES
-
     n_c = min(t_c.size, u.shape[0])
     Qc = np.vstack([cmd.q, np.tile(cmd.q[-1], (max(n_c - cmd.q.shape[0], 0), 1))])[:n_c]
+    return result(
+        st,
+        cmd.task.name,
+        method,
+        T,
+        t_out,
+        d,
+        dd,
+        static,
+        np.asarray(f_start),
+        np.asarray(f_end),
+        dominant,
+        internal,
+        None if pm is None else int(pm.samples.size),
+        None if shaped is None else shaped.describe(),
+        drift,
+        (t_c[:n_c], Qc, u[:n_c]),
+    )
+
+
+def static_deflection(pm: PathModes, F_end: np.ndarray) -> np.ndarray:
+    """Platform deviation (6,) in the (linear) static equilibrium of the end pose under ``F_end``."""
+    w = 2.0 * np.pi * pm.frequencies[-1]
+    return np.asarray(pm.platform[-1].T @ ((pm.shapes[-1] @ F_end) / w**2))
+
+
+def result(
+    st: Setup,
+    name: str,
+    method: str,
+    T: float,
+    t_out: np.ndarray,
+    d: np.ndarray,
+    dd: np.ndarray,
+    static: np.ndarray,
+    f_start: np.ndarray,
+    f_end: np.ndarray,
+    dominant: list[DominantMode],
+    internal: int,
+    poses: int | None,
+    shaper: dict[str, Any] | None,
+    drift: float | None,
+    display: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+) -> VibrationResult:
+    """The figures of a deviation and the result holding them."""
+    from pkdyn.analysis.kinematics import TASK_NAMES
+
+    rows = np.asarray(st.robot.task_rows, dtype=int)
+    tr = [i for i, r_ in enumerate(rows) if r_ < 3]
+    fig = figures(
+        t_out, d[:, rows][:, tr], dd[:, rows][:, tr], static[rows][tr], T, st.dwell, st.band,
+        st.rest,
+    )  # fmt: skip
+    t_c, Qc, u = display if display is not None else (None, None, None)
     return VibrationResult(
-        robot=robot.name,
-        trajectory=cmd.task.name,
+        robot=st.robot.name,
+        trajectory=name,
         method=method,
         task=tuple(TASK_NAMES[i] for i in rows),
         t=t_out,
         deviation=d[:, rows],
         deviation_rate=dd[:, rows],
         duration=T,
-        dwell=dwell,
-        band=band,
-        payload=payload,
-        point=p,
+        dwell=st.dwell,
+        band=st.band,
+        payload=st.payload,
+        point=st.point,
         peak_deviation=fig.peak_deviation,
         peak_time=fig.peak_time,
         residual_amplitude=fig.residual_amplitude,
         settling_time=fig.settling_time,
+        settled=fig.settled,
         static_deflection=static[rows],
-        frequencies_start=np.asarray(f_start),
-        frequencies_end=np.asarray(f_end),
+        frequencies_start=f_start,
+        frequencies_end=f_end,
         dominant_modes=dominant,
-        feedforward=feedforward,
-        damping=dmp,
-        actuator_stiffness=np.asarray(em.actuator_stiffness),
-        links=tuple(lc.link for lc in em.links),
+        feedforward=st.feedforward,
+        damping=st.damping,
+        actuator_stiffness=np.asarray(st.em.actuator_stiffness),
+        links=tuple(lc.link for lc in st.em.links),
         internal=internal,
-        modes=n_kept,
-        poses=None if pm is None else int(pm.samples.size),
-        shaper=None if shaped is None else shaped.describe(),
+        modes=st.kept,
+        poses=poses,
+        shaper=shaper,
         energy_drift=drift,
-        elastic=emL,
-        t_coarse=t_c[:n_c],
+        elastic=st.elastic,
+        t_coarse=t_c,
         command=Qc,
-        deformation=u[:n_c],
+        deformation=u,
+        prismatic=tuple(bool(x) for x in st.robot.actuator_prismatic),
     )
 
 

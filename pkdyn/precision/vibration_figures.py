@@ -11,8 +11,12 @@ rows:
 - ``residual_amplitude``: the largest norm of the deviation from the static equilibrium of the
   end pose over ``[T, T + 0.2 s]`` (:data:`RESIDUAL_WINDOW`);
 - ``settling_time``: counted from ``T``, the first time after which the norm of the deviation
-  from that equilibrium stays below the band until the end of the dwell ``[T, T + dwell]``
-  (``None`` when it is still outside at the end of the dwell; 0 when it never leaves it).
+  from that equilibrium stays below the band until the end of the window observed after the
+  motion, which lasts the dwell (at least the residual window) and two periods of the first
+  mode more: a momentary dip of the norm at the end of the dwell (two modes beating, or one
+  mode's vibration in two directions) is not taken for settling. The tool **settles within the
+  dwell** when that time is at most the dwell. ``None`` when the norm is still outside the band
+  at the end of the window; 0 when it never leaves it after the motion.
 """
 
 from __future__ import annotations
@@ -110,7 +114,7 @@ def largest(dense: Dense, lo: float, hi: float) -> tuple[float, float]:
 
 
 def settling(dense: Dense, lo: float, hi: float, band: float) -> float | None:
-    """First time after ``lo`` from which the norm stays below ``band`` until ``hi`` [s].
+    """First time after ``lo`` from which the norm stays below ``band`` until ``hi``.
 
     Returns:
         The settling time counted from ``lo``; ``0.0`` when the norm never reaches the band;
@@ -164,6 +168,7 @@ class Figures:
         residual_amplitude: Largest norm of the deviation from the end equilibrium over the
             residual window [m].
         settling_time: Settling time after the end of the motion [s], or ``None``.
+        settled: Whether it is at most the dwell.
 
     """
 
@@ -171,6 +176,7 @@ class Figures:
     peak_time: float
     residual_amplitude: float
     settling_time: float | None
+    settled: bool
 
 
 def figures(
@@ -181,6 +187,7 @@ def figures(
     T: float,
     dwell: float,
     band: float,
+    window: float,
 ) -> Figures:
     """The figures of a deviation (translation components only: the norms are in m).
 
@@ -192,6 +199,7 @@ def figures(
         T: End of the motion [s].
         dwell: Time after the motion within which the tool must settle [s].
         band: Settling band on the norm [m].
+        window: Time observed after the motion [s] (at least the dwell).
 
     Returns:
         The figures.
@@ -201,5 +209,6 @@ def figures(
     peak, when = largest(motion, 0.0, T)
     about = Dense(t, d - static_end, d_dot)
     residual, _ = largest(about, T, T + RESIDUAL_WINDOW)
-    settle = settling(about, T, T + dwell, band)
-    return Figures(peak, when, residual, settle)
+    settle = settling(about, T, T + window, band)
+    ok = settle is not None and settle <= dwell
+    return Figures(peak, when, residual, settle, ok)

@@ -1,35 +1,49 @@
 r"""The modal method: pose-dependent modes of the elastic model along the path, superposed.
 
-Linearised about the commanded (rigid) motion ``q_c(t)``: the elastic model's deformation
-``u`` (extended velocity coordinates, within the motions the closures allow) obeys
+Linearised about the commanded (rigid) motion ``q_c(t)``, the elastic model's deformation ``u``
+(extended velocity coordinates, within the motions the closures allow) obeys
 
 .. math::
 
     M(q_c) \ddot u + C \dot u + K(q_c) u = F(t), \qquad
-    F = -\mathrm{RNEA}(q_c, v_c, a_c) + S^T \tau_{ff} + f_{passive}(q_c, v_c)
+    F = P_c \left[-\mathrm{RNEA}(q_c, v_c, a_c) + S^T \tau_{ff} + f_{passive}(q_c, v_c)\right]
 
-``F`` the generalized force the commanded motion leaves unbalanced: its inertial and gravity
-loads (payload included) less the actuators' feedforward, plus the robot's own springs and
-dampers (the closures' reactions drop out on the allowed motions). The modes of
-:func:`pkdyn.precision.modes.modes` (the same ``M`` and ``K``; mass-normalised shapes ``U_i``,
-platform motions ``P_i``, undamped ``omega_i``) are computed at ``poses`` samples of the command
-spread evenly in time; each pose governs the samples nearest to it (**piecewise-constant modal
-data**). On each sample interval the modal equations
+``F`` the generalized force the commanded motion leaves unbalanced (its inertial and gravity
+loads, payload included, less the actuators' feedforward, plus the robot's own springs and
+dampers), projected by ``P_c`` on the motions the closures allow at that sample (the part their
+reactions balance does no work on the deformation). Method:
 
-.. math::
+- **modes at poses**: :func:`pkdyn.precision.modes.modes` (the same ``M`` and ``K``;
+  mass-normalised shapes ``U_i``, platform motions ``P_i``, undamped ``omega_i``) at ``poses``
+  commanded configurations spread evenly in time, first and last included;
+- **interpolation between two poses** ``j`` and ``j + 1``: in the basis of pose ``j``'s
+  integrated modes ``B = U_j`` (a Galerkin basis), the mass and stiffness are ``I`` and
+  ``Omega_j^2`` at pose ``j`` and ``B M_{j+1} B^T`` and ``T^T Omega_{j+1}^2 T``
+  (``T = U_{j+1} M_{j+1} B^T``, all of pose ``j + 1``'s modes) at pose ``j + 1``; both are
+  interpolated linearly in time to the middle of each sample interval, where their own modes
+  (``omega``, shapes, ``P``) are taken; the damping ``B C B^T`` is that of the constant joint-space
+  ``C`` (its modal off-diagonal terms neglected: exact for the damping-ratio model, which is
+  proportional to the stiffness);
+- **modal coordinates carried across** from one interval's modes to the next one's by the
+  projection ``y' = V'^T M' V y`` (through the segment basis; and from basis ``U_j`` to
+  ``U_{j+1}`` by ``T`` where the segment changes), the rates alike;
+- **exact integration** on each interval of
 
-    \ddot\eta_i + 2 \zeta_i \omega_i \dot\eta_i + \omega_i^2 \eta_i = U_i^T F(t),
-    \qquad 2 \zeta_i \omega_i = U_i^T C U_i
+  .. math::
 
-are solved **exactly** for a forcing that is the cubic Hermite interpolant of ``U_i^T F`` (its
-rate from a cubic spline of ``F`` through the samples): particular polynomial plus free damped
-oscillation. Where the governing pose changes, the **modal coordinates are carried** across by
-projecting the deformation onto the new modes (``eta' = U'^T M' U eta``, the same for the rates).
-The motion starts in the static equilibrium of the first pose (``eta_i = U_i^T F / omega_i^2``);
-after the motion the command rests at its end pose and the response is the closed form of
-constant coefficients. Only the lowest ``count`` modes are integrated; the others respond
-quasi-statically (``U_i^T F / omega_i^2``: the static correction, so that the static
-deflection stays exact). The platform deviation is ``d = sum_i P_i eta_i``.
+      \ddot y_i + 2 \zeta_i \omega_i \dot y_i + \omega_i^2 y_i = V_i^T B F(t)
+
+  for a forcing that is the cubic Hermite interpolant of its end values and rates (``F``'s rate
+  from a cubic spline through the samples): particular polynomial plus free damped
+  oscillation, evaluated in closed form anywhere in the interval (the dense output);
+- the motion starts in the static equilibrium of the first interval (``y = V^T B F / omega^2``);
+  after it the command rests at the end pose (its own modes) and the response is the closed
+  form of constant coefficients;
+- only the lowest ``count`` modes are integrated; the others respond quasi-statically
+  (``U_i^T F / omega_i^2``, interpolated between poses: the static correction, so that the
+  static deflection stays exact).
+
+The platform deviation is ``d = sum_i P_i y_i`` (plus the quasi-static part).
 """
 
 from __future__ import annotations
@@ -177,12 +191,13 @@ def _free(omega: np.ndarray, zeta: np.ndarray, tau: np.ndarray) -> tuple[np.ndar
     E = np.exp(-sigma * tau)
     EC_u = E * np.cos(x)
     ES_u = E * tau * np.sinc(x / np.pi)
-    # over-damped: exp(-(sigma -/+ a) tau) without overflow
-    slow = np.exp(-(sigma - wd) * tau)
-    fast_ratio = np.exp(-2.0 * x)
+    # over-damped: exp(-(sigma -/+ a) tau) without overflow (only where over-damped)
+    rate = np.where(under, sigma, sigma - wd)
+    slow = np.exp(-rate * tau)
+    fast_ratio = np.exp(-2.0 * np.where(under, 0.0, x))
     EC_o = 0.5 * slow * (1.0 + fast_ratio)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        sinhc = np.where(x > 1e-12, -np.expm1(-2.0 * x) / np.where(x > 1e-12, 2.0 * x, 1.0), 1.0)
+    xo = np.where(under, 1.0, x)
+    sinhc = np.where(xo > 1e-12, -np.expm1(-2.0 * xo) / np.where(xo > 1e-12, 2.0 * xo, 1.0), 1.0)
     ES_o = slow * tau * sinhc
     return np.where(under, EC_u, EC_o), np.where(under, ES_u, ES_o)
 
@@ -239,39 +254,50 @@ class ModalResponse:
     zeta_middle: np.ndarray
 
 
-def segments(samples: np.ndarray, intervals: int) -> tuple[np.ndarray, np.ndarray]:
+def segments(pose_t: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Segment (pair of poses ``j, j + 1``) of each sample interval and its place in it.
+
+    Args:
+        pose_t: Times of the poses (P,) [s], increasing.
+        t: Sample times (N,) [s].
 
     Returns:
         ``(seg, lam)``: the pose ``j`` starting the segment that holds each interval's middle
-        (intervals,), and the fraction of the segment at that middle (intervals,).
+        (N - 1,), and the fraction of the segment at that middle (N - 1,), in ``[0, 1]``.
 
     """
-    mid = np.arange(intervals) + 0.5
-    seg = np.clip(np.searchsorted(samples, mid, side="right") - 1, 0, samples.size - 2)
-    lam = (mid - samples[seg]) / (samples[seg + 1] - samples[seg])
+    mid = 0.5 * (t[1:] + t[:-1])
+    seg = np.clip(np.searchsorted(pose_t, mid, side="right") - 1, 0, pose_t.size - 2)
+    lam = np.clip((mid - pose_t[seg]) / (pose_t[seg + 1] - pose_t[seg]), 0.0, 1.0)
     return seg, lam
 
 
 def modal_response(
     pm: PathModes,
+    pose_t: np.ndarray,
     t: np.ndarray,
     F: np.ndarray,
     c_diag: np.ndarray,
     count: int | None,
     sub: int,
     rest: float,
+    ends: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> ModalResponse:
     """The modal response to the unbalanced force ``F`` (see the module docstring).
 
     Args:
-        pm: Modes along the motion (their ``samples`` index ``t``).
+        pm: Modes along the motion.
+        pose_t: Time of each of its poses (P,) [s] (the first at 0, the last at the end).
         t: Command sample times (N,) [s], ``t[0] = 0``.
         F: Unbalanced generalized force at the samples (N, nv_ext).
         c_diag: Viscous damping per extended velocity coordinate (nv_ext,).
         count: Modes integrated (the lowest; ``None``: all), the others quasi-static.
         sub: Output steps per sample interval.
         rest: Time simulated after the motion [s].
+        ends: The forcing at both ends of each interval and its rates there,
+            ``(F_left, F_right, F_left', F_right')`` (each (N - 1, nv_ext)), for a command
+            whose acceleration jumps at its samples; default: ``F`` at the samples, its rates
+            from a cubic spline through them.
 
     Returns:
         The response.
@@ -282,7 +308,7 @@ def modal_response(
     N = t.size
     K = N - 1
     P = pm.samples.size
-    seg, lam = segments(pm.samples, K)
+    seg, lam = segments(np.asarray(pose_t, dtype=float), t)
     omega_all = 2.0 * np.pi * pm.frequencies  # (P, n)
     W2 = omega_all**2
     B = pm.shapes[:, :m]  # (P, m, nv): the basis of each segment
@@ -316,16 +342,19 @@ def modal_response(
     PLk = np.einsum("kmi,kmc->kic", V, (1.0 - lk) * PL[seg] + lk * P_end[seg])  # (K, m, 6)
     # modal forces at both ends of each interval, in its own modes
     dt = np.diff(t)
-    spline = CubicSpline(t, F, axis=0, bc_type="not-a-knot") if N >= 4 else None
-    Fd = spline(t, 1) if spline is not None else np.gradient(F, t, axis=0)
+    if ends is None:
+        spline = CubicSpline(t, F, axis=0, bc_type="not-a-knot") if N >= 4 else None
+        Fd = spline(t, 1) if spline is not None else np.gradient(F, t, axis=0)
+        ends = (F[:-1], F[1:], Fd[:-1], Fd[1:])
+    FL, FR, FdL, FdR = ends
     BF = np.empty((K, 4, m))
     for j in np.unique(seg):
         ks = np.flatnonzero(seg == j)
         Bj = B[j].T
-        BF[ks, 0] = F[ks] @ Bj
-        BF[ks, 1] = F[ks + 1] @ Bj
-        BF[ks, 2] = Fd[ks] @ Bj
-        BF[ks, 3] = Fd[ks + 1] @ Bj
+        BF[ks, 0] = FL[ks] @ Bj
+        BF[ks, 1] = FR[ks] @ Bj
+        BF[ks, 2] = FdL[ks] @ Bj
+        BF[ks, 3] = FdR[ks] @ Bj
     pF = np.einsum("kmi,ksm->ksi", V, BF)
     pL, pR, dL, dR = pF[:, 0], pF[:, 1], pF[:, 2], pF[:, 3]
     h = dt[:, None]
@@ -380,8 +409,8 @@ def modal_response(
         inv = 1.0 / W2[:, m:]
         Rp = np.einsum("pmc,pmv,pm->pcv", pm.platform[:, m:], Uq, inv)
         Ru = np.einsum("pmw,pmv,pm->pwv", Uq, Uq, inv)
-        Fin = _hermite3(t, F, Fd, t_in)
-        Fdin = _hermite3(t, F, Fd, t_in, derivative=True)
+        Fin = _hermite3(t, ends, sub)
+        Fdin = _hermite3(t, ends, sub, derivative=True)
         segs, lams = np.repeat(seg, sub), np.repeat(lam, sub)[:, None]
         d += (1.0 - lams) * np.einsum("icv,iv->ic", Rp[segs], Fin) + lams * np.einsum(
             "icv,iv->ic", Rp[segs + 1], Fin
@@ -417,7 +446,7 @@ def modal_response(
         segc = np.append(np.minimum(seg + np.rint(lam).astype(int), P - 1), [jE] * (n_rest + 1))
         Fc = np.vstack([F, np.tile(FE, (n_rest, 1))])
         u += np.einsum("kwv,kv->kw", Ru[segc], Fc)
-    jM = int(np.argmin(np.abs(pm.samples - K / 2)))
+    jM = int(np.argmin(np.abs(np.asarray(pose_t) - 0.5 * t[-1])))
     zM = np.einsum("mv,v,mv->m", B[jM], c_diag, B[jM]) / (2.0 * omega_all[jM, :m])
     return ModalResponse(
         t=np.concatenate([t_in, t_rest]),
@@ -434,24 +463,30 @@ def modal_response(
 
 
 def _hermite3(
-    t: np.ndarray, F: np.ndarray, Fd: np.ndarray, tq: np.ndarray, derivative: bool = False
+    t: np.ndarray,
+    ends: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    sub: int,
+    derivative: bool = False,
 ) -> np.ndarray:
-    """Cubic Hermite interpolation of ``F`` (with rates ``Fd``) at ``tq`` (or its derivative)."""
-    k = np.clip(np.searchsorted(t, tq, side="right") - 1, 0, t.size - 2)
-    h = (t[k + 1] - t[k])[:, None]
-    s = ((tq - t[k])[:, None]) / h
-    y0, y1, m0, m1 = F[k], F[k + 1], Fd[k] * h, Fd[k + 1] * h
+    """The forcing's cubic Hermite interpolant (or its rate) at ``sub`` points per interval."""
+    FL, FR, FdL, FdR = ends
+    h = np.diff(t)[:, None, None]
+    s = (np.arange(sub) / sub)[None, :, None]
+    y0, y1 = FL[:, None, :], FR[:, None, :]
+    m0, m1 = FdL[:, None, :] * h, FdR[:, None, :] * h
     if derivative:
-        return (
+        out = (
             (6 * s * s - 6 * s) * y0
             + (3 * s * s - 4 * s + 1) * m0
             + (-6 * s * s + 6 * s) * y1
             + (3 * s * s - 2 * s) * m1
         ) / h
-    s2, s3 = s * s, s * s * s
-    return (
-        (2 * s3 - 3 * s2 + 1) * y0
-        + (s3 - 2 * s2 + s) * m0
-        + (-2 * s3 + 3 * s2) * y1
-        + (s3 - s2) * m1
-    )
+    else:
+        s2, s3 = s * s, s * s * s
+        out = (
+            (2 * s3 - 3 * s2 + 1) * y0
+            + (s3 - 2 * s2 + s) * m0
+            + (-2 * s3 + 3 * s2) * y1
+            + (s3 - s2) * m1
+        )
+    return out.reshape(-1, FL.shape[1])

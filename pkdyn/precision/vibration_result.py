@@ -62,8 +62,10 @@ class VibrationResult(Result):
         peak_time: When it happens [s].
         residual_amplitude: Largest norm of the position deviation from the end pose's static
             equilibrium over ``[T, T + 0.2 s]`` [m].
-        settling_time: Time after ``T`` from which that norm stays within the band until the
-            end of the dwell [s]; ``None``: not settled within the dwell.
+        settling_time: Time after ``T`` from which that norm stays within the band (until the
+            end of the window observed: the dwell, at least the residual window, and two
+            periods of the first mode) [s]; ``None``: still outside at the end of the window.
+        settled: The tool settles within the dwell (``settling_time <= dwell``).
         static_deflection: Deviation in the static equilibrium of the end pose (task size)
             [m, rad] (gravity, payload, feedforward).
         frequencies_start: Natural frequencies at the start pose [Hz] (the modes integrated).
@@ -82,6 +84,7 @@ class VibrationResult(Result):
         t_coarse: Times of ``deformation`` (K,) [s].
         command: Commanded extended configurations at ``t_coarse`` (K, nq_ext).
         deformation: Deformation from the command at ``t_coarse`` (K, nv_ext).
+        prismatic: Whether each actuator is prismatic (units of the servo figures).
 
     """
 
@@ -101,6 +104,7 @@ class VibrationResult(Result):
     peak_time: float
     residual_amplitude: float
     settling_time: float | None
+    settled: bool
     static_deflection: np.ndarray
     frequencies_start: np.ndarray
     frequencies_end: np.ndarray
@@ -118,11 +122,7 @@ class VibrationResult(Result):
     t_coarse: np.ndarray | None = field(default=None, repr=False)
     command: np.ndarray | None = field(default=None, repr=False)
     deformation: np.ndarray | None = field(default=None, repr=False)
-
-    @property
-    def settled(self) -> bool:
-        """Whether the tool settles within the band during the dwell."""
-        return self.settling_time is not None
+    prismatic: tuple[bool, ...] = ()
 
     @property
     def translation(self) -> np.ndarray:
@@ -144,7 +144,7 @@ class VibrationResult(Result):
 
     @property
     def cycle_time(self) -> float | None:
-        """Motion plus settling time [s] (``None`` when not settled within the dwell)."""
+        """Motion plus settling time [s] (``None`` when it does not settle)."""
         return None if self.settling_time is None else self.duration + self.settling_time
 
     def to_json(self) -> dict[str, Any]:
@@ -190,14 +190,18 @@ class VibrationResult(Result):
     def table(self) -> str:
         """The figures as text, units on every figure."""
         tr = self.translation
-        settle = (
-            f"{quantity(self.settling_time, 's')} (cycle {quantity(self.duration + self.settling_time, 's')})"
-            if self.settling_time is not None
-            else f"not within the {quantity(self.dwell, 's')} dwell"
-        )
+        if self.settling_time is None:
+            settle = f"longer than the {quantity(self.t[-1] - self.duration, 's')} observed"
+        else:
+            settle = (
+                f"{quantity(self.settling_time, 's')} (motion and settling "
+                f"{quantity(self.duration + self.settling_time, 's')}; "
+                + ("within" if self.settled else "beyond")
+                + f" the {quantity(self.dwell, 's')} dwell)"
+            )
         lines = [
             f"{self.robot}: {self.trajectory}, {quantity(self.duration, 's')}, payload "
-            f"{quantity(self.payload, 'kg')}, {self.method} method"
+            f"{quantity(1e3 * self.payload, 'g')}, {self.method} method"
             + (f", {self.shaper['kind'].upper()} shaping" if self.shaper else ""),
             f"peak deviation:      {quantity(self.peak_deviation, 'm')} at {quantity(self.peak_time, 's')}",
             f"residual amplitude:  {quantity(self.residual_amplitude, 'm')} (over "
@@ -221,7 +225,10 @@ class VibrationResult(Result):
         lines.append(
             f"damping:             ratio {d.ratio:g} of mode 1 at the middle pose "
             f"({quantity(d.f1, 'Hz')}); servos "
-            + ", ".join(quantity(c, "N m s/rad") for c in d.actuator)
+            + ", ".join(
+                quantity(c, "N s/m" if pr else "N m s/rad")
+                for c, pr in zip(d.actuator, self.prismatic or (False,) * d.actuator.size, strict=True)
+            )
             + f"; feedforward {self.feedforward}"
         )
         if self.energy_drift is not None:
