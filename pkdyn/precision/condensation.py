@@ -120,7 +120,7 @@ def platform_rows(em: ElasticModel, point: np.ndarray) -> tuple[np.ndarray, pin.
     fid = r.platform_frame
     assert fid is not None
     oMf = pin.updateFramePlacement(r.model, r.data, fid)
-    J = pin.getFrameJacobian(r.model, r.data, fid, _LWA)
+    J = np.asarray(pin.getFrameJacobian(r.model, r.data, fid, _LWA)).reshape(6, r.nv)
     arm = oMf.rotation @ point
     if np.any(arm):
         J = J.copy()

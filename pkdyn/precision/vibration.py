@@ -287,13 +287,13 @@ def vibration(
     links = flag("links", links)
     payload = non_negative("payload", payload, "kg")
     L = robot.length_scale
-    band = positive("band", band, "m", bound=10.0 * L)
+    band = positive("band", band, "m", bound=max(10.0 * L, 1.0))
     dwell = positive("dwell", dwell, "s", bound=MAX_DWELL)
     if modes is not None:
         modes = count("modes", modes, 1)
     poses = count("poses", poses, 2, 100_000)
     shaper_n = count("shaper_modes", shaper_modes, 1, 4)
-    p = np.zeros(3) if point is None else vector("point", point, 3, "m", bound=100.0 * L)
+    p = np.zeros(3) if point is None else vector("point", point, 3, "m", bound=max(100.0 * L, 10.0))
     task = _task(robot, trajectory, cycle_time, dt, profile)
     em = elastic_model(robot, actuator_stiffness, material, links)
     check_compliant(em)

@@ -365,7 +365,7 @@ def fastest_settling(
     instance("path", path, TaskTrajectory, "a TaskTrajectory (pkdyn.dynamics.trajectory)")
     if robot.platform_frame is None:
         raise InvalidInputError("robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}")
-    band = positive("band", band, "m", bound=10.0 * robot.length_scale)
+    band = positive("band", band, "m", bound=max(10.0 * robot.length_scale, 1.0))
     dwell = positive("dwell", dwell, "s", bound=MAX_DWELL)
     payload = non_negative("payload", payload, "kg")
     max_scale = positive("max_scale", max_scale, bound=100.0)

@@ -313,12 +313,15 @@ def modal_response(
     W2 = omega_all**2
     B = pm.shapes[:, :m]  # (P, m, nv): the basis of each segment
     PL = pm.platform[:, :m]  # (P, m, 6)
-    Cb = np.einsum("pmv,v,pkv->pmk", B, c_diag, B)  # damping in each basis (constant)
+    BT = np.swapaxes(B, 1, 2)
+    Cb = (B * c_diag) @ BT  # damping in each basis (constant)
     # the next pose's matrices in this pose's basis
-    T_all = np.einsum("pnv,pvw,pmw->pnm", pm.shapes[1:], pm.mass[1:], B[:-1])  # (P-1, n, m)
-    K_end = np.einsum("pnm,pn,pnk->pmk", T_all, W2[1:], T_all)
-    M_end = np.einsum("pmv,pvw,pkw->pmk", B[:-1], pm.mass[1:], B[:-1])
-    P_end = np.einsum("pnm,pnc->pmc", T_all, pm.platform[1:])
+    MB = pm.mass[1:] @ BT[:-1]  # (P-1, nv, m)
+    T_all = pm.shapes[1:] @ MB  # (P-1, n, m)
+    TT = np.swapaxes(T_all, 1, 2)
+    K_end = (TT * W2[1:, None, :]) @ T_all
+    M_end = B[:-1] @ MB
+    P_end = TT @ pm.platform[1:]
     # each interval: the segment's matrices interpolated at its middle, its own modes
     eye = np.eye(m)
     lk = lam[:, None, None]
@@ -338,8 +341,9 @@ def modal_response(
         )
     V = np.swapaxes(Li, 1, 2) @ Y  # xi = V y, V^T M V = I
     w = np.sqrt(w2)  # (K, m)
-    z = np.einsum("kmi,kmn,kni->ki", V, Cb[seg], V) / (2.0 * w)
-    PLk = np.einsum("kmi,kmc->kic", V, (1.0 - lk) * PL[seg] + lk * P_end[seg])  # (K, m, 6)
+    VT = np.swapaxes(V, 1, 2)
+    z = np.einsum("kmi,kmi->ki", V, Cb[seg] @ V) / (2.0 * w)
+    PLk = VT @ ((1.0 - lk) * PL[seg] + lk * P_end[seg])  # (K, m, 6)
     # modal forces at both ends of each interval, in its own modes
     dt = np.diff(t)
     if ends is None:
@@ -355,7 +359,7 @@ def modal_response(
         BF[ks, 1] = FR[ks] @ Bj
         BF[ks, 2] = FdL[ks] @ Bj
         BF[ks, 3] = FdR[ks] @ Bj
-    pF = np.einsum("kmi,ksm->ksi", V, BF)
+    pF = BF @ V
     pL, pR, dL, dR = pF[:, 0], pF[:, 1], pF[:, 2], pF[:, 3]
     h = dt[:, None]
     c2 = (3.0 * (pR - pL) / h - 2.0 * dL - dR) / h
@@ -368,7 +372,7 @@ def modal_response(
     S = np.broadcast_to(eye, (K - 1, m, m)).copy()
     switch = np.flatnonzero(seg[1:] != seg[:-1])
     S[switch] = T_all[seg[switch], :m, :]
-    G = np.einsum("kmi,kmn,knp,kpj->kij", V[1:], Mk[1:], S, V[:-1])
+    G = VT[1:] @ (Mk[1:] @ (S @ V[:-1]))
     X = np.empty((K + 1, m))
     Vv = np.empty((K + 1, m))
     x = pL[0] / w2[0]
@@ -399,16 +403,16 @@ def modal_response(
     sg = sig[:, None, :]
     xs = xs + ECs * e0 + ESs * (ed0 + sg * e0)
     vs = vs + ECs * ed0 - ESs * (w2[:, None, :] * e0 + sg * ed0)
-    d = np.einsum("ksm,kmc->ksc", xs, PLk).reshape(K * sub, 6)
-    dd = np.einsum("ksm,kmc->ksc", vs, PLk).reshape(K * sub, 6)
+    d = (xs @ PLk).reshape(K * sub, 6)
+    dd = (vs @ PLk).reshape(K * sub, 6)
     t_in = (t[:K, None] + dt[:, None] * frac[None, :]).reshape(-1)
     # quasi-static part of the modes not integrated
     Ru = Rp = None
     if m < n_all:
         Uq = pm.shapes[:, m:]
         inv = 1.0 / W2[:, m:]
-        Rp = np.einsum("pmc,pmv,pm->pcv", pm.platform[:, m:], Uq, inv)
-        Ru = np.einsum("pmw,pmv,pm->pwv", Uq, Uq, inv)
+        Rp = np.swapaxes(pm.platform[:, m:] * inv[:, :, None], 1, 2) @ Uq
+        Ru = np.swapaxes(Uq * inv[:, :, None], 1, 2) @ Uq
         Fin = _hermite3(t, ends, sub)
         Fdin = _hermite3(t, ends, sub, derivative=True)
         segs, lams = np.repeat(seg, sub), np.repeat(lam, sub)[:, None]
@@ -440,7 +444,7 @@ def modal_response(
     if Rp is not None:
         dr += Rp[jE] @ FE
     # deformation at the command samples and at rest (for display)
-    u = np.einsum("km,kjm,kjv->kv", X[:K], V, B[seg])
+    u = ((V @ X[:K, :, None])[:, :, 0][:, None, :] @ B[seg])[:, 0, :]
     u = np.vstack([u, eta_T @ B[jE], xr[sub::sub] @ B[jE]])
     if Ru is not None:
         segc = np.append(np.minimum(seg + np.rint(lam).astype(int), P - 1), [jE] * (n_rest + 1))
