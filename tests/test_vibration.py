@@ -21,36 +21,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.integrate import quad
+from support.slider import slider as load_slider
 
 import pkdyn
 from pkdyn.precision import elastic_model, modes, stiffness
 from pkdyn.precision.vibration import vibration
-
-SLIDER = """<?xml version="1.0"?>
-<robot name="slider" xmlns:pkdyn="urn:pkdyn:urdf:1">
-  <link name="base"/>
-  <link name="carriage">
-    <inertial>
-      <origin xyz="0 0 0"/>
-      <mass value="{mass}"/>
-      <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/>
-    </inertial>
-  </link>
-  <joint name="rail" type="prismatic">
-    <parent link="base"/>
-    <child link="carriage"/>
-    <origin xyz="0 0 0.5"/>
-    <axis xyz="1 0 0"/>
-    <limit lower="-0.5" upper="0.5" effort="1000" velocity="10"/>
-  </joint>
-  <pkdyn:platform link="carriage" xyz="0 0 0" rpy="0 0 0" task="x"/>
-  <transmission name="rail_transmission">
-    <type>transmission_interface/SimpleTransmission</type>
-    <joint name="rail"><hardwareInterface>hardware_interface/EffortJointInterface</hardwareInterface></joint>
-    <actuator name="motor"><mechanicalReduction>1</mechanicalReduction></actuator>
-  </transmission>
-</robot>
-"""
 
 MASS = 1.0
 F_SLIDER = 20.0  # Hz
@@ -61,9 +36,7 @@ T_MOVE = 0.2
 
 @pytest.fixture(scope="module")
 def slider(tmp_path_factory):
-    path = tmp_path_factory.mktemp("slider") / "slider.urdf"
-    path.write_text(SLIDER.format(mass=MASS))
-    return pkdyn.load(str(path))
+    return load_slider(tmp_path_factory.mktemp("slider"), MASS)
 
 
 def duhamel(t: float, zeta: float, T: float = T_MOVE, delay: float = 0.0) -> float:
@@ -140,9 +113,7 @@ def test_shaping_on_the_delta_removes_the_targeted_mode():
 @pytest.fixture(scope="module")
 def delta_adept():
     robot = pkdyn.load("delta")
-    opts = dict(
-        cycle_time=0.5, payload=0.5, actuator_stiffness=2e4, band=2e-5, dwell=0.3
-    )
+    opts = dict(cycle_time=0.5, payload=0.5, actuator_stiffness=2e4, band=2e-5, dwell=0.3)
     return robot, opts, vibration(robot, "adept", **opts)
 
 
@@ -166,8 +137,8 @@ def test_mujoco_runs_the_exported_elastic_model_alike(delta_adept):
     from pkdyn.dynamics.trajectory import named_task
     from pkdyn.precision.vibration_command import command
     from pkdyn.precision.vibration_figures import figures
-    from pkdyn.precision.vibration_multibody import equilibrium
     from pkdyn.precision.vibration_mjcf import simulate_mujoco
+    from pkdyn.precision.vibration_multibody import equilibrium
 
     robot, opts, modal = delta_adept
     em = elastic_model(robot, 2e4)

@@ -70,9 +70,7 @@ def _cmd_vibration(args: argparse.Namespace) -> None:
         finally:
             scene.close()
         payload["html"] = str(path)
-        text.append(
-            f"wrote {path}: deformation x {scale:.3g}, played {args.slow:g} times slower"
-        )
+        text.append(f"wrote {path}: deformation x {scale:.3g}, played {args.slow:g} times slower")
     emit(args, payload, "\n".join(text))
 
 
@@ -168,9 +166,10 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--poses",
         type=int,
-        default=33,
+        default=None,
         metavar="N",
-        help="poses along the motion where the modes are computed (modal method)",
+        help="poses along the motion where the modes are computed (modal method; 33, or 65 "
+        "with compliant links)",
     )
     sp.add_argument(
         "--point",
@@ -201,8 +200,6 @@ def register(sub: Any) -> None:
         help="exaggeration of the deformation in --html (default: peak shown as 5 %% of the "
         "robot's size)",
     )
-    sp.add_argument(
-        "--slow", type=float, default=20.0, help="slow-motion factor of --html (20)"
-    )
+    sp.add_argument("--slow", type=float, default=20.0, help="slow-motion factor of --html (20)")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_vibration)

@@ -293,8 +293,7 @@ class Study:
         if self.trajectory == "sine":
             raise InvalidInputError(
                 f"metric '{name}'",
-                "needs a duty cycle from rest to rest (adept or p2p), not sine (it ends in "
-                "motion)",
+                "needs a duty cycle from rest to rest (adept or p2p), not sine (it ends in motion)",
             )
         if "actuator_stiffness" in self.settings:
             return

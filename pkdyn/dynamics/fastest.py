@@ -139,9 +139,9 @@ class FastestResult:
         return mix(self.A) * u + mix(self.B) * sd * sd + mix(self.C) + mix(self.P)
 
     def scaled(self, scale: float = 1.0) -> tuple[JointTrajectory, TaskTrajectory]:
-        """The motion slowed down uniformly: times ``scale t``, rates ``/ scale``, accelerations
-        ``/ scale^2``.
+        """The motion slowed down uniformly (times ``scale t``, rates and accelerations divided).
 
+        Rates are divided by ``scale``, accelerations by ``scale^2``.
         A slower copy stays within the limits (its efforts are ``C + (tau - C) / scale^2``, a
         convex combination of the fastest motion's and of those at rest), minus the dampers'
         and drives' speed-dependent losses, which only fall.

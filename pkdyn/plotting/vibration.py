@@ -58,9 +58,7 @@ def plot_vibration(
         ax.plot(r.t * 1e3, norm * 1e6, color=f"C{i}", linewidth=1.0, label=label)
         ax.axvline(T * 1e3, color=f"C{i}", linestyle=":", linewidth=1.0)
         if r.settling_time is not None:
-            ax.plot(
-                (T + r.settling_time) * 1e3, r.band * 1e6, "v", color=f"C{i}", ms=7, mew=0
-            )
+            ax.plot((T + r.settling_time) * 1e3, r.band * 1e6, "v", color=f"C{i}", ms=7, mew=0)
     ax.axhline(result.band * 1e6, color="C3", linestyle="--", linewidth=1.0,
                label=f"band {result.band * 1e6:g} um")  # fmt: skip
     ax.axvspan(

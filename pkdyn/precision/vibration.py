@@ -36,8 +36,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -53,10 +53,12 @@ from pkdyn.precision.modes import Modes
 from pkdyn.precision.modes import modes as modes_at
 from pkdyn.precision.stiffness import check_compliant
 from pkdyn.precision.vibration_command import FEEDFORWARDS, Command, command
-from pkdyn.precision.vibration_damping import Damping, damping
+from pkdyn.precision.vibration_damping import Damping, actuator_damping_values, damping
+from pkdyn.precision.vibration_damping import damping_ratio as check_ratio
 from pkdyn.precision.vibration_figures import RESIDUAL_WINDOW, figures
 from pkdyn.precision.vibration_modal import (
     DEFAULT_POSES,
+    DEFAULT_POSES_LINKS,
     PathModes,
     loads,
     modal_response,
@@ -132,7 +134,8 @@ def _task(
         raise InvalidInputError(
             "trajectory",
             f"{trajectory!r:.60}: one of {', '.join(TRAJECTORIES)}, a .csv file or a "
-            "TaskTrajectory" + (close_match(trajectory, list(TRAJECTORIES)) if isinstance(trajectory, str) else ""),
+            "TaskTrajectory"
+            + (close_match(trajectory, list(TRAJECTORIES)) if isinstance(trajectory, str) else ""),
         )
     opts: dict[str, Any] = {"dt": positive("dt", dt, "s")}
     if trajectory == "adept":
@@ -152,7 +155,7 @@ def _task(
 def _with_payload(em: ElasticModel, payload: float, point: np.ndarray) -> ElasticModel:
     if payload <= 0.0:
         return em
-    return dataclasses.replace(em, robot=with_payload(em.robot, payload, offset=point))
+    return dataclasses.replace(em, robot=with_payload(em.robot, payload, offset=tuple(point)))
 
 
 def _damping_c(em: ElasticModel, dmp: Damping) -> np.ndarray:
@@ -164,7 +167,13 @@ def _damping_c(em: ElasticModel, dmp: Damping) -> np.ndarray:
 
 
 def _shaper(
-    kind: str, count: int, em: ElasticModel, cmd: Command, point: np.ndarray, poses: int, c: np.ndarray
+    kind: str,
+    count: int,
+    em: ElasticModel,
+    cmd: Command,
+    point: np.ndarray,
+    poses: int,
+    c: np.ndarray,
 ) -> Shaper:
     """The shaper of the lowest ``count`` modes, their frequencies tracked along ``cmd``."""
     pm = path_modes(em, cmd.joint.q, pose_samples(cmd.t.size, min(poses, 17)), point)
@@ -222,7 +231,7 @@ def vibration(
     shaper: str | None = None,
     shaper_modes: int = 1,
     modes: int | None = None,
-    poses: int = DEFAULT_POSES,
+    poses: int | None = None,
     point: Sequence[float] | np.ndarray | None = None,
     dt: float = 1e-3,
     profile: str = "quintic",
@@ -254,7 +263,8 @@ def vibration(
         modes: Modes integrated by the modal method, and resolved by the output step of both
             methods (the lowest; the others respond quasi-statically in the modal method);
             ``None``: those up to 8 times the first frequency at the middle pose.
-        poses: Poses along the motion where the modes are computed (modal method).
+        poses: Poses along the motion where the modes are computed (modal method; default 33
+            with rigid links, 65 with compliant ones).
         point: Reference point (tool), platform frame [m] (default: the platform origin).
         dt: Sample period of a named trajectory [s].
         profile: Motion law of a named trajectory (``quintic`` or ``jerk``).
@@ -275,7 +285,9 @@ def vibration(
 
     instance("robot", robot, Robot, "a Robot (pkdyn.load)")
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
     if not isinstance(method, str) or method not in METHODS:
         raise InvalidInputError("method", f"unknown {method!r} (one of {', '.join(METHODS)})")
     if not isinstance(feedforward, str) or feedforward not in FEEDFORWARDS:
@@ -291,12 +303,25 @@ def vibration(
     dwell = positive("dwell", dwell, "s", bound=MAX_DWELL)
     if modes is not None:
         modes = count("modes", modes, 1)
-    poses = count("poses", poses, 2, 100_000)
+    if poses is not None:
+        poses = count("poses", poses, 2, 100_000)
     shaper_n = count("shaper_modes", shaper_modes, 1, 4)
     p = np.zeros(3) if point is None else vector("point", point, 3, "m", bound=max(100.0 * L, 10.0))
     task = _task(robot, trajectory, cycle_time, dt, profile)
     em = elastic_model(robot, actuator_stiffness, material, links)
     check_compliant(em)
+    if damping_ratio is not None:
+        damping_ratio = check_ratio(damping_ratio)
+    if actuator_damping is not None:
+        actuator_damping = actuator_damping_values(em, actuator_damping)
+    if method == "multibody" and not np.all(np.isfinite(em.actuator_stiffness)):
+        raise InvalidInputError(
+            "actuator_stiffness",
+            "the multibody method simulates each actuator as a servo of finite stiffness; "
+            "give finite stiffnesses (or use the modal method)",
+        )
+    if poses is None:
+        poses = DEFAULT_POSES_LINKS if em.links else DEFAULT_POSES
     cmd = command(em, task, payload, p, feedforward, progress)
     setup = prepare(
         robot, em, cmd, p, payload, feedforward, damping_ratio, actuator_damping, band, dwell,
@@ -350,8 +375,11 @@ class Setup:
 
     @property
     def rest(self) -> float:
-        """Time observed after a motion [s]: the dwell (at least the residual window) and two
-        periods of the first mode (see :mod:`pkdyn.precision.vibration_figures`)."""
+        """Time observed after a motion [s].
+
+        The dwell (at least the residual window) and two periods of the first mode (see
+        :mod:`pkdyn.precision.vibration_figures`).
+        """
         return max(self.dwell, RESIDUAL_WINDOW) + 2.0 / self.f1
 
     def sub(self, h: float, T: float) -> int:
@@ -466,7 +494,7 @@ def analyse(st: Setup, cmd: Command, method: str, shaped: Shaper | None = None) 
 
 
 def static_deflection(pm: PathModes, F_end: np.ndarray) -> np.ndarray:
-    """Platform deviation (6,) in the (linear) static equilibrium of the end pose under ``F_end``."""
+    """Platform deviation (6,) in the linear static equilibrium of the end pose under ``F_end``."""
     w = 2.0 * np.pi * pm.frequencies[-1]
     return np.asarray(pm.platform[-1].T @ ((pm.shapes[-1] @ F_end) / w**2))
 

@@ -283,7 +283,7 @@ def command(
     robot = em.base
     joint = map_task_trajectory(robot, task, check_speeds=False, progress=progress)
     q, v, a = extended_motion(em, joint)
-    loaded = with_payload(robot, payload, offset=point) if payload > 0.0 else robot
+    loaded = with_payload(robot, payload, offset=tuple(point)) if payload > 0.0 else robot
     n_a = len(robot.actuators)
     if feedforward == "none":
         tau = np.zeros((task.t.size, n_a))

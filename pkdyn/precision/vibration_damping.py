@@ -27,7 +27,14 @@ import numpy as np
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.precision.elastic import ElasticModel
 
-__all__ = ["DEFAULT_DAMPING_RATIO", "MAX_DAMPING_RATIO", "Damping", "damping", "damping_ratio"]
+__all__ = [
+    "DEFAULT_DAMPING_RATIO",
+    "MAX_DAMPING_RATIO",
+    "Damping",
+    "actuator_damping_values",
+    "damping",
+    "damping_ratio",
+]
 
 DEFAULT_DAMPING_RATIO = 0.02
 """Damping ratio of the first mode when none is given (2 %: a lightly damped servo axis and
@@ -130,10 +137,27 @@ def damping(
     omega1 = 2.0 * math.pi * float(f1)
     beta = 2.0 * z / omega1
     k = em.actuator_stiffness
-    names = em.base.actuator_names
     if actuator_damping is None:
         c = np.where(np.isfinite(k), beta * np.where(np.isfinite(k), k, 0.0), 0.0)
         return Damping(z, float(f1), float(middle), beta, c, False)
+    arr = actuator_damping_values(em, actuator_damping)
+    arr = np.where(np.isfinite(k), arr, 0.0)
+    return Damping(z, float(f1), float(middle), beta, arr, True)
+
+
+def actuator_damping_values(
+    em: ElasticModel, value: float | Sequence[float] | np.ndarray
+) -> np.ndarray:
+    """Servo damping per actuator (n_a,) [N m s/rad or N s/m], checked.
+
+    One value or one per actuator, each finite, ``>= 0`` and at most 1e12.
+
+    Raises:
+        InvalidInputError: Not numbers, a wrong count, or a bad value (the actuator named).
+
+    """
+    names = em.base.actuator_names
+    actuator_damping = value
     if isinstance(actuator_damping, bool | str | bytes | dict):
         raise InvalidInputError("actuator_damping", f"{actuator_damping!r:.60} is not a number")
     try:
@@ -156,5 +180,4 @@ def damping(
                 f"{c:g} for actuator '{name}': a damping must be finite, >= 0 and at most 1e12 "
                 "[N m s/rad or N s/m]",
             )
-    arr = np.where(np.isfinite(k), arr, 0.0)
-    return Damping(z, float(f1), float(middle), beta, arr, True)
+    return arr

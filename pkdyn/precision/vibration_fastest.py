@@ -54,6 +54,7 @@ from pkdyn.precision.vibration import (
 from pkdyn.precision.vibration_command import Command, command, extended_motion, uniform
 from pkdyn.precision.vibration_modal import (
     DEFAULT_POSES,
+    DEFAULT_POSES_LINKS,
     modal_response,
     path_modes,
     pose_samples,
@@ -298,9 +299,7 @@ def _search(
 def _settled(kind: str | None, scale: float | None, v: VibrationResult, count: int) -> Settled:
     if scale is None or v.settling_time is None or not v.settled:
         return Settled(kind, None, None, None, None, count, v)
-    return Settled(
-        kind, scale, v.duration, v.settling_time, v.duration + v.dwell, count, v
-    )
+    return Settled(kind, scale, v.duration, v.settling_time, v.duration + v.dwell, count, v)
 
 
 def fastest_settling(
@@ -319,7 +318,7 @@ def fastest_settling(
     shaper: str | None = "zv",
     shaper_modes: int = 1,
     modes: int | None = None,
-    poses: int = DEFAULT_POSES,
+    poses: int | None = None,
     effort: float | np.ndarray | None = None,
     velocity: float | np.ndarray | None = None,
     max_scale: float = MAX_SCALE,
@@ -344,7 +343,7 @@ def fastest_settling(
         shaper: ``zv`` or ``zvd`` (also searched with shaping), or ``None``.
         shaper_modes: Modes the shaper targets.
         modes: Modes integrated (default: up to 8 times the first frequency).
-        poses: Poses along the path for the modes.
+        poses: Poses along the path for the modes (default 33, 65 with compliant links).
         effort: Effort limits (default: the robot's).
         velocity: Speed limits (default: the robot's).
         max_scale: Largest slow-down searched.
@@ -364,7 +363,9 @@ def fastest_settling(
     instance("robot", robot, Robot, "a Robot (pkdyn.load)")
     instance("path", path, TaskTrajectory, "a TaskTrajectory (pkdyn.dynamics.trajectory)")
     if robot.platform_frame is None:
-        raise InvalidInputError("robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}")
+        raise InvalidInputError(
+            "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
+        )
     band = positive("band", band, "m", bound=max(10.0 * robot.length_scale, 1.0))
     dwell = positive("dwell", dwell, "s", bound=MAX_DWELL)
     payload = non_negative("payload", payload, "kg")
@@ -376,10 +377,13 @@ def fastest_settling(
     shaper_n = count("shaper_modes", shaper_modes, 1, 4)
     if modes is not None:
         modes = count("modes", modes, 1)
-    poses = count("poses", poses, 2, 100_000)
+    if poses is not None:
+        poses = count("poses", poses, 2, 100_000)
     links = flag("links", links)
     em = elastic_model(robot, actuator_stiffness, material, links)
     check_compliant(em)
+    if poses is None:
+        poses = DEFAULT_POSES_LINKS if em.links else DEFAULT_POSES
     if fast is None:
         fast = fastest_trajectory(
             robot, path, payload=payload, effort=effort, velocity=velocity, progress=progress
@@ -438,4 +442,3 @@ def fastest_settling(
         scale_s, best_s, count_s = _search(shaped, max_scale, SCAN_STEP**3)
         settled_s = _settled(shaper, scale_s, best_s, count_s)
     return SettledFastest(robot.name, fast, band, dwell, max_scale, settled_u, settled_s)
-

@@ -138,7 +138,10 @@ def settling(dense: Dense, lo: float, hi: float, band: float) -> float | None:
         if peak < band:
             res = minimize_scalar(
                 lambda s, k=k: -dense.norm(k, s),
-                bounds=(max(a, float(grid[max(j - 1, 0)])), min(b, float(grid[min(j + 1, grid.size - 1)]))),
+                bounds=(
+                    max(a, float(grid[max(j - 1, 0)])),
+                    min(b, float(grid[min(j + 1, grid.size - 1)])),
+                ),
                 method="bounded",
                 options={"xatol": 1e-12},
             )

@@ -193,4 +193,3 @@ def simulate_mujoco(
         data.ctrl[2 : 3 * n_a : 3] = ff(min(tm, T))
         mujoco.mj_step(model, data)
     return MujocoRun(np.array(times), np.array(dev), steps)
-

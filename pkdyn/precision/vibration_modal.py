@@ -16,14 +16,14 @@ reactions balance does no work on the deformation). Method:
 - **modes at poses**: :func:`pkdyn.precision.modes.modes` (the same ``M`` and ``K``;
   mass-normalised shapes ``U_i``, platform motions ``P_i``, undamped ``omega_i``) at ``poses``
   commanded configurations spread evenly in time, first and last included;
-- **interpolation between two poses** ``j`` and ``j + 1``: in the basis of pose ``j``'s
-  integrated modes ``B = U_j`` (a Galerkin basis), the mass and stiffness are ``I`` and
-  ``Omega_j^2`` at pose ``j`` and ``B M_{j+1} B^T`` and ``T^T Omega_{j+1}^2 T``
-  (``T = U_{j+1} M_{j+1} B^T``, all of pose ``j + 1``'s modes) at pose ``j + 1``; both are
-  interpolated linearly in time to the middle of each sample interval, where their own modes
-  (``omega``, shapes, ``P``) are taken; the damping ``B C B^T`` is that of the constant joint-space
-  ``C`` (its modal off-diagonal terms neglected: exact for the damping-ratio model, which is
-  proportional to the stiffness);
+- **interpolation between two poses** ``j`` and ``j + 1``: in the coordinates of pose ``j``'s
+  integrated modes ``B = U_j``, the mass and stiffness are ``I`` and ``Omega_j^2`` at pose
+  ``j``, and ``T^T T`` and ``T^T Omega_{j+1}^2 T`` at pose ``j + 1``, whose integrated modes
+  ``U_{j+1}`` are seen through ``T = U_{j+1} M_{j+1} B^T`` (the platform motions alike,
+  ``T^T P_{j+1}``); both are interpolated linearly in time to the middle of each sample
+  interval, where their own modes (``omega``, shapes, ``P``) are taken; the damping
+  ``B C B^T`` is that of the constant joint-space ``C`` (its modal off-diagonal terms
+  neglected: exact for the damping-ratio model, which is proportional to the stiffness);
 - **modal coordinates carried across** from one interval's modes to the next one's by the
   projection ``y' = V'^T M' V y`` (through the segment basis; and from basis ``U_j`` to
   ``U_{j+1}`` by ``T`` where the segment changes), the rates alike;
@@ -61,10 +61,21 @@ from pkdyn.precision.modes import mass_matrix, modes
 from pkdyn.progress import progress as progress_bar
 from solvers import numerics
 
-__all__ = ["DEFAULT_POSES", "ModalResponse", "PathModes", "loads", "modal_response", "path_modes"]
+__all__ = [
+    "DEFAULT_POSES",
+    "DEFAULT_POSES_LINKS",
+    "ModalResponse",
+    "PathModes",
+    "loads",
+    "modal_response",
+    "path_modes",
+]
 
 DEFAULT_POSES = 33
-"""Poses along the motion where the modes are computed (start and end included)."""
+"""Poses along the motion where the modes are computed (start and end included), rigid links."""
+
+DEFAULT_POSES_LINKS = 65
+"""The same with compliant links (their many modes change faster along the path)."""
 
 
 @dataclass(eq=False)  # numpy fields
@@ -129,7 +140,11 @@ def path_modes(
         found.append(modes(em, Q[int(k)], point=point))
     counts = {m.frequencies.size for m in found}
     if len(counts) > 1:
-        k = next(int(s) for s, m in zip(samples, found, strict=True) if m.frequencies.size != found[0].frequencies.size)
+        k = next(
+            int(s)
+            for s, m in zip(samples, found, strict=True)
+            if m.frequencies.size != found[0].frequencies.size
+        )
         raise PkdynError(
             f"{em.base.name}: the number of elastic modes changes along the motion (at sample "
             f"{k}: {found[0].frequencies.size} -> {sorted(counts)}): a mobility appears, the "
@@ -316,12 +331,12 @@ def modal_response(
     BT = np.swapaxes(B, 1, 2)
     Cb = (B * c_diag) @ BT  # damping in each basis (constant)
     # the next pose's matrices in this pose's basis
-    MB = pm.mass[1:] @ BT[:-1]  # (P-1, nv, m)
-    T_all = pm.shapes[1:] @ MB  # (P-1, n, m)
+    # (the next pose's integrated modes seen from this basis: B^T ~ U'^T T, T = U' M' B^T)
+    T_all = B[1:] @ (pm.mass[1:] @ BT[:-1])  # (P-1, m, m)
     TT = np.swapaxes(T_all, 1, 2)
-    K_end = (TT * W2[1:, None, :]) @ T_all
-    M_end = B[:-1] @ MB
-    P_end = TT @ pm.platform[1:]
+    K_end = (TT * W2[1:, None, :m]) @ T_all
+    M_end = TT @ T_all
+    P_end = TT @ PL[1:]
     # each interval: the segment's matrices interpolated at its middle, its own modes
     eye = np.eye(m)
     lk = lam[:, None, None]
@@ -371,7 +386,7 @@ def modal_response(
     # transfer from each interval's modes to the next one's (through the segment basis)
     S = np.broadcast_to(eye, (K - 1, m, m)).copy()
     switch = np.flatnonzero(seg[1:] != seg[:-1])
-    S[switch] = T_all[seg[switch], :m, :]
+    S[switch] = T_all[seg[switch]]
     G = VT[1:] @ (Mk[1:] @ (S @ V[:-1]))
     X = np.empty((K + 1, m))
     Vv = np.empty((K + 1, m))
@@ -390,7 +405,7 @@ def modal_response(
             v = G[k] @ v
     # at the end of the motion: into the end pose's modes
     jL = int(seg[-1])
-    to_end = T_all[jL, :m] @ V[-1]
+    to_end = T_all[jL] @ V[-1]
     eta_T = to_end @ x
     eta_dot_T = to_end @ v
     # dense output within the intervals

@@ -77,7 +77,9 @@ def platform_motion(
             acc = pin.getFrameClassicalAcceleration(model, data, fid, _LWA)
             al[k] = acc.angular
             pdd[k] = (
-                acc.linear + np.cross(acc.angular, r) + np.cross(vel.angular, np.cross(vel.angular, r))
+                acc.linear
+                + np.cross(acc.angular, r)
+                + np.cross(vel.angular, np.cross(vel.angular, r))
             )
     return p, pd, pdd, R, w, al
 
@@ -164,8 +166,10 @@ def _deviation(
 def _rotation(
     cmd_rot: tuple[np.ndarray, np.ndarray, np.ndarray], tq: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Commanded rotation and angular velocity at ``tq``: cubic Hermite of the rotation vector
-    relative to the previous sample (geodesic to second order)."""
+    """Commanded rotation and angular velocity at ``tq``.
+
+    A cubic Hermite of the rotation vector relative to the previous sample (second order).
+    """
     t, R, w = cmd_rot
     k = np.clip(np.searchsorted(t, tq, side="right") - 1, 0, t.size - 2)
     h = t[k + 1] - t[k]
@@ -179,7 +183,9 @@ def _rotation(
         m0, m1 = Rk.T @ w[kk] * hh, Rk.T @ w[kk + 1] * hh
         s2, s3 = ss * ss, ss * ss * ss
         th = (s3 - 2 * s2 + ss) * m0 + (-2 * s3 + 3 * s2) * delta + (s3 - s2) * m1
-        thd = ((3 * s2 - 4 * ss + 1) * m0 + (-6 * s2 + 6 * ss) * delta + (3 * s2 - 2 * ss) * m1) / hh
+        thd = (
+            (3 * s2 - 4 * ss + 1) * m0 + (-6 * s2 + 6 * ss) * delta + (3 * s2 - 2 * ss) * m1
+        ) / hh
         out_R[i] = Rk @ pin.exp3(th)
         out_w[i] = Rk @ thd
     if np.any(tq > t[-1]):
@@ -269,7 +275,7 @@ def multibody_response(
         q0=q0,
         v0=v0,
         torque=servo,
-        viscous=damping_c,
+        viscous=list(damping_c),
         integrator="dopri5",
     )
     # the command's reference point and rotation at the output times
@@ -304,4 +310,3 @@ def multibody_response(
         steps=int(sim.extras.get("substeps", 0)),
         simulation=sim,
     )
-

@@ -190,6 +190,10 @@ class VibrationResult(Result):
     def table(self) -> str:
         """The figures as text, units on every figure."""
         tr = self.translation
+        static = float(np.linalg.norm(self.static_deflection[tr]))
+        shown = np.where(
+            np.abs(self.static_deflection[tr]) > 1e-9 * static, self.static_deflection[tr], 0.0
+        )
         if self.settling_time is None:
             settle = f"longer than the {quantity(self.t[-1] - self.duration, 's')} observed"
         else:
@@ -203,12 +207,13 @@ class VibrationResult(Result):
             f"{self.robot}: {self.trajectory}, {quantity(self.duration, 's')}, payload "
             f"{quantity(1e3 * self.payload, 'g')}, {self.method} method"
             + (f", {self.shaper['kind'].upper()} shaping" if self.shaper else ""),
-            f"peak deviation:      {quantity(self.peak_deviation, 'm')} at {quantity(self.peak_time, 's')}",
+            f"peak deviation:      {quantity(self.peak_deviation, 'm')} at "
+            f"{quantity(self.peak_time, 's')}",
             f"residual amplitude:  {quantity(self.residual_amplitude, 'm')} (over "
             f"{quantity(RESIDUAL_WINDOW, 's')} after the motion)",
             f"settling time:       {settle} to a {quantity(self.band, 'm')} band",
-            f"static deflection:   {quantity(float(np.linalg.norm(self.static_deflection[tr])), 'm')} "
-            f"at the end pose, {vector(self.static_deflection[tr] * 1e6, 'um')}",
+            f"static deflection:   {quantity(static, 'm')} at the end pose, "
+            f"{vector(shown * 1e6, 'um')}",
             "frequencies:         "
             + _freqs(self.frequencies_start)
             + " at the start, "
@@ -227,7 +232,9 @@ class VibrationResult(Result):
             f"({quantity(d.f1, 'Hz')}); servos "
             + ", ".join(
                 quantity(c, "N s/m" if pr else "N m s/rad")
-                for c, pr in zip(d.actuator, self.prismatic or (False,) * d.actuator.size, strict=True)
+                for c, pr in zip(
+                    d.actuator, self.prismatic or (False,) * d.actuator.size, strict=True
+                )
             )
             + f"; feedforward {self.feedforward}"
         )
@@ -236,8 +243,10 @@ class VibrationResult(Result):
         return "\n".join(lines)
 
     def write_csv(self, path: str | Path) -> None:
-        """Time series: ``t``, ``deviation_<c>`` per task component, ``deviation_norm``,
-        ``deviation_from_rest`` (the norm about the end equilibrium).
+        """Time series: ``t``, the deviation's components, its norm and its norm from rest.
+
+        Columns ``t`` [s], ``deviation_<c>`` per task component [m, rad], ``deviation_norm``
+        [m] and ``deviation_from_rest`` [m] (the norm about the end pose's equilibrium).
 
         Args:
             path: Output file.

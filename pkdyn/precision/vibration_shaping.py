@@ -114,9 +114,7 @@ class Shaper:
     def delays_end(self) -> np.ndarray:
         """Delays of the convolved impulses at the end pose (n_impulses,) [s]."""
         _, n = self._combined()
-        half = np.pi / (
-            2.0 * np.pi * self.frequencies[-1] * np.sqrt(1.0 - self.damping[-1] ** 2)
-        )
+        half = np.pi / (2.0 * np.pi * self.frequencies[-1] * np.sqrt(1.0 - self.damping[-1] ** 2))
         return np.asarray(n @ half)
 
     def _combined(self) -> tuple[np.ndarray, np.ndarray]:
@@ -207,4 +205,6 @@ def tracked(
         raise InvalidInputError("shaper", f"unknown {kind!r} (one of {', '.join(SHAPERS)})")
     for z in np.ravel(damping):
         impulses(kind, float(z))
-    return Shaper(kind, np.asarray(times, dtype=float), np.asarray(frequencies), np.asarray(damping))
+    return Shaper(
+        kind, np.asarray(times, dtype=float), np.asarray(frequencies), np.asarray(damping)
+    )
