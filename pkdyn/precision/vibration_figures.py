@@ -24,7 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
+from scipy.optimize import brentq
 
 __all__ = ["RESIDUAL_WINDOW", "Dense", "Figures", "figures"]
 
@@ -83,10 +83,33 @@ def _window(dense: Dense, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray,
 
 def _scan(dense: Dense, ks: np.ndarray, s0: np.ndarray, s1: np.ndarray) -> np.ndarray:
     """Largest norm of each step on a grid of :data:`_SAMPLES` points (len(ks),)."""
+    t = dense.t
+    h = (t[ks + 1] - t[ks])[:, None]
+    y0, y1 = dense.y[ks], dense.y[ks + 1]
+    m0, m1 = h * dense.yd[ks], h * dense.yd[ks + 1]
+    # the cubic's power-basis coefficients per step (K, n)
+    c2 = 3.0 * (y1 - y0) - 2.0 * m0 - m1
+    c3 = 2.0 * (y0 - y1) + m0 + m1
     frac = np.linspace(0.0, 1.0, _SAMPLES)
-    S = s0[:, None] + (s1 - s0)[:, None] * frac[None, :]
-    K = np.broadcast_to(ks[:, None], S.shape)
-    return np.asarray(np.linalg.norm(dense.at(K, S), axis=-1).max(axis=1))
+    S = (s0[:, None] + (s1 - s0)[:, None] * frac[None, :])[:, :, None]  # (K, samples, 1)
+    v = y0[:, None, :] + S * (m0[:, None, :] + S * (c2[:, None, :] + S * c3[:, None, :]))
+    return np.asarray(np.sqrt(np.einsum("ksc,ksc->ks", v, v)).max(axis=1))
+
+
+def _refine(dense: Dense, k: int, a: float, b: float, points: int = 257) -> tuple[float, float]:
+    """Largest norm on ``[a, b]`` of step ``k`` (a fine grid, then a parabola through its top)."""
+    s = np.linspace(a, b, points)
+    vals = np.linalg.norm(dense.at(np.full(points, k), s), axis=-1)
+    j = int(np.argmax(vals))
+    best, where = float(vals[j]), float(s[j])
+    if 0 < j < points - 1:
+        y0, y1, y2 = vals[j - 1], vals[j], vals[j + 1]
+        den = y0 - 2.0 * y1 + y2
+        if den < 0.0:
+            off = 0.5 * (y0 - y2) / den
+            where = float(s[j] + off * (s[1] - s[0]))
+            best = max(best, dense.norm(k, where))
+    return best, where
 
 
 def largest(dense: Dense, lo: float, hi: float) -> tuple[float, float]:
@@ -101,15 +124,9 @@ def largest(dense: Dense, lo: float, hi: float) -> tuple[float, float]:
         if scanned[i] < 0.98 * top:
             break
         k = int(ks[i])
-        res = minimize_scalar(
-            lambda s, k=k: -dense.norm(k, s),
-            bounds=(float(s0[i]), float(s1[i])),
-            method="bounded",
-            options={"xatol": 1e-10},
-        )
-        val = max(-float(res.fun), float(scanned[i]))
+        val, s = _refine(dense, k, float(s0[i]), float(s1[i]))
         if val > best:
-            best, when = val, dense.time(k, float(res.x))
+            best, when = val, dense.time(k, s)
     return best, when
 
 
@@ -131,27 +148,14 @@ def settling(dense: Dense, lo: float, hi: float, band: float) -> float | None:
     for i in np.flatnonzero(scanned >= 0.9 * band)[::-1]:
         k = int(ks[i])
         a, b = float(s0[i]), float(s1[i])
-        grid = np.linspace(a, b, 4 * _SAMPLES)
+        grid = np.linspace(a, b, 257)
         vals = np.linalg.norm(dense.at(np.full(grid.size, k), grid), axis=-1)
-        j = int(np.argmax(vals))
-        peak_s, peak = float(grid[j]), float(vals[j])
+        peak, peak_s = _refine(dense, k, a, b)
         if peak < band:
-            res = minimize_scalar(
-                lambda s, k=k: -dense.norm(k, s),
-                bounds=(
-                    max(a, float(grid[max(j - 1, 0)])),
-                    min(b, float(grid[min(j + 1, grid.size - 1)])),
-                ),
-                method="bounded",
-                options={"xatol": 1e-12},
-            )
-            if -float(res.fun) < band:
-                continue
-            peak_s = float(res.x)
-        # the last crossing: after the last grid point at or above the band
+            continue
+        # the last crossing: after the last grid point at or above the band (and the peak)
         above = np.flatnonzero(vals >= band)
-        start = float(grid[above[-1]]) if above.size else peak_s
-        start = max(start, peak_s)
+        start = max(float(grid[above[-1]]) if above.size else peak_s, peak_s)
         ends = grid[grid > start]
         stop = float(ends[0]) if ends.size else b
         if dense.norm(k, stop) >= band:  # still above at the step's end: crossing in the next

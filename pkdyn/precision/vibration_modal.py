@@ -177,18 +177,26 @@ def loads(
     model, data = r.model, r.model.createData()
     iv = np.asarray(r.actuated_v)
     P = r.passive
-    F = np.empty((Q.shape[0], r.nv))
+    n = Q.shape[0]
+    F = np.empty((n, r.nv))
+    rows = []
     rnea = pin.rnea
-    for k in range(Q.shape[0]):
+    for k in range(n):
         f = -rnea(model, data, Q[k], V[k], A[k])
         if P is not None:
             f = f + P.force(Q[k], V[k])
         f[iv] += tau_ff[k]
-        rows = constraint_rows(em, Q[k])
-        if rows.shape[0]:
-            N = numerics.null_space(rows, RANK_TOL, scale=1.0)
-            f = N @ (N.T @ f)
         F[k] = f
+        rows.append(constraint_rows(em, Q[k]))
+    if not rows or rows[0].shape[0] == 0:
+        return F
+    J = np.array(rows)  # (N, r, nv)
+    _, sv, Vt = np.linalg.svd(J)  # (batched)
+    ranks = [numerics.rank_of(sv[k], RANK_TOL, 1.0) for k in range(n)]
+    for rank in set(ranks):
+        ks = np.flatnonzero(np.asarray(ranks) == rank)
+        Vr = Vt[ks, :rank, :]  # the rows' range: the reactions' directions
+        F[ks] -= np.einsum("krv,kr->kv", Vr, np.einsum("krv,kv->kr", Vr, F[ks]))
     return F
 
 
