@@ -20,7 +20,13 @@
 - :mod:`~pkdyn.precision.sensitivity`: first-order sensitivity of the platform pose to actuator
   and geometric errors through the loops (shared with :mod:`pkdyn.calibration`);
 - :mod:`~pkdyn.precision.accuracy`: error budgets (worst case, RMS, Monte Carlo, ranking of the
-  tolerances) and pose-error maps.
+  tolerances) and pose-error maps;
+- :mod:`~pkdyn.precision.vibration`: :func:`vibration`, the tool's deviation from its rigid
+  motion along a motion and its settling (the command: ``vibration_command``; the damping:
+  ``vibration_damping``; the modal and multibody methods: ``vibration_modal``,
+  ``vibration_multibody``; the figures: ``vibration_figures``; the result:
+  ``vibration_result``; input shaping: ``vibration_shaping``; the fastest settling cycle:
+  ``vibration_fastest``; the MJCF export with servos: ``vibration_mjcf``).
 
 Layering: may import :mod:`pkdyn.model`, :mod:`pkdyn.analysis`, :mod:`pkdyn.workspace` and
 below; never design, calibration, viewer, plotting or the CLI.
@@ -33,6 +39,8 @@ from pkdyn.precision.maps import PoseFigures, PrecisionMap, pose_figures, precis
 from pkdyn.precision.material import ALUMINIUM, CARBON, MATERIALS, STEEL, Material, as_material
 from pkdyn.precision.modes import Modes, mode_trajectory, modes
 from pkdyn.precision.stiffness import Principal, Stiffness, stiffness, stiffness_json, transport
+from pkdyn.precision.vibration import vibration
+from pkdyn.precision.vibration_result import VibrationResult
 
 __all__ = [
     "ALUMINIUM",
@@ -48,6 +56,7 @@ __all__ = [
     "Principal",
     "Section",
     "Stiffness",
+    "VibrationResult",
     "actuator_stiffness",
     "as_material",
     "centre_compliance",
@@ -61,4 +70,5 @@ __all__ = [
     "stiffness_json",
     "tip_compliance",
     "transport",
+    "vibration",
 ]
