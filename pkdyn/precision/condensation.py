@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import SingularConfigurationError
+from pkdyn.model.platform_jacobian import platform_jacobian
 from pkdyn.precision.elastic import ElasticModel
 from solvers import numerics
 
@@ -55,9 +56,6 @@ FREE_TOL_LOADED = 1e-8
 _MOVES_TOL = 1e-7
 """A stiffness-free motion moves the platform when its (scale-aware) motion exceeds this."""
 
-_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-
 @dataclass(eq=False)  # numpy fields
 class Reduced:
     """A virtual-joint model condensed at one configuration (see the module docstring).
@@ -85,10 +83,6 @@ class Reduced:
     free_tol: float = FREE_TOL
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
 def constraint_rows(em: ElasticModel, q: np.ndarray) -> np.ndarray:
     """Closure Jacobian and rigid-actuator rows (r, nv) at ``q`` (runs the joint Jacobians)."""
     r = em.robot
@@ -108,6 +102,9 @@ def constraint_rows(em: ElasticModel, q: np.ndarray) -> np.ndarray:
 def platform_rows(em: ElasticModel, point: np.ndarray) -> tuple[np.ndarray, pin.SE3, np.ndarray]:
     """Platform Jacobian (6, nv) at the reference point (joint Jacobians already computed).
 
+    :func:`pkdyn.model.platform_jacobian.platform_jacobian` with world axes (the precision
+    convention).
+
     Args:
         em: The elastic model.
         point: Reference point in the platform frame [m].
@@ -117,15 +114,10 @@ def platform_rows(em: ElasticModel, point: np.ndarray) -> tuple[np.ndarray, pin.
 
     """
     r = em.robot
-    fid = r.platform_frame
-    assert fid is not None
-    oMf = pin.updateFramePlacement(r.model, r.data, fid)
-    J = pin.getFrameJacobian(r.model, r.data, fid, _LWA)
-    arm = oMf.rotation @ point
-    if np.any(arm):
-        J = J.copy()
-        J[:3] -= _skew(arm) @ J[3:]
-    return J, pin.SE3(oMf), oMf.translation + arm
+    J = platform_jacobian(r, None, point=point, angular="world")
+    assert r.platform_frame is not None
+    oMf = r.data.oMf[r.platform_frame]
+    return J, pin.SE3(oMf), oMf.act(np.asarray(point, dtype=float))
 
 
 def spring_force(em: ElasticModel, q: np.ndarray, qa_rest: np.ndarray) -> np.ndarray:
