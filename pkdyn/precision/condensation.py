@@ -56,6 +56,7 @@ FREE_TOL_LOADED = 1e-8
 _MOVES_TOL = 1e-7
 """A stiffness-free motion moves the platform when its (scale-aware) motion exceeds this."""
 
+
 @dataclass(eq=False)  # numpy fields
 class Reduced:
     """A virtual-joint model condensed at one configuration (see the module docstring).
