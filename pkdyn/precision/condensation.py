@@ -33,7 +33,6 @@ from solvers import numerics
 __all__ = [
     "FREE_TOL",
     "FREE_TOL_LOADED",
-    "translational",
     "RANK_TOL",
     "Reduced",
     "compliance",
@@ -54,7 +53,10 @@ FREE_TOL_LOADED = 1e-8
 """The same for a loaded tangent stiffness (central differences: round-off about 1e-10)."""
 
 _MOVES_TOL = 1e-7
-"""A stiffness-free motion moves the platform when its (scale-aware) motion exceeds this."""
+"""A stiffness-free motion moves the platform when its (scale-aware) motion exceeds this, times
+the largest motion any allowed direction gives the platform (at least 1: translations divided by
+the robot's size, unit allowed motions; a mechanism whose allowed motions all leave the platform
+still, every actuator held, is judged against that unit)."""
 
 
 @dataclass(eq=False)  # numpy fields
@@ -237,7 +239,7 @@ def compliance(em: ElasticModel, red: Reduced) -> tuple[np.ndarray, int]:
     zero = negligible(w, red.free_tol)
     moving = _scale(em)[:, None] * (red.Jz @ V[:, zero])
     reach = np.abs(_scale(em)[:, None] * red.Jz).max() if red.Jz.size else 0.0
-    if moving.size and float(np.abs(moving).max()) > _MOVES_TOL * max(reach, 1e-300):
+    if moving.size and float(np.abs(moving).max()) > _MOVES_TOL * max(reach, 1.0):
         raise SingularConfigurationError(
             "parallel",
             f"{em.base.name}: the platform can move without deforming any spring (parallel "
@@ -259,26 +261,3 @@ def compliance(em: ElasticModel, red: Reduced) -> tuple[np.ndarray, int]:
         JV = red.Jz @ Vk
         C = JV @ np.linalg.solve(Vk.T @ Kz @ Vk, JV.T)
     return C, int(zero.sum())
-
-
-def translational(
-    em: ElasticModel, q: np.ndarray, point: np.ndarray, w: np.ndarray | None
-) -> tuple[float, float]:
-    """Smallest translational stiffness [N/m] and deflection [m] at an assembled ``q``.
-
-    The smallest principal stiffness among the task's translation components, and the
-    translation of the point under ``w`` (``nan`` without ``w``). The lean path of the maps
-    (no input checks): :func:`reduce` and :func:`compliance`.
-
-    Raises:
-        SingularConfigurationError: As :func:`compliance`.
-
-    """
-    C, _ = compliance(em, reduce(em, em.embed(q), point))
-    t = [int(i) for i in em.base.task_rows if i < 3]
-    if not t:
-        return float("nan"), float("nan")
-    top = float(np.linalg.eigvalsh(C[np.ix_(t, t)])[-1])
-    kmin = 1.0 / top if top > 0.0 else float("nan")
-    defl = float(np.linalg.norm((C @ w)[:3])) if w is not None else float("nan")
-    return kmin, defl

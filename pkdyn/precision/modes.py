@@ -23,21 +23,24 @@ motions (reference point and rotation, world axes).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 import scipy.linalg
 
-from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.exceptions import InvalidInputError, PkdynError, SingularConfigurationError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
-from pkdyn.precision.stiffness import _check_assembled, _point, _wrench, check_compliant
+from pkdyn.precision.stiffness import _check_assembled, _point, _wrench, nothing_compliant
+from pkdyn.precision.validity import Validity, check_stiffness, freed
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity
 from solvers import numerics, solve_lm
 
 __all__ = ["Modes", "mass_matrix", "mode_trajectory", "modes", "modes_json"]
@@ -49,13 +52,13 @@ _ZERO_FREQ = 1e-10
 
 
 @dataclass(eq=False)  # numpy fields
-class Modes:
+class Modes(Result):
     """Natural frequencies and mode shapes (see the module docstring).
 
     Attributes:
         q: Configuration (nq,) of the equilibrium (link deflections dropped).
         q_elastic: Extended configuration of the equilibrium (the elastic model's robot).
-        frequencies: Natural frequencies (n,) [Hz], ascending.
+        frequencies: Natural frequencies (n,) [Hz], ascending (none when the robot is rigid).
         shapes: Mode shapes in the extended velocity coordinates (n, nv_ext), mass-normalised.
         joints: Joint motions of each mode (n, nv) (the robot's velocity coordinates).
         deflections: Each compliant link's deflection per mode (n, n_links, 6) [m, rad].
@@ -63,6 +66,11 @@ class Modes:
         internal: Internal mobilities without stiffness (not modes).
         condensed: Directions without mass condensed out statically.
         point: Reference point, platform frame [m].
+        rigid: Every actuator rigid and nothing else compliant: no mode (infinite frequencies).
+        validity: ``valid`` and ``warnings`` (:mod:`pkdyn.precision.validity`).
+        robot: The robot's name.
+        links: Names of the compliant links.
+        count: Modes :meth:`to_json` and :meth:`table` report (``None``: all).
 
     """
 
@@ -76,32 +84,79 @@ class Modes:
     internal: int
     condensed: int
     point: np.ndarray
+    rigid: bool = False
+    validity: Validity = field(default_factory=Validity)
+    robot: str = ""
+    links: tuple[str, ...] = ()
+    count: int | None = None
+
+    @property
+    def valid(self) -> bool:
+        """The figures mean what they say here (:mod:`pkdyn.precision.validity`)."""
+        return self.validity.valid
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What to know about the figures."""
+        return self.validity.warnings
 
     @property
     def f1(self) -> float:
-        """Lowest natural frequency [Hz]."""
-        return float(self.frequencies[0])
+        """Lowest natural frequency [Hz] (``inf`` for a rigid robot)."""
+        return float(self.frequencies[0]) if self.frequencies.size else float("inf")
+
+    def _shown(self, count: int | None) -> int:
+        n = self.frequencies.size
+        c = self.count if count is None else count
+        return n if c is None else min(int(c), n)
 
     def to_json(self, count: int | None = None) -> dict[str, Any]:
-        """JSON-ready dict: ``frequencies`` [Hz], ``platform`` motions, ``internal_mobilities``.
+        """JSON values: ``frequencies`` [Hz], ``platform`` motions, ``internal_mobilities``...
 
         Args:
-            count: Report the lowest ``count`` modes (default: all).
+            count: Report the lowest ``count`` modes (default: :attr:`count`, else all).
 
         """
-        n = self.frequencies.size if count is None else min(count, self.frequencies.size)
+        n = self._shown(count)
         unit = np.linalg.norm(self.platform[:n], axis=1, keepdims=True)
         return {
-            "frequencies": [float(f) for f in self.frequencies[:n]],
-            "platform": [
-                [float(x) for x in row] for row in self.platform[:n] / np.maximum(unit, 1e-300)
-            ],
+            "robot": self.robot,
+            "frequencies": jsonable(self.frequencies[:n]),
+            "platform": jsonable(self.platform[:n] / np.maximum(unit, 1e-300)),
             "internal_mobilities": self.internal,
             "modes": int(self.frequencies.size),
-            "point": [float(x) for x in self.point],
+            "point": jsonable(self.point),
+            "rigid": self.rigid,
+            **self.validity.to_json(),
+            "links": list(self.links),
             "convention": "frequencies ascending [Hz]; platform: direction of each mode's "
             "platform motion [translation of the point, rotation], world axes, unit norm",
         }
+
+    def table(self, count: int | None = None) -> str:
+        """The frequencies with their units, what each mode moves, the flags."""
+        n = self._shown(count)
+        lines = [f"natural frequencies of {self.robot or 'the robot'}"]
+        if self.rigid:
+            lines.append(
+                "rigid: every actuator is held rigidly (inf) and nothing else is compliant: "
+                "no vibration mode (infinite frequencies)"
+            )
+        for k in range(n):
+            P = self.platform[k]
+            lines.append(
+                f"  mode {k + 1}: {quantity(self.frequencies[k], 'Hz')}, platform moves "
+                f"{quantity(float(np.linalg.norm(P[:3])), 'm')} and turns "
+                f"{quantity(float(np.linalg.norm(P[3:])), 'rad')} per unit modal amplitude"
+            )
+        if n < self.frequencies.size:
+            lines.append(f"  ({self.frequencies.size - n} more modes up to "
+                         f"{quantity(self.frequencies[-1], 'Hz')})")  # fmt: skip
+        if self.internal:
+            lines.append(f"internal mobilities without stiffness (not modes): {self.internal}")
+        if self.links:
+            lines.append(f"compliant links: {', '.join(self.links)}")
+        return "\n".join(lines + self.validity.lines())
 
 
 def mass_matrix(robot: Robot, q: np.ndarray) -> np.ndarray:
@@ -182,8 +237,9 @@ def modes(
         if isinstance(robot, ElasticModel)
         else elastic_model(robot, actuator_stiffness, material, links)
     )
-    check_compliant(em)
     q_ext = em.embed(qq)
+    if nothing_compliant(em):
+        return _rigid_modes(em, qq, q_ext, p)
     if w is None and not gravity:
         red = reduce(em, q_ext, p)
     else:
@@ -196,7 +252,8 @@ def modes(
             return tangent_along(em, eq.q, eq.lambdas, qa_rest, p, load, gravity, N)
 
         red = reduce(em, q_ext, p, tangent)
-    _, internal = compliance(em, red)  # raises when the platform moves without stiffness
+    C6, internal = compliance(em, red)  # raises when the platform moves without stiffness
+    validity = _validity(em, red, C6, qq, p)
     lam, X, condensed = _eigen(red, mass_matrix(em.robot, q_ext))
     elastic = ~negligible(lam, max(_ZERO_FREQ, red.free_tol)) & (lam > 0.0)
     if not elastic.any():
@@ -204,6 +261,7 @@ def modes(
     lam, X = lam[elastic], X[:, elastic]
     free = int((~elastic).sum())
     U = (red.N @ X).T  # (n, nv_ext)
+    validity.warn(stacklevel=3)
     return Modes(
         q=em.restrict(q_ext),
         q_elastic=q_ext,
@@ -215,11 +273,57 @@ def modes(
         internal=max(internal, free),
         condensed=condensed,
         point=p,
+        validity=validity,
+        robot=base.name,
+        links=tuple(lc.link for lc in em.links),
+    )
+
+
+def _validity(
+    em: ElasticModel, red: Reduced, C6: np.ndarray, q: np.ndarray, point: np.ndarray
+) -> Validity:
+    """Not valid where the stiffness is unbounded: the platform does not move in the modes."""
+    base = em.base
+    rows = [int(i) for i in base.task_rows]
+    em_free, k_ref = freed(em)
+    C_free = None
+    if em_free is not em:
+        C_free, _ = compliance(em_free, reduce(em_free, red.q, point))
+    try:
+        validity, _ = check_stiffness(base, q, C6, rows, k_ref, C_free)
+    except SingularConfigurationError as err:
+        return Validity(
+            False,
+            (
+                f"{err}; the modes are the mechanism's own, the platform does not move in them "
+                "to first order",
+            ),
+        )
+    return validity
+
+
+def _rigid_modes(em: ElasticModel, q: np.ndarray, q_ext: np.ndarray, point: np.ndarray) -> Modes:
+    """No mode: every actuator rigid and nothing compliant (the platform must not move)."""
+    compliance(em, reduce(em, q_ext, point))  # (a parallel singularity is still refused)
+    nv = em.robot.nv
+    return Modes(
+        q=q,
+        q_elastic=q_ext,
+        frequencies=np.zeros(0),
+        shapes=np.zeros((0, nv)),
+        joints=np.zeros((0, em.base.nv)),
+        deflections=np.zeros((0, len(em.links), 6)),
+        platform=np.zeros((0, 6)),
+        internal=0,
+        condensed=0,
+        point=point,
+        rigid=True,
+        robot=em.base.name,
     )
 
 
 def modes_json(robot: Robot, q: np.ndarray, count: int | None = None, **kwargs: Any) -> dict:
-    """JSON-ready :func:`modes` for the CLI (keys of :meth:`Modes.to_json`)."""
+    """JSON-ready :func:`modes` (keys of :meth:`Modes.to_json`)."""
     return modes(robot, q, **kwargs).to_json(count)
 
 
