@@ -220,7 +220,7 @@ def accuracy_map(
         InvalidInputError: A bad plane, centre, extent, bounds, sample count or error value.
 
     """
-    if not isinstance(plane, str) or positions is not None:
+    if not isinstance(plane, str) or positions is not None or (legacy and plane not in PLANES):
         names = ("resolution", "backlash", "model", "tolerance", "rotation", "shape", "axes",
                  "progress_bar")  # fmt: skip
         if len(legacy) > len(names):
@@ -360,7 +360,9 @@ def _map(
             act = _actuator_budget(robot, s.J, r, b, validity)
             out["actuator_worst"][k], out["actuator_rms"][k] = act.position_worst, act.position_rms
             if model is not None:
-                geo = _geometric_budget(model, s, t, std, distribution, validity)
+                geo = _geometric_budget(
+                    model, s, t, std, distribution, validity, robot.length_scale
+                )
                 out["geometric_worst"][k] = geo.position_worst
                 out["geometric_rms"][k] = geo.position_rms
     keep = list(FIELDS) if model is not None else ["actuator_worst", "actuator_rms"]

@@ -39,6 +39,7 @@ import pinocchio as pin
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.robot import Robot
+from pkdyn.precision._format import chop
 from pkdyn.precision.parameters import ParameterModel
 from pkdyn.precision.sensitivity import pose_sensitivity
 from pkdyn.precision.validity import PrecisionWarning, Validity, budget_validity
@@ -162,6 +163,7 @@ class Budget(Result):
         position_worst: Worst-case position error norm [m].
         orientation_worst: Worst-case rotation error norm [rad].
         validity: ``valid`` and ``warnings`` at this pose (:mod:`pkdyn.precision.validity`).
+        length: The robot's size [m] (rotations judged through it in tables).
 
     """
 
@@ -170,6 +172,7 @@ class Budget(Result):
     position_worst: float
     orientation_worst: float
     validity: Validity = field(default_factory=Validity)
+    length: float = 1.0
 
     @property
     def position_rms(self) -> float:
@@ -205,17 +208,24 @@ class Budget(Result):
         }
 
     def _summary(self) -> str:
+        scale = max(self.position_worst / self.length, self.orientation_worst)
+        orientation_worst, orientation_rms = (
+            float(x) for x in chop(np.array([self.orientation_worst, self.orientation_rms]), scale)
+        )
         return (
             f"worst-case position {quantity(self.position_worst, 'm')}, RMS "
             f"{quantity(self.position_rms, 'm')}; rotation "
-            f"{quantity(self.orientation_worst, 'rad')} worst-case, RMS "
-            f"{quantity(self.orientation_rms, 'rad')}"
+            f"{quantity(orientation_worst, 'rad')} worst-case, RMS "
+            f"{quantity(orientation_rms, 'rad')}"
         )
 
     def _components(self) -> str:
+        S = np.array([1.0 / self.length] * 3 + [1.0] * 3)
+        scale = float(np.max(np.abs(self.worst) * S, initial=0.0))
+        worst, rms = chop(self.worst * S, scale) / S, chop(self.rms * S, scale) / S
         return "  per component, worst case (RMS): " + ", ".join(
             f"{c} {quantity(w, u)} ({quantity(r, u)})"
-            for c, w, r, u in zip(_COMPONENTS, self.worst, self.rms, _UNITS, strict=True)
+            for c, w, r, u in zip(_COMPONENTS, worst, rms, _UNITS, strict=True)
         )
 
     def table(self) -> str:
@@ -337,6 +347,7 @@ def _actuator_budget(
     return ActuatorAccuracy(
         **_budget(J, half, std),
         validity=validity,
+        length=robot.length_scale,
         J=J,
         half_width=half,
         std=std,
@@ -538,7 +549,8 @@ def geometric_errors(
     t = _tolerances(model, tolerance)
     std = _std(t, distribution)
     s = pose_sensitivity(robot, q, model)
-    return _geometric_budget(model, s, t, std, distribution, budget_validity(robot, s.q))
+    validity = budget_validity(robot, s.q)
+    return _geometric_budget(model, s, t, std, distribution, validity, robot.length_scale)
 
 
 def _geometric_budget(
@@ -548,6 +560,7 @@ def _geometric_budget(
     std: np.ndarray,
     distribution: str,
     validity: Validity,
+    length: float = 1.0,
 ) -> GeometricAccuracy:
     gap = (
         np.max(np.abs(s.closure_gap), axis=0, initial=0.0)
@@ -561,6 +574,7 @@ def _geometric_budget(
     return GeometricAccuracy(
         **_budget(K, t_eff, std_eff),
         validity=validity,
+        length=length,
         K=K,
         names=model.names,
         tolerance=t,

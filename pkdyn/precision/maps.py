@@ -257,6 +257,7 @@ def translational(
             unbounded (serial) at ``q``.
 
     """
+    em = em.at(q)
     red = reduce(em, em.embed(q), point)
     C, _ = compliance(em, red)
     base = em.base

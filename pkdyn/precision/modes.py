@@ -33,6 +33,7 @@ import scipy.linalg
 from pkdyn.exceptions import InvalidInputError, PkdynError, SingularConfigurationError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.precision._format import chop
 from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
@@ -71,6 +72,7 @@ class Modes(Result):
         robot: The robot's name.
         links: Names of the compliant links.
         count: Modes :meth:`to_json` and :meth:`table` report (``None``: all).
+        elastic: The elastic model the modes were computed on (at their configuration).
 
     """
 
@@ -89,6 +91,7 @@ class Modes(Result):
     robot: str = ""
     links: tuple[str, ...] = ()
     count: int | None = None
+    elastic: ElasticModel | None = field(default=None, repr=False)
 
     @property
     def valid(self) -> bool:
@@ -142,8 +145,9 @@ class Modes(Result):
                 "rigid: every actuator is held rigidly (inf) and nothing else is compliant: "
                 "no vibration mode (infinite frequencies)"
             )
+        L = self.elastic.base.length_scale if self.elastic is not None else 1.0
         for k in range(n):
-            P = self.platform[k]
+            P = chop(self.platform[k], float(np.abs(self.platform[k]).max()) / L)
             lines.append(
                 f"  mode {k + 1}: {quantity(self.frequencies[k], 'Hz')}, platform moves "
                 f"{quantity(float(np.linalg.norm(P[:3])), 'm')} and turns "
@@ -195,6 +199,7 @@ def modes(
     point: Sequence[float] | np.ndarray | None = None,
     wrench: Sequence[float] | np.ndarray | None = None,
     gravity: bool = False,
+    shear: bool = True,
 ) -> Modes:
     """Natural frequencies [Hz] and mode shapes of a robot about an equilibrium.
 
@@ -211,6 +216,7 @@ def modes(
         wrench: A static wrench on the platform (6, world axes, moment about the point): the
             vibrations are about the loaded equilibrium, geometric terms included.
         gravity: The weight is part of the load (equilibrium and geometric terms).
+        shear: Include the beams' shear deflection (Timoshenko; ``False``: Euler-Bernoulli).
 
     Returns:
         The modes.
@@ -235,8 +241,8 @@ def modes(
     em = (
         robot
         if isinstance(robot, ElasticModel)
-        else elastic_model(robot, actuator_stiffness, material, links)
-    )
+        else elastic_model(robot, actuator_stiffness, material, links, shear)
+    ).at(qq)
     q_ext = em.embed(qq)
     if nothing_compliant(em):
         return _rigid_modes(em, qq, q_ext, p)
@@ -275,7 +281,8 @@ def modes(
         point=p,
         validity=validity,
         robot=base.name,
-        links=tuple(lc.link for lc in em.links),
+        links=tuple(dict.fromkeys(lc.link for lc in em.links)),
+        elastic=em,
     )
 
 
@@ -319,6 +326,7 @@ def _rigid_modes(em: ElasticModel, q: np.ndarray, q_ext: np.ndarray, point: np.n
         point=point,
         rigid=True,
         robot=em.base.name,
+        elastic=em,
     )
 
 
@@ -361,6 +369,8 @@ def mode_trajectory(
     for what, value in (("period", period), ("cycles", cycles), ("samples", samples)):
         if not (np.isfinite(value) and value > 0):
             raise InvalidInputError(what, f"must be > 0, got {value}")
+    if result.elastic is not None and result.elastic.robot.nq == em.robot.nq:
+        em = result.elastic  # (the model at the modes' configuration)
     r = em.robot
     q0 = result.q_elastic
     u = result.shapes[index]

@@ -46,6 +46,7 @@ from pkdyn.analysis.kinematics import ASSEMBLY_TOL, TASK_NAMES
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.precision._format import chop
 from pkdyn.precision.condensation import Reduced, compliance, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
@@ -114,6 +115,7 @@ class Stiffness(Result):
         robot: The robot's name.
         links: Names of the compliant links.
         actuator_stiffness: Each actuator's stiffness (n_a,) [N m/rad or N/m] (``inf``: rigid).
+        length: The robot's size [m] (rotations and moments judged through it in tables).
 
     """
 
@@ -135,6 +137,7 @@ class Stiffness(Result):
     robot: str = ""
     links: tuple[str, ...] = ()
     actuator_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    length: float = 1.0
 
     @property
     def valid(self) -> bool:
@@ -217,7 +220,7 @@ class Stiffness(Result):
             )
         else:
             lines.append(f"K ({' '.join(self.task)}), rows and columns in that order:")
-            lines += _matrix_lines(self.K, self.task)
+            lines += _matrix_lines(self.K, self.task, self.length)
         for name, p, unit in (
             ("translational", self.translation, "N/m"),
             ("rotational", self.rotation, "N m/rad"),
@@ -225,18 +228,19 @@ class Stiffness(Result):
             if p is None or self.rigid:
                 continue
             parts = [
-                f"{quantity(k, unit)} along {vector(d, '', 3)}"
+                f"{quantity(k, unit)} along {vector(chop(d, 1.0), '', 3)}"
                 for k, d in zip(p.stiffness, p.directions, strict=True)
             ]
             lines.append(f"principal {name} stiffness (world axes): " + "; ".join(parts))
         if self.rigid_directions.shape[0] and not self.rigid:
             for d in self.rigid_directions:
-                lines.append(f"rigid along {vector(d, '', 3)} ({' '.join(self.task)}): held by "
-                             "rigid actuators")  # fmt: skip
+                lines.append(f"rigid along {vector(chop(d, 1.0), '', 3)} ({' '.join(self.task)}): "
+                             "held by rigid actuators")  # fmt: skip
         if self.internal:
             lines.append(f"internal mobilities without stiffness: {self.internal}")
         if self.deflection is not None:
-            d = self.deflection
+            scale = float(np.abs(self.deflection[:3]).max()) / self.length
+            d = chop(self.deflection, max(scale, float(np.abs(self.deflection[3:]).max())))
             lines.append(
                 f"deflection: {', '.join(quantity(x, 'm') for x in d[:3])} (translation); "
                 f"{', '.join(quantity(x, 'rad') for x in d[3:])} (rotation)"
@@ -254,8 +258,17 @@ _UNITS = {
 }
 
 
-def _matrix_lines(K: np.ndarray, task: Sequence[str]) -> list[str]:
-    """Rows of a stiffness matrix, each entry with its unit (force/moment per length/angle)."""
+def _matrix_lines(K: np.ndarray, task: Sequence[str], length: float) -> list[str]:
+    """Rows of a stiffness matrix, each entry with its unit (force/moment per length/angle).
+
+    Entries are judged in the robot's scale (moments and rotations through its size
+    ``length``): round-off below it prints as zero.
+    """
+    S = np.array([1.0 if not t.startswith("r") else 1.0 / length for t in task])
+    finite = np.isfinite(K)
+    Ks = np.where(finite, K, 0.0) * np.outer(S, S)
+    scale = float(np.abs(Ks).max()) if Ks.size else 0.0
+    K = np.where(finite & (np.abs(Ks) < 1e-12 * scale), 0.0, K)
     out = []
     for i, ti in enumerate(task):
         cells = []
@@ -325,11 +338,15 @@ def _wrench(robot: Robot, wrench: Sequence[float] | np.ndarray | None) -> np.nda
     return out
 
 
-def _principal(C6: np.ndarray, rows: list[int], block: tuple[int, int, int]) -> Principal | None:
+def _principal(
+    C6: np.ndarray, rows: list[int], block: tuple[int, int, int], cut: float = 0.0
+) -> Principal | None:
+    """Principal stiffnesses of a block; compliances at or below ``cut``: rigid (``inf``)."""
     idx = [i for i in rows if i in block]
     if not idx:
         return None
     w, V = np.linalg.eigh(C6[np.ix_(idx, idx)])
+    w = np.where(w <= cut, 0.0, w)
     order = np.argsort(w)[::-1]  # largest compliance: smallest stiffness first
     D = np.zeros((len(idx), 3))
     for k, i in enumerate(idx):
@@ -384,7 +401,7 @@ def _with_rigid(
     held = w <= UNBOUNDED_COMPLIANCE * max(float(w[-1]), 1.0)
     Ks = k_ref * (V[:, ~held] / w[~held]) @ V[:, ~held].T  # the inverse of C' times k_ref
     P = V[:, held] @ V[:, held].T
-    Ks = np.where(np.abs(P) > 1e-9, np.inf * np.sign(P), Ks)
+    Ks = np.where(np.abs(P) > 1e-9, np.where(P > 0.0, np.inf, -np.inf), Ks)
     K = Ks * np.outer(S, S)
     D = V[:, held].T / S[None, :]
     D /= np.maximum(np.linalg.norm(D, axis=1, keepdims=True), 1e-300)
@@ -411,7 +428,9 @@ def _result(
         C_free, _ = compliance(em_free, reduce(em_free, red.q, point))
         validity, rigid = check_stiffness(base, q, C6, rows, k_ref, C_free)
     Ct = C6[np.ix_(rows, rows)]
+    cut = 0.0  # compliance [rad/(N m)] at or below which a direction is rigid
     if rigid.shape[0]:
+        cut = UNBOUNDED_COMPLIANCE * max(float(np.abs(C6).max()) / L**2, 1.0 / max(k_ref, 1e-300))
         K, rigid = _with_rigid(Ct, rows, L, k_ref)
         K6 = None
     else:
@@ -429,8 +448,8 @@ def _result(
         compliance6=C6,
         K=K,
         K6=K6,
-        translation=_principal(C6, rows, (0, 1, 2)),
-        rotation=_principal(C6, rows, (3, 4, 5)),
+        translation=_principal(C6, rows, (0, 1, 2), cut * L**2),
+        rotation=_principal(C6, rows, (3, 4, 5), cut),
         internal=internal,
         wrench=wrench,
         deflection=deflection,
@@ -438,8 +457,9 @@ def _result(
         rigid_directions=rigid,
         validity=validity,
         robot=base.name,
-        links=tuple(lc.link for lc in em.links),
+        links=tuple(dict.fromkeys(lc.link for lc in em.links)),
         actuator_stiffness=np.array(em.actuator_stiffness, dtype=float),
+        length=L,
     )
 
 
@@ -454,6 +474,7 @@ def stiffness(
     wrench: Sequence[float] | np.ndarray | None = None,
     loaded: bool = False,
     gravity: bool = False,
+    shear: bool = True,
 ) -> Stiffness:
     """Stiffness, compliance, principal stiffnesses and deflection at a configuration.
 
@@ -473,6 +494,7 @@ def stiffness(
         loaded: Solve the equilibrium under ``wrench`` (and the weight with ``gravity``) and
             include the load's geometric terms.
         gravity: With ``loaded``, the robot's weight is part of the load.
+        shear: Include the beams' shear deflection (Timoshenko; ``False``: Euler-Bernoulli).
 
     Returns:
         The stiffness.
@@ -500,8 +522,8 @@ def stiffness(
     em = (
         robot
         if isinstance(robot, ElasticModel)
-        else elastic_model(robot, actuator_stiffness, material, links)
-    )
+        else elastic_model(robot, actuator_stiffness, material, links, shear)
+    ).at(qq)
     q_ext = em.embed(qq)
     if not loaded:
         return _result(em, reduce(em, q_ext, p), qq, p, w, None, False)
