@@ -18,6 +18,7 @@ here.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -44,6 +45,7 @@ from pkdyn.precision.budgets import (
 )
 from pkdyn.precision.monte_carlo import MonteCarlo, monte_carlo
 from pkdyn.precision.parameters import ParameterModel
+from pkdyn.precision.validity import PrecisionWarning
 from pkdyn.results import Result
 
 __all__ = [
@@ -178,8 +180,11 @@ def accuracy_budget(
             f"geometric tolerances +-{length * 1e6:g} um on lengths, +-{angle * 1e3:g} mrad on "
             "angles, 0 on gains (give them: --tolerance LENGTH [ANGLE [GAIN]])"
         )
-    act = actuator_errors(robot, q, resolution, backlash)
-    geo = geometric_errors(robot, q, model, tolerance, distribution)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PrecisionWarning)  # (issued once, below)
+        act = actuator_errors(robot, q, resolution, backlash)
+        geo = geometric_errors(robot, q, model, tolerance, distribution)
+    act.validity.warn()
     geo.top = top
     mc = None
     if samples:

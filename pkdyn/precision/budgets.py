@@ -335,7 +335,9 @@ def actuator_errors(
     r = _per_actuator(robot, "resolution", resolution)
     b = _per_actuator(robot, "backlash", backlash)
     s = pose_sensitivity(robot, q)
-    return _actuator_budget(robot, s.J, r, b, budget_validity(robot, s.q))
+    validity = budget_validity(robot, s.q)
+    validity.warn()
+    return _actuator_budget(robot, s.J, r, b, validity)
 
 
 def _actuator_budget(
@@ -550,6 +552,7 @@ def geometric_errors(
     std = _std(t, distribution)
     s = pose_sensitivity(robot, q, model)
     validity = budget_validity(robot, s.q)
+    validity.warn()
     return _geometric_budget(model, s, t, std, distribution, validity, robot.length_scale)
 
 

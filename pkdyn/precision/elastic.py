@@ -258,7 +258,8 @@ def _build(
             f"{robot.name}: compliant links need a closure set of point and weld closures only "
             "(this one has other rows); analyse it with rigid links (links=False)"
         )
-    ext, q_index, v_index, defl = _extended(_with_beam_masses(robot, found), found)
+    robot = _with_beam_masses(robot, found)  # (the robot as the precision models weigh it)
+    ext, q_index, v_index, defl = _extended(robot, found)
     return ElasticModel(ext, robot, k_a, tuple(found), q_index, v_index, defl, material, shear)
 
 

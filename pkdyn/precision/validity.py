@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings as _warnings
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -277,6 +278,20 @@ def freed(em: ElasticModel) -> tuple[ElasticModel, float]:
     The rule of :mod:`pkdyn.precision.validity` judges whether a direction is unbounded with
     the rigid actuators freed: what only they hold is rigid by declaration.
     """
+    cached = _FREED.get(em)
+    if cached is None:
+        other, k_ref = _freed(em)
+        cached = (None if other is em else other, k_ref)  # (no reference back to the key)
+        _FREED[em] = cached
+    return (em if cached[0] is None else cached[0]), cached[1]
+
+
+_FREED: weakref.WeakKeyDictionary[ElasticModel, tuple[ElasticModel | None, float]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _freed(em: ElasticModel) -> tuple[ElasticModel, float]:
     k_ref = reference_stiffness(em.robot, em.spring_stiffness())
     k = em.actuator_stiffness
     if np.all(np.isfinite(k)):
