@@ -26,7 +26,6 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import NearSingularityWarning
 from pkdyn.exceptions import InvalidInputError, PkdynError
-from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision.budgets import (
@@ -36,10 +35,20 @@ from pkdyn.precision.budgets import (
     _std,
     _tolerances,
 )
-from pkdyn.precision.grid import OK, PLANES, SINGULAR, UNREACHABLE, GridMap, PlaneGrid, plane_grid
+from pkdyn.precision.grid import (
+    OK,
+    PLANES,
+    SINGULAR,
+    UNREACHABLE,
+    GridMap,
+    PlaneGrid,
+    map_validity,
+    plane_grid,
+    reach,
+)
 from pkdyn.precision.parameters import ParameterModel
 from pkdyn.precision.sensitivity import pose_sensitivity
-from pkdyn.precision.validity import PrecisionWarning, Validity, budget_validity
+from pkdyn.precision.validity import PrecisionWarning, budget_validity
 from pkdyn.progress import progress
 from pkdyn.threads import one_blas_thread
 
@@ -337,13 +346,7 @@ def _map(
         for k in progress(range(n), "accuracy map", "pose", progress_bar, min_items=200):
             if not inside[k]:
                 continue
-            q = None
-            for q0 in (q_prev, robot.q_home):
-                try:
-                    q = inverse_geometry(robot, pin.SE3(R, P[k]), q_init=q0).q
-                    break
-                except PkdynError:
-                    continue
+            q = reach(robot, pin.SE3(R, P[k]), (q_prev, robot.q_home))
             if q is None:
                 continue
             q_prev = q
@@ -387,23 +390,9 @@ def _map(
         positions=P,
         legacy_shape=legacy_shape,
     )
-    amap.validity = _validity(amap)
+    amap.validity = map_validity(
+        amap,
+        "the first order is unbounded or does not hold there",
+        "errors are amplified there",
+    )
     return amap
-
-
-def _validity(m: GridMap) -> Validity:
-    c = m.counts()
-    lines = []
-    if c["singular"]:
-        lines.append(
-            f"{c['singular']} reached cells are singular (the first order is unbounded or does "
-            "not hold there): left out"
-        )
-    if c["near"]:
-        lines.append(f"{c['near']} cells are near a singularity: errors are amplified there")
-    if c["ok"] == 0:
-        lines.append(
-            "no cell of the map is reachable and regular: give a center and extent inside the "
-            "workspace"
-        )
-    return Validity(c["ok"] > 0, tuple(lines))

@@ -36,13 +36,13 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import InvalidInputError, PkdynError
-from pkdyn.model.assembly import inverse_geometry
+from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.robot import Robot
 from pkdyn.precision._format import chop
+from pkdyn.precision.grid import reach
 from pkdyn.precision.parameters import ParameterModel
 from pkdyn.precision.sensitivity import pose_sensitivity
-from pkdyn.precision.validity import PrecisionWarning, Validity, budget_validity
+from pkdyn.precision.validity import Flagged, PrecisionWarning, Validity, budget_validity
 from pkdyn.results import Result, jsonable
 from pkdyn.units import quantity
 
@@ -154,7 +154,7 @@ _UNITS = ("m", "m", "m", "rad", "rad", "rad")
 
 
 @dataclass
-class Budget(Result):
+class Budget(Flagged, Result):
     """Worst case and RMS of a linear error map ``dx = A e`` (the two budgets' base).
 
     Attributes:
@@ -183,16 +183,6 @@ class Budget(Result):
     def orientation_rms(self) -> float:
         """RMS of the rotation error's norm [rad]."""
         return float(np.sqrt(np.sum(self.rms[3:] ** 2)))
-
-    @property
-    def valid(self) -> bool:
-        """The first order holds here (:mod:`pkdyn.precision.validity`)."""
-        return self.validity.valid
-
-    @property
-    def warnings(self) -> tuple[str, ...]:
-        """What to know about the budget."""
-        return self.validity.warnings
 
     def to_json(self) -> dict[str, Any]:
         """``worst_case``, ``rms`` per component, position and orientation norms, flags."""
@@ -627,13 +617,7 @@ def largest_position_error(
     worst, reached = 0.0, 0
     q_prev = None
     for p, rot in zip(P, R, strict=True):
-        q = None
-        for q0 in (None, q_prev):
-            try:
-                q = inverse_geometry(robot, pin.SE3(np.asarray(rot), p), q_init=q0).q
-                break
-            except PkdynError:
-                continue
+        q = reach(robot, pin.SE3(np.asarray(rot), p), (None, q_prev))
         if q is None:
             continue
         q_prev = q

@@ -28,15 +28,19 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
-from pkdyn.exceptions import InvalidInputError
+from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.robot import Robot
-from pkdyn.precision.validity import Validity
+from pkdyn.precision.validity import Flagged, Validity
 from pkdyn.results import Result, jsonable
 from pkdyn.units import quantity, vector
 
 __all__ = [
     "OK",
+    "map_validity",
+    "reach",
     "PLANES",
     "SINGULAR",
     "STATUS",
@@ -56,6 +60,52 @@ STATUS = ("ok", "unreachable", "singular")
 
 MAX_SAMPLES = 2001
 """Most grid points per axis."""
+
+
+def reach(
+    robot: Robot,
+    target: pin.SE3,
+    starts: Sequence[np.ndarray | None],
+    check_limits: bool = True,
+) -> np.ndarray | None:
+    """A configuration of ``robot`` with the platform at ``target``, or ``None``.
+
+    The inverse geometric model from each start in turn (the previous pose of a map, then
+    home: ``None`` starts from the model's own guess), the first that converges.
+    """
+    for start in starts:
+        try:
+            return inverse_geometry(robot, target, q_init=start, check_limits=check_limits).q
+        except PkdynError:
+            continue
+    return None
+
+
+def map_validity(m: GridMap, singular: str, near: str) -> Validity:
+    """A map's flags: not valid without any evaluated cell; its singular and near cells.
+
+    Args:
+        m: The map.
+        singular: Why a singular cell has no figure (completes "N reachable cells are
+            singular (...)").
+        near: What being near a singularity means for the figure.
+
+    Returns:
+        The validity.
+
+    """
+    c = m.counts()
+    lines = []
+    if c["singular"]:
+        lines.append(f"{c['singular']} reachable cells are singular ({singular}): left out")
+    if c["near"]:
+        lines.append(f"{c['near']} cells are near a singularity: {near}")
+    if c["ok"] == 0:
+        lines.append(
+            "no cell of the map is reachable and regular: give a center and extent inside the "
+            "workspace"
+        )
+    return Validity(c["ok"] > 0, tuple(lines))
 
 
 @dataclass(frozen=True, eq=False)  # numpy fields
@@ -164,7 +214,7 @@ def plane_grid(
 
 
 @dataclass(eq=False)  # numpy fields
-class GridMap(Result):
+class GridMap(Flagged, Result):
     """Figures over a :class:`PlaneGrid` (module docstring).
 
     Attributes:
@@ -233,16 +283,6 @@ class GridMap(Result):
     def evaluated(self) -> np.ndarray:
         """Cells with a figure (nu, nv)."""
         return np.asarray(self.status == OK)
-
-    @property
-    def valid(self) -> bool:
-        """The map means what it says (some cell evaluated, no flagged figure)."""
-        return self.validity.valid
-
-    @property
-    def warnings(self) -> tuple[str, ...]:
-        """What to know about the map."""
-        return self.validity.warnings
 
     def extreme(self, name: str) -> float:
         """Worst value of a field over the evaluated cells (``nan`` when none is).

@@ -35,16 +35,24 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import NearSingularityWarning
 from pkdyn.exceptions import InvalidInputError, PkdynError
-from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision.condensation import compliance, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
-from pkdyn.precision.grid import OK, PLANES, SINGULAR, UNREACHABLE, GridMap, plane_grid
+from pkdyn.precision.grid import (
+    OK,
+    PLANES,
+    SINGULAR,
+    UNREACHABLE,
+    GridMap,
+    map_validity,
+    plane_grid,
+    reach,
+)
 from pkdyn.precision.material import Material
 from pkdyn.precision.modes import modes
 from pkdyn.precision.stiffness import _point, _wrench
-from pkdyn.precision.validity import PrecisionWarning, Validity, check_stiffness, freed
+from pkdyn.precision.validity import PrecisionWarning, check_stiffness, freed
 from pkdyn.precision.vectorised import (
     VectorisedFigures,
     delta_figures,
@@ -296,14 +304,7 @@ def _general(
         warnings.simplefilter("ignore", NearSingularityWarning)
         warnings.simplefilter("ignore", PrecisionWarning)
         for i in progress_bar(range(N), "precision", "pose", progress, min_items=200):
-            q = None
-            for start in (q_prev, robot.q_home):
-                try:
-                    target = pin.SE3(R[i], P[i])
-                    q = inverse_geometry(robot, target, q_init=start, check_limits=False).q
-                    break
-                except PkdynError:
-                    continue
+            q = reach(robot, pin.SE3(R[i], P[i]), (q_prev, robot.q_home), check_limits=False)
             if q is None:
                 continue
             reached[i] = True
@@ -452,26 +453,7 @@ def precision_map(
             "wrench": None if wrench is None else list(np.asarray(wrench, float)),
         },
     )
-    out.validity = _map_validity(out)
+    out.validity = map_validity(
+        out, "the figure is unbounded or undefined there", "their figures are steep there"
+    )
     return out
-
-
-def _map_validity(m: GridMap) -> Validity:
-    """Not valid without any evaluated cell; warnings for singular and near-singular cells."""
-    c = m.counts()
-    lines = []
-    if c["singular"]:
-        lines.append(
-            f"{c['singular']} reachable cells are singular (the figure is unbounded or "
-            "undefined there): left out"
-        )
-    if c["near"]:
-        lines.append(f"{c['near']} cells are near a singularity: their figures are steep there")
-    if c["ok"] == 0:
-        lines.append(
-            "no cell of the map is reachable and regular: give a center and extent inside the "
-            "workspace"
-            if c["unreachable"] == m.status.size
-            else "no cell is regular"
-        )
-    return Validity(c["ok"] > 0, tuple(lines))

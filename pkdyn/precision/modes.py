@@ -31,15 +31,14 @@ import pinocchio as pin
 import scipy.linalg
 
 from pkdyn.exceptions import InvalidInputError, PkdynError, SingularConfigurationError
-from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision._format import chop
 from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
-from pkdyn.precision.elastic import ElasticModel, elastic_model
+from pkdyn.precision.elastic import ElasticModel
 from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
-from pkdyn.precision.stiffness import _check_assembled, _point, _wrench, nothing_compliant
-from pkdyn.precision.validity import Validity, check_stiffness, freed
+from pkdyn.precision.stiffness import nothing_compliant, prepared
+from pkdyn.precision.validity import Flagged, Validity, check_stiffness, freed
 from pkdyn.results import Result, jsonable
 from pkdyn.units import quantity
 from solvers import numerics, solve_lm
@@ -53,7 +52,7 @@ _ZERO_FREQ = 1e-10
 
 
 @dataclass(eq=False)  # numpy fields
-class Modes(Result):
+class Modes(Flagged, Result):
     """Natural frequencies and mode shapes (see the module docstring).
 
     Attributes:
@@ -92,16 +91,6 @@ class Modes(Result):
     links: tuple[str, ...] = ()
     count: int | None = None
     elastic: ElasticModel | None = field(default=None, repr=False)
-
-    @property
-    def valid(self) -> bool:
-        """The figures mean what they say here (:mod:`pkdyn.precision.validity`)."""
-        return self.validity.valid
-
-    @property
-    def warnings(self) -> tuple[str, ...]:
-        """What to know about the figures."""
-        return self.validity.warnings
 
     @property
     def f1(self) -> float:
@@ -227,22 +216,11 @@ def modes(
         PkdynError: No elastic mode at all.
 
     """
-    from pkdyn.inputs import flag, instance
+    from pkdyn.inputs import flag
 
-    instance("robot", robot, (Robot, ElasticModel), "a Robot (pkdyn.load) or an ElasticModel")
-    gravity, links = flag("gravity", gravity), flag("links", links)
-    base = robot.base if isinstance(robot, ElasticModel) else robot
-    if base.platform_frame is None:
-        raise InvalidInputError("robot", f"{base.name} declares no platform frame")
-    qq = as_finite("q", q, base.nq)
-    _check_assembled(base, qq)
-    p = _point(point, base)
-    w = _wrench(base, wrench)
-    em = (
-        robot
-        if isinstance(robot, ElasticModel)
-        else elastic_model(robot, actuator_stiffness, material, links, shear)
-    ).at(qq)
+    gravity = flag("gravity", gravity)
+    em, qq, p, w = prepared(robot, q, actuator_stiffness, material, links, shear, point, wrench)
+    base = em.base
     q_ext = em.embed(qq)
     if nothing_compliant(em):
         return _rigid_modes(em, qq, q_ext, p)

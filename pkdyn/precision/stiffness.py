@@ -53,6 +53,7 @@ from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
 from pkdyn.precision.validity import (
     UNBOUNDED_COMPLIANCE,
+    Flagged,
     Validity,
     check_stiffness,
     freed,
@@ -90,7 +91,7 @@ class Principal:
 
 
 @dataclass(eq=False)  # numpy fields
-class Stiffness(Result):
+class Stiffness(Flagged, Result):
     """Stiffness of a robot at one configuration (see the module docstring).
 
     Attributes:
@@ -138,16 +139,6 @@ class Stiffness(Result):
     links: tuple[str, ...] = ()
     actuator_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
     length: float = 1.0
-
-    @property
-    def valid(self) -> bool:
-        """The figures mean what they say here (:mod:`pkdyn.precision.validity`)."""
-        return self.validity.valid
-
-    @property
-    def warnings(self) -> tuple[str, ...]:
-        """What to know about the figures (near a singularity...)."""
-        return self.validity.warnings
 
     @property
     def rigid(self) -> bool:
@@ -463,6 +454,46 @@ def _result(
     )
 
 
+def prepared(
+    robot: Robot | ElasticModel,
+    q: Sequence[float] | np.ndarray,
+    actuator_stiffness: float | Sequence[float] | np.ndarray | None,
+    material: str | Material | None,
+    links: bool,
+    shear: bool,
+    point: Sequence[float] | np.ndarray | None,
+    wrench: Sequence[float] | np.ndarray | None,
+) -> tuple[ElasticModel, np.ndarray, np.ndarray, np.ndarray | None]:
+    """The inputs of :func:`stiffness` and :func:`pkdyn.precision.modes.modes`, checked.
+
+    Returns:
+        ``(em, q, point, wrench)``: the elastic model at ``q`` (rebuilt for a prismatic leg's
+        stroke), the configuration, the reference point (3,), the wrench (6,) or ``None``.
+
+    Raises:
+        InvalidInputError: Not a robot, no platform, a malformed or unassembled ``q``, a bad
+            point, wrench, stiffness or material (named).
+
+    """
+    from pkdyn.inputs import flag, instance
+
+    instance("robot", robot, (Robot, ElasticModel), "a Robot (pkdyn.load) or an ElasticModel")
+    links = flag("links", links)
+    base = robot.base if isinstance(robot, ElasticModel) else robot
+    if base.platform_frame is None:
+        raise InvalidInputError("robot", f"{base.name} declares no platform frame")
+    qq = as_finite("q", q, base.nq)
+    _check_assembled(base, qq)
+    p = _point(point, base)
+    w = _wrench(base, wrench)
+    em = (
+        robot
+        if isinstance(robot, ElasticModel)
+        else elastic_model(robot, actuator_stiffness, material, links, shear)
+    ).at(qq)
+    return em, qq, p, w
+
+
 def stiffness(
     robot: Robot | ElasticModel,
     q: Sequence[float] | np.ndarray,
@@ -506,24 +537,12 @@ def stiffness(
             one (stiffness unbounded).
 
     """
-    from pkdyn.inputs import flag, instance
+    from pkdyn.inputs import flag
 
-    instance("robot", robot, (Robot, ElasticModel), "a Robot (pkdyn.load) or an ElasticModel")
-    loaded, gravity, links = flag("loaded", loaded), flag("gravity", gravity), flag("links", links)
-    base = robot.base if isinstance(robot, ElasticModel) else robot
-    if base.platform_frame is None:
-        raise InvalidInputError("robot", f"{base.name} declares no platform frame")
-    qq = as_finite("q", q, base.nq)
-    _check_assembled(base, qq)
-    p = _point(point, base)
-    w = _wrench(base, wrench)
+    loaded, gravity = flag("loaded", loaded), flag("gravity", gravity)
+    em, qq, p, w = prepared(robot, q, actuator_stiffness, material, links, shear, point, wrench)
     if loaded and w is None and not gravity:
         raise InvalidInputError("loaded", "the loaded mode needs a wrench (or gravity=True)")
-    em = (
-        robot
-        if isinstance(robot, ElasticModel)
-        else elastic_model(robot, actuator_stiffness, material, links, shear)
-    ).at(qq)
     q_ext = em.embed(qq)
     if not loaded:
         return _result(em, reduce(em, q_ext, p), qq, p, w, None, False)

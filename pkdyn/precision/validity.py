@@ -66,6 +66,7 @@ from pkdyn.units import vector
 __all__ = [
     "NEAR_COMPLIANCE",
     "UNBOUNDED_COMPLIANCE",
+    "Flagged",
     "PrecisionWarning",
     "Validity",
     "budget_validity",
@@ -118,6 +119,22 @@ class Validity:
         """The table lines: ``not valid: ...`` and ``warning: ...``."""
         out = [] if self.valid else ["NOT VALID here (see the warnings)"]
         return out + [f"warning: {w}" for w in self.warnings]
+
+
+class Flagged:
+    """Mixin of the results that carry a ``validity`` field: ``valid`` and ``warnings``."""
+
+    validity: Validity
+
+    @property
+    def valid(self) -> bool:
+        """The figures mean what they say here (:mod:`pkdyn.precision.validity`)."""
+        return self.validity.valid
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What to know about the figures (near a singularity...)."""
+        return self.validity.warnings
 
 
 def pose_text(robot: Robot, q: np.ndarray) -> str:
