@@ -51,7 +51,7 @@ def test_platform_jacobian_against_finite_differences(robots, name):
         Mp = robot.platform_placement(pin.integrate(robot.model, q, dv))
         Mm = robot.platform_placement(pin.integrate(robot.model, q, -dv))
         lin = (Mp.act(point) - Mm.act(point)) / (2 * h)
-        w_world = (pin.log3(Mp.rotation @ M0.rotation.T) - pin.log3(Mm.rotation @ M0.rotation.T))
+        w_world = pin.log3(Mp.rotation @ M0.rotation.T) - pin.log3(Mm.rotation @ M0.rotation.T)
         w_plat = pin.log3(M0.rotation.T @ Mp.rotation) - pin.log3(M0.rotation.T @ Mm.rotation)
         np.testing.assert_allclose(Jw[:3, k], lin, atol=1e-7)
         np.testing.assert_allclose(Jw[3:, k], w_world / (2 * h), atol=1e-7)
@@ -83,7 +83,9 @@ def test_elimination_rule_and_pseudo_inverse():
     # stacks: per matrix, and the batched solve of identification gives the same
     stack = np.stack([A, 2.0 * A, A + 1e-3 * rng.normal(size=A.shape)])
     rhs = stack @ rng.normal(size=(3, 5, 2))  # right-hand sides in the range
-    ref = np.stack([numerics.passive_elimination(m).solve(r) for m, r in zip(stack, rhs)])
+    ref = np.stack(
+        [numerics.passive_elimination(m).solve(r) for m, r in zip(stack, rhs, strict=True)]
+    )
     np.testing.assert_allclose(numerics.passive_elimination(stack).solve(rhs), ref, atol=1e-12)
     np.testing.assert_allclose(numerics.passive_solve(stack[:2], rhs[:2]), ref[:2], atol=1e-9)
     tall = rng.normal(size=(4, 9, 5))  # full column rank: least squares

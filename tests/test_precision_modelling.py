@@ -114,7 +114,8 @@ def test_a_spring_acts_at_its_point_on_the_beam(tmp_path):
 
 
 def test_mass_from_material(tmp_path):
-    xml = beam_xml(None, extra='<pkdyn:compliance link="beam" material="steel" mass="from-material"/>')
+    own = '<pkdyn:compliance link="beam" material="steel" mass="from-material"/>'
+    xml = beam_xml(None, extra=own)
     robot, _ = _load(tmp_path, xml)
     em = elastic_model(robot, 3e3)
     m = STEEL.density * np.pi * R**2 * L

@@ -92,7 +92,8 @@ def test_rigid_actuators_are_rigid(capsys):
     assert S.rigid and np.all(S.compliance == 0.0) and np.all(np.isinf(np.diag(S.K)))
     assert S.translational_min == np.inf
     payload = S.to_json()
-    assert payload["rigid"] is True and payload["principal"]["translation"]["stiffness"] == [None] * 3
+    assert payload["rigid"] is True
+    assert payload["principal"]["translation"]["stiffness"] == [None] * 3
     json.dumps(payload, allow_nan=False)
     M = modes(delta, delta.q_home, np.inf)
     assert M.rigid and M.frequencies.size == 0 and M.f1 == np.inf

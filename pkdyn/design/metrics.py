@@ -352,8 +352,7 @@ def check_precision(metrics: Sequence[Metric], conditions: Any, robot: Robot) ->
         text = str(err).removeprefix(f"{err.name}: ")
         raise InvalidInputError(
             "actuator_stiffness",
-            f"{what} needs each actuator's stiffness: {text} (study setting "
-            "actuator_stiffness)",
+            f"{what} needs each actuator's stiffness: {text} (study setting actuator_stiffness)",
         ) from None
     desc = robot.description
     compliant = (
