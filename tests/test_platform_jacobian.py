@@ -127,14 +127,15 @@ def _action_matrix_columns(robot, model, q):
     def skew(p):
         return pin.skew(np.asarray(p))
 
-    C = np.zeros((robot.closure_set.nc, model.size))
+    C = np.zeros((robot.constraints.n, model.size))
+    offsets = robot.constraints.closure_rows.base_offsets
     owners = robot.constraint_owner
     for i, cm in enumerate(robot.constraint_models):
         S1 = twist(int(cm.joint1_id), ("closure", f"{owners[i]}/1"))
         S2 = twist(int(cm.joint2_id), ("closure", f"{owners[i]}/2"))
         oM1 = data.oMi[cm.joint1_id] * cm.joint1_placement
         oM2 = data.oMi[cm.joint2_id] * cm.joint2_placement
-        o = int(robot.closure_set.offsets[i])
+        o = int(offsets[i])
         if cm.type == pin.ContactType.CONTACT_3D:
             d1 = S1[:3] - skew(oM1.translation) @ S1[3:]
             d2 = S2[:3] - skew(oM2.translation) @ S2[3:]

@@ -555,11 +555,7 @@ def _geometric_budget(
     validity: Validity,
     length: float = 1.0,
 ) -> GeometricAccuracy:
-    gap = (
-        np.max(np.abs(s.closure_gap), axis=0, initial=0.0)
-        if s.closure_gap.size
-        else np.zeros(model.size)
-    )
+    gap = np.max(np.abs(s.gap), axis=0, initial=0.0) if s.gap.size else np.zeros(model.size)
     bad = gap > _GAP_TOL
     K = np.where(bad[None, :], 0.0, s.K)
     t_eff = np.where(bad, 0.0, t)

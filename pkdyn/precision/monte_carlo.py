@@ -162,7 +162,7 @@ def monte_carlo(
     except InvalidInputError:
         raise InvalidInputError("samples", f"{samples}: give 1 to 100,000") from None
     seed = _seed("seed", seed)
-    gap = pose_sensitivity(robot, qq, model).closure_gap
+    gap = pose_sensitivity(robot, qq, model).gap
     if gap.size:
         t = np.where(np.max(np.abs(gap), axis=0) > _GAP_TOL, 0.0, t)
     nominal = robot.platform_placement(qq)

@@ -352,9 +352,9 @@ def _scaled(C: np.ndarray, rows: list[int], L: float) -> np.ndarray:
 
 
 def _check_assembled(robot: Robot, q: np.ndarray) -> None:
-    if robot.closure_set.nc == 0:
+    if robot.constraints.n == 0:
         return
-    res = float(np.max(np.abs(robot.closure_set.residual(robot.data, q))))
+    res = float(np.max(np.abs(robot.constraints.residual(robot.data, q))))
     if res > ASSEMBLY_TOL:
         raise InvalidInputError(
             "q",
