@@ -191,3 +191,28 @@ def test_regressor_sensitivity_of_a_perturbed_robot_by_finite_differences(robots
             )
         fd = (res[0] - res[1]) / (2 * h)
         np.testing.assert_allclose(s.K[:, k], fd, atol=1e-6 * max(1.0, np.abs(fd).max()))
+
+
+def test_one_joint_robot(tmp_path):
+    """nv = 1: Pinocchio hands a (6, 1) Jacobian back as a vector; the stiffness of a crank."""
+    from pkdyn.precision import stiffness
+
+    xml = """<robot name="crank" xmlns:pkdyn="urn:pkdyn:urdf:1">
+  <link name="base"/>
+  <link name="arm"><inertial><origin xyz="0.25 0 0"/><mass value="1"/>
+    <inertia ixx="0.001" iyy="0.02" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="a1" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="10" velocity="1"/></joint>
+  <transmission name="t"><type>transmission_interface/SimpleTransmission</type>
+    <joint name="a1"/><actuator name="m"><mechanicalReduction>1</mechanicalReduction></actuator>
+  </transmission>
+  <pkdyn:platform link="arm" xyz="0.5 0 0" task="x"/>
+</robot>"""
+    path = tmp_path / "crank.urdf"
+    path.write_text(xml)
+    robot = pkdyn.load(str(path))
+    q = pkdyn.forward_geometry(robot, [0.3]).q
+    assert platform_jacobian(robot, q, angular="world").shape == (6, 1)
+    k = 100.0
+    S = stiffness(robot, q, k)  # x = L cos(q): K = k / (L sin q)^2
+    assert S.K[0, 0] == pytest.approx(k / (0.5 * np.sin(0.3)) ** 2, rel=1e-12)

@@ -79,7 +79,7 @@ def platform_jacobian(
     if q is not None:
         pin.computeJointJacobians(model, data, q)
     R = pin.updateFramePlacement(model, data, fid).rotation
-    J = np.array(pin.getFrameJacobian(model, data, fid, _LWA))
+    J = np.array(pin.getFrameJacobian(model, data, fid, _LWA)).reshape(6, model.nv)  # (nv = 1)
     if point is not None and np.any(point):
         J[:3] -= _skew(R @ np.asarray(point, dtype=float)) @ J[3:]
     if angular == "platform":

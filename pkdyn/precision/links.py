@@ -224,7 +224,7 @@ def _no_beam(robot: Robot, what: str) -> InvalidInputError:
         what,
         f"{robot.name} {missing}: give the links cylinders in the URDF, or describe their "
         "compliance (<pkdyn:compliance link=... compliance=...>), or leave the material out "
-        "(rigid links)",
+        "(no --material / material=, or --rigid-links: rigid links)",
     )
 
 
