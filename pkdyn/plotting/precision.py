@@ -47,6 +47,23 @@ def _display(values: np.ndarray, unit: str) -> tuple[float, str]:
     return 1.0 / scale, f"{prefix}{unit}"
 
 
+def _axes(ax: Any, size: tuple[float, float]) -> tuple[Any, Any]:
+    """``(figure, axes)``: a new figure of ``size`` [in], or the one ``ax`` is drawn in."""
+    if ax is not None:
+        return ax.figure, ax
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size, layout="constrained")
+    return fig, fig.add_subplot(1, 1, 1)
+
+
+def _done(fig: Any, path: str | Path | None) -> Any:
+    """Save the figure when a path is given (atomically); return it."""
+    if path is not None:
+        save_figure(fig, path, dpi=120)
+    return fig
+
+
 def _edges(x: np.ndarray) -> tuple[float, float]:
     d = (x[-1] - x[0]) / max(x.size - 1, 1) if x.size > 1 else 1.0
     return float(x[0] - d / 2), float(x[-1] + d / 2)
@@ -80,7 +97,6 @@ def plot_grid_map(
 
     """
     from matplotlib.colors import ListedColormap
-    from matplotlib.figure import Figure
 
     name = field if field is not None else next(iter(result.values), None)
     if name is None or name not in result.values:
@@ -94,11 +110,7 @@ def plot_grid_map(
             f"'{name}': no cell of the map was evaluated (none is reachable and regular): give "
             "a center and extent inside the workspace",
         )
-    if ax is None:
-        fig = Figure(figsize=(6.2, 5.0), layout="constrained")
-        ax = fig.add_subplot(1, 1, 1)
-    else:
-        fig = ax.figure
+    fig, ax = _axes(ax, (6.2, 5.0))
     unit = result.units.get(name, "")
     scale, shown = _display(z, unit)
     extent = (*_edges(result.u), *_edges(result.v))
@@ -136,9 +148,7 @@ def plot_grid_map(
         f"{c['unreachable']} unreachable grey, {c['singular']} singular red)",
         fontsize=9,
     )
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return _done(fig, path)
 
 
 def plot_precision_map(
@@ -193,15 +203,9 @@ def plot_modes(
         InvalidInputError: A rigid robot (no mode to draw).
 
     """
-    from matplotlib.figure import Figure
-
     if result.frequencies.size == 0:
         raise InvalidInputError("modes", "the robot is rigid: there is no mode to draw")
-    if ax is None:
-        fig = Figure(figsize=(7.0, 3.5), layout="constrained")
-        ax = fig.add_subplot(1, 1, 1)
-    else:
-        fig = ax.figure
+    fig, ax = _axes(ax, (7.0, 3.5))
     f = result.frequencies
     P = result.platform  # mass-normalised shapes: platform motion per unit modal amplitude
     move = np.linalg.norm(P[:, :3], axis=1) + length * np.linalg.norm(P[:, 3:], axis=1)
@@ -220,9 +224,7 @@ def plot_modes(
         default += " (NOT VALID here: see the warnings)"
     ax.set_title(title if title is not None else default)
     ax.legend(loc="upper right", fontsize=8)
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return _done(fig, path)
 
 
 @register_plot(MonteCarlo)
@@ -249,15 +251,9 @@ def plot_monte_carlo(
         InvalidInputError: No sample assembled.
 
     """
-    from matplotlib.figure import Figure
-
     if len(result.errors) == 0:
         raise InvalidInputError("monte_carlo", "no sampled robot assembled: nothing to draw")
-    if ax is None:
-        fig = Figure(figsize=(6.0, 3.8), layout="constrained")
-        ax = fig.add_subplot(1, 1, 1)
-    else:
-        fig = ax.figure
+    fig, ax = _axes(ax, (6.0, 3.8))
     e = np.linalg.norm(result.errors[:, :3], axis=1)
     scale, shown = _display(e, "m")
     ax.hist(e * scale, bins=bins, color="C0", alpha=0.8)
@@ -273,9 +269,7 @@ def plot_monte_carlo(
     ax.set_ylabel("robots")
     ax.set_title(title if title is not None else f"Monte Carlo: {len(e)} robots")
     ax.legend(fontsize=8)
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return _done(fig, path)
 
 
 @register_plot(ToleranceRanking)
@@ -297,18 +291,10 @@ def plot_ranking(
         The matplotlib Figure.
 
     """
-    from matplotlib.figure import Figure
-
-    if ax is None:
-        fig = Figure(figsize=(6.0, 0.8 + 0.3 * max(len(result.entries), 1)), layout="constrained")
-        ax = fig.add_subplot(1, 1, 1)
-    else:
-        fig = ax.figure
+    fig, ax = _axes(ax, (6.0, 0.8 + 0.3 * max(len(result.entries), 1)))
     names = [e["name"] for e in result.entries][::-1]
     share = [100.0 * e["share"] for e in result.entries][::-1]
     ax.barh(names, share, color="C0")
     ax.set_xlabel("share of the position variance [%]")
     ax.set_title(title if title is not None else f"tolerances ({result.total} parameters)")
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return _done(fig, path)

@@ -52,7 +52,7 @@ from pkdyn.precision.grid import (
 from pkdyn.precision.material import Material
 from pkdyn.precision.modes import modes
 from pkdyn.precision.stiffness import _point, _wrench
-from pkdyn.precision.validity import PrecisionWarning, check_stiffness, freed
+from pkdyn.precision.validity import PrecisionWarning, stiffness_check
 from pkdyn.precision.vectorised import (
     VectorisedFigures,
     delta_figures,
@@ -268,13 +268,8 @@ def translational(
     em = em.at(q)
     red = reduce(em, em.embed(q), point)
     C, _ = compliance(em, red)
-    base = em.base
-    rows = [int(i) for i in base.task_rows]
-    em_free, k_ref = freed(em)
-    C_free = None
-    if em_free is not em:
-        C_free, _ = compliance(em_free, reduce(em_free, red.q, point))
-    validity, _ = check_stiffness(base, q, C, rows, k_ref, C_free)
+    validity, _, _ = stiffness_check(em, red.q, point, C, q)
+    rows = [int(i) for i in em.base.task_rows]
     t = [i for i in rows if i < 3]
     if not t:
         return float("nan"), float("nan"), bool(validity.warnings)

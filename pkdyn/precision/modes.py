@@ -38,7 +38,7 @@ from pkdyn.precision.elastic import ElasticModel
 from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
 from pkdyn.precision.stiffness import nothing_compliant, prepared
-from pkdyn.precision.validity import Flagged, Validity, check_stiffness, freed
+from pkdyn.precision.validity import Flagged, Validity, stiffness_check
 from pkdyn.results import Result, jsonable
 from pkdyn.units import quantity
 from solvers import numerics, solve_lm
@@ -268,14 +268,8 @@ def _validity(
     em: ElasticModel, red: Reduced, C6: np.ndarray, q: np.ndarray, point: np.ndarray
 ) -> Validity:
     """Not valid where the stiffness is unbounded: the platform does not move in the modes."""
-    base = em.base
-    rows = [int(i) for i in base.task_rows]
-    em_free, k_ref = freed(em)
-    C_free = None
-    if em_free is not em:
-        C_free, _ = compliance(em_free, reduce(em_free, red.q, point))
     try:
-        validity, _ = check_stiffness(base, q, C6, rows, k_ref, C_free)
+        validity, _, _ = stiffness_check(em, red.q, point, C6, q)
     except SingularConfigurationError as err:
         return Validity(
             False,

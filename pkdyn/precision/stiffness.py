@@ -55,8 +55,7 @@ from pkdyn.precision.validity import (
     UNBOUNDED_COMPLIANCE,
     Flagged,
     Validity,
-    check_stiffness,
-    freed,
+    stiffness_check,
 )
 from pkdyn.results import Result, jsonable
 from pkdyn.units import quantity, vector
@@ -412,12 +411,7 @@ def _result(
     C6, internal = compliance(em, red)
     rows = [int(i) for i in base.task_rows]
     L = base.length_scale
-    em_free, k_ref = freed(em)
-    if em_free is em:
-        validity, rigid = check_stiffness(base, q, C6, rows, k_ref)
-    else:
-        C_free, _ = compliance(em_free, reduce(em_free, red.q, point))
-        validity, rigid = check_stiffness(base, q, C6, rows, k_ref, C_free)
+    validity, rigid, k_ref = stiffness_check(em, red.q, point, C6, q)
     Ct = C6[np.ix_(rows, rows)]
     cut = 0.0  # compliance [rad/(N m)] at or below which a direction is rigid
     if rigid.shape[0]:

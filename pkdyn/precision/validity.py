@@ -76,6 +76,7 @@ __all__ = [
     "pose_text",
     "reference_stiffness",
     "scaled_compliance",
+    "stiffness_check",
 ]
 
 UNBOUNDED_COMPLIANCE = SINGULAR_TOL**2
@@ -317,6 +318,36 @@ def _freed(em: ElasticModel) -> tuple[ElasticModel, float]:
     s = coordinate_scales(em.robot)[np.asarray(em.robot.actuated_v)]
     k_free = np.where(np.isfinite(k), k, ref / s**2)
     return dataclasses.replace(em, actuator_stiffness=k_free), ref
+
+
+def stiffness_check(
+    em: ElasticModel, q_ext: np.ndarray, point: np.ndarray, C6: np.ndarray, q: np.ndarray
+) -> tuple[Validity, np.ndarray, float]:
+    """The stiffness rule on a condensed compliance, the rigid actuators freed if any.
+
+    Args:
+        em: The elastic model.
+        q_ext: Its configuration (nq_ext,) the compliance was condensed at.
+        point: Reference point, platform frame [m].
+        C6: The compliance (6, 6) with the actuators as given.
+        q: The robot's configuration (nq,) (for the messages).
+
+    Returns:
+        ``(validity, rigid directions (k, m), k_ref)`` (:func:`check_stiffness`).
+
+    Raises:
+        SingularConfigurationError: The stiffness is unbounded along a task direction.
+
+    """
+    from pkdyn.precision.condensation import compliance, reduce
+
+    rows = [int(i) for i in em.base.task_rows]
+    em_free, k_ref = freed(em)
+    C_free = None
+    if em_free is not em:
+        C_free, _ = compliance(em_free, reduce(em_free, q_ext, point))
+    validity, rigid = check_stiffness(em.base, q, C6, rows, k_ref, C_free)
+    return validity, rigid, k_ref
 
 
 def budget_validity(robot: Robot, q: np.ndarray) -> Validity:
