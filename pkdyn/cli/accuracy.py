@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, qa_argument, robot_command
-from pkdyn.cli.precision import _write_map, check_map_options, map_options
+from pkdyn.cli._common import emit, load
+from pkdyn.cli.precision import write_map, check_map_options, posed_or_map
 
 __all__ = ["register"]
 
@@ -64,7 +64,7 @@ def _cmd_accuracy(args: argparse.Namespace) -> None:
             tolerance=tol,
             distribution=args.distribution,
         )
-        _write_map(args, amap, "actuator_worst")
+        write_map(args, amap, "actuator_worst")
         return
     if args.qa is not None:
         q = pkdyn.forward_geometry(robot, args.qa, check_limits=False).q
@@ -87,14 +87,13 @@ def _cmd_accuracy(args: argparse.Namespace) -> None:
 
 def register(sub: Any) -> None:
     """Add this module's sub-commands to the ``pkdyn`` parser."""
-    sp = robot_command(sub, "accuracy", "error budget: actuator resolution/backlash, tolerances")
-    where = sp.add_mutually_exclusive_group(required=True)
-    where.add_argument("--pose", nargs="+", type=float, help="X Y Z [ROLL PITCH YAW] (m, rad)")
-    qa_argument(where)
-    where.add_argument(
-        "--map",
-        choices=("xy", "xz", "yz"),
-        help="map the position errors over a plane (with --center, --extent, --grid)",
+    sp = posed_or_map(
+        sub,
+        "accuracy",
+        "error budget: actuator resolution/backlash, tolerances",
+        15,
+        _FIELDS,
+        "the position errors",
     )
     sp.add_argument(
         "--resolution",
@@ -132,6 +131,4 @@ def register(sub: Any) -> None:
     sp.add_argument("--samples", type=int, default=0, help="Monte Carlo robots (default 0: off)")
     sp.add_argument("--seed", type=int, default=0)
     sp.add_argument("--top", type=int, default=10, help="ranked tolerances shown (10)")
-    sp.add_argument("--json", action="store_true")
-    map_options(sp, 15, _FIELDS)
     sp.set_defaults(func=_cmd_accuracy)

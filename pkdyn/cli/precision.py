@@ -17,7 +17,7 @@ import numpy as np
 from pkdyn.cli._common import emit, load, output_path, qa_argument, robot_command
 from pkdyn.exceptions import InvalidInputError
 
-__all__ = ["map_options", "register"]
+__all__ = ["check_map_options", "map_options", "posed_or_map", "register", "write_map"]
 
 
 def _options(sp: argparse.ArgumentParser) -> None:
@@ -85,7 +85,23 @@ def map_options(sp: argparse.ArgumentParser, grid: int, fields: tuple[str, ...])
     )
 
 
-def _posed_or_map(sub: Any, name: str, help_: str, grid: int, fields: tuple[str, ...]) -> Any:
+def posed_or_map(
+    sub: Any, name: str, help_: str, grid: int, fields: tuple[str, ...], what: str
+) -> Any:
+    """A sub-command at one configuration (``--pose``, ``--qa``, ``--readings``) or over a map.
+
+    Args:
+        sub: The sub-parsers.
+        name: The command.
+        help_: Its one line.
+        grid: Default map points per axis.
+        fields: The map's fields (``--field``).
+        what: What the map shows (``--map``'s help).
+
+    Returns:
+        The parser, with ``--json`` and the map options (:func:`map_options`).
+
+    """
     sp = robot_command(sub, name, help_)
     where = sp.add_mutually_exclusive_group(required=True)
     where.add_argument("--pose", nargs="+", type=float, help="X Y Z [ROLL PITCH YAW] (m, rad)")
@@ -93,10 +109,9 @@ def _posed_or_map(sub: Any, name: str, help_: str, grid: int, fields: tuple[str,
     where.add_argument(
         "--map",
         choices=("xy", "xz", "yz"),
-        help="map over a plane of the workspace (with --center, --extent, --grid)",
+        help=f"map {what} over a plane of the workspace (with --center, --extent, --grid)",
     )
     sp.add_argument("--json", action="store_true")
-    _options(sp)
     map_options(sp, grid, fields)
     return sp
 
@@ -193,10 +208,10 @@ def _map(args: argparse.Namespace, frequency: bool) -> None:
         wrench=getattr(args, "wrench", None),
         frequency=frequency,
     )
-    _write_map(args, result, "f1" if frequency else "stiffness_min")
+    write_map(args, result, "f1" if frequency else "stiffness_min")
 
 
-def _write_map(args: argparse.Namespace, result: Any, default_field: str) -> None:
+def write_map(args: argparse.Namespace, result: Any, default_field: str) -> None:
     """``--csv``, ``--plot`` (when some cell was evaluated), then the table or JSON."""
     if args.csv:
         result.write_csv(args.csv)
@@ -264,13 +279,15 @@ def _cmd_modes(args: argparse.Namespace) -> None:
 
 def register(sub: Any) -> None:
     """Add ``stiffness`` and ``modes`` to the ``pkdyn`` parser."""
-    sp = _posed_or_map(
+    sp = posed_or_map(
         sub,
         "stiffness",
         "stiffness, compliance and deflection at a configuration or over a map (VJM)",
         31,
         ("stiffness_min", "deflection"),
+        "the smallest stiffness (and the deflection)",
     )
+    _options(sp)
     sp.add_argument(
         "--wrench",
         nargs="+",
@@ -285,13 +302,15 @@ def register(sub: Any) -> None:
         help="solve the equilibrium under the wrench and add its geometric stiffness",
     )
     sp.set_defaults(func=_cmd_stiffness)
-    sp = _posed_or_map(
+    sp = posed_or_map(
         sub,
         "modes",
         "natural frequencies and mode shapes at a configuration or over a map",
         21,
         ("f1", "stiffness_min"),
+        "the lowest frequency",
     )
+    _options(sp)
     sp.add_argument("--count", type=int, default=None, help="report the lowest COUNT modes")
     sp.add_argument("--gravity", action="store_true", help="about the equilibrium under gravity")
     sp.add_argument("--html", metavar="FILE", help="write an animation of a mode (meshcat HTML)")
