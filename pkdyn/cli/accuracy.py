@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.cli._common import emit, load
-from pkdyn.cli.precision import write_map, check_map_options, posed_or_map
+from pkdyn.cli.precision import check_map_options, posed_or_map, write_map
 
 __all__ = ["register"]
 
