@@ -12,9 +12,9 @@ public models), ``cli_latency`` (command start-up against the bare imports), ``i
 (design-study throughput and a 10,000-design study: several minutes; ``PKDYN_BENCH_DESIGNS``
 makes it smaller), ``calibration`` (geometric calibration of a Gough-Stewart from 100 poses, a
 Delta from 40, pose sensitivities), ``vibration`` (the modal method's cycles per second, the
-multibody simulation, the settling search). Figures are medians of repeated runs; ratios are medians of
-ratios measured on alternating batches (CPU time of the process), so that they hold under a
-varying load.
+multibody simulation, the settling search). Figures are medians of repeated runs; ratios are
+medians of ratios measured on alternating batches (CPU time of the process), so that they hold
+under a varying load.
 """
 
 from __future__ import annotations

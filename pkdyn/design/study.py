@@ -37,7 +37,15 @@ import numpy as np
 from pkdyn.design import fields
 from pkdyn.design.context import Conditions
 from pkdyn.design.goals import Constraint, Objective
-from pkdyn.design.metrics import METRICS, VIBRATION_METRICS, Metric, resolve_metrics
+from pkdyn.design.metrics import (
+    METRICS,
+    PRECISION_METRICS,
+    VIBRATION_METRICS,
+    WORKSPACE_METRICS,
+    Metric,
+    check_precision,
+    resolve_metrics,
+)
 from pkdyn.design.requirement import Requirement
 from pkdyn.design.samplers import SAMPLERS, check_count, unit_points
 from pkdyn.design.space import DesignSpace, Range
@@ -190,11 +198,25 @@ class Study:
         set_(self, "name", fields.text("name", self.name))
         # validate now: bad input fails before any design is evaluated
         _ = self.space, self.conditions, self.metric_list
+        self._check_precision()
         set_(self, "fixed", dict(self.space.fixed))  # text values converted by the space
         _ = self.total
         if self.sampler == "nsga2" and not self.objectives:
             raise InvalidInputError("objectives", "nsga2 needs at least one objective")
         self._check_work(self._check_duty_cycle())
+
+    def _check_precision(self) -> None:
+        """Refuse precision options no design could turn into a metric (on the middle design)."""
+        if not any(m.name in PRECISION_METRICS for m in self.metric_list):
+            return
+        from pkdyn.design.evaluate import build
+        from pkdyn.exceptions import PkdynError
+
+        try:
+            robot = build(self, self.space.values(np.full((1, self.space.dimension), 0.5))[0])
+        except PkdynError:
+            return  # (the middle design does not build: each design says why)
+        check_precision(self.metric_list, self.conditions, robot)
 
     def _check_duty_cycle(self) -> int:
         """Build the duty cycle about a stand-in home: its options fail now, not per design.
@@ -272,6 +294,7 @@ class Study:
             raise InvalidInputError("metrics", "a study needs at least one metric (--metric)")
         metrics = resolve_metrics(names)
         needs = {"contains", "inv_cond_min", "inv_cond_mean", "interference_margin"}
+        needs |= set(WORKSPACE_METRICS)
         if self.requirement is None:
             used = sorted(needs & {m.name for m in metrics})
             if used:
@@ -286,29 +309,13 @@ class Study:
     def _check_vibration(self, name: str) -> None:
         """Refuse up front the settings a vibration metric cannot be computed with.
 
-        The duty cycle must run from rest to rest (the settling follows a stop) and the
-        actuators need a stiffness (the settings' or, for every actuator of the family's
-        default robot, the description's).
+        The duty cycle must run from rest to rest (the settling follows a stop); the actuators'
+        stiffness is checked with the precision metrics' (:func:`check_precision`).
         """
         if self.trajectory == "sine":
             raise InvalidInputError(
                 f"metric '{name}'",
                 "needs a duty cycle from rest to rest (adept or p2p), not sine (it ends in motion)",
-            )
-        if "actuator_stiffness" in self.settings:
-            return
-        import pkdyn
-
-        try:
-            robot = pkdyn.load(self.family, geometry=False)
-        except Exception:  # noqa: BLE001 (the defaults do not build: the designs will say)
-            return
-        missing = [a.name for a in robot.actuators if a.stiffness is None]
-        if missing:
-            raise InvalidInputError(
-                f"metric '{name}'",
-                f"needs the actuators' stiffness: {self.family} describes none for "
-                f"'{missing[0]}'; give settings actuator_stiffness (--actuator-stiffness K)",
             )
 
     @property

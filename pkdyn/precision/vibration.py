@@ -51,7 +51,7 @@ from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.material import Material
 from pkdyn.precision.modes import Modes
 from pkdyn.precision.modes import modes as modes_at
-from pkdyn.precision.stiffness import check_compliant
+from pkdyn.precision.stiffness import nothing_compliant
 from pkdyn.precision.vibration_command import FEEDFORWARDS, Command, command
 from pkdyn.precision.vibration_damping import Damping, actuator_damping_values, damping
 from pkdyn.precision.vibration_damping import damping_ratio as check_ratio
@@ -150,6 +150,22 @@ def _task(
         c = positive("cycle_time", cycle_time, "s")
         opts.update(frequency=1.0 / c, duration=c)
     return named_task(robot, trajectory, **opts)
+
+
+def check_compliant(em: ElasticModel) -> None:
+    """Refuse a rigid model (every actuator ``inf``, no spring, rigid links): nothing vibrates.
+
+    Raises:
+        InvalidInputError: The robot is rigid.
+
+    """
+    if nothing_compliant(em):
+        raise InvalidInputError(
+            "actuator_stiffness",
+            f"{em.base.name}: every actuator is rigid (inf) and nothing else is compliant: the "
+            "robot is rigid and does not vibrate; give finite actuator stiffnesses or a "
+            "material for the links",
+        )
 
 
 def _with_payload(em: ElasticModel, payload: float, point: np.ndarray) -> ElasticModel:

@@ -39,7 +39,6 @@ from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.precision.condensation import RANK_TOL, constraint_rows
 from pkdyn.precision.elastic import elastic_model
 from pkdyn.precision.material import Material
-from pkdyn.precision.stiffness import check_compliant
 from pkdyn.precision.vibration import (
     DEFAULT_BAND,
     DEFAULT_DWELL,
@@ -47,6 +46,7 @@ from pkdyn.precision.vibration import (
     Setup,
     _dominant,
     analyse,
+    check_compliant,
     prepare,
     result,
     static_deflection,
