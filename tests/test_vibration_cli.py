@@ -147,6 +147,13 @@ def test_size_fastest_settle_compares_shaped_and_unshaped(tmp_path, capsys):
         damping_ratio=0.05, shaper=None, max_scale=u["scale"] * 0.995,
     )  # fmt: skip
     assert res.unshaped.scale is None
+    # the rigid feedforward cancels the one-mode system's vibration: the fastest motion settles
+    rigid = fastest_settling(
+        robot, named_task(robot, "p2p"), 5e-4, 0.05, actuator_stiffness=(2 * np.pi * 20) ** 2,
+        damping_ratio=0.05, shaper=None, feedforward="rigid",
+    )  # fmt: skip
+    assert rigid.unshaped.scale == 1.0
+    assert rigid.unshaped.vibration.peak_deviation < 1e-12
 
 
 def test_settle_options_need_fastest(capsys):

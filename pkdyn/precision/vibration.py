@@ -339,6 +339,7 @@ def vibration(
     if poses is None:
         poses = DEFAULT_POSES_LINKS if em.links else DEFAULT_POSES
     cmd = command(em, task, payload, p, feedforward, progress)
+    em = em.at(cmd.joint.q[0])  # (a compliant prismatic rod: its length at the start)
     setup = prepare(
         robot, em, cmd, p, payload, feedforward, damping_ratio, actuator_damping, band, dwell,
         modes, poses, progress,

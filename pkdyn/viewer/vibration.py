@@ -42,7 +42,7 @@ def exaggerated(
 
     scale = positive("scale", scale, bound=1e12)
     free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
-    cs, data = r.closure_set, r.data
+    cs, data = r.constraints, r.data
     Q = np.empty_like(result.command)
     q = result.command[0]
     for k, (qc, u) in enumerate(zip(result.command, result.deformation, strict=True)):
