@@ -210,3 +210,21 @@ def test_free_vibration_after_a_stop_rings_at_the_natural_frequency():
     m = modes(em, q_end, gravity=True)
     vertical = int(np.argmax(np.abs(m.platform[:, 2])))
     assert peak == pytest.approx(m.frequencies[vertical], rel=1e-4)
+
+
+@pytest.mark.parametrize("name, k", [("gough_stewart", 2e6), ("planar_3rrr", 2e4)])
+def test_other_robots_modal_against_multibody(name, k):
+    """Prismatic actuators and rotations in the task: the methods agree the same way."""
+    robot = pkdyn.load(name)
+    opts = dict(cycle_time=0.2, payload=0.5, actuator_stiffness=k, dwell=0.2, band=1e-6)
+    modal = vibration(robot, "p2p", **opts)
+    mb = vibration(robot, "p2p", method="multibody", **opts)
+    assert modal.task == mb.task and len(modal.task) == len(robot.task_rows)
+    assert mb.energy_drift < 1e-6
+    assert modal.peak_deviation == pytest.approx(mb.peak_deviation, rel=0.02)
+    assert modal.residual_amplitude == pytest.approx(mb.residual_amplitude, rel=0.02)
+    rot = [i for i, c in enumerate(modal.task) if c.startswith("r")]
+    if rot:  # the rotations' deviation [rad]
+        a = np.max(np.abs(modal.deviation[:, rot]))
+        b = np.max(np.abs(mb.deviation[:, rot]))
+        assert a == pytest.approx(b, rel=0.02)
