@@ -411,16 +411,17 @@ def column_basis(
 ) -> ColumnBasis:
     """The independent columns of ``A`` (m, p) and the combination each other column is.
 
-    **Scaling.** Independence does not depend on the columns' units: by default each column is
-    divided by its norm (unit columns, judged with ``scale`` 1 as orthonormal bases are, so that
-    the cut-off is ``rtol``). A caller that knows a magnitude per column passes ``col_scale``
-    (the columns are multiplied by it): calibration the prior standard deviation of each
-    parameter and identification a plausible magnitude of each base parameter, on a matrix
-    whitened by the noise, so that ``|R_kk|`` is that magnitude divided by the standard
-    deviation the data give the parameter (the parameters before it known); then ``floor``
-    (e.g. 1) also makes a column whose ``|R_kk|`` falls below it dependent (*weak*: the data
-    determine it worse than its magnitude). The cut-off of the rule is then ``rtol`` times the
-    largest scaled column norm.
+    **Scaling.** Independence does not depend on the columns' units: each column is judged by
+    its distance to the span of the columns before it *divided by its own norm* (unit columns,
+    judged with ``scale`` 1 as orthonormal bases are: the cut-off is ``rtol``). A caller that
+    knows a magnitude per column passes ``col_scale`` (the columns are multiplied by it):
+    calibration the prior standard deviation of each parameter and identification a plausible
+    magnitude of each base parameter, on a matrix whitened by the noise, so that ``|R_kk|`` of
+    the scaled columns is that magnitude divided by the standard deviation the data give the
+    parameter (the parameters before it known). The pivots then follow the scaled columns (the
+    best-determined parameters first), each still judged by the unit-free rule, and ``floor``
+    also makes a column whose scaled ``|R_kk|`` falls below it dependent (*weak*: the data
+    determine it worse than ``floor`` times its magnitude).
 
     Columns whose norm is at most :data:`ZERO_RTOL` of the largest have no effect: dependent,
     with a zero combination.
@@ -453,18 +454,23 @@ def column_basis(
         return ColumnBasis(
             np.zeros(0, int), np.arange(p), np.zeros((0, p)), r_diag, np.zeros(0, int), zero
         )
-    if col_scale is None:
+    if col_scale is None:  # unit columns: the rule on the diagonal itself
         d = 1.0 / norms[live]
-        cut_scale = 1.0
-    else:
+        qr = column_qr(A[:, live] * d, pivot, rtol, 1.0)
+        diag = np.abs(np.diag(qr.R))[: qr.rank]
+        r = struct = qr.rank
+    else:  # the rule on the unit-free distances, the floor on the scaled diagonal
         d = np.asarray(col_scale, dtype=float)[live]
-        cut_scale = 0.0
-    qr = column_qr(A[:, live] * d, pivot, rtol, cut_scale)
-    diag = np.abs(np.diag(qr.R))[: qr.rank]
-    r = qr.rank if floor <= 0.0 else int(np.count_nonzero(np.cumprod(diag >= floor)))
+        qr = column_qr(A[:, live] * d, pivot, 0.0)
+        diag = np.abs(np.diag(qr.R))[: qr.rank]
+        unit = diag / (norms[live] * d)[qr.perm[: qr.rank]]
+        apart = unit > rtol
+        struct = int(np.count_nonzero(np.cumprod(apart)))
+        r = int(np.count_nonzero(np.cumprod(apart & (diag >= floor))))
+        diag = diag[:struct]
     r_diag[: diag.size] = diag
     ind = live[qr.perm[:r]]
-    weak = live[qr.perm[r : qr.rank]]
+    weak = live[qr.perm[r:struct]]
     rest = qr.perm[r:]
     beta = np.zeros((r, rest.size + zero.size))
     if rest.size and r:

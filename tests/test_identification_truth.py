@@ -150,8 +150,8 @@ def test_recovers_a_perturbed_robot_from_mujoco_efforts(name):
     assert np.all(err0 > 5 * noise)
     # reported, not invented: the parameters without effect are listed, and have none
     ps = res.parameters
-    assert len(res.base.unidentifiable) >= {"five_bar": 30, "delta": 30}.get(name, 1)
-    unseen = [ps.index(p) for p in res.base.unidentifiable]
+    assert len(res.base.no_effect) >= {"five_bar": 30, "delta": 30}.get(name, 1)
+    unseen = [ps.index(p) for p in res.base.no_effect]
     moved = res.theta.copy()
     moved[unseen] *= 1.5
     moved[unseen] += 0.1
@@ -208,7 +208,7 @@ def test_recovers_a_perturbed_coupled_gripper_from_mujoco_efforts(xarm_gripper):
     tau0 = predict_efforts(nominal, ps0, ps0.nominal, t2, qa2, qd2, qdd2)
     err0 = np.sqrt(np.mean((tau0 - tau2) ** 2, axis=0))
     assert np.all(err < noise) and np.all(err0 > 2 * noise), (err / noise, err0 / noise)
-    unseen = [ps0.index(p) for p in res.base.unidentifiable]
+    unseen = [ps0.index(p) for p in res.base.no_effect]
     assert len(unseen) >= 30  # a translating finger's rotational inertia, among others
     moved = res.theta.copy()
     moved[unseen] = 1.5 * moved[unseen] + 0.1

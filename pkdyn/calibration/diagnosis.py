@@ -25,8 +25,8 @@ the nominal robot, not in the robot's geometry, and :func:`likely_cause` names i
    robot**: the measured positions' centre and spread are compared with the nominal robot's at
    the same readings (a robot of another size: check ``--param`` or the description).
 
-:func:`readings_hint` says what actuator readings the robot cannot be assembled at look like
-(degrees for revolute actuators, millimetres for prismatic ones).
+What actuator readings the robot cannot be assembled at look like (degrees, millimetres) is
+:func:`pkdyn.identification.checks.readings_hint`.
 """
 
 from __future__ import annotations
@@ -36,12 +36,10 @@ import itertools
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import PkdynError
-from pkdyn.model.assembly import forward_geometry
 from pkdyn.model.robot import Robot
 from pkdyn.units import quantity, vector
 
-__all__ = ["likely_cause", "readings_hint", "tolerance_error"]
+__all__ = ["EXPLAINED", "likely_cause", "tolerance_error"]
 
 _UNITS = ((1e-2, "centimetres"), (1e-3, "millimetres"), (0.0254, "inches"))
 EXPLAINED = 3.0
@@ -229,38 +227,3 @@ def _orientations(rpy: np.ndarray, R0: np.ndarray, a0: float, bound: float) -> s
         f"explain ({bound:.3g} rad): check the orientation convention (roll, pitch, yaw [rad] "
         "about the fixed x, y, z axes of the robot's world frame)"
     )
-
-
-def readings_hint(robot: Robot, qa: np.ndarray) -> str:
-    """``; the readings look like degrees ...`` when that explains readings out of reach, else "".
-
-    Args:
-        robot: The robot.
-        qa: Actuator values (N, n_a) the robot was given (joint coordinates) [rad or m].
-
-    Returns:
-        A phrase to append to a message, or ``""``.
-
-    """
-    lo = robot.model.lowerPositionLimit[robot.actuated_q]
-    hi = robot.model.upperPositionLimit[robot.actuated_q]
-    prismatic = robot.actuator_prismatic
-    factor = np.where(prismatic, 1e-3, np.pi / 180.0)
-    outside = (qa < lo - 1e-9) | (qa > hi + 1e-9)
-    scaled = qa * factor
-    inside = (scaled >= lo - 1e-9) & (scaled <= hi + 1e-9)
-    cols = np.flatnonzero(outside.any(axis=0))
-    if cols.size == 0:
-        if not np.any(np.abs(qa) > np.where(prismatic, 10.0 * robot.length_scale, 2.0 * np.pi)):
-            return ""
-        cols = np.flatnonzero(np.any(np.abs(qa) > 2.0 * np.pi, axis=0))
-    if not np.all(inside[:, cols]):
-        return ""
-    for row in scaled[: min(5, len(scaled))]:  # they assemble once converted
-        try:
-            forward_geometry(robot, row, check_limits=False)
-        except PkdynError:
-            return ""
-    names = ", ".join(robot.actuator_names[int(c)] for c in cols)
-    unit, si = ("millimetres", "m") if np.all(prismatic[cols]) else ("degrees", "rad")
-    return f"; the readings of {names} look like {unit} (give {si})"

@@ -80,7 +80,7 @@ def nominal_configurations(robot: Robot, m: Measurements) -> list[np.ndarray]:
             look like when that explains it (degrees, a gain).
 
     """
-    from pkdyn.calibration.diagnosis import readings_hint
+    from pkdyn.identification.checks import readings_hint
 
     qs = []
     for i, reading in enumerate(m.qa):

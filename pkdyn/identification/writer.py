@@ -242,8 +242,11 @@ def identified_urdf(robot: Robot, ps: ParameterSet, theta: np.ndarray) -> str:
 
 def write_urdf(
     path: str | os.PathLike[str], robot: Robot, ps: ParameterSet, theta: np.ndarray
-) -> None:
+) -> str:
     """Write :func:`identified_urdf` atomically (temporary file, then rename).
+
+    Returns:
+        The text written.
 
     Raises:
         OutputError: The file cannot be written (an existing file is left intact).
@@ -252,3 +255,4 @@ def write_urdf(
     text = identified_urdf(robot, ps, theta)
     with atomic_write(path) as fh:
         fh.write(text)
+    return text
