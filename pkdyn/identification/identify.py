@@ -34,7 +34,7 @@ from pkdyn.identification.checks import check_limits, check_moves, readings_hint
 from pkdyn.identification.data import MAX_SAMPLES, Measurements
 from pkdyn.identification.estimation import Accumulator
 from pkdyn.identification.filtering import derivatives
-from pkdyn.identification.magnitudes import base_references, prior_weights
+from pkdyn.identification.magnitudes import base_references, drive_scales, prior_weights
 from pkdyn.identification.motion import BATCH, MotionSampler
 from pkdyn.identification.parameters import ParameterSet, parameter_set
 from pkdyn.identification.physical import consistent_parameters
@@ -271,7 +271,8 @@ def _identify(
         colsq += share.colsq
     sel = np.flatnonzero(ps.identified)
     nominal = ps.nominal[sel]
-    est = acc.estimate(formulas, base_references(base, nominal), base.K @ nominal)
+    scales = drive_scales(robot)
+    est = acc.estimate(formulas, base_references(base, nominal, scales), base.K @ nominal)
     pos = {int(c): k for k, c in enumerate(sel)}
     bodies = [
         slice(pos[ps.body_slice(k).start], pos[ps.body_slice(k).start] + 10)
@@ -285,7 +286,7 @@ def _identify(
     sigma = float(np.sqrt(np.mean(est.sigma**2))) or 1.0
     K = base.K
     unseen = ~np.any(K[est.excited] != 0.0, axis=0)  # only in base parameters not excited
-    effect = prior_weights(np.sqrt(colsq) / sigma, nominal, base, unseen)
+    effect = prior_weights(np.sqrt(colsq) / sigma, nominal, base, unseen, scales)
     theta_id = consistent_parameters(K, est.R, est.theta, nominal, bodies, nonneg, effect)
     theta = ps.nominal.copy()
     theta[sel] = theta_id
