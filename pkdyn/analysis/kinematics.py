@@ -173,8 +173,8 @@ def platform_jacobian(robot: Robot, q: np.ndarray) -> np.ndarray:
 
 def _checked_q(robot: Robot, q: Sequence[float] | np.ndarray) -> np.ndarray:
     qq = as_finite("q", q, robot.nq)
-    if robot.closure_set.nc:
-        res = float(np.max(np.abs(robot.closure_set.residual(robot.data, qq))))
+    if robot.constraints.n:
+        res = float(np.max(np.abs(robot.constraints.residual(robot.data, qq))))
         if res > ASSEMBLY_TOL:
             raise InvalidInputError(
                 "q",
@@ -355,7 +355,7 @@ def _relation_count(robot: Robot, rows: np.ndarray) -> int:
     count = _RELATION_COUNTS.get(key)
     if count is None:
         q = robot.q_home
-        Jc = robot.closure_set.jacobian(robot.data, q) if robot.closure_set.nc else None
+        Jc = robot.constraints.jacobian(robot.data, q) if robot.constraints.n else None
         Jc = np.zeros((0, robot.nv)) if Jc is None else Jc
         Jx = platform_jacobian(robot, q)[rows]
         rel = _relations(Jc, Jx, np.asarray(robot.actuated_v), np.asarray(robot.passive_v))
@@ -383,7 +383,7 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
     rows = np.asarray(robot.task_rows, dtype=int)
     r = _relation_count(robot, rows)  # (at home, once: before the kinematics at q)
     nv = robot.nv
-    Jc = robot.closure_set.jacobian(robot.data, qq) if robot.closure_set.nc else np.zeros((0, nv))
+    Jc = robot.constraints.jacobian(robot.data, qq) if robot.constraints.n else np.zeros((0, nv))
     J6 = platform_jacobian(robot, qq)
     Jx = J6[rows]
     a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)

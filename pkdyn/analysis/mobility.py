@@ -207,8 +207,8 @@ def mobility(
     Ic += sum(CLOSURE_FREEDOM[kinds[name]] for name in dict.fromkeys(robot.constraint_owner))
     loops = robot.loops
 
-    if robot.closure_set.nc:
-        _, Jc = robot.closure_set.residual_and_jacobian(data, qq)
+    if robot.constraints.n:
+        _, Jc = robot.constraints.residual_and_jacobian(data, qq)
     else:
         Jc = np.zeros((0, model.nv))
         pin.computeJointJacobians(model, data, qq)
@@ -221,7 +221,7 @@ def mobility(
     m = N.shape[1]
     if d is None:
         d = 3 if _plane_normal(robot, physical) is not None else 6
-    n_k = len(robot.closure_set.couplings)
+    n_k = robot.constraints.nk
     Ec = d * loops + n_k
     rc = Ic - m
 

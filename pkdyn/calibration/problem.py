@@ -284,8 +284,8 @@ class Problem:
         gap = np.zeros(self.model.size)
         for i, (q, M) in enumerate(zip(state.qs, state.poses, strict=True)):
             sens = pose_sensitivity(state.perturbed.robot, q, self.model, at=p)
-            if sens.closure_gap.size:
-                gap = np.maximum(gap, np.max(np.abs(sens.closure_gap), axis=0))
+            if sens.gap.size:
+                gap = np.maximum(gap, np.max(np.abs(sens.gap), axis=0))
             K = sens.K[:, cols]
             if m.kind == "joints":
                 assert sens.joints is not None

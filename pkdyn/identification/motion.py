@@ -78,7 +78,7 @@ class MotionBatch:
         q: Configurations (n, nq).
         v: Velocities (n, nv).
         a: Accelerations (n, nv).
-        J: Closure Jacobians (n, nc, nv) (:class:`solvers.ClosureSet` convention).
+        J: Closure Jacobians (n, nc, nv) (:class:`solvers.ConstraintSet` convention).
         first: Index of the first sample in the whole series.
         passive_map: ``J_p^+ J_a`` (n, n_p, n_a) when computed (``v_p = -J_p^+ J_a qa_dot``),
             else ``None``.
@@ -150,8 +150,8 @@ class MotionSampler:
         self.robot = robot
         self.model = robot.model
         self.data = robot.model.createData()
-        self.cs = robot.closure_set
-        self.kin = SampledKinematics(robot.model, robot.closure_set, (), BATCH)
+        self.cs = robot.constraints
+        self.kin = SampledKinematics(robot.model, robot.constraints, (), BATCH)
         self.va = np.asarray(robot.actuated_v, dtype=int)
         self.aq = np.asarray(robot.actuated_q, dtype=int)
         self.vp = np.setdiff1d(np.arange(robot.nv), self.va)
@@ -332,8 +332,8 @@ class MotionSampler:
             return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
         model, cs = self.model, self.cs
         Q = np.empty((n, model.nq))
-        J = np.empty((n, cs.nc, model.nv))
-        if not cs.nc:
+        J = np.empty((n, cs.n, model.nv))
+        if not cs.n:
             for k in range(n):
                 q = self._guess(first + k)
                 q[self.aq] = qa[k]
@@ -472,7 +472,7 @@ class MotionSampler:
         A[:, self.va] = qdd
         err = np.zeros(n)
         X = None
-        if cs.nc and self.vp.size:
+        if cs.n and self.vp.size:
             Jp, Ja = J[:, :, self.vp], J[:, :, self.va]
             X = passive_solve(Jp, Ja)
             V[:, self.vp] = -(X @ qd[..., None])[..., 0]

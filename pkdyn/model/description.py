@@ -23,7 +23,10 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
   source_ref]>``: a scalar relation between two 1-DoF joint coordinates (a gear pair, a rack,
   a cam law): ``joint - joint_ref = offset + multiplier (source - source_ref)``, or the polynomial
   ``sum_k polycoef[k] (source - source_ref)^k`` (1 to 5 coefficients); without ``source`` the
-  joint is locked at ``joint_ref + offset``. The standard URDF ``<mimic joint multiplier
+  joint is locked at ``joint_ref + offset``. ``<pkdyn:coupling name [offset]>`` with
+  ``<pkdyn:term joint coefficient>`` children: a linear relation over any number of 1-DoF
+  joints, ``sum_i coefficient_i joint_i = offset`` (a rotor geared to the sum of a knee and an
+  ankle angle). The standard URDF ``<mimic joint multiplier
   offset>`` of a joint is read as the coupling ``<joint name>_mimic`` (the joint stays a tree
   joint).
 - Compliance (:mod:`pkdyn.precision`): ``<pkdyn:stiffness value>`` in a ``<transmission>`` (or
@@ -411,7 +414,7 @@ class Description:
     passive: tuple[PassiveSpec, ...] = ()
     springs: tuple[SpringSpec, ...] = ()
     family: FamilySpec | None = None
-    couplings: tuple[CouplingSpec, ...] = ()
+    couplings: tuple[CouplingSpec | LinearCouplingSpec, ...] = ()
     home: tuple[float, ...] | None = None
     material: MaterialSpec | None = None
     compliance: tuple[ComplianceSpec, ...] = ()
@@ -782,15 +785,29 @@ def _number(source: str, culprit: str, text: str) -> float:
     return value
 
 
-def _coupling(source: str, el: ET.Element) -> CouplingSpec:
-    """A ``<pkdyn:coupling>`` element."""
+def _coupling(source: str, el: ET.Element) -> CouplingSpec | LinearCouplingSpec:
+    """A ``<pkdyn:coupling>`` element: polynomial (``joint``, ``source``...) or linear (terms)."""
     name = el.get("name")
     if not name:
         raise DescriptionError(source, "<pkdyn:coupling>", "missing attribute 'name'")
     what = f"coupling '{name}'"
+    terms = el.findall(_NS + "term")
+    other = [c.tag for c in el if c.tag != _NS + "term"]
+    if other:
+        tag = str(other[0]).replace(_NS, "pkdyn:")
+        raise DescriptionError(
+            source, what, f"unknown child <{tag}>; a coupling holds <pkdyn:term> children only"
+        )
+    if terms:
+        return _linear_coupling(source, el, name, terms)
     joint = el.get("joint")
     if not joint:
-        raise DescriptionError(source, what, "missing attribute 'joint' (the driven joint)")
+        raise DescriptionError(
+            source,
+            what,
+            "missing attribute 'joint' (the driven joint), or <pkdyn:term joint coefficient> "
+            "children (a linear coupling)",
+        )
     src = el.get("source") or None
     poly = el.get("polycoef")
     if poly is not None and (el.get("multiplier") is not None or el.get("offset") is not None):
@@ -813,6 +830,43 @@ def _coupling(source: str, el: ET.Element) -> CouplingSpec:
         coef = coef[:1]
     refs = [_number(source, f"{what} {a}", el.get(a, "0")) for a in ("joint_ref", "source_ref")]
     return CouplingSpec(name, joint, src, coef, refs[0], refs[1])
+
+
+def _linear_coupling(
+    source: str, el: ET.Element, name: str, terms: list[ET.Element]
+) -> LinearCouplingSpec:
+    """``<pkdyn:coupling name offset>`` with ``<pkdyn:term joint coefficient>`` children."""
+    what = f"coupling '{name}'"
+    extra = [a for a in ("joint", "source", "polycoef", "multiplier") if el.get(a) is not None]
+    if extra:
+        raise DescriptionError(
+            source,
+            what,
+            f"attribute '{extra[0]}' with <pkdyn:term> children: a linear coupling is its "
+            "terms and its offset only",
+        )
+    out: list[tuple[str, float]] = []
+    for t in terms:
+        joint = t.get("joint")
+        if not joint:
+            raise DescriptionError(source, f"{what} <pkdyn:term>", "missing attribute 'joint'")
+        if any(j == joint for j, _ in out):
+            raise DescriptionError(
+                source, what, f"joint '{joint}' appears in two terms; give each joint once"
+            )
+        text = t.get("coefficient")
+        if text is None:
+            raise DescriptionError(
+                source, f"{what} term of '{joint}'", "missing attribute 'coefficient'"
+            )
+        coef = _number(source, f"{what} coefficient of '{joint}'", text)
+        if coef == 0.0:
+            raise DescriptionError(
+                source, f"{what} coefficient of '{joint}'", "is zero: leave the term out"
+            )
+        out.append((joint, coef))
+    offset = _number(source, f"{what} offset", el.get("offset", "0"))
+    return LinearCouplingSpec(name, tuple(out), offset)
 
 
 _ONE_DOF = ("revolute", "continuous", "prismatic")
@@ -914,7 +968,7 @@ def _check_namespace(source: str, root: ET.Element) -> None:
                     f"unknown pkdyn element; the elements are {', '.join(ELEMENTS)}",
                 )
             continue
-        if "pkdyn" in uri.lower() or local in ELEMENTS + ("frame", "cone", "pyramid"):
+        if "pkdyn" in uri.lower() or local in ELEMENTS + ("frame", "cone", "pyramid", "term"):
             raise DescriptionError(
                 source,
                 f"namespace '{uri}' of <{local}>",

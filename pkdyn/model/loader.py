@@ -31,8 +31,8 @@ from pkdyn.model.build import (
     build_tree,
     check_model_size,
     constraint_models,
+    constraint_set,
     geometry_models,
-    joint_couplings,
     resolve_frame,
 )
 from pkdyn.model.description import (
@@ -47,7 +47,6 @@ from pkdyn.model.home import ASSEMBLY_TOL, find_home
 from pkdyn.model.passive import passive_forces
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn, warn_missing_meshes
-from solvers import ClosureSet
 
 if TYPE_CHECKING:
     from pkdyn.model.formats.gepetto import Sidecar
@@ -498,12 +497,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         if names.count(n) > 1:
             raise DescriptionError(source, f"closure '{n}'", "closure names must be unique")
     cms, owner = constraint_models(model, desc.closures, source)
-    couplings = joint_couplings(model, desc.couplings, source)
-    clash = {c.name for c in desc.couplings} & set(names)
-    if clash:
-        raise DescriptionError(
-            source, f"coupling '{sorted(clash)[0]}'", "a closure has the same name"
-        )
+    constraints = constraint_set(model, desc.closures, desc.couplings, source)
     actuated_joints, actuated_q, actuated_v = _actuation(model, list(desc.actuators), source)
     desc = dataclasses.replace(desc, actuators=_reflected(model, desc.actuators, actuated_v))
     platform_frame = None
@@ -538,7 +532,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         description=desc,
         constraint_models=vec,
         constraint_owner=owner,
-        closure_set=ClosureSet(model, cms, couplings),
+        constraints=constraints,
         actuators=tuple(desc.actuators),
         actuated_joints=actuated_joints,
         actuated_q=actuated_q,

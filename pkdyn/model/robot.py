@@ -10,9 +10,15 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
-from pkdyn.model.description import ActuatorSpec, ClosureSpec, CouplingSpec, Description
+from pkdyn.model.description import (
+    ActuatorSpec,
+    ClosureSpec,
+    CouplingSpec,
+    Description,
+    LinearCouplingSpec,
+)
 from pkdyn.model.families import FAMILIES
-from solvers import ClosureSet, PassiveForces
+from solvers import ConstraintSet, PassiveForces
 from solvers.numerics import rank
 
 __all__ = ["PLATFORM_HINT", "MODELLING_JOINTS", "Robot"]
@@ -39,10 +45,11 @@ class Robot:
         visual_model: Visual geometry (coal shapes).
         collision_model: Collision geometry (coal shapes).
         description: The parsed extension elements.
-        constraint_models: Pinocchio rigid constraint models (a ``hinge`` gives two).
+        constraint_models: Pinocchio rigid constraint models (a ``hinge`` gives two points).
         constraint_owner: Closure name of each constraint model.
-        closure_set: Residual / Jacobian evaluator of the closures, then the joint couplings
-            (one row each, see :mod:`solvers.coupling`).
+        constraints: The constraint layer (:class:`solvers.ConstraintSet`): the closures' rows
+            (reduced to their independent rows), then one row per joint coupling; views
+            ``constraints.closures`` and ``constraints.couplings``.
         actuators: Actuators in actuator order.
         actuated_joints: Joint id of each actuator.
         actuated_q: Configuration index of each actuator (nq indexing).
@@ -69,7 +76,7 @@ class Robot:
     description: Description
     constraint_models: pin.StdVec_RigidConstraintModel
     constraint_owner: list[str]
-    closure_set: ClosureSet
+    constraints: ConstraintSet
     actuators: tuple[ActuatorSpec, ...]
     actuated_joints: np.ndarray
     actuated_q: np.ndarray
@@ -128,14 +135,19 @@ class Robot:
         return self.description.closures
 
     @property
-    def couplings(self) -> tuple[CouplingSpec, ...]:
-        """Joint couplings of the description (gears, mimic joints, locked joints)."""
+    def couplings(self) -> tuple[CouplingSpec | LinearCouplingSpec, ...]:
+        """Joint couplings of the description (sums, gears, mimic joints, locked joints)."""
         return self.description.couplings
 
     @property
+    def closure_set(self) -> ConstraintSet:
+        """The former name of :attr:`constraints` (kept for one release)."""
+        return self.constraints
+
+    @property
     def row_owners(self) -> list[str]:
-        """Closure or coupling name of each entry of ``closure_set`` (its ``names`` order)."""
-        return list(self.constraint_owner) + [c.name for c in self.closure_set.couplings]
+        """Closure or coupling name of each constraint of ``constraints`` (its ``names``)."""
+        return list(self.constraints.names)
 
     @property
     def actuator_prismatic(self) -> np.ndarray:
@@ -311,7 +323,7 @@ class Robot:
     def mobility(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
         """Mobility at ``q`` (default ``q_home``): nv minus the rank of the closure Jacobian.
 
-        The closure Jacobian includes the joint couplings' rows.
+        The constraint Jacobian includes the joint couplings' rows.
 
         Args:
             q: Configuration (nq,).
@@ -324,9 +336,9 @@ class Robot:
 
         """
         qq = self.q_home if q is None else q
-        if self.closure_set.nc == 0:
+        if self.constraints.n == 0:
             return self.nv
-        _, J = self.closure_set.residual_and_jacobian(self.data, qq)
+        _, J = self.constraints.residual_and_jacobian(self.data, qq)
         return self.nv - rank(J, tol, scale=1.0)
 
     def mobility_split(self, q: np.ndarray | None = None, tol: float = 1e-9) -> tuple[int, int]:
@@ -348,8 +360,8 @@ class Robot:
         """
         qq = self.q_home if q is None else q
         nv = self.nv
-        if self.closure_set.nc:
-            _, Jc = self.closure_set.residual_and_jacobian(self.data, qq)
+        if self.constraints.n:
+            _, Jc = self.constraints.residual_and_jacobian(self.data, qq)
             _, s, Vt = np.linalg.svd(Jc)
             rank = int(np.sum(s > tol * max(1.0, float(s[0]) if s.size else 0.0)))
             N = Vt[rank:].T

@@ -359,11 +359,7 @@ def geometric_errors(
     t = _tolerances(model, tolerance)
     std = _std(t, distribution)
     s = pose_sensitivity(robot, q, model)
-    gap = (
-        np.max(np.abs(s.closure_gap), axis=0, initial=0.0)
-        if s.closure_gap.size
-        else np.zeros(model.size)
-    )
+    gap = np.max(np.abs(s.gap), axis=0, initial=0.0) if s.gap.size else np.zeros(model.size)
     bad = gap > _GAP_TOL
     K = np.where(bad[None, :], 0.0, s.K)
     t_eff = np.where(bad, 0.0, t)
@@ -465,7 +461,7 @@ def monte_carlo(
     except InvalidInputError:
         raise InvalidInputError("samples", f"{samples}: give 1 to 100,000") from None
     seed = _seed("seed", seed)
-    gap = pose_sensitivity(robot, qq, model).closure_gap
+    gap = pose_sensitivity(robot, qq, model).gap
     if gap.size:
         t = np.where(np.max(np.abs(gap), axis=0) > _GAP_TOL, 0.0, t)
     nominal = robot.platform_placement(qq)

@@ -92,8 +92,8 @@ def _skew(v: np.ndarray) -> np.ndarray:
 def constraint_rows(em: ElasticModel, q: np.ndarray) -> np.ndarray:
     """Closure Jacobian and rigid-actuator rows (r, nv) at ``q`` (runs the joint Jacobians)."""
     r = em.robot
-    if r.closure_set.nc:
-        Jc = r.closure_set.jacobian(r.data, q)
+    if r.constraints.n:
+        Jc = r.constraints.jacobian(r.data, q)
     else:
         pin.computeJointJacobians(r.model, r.data, q)
         Jc = np.zeros((0, r.nv))

@@ -15,9 +15,10 @@ Pashkevich, Chablat and Wenger's virtual-joint method (2009) on the whole tree:
   uniform half rod or tube of half the link's mass) moves with the tip, the rest of the link's
   inertia with the root (when the link's inertia does not contain such a half rod, all of it
   stays on the root); a described compliance keeps the link's inertia on its root;
-- the loop closures (and any other rows of ``robot.closure_set``) stay rigid constraints,
-  re-made on the new tree; hinges built from two points, welds and redundant closures keep
-  their rank deficiency (the analyses use rank-revealing null spaces).
+- the constraint layer (``robot.constraints``) stays rigid, re-made on the new tree: the loop
+  closures (their frames carried by the tips of compliant links) and the joint couplings (rigid
+  relations between the same tree joints, in the same condensation as the closures); redundant
+  closures keep their rank deficiency (the analyses use rank-revealing null spaces).
 
 :func:`elastic_model` returns this as an :class:`ElasticModel`: a :class:`pkdyn.Robot` of the
 extended tree (the robot itself when no link is compliant) whose ``passive`` holds the joint
@@ -36,11 +37,12 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.robot import Robot
 from pkdyn.precision.links import LinkCompliance, link_compliances
 from pkdyn.precision.material import Material
-from solvers import ClosureSet, FrameSpring, PassiveForces
+from solvers import ConstraintSet, FrameSpring, PassiveForces
+from solvers.coupling import Coupling, LinearCoupling
 
 __all__ = ["DEFLECTION_SUFFIX", "ElasticModel", "actuator_stiffness", "elastic_model"]
 
@@ -198,8 +200,6 @@ def elastic_model(
 
     Raises:
         InvalidInputError: A bad stiffness or material (the value is named).
-        PkdynError: Compliant links on a robot whose closure set has rows other than point and
-            weld closures (not supported yet).
 
     """
     k_a = _actuator_stiffness(robot, actuator_stiffness)
@@ -213,12 +213,6 @@ def elastic_model(
             np.arange(robot.nq),
             np.arange(robot.nv),
             np.zeros((0, 6), dtype=int),
-        )
-    cs = robot.closure_set
-    if cs.nc != sum(3 if item[0] else 6 for item in cs.items):
-        raise PkdynError(
-            f"{robot.name}: compliant links need a closure set of point and weld closures only "
-            "(this one has other rows); analyse it with rigid links (links=False)"
         )
     ext, q_index, v_index, defl = _extended(robot, found)
     return ElasticModel(ext, robot, k_a, tuple(found), q_index, v_index, defl)
@@ -318,7 +312,7 @@ def _extended(
         visual_model=_geometry(robot.visual_model, jmap),
         collision_model=_geometry(robot.collision_model, jmap),
         constraint_models=cms,
-        closure_set=ClosureSet(new, list(cms)),
+        constraints=_constraints(robot.constraints, new, jmap, carrier),
         actuated_joints=np.array([jmap[int(j)] for j in robot.actuated_joints], dtype=int),
         actuated_q=q_index[np.asarray(robot.actuated_q, dtype=int)],
         actuated_v=v_index[np.asarray(robot.actuated_v, dtype=int)],
@@ -328,6 +322,38 @@ def _extended(
         passive=_passive(robot, new, q_index, v_index, carrier, links, defl),
     )
     return ext, q_index, v_index, defl
+
+
+def _constraints(
+    cs: ConstraintSet,
+    new: pin.Model,
+    jmap: dict[int, int],
+    carrier: dict[int, tuple[int, pin.SE3]],
+) -> ConstraintSet:
+    """The constraint layer on the extended tree: the same closures and couplings.
+
+    A closure's frames ride on what the link's tip carries (``carrier``); a coupling relates
+    the same tree joints (``jmap``). The virtual joints are spatial: a planar closure whose loop
+    holds a compliant link keeps its out-of-plane rows (the link deforms out of the plane).
+    """
+    closures = []
+    for c in cs.closure_specs:
+        j1, o1 = carrier[c.joint1]
+        j2, o2 = carrier[c.joint2]
+        closures.append(
+            dataclasses.replace(
+                c, joint1=j1, placement1=o1 * c.placement1, joint2=j2, placement2=o2 * c.placement2
+            )
+        )
+    couplings: list[Coupling] = []
+    for k in cs.coupling_specs:
+        if isinstance(k, LinearCoupling):
+            couplings.append(dataclasses.replace(k, terms=tuple((jmap[j], a) for j, a in k.terms)))
+        else:
+            src = None if k.source is None else jmap[k.source]
+            couplings.append(dataclasses.replace(k, joint=jmap[k.joint], source=src))
+    reduce = cs.closure_rows.reduce if cs.closure_rows is not None else True
+    return ConstraintSet(new, closures, couplings, reduce=reduce)
 
 
 def _split(

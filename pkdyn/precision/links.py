@@ -117,8 +117,12 @@ def _attachments(robot: Robot, joint: int) -> list[np.ndarray]:
         for c in range(1, model.njoints)
         if model.parents[c] == joint
     ]
-    for _, j1, M1, j2, M2 in robot.closure_set.items:
-        pts += [np.array(M.translation) for j, M in ((j1, M1), (j2, M2)) if j == joint]
+    for cm in robot.constraint_models:  # (a hinge's two points, as built)
+        pts += [
+            np.array(M.translation)
+            for j, M in ((cm.joint1_id, cm.joint1_placement), (cm.joint2_id, cm.joint2_placement))
+            if j == joint
+        ]
     if robot.platform_frame is not None:
         f = model.frames[robot.platform_frame]
         if f.parentJoint == joint:

@@ -267,10 +267,10 @@ def mode_trajectory(
     t = np.linspace(0.0, cycles * period, int(cycles * samples) + 1)
     Q = np.empty((t.size, r.nq))
     free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
-    cs, data = r.closure_set, r.data
+    cs, data = r.constraints, r.data
     for i, ti in enumerate(t):
         qi = pin.integrate(r.model, q0, a * np.sin(2.0 * np.pi * ti / period) * u)
-        if cs.nc:
+        if cs.n:
             qi = solve_lm(
                 r.model,
                 qi,

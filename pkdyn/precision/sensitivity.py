@@ -12,7 +12,7 @@ of the platform in its own frame [rad] (``log3(R0^T R)``).
 every body downstream of it (a joint's subtree; for a closure frame or the platform, that frame
 alone) by the world twist ``V = Ad(oF) xi``, ``oF`` the world placement of the placed frame. A
 point ``p`` on a moved body moves by ``v + w x p``, a frame ``R`` turns by ``R^T w`` in its axes.
-The closure residuals ``c(q, p)`` (:class:`solvers.ClosureSet`: points ``p1 - p2``, welds
+The closure residuals ``c(q, p)`` (:class:`solvers.ConstraintSet`: points ``p1 - p2``, welds
 ``log6(c1Mc2)``) and the platform pose ``x(q, p)`` then change at fixed ``q`` by ``C dp`` and
 ``X dp``. Gains change the actuated coordinates, ``dqa = diag(qa) G dp``.
 
@@ -22,13 +22,15 @@ mobilities, like the spin of a Delta's bars, stay still), so that
 
     dx = J dqa + K dp,   J = Jx_a - Jx_p Jc_p^+ Jc_a,   K = X + J diag(qa) G - Jx_p Jc_p^+ C
 
-with ``Jc`` the closure Jacobian of the robot's constraint layer (``robot.closure_set``: any
-scalar rows it holds besides the rigid closures, e.g. joint couplings, take part in the
-elimination; they depend on no placement) and ``Jx`` the platform Jacobian. ``J`` is the direct
+with ``Jc`` the Jacobian of the robot's constraint layer (``robot.constraints``: the closures'
+rows, then the joint couplings', which take part in the elimination and depend on no
+placement) and ``Jx`` the platform Jacobian. ``J`` is the direct
 kinematic Jacobian of :func:`pkdyn.analysis.kinematics.kinematic_models` (all six pose rows).
 Placement errors the passive joints cannot absorb (an over-constrained mechanism: the
 out-of-plane errors of a planar five-bar) leave a closure residual at first order, reported in
-:attr:`PoseSensitivity.closure_gap`: the mechanism would not assemble without deforming.
+:attr:`PoseSensitivity.closure_gap` (and, where the passive motion that absorbs a closure
+residual would break a coupling, :attr:`PoseSensitivity.coupling_gap`): the mechanism would not
+assemble without deforming.
 
 The derivative is with respect to the parameters ``p`` of a :class:`ParameterModel` at a robot
 already perturbed by ``at`` (the placement ``M0 exp(xi(at))`` moves by ``exp(Jexp6(xi) dxi)``),
@@ -76,6 +78,8 @@ class PoseSensitivity:
             the loops (and couplings) move every joint when a parameter changes at fixed
             actuator readings (the actuated rows: the gains' effect); what encoders on
             passive joints see.
+        coupling_gap: Coupling residual per parameter that no passive motion absorbs (nk,
+            n_par) [rad or m per unit] (``None``: no couplings).
 
     """
 
@@ -85,6 +89,18 @@ class PoseSensitivity:
     K: np.ndarray
     closure_gap: np.ndarray
     joints: np.ndarray | None = None
+    coupling_gap: np.ndarray | None = None
+
+    @property
+    def gap(self) -> np.ndarray:
+        """Every constraint row's unabsorbed residual (n, n_par).
+
+        The closure rows (m or rad), then the coupling rows (rad or m); zero columns for
+        parameters the mechanism accommodates.
+        """
+        if self.coupling_gap is None or not self.coupling_gap.size:
+            return self.closure_gap
+        return np.vstack([self.closure_gap, self.coupling_gap])
 
     @property
     def position(self) -> np.ndarray:
@@ -146,7 +162,8 @@ def _plan(robot: Robot, model: ParameterModel) -> _Plan:
     masks: list[np.ndarray] = []
     points: list[tuple[int, int]] = []
     welds: list[tuple[int, int]] = []
-    offsets = robot.closure_set.offsets
+    cr = robot.constraints.closure_rows
+    offsets = cr.base_offsets if cr is not None else np.zeros(1, dtype=int)
     for i, (cm, owner) in enumerate(
         zip(robot.constraint_models, robot.constraint_owner, strict=True)
     ):
@@ -179,7 +196,7 @@ def _rigid_jacobians(
     """``C`` (nc, n_par) and ``X`` (6, n_par): closures and platform per parameter, fixed ``q``."""
     plan = _plan(robot, model)
     n_par = model.size
-    C = np.zeros((robot.closure_set.nc, n_par))
+    C = np.zeros((robot.constraints.n, n_par))
     X = np.zeros((6, n_par))
     if plan.used.size == 0:
         return C, X
@@ -235,7 +252,7 @@ def _structural_rank(robot: Robot) -> int:
     key = id(robot.model)
     rank = _RANKS.get(key)
     if rank is None:
-        Jc = robot.closure_set.jacobian(robot.data, robot.q_home)[:, robot.passive_v]
+        Jc = robot.constraints.jacobian(robot.data, robot.q_home)[:, robot.passive_v]
         rank = numerics.rank(Jc, _RANK_TOL, 1.0)
         _RANKS[key] = rank
         weakref.finalize(robot.model, _RANKS.pop, key, None)
@@ -272,9 +289,9 @@ def pose_sensitivity(
         raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
     qq = as_finite("q", q, robot.nq)
     m, data = robot.model, robot.data
-    cs = robot.closure_set
-    r = _structural_rank(robot) if cs.nc else 0  # (at home: before the kinematics at q)
-    if cs.nc:  # (runs the kinematics and joint Jacobians at q; coupling rows need q)
+    cs = robot.constraints
+    r = _structural_rank(robot) if cs.n else 0  # (at home: before the kinematics at q)
+    if cs.n:  # (runs the kinematics and joint Jacobians at q; coupling rows need q)
         Jc = cs.jacobian(data, qq)
     else:
         Jc = np.zeros((0, robot.nv))
@@ -324,4 +341,12 @@ def pose_sensitivity(
         V = np.zeros((robot.nv, model.size))
         V[a] = Dg
         V[p] = passive(rhs)
-    return PoseSensitivity(qq, pin.SE3(data.oMf[robot.platform_frame]), J, K, gap, V)
+    return PoseSensitivity(
+        qq,
+        pin.SE3(data.oMf[robot.platform_frame]),
+        J,
+        K,
+        gap[: cs.nc],
+        V,
+        gap[cs.nc :] if cs.nk else None,
+    )

@@ -257,9 +257,9 @@ def _check_serial(red: Reduced, rows: list[int], L: float, name: str) -> None:
 
 
 def _check_assembled(robot: Robot, q: np.ndarray) -> None:
-    if robot.closure_set.nc == 0:
+    if robot.constraints.n == 0:
         return
-    res = float(np.max(np.abs(robot.closure_set.residual(robot.data, q))))
+    res = float(np.max(np.abs(robot.constraints.residual(robot.data, q))))
     if res > ASSEMBLY_TOL:
         raise InvalidInputError(
             "q",

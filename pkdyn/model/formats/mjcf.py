@@ -16,10 +16,12 @@ geoms). Visual geoms are in group 2 without contacts, collision geoms in group 3
 between bodies linked by a joint or a closure are excluded. Closures become equality constraints
 between two sites placed at the Pinocchio contact frames (``<name>_1`` on ``joint1``'s body,
 ``<name>_2`` on ``joint2``'s): a ``point`` closure a ``connect``, a ``weld`` a ``weld``, a
-``hinge`` the same two ``connect`` as its two Pinocchio point constraints. Joint couplings
-become ``joint`` equalities named after the coupling (``joint1`` the driven joint, ``joint2``
-the source, ``polycoef`` the polynomial re-expanded about ``qpos0 = 0``: MuJoCo's
-``qpos - qpos0`` convention with the exported joints' zero ``ref``). Each actuator is a
+``hinge`` the same two ``connect`` as its two Pinocchio point constraints. Polynomial joint
+couplings become ``joint`` equalities named after the coupling (``joint1`` the driven joint,
+``joint2`` the source, ``polycoef`` the polynomial re-expanded about ``qpos0 = 0``: MuJoCo's
+``qpos - qpos0`` convention with the exported joints' zero ``ref``); a linear coupling
+``sum a_i q_i = b`` a fixed tendon ``<name>/sum`` of length ``sum a_i q_i`` and a ``tendon``
+equality named after the coupling holding it at ``b``. Each actuator is a
 ``motor`` on its joint with ``gear`` = the transmission reduction, so its control is the
 motor-side effort; ``ctrlrange`` and ``forcerange`` are the URDF (joint-side) effort limit
 divided by the reduction. A keyframe ``home`` holds the assembled home configuration.
@@ -63,7 +65,7 @@ from pkdyn.model.formats.mjcf_mujoco import actuator_efforts, mujoco_model
 from pkdyn.model.formats.mjcf_state import JointMap, StateMap
 from pkdyn.model.formats.mjcf_state import quat_wxyz as _quat_wxyz
 from pkdyn.model.robot import Robot
-from solvers.coupling import MAX_COEFFICIENTS, JointCoupling
+from solvers.coupling import MAX_COEFFICIENTS, JointCoupling, LinearCoupling
 
 __all__ = [
     "JointMap",
@@ -181,6 +183,27 @@ def _spring_attrs(robot: Robot, jid: int, kind: str, k: int) -> dict[str, str]:
         stacklevel=3,
     )
     return {}
+
+
+COUPLING_TENDON = "/sum"
+"""Name suffix of the fixed tendon a linear coupling is exported as (``ankle_rotor/sum``)."""
+
+
+def _coupling_tendons(root: ET.Element, model: pin.Model, sums: list[LinearCoupling]) -> None:
+    """Linear couplings ``sum a_i q_i = b`` as fixed tendons ``L = sum a_i q_i``.
+
+    MuJoCo's tendon equality without ``tendon2`` holds ``L - L0 = polycoef[0]``, ``L0`` the
+    length at ``qpos0`` (zero here: no joint has a ``ref``), so ``polycoef[0] = b``.
+    """
+    if not sums:
+        return
+    tendon = root.find("tendon")
+    if tendon is None:
+        tendon = _sub(root, "tendon")
+    for c in sums:
+        el = _sub(tendon, "fixed", name=f"{c.name}{COUPLING_TENDON}")
+        for j, a in c.terms:
+            _sub(el, "joint", joint=model.names[j], coef=_num(a))
 
 
 def _tendons(root: ET.Element, robot: Robot, elements: dict[int, ET.Element]) -> None:
@@ -325,7 +348,13 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
         _sub(elements[cm.joint2_id], "site", name=s2, **_pose_attrs(cm.joint2_placement))
         tag = "connect" if cm.type == pin.ContactType.CONTACT_3D else "weld"
         _sub(equality, tag, name=cm.name, site1=s1, site2=s2)
-    for c in robot.closure_set.couplings:
+    sums: list[LinearCoupling] = []
+    for c in robot.constraints.coupling_specs:
+        if isinstance(c, LinearCoupling):  # a fixed tendon held at its length
+            sums.append(c)
+            _sub(equality, "tendon", name=c.name, tendon1=f"{c.name}{COUPLING_TENDON}",
+                 polycoef=_fmt([c.offset, 0.0, 0.0, 0.0, 0.0]))  # fmt: skip
+            continue
         attrs = {"name": c.name, "joint1": model.names[c.joint]}
         if c.source is not None:
             attrs["joint2"] = model.names[c.source]
@@ -333,6 +362,7 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
     if len(equality) == 0:
         root.remove(equality)
     _tendons(root, robot, elements)
+    _coupling_tendons(root, model, sums)
     if opt.contacts and opt.collision and len(robot.collision_model.geometryObjects):
         contact = _sub(root, "contact")
         for a, b in _excluded_pairs(robot):

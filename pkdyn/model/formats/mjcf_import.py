@@ -17,13 +17,14 @@ What is read (attributes with their default classes, see :mod:`~pkdyn.model.form
   with MuJoCo's formulas for primitive shapes (mesh volumes from the mesh file, exact);
 - geoms: primitives and meshes (``contype = conaffinity = 0`` ones are visual, the others
   collision); a mesh file that cannot be found is left out with one warning naming the files;
-- ``<equality>``: ``connect`` -> ``point`` closure, ``weld`` -> ``weld`` closure, by bodies
-  (the second anchor / relative pose taken at ``qpos0``, as MuJoCo does) or by sites; named
-  after the equality (unnamed ones ``connect1``, ``weld2``...). ``joint`` -> a joint coupling
-  (:class:`~pkdyn.model.description.CouplingSpec`: ``joint1 - qpos0 = polycoef(joint2 -
-  qpos0)``, up to 5 coefficients, on hinge and slide joints; ``joint1`` alone is locked at
-  ``qpos0 + polycoef[0]``). ``tendon``, ``distance`` and ``flex`` equalities are refused with a
-  message naming them;
+- ``<equality>``: ``connect`` -> ``point`` closure (a pair ``N``, ``N/axis`` on the same two
+  bodies, as pkdyn exports a hinge, -> the ``hinge`` closure ``N``), ``weld`` -> ``weld``
+  closure, by bodies (the second anchor / relative pose taken at ``qpos0``, as MuJoCo does)
+  or by sites; named after the equality (unnamed ones ``connect1``, ``weld2``...).
+  ``joint`` -> a joint coupling (:class:`~pkdyn.model.description.CouplingSpec`:
+  ``joint1 - qpos0 = polycoef(joint2 - qpos0)``, up to 5 coefficients, on hinge and slide
+  joints; ``joint1`` alone is locked at ``qpos0 + polycoef[0]``). ``tendon``, ``distance``
+  and ``flex`` equalities are refused with a message naming them;
 - ``<actuator>`` on joints: ``gear`` -> reduction, joint-side effort limit from ``forcerange``
   x gear (motors and proportional ``general`` actuators also from ``ctrlrange`` x gain x gear);
   actuators on tendons, sites or bodies are left out with a warning;
@@ -602,6 +603,50 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
             raise doc.error(el, "both sides are on the same body; nothing to close")
         kind = "point" if tag == "connect" or torquescale == 0.0 else "weld"
         mech.closures.append(ClosureSpec(name, kind, f1, f2))
+    mech.closures[:] = _hinges(mech.closures)
+
+
+def _hinges(closures: list[ClosureSpec]) -> list[ClosureSpec]:
+    """Pairs of connects ``N`` and ``N/axis`` (pkdyn's MJCF export of a hinge) as one hinge.
+
+    The pair holds two points of the axis together, which is a hinge about that axis: it
+    becomes the ``hinge`` closure ``N`` when both connects join the same two bodies and the
+    second points lie at one distance from the first ones on both bodies.
+    """
+    by_name = {c.name: c for c in closures}
+    merged: dict[str, ClosureSpec] = {}
+    for c in closures:
+        a = by_name.get(c.name + "/axis")
+        if c.kind != "point" or a is None or a.kind != "point":
+            continue
+        if (a.frame1.link, a.frame2.link) != (c.frame1.link, c.frame2.link):
+            continue
+        d1 = a.frame1.placement.translation - c.frame1.placement.translation
+        d2 = a.frame2.placement.translation - c.frame2.placement.translation
+        n1, n2 = float(np.linalg.norm(d1)), float(np.linalg.norm(d2))
+        if not (n1 > 0.0 and abs(n1 - n2) <= 1e-12 * max(1.0, n1)):
+            continue
+        u, w = d1 / n1, d2 / n2
+        R2 = _rotation_between(u, w)  # frame 2's axes: the axis u maps onto w in body 2
+        f1 = FrameRef(c.frame1.link, pin.SE3(np.eye(3), c.frame1.placement.translation))
+        f2 = FrameRef(c.frame2.link, pin.SE3(R2, c.frame2.placement.translation))
+        merged[c.name] = ClosureSpec(c.name, "hinge", f1, f2, u)
+    drop = {n + "/axis" for n in merged}
+    return [merged.get(c.name, c) for c in closures if c.name not in drop]
+
+
+def _rotation_between(u: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """The smallest rotation taking the unit vector ``u`` to the unit vector ``w``."""
+    axis = np.cross(u, w)
+    s, c = float(np.linalg.norm(axis)), float(np.clip(u @ w, -1.0, 1.0))
+    if s < 1e-15:
+        if c > 0.0:
+            return np.eye(3)
+        t = np.eye(3)[int(np.argmin(np.abs(u)))]  # half a turn about any normal of u
+        n = np.cross(u, t)
+        n /= np.linalg.norm(n)
+        return 2.0 * np.outer(n, n) - np.eye(3)
+    return np.asarray(pin.exp3(axis / s * np.arctan2(s, c)))
 
 
 def _coupling(r: _Reader, el: ET.Element, a: dict[str, str], name: str) -> CouplingSpec:
