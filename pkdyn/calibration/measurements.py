@@ -74,6 +74,7 @@ class Measurements:
         lines: Line (CSV) or row (Parquet) of each measurement in its file (N,), for
             messages; ``None`` for measurements made in memory.
         source: The file they were read from (``""``: made in memory).
+        line_word: ``line`` (CSV) or ``row`` (Parquet), for messages.
 
     """
 
@@ -88,11 +89,12 @@ class Measurements:
     lines: np.ndarray | None = field(default=None, repr=False)
     source: str = ""
     _rows: np.ndarray | None = field(default=None, repr=False)
+    line_word: str = field(default="line", repr=False)
 
     def where(self, i: int) -> str:
-        """``line L`` of its file, or ``row R`` of the measurements given, of measurement ``i``."""
+        """``line L`` of its file (``row R`` of a Parquet file, or of the measurements given)."""
         if self.lines is not None:
-            return f"line {int(self.lines[int(i)])}"
+            return f"{self.line_word} {int(self.lines[int(i)])}"
         if self._rows is not None:
             return f"row {int(self._rows[int(i)])}"
         return f"row {int(i) + 1}"
@@ -207,6 +209,7 @@ class Measurements:
             lines=None if self.lines is None else self.lines[i],
             source=self.source,
             _rows=(np.arange(1, len(self) + 1) if self._rows is None else self._rows)[i],
+            line_word=self.line_word,
         )
 
     def with_readings(self, qa: np.ndarray) -> Measurements:
@@ -222,6 +225,7 @@ class Measurements:
             lines=self.lines,
             source=self.source,
             _rows=self._rows,
+            line_word=self.line_word,
         )
 
     @classmethod
@@ -363,16 +367,16 @@ def read_csv(path: str | os.PathLike[str], robot: Robot, kind: str | None = None
     data = table.select(want)
     n_a = len(robot.actuators)
     qa = data[:, :n_a]
-    lines = table.lines
+    at = {"lines": table.lines, "source": src, "line_word": table.where(0).split()[0]}
     if kind == "pose":
         P, rpy = data[:, n_a : n_a + 3], data[:, n_a + 3 : n_a + 6]
-        return Measurements(kind, qa, P, rpy, lines=lines, source=src)
+        return Measurements(kind, qa, P, rpy, **at)  # type: ignore[arg-type]
     if kind == "position":
-        return Measurements(kind, qa, data[:, n_a : n_a + 3], lines=lines, source=src)
+        return Measurements(kind, qa, data[:, n_a : n_a + 3], **at)  # type: ignore[arg-type]
     if kind == "joints":
         joints = tuple(c[2:] for c in want[n_a:])
-        return Measurements(kind, qa, joints=joints, q=data[:, n_a:], lines=lines, source=src)
-    return Measurements(kind, qa, group=data[:, n_a], lines=lines, source=src)
+        return Measurements(kind, qa, joints=joints, q=data[:, n_a:], **at)  # type: ignore[arg-type]
+    return Measurements(kind, qa, group=data[:, n_a], **at)  # type: ignore[arg-type]
 
 
 def write_csv(path: str | os.PathLike[str], robot: Robot, m: Measurements) -> None:

@@ -465,20 +465,22 @@ def calibrate(
     before, after = error_stats(cal.kind, res_before), error_stats(cal.kind, res_after)
     val_before = val_after = None
     val_res = None
+    unreachable = ""
     if len(val):
         vprob = Problem(
             robot, pm, val, sigma, nominal_configurations(robot, val), planes, prob.groups
         )
         vstate0 = vprob.evaluate(zero)
+        val_before = error_stats(val.kind, vprob.residuals(vstate0, y0))
         try:
             vstate = vprob.evaluate(p, vstate0)
         except PkdynError as err:
-            raise InvalidInputError(
-                "validation", f"the calibrated robot cannot reach a validation pose ({err})"
-            ) from None
-        val_res = (vprob.residuals(vstate0, y0), vprob.residuals(vstate, y))
-        val_before = error_stats(val.kind, val_res[0])
-        val_after = error_stats(val.kind, val_res[1])
+            unreachable = (
+                f"the calibrated robot cannot be assembled at the held-out readings ({err})"
+            )
+        else:
+            val_res = (vprob.residuals(vstate0, y0), vprob.residuals(vstate, y))
+            val_after = error_stats(val.kind, val_res[1])
 
     # trust
     inliers = np.repeat(fit.weights >= 0.5, cal.rows)
@@ -506,7 +508,7 @@ def calibrate(
         ),
         residual_limit=residual_limit,
         correction_limit=correction_limit,
-    )
+    ) + ([unreachable] if unreachable else [])
     why = (cause() or _fallback_cause(reasons, known)) if reasons else ""
     result = CalibrationResult(
         robot=fit.state.perturbed.robot,

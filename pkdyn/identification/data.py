@@ -43,7 +43,8 @@ class Measurements:
         tau: Efforts (N, n_a) [N m or N], or ``None``.
         source: File name, for messages.
         lines: Line (CSV) or row (Parquet) of each sample in the file (N,), for messages, or
-            ``None`` (samples given in memory: rows are counted from 1).
+            ``None`` (samples given in memory: counted from 0).
+        line_word: ``line`` (CSV) or ``row`` (Parquet), for messages.
 
     """
 
@@ -54,12 +55,13 @@ class Measurements:
     tau: np.ndarray | None = None
     source: str = "data"
     lines: np.ndarray | None = None
+    line_word: str = "line"
 
     def where(self, k: int) -> str:
-        """``line L`` of sample ``k`` in its file, or ``sample k`` (from 0) in memory."""
+        """``line L`` of sample ``k`` in its file (``row R``: Parquet), or ``sample k`` (from 0)."""
         if self.lines is None:
             return f"sample {k}"
-        return f"line {int(self.lines[k])}"
+        return f"{self.line_word} {int(self.lines[k])}"
 
 
 MAX_BYTES = 512_000_000
@@ -142,6 +144,7 @@ def read_measurements(
         cols("tau"),
         src,
         table.lines,
+        "line" if table.kind == "csv" else "row",
     )
 
 
