@@ -202,12 +202,18 @@ class Identifiability(Result):
             why = "weakly seen, " if int(j) in weak else ""
             lines.append(f"unidentifiable: {name} ({why}acts as {combo.lstrip('+ ')})")
         if self.indices:
-            lines.append(
-                "observability: "
-                + ", ".join(f"{k} = {v:.3g}" for k, v in self.indices.items())
-                + " (O4: noise amplification index)"
-            )
+            lines.append(self.indices_line())
         return "\n".join(lines)
+
+    def indices_line(self) -> str:
+        """The observability indices on one line (calibration; ``""`` without them)."""
+        if not self.indices:
+            return ""
+        return (
+            "observability: "
+            + ", ".join(f"{k} = {v:.3g}" for k, v in self.indices.items())
+            + " (O4: noise amplification index)"
+        )
 
     def _coefficient(self, c: float, j: int, name: str) -> str:
         """A coefficient with its unit (unit of ``j`` per unit of ``name``) when they differ."""

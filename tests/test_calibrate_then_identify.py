@@ -22,6 +22,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from support.calibration_truth import readings
 from support.dynamics_truth import mujoco_efforts, multisine, perturbed
 from support.urdf_edit import family_xml, load_like, where_of, with_twists
 
@@ -47,16 +48,7 @@ def chain(tmp_path_factory):
     twists = {where_of(pl): x for pl, x in zip(model.placements, xi, strict=True) if np.any(x)}
     geometry = load_like(with_twists(family_xml(nominal), twists), nominal)
     # 1. calibration: positions measured at readings
-    home = nominal.q_home[nominal.actuated_q]
-    draw, readings = np.random.default_rng(1), []
-    while len(readings) < 50:
-        q = home + 0.3 * draw.uniform(-1, 1, 3)
-        try:
-            pkdyn.forward_geometry(nominal, q)
-        except pkdyn.PkdynError:
-            continue
-        readings.append(q / GAIN)
-    R = np.array(readings)
+    R = readings(nominal, 50, seed=1) / GAIN
     P = np.array(
         [
             pkdyn.forward_geometry(

@@ -12,6 +12,7 @@ import json
 import numpy as np
 import pinocchio as pin
 import pytest
+from support.dynamics_truth import multisine
 
 import pkdyn
 from pkdyn.cli import main
@@ -43,19 +44,7 @@ FAMILIES = [
 
 
 def _multisine(robot, T, dt, amp, seed, harmonics=4, f0=0.25):
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, T, dt)
-    n = len(robot.actuators)
-    qa = np.tile(robot.q_home[robot.actuated_q], (t.size, 1))
-    qd, qdd = np.zeros_like(qa), np.zeros_like(qa)
-    for h in range(1, harmonics + 1):
-        w = 2 * np.pi * f0 * h
-        A, B = amp * rng.uniform(-1, 1, n) / h, amp * rng.uniform(-1, 1, n) / h
-        s, c = np.sin(w * t[:, None]), np.cos(w * t[:, None])
-        qa += A * s + B * (c - 1)
-        qd += w * (A * c - B * s)
-        qdd += -w * w * (A * s + B * c)
-    return t, qa, qd, qdd
+    return multisine(robot, len(np.arange(0.0, T, dt)), dt, amp, seed, harmonics, f0)
 
 
 def _amplitude(name):

@@ -22,6 +22,7 @@ import os
 
 import numpy as np
 import pytest
+from support.dynamics_truth import multisine
 
 import pkdyn
 from pkdyn.cli import main
@@ -31,21 +32,9 @@ from pkdyn.identification import Measurements, identify, parameter_set, predict_
 from pkdyn.tables import write_table
 
 
-def _multisine(robot, samples, amp, seed, dt=5e-3, harmonics=4, f0=0.25):
-    rng = np.random.default_rng(seed)
-    t = np.arange(samples) * dt
-    n = len(robot.actuators)
-    amp = np.broadcast_to(np.asarray(amp, dtype=float), (n,))
-    qa = np.tile(robot.q_home[robot.actuated_q], (samples, 1))
-    qd, qdd = np.zeros_like(qa), np.zeros_like(qa)
-    for h in range(1, harmonics + 1):
-        w = 2 * np.pi * f0 * h
-        A, B = amp * rng.uniform(-1, 1, n) / h, amp * rng.uniform(-1, 1, n) / h
-        s, c = np.sin(w * t[:, None]), np.cos(w * t[:, None])
-        qa += A * s + B * (c - 1)
-        qd += w * (A * c - B * s)
-        qdd += -w * w * (A * s + B * c)
-    return t, qa, qd, qdd
+def _multisine(robot, samples, amp, seed):
+    """A 4-harmonic multi-sine around home (per-actuator amplitudes) at 200 Hz."""
+    return multisine(robot, samples, 5e-3, np.asarray(amp, dtype=float), seed, harmonics=4)
 
 
 def _recorded(robot, t, qa, qd, qdd, noise=1e-3, seed=2):

@@ -339,11 +339,7 @@ class CalibrationResult(Result):
         if self.not_assembling:
             lines.append(f"not assembling (held at nominal): {len(self.not_assembling)} parameters")
         if ident.indices:
-            lines.append(
-                "observability: "
-                + ", ".join(f"{k} = {v:.3g}" for k, v in ident.indices.items())
-                + " (O4: noise amplification index)"
-            )
+            lines.append(ident.indices_line())
         if not self.converged:
             lines.append(f"the fit did not converge in {self.iterations} iterations")
         if self.reasons:
