@@ -31,7 +31,7 @@ calibration).
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -297,7 +297,8 @@ a metre (calibration) or leave its parameter undetermined (identification)."""
 _CLEAN = 1e-9  # combination coefficients below this fraction of their column's largest: round-off
 
 
-class ColumnQR(NamedTuple):
+@dataclass(frozen=True, eq=False)  # numpy fields
+class ColumnQR:
     """A Householder QR factorisation ``A[:, perm] = Q R`` stopped at the numerical rank.
 
     Attributes:
@@ -374,7 +375,8 @@ def column_qr(
     return ColumnQR(np.triu(R[: min(m, n)]), perm, rank)
 
 
-class ColumnBasis(NamedTuple):
+@dataclass(frozen=True, eq=False)  # numpy fields
+class ColumnBasis:
     """Independent columns of a matrix and the combinations the others are (:func:`column_basis`).
 
     Attributes:
