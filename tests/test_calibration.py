@@ -265,6 +265,8 @@ def test_planner_says_what_reaches_a_target():
     rec = plan.recommendation()
     assert rec[1e-6] is not None and rec[1e-4] is None
     assert "1 um" in plan.summary() and "um" in plan.table()
+    json.dumps(plan.to_json(), allow_nan=False)
+    assert len(plan.plot().axes) == 1
 
 
 # ---------------------------------------------------------------------- CLI and bad input

@@ -6,7 +6,8 @@
   one analysis, :mod:`pkdyn.identifiability`), observability indices O1-O5 and the noise
   amplification index;
 - :mod:`~pkdyn.calibration.problem`: residuals and Jacobian of the measurements through the
-  loops;
+  loops; :mod:`~pkdyn.calibration.analysis`: what the nominal robot says of them (the fit it
+  sets up);
 - :mod:`~pkdyn.calibration.robust`: the estimator (robust Levenberg-Marquardt with a weakly
   informative prior);
 - :mod:`~pkdyn.calibration.solve`: the procedure (:func:`calibrate`), held-out validation;

@@ -8,8 +8,9 @@ from :class:`~pkdyn.calibration.measurements.Measurements`:
    joint_coordinates`: a description calibrated before has its gains applied); the
    measurements are split into a calibration set and a held-out validation set (``holdout``,
    within each group for implicit kinds), or a validation set is given;
-2. the nominal robot's forward geometry at the calibration readings gives the configurations,
-   and the problem (:mod:`~pkdyn.calibration.problem`) the identification Jacobian;
+2. the nominal robot (:mod:`~pkdyn.calibration.analysis`): its forward geometry at the
+   calibration readings gives the configurations, and the problem
+   (:mod:`~pkdyn.calibration.problem`) the identification Jacobian;
    parameters the mechanism cannot absorb (an over-constrained loop) are held at zero; the
    others are analysed by :func:`~pkdyn.calibration.identifiability.identifiability`: only the
    identifiable subset is estimated, the unidentifiable parameters are reported with the
@@ -33,17 +34,16 @@ fixed points in self-calibration) near the nominal robot instead of wandering wi
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Sequence
 
 import numpy as np
 
-from pkdyn.calibration.diagnosis import likely_cause, tolerance_error
-from pkdyn.calibration.identifiability import RTOL, identifiability
+from pkdyn.calibration.analysis import Nominal, analyse, parameter_scale
+from pkdyn.calibration.identifiability import RTOL
 from pkdyn.calibration.measurements import Measurements
-from pkdyn.calibration.problem import GAP_TOL, Problem, State, nominal_configurations
+from pkdyn.calibration.problem import Problem, nominal_configurations
 from pkdyn.calibration.result import CalibrationResult, ErrorStats, error_stats
-from pkdyn.calibration.robust import ROBUST, robust_fit
+from pkdyn.calibration.robust import ROBUST, RobustFit
 from pkdyn.calibration.trust import (
     CORRECTION_LIMIT,
     RESIDUAL_LIMIT,
@@ -51,13 +51,9 @@ from pkdyn.calibration.trust import (
     untrusted_reasons,
 )
 from pkdyn.exceptions import CalibrationError, InvalidInputError, PkdynError
-from pkdyn.identifiability import Identifiability
-from pkdyn.model.assembly import forward_geometry
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel, parameter_model
-from pkdyn.precision.sensitivity import pose_sensitivity
 from pkdyn.threads import one_blas_thread
-from solvers import numerics
 
 __all__ = [
     "PRIOR",
@@ -72,15 +68,6 @@ PRIOR = (0.01, 0.1, 0.01)
 """Default prior standard deviations of the errors (length [m], angle [rad], gain): a
 centimetre, 6 degrees, 1 %: far wider than any tolerance, so it only steadies the directions
 the measurements barely see."""
-
-
-def parameter_scale(robot: Robot, model: ParameterModel) -> np.ndarray:
-    """Scale of each parameter [m per unit]: 1 for lengths, the robot's size for angles and gains.
-
-    Makes parameters of different units commensurate (step sizes, observability indices).
-    """
-    L = robot.length_scale
-    return np.array([1.0 if u == "m" else L for u in model.units])
 
 
 def _split(m: Measurements, holdout: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -128,107 +115,6 @@ def _sigma(robot: Robot, noise: float | Sequence[float] | None) -> tuple[tuple[f
     s_pos = float(arr[0])
     s_rot = float(arr[1]) if arr.size == 2 else s_pos / robot.length_scale
     return (s_pos, s_rot), True
-
-
-def _nuisance_names(m: Measurements, groups: np.ndarray) -> tuple[str, ...]:
-    if m.kind == "point":
-        return tuple(f"point{g}.{c}" for g in groups for c in "xyz")
-    if m.kind == "plane":
-        return tuple(f"plane{g}.{c}" for g in groups for c in ("tilt1", "tilt2", "offset"))
-    return ()
-
-
-def _nuisance_scale(robot: Robot, prob: Problem) -> np.ndarray:
-    if prob.m.kind == "plane":
-        return np.tile([robot.length_scale, robot.length_scale, 1.0], prob.groups.size)
-    return np.ones(prob.n_nuis)
-
-
-def _nuisance_prior(robot: Robot, prob: Problem) -> np.ndarray:
-    """Prior scale of the unknowns of implicit measurements: a metre, a radian (no prior)."""
-    if prob.m.kind == "plane":
-        return np.tile([1.0, 1.0, robot.length_scale], prob.groups.size)
-    return np.full(prob.n_nuis, robot.length_scale)
-
-
-def _prior(model: ParameterModel, prior: tuple[float, float, float]) -> np.ndarray:
-    return model.tolerances(float(prior[0]), float(prior[1]), float(prior[2]))
-
-
-def _robot_identifiability(
-    ident: Identifiability, keep: np.ndarray, n_rob: int, pm: ParameterModel
-) -> Identifiability:
-    """The analysis re-indexed on the full parameter model (nuisance unknowns named after)."""
-    names = pm.names + ident.names[n_rob:]
-    units = tuple(pm.units) + ("m",) * (len(ident.names) - n_rob)
-
-    def full(i: int) -> int:
-        return int(keep[i]) if i < n_rob else pm.size + i - n_rob
-
-    ids = np.array([full(int(i)) for i in ident.identifiable], dtype=int)
-    un = np.array([full(int(i)) for i in ident.unidentifiable], dtype=int)
-    return Identifiability(  # (the parameters the mechanism cannot absorb are in neither)
-        tuple(names),
-        ids,
-        un,
-        ident.coefficients,
-        ident.r_diag,
-        np.array([full(int(i)) for i in ident.weak], dtype=int),
-        units,
-        ident.singular_values,
-        ident.indices,
-        ident.poses,
-    )
-
-
-def _structural_rank(
-    robot: Robot, model: ParameterModel, m: Measurements, qs: list[np.ndarray], keep: np.ndarray
-) -> int:
-    """Rank the model reaches on many configurations interpolated between the measured ones."""
-    rng = np.random.default_rng(1)
-    n = max(2 * model.size // max(m.rows, 1) + 6, 12)
-    rows = []
-    n_meas = len(m)
-    for _ in range(n):
-        i, j = rng.integers(n_meas, size=2)
-        t = rng.uniform(0.0, 1.0)
-        qa = (1.0 - t) * m.qa[i] + t * m.qa[j]
-        qa = qa + rng.normal(0.0, 0.02, qa.size) * robot.actuator_scale
-        try:
-            q = forward_geometry(robot, qa, q_init=qs[i], check_limits=False).q
-            sens = pose_sensitivity(robot, q, model)
-            if m.kind == "joints":
-                assert sens.joints is not None
-                ids = [robot.model.getJointId(j) for j in m.joints]
-                K = sens.joints[[robot.model.joints[k].idx_v for k in ids]]
-            else:
-                K = sens.K[: min(m.rows, 6) if m.kind != "plane" else 3]
-        except PkdynError:
-            continue
-        rows.append(K[:, keep])
-    if not rows:
-        return 0
-    return numerics.column_basis(np.vstack(rows), RTOL).rank
-
-
-def _check_far(robot: Robot, m: Measurements, positions: np.ndarray, cause: str) -> None:
-    """Refuse a measured position more than 100 robot sizes from the nominal model's."""
-    if m.position is None:
-        return
-    gap = np.linalg.norm(m.position - positions, axis=1)
-    far = np.flatnonzero(gap > 100.0 * robot.length_scale)
-    if far.size:
-        i = int(far[0])
-        raise InvalidInputError(
-            "measurements",
-            f"{m.where(i)}: the measured position lies {gap[i]:.3g} m from the nominal "
-            f"{robot.name}'s, more than 100 times its size ({robot.length_scale:.3g} m): "
-            + (
-                f"likely cause: {cause}"
-                if cause
-                else "a unit or frame error (positions in metres, in the robot's world frame)"
-            ),
-        )
 
 
 def _check_options(
@@ -357,159 +243,32 @@ def calibrate(
     accept = flag("accept", accept)
     max_iter = count("max_iter", max_iter, 1, 10_000)
     seed = _seed("seed", seed)
-    residual_limit = positive("residual_limit", residual_limit, "x the noise", bound=1e6)
-    correction_limit = positive("correction_limit", correction_limit, "x the tolerance", bound=1e6)
+    limits = (
+        positive("residual_limit", residual_limit, "x the noise", bound=1e6),
+        positive("correction_limit", correction_limit, "x the tolerance", bound=1e6),
+    )
     pm = parameter_model(robot, model, gains) if isinstance(model, str) else model
     tol = parameter_tolerances(robot, pm, tolerance)
     sigma, known = _sigma(robot, noise)
-    # readings -> the nominal robot's joint coordinates (the one readings rule); the relative
-    # gains estimated here multiply them
-    meas = measurements.with_readings(robot.joint_coordinates(measurements.qa))
-    val_in = (
-        None
-        if validation is None
-        else validation.with_readings(robot.joint_coordinates(validation.qa))
+    cal, val, cal_rows, val_rows = _calibration_and_validation(
+        robot, measurements, validation, holdout, seed
     )
-    if val_in is not None:
-        cal_rows, val_rows = np.arange(len(meas)), np.arange(len(val_in))
-        cal, val = meas, val_in
-    else:
-        cal_rows, val_rows = _split(meas, holdout, seed)
-        cal, val = meas.subset(cal_rows), meas.subset(val_rows)
-    if len(cal) == 0:
-        raise InvalidInputError("measurements", "no measurement left for the calibration")
     cal.check_groups()
-    prob = Problem(robot, pm, cal, sigma, nominal_configurations(robot, cal))
-    row_sigma = np.tile(prob.row_sigma(), len(cal))
-
-    # the nominal robot: identifiability, and how far it is from the measurements
-    zero = np.zeros(pm.size)
-    state0 = prob.evaluate(zero)
-    positions0 = np.array([M.translation for M in state0.poses])
-    y0, planes = prob.fit_nuisance(positions0)
-    prob = prob.with_planes(planes)
-    J_all, gaps = prob.jacobian(state0, zero, y0, np.arange(pm.size))
-    bound = tolerance_error(J_all[:, :, : pm.size], tol)
-    rotations0 = np.array([M.rotation for M in state0.poses])
-
-    def cause() -> str:
-        return likely_cause(
-            robot, cal.kind, cal.position, positions0, cal.rpy, rotations0, bound, sigma
-        )
-
-    if cal.position is not None and np.any(
-        np.linalg.norm(cal.position - positions0, axis=1) > 100.0 * robot.length_scale
-    ):
-        _check_far(robot, cal, positions0, cause())
-    keep = np.flatnonzero(gaps <= GAP_TOL)
-    not_assembling = tuple(pm.names[k] for k in np.flatnonzero(gaps > GAP_TOL))
-    n_rob = keep.size
-    J0 = np.concatenate([J_all[:, :, keep], J_all[:, :, pm.size :]], axis=2)
-    J0 = J0.reshape(len(cal) * cal.rows, -1)
-    names = tuple(pm.names[k] for k in keep) + _nuisance_names(cal, prob.groups)
-    scale_all = np.concatenate([parameter_scale(robot, pm)[keep], _nuisance_scale(robot, prob)])
-    prior_all = None
-    if prior is not None:
-        prior_all = np.concatenate([_prior(pm, prior)[keep], _nuisance_prior(robot, prob)])
-    ident = identifiability(J0 / row_sigma[:, None], names, len(cal), scale_all, rtol, prior_all)
-    _check_poses(robot, pm, cal, state0, keep, prob, J0, ident, val_rows.size, holdout)
-
-    # the estimated unknowns: identifiable robot parameters, then nuisance unknowns
-    est = ident.identifiable
-    cols = keep[np.sort(est[est < n_rob])]
-    nuis_cols = np.sort(est[est >= n_rob]) - n_rob
-
-    def unpack(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        p = np.zeros(pm.size)
-        p[cols] = z[: cols.size]
-        y = y0.copy()
-        y[nuis_cols] = y[nuis_cols] + z[cols.size :]
-        return p, y
-
-    def residual(z: np.ndarray, start: State) -> tuple[State, np.ndarray]:
-        p, y = unpack(z)
-        state = prob.evaluate(p, start)
-        return state, prob.residuals(state, y).reshape(-1) / row_sigma
-
-    def jacobian(z: np.ndarray, state: State) -> np.ndarray:
-        p, y = unpack(z)
-        J, _ = prob.jacobian(state, p, y, cols)
-        J = J.reshape(len(cal) * cal.rows, -1)
-        return np.hstack([J[:, : cols.size], J[:, cols.size :][:, nuis_cols]]) / row_sigma[:, None]
-
-    pw = np.zeros(cols.size + nuis_cols.size)
-    if prior is not None:  # weakly informative, on the robot's errors only
-        pw[: cols.size] = 1.0 / _prior(pm, prior)[cols] ** 2
-    z0 = np.zeros(cols.size + nuis_cols.size)
-    J_start = np.hstack(
-        [J_all.reshape(len(cal) * cal.rows, -1)[:, cols], J0[:, n_rob:][:, nuis_cols]]
-    )
-    fit = robust_fit(
-        residual,
-        jacobian,
-        z0,
-        state0,
-        prob.residuals(state0, y0).reshape(-1) / row_sigma,
-        J_start / row_sigma[:, None],
-        pw,
-        cal.rows,
-        robust,
-        known,
-        max_iter,
-    )
-    p, y = unpack(fit.z)
+    nominal = analyse(robot, pm, cal, sigma, tol, rtol, prior, val_rows.size, holdout)
+    fit = nominal.fit(robust, known, max_iter, prior)
+    prob, state0, y0 = nominal.problem, nominal.state, nominal.y0
+    cols = nominal.cols
+    p, y = nominal.unpack(fit.z)
     std = np.full(pm.size, np.nan)
     std[cols] = fit.std[: cols.size]
     res_before = prob.residuals(state0, y0)
     res_after = prob.residuals(fit.state, y)
     before, after = error_stats(cal.kind, res_before), error_stats(cal.kind, res_after)
-    val_before = val_after = None
-    val_res = None
-    unreachable = ""
-    if len(val):
-        vprob = Problem(
-            robot, pm, val, sigma, nominal_configurations(robot, val), planes, prob.groups
-        )
-        vstate0 = vprob.evaluate(zero)
-        val_before = error_stats(val.kind, vprob.residuals(vstate0, y0))
-        try:
-            vstate = vprob.evaluate(p, vstate0)
-        except PkdynError as err:
-            unreachable = (
-                f"the calibrated robot cannot be assembled at the held-out readings ({err})"
-            )
-        else:
-            val_res = (vprob.residuals(vstate0, y0), vprob.residuals(vstate, y))
-            val_after = error_stats(val.kind, val_res[1])
-
-    # trust
-    inliers = np.repeat(fit.weights >= 0.5, cal.rows)
-    kept = fit.r[inliers] if inliers.any() else fit.r  # (all outliers: all of them)
-    inlier_scale = float(np.sqrt(np.mean(kept**2)))
-    reasons = untrusted_reasons(
-        converged=fit.converged,
-        iterations=fit.iterations,
-        inlier_scale=inlier_scale,
-        outliers=float(np.mean(fit.weights < 0.5)),
-        known=known,
-        after_rms=after.position_rms,
-        robot=robot,
-        names=pm.names,
-        units=pm.units,
-        p=p,
-        estimated=cols,
-        tolerance=tol,
-        validation=None
-        if val_after is None
-        else (
-            val_after.rms,
-            max(after.rms, sigma[1] if cal.kind == "joints" else sigma[0]),
-            cal.kind,
-        ),
-        residual_limit=residual_limit,
-        correction_limit=correction_limit,
+    val_before, val_after, val_res, unreachable = _validate(robot, pm, val, nominal, p, y)
+    reasons = _reasons(
+        robot, pm, cal.kind, fit, after, p, cols, tol, val_after, sigma, known, limits
     ) + ([unreachable] if unreachable else [])
-    why = (cause() or _fallback_cause(reasons, known)) if reasons else ""
+    why = (nominal.cause() or _fallback_cause(reasons, known)) if reasons else ""
     result = CalibrationResult(
         robot=fit.state.perturbed.robot,
         gains=fit.state.perturbed.gains,
@@ -517,8 +276,8 @@ def calibrate(
         model=pm,
         p=p,
         std=std,
-        identifiability=_robot_identifiability(ident, keep, n_rob, pm),
-        not_assembling=not_assembling,
+        identifiability=nominal.full_identifiability(),
+        not_assembling=nominal.not_assembling,
         nuisance=prob.nuisance_dict(y),
         sigma=sigma,
         scale=fit.scale,
@@ -546,39 +305,95 @@ def calibrate(
     return result
 
 
-def _check_poses(
+def _calibration_and_validation(
+    robot: Robot,
+    measurements: Measurements,
+    validation: Measurements | None,
+    holdout: float,
+    seed: int,
+) -> tuple[Measurements, Measurements, np.ndarray, np.ndarray]:
+    """The calibration and validation sets, readings as the nominal robot's joint coordinates.
+
+    The one readings rule (:meth:`pkdyn.Robot.joint_coordinates`): a robot calibrated before has
+    its gains applied; the relative gains estimated here multiply them.
+    """
+    meas = measurements.with_readings(robot.joint_coordinates(measurements.qa))
+    if validation is not None:
+        val = validation.with_readings(robot.joint_coordinates(validation.qa))
+        groups = np.zeros(0) if meas.group is None else meas.group
+        if val.group is not None and not np.isin(val.group, groups).all():
+            raise InvalidInputError(
+                "validation", "holds groups the calibration measurements do not (their unknowns)"
+            )
+        return meas, val, np.arange(len(meas)), np.arange(len(val))
+    cal_rows, val_rows = _split(meas, holdout, seed)
+    return meas.subset(cal_rows), meas.subset(val_rows), cal_rows, val_rows
+
+
+def _validate(
     robot: Robot,
     pm: ParameterModel,
-    cal: Measurements,
-    state0: State,
-    keep: np.ndarray,
-    prob: Problem,
-    J0: np.ndarray,
-    ident: Identifiability,
-    n_val: int,
-    holdout: float,
-) -> None:
-    """Warn about poses that identify less than varied poses would; refuse too few values."""
-    n_values = len(cal) * cal.rows
-    own = numerics.column_basis(J0, RTOL).rank  # what these poses can tell apart, noise aside
-    if own < min(n_values, keep.size + prob.n_nuis):
-        r_struct = _structural_rank(robot, pm, cal, state0.qs, keep) + prob.n_nuis
-        if own < r_struct:
-            warnings.warn(
-                f"these {len(cal)} poses identify {own} of the {r_struct} parameters that "
-                f"poses spread over the workspace would ({pm.kind} model): the others are held "
-                "at nominal; measure more varied poses (pkdyn.calibration.selection)",
-                stacklevel=3,
-            )
-    if ident.rank >= n_values or n_values <= keep.size + prob.n_nuis:
-        r_struct = _structural_rank(robot, pm, cal, state0.qs, keep) + prob.n_nuis
-        if n_values <= r_struct:
-            need = math.ceil((r_struct + 1) / cal.rows)
-            n_total = need if n_val == 0 else math.ceil(need / (1.0 - holdout))
-            raise InvalidInputError(
-                "measurements",
-                f"{len(cal)} calibration poses give {n_values} measured values for "
-                f"{r_struct} identifiable parameters ({pm.kind} model, {cal.kind} "
-                f"measurements): measure at least {need} poses"
-                + (f" ({n_total} with the {holdout:.0%} hold-out)" if n_val else ""),
-            )
+    val: Measurements,
+    nominal: Nominal,
+    p: np.ndarray,
+    y: np.ndarray,
+) -> tuple[ErrorStats | None, ErrorStats | None, tuple[np.ndarray, np.ndarray] | None, str]:
+    """Errors of the nominal and the calibrated robot on the validation set.
+
+    Returns:
+        The errors before and after, the residuals ``(before, after)``, and why the calibrated
+        robot cannot be evaluated there (``""``: it can).
+
+    """
+    if not len(val):
+        return None, None, None, ""
+    prob = nominal.problem
+    vprob = Problem(
+        robot, pm, val, prob.sigma, nominal_configurations(robot, val), prob.planes, prob.groups
+    )
+    vstate0 = vprob.evaluate(np.zeros(pm.size))
+    before = vprob.residuals(vstate0, nominal.y0)
+    try:
+        vstate = vprob.evaluate(p, vstate0)
+    except PkdynError as err:
+        why = f"the calibrated robot cannot be assembled at the held-out readings ({err})"
+        return error_stats(val.kind, before), None, None, why
+    after = vprob.residuals(vstate, y)
+    return error_stats(val.kind, before), error_stats(val.kind, after), (before, after), ""
+
+
+def _reasons(
+    robot: Robot,
+    pm: ParameterModel,
+    kind: str,
+    fit: RobustFit,
+    after: ErrorStats,
+    p: np.ndarray,
+    cols: np.ndarray,
+    tol: np.ndarray,
+    val_after: ErrorStats | None,
+    sigma: tuple[float, float],
+    known: bool,
+    limits: tuple[float, float],
+) -> list[str]:
+    """The trust rules (:mod:`pkdyn.calibration.trust`) on a fit."""
+    inliers = np.repeat(fit.weights >= 0.5, fit.r.size // max(fit.weights.size, 1))
+    kept = fit.r[inliers] if inliers.any() else fit.r  # (all outliers: all of them)
+    floor = sigma[1] if kind == "joints" else sigma[0]
+    return untrusted_reasons(
+        converged=fit.converged,
+        iterations=fit.iterations,
+        inlier_scale=float(np.sqrt(np.mean(kept**2))),
+        outliers=float(np.mean(fit.weights < 0.5)),
+        known=known,
+        after_rms=after.position_rms,
+        robot=robot,
+        names=pm.names,
+        units=pm.units,
+        p=p,
+        estimated=cols,
+        tolerance=tol,
+        validation=None if val_after is None else (val_after.rms, max(after.rms, floor), kind),
+        residual_limit=limits[0],
+        correction_limit=limits[1],
+    )

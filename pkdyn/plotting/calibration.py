@@ -1,4 +1,8 @@
-"""Calibration residuals per pose and axis, before and after (:class:`CalibrationResult`)."""
+"""Calibration figures: residuals, and the simulated accuracy of a plan.
+
+:class:`CalibrationResult`: the residuals per pose and axis before and after;
+:class:`CalibrationPlan`: the error after calibration against the pose count per noise.
+"""
 
 from __future__ import annotations
 
@@ -7,12 +11,13 @@ from typing import Any
 
 import numpy as np
 
+from pkdyn.calibration.planner import CalibrationPlan
 from pkdyn.calibration.result import CalibrationResult
 from pkdyn.plotting._save import save_figure
 from pkdyn.results import register_plot
 from pkdyn.units import quantity
 
-__all__ = ["plot_calibration"]
+__all__ = ["plot_calibration", "plot_calibration_plan"]
 
 _AXES = {
     "pose": ("x", "y", "z", "rx", "ry", "rz"),
@@ -94,6 +99,40 @@ def plot_calibration(
         else f"{result.nominal.name}, {result.model.kind}: residuals (model minus measurement), "
         f"{quantity(result.before.rms, unit)} -> {quantity(result.after.rms, unit)} RMS"
     )
+    fig.tight_layout()
+    if path is not None:
+        save_figure(fig, path, dpi=120)
+    return fig
+
+
+@register_plot(CalibrationPlan)
+def plot_calibration_plan(
+    plan: CalibrationPlan, path: str | Path | None = None, title: str | None = None
+) -> Any:
+    """Simulated error after calibration against the pose count, one line per noise level.
+
+    Args:
+        plan: The plan (:func:`pkdyn.calibration.planner.plan_calibration`).
+        path: Save the figure there (format from the suffix).
+        title: Figure title.
+
+    Returns:
+        The matplotlib Figure.
+
+    """
+    from matplotlib.figure import Figure
+
+    err = plan.rms if plan.statistic == "rms" else plan.worst
+    fig = Figure(figsize=(6.0, 4.2))
+    ax = fig.add_subplot(1, 1, 1)
+    for j, sigma in enumerate(plan.noise):
+        ax.semilogy(plan.poses, 1e6 * err[:, j], "o-", label=f"noise {quantity(sigma, 'm')}")
+    ax.axhline(1e6 * plan.target, color="k", ls="--", lw=0.8, label="target")
+    ax.axhline(1e6 * plan.before, color="0.5", ls=":", lw=0.8, label="uncalibrated")
+    ax.set_xlabel("measured poses")
+    ax.set_ylabel(f"{'RMS' if plan.statistic == 'rms' else 'largest'} position error [um]")
+    ax.legend(fontsize="small")
+    ax.set_title(title if title is not None else plan.summary(), fontsize="small", wrap=True)
     fig.tight_layout()
     if path is not None:
         save_figure(fig, path, dpi=120)
