@@ -60,7 +60,6 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.validate import check_urdf, unit_vector
-from pkdyn.model.warn import warn
 
 __all__ = [
     "NAMESPACE",
@@ -534,7 +533,7 @@ def _joint(source: str, el: ET.Element) -> JointSpec:
 
 
 def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[ActuatorSpec]:
-    """Actuators of the ``SimpleTransmission`` elements (other transmission types are ignored).
+    """Actuators of the ``SimpleTransmission`` elements (other types are left out, one warning).
 
     With ``strict=False`` (a plain URDF, without pkdyn elements), ros_control transmissions
     pkdyn cannot use (no joint, a joint absent from the URDF or not revolute / prismatic) are
@@ -551,14 +550,17 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
                 _float(source, lim, "velocity", math.inf),
             )
     out = []
+    other: list[str] = []
     for t in root.findall("transmission"):
         tname = t.get("name", "?")
         ttype = t.findtext("type") or t.get("type") or "SimpleTransmission"
         if not ttype.strip().endswith("SimpleTransmission"):
+            other.append(f"'{tname}' ({ttype.strip().rsplit('/', 1)[-1]})")
             continue
         joint = t.find("joint")
         if not strict and (
-            joint is None or kinds.get(joint.get("name", "")) not in ("revolute", "prismatic")
+            joint is None
+            or kinds.get(joint.get("name", "")) not in ("revolute", "prismatic", "continuous")
         ):
             continue
         if joint is None or not joint.get("name"):
@@ -588,6 +590,13 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
         stiffness = _actuator_stiffness(source, f"transmission '{tname}'", t, act)
         out.append(
             ActuatorSpec(aname, jname, reduction, effort, velocity, **drive, stiffness=stiffness)
+        )
+    if other:
+        from pkdyn.model.warn import warn
+
+        warn(
+            f"{source}: transmission(s) {', '.join(other[:3])}{' ...' if len(other) > 3 else ''} "
+            "not read: pkdyn reads SimpleTransmission (one actuator on one joint)"
         )
     return out
 
@@ -872,16 +881,15 @@ def _linear_coupling(
 _ONE_DOF = ("revolute", "continuous", "prismatic")
 
 
-def _mimics(source: str, root: ET.Element, strict: bool) -> list[CouplingSpec]:
+def _mimics(source: str, root: ET.Element) -> list[CouplingSpec]:
     """Couplings of the URDF ``<mimic joint multiplier offset>`` elements.
 
-    A mimic between joints that are not both moving 1-DoF joints of the file is an error in a
-    pkdyn description (``strict``) and, in a plain URDF, left out with one warning (Pinocchio
-    and most URDF tools load such files: the joint then moves freely).
+    A mimic between joints that are not both moving 1-DoF joints of the file (a joint that does
+    not exist, a fixed joint...) is an error (``ignore_elements=("mimic",)`` leaves the file's
+    mimics out): the joint would otherwise move freely, a coupling silently lost.
     """
     kinds = {j.get("name", ""): j.get("type", "") for j in root.findall("joint")}
     out = []
-    skipped: list[str] = []
     for j in root.findall("joint"):
         m = j.find("mimic")
         if m is None:
@@ -901,17 +909,10 @@ def _mimics(source: str, root: ET.Element, strict: bool) -> list[CouplingSpec]:
                 else f"joint '{bad}' is {kinds[bad] or 'untyped'}, not a revolute, continuous "
                 "or prismatic joint"
             )
-            if strict:
-                raise DescriptionError(source, what, why)
-            skipped.append(f"{what} {why}")
-            continue
+            raise DescriptionError(
+                source, what, f"{why} (ignore_elements=('mimic',) leaves the mimics out)"
+            )
         out.append(CouplingSpec(f"{jname}_mimic", jname, src, (offset, multiplier)))
-    if skipped:
-        warn(
-            f"{source}: {len(skipped)} <mimic> element(s) left out (the joints move freely): "
-            + "; ".join(skipped[:3])
-            + (" ..." if len(skipped) > 3 else "")
-        )
     return out
 
 
@@ -1038,7 +1039,7 @@ def parse_description(xml_text: str, source: str) -> Description:
     for n in spring_names:
         if spring_names.count(n) > 1:
             raise DescriptionError(source, f"spring '{n}'", "spring names must be unique")
-    couplings = tuple(_mimics(source, root, extended)) + tuple(
+    couplings = tuple(_mimics(source, root)) + tuple(
         _coupling(source, el) for el in root.findall(_NS + "coupling")
     )
     _unique(source, "coupling", [c.name for c in couplings])

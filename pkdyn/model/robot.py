@@ -64,6 +64,8 @@ class Robot:
         missing_meshes: Mesh files of the description that were not found: their shapes are
             left out of ``visual_model`` and ``collision_model`` (collision checks refuse to
             run, the viewer warns, both naming them).
+        dropped_collisions: Collision elements of the description left out because their
+            numbers were malformed (collision checks refuse to run, naming them).
 
     """
 
@@ -88,6 +90,7 @@ class Robot:
     params: Any = None
     passive: PassiveForces | None = None
     missing_meshes: tuple[str, ...] = ()
+    dropped_collisions: tuple[str, ...] = ()
 
     @functools.cached_property
     def length_scale(self) -> float:
