@@ -175,3 +175,20 @@ def test_the_result_protocol_and_the_old_spellings(delta, tmp_path):
     with pytest.warns(DeprecationWarning, match="joint_coordinates"):
         joint_coordinates(robot, m.qa)
     assert (tmp_path / "c.urdf").read_text() == res.urdf()
+
+
+@pytest.mark.parametrize(
+    ("option", "culprit"),
+    [
+        ({"accept": "yes"}, "accept"),
+        ({"residual_limit": float("nan")}, "residual_limit"),
+        ({"correction_limit": -1.0}, "correction_limit"),
+        ({"tolerance": "x"}, "tolerance"),
+        ({"tolerance": (1e-3, 1e-3, 1e-3, 1e-3)}, "tolerance"),
+    ],
+)
+def test_the_trust_options_are_checked(delta, option, culprit):
+    robot, model, m = delta
+    with pytest.raises(InvalidInputError) as err:
+        calibrate(robot, m, model, noise=SIGMA, **option)
+    assert culprit in str(err.value) and "\n" not in str(err.value)

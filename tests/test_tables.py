@@ -165,3 +165,12 @@ def test_the_three_readers_take_parquet(tmp_path):
     )
     data = read_measurements(tmp_path / "d.parquet", delta.actuator_names)
     np.testing.assert_array_equal(data.qa, qa)
+
+
+def test_too_many_columns(tmp_path):
+    from pkdyn.tables import MAX_COLUMNS
+
+    names = ",".join(f"c{i}" for i in range(MAX_COLUMNS + 1))
+    path = _write(tmp_path, "wide.csv", names + "\n" + ",".join(["1"] * (MAX_COLUMNS + 1)) + "\n")
+    with pytest.raises(InvalidInputError, match="10001 columns: at most 10,000"):
+        read_table(path)

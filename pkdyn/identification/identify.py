@@ -213,7 +213,7 @@ def _identify(
     workers: int | None,
 ) -> IdentificationResult:
     start = time.perf_counter()
-    from pkdyn.inputs import instance
+    from pkdyn.inputs import count, instance
     from pkdyn.workers import can_fork, fork_map
 
     instance("robot", robot, Robot, "a Robot (pkdyn.load)")
@@ -253,7 +253,8 @@ def _identify(
         qdd = robot.joint_coordinates(data.qa_ddot, rates=True)
     if workers is None:
         workers = min(2, os.cpu_count() or 1) if can_fork() and N >= PARALLEL_SAMPLES else 1
-    workers = max(1, min(int(workers), N // (4 * BATCH) or 1))
+    workers = count("workers", workers, 1, 64) if can_fork() else 1
+    workers = max(1, min(workers, N // (4 * BATCH) or 1))
     bounds = [round(k * N / workers) for k in range(workers + 1)]
     starts = _coarse_pass(robot, data, data.t, qa, bounds[1:-1])
     work = _Work(robot, ps, base, data.t, qa, qd, qdd, data.tau, max(1, -(-N // FIT_SAMPLES)))
