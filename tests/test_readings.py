@@ -79,10 +79,8 @@ def test_identification_checks_the_joint_coordinates_of_the_readings(geared):
     robot, _ = geared
     t = np.linspace(0.0, 1.0, 50)
     qa = np.tile(robot.q_home[robot.actuated_q], (50, 1))
-    qa[:, 0] = 3.1  # within the joint's +-pi...
+    qa[:, 0] = 3.17  # within +-pi and the check's 1 % of the range (0.063 rad)...
     r = robot.readings(qa)
-    r[:, 0] = 3.1  # ...but as a reading: 1.01 x 3.1 + 0.02 = 3.151 > pi
-    with pytest.raises(
-        InvalidInputError, match="sample 0, column qa_motor1: 3.151 rad lies beyond"
-    ):
+    r[:, 0] = 3.17  # ...but as a reading: 1.01 x 3.17 + 0.02 = 3.2217 beyond it
+    with pytest.raises(InvalidInputError, match="sample 0, column qa_motor1: 3.2217 rad lies"):
         identify(robot, Measurements(t, r, 0 * r, 0 * r, 0 * r))

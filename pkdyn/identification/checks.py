@@ -26,8 +26,10 @@ from pkdyn.model.robot import Robot
 
 __all__ = ["LIMIT_RTOL", "check_limits", "check_moves", "readings_hint"]
 
-LIMIT_RTOL = 1e-6
-"""Tolerance of the limits check, relative to the joint's range (or its actuator's scale)."""
+LIMIT_RTOL = 1e-2
+"""Tolerance of the limits check, relative to the joint's range (or its actuator's scale): a
+recording at a hard stop a little beyond the described limit passes; degrees given as radians
+(a hundred times beyond) do not."""
 
 
 def _factor(robot: Robot) -> np.ndarray:
