@@ -46,8 +46,9 @@ from pkdyn.units import quantity
 
 __all__ = ["CalibrationPlan", "plan_calibration"]
 
-MAX_RUNS = 20_000
-"""Most simulated calibrations of one plan (trials x noise levels x pose counts)."""
+MAX_RUNS = 2_000
+"""Most simulated calibrations of one plan (trials x noise levels x pose counts): each is a
+whole calibration (0.1 to 1 s), so that a plan stays under about half an hour."""
 
 
 @dataclass
