@@ -93,10 +93,10 @@ class MotionBatch:
 
 
 def passive_solve(Jp: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Least-squares, least-norm solutions ``J_p^+ x`` of a batch.
+    """Least-squares, least-norm solutions ``J_p^+ x`` of a batch (the passive-joint elimination).
 
-    :func:`solvers.numerics.lstsq_batch`: the rank rule in its soft form, fast for many small
-    systems.
+    :func:`solvers.numerics.passive_elimination`: the one rule of the kinematic models and the
+    sensitivities (redundant closure rows dropped by the scale-aware cut-off).
 
     Args:
         Jp: Passive columns of the closure Jacobians (n, nc, n_p).
@@ -106,12 +106,12 @@ def passive_solve(Jp: np.ndarray, x: np.ndarray) -> np.ndarray:
         ``J_p^+ x``: (n, n_p) or (n, n_p, k).
 
     """
-    return numerics.lstsq_batch(Jp, x)
+    return numerics.passive_solve(Jp, x)
 
 
 def _step(Jp: np.ndarray, r: np.ndarray) -> np.ndarray:
     """One sample's least-squares, least-norm ``J_p^+ r`` (as :func:`passive_solve`)."""
-    return numerics.lstsq_batch(Jp[None], r[None])[0]
+    return numerics.passive_elimination(Jp).solve(r)
 
 
 def _hermite(s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

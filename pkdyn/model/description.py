@@ -366,6 +366,9 @@ class MaterialSpec:
         E: Young's modulus [Pa] (``None``: the preset's).
         G: Shear modulus [Pa] (``None``: the preset's).
         density: Density [kg/m^3] (``None``: the preset's).
+        mass_from_material: ``mass="from-material"``: the links read as beams of this material
+            weigh what their section and density say (mass and inertia replace the URDF's
+            ``<inertial>`` in the precision models), instead of what the URDF says.
 
     """
 
@@ -373,6 +376,7 @@ class MaterialSpec:
     E: float | None = None
     G: float | None = None
     density: float | None = None
+    mass_from_material: bool = False
 
 
 @dataclass(frozen=True, eq=False)  # SE3 field: no boolean ==
@@ -388,6 +392,8 @@ class ComplianceSpec:
             respect to its root, in the frame ``frame`` (given instead of a beam), or ``None``.
         frame: Placement of that frame in the link frame.
         rigid: The link does not deform (no beam even with a material).
+        mass_from_material: ``mass="from-material"``: the link's beam weighs what its section
+            and material's density say (``None``: as the robot's ``<pkdyn:material>`` says).
 
     """
 
@@ -397,6 +403,7 @@ class ComplianceSpec:
     compliance: tuple[float, ...] | None = None
     frame: pin.SE3 = field(default_factory=pin.SE3.Identity)
     rigid: bool = False
+    mass_from_material: bool | None = None
 
 
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
@@ -673,12 +680,28 @@ def _positive(source: str, el: ET.Element, attr: str, zero: bool = False) -> flo
     return value
 
 
+_MASS_MODES = ("from-material", "as-described")
+"""Values of the ``mass`` attribute of ``<pkdyn:material>`` and ``<pkdyn:compliance>``."""
+
+
+def _mass_mode(source: str, el: ET.Element) -> bool | None:
+    """``mass="from-material"`` (True), ``"as-described"`` (False) or absent (None)."""
+    text = el.get("mass")
+    if text is None:
+        return None
+    if text.strip() not in _MASS_MODES:
+        raise DescriptionError(
+            source, f"<{_tag(el)}> mass='{text}'", f"expected one of {', '.join(_MASS_MODES)}"
+        )
+    return text.strip() == "from-material"
+
+
 def _material(source: str, el: ET.Element, name: str | None) -> MaterialSpec | None:
     """The material an element names (``name`` attribute) and its optional constants."""
     E, G, rho = (_positive(source, el, a) for a in ("E", "G", "density"))
     if name is None and E is None and G is None and rho is None:
         return None
-    return MaterialSpec(name or "custom", E, G, rho)
+    return MaterialSpec(name or "custom", E, G, rho, bool(_mass_mode(source, el)))
 
 
 def _material_element(source: str, root: ET.Element) -> MaterialSpec | None:
@@ -725,7 +748,12 @@ def _compliance(source: str, el: ET.Element, links: set[str]) -> ComplianceSpec:
             "give one of: rigid, compliance (with xyz / rpy), or a beam's material / inner_radius",
         )
     frame = _frame(source, el, links) if el.get("link") else pin.SE3.Identity()
-    return ComplianceSpec(link, material, bore, compliance, frame.placement, rigid)
+    mass = _mass_mode(source, el)
+    if mass and (rigid or compliance is not None):
+        raise DescriptionError(
+            source, f"{where} mass", "from-material needs a beam (a material or inner_radius)"
+        )
+    return ComplianceSpec(link, material, bore, compliance, frame.placement, rigid, mass)
 
 
 _PASSIVE_FIELDS = ("stiffness", "rest", "damping", "friction")

@@ -373,14 +373,9 @@ class Robot:
         total = N.shape[1]
         if self.platform_frame is None or total == 0:
             return total, 0
-        model, data = self.model, self.data
-        pin.computeJointJacobians(model, data, qq)
-        pin.updateFramePlacements(model, data)
-        lin = pin.getFrameJacobian(
-            model, data, self.platform_frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        )[:3]
-        ang = pin.getFrameJacobian(model, data, self.platform_frame, pin.ReferenceFrame.LOCAL)[3:]
-        Jx = np.vstack([lin, ang])[self.task_rows] @ N
+        from pkdyn.model.platform_jacobian import platform_jacobian
+
+        Jx = platform_jacobian(self, qq, angular="platform")[self.task_rows] @ N
         sx = np.linalg.svd(Jx, compute_uv=False)
         useful = int(np.sum(sx > tol * max(1.0, float(sx[0]) if sx.size else 0.0)))
         return useful, total - useful
