@@ -12,8 +12,8 @@ MuJoCo (:mod:`support.dynamics_truth`), with 0.1 % noise; everything it records 
 3. the identified model predicts another recorded motion: its efforts within the noise.
 
 The same chain with the readings taken as joint coordinates (the encoder gains ignored, as
-``identify`` did before the readings rule) predicts several times the noise: the test would fail
-on that code.
+``identify`` did before the readings rule) predicts three to five times the noise: the test
+would fail on that code.
 """
 
 from __future__ import annotations
@@ -86,11 +86,11 @@ def test_identify_on_the_calibrated_description_predicts_within_the_noise(chain)
     cal, calibrated, recorded, other, tau2, noise = chain
     res = identify(calibrated, recorded)
     err = np.sqrt(np.mean((res.predict(*other) - tau2) ** 2, axis=0))
-    assert np.all(err < noise), err / noise  # observed 0.5-0.9
+    assert np.all(err < noise), err / noise  # observed 0.3-0.6
     # the readings taken as joint coordinates (the gains ignored): several times the noise
     acts = tuple(dataclasses.replace(a, encoder_gain=1.0) for a in calibrated.actuators)
     desc = dataclasses.replace(calibrated.description, actuators=acts)
     ignored = dataclasses.replace(calibrated, actuators=acts, description=desc)
     res0 = identify(ignored, recorded)
     err0 = np.sqrt(np.mean((res0.predict(*other) - tau2) ** 2, axis=0))
-    assert np.all(err0 > 3 * noise), err0 / noise  # observed 5.8
+    assert np.all(err0 > 2 * noise), err0 / noise  # observed 3.1-4.7
