@@ -54,6 +54,20 @@ def test_vibration_command_reports_the_figures_and_writes_its_files(tmp_path, ca
     assert png.stat().st_size > 1000 and "<html" in html.read_text()[:2000].lower()
 
 
+def test_a_motion_read_from_a_file(tmp_path, capsys):
+    t = np.linspace(0.0, 0.2, 201)
+    u = t / 0.2
+    x = -0.05 + 0.1 * (10 * u**3 - 15 * u**4 + 6 * u**5)
+    path = tmp_path / "move.csv"
+    rows = "".join(f"{a:.6f},{b:.9f},0,-0.4\n" for a, b in zip(t, x, strict=True))
+    path.write_text("t,x,y,z\n" + rows)
+    assert main([*BASE, "--trajectory", str(path), "--dwell", "0.2", "--json"]) == 0
+    out = _json(capsys)
+    assert out["trajectory"] == "move.csv (task space)" and out["duration"] == pytest.approx(0.2)
+    assert main([*BASE, "--trajectory", str(path), "--cycle-time", "0.3"]) == 1
+    assert "--cycle-time" in capsys.readouterr().err
+
+
 def test_table_has_units_and_shaping_reports_the_unshaped_motion_too(capsys):
     argv = [*BASE, "--trajectory", "p2p", "--cycle-time", "0.15", "--dwell", "0.2",
             "--shaper", "zv"]  # fmt: skip

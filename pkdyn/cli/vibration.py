@@ -21,6 +21,11 @@ def _cmd_vibration(args: argparse.Namespace) -> None:
         raise InvalidInputError("--scale", f"must be > 0, got {args.scale:g}")
     if not args.slow > 0.0:
         raise InvalidInputError("--slow", f"must be > 0, got {args.slow:g}")
+    if args.trajectory.lower().endswith(".csv"):
+        if args.cycle_time is not None:
+            raise InvalidInputError(
+                "--cycle-time", "does not apply to a trajectory read from a file"
+            )
     if args.shaper_modes != 1 and args.shaper is None:
         raise InvalidInputError("--shaper-modes", "needs --shaper zv|zvd")
     robot = load(args, geometry=args.material is not None or args.html is not None)
