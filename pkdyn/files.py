@@ -34,7 +34,15 @@ from typing import IO, Any
 
 from pkdyn.exceptions import OutputError, PkdynError
 
-__all__ = ["atomic_path", "atomic_write", "check_writable", "output_target", "read_text", "shown"]
+__all__ = [
+    "atomic_path",
+    "atomic_write",
+    "check_writable",
+    "output_target",
+    "read_bytes",
+    "read_text",
+    "shown",
+]
 
 _KIND = {
     stat.S_IFIFO: "a FIFO (named pipe)",
@@ -150,13 +158,10 @@ def output_target(path: str | os.PathLike[str], option: str = "") -> Path:
     return target
 
 
-def read_text(
-    path: str | os.PathLike[str],
-    limit: int,
-    error: Callable[[str], PkdynError],
-    encoding: str = "utf-8",
-) -> str:
-    """The text of an input file, refused unless a regular file of at most ``limit`` bytes.
+def read_bytes(
+    path: str | os.PathLike[str], limit: int, error: Callable[[str], PkdynError]
+) -> bytes:
+    """The bytes of an input file, refused unless a regular file of at most ``limit`` bytes.
 
     A FIFO, a device or a directory is refused before it is opened (opening a FIFO waits for a
     writer; ``/dev/zero`` never ends).
@@ -165,11 +170,9 @@ def read_text(
         path: The file (a symbolic link to a regular file is followed).
         limit: Largest size accepted [bytes].
         error: Makes the exception to raise from a message (the caller's type, naming the file).
-        encoding: Text encoding.
 
     Raises:
-        PkdynError: From ``error``: missing, unreadable, not a regular file, too large, or not
-            text in ``encoding``.
+        PkdynError: From ``error``: missing, unreadable, not a regular file or too large.
 
     """
     try:
@@ -190,6 +193,31 @@ def read_text(
         raise error(f"cannot be read ({err.strerror or err})") from None
     if len(data) > limit:
         raise error(f"is more than the {limit / 1e6:.3g} MB accepted")
+    return data
+
+
+def read_text(
+    path: str | os.PathLike[str],
+    limit: int,
+    error: Callable[[str], PkdynError],
+    encoding: str = "utf-8",
+) -> str:
+    """The text of an input file, refused unless a regular file of at most ``limit`` bytes.
+
+    :func:`read_bytes`, decoded.
+
+    Args:
+        path: The file (a symbolic link to a regular file is followed).
+        limit: Largest size accepted [bytes].
+        error: Makes the exception to raise from a message (the caller's type, naming the file).
+        encoding: Text encoding.
+
+    Raises:
+        PkdynError: From ``error``: missing, unreadable, not a regular file, too large, or not
+            text in ``encoding``.
+
+    """
+    data = read_bytes(path, limit, error)
     try:
         return data.decode(encoding)
     except UnicodeDecodeError as err:

@@ -18,11 +18,12 @@ from __future__ import annotations
 
 import importlib
 import math
+import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["Result", "jsonable", "plotter_for", "register_plot"]
+__all__ = ["Result", "deprecated", "jsonable", "plotter_for", "register_plot"]
 
 _PLOTTERS: dict[type, Callable[..., Any]] = {}
 
@@ -119,3 +120,18 @@ class Result:
         if fn is None:
             raise NotImplementedError(f"{type(self).__name__} has no plot")
         return fn(self, path=path, **options)
+
+
+def deprecated(old: str, new: str) -> None:
+    """Warn (``DeprecationWarning``) that ``old`` is kept for one release and ``new`` replaces it.
+
+    Args:
+        old: The old spelling (``CalibrationResult.as_dict``).
+        new: What to use instead (``to_json()``).
+
+    """
+    warnings.warn(
+        f"{old} is deprecated and will be removed in the next release: use {new}",
+        DeprecationWarning,
+        stacklevel=3,
+    )

@@ -21,6 +21,7 @@ __all__ = [
     "emit",
     "fmt",
     "gains_of",
+    "reads_differently",
     "load",
     "output_path",
     "params",
@@ -264,8 +265,13 @@ def qa_argument(parser: Any, required: bool = False) -> None:
 
 
 def gains_of(robot: Any) -> np.ndarray:
-    """The actuators' encoder gains (n_a,): joint coordinate = gain x reading."""
-    return np.array([float(a.encoder_gain) for a in robot.actuators])
+    """The actuators' encoder gains (n_a,) (:meth:`pkdyn.Robot.joint_coordinates`'s rule)."""
+    return np.asarray(robot.encoder_gains)
+
+
+def reads_differently(robot: Any) -> bool:
+    """Whether the robot's readings differ from its joint coordinates (gains or offsets)."""
+    return bool(np.any(robot.encoder_gains != 1.0) or np.any(robot.encoder_offsets != 0.0))
 
 
 def _resolve_readings(args: argparse.Namespace, robot: Any) -> None:
@@ -279,8 +285,8 @@ def _resolve_readings(args: argparse.Namespace, robot: Any) -> None:
         from pkdyn.inputs import vector
 
         r = vector("--readings", readings, len(gains), "rad or m")
-        args.qa = [float(v) for v in gains * r]
-    elif getattr(args, "qa", None) is not None and np.any(gains != 1.0):
+        args.qa = [float(v) for v in robot.joint_coordinates(r)]  # the one readings rule
+    elif getattr(args, "qa", None) is not None and reads_differently(robot):
         import sys
 
         listed = ", ".join(

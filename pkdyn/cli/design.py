@@ -91,6 +91,9 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
             ("length", args.length),
             ("actuator_stiffness", args.actuator_stiffness),
             ("material", args.material),
+            ("damping_ratio", args.damping_ratio),
+            ("band", args.band),
+            ("dwell", args.dwell),
         )
         if v is not None
     }
@@ -268,7 +271,8 @@ def register(sub: Any) -> None:
         action="append",
         nargs="+",
         metavar="NAME",
-        help="metric or group (clavel, required, sizing, workspace, clavel_chart)",
+        help="metric or group (clavel, required, sizing, workspace, precision, vibration, "
+        "clavel_chart)",
     )
     sp.add_argument("--constraint", action="append", nargs="+", metavar="NAME>=VALUE")
     sp.add_argument("--minimize", action="append", nargs="+", metavar="METRIC")
@@ -291,9 +295,21 @@ def register(sub: Any) -> None:
         type=float,
         nargs="+",
         metavar="K",
-        help="actuator stiffness for stiffness_min / f1_min [N m/rad or N/m]",
+        help="actuator stiffness for stiffness_min, f1_min and the vibration metrics "
+        "[N m/rad or N/m]",
     )
-    sp.add_argument("--material", help="link material for stiffness_min / f1_min (steel...)")
+    sp.add_argument(
+        "--material", help="link material for stiffness_min, f1_min, vibration (steel...)"
+    )
+    sp.add_argument(
+        "--damping-ratio",
+        type=float,
+        help="damping ratio of the first mode for the vibration metrics (0.02)",
+    )
+    sp.add_argument("--band", type=float, help="settling band of settling_time [m] (1e-4)")
+    sp.add_argument(
+        "--dwell", type=float, help="time after the duty cycle to settle within [s] (0.5)"
+    )
     how = sp.add_mutually_exclusive_group()
     how.add_argument("--n", type=int, help="number of designs (lhs, sobol, random)")
     how.add_argument("--grid", type=int, help="full grid, values per variable")

@@ -130,6 +130,27 @@ def _fastest_options(args: argparse.Namespace) -> dict[str, Any]:
     return opts
 
 
+def _check_settle(args: argparse.Namespace) -> None:
+    """The settling options of ``size --fastest --settle``, refused where they do not apply."""
+    if args.settle is None:
+        for option, given in (
+            ("--dwell", args.dwell is not None),
+            ("--actuator-stiffness", args.actuator_stiffness is not None),
+            ("--damping-ratio", args.damping_ratio is not None),
+            ("--material", args.material is not None),
+            ("--shaper", args.shaper is not None),
+        ):
+            if given:
+                raise InvalidInputError(option, "applies with --fastest --settle BAND")
+        return
+    if not args.fastest:
+        raise InvalidInputError("--settle", "needs --fastest (the fastest cycle that settles)")
+    if not args.settle > 0.0:
+        raise InvalidInputError("--settle", f"a band must be > 0 m, got {args.settle:g}")
+    if args.dwell is not None and not args.dwell > 0.0:
+        raise InvalidInputError("--dwell", f"must be > 0 s, got {args.dwell:g}")
+
+
 def _cmd_size(args: argparse.Namespace) -> None:
     from pkdyn.dynamics.sizing import size, sizing_from_efforts
     from pkdyn.dynamics.trajectory import named_task, named_trajectory
@@ -146,13 +167,15 @@ def _cmd_size(args: argparse.Namespace) -> None:
             catalog = catalog + load_catalog(args.gearboxes)
     elif args.gearboxes:
         raise InvalidInputError("--gearboxes", "needs --catalog (the motors to pair them with)")
-    robot = load(args)
+    _check_settle(args)
+    robot = load(args, geometry=args.material is not None)
     non_negative("--payload", args.payload, "kg")
     if args.show < 0:
         raise InvalidInputError("--show", f"must be >= 0, got {args.show}")
     if args.operating_points and not args.catalog:
         raise InvalidInputError("--operating-points", "needs --catalog (the motors to plot)")
     fast = None
+    settled = None
     from_file = _trajectory_file(args, robot)
     if args.fastest:
         from pkdyn.dynamics.fastest import fastest_trajectory
@@ -161,6 +184,21 @@ def _cmd_size(args: argparse.Namespace) -> None:
         fast = fastest_trajectory(robot, task, payload=args.payload)
         traj = fast.trajectory
         result = sizing_from_efforts(robot, fast.efforts, args.payload)
+        if args.settle is not None:
+            from pkdyn.precision.vibration_fastest import fastest_settling
+
+            settled = fastest_settling(
+                robot,
+                task,
+                args.settle,
+                0.5 if args.dwell is None else args.dwell,
+                payload=args.payload,
+                actuator_stiffness=args.actuator_stiffness,
+                material=args.material,
+                damping_ratio=args.damping_ratio,
+                shaper={None: "zv", "none": None}.get(args.shaper, args.shaper),
+                fast=fast,
+            )
     else:
         # speeds are reported (their margins), not refused: a sizing answers how far off it is
         if from_file is not None:
@@ -221,6 +259,9 @@ def _cmd_size(args: argparse.Namespace) -> None:
             f"torque limit, {100 * float(np.max(fast.speed_utilisation)):.3f} % of the speed "
             "limit)",
         )
+    if settled is not None:
+        payload["settling"] = settled.to_json()
+        text.insert(1, settled.table())
     if selection is not None:
         payload["selection"] = selection.as_json()
         text.append(selection.table(show=args.show))
@@ -281,6 +322,35 @@ def register(sub: Any) -> None:
         action="store_true",
         help="traverse the trajectory's path as fast as the torque and speed limits allow "
         "(toppra); --cycle-time / --dt then set the path's sampling (default 1 s / 1 ms)",
+    )
+    settle = sp.add_argument_group(
+        "settling (with --fastest): the fastest cycle whose tool settles, with and without "
+        "input shaping (the elastic model: pkdyn vibration)"
+    )
+    settle.add_argument(
+        "--settle",
+        type=float,
+        metavar="BAND",
+        help="settling band on the tool's deviation [m]",
+    )
+    settle.add_argument(
+        "--dwell", type=float, help="time after the motion within which to settle [s] (0.5)"
+    )
+    settle.add_argument(
+        "--actuator-stiffness",
+        nargs="+",
+        type=float,
+        metavar="K",
+        help="servo stiffness, one or one per actuator [N m/rad or N/m] (default: described)",
+    )
+    settle.add_argument(
+        "--damping-ratio", type=float, help="damping ratio of the first mode (0.02)"
+    )
+    settle.add_argument("--material", help="link material (steel, aluminium, carbon)")
+    settle.add_argument(
+        "--shaper",
+        choices=("zv", "zvd", "none"),
+        help="input shaper compared with the unshaped motion (default zv)",
     )
     sp.add_argument(
         "--catalog",

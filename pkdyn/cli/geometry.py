@@ -16,12 +16,12 @@ from pkdyn.cli._common import (
     configuration,
     emit,
     fmt,
-    gains_of,
     load,
     output_path,
     params,
     posed_command,
     qa_argument,
+    reads_differently,
     robot_command,
     units,
 )
@@ -207,9 +207,8 @@ def _cmd_fk(args: argparse.Namespace) -> None:
         "residual": res.residual,
     }
     text = f"position [m]: {fmt(res.position)}\nrpy [rad]:    {fmt(res.rpy)}"
-    g = gains_of(robot)
-    if np.any(g != 1.0):  # a calibrated robot: readings differ from joint coordinates
-        payload["readings"] = (res.qa / g).tolist()
+    if reads_differently(robot):  # a calibrated robot: readings differ from joint coordinates
+        payload["readings"] = robot.readings(res.qa).tolist()
     emit(args, payload, text)
 
 
@@ -228,9 +227,8 @@ def _cmd_ik(args: argparse.Namespace) -> None:
     text = "\n".join(
         f"{n}: {v:.9f} {u[0]}" for n, v, u in zip(names, res.qa, units(robot), strict=True)
     )
-    g = gains_of(robot)
-    if np.any(g != 1.0):  # a calibrated robot: what its encoders will read there
-        readings = res.qa / g
+    if reads_differently(robot):  # a calibrated robot: what its encoders will read there
+        readings = robot.readings(res.qa)
         payload["readings"] = readings.tolist()
         text += "\nencoder readings (joint coordinate / <pkdyn:encoder gain>):\n" + "\n".join(
             f"{n}: {v:.9f} {u[0]}" for n, v, u in zip(names, readings, units(robot), strict=True)

@@ -138,6 +138,47 @@ class FastestResult:
 
         return mix(self.A) * u + mix(self.B) * sd * sd + mix(self.C) + mix(self.P)
 
+    def scaled(self, scale: float = 1.0) -> tuple[JointTrajectory, TaskTrajectory]:
+        """The motion slowed down uniformly (times ``scale t``, rates and accelerations divided).
+
+        Rates are divided by ``scale``, accelerations by ``scale^2``.
+        A slower copy stays within the limits (its efforts are ``C + (tau - C) / scale^2``, a
+        convex combination of the fastest motion's and of those at rest), minus the dampers'
+        and drives' speed-dependent losses, which only fall.
+
+        Args:
+            scale: Slow-down factor (>= 1 keeps the limits).
+
+        Returns:
+            ``(joint, task)``: the joint and platform trajectories (non-uniform times).
+
+        Raises:
+            InvalidInputError: A path without its task trajectory, or a scale not > 0.
+
+        """
+        from pkdyn.inputs import positive
+
+        scale = positive("scale", scale)
+        traj = self.trajectory
+        joint = JointTrajectory(
+            traj.t * scale,
+            traj.q,
+            traj.v / scale,
+            traj.a / scale**2,
+            traj.actuated_q,
+            traj.actuated_v,
+            name=traj.name,
+        )
+        task = self.path.task
+        if task is None:
+            raise InvalidInputError("path", "this motion was built in joint space: no task path")
+        sd = self.s_dot[:, None] / scale
+        sdd = self.s_ddot[:, None] / scale**2
+        pose_d = task.pose_d * sd
+        pose_dd = task.pose_d * sdd + task.pose_dd * sd * sd
+        timed = TaskTrajectory(joint.t, task.pose, pose_d, pose_dd, name=traj.name)
+        return joint, timed
+
     def as_json(self) -> dict[str, Any]:
         """JSON-ready summary."""
         return {

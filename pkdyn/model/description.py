@@ -41,8 +41,9 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
 - ``<pkdyn:home q>``: the home configuration to assemble (actuator coordinates, or a full
   configuration in Pinocchio's order), as ``pkdyn.load(..., home=)`` takes it: written by
   ``pkdyn calibrate`` so that a calibrated robot loads in the assembly mode it was measured in.
-- ``<pkdyn:encoder gain>`` in a transmission's ``<actuator>``: the actuated joint's coordinate is
-  ``gain`` times the actuator's reading (a calibrated scale error of the encoder or screw).
+- ``<pkdyn:encoder gain offset>`` in a transmission's ``<actuator>``: the actuated joint's
+  coordinate is ``gain`` times the actuator's reading plus ``offset`` (a calibrated scale error of
+  the encoder or screw; the joint coordinate at a zero reading).
 
 The URDF part is validated by :mod:`pkdyn.model.validate` (numbers, physics, tree), the pkdyn
 elements here (unknown elements, mistyped namespaces, duplicates).
@@ -209,6 +210,9 @@ class ActuatorSpec:
             (``pkdyn:stiffness value``), ``None`` when not described.
         encoder_gain: Joint coordinate per unit of the actuator's reading (``pkdyn:encoder
             gain``, > 0; default 1), from a geometric calibration.
+        encoder_offset: Joint coordinate at a zero reading [rad or m] (``pkdyn:encoder
+            offset``; default 0): ``q = encoder_gain * reading + encoder_offset``
+            (:meth:`pkdyn.Robot.joint_coordinates`).
 
     """
 
@@ -224,6 +228,7 @@ class ActuatorSpec:
     coulomb: float = 0.0
     stiffness: float | None = None
     encoder_gain: float = 1.0
+    encoder_offset: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
@@ -361,6 +366,9 @@ class MaterialSpec:
         E: Young's modulus [Pa] (``None``: the preset's).
         G: Shear modulus [Pa] (``None``: the preset's).
         density: Density [kg/m^3] (``None``: the preset's).
+        mass_from_material: ``mass="from-material"``: the links read as beams of this material
+            weigh what their section and density say (mass and inertia replace the URDF's
+            ``<inertial>`` in the precision models), instead of what the URDF says.
 
     """
 
@@ -368,6 +376,7 @@ class MaterialSpec:
     E: float | None = None
     G: float | None = None
     density: float | None = None
+    mass_from_material: bool = False
 
 
 @dataclass(frozen=True, eq=False)  # SE3 field: no boolean ==
@@ -383,6 +392,8 @@ class ComplianceSpec:
             respect to its root, in the frame ``frame`` (given instead of a beam), or ``None``.
         frame: Placement of that frame in the link frame.
         rigid: The link does not deform (no beam even with a material).
+        mass_from_material: ``mass="from-material"``: the link's beam weighs what its section
+            and material's density say (``None``: as the robot's ``<pkdyn:material>`` says).
 
     """
 
@@ -392,6 +403,7 @@ class ComplianceSpec:
     compliance: tuple[float, ...] | None = None
     frame: pin.SE3 = field(default_factory=pin.SE3.Identity)
     rigid: bool = False
+    mass_from_material: bool | None = None
 
 
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
@@ -606,6 +618,7 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
         ("motor_friction", "viscous", "viscous", 0.0, math.inf),
         ("motor_friction", "coulomb", "coulomb", 0.0, math.inf),
         ("encoder", "gain", "encoder_gain", 0.0, math.inf),
+        ("encoder", "offset", "encoder_offset", -math.inf, math.inf),
     )
     for tag, attr, key, lo, hi in fields:
         child = el.find(_NS + tag)
@@ -618,9 +631,11 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
             raise DescriptionError(source, f"{where} {err.culprit}", msg) from None
         positive = key.endswith("efficiency") or key == "encoder_gain"
         ok = lo < value <= hi if positive else lo <= value < hi
+        ok = ok and math.isfinite(value) if key == "encoder_offset" else ok
         if not ok:
             interval = "(0, 1]" if key.endswith("efficiency") else "[0, inf)"
             interval = "(0, inf)" if key == "encoder_gain" else interval
+            interval = "(-inf, inf)" if key == "encoder_offset" else interval
             raise DescriptionError(
                 source,
                 f"{where} <pkdyn:{tag}> {attr}='{child.get(attr)}'",
@@ -665,12 +680,28 @@ def _positive(source: str, el: ET.Element, attr: str, zero: bool = False) -> flo
     return value
 
 
+_MASS_MODES = ("from-material", "as-described")
+"""Values of the ``mass`` attribute of ``<pkdyn:material>`` and ``<pkdyn:compliance>``."""
+
+
+def _mass_mode(source: str, el: ET.Element) -> bool | None:
+    """``mass="from-material"`` (True), ``"as-described"`` (False) or absent (None)."""
+    text = el.get("mass")
+    if text is None:
+        return None
+    if text.strip() not in _MASS_MODES:
+        raise DescriptionError(
+            source, f"<{_tag(el)}> mass='{text}'", f"expected one of {', '.join(_MASS_MODES)}"
+        )
+    return text.strip() == "from-material"
+
+
 def _material(source: str, el: ET.Element, name: str | None) -> MaterialSpec | None:
     """The material an element names (``name`` attribute) and its optional constants."""
     E, G, rho = (_positive(source, el, a) for a in ("E", "G", "density"))
     if name is None and E is None and G is None and rho is None:
         return None
-    return MaterialSpec(name or "custom", E, G, rho)
+    return MaterialSpec(name or "custom", E, G, rho, bool(_mass_mode(source, el)))
 
 
 def _material_element(source: str, root: ET.Element) -> MaterialSpec | None:
@@ -717,7 +748,12 @@ def _compliance(source: str, el: ET.Element, links: set[str]) -> ComplianceSpec:
             "give one of: rigid, compliance (with xyz / rpy), or a beam's material / inner_radius",
         )
     frame = _frame(source, el, links) if el.get("link") else pin.SE3.Identity()
-    return ComplianceSpec(link, material, bore, compliance, frame.placement, rigid)
+    mass = _mass_mode(source, el)
+    if mass and (rigid or compliance is not None):
+        raise DescriptionError(
+            source, f"{where} mass", "from-material needs a beam (a material or inner_radius)"
+        )
+    return ComplianceSpec(link, material, bore, compliance, frame.placement, rigid, mass)
 
 
 _PASSIVE_FIELDS = ("stiffness", "rest", "damping", "friction")

@@ -8,7 +8,28 @@ displays itself in Jupyter). The CLI and the notebooks use these functions only.
 from __future__ import annotations
 
 from pkdyn.plotting.accuracy import plot_accuracy_map
+from pkdyn.plotting.calibration import plot_calibration, plot_calibration_plan
+from pkdyn.plotting.identification import plot_identification
 from pkdyn.plotting.maps import plot_conditioning_map
-from pkdyn.plotting.precision import plot_modes, plot_precision_map
+from pkdyn.plotting.precision import (
+    plot_grid_map,
+    plot_modes,
+    plot_monte_carlo,
+    plot_precision_map,
+    plot_ranking,
+)
+from pkdyn.plotting.vibration import plot_vibration
 
-__all__ = ["plot_accuracy_map", "plot_conditioning_map", "plot_modes", "plot_precision_map"]
+__all__ = [
+    "plot_accuracy_map",
+    "plot_calibration",
+    "plot_calibration_plan",
+    "plot_conditioning_map",
+    "plot_grid_map",
+    "plot_identification",
+    "plot_modes",
+    "plot_monte_carlo",
+    "plot_precision_map",
+    "plot_ranking",
+    "plot_vibration",
+]
