@@ -431,7 +431,38 @@ class CandidateBuilder:
 
     # ------------------------------------------------------------------ in place
 
-    def _write(self, t: _Template, params: Any, records: Sequence[Record]) -> Robot | None:
+    def unassembled(self, params: Any) -> Robot:
+        """The family's model, geometry, constraint models and description with these parameters.
+
+        What :meth:`robot` writes, without the constraint layer and the home assembly: for a
+        caller that reads placements, inertias or shapes only (the family parameters of
+        :mod:`pkdyn.precision`). ``q_home`` and ``constraints`` are the previous candidate's
+        (or, where the structure takes the URDF path, those of an assembled robot). Valid until
+        the next call.
+
+        Args:
+            params: The family's parameter dataclass.
+
+        Returns:
+            The robot (shared with the builder).
+
+        """
+        layout = self.family.layout(params)
+        key = None if layout is None else _skeleton(layout.records)
+        if layout is None or key is None:
+            return self._urdf_robot(params, None)
+        if key not in self._templates:
+            return self.robot(params)
+        template = self._templates[key]
+        if template is None:
+            return self._urdf_robot(params, layout)
+        out = self._write(template, params, layout.records, assemble=False)
+        assert out is not None
+        return out
+
+    def _write(
+        self, t: _Template, params: Any, records: Sequence[Record], assemble: bool = True
+    ) -> Robot | None:
         """Write a candidate's numbers into the template; ``None``: take the URDF path."""
         robot = t.robot
         model = robot.model
@@ -542,6 +573,10 @@ class CandidateBuilder:
                 off = pin.SE3(np.eye(3), HINGE_ARM * c.axis)
                 vec[k].joint1_placement, vec[k].joint2_placement = M1 * off, M2 * off
                 k += 1
+        if not assemble:
+            return dataclasses.replace(
+                robot, description=desc, actuators=desc.actuators, params=params
+            )
         passive = robot.passive
         if passive is not None:
             passive = passive_forces(

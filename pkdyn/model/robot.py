@@ -21,7 +21,7 @@ from pkdyn.model.families import FAMILIES
 from solvers import ConstraintSet, PassiveForces
 from solvers.numerics import rank
 
-__all__ = ["PLATFORM_HINT", "MODELLING_JOINTS", "Robot"]
+__all__ = ["PLATFORM_HINT", "MODELLING_JOINTS", "Robot", "length_scale_at"]
 
 PLATFORM_HINT = (
     'declare one: <pkdyn:platform link="LINK" task="x y z"/> in the URDF (urdf/README.md), '
@@ -99,10 +99,7 @@ class Robot:
         Makes translations and rotations commensurate where a test compares them (singularity
         margins, continuation steps), so that results do not depend on the robot's size.
         """
-        data = self.model.createData()
-        pin.forwardKinematics(self.model, data, self.q_home)
-        P = np.array([M.translation for M in data.oMi])
-        return max(float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))), 1e-9)
+        return length_scale_at(self.model, self.model.createData(), self.q_home)
 
     @property
     def nq(self) -> int:
@@ -410,3 +407,10 @@ def _prismatic(jm: pin.JointModel) -> bool:
     """A 1-DOF prismatic joint model (``JointModelP{X,Y,Z}``, ``JointModelPrismaticUnaligned``)."""
     name = str(jm.shortname())
     return name.startswith("JointModelP") and not name.startswith("JointModelPlanar")
+
+
+def length_scale_at(model: pin.Model, data: pin.Data, q: np.ndarray) -> float:
+    """:attr:`Robot.length_scale` of a model at ``q`` (nq,), computed in ``data`` [m]."""
+    pin.forwardKinematics(model, data, q)
+    P = np.array([M.translation for M in data.oMi])
+    return max(float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))), 1e-9)

@@ -171,6 +171,7 @@ def _poses(P: np.ndarray, R: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]
     return P, np.broadcast_to(Rm, (P.shape[0], 3, 3)) if Rm.ndim == 2 else Rm
 
 
+@one_blas_thread
 def pose_figures(
     robot: Robot,
     P: np.ndarray,

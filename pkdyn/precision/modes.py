@@ -40,6 +40,7 @@ from pkdyn.precision.material import Material
 from pkdyn.precision.stiffness import nothing_compliant, prepared
 from pkdyn.precision.validity import Flagged, Validity, stiffness_check
 from pkdyn.results import Result, jsonable
+from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
 from solvers import numerics, solve_lm
 
@@ -178,6 +179,7 @@ def _eigen(red: Reduced, M: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     return lam, X, int(massless.sum())
 
 
+@one_blas_thread
 def modes(
     robot: Robot | ElasticModel,
     q: Sequence[float] | np.ndarray,

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.assembly import forward_geometry
@@ -168,8 +169,13 @@ def monte_carlo(
     nominal = robot.platform_placement(qq)
     readings = qq[robot.actuated_q]
     rng = np.random.default_rng(seed)
-    errors, failed = [], 0
     family = model.kind == "family parameters"
+    if family and _delta_closed_form(robot, model):
+        # every sample at once: the same draws (one stream, sample after sample)
+        dp_all = _draw_all(rng, t, distribution, int(samples))
+        errors_all, ok = _delta_family_errors(robot, model, dp_all, readings, nominal)
+        return MonteCarlo(errors_all[ok], int(np.sum(~ok)), distribution=distribution, seed=seed)
+    errors, failed = [], 0
     for _ in progress(range(int(samples)), "Monte Carlo", "robot", progress_bar, min_items=50):
         dp = _draw(rng, t, distribution)
         try:
@@ -177,7 +183,7 @@ def monte_carlo(
                 sample = _family_sample(robot, model, dp)
                 qa = readings * (1.0 + model.gains(dp))
             else:
-                pert = perturbed(robot, model, dp)
+                pert = perturbed(robot, model, dp, assemble=False)
                 sample, qa = pert.robot, pert.joint_coordinates(readings)
             res = forward_geometry(sample, qa, q_init=qq, check_limits=False)
         except PkdynError:
@@ -188,7 +194,77 @@ def monte_carlo(
     return MonteCarlo(np.array(errors).reshape(-1, 6), failed, distribution=distribution, seed=seed)
 
 
+def _draw_all(rng: np.random.Generator, t: np.ndarray, distribution: str, n: int) -> np.ndarray:
+    """``n`` draws of :func:`_draw` at once (n, len(t)): the same numbers, in the same order."""
+    if distribution == "uniform":
+        return rng.uniform(-1.0, 1.0, (n, t.size)) * t
+    return rng.normal(0.0, 1.0, (n, t.size)) * (t / 3.0)
+
+
+_DELTA_GEOMETRY = ("ra", "rb", "la", "lb")
+"""The library Delta's parameters its platform position depends on (Clavel's closed form)."""
+
+
+def _delta_closed_form(robot: Robot, model: ParameterModel) -> bool:
+    """Whether the samples of a family model of the Delta have Clavel's closed form.
+
+    A library Delta with three ball-jointed arms and its platform frame at the nacelle's
+    centre: every sample is a Delta of the family whose nacelle keeps its orientation and sits
+    where Clavel's direct model puts it (the other parameters of the model, the bars' spacing,
+    move no nacelle position).
+    """
+    from pkdyn.dynamics.delta import has_delta_dynamics
+
+    if robot.family != "delta" or not has_delta_dynamics(robot):
+        return False
+    assert robot.platform_frame is not None
+    offset = robot.model.frames[robot.platform_frame].placement.translation
+    return bool(np.all(np.asarray(offset) == 0.0))
+
+
 def _family_sample(robot: Robot, model: ParameterModel, dp: np.ndarray) -> Robot:
     """The robot its family builder gives with the model's parameters moved by ``dp``."""
     params = family_values(robot, model, model.nominal + dp)
-    return with_placements(robot, placements(robot), built_placements(robot, params))
+    return with_placements(
+        robot, placements(robot), built_placements(robot, params), assemble=False
+    )
+
+
+class _Arrays:
+    """Clavel's four lengths as (n, 1) arrays: :func:`pkdyn.closed_form.delta.forward` on all."""
+
+    def __init__(self, values: dict[str, np.ndarray]) -> None:
+        for k, v in values.items():
+            setattr(self, k, v[:, None])
+
+
+def _delta_family_errors(
+    robot: Robot,
+    model: ParameterModel,
+    dp: np.ndarray,
+    readings: np.ndarray,
+    nominal: pin.SE3,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pose errors (n, 6) and which samples assemble (n,) of family samples of the Delta.
+
+    Per sample, the lengths ``ra, rb, la, lb`` of the family's parameters moved by ``dp`` and
+    the actuators at the readings with the samples' gains, Clavel's direct model; the nacelle
+    keeps the nominal orientation (a zero rotation error).
+    """
+    from pkdyn.closed_form.delta import forward
+    from pkdyn.precision.family_parameters import _resolved
+
+    p0 = _resolved(robot)
+    values = model.nominal[None, :] + dp
+    names = list(model.names)
+    lengths = {
+        k: values[:, names.index(k)] if k in names else np.full(len(dp), float(getattr(p0, k)))
+        for k in _DELTA_GEOMETRY
+    }
+    gains = np.array([model.gains(d) for d in dp]) if model.G.size else np.zeros((len(dp), 3))
+    qa = readings[None, :3] * (1.0 + gains[:, :3])
+    geometry: Any = _Arrays(lengths)
+    P, ok = forward(geometry, qa)
+    errors = np.zeros((len(dp), 6))
+    errors[:, :3] = P - np.asarray(nominal.translation)[None, :]
+    return errors, ok
