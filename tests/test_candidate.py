@@ -90,10 +90,11 @@ def test_universal_joints() -> None:
     # the bars' first axes are aligned with a frame axis and their second constant: in place
     rng = np.random.default_rng(4)
     builder = CandidateBuilder("delta", collision=True)
-    for _ in range(4):
+    for _ in range(2):
         p = _random_params("delta", rng, bar_joint="universal")
-        assert difference(builder.robot(p), _reference("delta", p)) == ""
-    assert builder.written >= 1
+        for _ in range(2):  # (the second time in place: its axes make the same skeleton)
+            assert difference(builder.robot(p), _reference("delta", p)) == ""
+    assert builder.written >= 2
 
 
 def test_joint_models_with_numbers_have_no_skeleton() -> None:
