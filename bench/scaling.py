@@ -139,9 +139,7 @@ def model_rows(path: str) -> list[Row]:
             traj.t[:1], traj.q[:1], traj.v[:1], traj.a[:1], robot.actuated_q, robot.actuated_v
         )
         setups.append(("inverse_dynamics", _cpu_ms(lambda: inverse_dynamics(robot, one))))
-    setups.append(
-        ("simulate", _cpu_ms(lambda: simulate(robot, 1e-3, 1e-3, integrator="euler")))
-    )
+    setups.append(("simulate", _cpu_ms(lambda: simulate(robot, 1e-3, 1e-3, integrator="euler"))))
     worst = max(t for _, t in setups)
     rows.append(
         (
