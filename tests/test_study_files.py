@@ -103,7 +103,7 @@ EVERY_DESIGN_FAILS = {
     "zero cycle time": (["--cycle-time", "0"], "cycle_time: must be > 0"),
     "negative step": (["--dt", "-0.001"], "dt: sample period must be > 0 s"),
     "step longer than a move": (["--dt", "0.2"], "dt: 0.2 s samples the"),
-    "NaN depth": (["--depth", "nan"], "depth: adept: expected a finite number"),
+    "NaN depth": (["--depth", "nan"], "--depth: is nan"),
     "NaN fixed parameter": (["--fix", "lb=nan"], "parameter 'lb': fixed at nan"),
     "infinite fixed parameter": (["--fix", "lb=inf"], "parameter 'lb': fixed at inf"),
     "parametrisation missing its variables": (
@@ -124,7 +124,7 @@ EVERY_DESIGN_FAILS = {
     "verify below 2": (["--verify", "1", "--require", "cylinder:D=0.1,H=0.1,z=-0.3"], "--verify"),
     "verify without requirement": (["--verify", "5"], "--verify: checks a required workspace"),
     "negative timeout": (["--timeout", "-1"], "--timeout: must be a number of seconds"),
-    "NaN timeout": (["--timeout", "nan"], "--timeout: must be a number of seconds"),
+    "NaN timeout": (["--timeout", "nan"], "--timeout: is nan"),
     "endless timeout": (["--timeout", "1e9"], "--timeout: must be a number of seconds"),
     "zero workers": (["--workers", "0"], "--workers: must be >= 1"),
 }

@@ -7,7 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, output_path, qa_argument, robot_command
+from pkdyn.cli._common import emit, integer, load, number, qa_argument, robot_command
+from pkdyn.cli._paths import output_option
 
 __all__ = ["register"]
 
@@ -43,7 +44,6 @@ def _cmd_accuracy(args: argparse.Namespace) -> None:
     )
     from pkdyn.precision.parameters import parameter_model
 
-    output_path("--plot", args.plot, figure=True)
     count("--top", args.top, 0)
     seed("--seed", args.seed)
     if args.plot and args.map is None:
@@ -146,7 +146,7 @@ def register(sub: Any) -> None:
     """Add this module's sub-commands to the ``pkdyn`` parser."""
     sp = robot_command(sub, "accuracy", "error budget: actuator resolution/backlash, tolerances")
     where = sp.add_mutually_exclusive_group(required=True)
-    where.add_argument("--pose", nargs="+", type=float, help="X Y Z [ROLL PITCH YAW] (m, rad)")
+    where.add_argument("--pose", nargs="+", type=number, help="X Y Z [ROLL PITCH YAW] (m, rad)")
     qa_argument(where)
     where.add_argument(
         "--map", choices=("xy", "xz", "yz"), help="map the position errors over a square grid"
@@ -154,7 +154,7 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--resolution",
         nargs="+",
-        type=float,
+        type=number,
         default=[0.0],
         metavar="R",
         help="actuator resolution, one or per actuator (rad or m)",
@@ -162,7 +162,7 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--backlash",
         nargs="+",
-        type=float,
+        type=number,
         default=[0.0],
         metavar="B",
         help="actuator backlash, one or per actuator (rad or m)",
@@ -170,7 +170,7 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--tolerance",
         nargs="+",
-        type=float,
+        type=number,
         default=[5e-5, 5e-4],
         metavar="T",
         help="geometric tolerance: LENGTH [ANGLE [GAIN]] (m, rad, -; default 5e-5 m, 5e-4 rad; "
@@ -183,18 +183,22 @@ def register(sub: Any) -> None:
         help="geometric parameters (default: family shortcuts when the family has them)",
     )
     sp.add_argument("--distribution", default="uniform", choices=("uniform", "normal"))
-    sp.add_argument("--samples", type=int, default=0, help="Monte Carlo robots (default 0: off)")
-    sp.add_argument("--seed", type=int, default=0)
-    sp.add_argument("--top", type=int, default=10, help="ranked tolerances shown (10)")
-    sp.add_argument("--center", nargs=3, type=float, metavar=("X", "Y", "Z"), help="map centre")
-    sp.add_argument("--extent", type=float, help="map half-width [m] (default 0.2 x size)")
-    sp.add_argument("--grid", type=int, default=15, help="map samples per side (15)")
+    sp.add_argument(
+        "--samples", type=integer, default=0, help="Monte Carlo robots (default 0: off)"
+    )
+    sp.add_argument("--seed", type=integer, default=0)
+    sp.add_argument("--top", type=integer, default=10, help="ranked tolerances shown (10)")
+    sp.add_argument("--center", nargs=3, type=number, metavar=("X", "Y", "Z"), help="map centre")
+    sp.add_argument("--extent", type=number, help="map half-width [m] (default 0.2 x size)")
+    sp.add_argument("--grid", type=integer, default=15, help="map samples per side (15)")
     sp.add_argument(
         "--field",
         default="actuator_worst",
         choices=("actuator_worst", "actuator_rms", "geometric_worst", "geometric_rms"),
         help="field plotted",
     )
-    sp.add_argument("--plot", help="save the map's plot (png, pdf, svg...)")
+    output_option(
+        sp, "--plot", figure=True, metavar="FILE", help="save the map's plot (png, pdf, svg...)"
+    )
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_accuracy)

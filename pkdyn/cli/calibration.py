@@ -7,7 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, output_path, robot_command
+from pkdyn.cli._common import emit, integer, load, number, robot_command
+from pkdyn.cli._paths import input_option, output_option
 
 __all__ = ["register"]
 
@@ -16,7 +17,6 @@ def _cmd_calibrate(args: argparse.Namespace) -> None:
     from pkdyn.calibration import calibrate, read_csv
     from pkdyn.calibration.writer import write_calibrated
 
-    output_path("-o", args.output)
     robot = load(args)
     m = read_csv(args.measurements, robot, args.implicit)
     res = calibrate(
@@ -29,9 +29,9 @@ def _cmd_calibrate(args: argparse.Namespace) -> None:
         gains=args.gains,
         seed=args.seed,
     )
-    write_calibrated(res, args.output)
+    write_calibrated(res, args.out)
     out = res.as_dict()
-    out["output"] = args.output
+    out["output"] = args.out
     field, unit, what = (
         ("joint_rms", "rad or m", "passive joint error RMS")
         if m.kind == "joints"
@@ -65,14 +65,15 @@ def _cmd_calibrate(args: argparse.Namespace) -> None:
         + ", ".join(f"{k} = {v:.3g}" for k, v in idx.items())
         + " (O4: noise amplification index)"
     )
-    lines.append(f"written: {args.output}")
+    lines.append(f"written: {args.out}")
     emit(args, out, "\n".join(lines))
 
 
 def register(sub: Any) -> None:
     """Add this module's sub-commands to the ``pkdyn`` parser."""
     sp = robot_command(sub, "calibrate", "geometric calibration from measured platform poses")
-    sp.add_argument(
+    input_option(
+        sp,
         "--measurements",
         required=True,
         metavar="FILE.csv",
@@ -80,7 +81,15 @@ def register(sub: Any) -> None:
         "(m, rad), or a group column with --implicit, or q_<joint> columns (encoders on "
         "passive joints: self-calibration from extra sensors)",
     )
-    sp.add_argument("-o", "--output", required=True, help="calibrated URDF to write")
+    output_option(
+        sp,
+        "-o",
+        "--out",
+        deprecated=("--output",),
+        required=True,
+        metavar="FILE.urdf",
+        help="calibrated URDF to write",
+    )
     sp.add_argument(
         "--model",
         default="auto",
@@ -92,12 +101,12 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--noise",
         nargs="+",
-        type=float,
+        type=number,
         metavar="SIGMA",
         help="measurement noise: position [m] [orientation [rad]] (default: estimated)",
     )
     sp.add_argument(
-        "--holdout", type=float, default=0.2, help="fraction held out for validation (0.2)"
+        "--holdout", type=number, default=0.2, help="fraction held out for validation (0.2)"
     )
     sp.add_argument("--robust", default="huber", choices=("huber", "cauchy", "none"))
     sp.add_argument(
@@ -105,6 +114,6 @@ def register(sub: Any) -> None:
         choices=("point", "plane"),
         help="self-calibration: the platform held on one unknown point / plane per group",
     )
-    sp.add_argument("--seed", type=int, default=0, help="seed of the hold-out split")
+    sp.add_argument("--seed", type=integer, default=0, help="seed of the hold-out split")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_calibrate)

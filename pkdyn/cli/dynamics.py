@@ -7,7 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, output_path, robot_command
+from pkdyn.cli._common import emit, integer, load, number, robot_command
+from pkdyn.cli._paths import input_option, output_option
 from pkdyn.exceptions import InvalidInputError, LimitsExceededError
 from pkdyn.inputs import non_negative
 
@@ -17,9 +18,6 @@ __all__ = ["register"]
 def _cmd_simulate(args: argparse.Namespace) -> None:
     from pkdyn.dynamics import simulate
 
-    output_path("--csv", args.csv)
-    output_path("--plot", args.plot, figure=True)
-    output_path("--html", args.html)
     robot = load(args, geometry=args.html is not None)
     res = simulate(robot, args.duration, args.dt, integrator=args.integrator, step=args.step)
     if args.csv:
@@ -134,9 +132,6 @@ def _cmd_size(args: argparse.Namespace) -> None:
     from pkdyn.dynamics.sizing import size, sizing_from_efforts
     from pkdyn.dynamics.trajectory import named_task, named_trajectory
 
-    output_path("--csv", args.csv)
-    output_path("--plot", args.plot, figure=True)
-    output_path("--operating-points", args.operating_points, figure=True)
     catalog = None
     if args.catalog:  # read (and refused) before any work
         from pkdyn.dynamics.motors import load_catalog
@@ -236,41 +231,54 @@ def _cmd_size(args: argparse.Namespace) -> None:
 def register(sub: Any) -> None:
     """Add ``simulate`` and ``size`` to the ``pkdyn`` parser."""
     sp = robot_command(sub, "simulate", "passive constrained dynamics under gravity")
-    sp.add_argument("--duration", type=float, default=1.0, help="simulated time [s]")
-    sp.add_argument("--dt", type=float, default=1e-3, help="output time step [s]")
+    sp.add_argument("--duration", type=number, default=1.0, help="simulated time [s]")
+    sp.add_argument("--dt", type=number, default=1e-3, help="output time step [s]")
     sp.add_argument("--integrator", choices=("dopri5", "rk4", "euler"), default="dopri5")
-    sp.add_argument("--step", type=float, default=None, help="integration step [s] (default: --dt)")
     sp.add_argument(
+        "--step", type=number, default=None, help="integration step [s] (default: --dt)"
+    )
+    output_option(
+        sp,
         "--csv",
         metavar="FILE",
         help="write the time series (t, qa_, qa_dot_, tau_, energies, closure_residual)",
     )
-    sp.add_argument("--plot", metavar="FILE.png", help="plot actuators, energies, closures vs time")
-    sp.add_argument("--html", metavar="FILE", help="save a meshcat animation (static HTML)")
+    output_option(
+        sp,
+        "--plot",
+        figure=True,
+        metavar="FILE.png",
+        help="plot actuators, energies, closures vs time",
+    )
+    output_option(sp, "--html", metavar="FILE", help="save a meshcat animation (static HTML)")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_simulate)
     sp = robot_command(sub, "size", "actuator efforts, speeds and powers along a trajectory")
-    sp.add_argument(
+    input_option(
+        sp,
         "--trajectory",
+        or_name=True,
         default="adept",
         metavar="NAME|FILE.csv",
         help="adept, sine, p2p, or a CSV file: a column t [s] and qa_<actuator> columns "
         "(actuator space) or the controlled pose components among x y z roll pitch yaw",
     )
-    sp.add_argument("--payload", type=float, default=0.0, help="payload mass [kg]")
+    sp.add_argument("--payload", type=number, default=0.0, help="payload mass [kg]")
     sp.add_argument(
         "--cycle-time",
-        type=float,
+        type=number,
         default=None,
         help="adept: cycle time; sine: period; p2p: move duration [s]",
     )
-    sp.add_argument("--cycles", type=int, default=1, help="number of cycles (adept, sine)")
+    sp.add_argument("--cycles", type=integer, default=1, help="number of cycles (adept, sine)")
     sp.add_argument("--profile", choices=("quintic", "jerk"), default="quintic")
-    sp.add_argument("--dt", type=float, default=1e-3, help="sample period [s]")
-    sp.add_argument(
-        "--csv", metavar="FILE", help="write the time series (t, qa_, qa_dot_, tau_, energy)"
+    sp.add_argument("--dt", type=number, default=1e-3, help="sample period [s]")
+    output_option(
+        sp, "--csv", metavar="FILE", help="write the time series (t, qa_, qa_dot_, tau_, energy)"
     )
-    sp.add_argument("--plot", metavar="FILE.png", help="plot effort, speed, power vs time")
+    output_option(
+        sp, "--plot", figure=True, metavar="FILE.png", help="plot effort, speed, power vs time"
+    )
     sp.add_argument(
         "--no-passive",
         action="store_true",
@@ -282,21 +290,31 @@ def register(sub: Any) -> None:
         help="traverse the trajectory's path as fast as the torque and speed limits allow "
         "(toppra); --cycle-time / --dt then set the path's sampling (default 1 s / 1 ms)",
     )
-    sp.add_argument(
+    input_option(
+        sp,
         "--catalog",
+        or_name=True,
         metavar="FILE",
         help="motor (and gearbox) catalog, YAML or CSV, or 'example': select motors",
     )
-    sp.add_argument("--gearboxes", metavar="FILE", help="gearbox catalog (YAML, CSV, 'example')")
+    input_option(
+        sp,
+        "--gearboxes",
+        or_name=True,
+        metavar="FILE",
+        help="gearbox catalog (YAML, CSV, 'example')",
+    )
     sp.add_argument(
         "--criterion",
         choices=("rated_torque", "mass", "price"),
         default="rated_torque",
         help="ranking of the feasible motor x gearbox pairs (smallest first)",
     )
-    sp.add_argument("--show", type=int, default=5, help="pairs listed per actuator")
-    sp.add_argument(
+    sp.add_argument("--show", type=integer, default=5, help="pairs listed per actuator")
+    output_option(
+        sp,
         "--operating-points",
+        figure=True,
         metavar="FILE.png",
         help="plot the chosen motors' operating points over their envelopes (with --catalog)",
     )

@@ -18,13 +18,14 @@ from pkdyn.cli._common import (
     fmt,
     gains_of,
     load,
-    output_path,
+    number,
     params,
     posed_command,
     qa_argument,
     robot_command,
     units,
 )
+from pkdyn.cli._paths import output_option
 from pkdyn.exceptions import OutputError, PkdynError
 from pkdyn.model.description import CouplingSpec
 from pkdyn.model.robot import PLATFORM_HINT
@@ -135,7 +136,6 @@ def _passive_text(passive: dict[str, Any]) -> str:
 def _cmd_urdf(args: argparse.Namespace) -> None:
     from pkdyn import library
 
-    output_path("-o", args.output)
     overrides = params(args.param)
     if args.robot in library.FAMILIES:
         from pkdyn.model.families import export_urdf
@@ -156,14 +156,14 @@ def _cmd_urdf(args: argparse.Namespace) -> None:
                 "robots and URDF files (use 'pkdyn mjcf' for a MuJoCo model)"
             )
         del pkdyn
-    if args.output:
+    if args.out:
         from pkdyn.files import atomic_write
 
         try:
-            with atomic_write(args.output) as fh:
+            with atomic_write(args.out) as fh:
                 fh.write(text)
         except OSError as err:
-            raise OutputError(args.output, err.strerror or str(err)) from None
+            raise OutputError(args.out, err.strerror or str(err)) from None
     else:
         sys.stdout.write(text)
 
@@ -273,7 +273,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_info)
     sp = robot_command(sub, "urdf", "write the description")
-    sp.add_argument("-o", "--output", help="output file (default: stdout)")
+    output_option(sp, "-o", "--out", deprecated=("--output",), help="output file (default: stdout)")
     sp.set_defaults(func=_cmd_urdf)
     sp = robot_command(
         sub, "forward-geometry", "direct geometric model (pkdyn.forward_geometry)", ("fk",)
@@ -285,7 +285,7 @@ def register(sub: Any) -> None:
         sub, "inverse-geometry", "inverse geometric model (pkdyn.inverse_geometry)", ("ik",)
     )
     sp.add_argument(
-        "--pose", nargs="+", type=float, required=True, help="X Y Z [ROLL PITCH YAW] (m, rad)"
+        "--pose", nargs="+", type=number, required=True, help="X Y Z [ROLL PITCH YAW] (m, rad)"
     )
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_ik)
@@ -304,7 +304,7 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--wrench",
         nargs=6,
-        type=float,
+        type=number,
         default=[0.0] * 6,
         metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
     )

@@ -7,7 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, output_path, robot_command
+from pkdyn.cli._common import emit, load, number, robot_command
+from pkdyn.cli._paths import input_option, output_option
 
 __all__ = ["register"]
 
@@ -25,8 +26,6 @@ def _cmd_identify(args: argparse.Namespace) -> None:
     from pkdyn.identification import identify, read_measurements
     from pkdyn.identification.filtering import derivatives
 
-    output_path("-o", args.output)
-    output_path("--csv", args.csv)
     if args.csv and not args.predict:
         raise InvalidInputError("--csv", "needs --predict (the motion to predict)")
     robot = load(args)
@@ -58,9 +57,9 @@ def _cmd_identify(args: argparse.Namespace) -> None:
             _write_predicted(args.csv, other.t, names, tau)
             pred["csv"] = args.csv
         payload["prediction"] = pred
-    res.write_urdf(args.output)
-    payload["output"] = args.output
-    text.append(f"identified description written to {args.output}")
+    res.write_urdf(args.out)
+    payload["output"] = args.out
+    text.append(f"identified description written to {args.out}")
     emit(args, payload, "\n".join(text))
 
 
@@ -69,15 +68,22 @@ def register(sub: Any) -> None:
     sp = robot_command(
         sub, "identify", "identify masses, inertias, friction, rotor inertias from a motion"
     )
-    sp.add_argument(
+    input_option(
+        sp,
         "--data",
         required=True,
         metavar="FILE.csv",
         help="measured motion: columns t, qa_<actuator>, optional qa_dot_*, qa_ddot_*, "
         "and tau_<actuator> (joint-side efforts)",
     )
-    sp.add_argument(
-        "-o", "--output", required=True, metavar="FILE.urdf", help="identified description"
+    output_option(
+        sp,
+        "-o",
+        "--out",
+        deprecated=("--output",),
+        required=True,
+        metavar="FILE.urdf",
+        help="identified description",
     )
     sp.add_argument(
         "--parameters",
@@ -88,15 +94,15 @@ def register(sub: Any) -> None:
     )
     sp.add_argument(
         "--cutoff",
-        type=float,
+        type=number,
         default=None,
         metavar="HZ",
         help="cut-off of the zero-phase position filter when rates are not given "
         "(default 5%% of the sampling rate)",
     )
-    sp.add_argument("--predict", metavar="OTHER.csv", help="another motion to predict")
-    sp.add_argument(
-        "--csv", metavar="PREDICTED.csv", help="write t and tau_<actuator> of --predict"
+    input_option(sp, "--predict", metavar="OTHER.csv", help="another motion to predict")
+    output_option(
+        sp, "--csv", metavar="PREDICTED.csv", help="write t and tau_<actuator> of --predict"
     )
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_identify)

@@ -7,7 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import configuration, emit, load, output_path, posed_command
+from pkdyn.cli._common import configuration, emit, integer, load, number, posed_command
+from pkdyn.cli._paths import output_option
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["register"]
@@ -17,7 +18,7 @@ def _options(sp: argparse.ArgumentParser) -> None:
     sp.add_argument(
         "--actuator-stiffness",
         nargs="+",
-        type=float,
+        type=number,
         metavar="K",
         help="joint-side actuator stiffness, one or one per actuator [N m/rad or N/m] "
         "(default: the description's <pkdyn:stiffness>)",
@@ -32,7 +33,7 @@ def _options(sp: argparse.ArgumentParser) -> None:
     sp.add_argument(
         "--point",
         nargs=3,
-        type=float,
+        type=number,
         metavar=("X", "Y", "Z"),
         help="reference point in the platform frame [m] (default: its origin)",
     )
@@ -87,7 +88,6 @@ def _cmd_stiffness(args: argparse.Namespace) -> None:
 def _cmd_modes(args: argparse.Namespace) -> None:
     from pkdyn.precision.modes import modes
 
-    output_path("--html", args.html)
     if args.count is not None and args.count < 1:
         raise InvalidInputError("--count", f"{args.count}: give 1 or more")
     robot, em, q = _elastic(args)
@@ -120,7 +120,7 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--wrench",
         nargs="+",
-        type=float,
+        type=number,
         metavar="F",
         help="tool wrench: fx fy fz mx my mz [N, N m] (world axes, moment about the point) or "
         "the task components; its deflection is reported",
@@ -133,8 +133,8 @@ def register(sub: Any) -> None:
     sp.set_defaults(func=_cmd_stiffness)
     sp = posed_command(sub, "modes", "natural frequencies and mode shapes at a configuration")
     _options(sp)
-    sp.add_argument("--count", type=int, default=None, help="report the lowest COUNT modes")
+    sp.add_argument("--count", type=integer, default=None, help="report the lowest COUNT modes")
     sp.add_argument("--gravity", action="store_true", help="about the equilibrium under gravity")
-    sp.add_argument("--html", metavar="FILE", help="write an animation of a mode (meshcat HTML)")
-    sp.add_argument("--mode", type=int, default=1, help="mode to animate, 1 = lowest (--html)")
+    output_option(sp, "--html", metavar="FILE", help="write an animation of a mode (meshcat HTML)")
+    sp.add_argument("--mode", type=integer, default=1, help="mode to animate, 1 = lowest (--html)")
     sp.set_defaults(func=_cmd_modes)

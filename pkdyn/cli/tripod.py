@@ -11,7 +11,8 @@ import argparse
 import json
 from typing import Any
 
-from pkdyn.cli._common import Parser, add_param_option, output_path, params
+from pkdyn.cli._common import Parser, add_param_option, integer, number, params
+from pkdyn.cli._paths import output_option
 from pkdyn.exceptions import InvalidInputError, PkdynError
 
 __all__ = ["register"]
@@ -53,8 +54,6 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
     from pkdyn.tripod.machining import MachiningPlan
     from pkdyn.tripod.scenario import WalkPlan
 
-    output_path("--plot", args.plot, figure=True)
-    output_path("--html", args.html)
     overrides = params(args.param)
     if args.branches is not None:
         overrides["branches"] = args.branches
@@ -108,7 +107,7 @@ def register(sub: Any) -> None:
     add_param_option(sc)
     sc.add_argument(
         "--branches",
-        type=int,
+        type=integer,
         choices=(3, 4),
         help="3: the tripod (default); 4: the four-branch walker (redundancy while swinging)",
     )
@@ -118,34 +117,36 @@ def register(sub: Any) -> None:
         default="norm",
         help="the walker's redundant actuation in PP: least norm (default) or least largest force",
     )
-    sc.add_argument("--cycles", type=int, default=2, help="walking cycles (default 2)")
+    sc.add_argument("--cycles", type=integer, default=2, help="walking cycles (default 2)")
     sc.add_argument(
         "--step",
         nargs=2,
-        type=float,
+        type=number,
         default=[0.10, 0.0],
         metavar=("DX", "DY"),
         help="foot displacement per cycle [m] (default 0.10 0)",
     )
-    sc.add_argument("--lift", type=float, default=0.03, help="foot lift [m] (default 0.03)")
+    sc.add_argument("--lift", type=number, default=0.03, help="foot lift [m] (default 0.03)")
     sc.add_argument(
-        "--tilt", type=float, default=0.10, help="nacelle tilt at swing end [rad] (default 0.1)"
+        "--tilt", type=number, default=0.10, help="nacelle tilt at swing end [rad] (default 0.1)"
     )
-    sc.add_argument("--swing-time", type=float, default=2.5, help="[s] (default 2.5)")
-    sc.add_argument("--reconfiguration-time", type=float, default=1.5, help="[s] (default 1.5)")
-    sc.add_argument("--dt", type=float, default=0.05, help="sample period [s] (default 0.05)")
+    sc.add_argument("--swing-time", type=number, default=2.5, help="[s] (default 2.5)")
+    sc.add_argument("--reconfiguration-time", type=number, default=1.5, help="[s] (default 1.5)")
+    sc.add_argument("--dt", type=number, default=0.05, help="sample period [s] (default 0.05)")
     sc.add_argument("--no-machining", action="store_true", help="walk only")
     sc.add_argument(
         "--surface-radius",
-        type=float,
+        type=number,
         default=float("inf"),
         metavar="R",
         help="walk across a cylindrical support of radius R [m] (default: a plane)",
     )
     sc.add_argument(
-        "--stride", type=int, default=1, help="singularity margin every N samples (default 1)"
+        "--stride", type=integer, default=1, help="singularity margin every N samples (default 1)"
     )
     sc.add_argument("--json", action="store_true")
-    sc.add_argument("--plot", metavar="FILE", help="save the summary figure (png, pdf, svg)")
-    sc.add_argument("--html", metavar="FILE", help="save a meshcat animation (static HTML)")
+    output_option(
+        sc, "--plot", figure=True, metavar="FILE", help="save the summary figure (png, pdf, svg)"
+    )
+    output_option(sc, "--html", metavar="FILE", help="save a meshcat animation (static HTML)")
     sc.set_defaults(func=_cmd_scenario)

@@ -10,11 +10,13 @@ from typing import Any
 from pkdyn.cli._common import (
     configuration,
     emit,
+    integer,
     load,
-    output_path,
+    number,
     posed_command,
     robot_command,
 )
+from pkdyn.cli._paths import output_option
 
 __all__ = ["register"]
 
@@ -199,7 +201,6 @@ def _text(out: dict[str, Any]) -> str:
 
 
 def _cmd_workspace(args: argparse.Namespace) -> None:
-    output_path("--plot", args.plot, figure=True)
     robot = load(args, geometry=True)
     if args.clavel:
         _cmd_clavel(args, robot)
@@ -212,14 +213,14 @@ def _cmd_workspace(args: argparse.Namespace) -> None:
 def register(sub: Any) -> None:
     """Add this module's sub-commands to the ``pkdyn`` parser."""
     sp = posed_command(sub, "collisions", "minimum distances between legs, platform and base")
-    sp.add_argument("--margin", type=float, default=0.0, help="safety margin [m]")
+    sp.add_argument("--margin", type=number, default=0.0, help="safety margin [m]")
     sp.add_argument(
         "--pair",
         action="append",
         metavar="A,B",
         help="check only this pair of geometry or link names (repeatable)",
     )
-    sp.add_argument("--top", type=int, default=10, help="pairs listed in the text output")
+    sp.add_argument("--top", type=integer, default=10, help="pairs listed in the text output")
     sp.set_defaults(func=_cmd_collisions)
     sp = robot_command(sub, "workspace", "workspace: translation, orientation, dextrous; Clavel")
     sp.add_argument(
@@ -228,19 +229,19 @@ def register(sub: Any) -> None:
         help="Delta: Clavel's closed-form figures (seed 000, 1.4) beside the numeric ones",
     )
     sp.add_argument(
-        "--gamma-max", type=float, default=math.radians(40.0), help="Clavel's limit 1 [rad]"
+        "--gamma-max", type=number, default=math.radians(40.0), help="Clavel's limit 1 [rad]"
     )
     sp.add_argument(
-        "--ab-min", type=float, default=math.radians(30.0), help="Clavel's (alpha+beta)_min [rad]"
+        "--ab-min", type=number, default=math.radians(30.0), help="Clavel's (alpha+beta)_min [rad]"
     )
-    sp.add_argument("--rays", type=int, default=72, help="Clavel: directions sampled")
+    sp.add_argument("--rays", type=integer, default=72, help="Clavel: directions sampled")
     sp.add_argument(
         "--kind", choices=("translation", "orientation", "dextrous"), default="translation"
     )
     sp.add_argument(
         "--rpy",
         nargs=3,
-        type=float,
+        type=number,
         default=[0.0, 0.0, 0.0],
         metavar=("R", "P", "Y"),
         help="platform orientation (translation) or reference orientation (orientation) [rad]",
@@ -248,12 +249,12 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--bounds",
         nargs=6,
-        type=float,
+        type=number,
         metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
         help="sampled box [m]",
     )
-    sp.add_argument("--step", type=float, help="grid spacing [m]")
-    sp.add_argument("--samples", type=int, default=41, help="samples per axis (no --step)")
+    sp.add_argument("--step", type=number, help="grid spacing [m]")
+    sp.add_argument("--samples", type=integer, default=41, help="samples per axis (no --step)")
     sp.add_argument(
         "--limits",
         nargs="*",
@@ -261,12 +262,12 @@ def register(sub: Any) -> None:
         choices=("stroke", "joint", "interference"),
         help="limits checked besides reach",
     )
-    sp.add_argument("--margin", type=float, default=0.0, help="interference safety distance [m]")
+    sp.add_argument("--margin", type=number, default=0.0, help="interference safety distance [m]")
     sp.add_argument("--method", choices=("auto", "closed", "numeric"), default="auto")
     sp.add_argument(
         "--center",
         nargs=3,
-        type=float,
+        type=number,
         metavar=("X", "Y", "Z"),
         help="orientation: fixed point C [m]",
     )
@@ -276,16 +277,16 @@ def register(sub: Any) -> None:
         ("--x2", (0.0, 0.0, 1.0), "second rotation axis"),
     ):
         sp.add_argument(
-            flag, nargs=3, type=float, default=list(default), help=f"orientation: {what}"
+            flag, nargs=3, type=number, default=list(default), help=f"orientation: {what}"
         )
-    sp.add_argument("--n1", type=int, default=180, help="orientation: theta1 samples")
-    sp.add_argument("--n2", type=int, default=360, help="orientation: theta2 samples")
+    sp.add_argument("--n1", type=integer, default=180, help="orientation: theta1 samples")
+    sp.add_argument("--n2", type=integer, default=360, help="orientation: theta2 samples")
     sp.add_argument(
         "--mel",
         action="store_true",
         help="orientation: Merlet's MEL study (strokes; + joints; + interference)",
     )
     sp.add_argument("--joint-limits", action="store_true", help="dextrous: base joint limits")
-    sp.add_argument("--plot", help="save a figure (png, pdf, svg)")
+    output_option(sp, "--plot", figure=True, metavar="FILE", help="save a figure (png, pdf, svg)")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_workspace)

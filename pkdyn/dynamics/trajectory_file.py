@@ -34,17 +34,21 @@ __all__ = ["TASK_COLUMNS", "read_task_csv"]
 TASK_COLUMNS = ("x", "y", "z", "roll", "pitch", "yaw")
 """The task-space columns, in pose order."""
 
+MAX_BYTES = 256_000_000
+"""Largest trajectory file read [bytes] (a FIFO or a device is refused before it is opened)."""
+
 
 def _table(path: Path) -> tuple[list[str], np.ndarray]:
     """Header and (N, k) numbers of a CSV file, each cell checked."""
+    import io
+
+    from pkdyn.files import read_text
+
     name = str(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            rows = list(csv.reader(fh))
-    except FileNotFoundError:
-        raise InvalidInputError("trajectory", f"'{name}': no such file") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise InvalidInputError("trajectory", f"'{name}': cannot be read ({err})") from None
+    text = read_text(
+        path, MAX_BYTES, lambda msg: InvalidInputError("trajectory", f"'{name}' {msg}")
+    )
+    rows = list(csv.reader(io.StringIO(text.lstrip("\ufeff"), newline="")))
     rows = [r for r in rows if any(c.strip() for c in r)]
     if len(rows) < 4:
         raise InvalidInputError(

@@ -59,19 +59,9 @@ MIN_STEP = 1e-9
 
 def _check_file(p: Path, src: str) -> None:
     """Refuse a missing file, a directory, a FIFO or a device, or a file too large, unopened."""
-    import stat
+    from pkdyn.files import input_file
 
-    try:
-        st = p.stat()
-    except OSError as err:
-        raise InvalidInputError(src, f"cannot be read ({err.strerror or err})") from None
-    if not stat.S_ISREG(st.st_mode):
-        kind = "a directory" if stat.S_ISDIR(st.st_mode) else "a FIFO, device or socket"
-        raise InvalidInputError(src, f"cannot be read: {kind}, not a regular file")
-    if st.st_size > MAX_BYTES:
-        raise InvalidInputError(
-            src, f"is {st.st_size / 1e6:.3g} MB, more than the {MAX_BYTES / 1e6:.3g} MB accepted"
-        )
+    input_file(p, MAX_BYTES, lambda msg: InvalidInputError(src, msg))
 
 
 def _read_table(path: Path) -> tuple[list[str], np.ndarray]:
