@@ -297,13 +297,24 @@ def _non_finite(value: Any, where: str = "") -> str | None:
     return None
 
 
-def emit(args: argparse.Namespace, payload: dict[str, Any], text: str) -> None:
+def emit(args: argparse.Namespace, payload: Any, text: str | None = None) -> None:
     """Print the result: one JSON object with ``--json`` (never NaN or Infinity), else text.
+
+    Args:
+        args: The parsed command line (``--json``).
+        payload: A :class:`pkdyn.results.Result` (its ``to_json()`` and ``table()`` are
+            printed), or a JSON-ready dict with its ``text``.
+        text: The text (for a dict payload).
 
     Raises:
         InvalidInputError: A result is not finite (an input overflowed the computation).
 
     """
+    from pkdyn.results import Result
+
+    if isinstance(payload, Result):
+        text = payload.table() if text is None else text
+        payload = payload.to_json()
     bad = _non_finite(payload)
     if bad is not None:
         raise InvalidInputError(
@@ -314,7 +325,7 @@ def emit(args: argparse.Namespace, payload: dict[str, Any], text: str) -> None:
 
         print(json.dumps(payload, allow_nan=False))
     else:
-        print(text)
+        print(text or "")
 
 
 def units(robot: Any) -> list[tuple[str, str, str]]:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 from functools import partial
 
 import numpy as np
@@ -28,6 +29,8 @@ from pkdyn.exceptions import (
 from pkdyn.model.families import FAMILIES, Family
 from pkdyn.model.pose import as_finite, pose_from_vector, pose_to_vector
 from pkdyn.model.robot import PLATFORM_HINT, Robot
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity, vector
 from solvers import FramePoseTask, SolveResult, solve_lm
 
 __all__ = [
@@ -51,7 +54,7 @@ components."""
 
 
 @dataclass
-class GeometryResult:
+class GeometryResult(Result):
     """A solved geometric model.
 
     Attributes:
@@ -61,6 +64,10 @@ class GeometryResult:
         residual: Largest closure residual component after the solve [m or rad] (in the
             contact frames the solver works in: the world residual rotated).
         iterations: Solver iterations.
+        actuators: Actuator names, in order (for the table).
+        units: Unit of each actuator coordinate (``rad`` or ``m``).
+        readings: What the actuators' encoders read (``qa / <pkdyn:encoder gain>``), when a
+            gain is not 1 (a calibrated robot), else ``None``.
 
     """
 
@@ -69,6 +76,46 @@ class GeometryResult:
     placement: pin.SE3 | None
     residual: float
     iterations: int
+    actuators: tuple[str, ...] = ()
+    units: tuple[str, ...] = ()
+    readings: np.ndarray | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """``position`` [m], ``rpy`` [rad] (``None`` without a platform), ``qa``, ``q``,
+        ``actuators``, ``residual`` [m or rad], and ``readings`` on a calibrated robot."""
+        out: dict[str, Any] = {
+            "position": None if self.placement is None else self.position,
+            "rpy": None if self.placement is None else self.rpy,
+            "q": self.q,
+            "qa": self.qa,
+            "actuators": list(self.actuators),
+            "residual": self.residual,
+        }
+        if self.readings is not None:
+            out["readings"] = self.readings
+        return jsonable(out)
+
+    def table(self) -> str:
+        """The platform pose (when there is a platform) and each actuator coordinate."""
+        lines = []
+        if self.placement is not None:
+            lines.append(f"position: {vector(self.position, 'm', roundoff=1e-12)}")
+            lines.append(f"rpy:      {vector(self.rpy, 'rad', roundoff=1e-12)}")
+        names = self.actuators or tuple(f"actuator {k + 1}" for k in range(self.qa.size))
+        units = self.units or ("",) * self.qa.size
+        width = max((len(n) for n in names), default=0)
+        lines += [
+            f"{n + ':':<{width + 1}} {quantity(v, u, 9)}"
+            for n, v, u in zip(names, self.qa, units, strict=True)
+        ]
+        if self.readings is not None:
+            lines.append("encoder readings (joint coordinate / <pkdyn:encoder gain>):")
+            lines += [
+                f"  {n + ':':<{width + 1}} {quantity(v, u, 9)}"
+                for n, v, u in zip(names, self.readings, units, strict=True)
+            ]
+        lines.append(f"closure residual: {self.residual:.2g} (m or rad)")
+        return "\n".join(lines)
 
     @property
     def position(self) -> np.ndarray:
@@ -121,7 +168,18 @@ def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryRes
     placement = None
     if robot.platform_frame is not None:
         placement = pin.SE3(pin.updateFramePlacement(robot.model, robot.data, robot.platform_frame))
-    return GeometryResult(sol.q, sol.q[robot.actuated_q], placement, closure_error, sol.iterations)
+    qa = sol.q[robot.actuated_q]
+    gains = np.array([float(a.encoder_gain) for a in robot.actuators])
+    return GeometryResult(
+        sol.q,
+        qa,
+        placement,
+        closure_error,
+        sol.iterations,
+        actuators=tuple(robot.actuator_names),
+        units=tuple("m" if p else "rad" for p in robot.actuator_prismatic),
+        readings=qa / gains if gains.size and np.any(gains != 1.0) else None,
+    )
 
 
 def _family_of(robot: Robot) -> Family | None:
