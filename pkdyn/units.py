@@ -4,7 +4,9 @@
 ``quantity(2.0e4, "N m/rad")`` -> ``"20 kN m/rad"``; ``quantity(float("nan"), "m")`` -> ``"n/a"``.
 SI prefixes from pico to tera on the first unit symbol (``um`` is written with a plain ``u`` so that
 terminals and CSV files need no Unicode); units that take no prefix (``rad``, ``deg``, ``%``, ``s``
-above one second, dimensionless ``""``) keep their value in plain notation.
+above one second, dimensionless ``""``, and a first symbol with a power: ``m^2``, ``m^3``, whose
+prefix would scale by that power) keep their value in plain notation, without an exponent below
+1e15 (``130``, not ``1.3e+02``).
 
 :func:`vector` writes a short vector with one unit and shared precision (``[0.1, -0.2, 0] m``),
 never a negative zero.
@@ -36,6 +38,9 @@ _NO_PREFIX = {"", "rad", "deg", "%", "rad/s", "rad/s^2", "Hz"}
 
 def _plain(value: float, digits: int) -> str:
     text = f"{value:.{digits}g}"
+    if "e+" in text and abs(value) < 1e15:  # 130 with 2 digits: "130", not "1.3e+02"
+        mag = math.floor(math.log10(abs(value)))
+        text = f"{round(value, digits - 1 - mag):.0f}"
     if text in ("-0", "-0.0"):
         text = "0"
     return text
@@ -58,12 +63,24 @@ def quantity(value: float, unit: str = "", digits: int = 4) -> str:
         return "n/a"
     if math.isinf(v):
         return f"{'-' if v < 0 else ''}inf{(' ' + unit) if unit else ''}"
-    if unit in _NO_PREFIX or v == 0.0 or (unit == "s" and abs(v) >= 1.0):
+    first = unit.split(" ")[0].split("/")[0]
+    powered = "^" in first  # m^2, m^3: a prefix would scale by its power
+    if first.startswith("kg"):  # the kilogram has its prefix: grams
+        return _kilograms(v, unit, digits)
+    if unit in _NO_PREFIX or powered or v == 0.0 or (unit == "s" and abs(v) >= 1.0):
         return f"{_plain(v, digits)}{(' ' + unit) if unit else ''}"
     mag = abs(v)
     round_up = 1.0 - 0.5 * 10.0 ** (1 - digits)  # 999.99999 m shown as 1 km, not 1000 m
     scale, prefix = next(((s, p) for s, p in _PREFIXES if mag >= s * round_up), _PREFIXES[-1])
     return f"{_plain(v / scale, digits)} {prefix}{unit}"
+
+
+def _kilograms(v: float, unit: str, digits: int) -> str:
+    """A mass unit (``kg``, ``kg m^2``): prefixed on the gram, ``g`` below 1 kg, plain above."""
+    rest = unit[2:]
+    if v == 0.0 or abs(v) >= 1.0 or rest.startswith("^"):
+        return f"{_plain(v, digits)} {unit}"
+    return quantity(v * 1e3, "g" + rest, digits)
 
 
 def vector(values: Iterable[float], unit: str = "", digits: int = 4, roundoff: float = 0.0) -> str:
