@@ -15,19 +15,50 @@ from pkdyn.inputs import non_negative
 __all__ = ["register"]
 
 
+def _initial_velocity(robot: Any, v0: list[float] | None) -> np.ndarray | None:
+    """``--v0``: the actuators' rates (n_a values) or every velocity coordinate (nv values)."""
+    if v0 is None:
+        return None
+    from pkdyn.inputs import vector
+
+    n_a, nv = len(robot.actuators), robot.nv
+    v = vector("--v0", v0, (n_a, nv), "rad/s or m/s")
+    if v.size == nv and nv != n_a:
+        return v
+    from pkdyn.analysis.kinematics import joint_velocities
+
+    return joint_velocities(robot, robot.q_home, v)  # passive rates from the closures
+
+
+def _constant_effort(robot: Any, torque: list[float] | None) -> Any:
+    """``--torque``: constant joint-side efforts of the actuators [N m or N]."""
+    if torque is None:
+        return None
+    from pkdyn.inputs import vector
+
+    tau = vector("--torque", torque, len(robot.actuators), "N m or N")
+    return lambda t, q, v: tau
+
+
 def _cmd_simulate(args: argparse.Namespace) -> None:
     from pkdyn.dynamics import simulate
 
     robot = load(args, geometry=args.html is not None)
-    res = simulate(robot, args.duration, args.dt, integrator=args.integrator, step=args.step)
+    res = simulate(
+        robot,
+        args.duration,
+        args.dt,
+        v0=_initial_velocity(robot, args.v0),
+        torque=_constant_effort(robot, args.torque),
+        integrator=args.integrator,
+        step=args.step,
+    )
     if args.csv:
         from pkdyn.dynamics.simulation_output import write_simulation_csv
 
         write_simulation_csv(robot, res, args.csv)
     if args.plot:
-        from pkdyn.plotting.dynamics import plot_simulation
-
-        plot_simulation(robot, res, path=args.plot)
+        res.plot(args.plot)
     if args.html:
         from pkdyn.viewer import Scene
 
@@ -37,26 +68,7 @@ def _cmd_simulate(args: argparse.Namespace) -> None:
             scene.save_html(args.html)
         finally:
             scene.close()
-    payload = {
-        "robot": robot.name,
-        "duration": float(res.t[-1] - res.t[0]),
-        "dt": args.dt,
-        "integrator": args.integrator,
-        "steps": int(res.t.size - 1),
-        "substeps": int(res.extras.get("substeps", res.t.size - 1)),
-        "max_closure_residual": float(np.max(res.closure_residual)),
-        "energy_drift_rel": res.energy_drift(),
-        "max_kinetic_energy": float(np.max(res.kinetic)),
-        "projections": int(res.projections),
-    }
-    text = (
-        f"{robot.name}: {payload['duration']:g} s passive under gravity, {payload['steps']} steps "
-        f"of {args.dt:g} s ({args.integrator}, {payload['substeps']} substeps)\n"
-        f"max closure residual: {payload['max_closure_residual']:.3g} m\n"
-        f"energy drift:         {payload['energy_drift_rel']:.3g} (relative to the largest "
-        f"kinetic energy, {payload['max_kinetic_energy']:.4g} J)"
-    )
-    emit(args, payload, text)
+    emit(args, res)
 
 
 def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -230,9 +242,30 @@ def _cmd_size(args: argparse.Namespace) -> None:
 
 def register(sub: Any) -> None:
     """Add ``simulate`` and ``size`` to the ``pkdyn`` parser."""
-    sp = robot_command(sub, "simulate", "passive constrained dynamics under gravity")
+    sp = robot_command(
+        sub,
+        "simulate",
+        "constrained dynamics under gravity, from rest or --v0, free or under a --torque",
+    )
     sp.add_argument("--duration", type=number, default=1.0, help="simulated time [s]")
     sp.add_argument("--dt", type=number, default=1e-3, help="output time step [s]")
+    sp.add_argument(
+        "--v0",
+        nargs="+",
+        type=number,
+        metavar="V",
+        help="initial velocity: the actuators' rates in actuator order (rad/s or m/s; the "
+        "passive joints follow the closures) or every velocity coordinate (nv values); "
+        "default: at rest",
+    )
+    sp.add_argument(
+        "--torque",
+        nargs="+",
+        type=number,
+        metavar="T",
+        help="constant actuator efforts, joint side, in actuator order (N m or N); default: "
+        "free actuators",
+    )
     sp.add_argument("--integrator", choices=("dopri5", "rk4", "euler"), default="dopri5")
     sp.add_argument(
         "--step", type=number, default=None, help="integration step [s] (default: --dt)"
