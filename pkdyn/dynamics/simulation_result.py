@@ -143,7 +143,7 @@ class SimulationResult(ForwardResult, Result):
                 )
             lines.append(columns(rows))
         lines += [
-            f"max closure residual: {quantity(float(np.max(self.closure_residual)), 'm')} (or rad)",
+            f"max closure residual: {float(np.max(self.closure_residual)):.2g} m or rad",
             f"kinetic energy: {quantity(float(self.kinetic[0]), 'J')} at the start, "
             f"{quantity(float(np.max(self.kinetic)), 'J')} at most; work of the efforts "
             f"{quantity(float(self.work[-1]), 'J')}",
