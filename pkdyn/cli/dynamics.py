@@ -192,44 +192,28 @@ def _cmd_size(args: argparse.Namespace) -> None:
             efforts=result.efforts,
         )
     if args.operating_points and selection is not None:
-        from pkdyn.plotting.motors import plot_operating_points
-
-        plot_operating_points(selection, path=args.operating_points)
+        selection.plot(args.operating_points)
     if args.csv:
         result.write_csv(args.csv)
     if args.plot:
-        from pkdyn.plotting.dynamics import plot_efforts
-
-        plot_efforts(result, path=args.plot)
-    head = (
-        f"{robot.name}: {result.trajectory}, {result.duration:.4g} s, payload {args.payload:g} kg"
-        + ("" if result.feasible else "  -- LIMITS EXCEEDED")
-    )
-    payload = result.as_json()
-    text = [head, result.table()]
+        result.plot(args.plot)
+    payload = result.to_json()
+    text = [result.table()]
     if args.no_passive:  # the same without the springs, dampers and friction
         bare = size(robot, traj, payload=args.payload, passive=False)
-        payload["without_passive"] = bare.as_json()
+        payload["without_passive"] = bare.to_json()
         what = "without" if robot.passive is not None else "(the robot has none) without"
         text = [
-            head,
             "with passive elements:",
             result.table(),
-            f"{what} passive elements:" + ("" if bare.feasible else "  -- LIMITS EXCEEDED"),
+            f"{what} passive elements:",
             bare.table(),
         ]
     if fast is not None:
-        payload["fastest"] = fast.as_json()
-        text.insert(
-            0,
-            f"fastest cycle: {fast.cycle_time:.4g} s (toppra on {traj.t.size} samples; a torque "
-            f"or speed limit active on {100 * fast.active_fraction:.0f} % of them; inverse "
-            f"dynamics along it: {100 * float(np.max(fast.torque_utilisation)):.3f} % of the "
-            f"torque limit, {100 * float(np.max(fast.speed_utilisation)):.3f} % of the speed "
-            "limit)",
-        )
+        payload["fastest"] = fast.to_json()
+        text.insert(0, fast.table())
     if selection is not None:
-        payload["selection"] = selection.as_json()
+        payload["selection"] = selection.to_json()
         text.append(selection.table(show=args.show))
     emit(args, payload, "\n".join(text))
     if not result.feasible:  # the report stands; the exit status and one line say no
