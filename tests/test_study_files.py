@@ -235,7 +235,7 @@ def test_a_resumed_study_takes_only_its_own_rows(tmp_path):
     assert "4 rows that do not belong to this study dropped" in msg
     assert "2 with an index outside 0..5" in msg and "1 with design values" in msg
     assert "1 with an index given again" in msg and "2 kept" in msg
-    assert len(res.table) == 6 and list(res.table.index) == list(range(6))
+    assert len(res.designs) == 6 and list(res.designs.index) == list(range(6))
     assert out.read_text() == fresh.read_text()
 
 
@@ -248,7 +248,7 @@ def test_a_complete_table_with_foreign_rows_is_not_reused(tmp_path):
     out.write_text("\n".join([*lines, lines[-1].replace(lines[-1].split(",")[0], "9", 1)]) + "\n")
     with pytest.warns(UserWarning, match="index outside 0..3"):
         res = run_study(s, out, workers=1)
-    assert len(res.table) == 4 and out.read_text() == good
+    assert len(res.designs) == 4 and out.read_text() == good
 
 
 def test_errors_cross_process_boundaries():

@@ -153,7 +153,9 @@ def _clavel_chart(args: argparse.Namespace) -> None:
     result = _run(study, args)
     if args.json:
         print(
-            json.dumps({"rows": [_plain(result.table.record(i)) for i in range(len(result.table))]})
+            json.dumps(
+                {"rows": [_plain(result.designs.record(i)) for i in range(len(result.designs))]}
+            )
         )
     else:
         print(clavel_chart_text(result))
@@ -218,15 +220,12 @@ def _cmd_design(args: argparse.Namespace) -> None:
     if args.verify:
         result.verify(args.verify)
     if args.plot:
-        from pkdyn.plotting.design import plot_pareto
-
-        plot_pareto(result, path=args.plot)
+        result.plot(args.plot)
     if args.urdf:
         result.write_urdf(args.urdf)
-    if args.json:
-        print(json.dumps(result.as_json()))
-    else:
-        print(result.summary())
+    from pkdyn.cli._common import emit
+
+    emit(args, result)
 
 
 def _study_files(out: str) -> list[str]:

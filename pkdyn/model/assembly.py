@@ -14,8 +14,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 from functools import partial
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -81,8 +81,13 @@ class GeometryResult(Result):
     readings: np.ndarray | None = None
 
     def to_json(self) -> dict[str, Any]:
-        """``position`` [m], ``rpy`` [rad] (``None`` without a platform), ``qa``, ``q``,
-        ``actuators``, ``residual`` [m or rad], and ``readings`` on a calibrated robot."""
+        """The result as JSON values.
+
+        Returns:
+            ``position`` [m], ``rpy`` [rad] (``None`` without a platform), ``qa``, ``q``,
+            ``actuators``, ``residual`` [m or rad], and ``readings`` on a calibrated robot.
+
+        """
         out: dict[str, Any] = {
             "position": None if self.placement is None else self.position,
             "rpy": None if self.placement is None else self.rpy,
