@@ -8,44 +8,13 @@ JSON entry adds ``redundancy`` (the objective's values, baseline and chosen path
 from __future__ import annotations
 
 import argparse
-import json
 from typing import Any
 
-from pkdyn.cli._common import Parser, add_param_option, integer, number, params
+from pkdyn.cli._common import Parser, add_param_option, emit, integer, number, params
 from pkdyn.cli._paths import output_option
 from pkdyn.exceptions import InvalidInputError, PkdynError
 
 __all__ = ["register"]
-
-
-def _objective(ph: dict[str, Any]) -> str:
-    red = ph.get("redundancy")
-    if red is None:
-        return ""
-    return f"  {1e3 * red['objective_baseline']:.1f} -> {1e3 * red['objective']:.1f}"
-
-
-def _text(out: dict[str, Any]) -> str:
-    walker = out["summary"].get("branches", 3) != 3
-    lines = [
-        f"{'#':>2} {'phase':<15} {'mode':<4} {'br':>2} {'closure':>9} {'force N':>8} "
-        f"{'legs mm':>8} {'stroke mm':>9} {'1/cond':>7}"
-        + ("  objective mm (baseline -> chosen)" if walker else "")
-    ]
-    for k, ph in enumerate(out["phases"]):
-        lines.append(
-            f"{k:>2} {ph['name']:<15} {ph['mode']:<4} {ph['branch'] or '-':>2} "
-            f"{ph['max_closure_residual']:>9.1e} {ph['max_actuator_force']:>8.1f} "
-            f"{1e3 * ph['min_leg_distance']:>8.1f} {1e3 * ph['min_stroke_margin']:>9.1f} "
-            f"{ph['min_singularity_distance']:>7.3f}" + _objective(ph)
-        )
-    s = out["summary"]
-    lines.append(
-        f"{s['duration']:.1f} s, {s['samples']} samples; locks held to "
-        f"{s['max_lock_drift']:.1e} rad, feet to {s['max_support_drift']:.1e} m; "
-        + ("no violation" if not s["violations"] else "; ".join(s["violations"]))
-    )
-    return "\n".join(lines)
 
 
 def _cmd_scenario(args: argparse.Namespace) -> None:
@@ -72,18 +41,12 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
         surface_radius=args.surface_radius,
     )
     report = run_scenario(robot, plan, stride=args.stride, allocation=args.allocation)
-    out = report.as_json()
     if args.plot:
-        from pkdyn.plotting.tripod import plot_scenario
-
-        plot_scenario(report, path=args.plot)
+        report.plot(args.plot)
     if args.html:
         _html(robot, report, args.html)
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print(_text(out))
-    bad = out["summary"]["violations"]
+    emit(args, report)
+    bad = report.violations()
     if bad:
         more = f" (and {len(bad) - 1} more, see the report)" if len(bad) > 1 else ""
         raise PkdynError(f"the scenario is not feasible: {bad[0]}{more}")
