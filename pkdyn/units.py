@@ -64,7 +64,7 @@ def quantity(value: float, unit: str = "", digits: int = 4) -> str:
     if math.isinf(v):
         return f"{'-' if v < 0 else ''}inf{(' ' + unit) if unit else ''}"
     first = unit.split(" ")[0].split("/")[0]
-    powered = "^" in first  # m^2, m^3: a prefix would scale by its power
+    powered = "^" in first or " or " in unit  # m^2: scaled by its power; "rad or m": which?
     if first.startswith("kg"):  # the kilogram has its prefix: grams
         return _kilograms(v, unit, digits)
     if unit in _NO_PREFIX or powered or v == 0.0 or (unit == "s" and abs(v) >= 1.0):

@@ -30,12 +30,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import AssemblyError, InvalidInputError
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity
 from solvers import numerics, solve_lm
 
 __all__ = ["MAX_SAMPLES", "ActuationMap", "MapSamples", "actuation_map"]
@@ -48,7 +51,7 @@ RANK_RTOL = numerics.RTOL
 
 
 @dataclass(frozen=True)
-class MapSamples:
+class MapSamples(Result):
     """The maps at ``N`` samples (``n`` actuators, ``n`` joint coordinates).
 
     Attributes:
@@ -76,6 +79,25 @@ class MapSamples:
     cond: np.ndarray
     singular: np.ndarray
     reached: np.ndarray
+
+    def to_json(self) -> dict[str, Any]:
+        """Every array as nested lists (``None`` where not finite), SI units."""
+        return jsonable(dict(self.__dict__))
+
+    def table(self) -> str:
+        """Samples reached and singular, the range of the condition number and of the maps."""
+        ok = np.asarray(self.reached) & ~np.asarray(self.singular)
+        cond = np.asarray(self.cond)[ok]
+        rng = (
+            f"cond(J) {quantity(float(cond.min()))} .. {quantity(float(cond.max()))}"
+            if cond.size
+            else "cond(J): none"
+        )
+        return (
+            f"{int(np.count_nonzero(self.reached))} of {len(self.reached)} samples assembled, "
+            f"{int(np.count_nonzero(self.singular))} singular; {rng} (dimensionless); "
+            f"{self.qa.shape[1] if self.qa.ndim == 2 else 0} actuators, coordinates in rad or m"
+        )
 
     def actuator_torques(self, tau_joint: Sequence[float] | np.ndarray) -> np.ndarray:
         """Actuator efforts that deliver joint-space efforts, by virtual work.
