@@ -85,19 +85,27 @@ class MapSamples(Result):
         return jsonable(dict(self.__dict__))
 
     def table(self) -> str:
-        """Samples reached and singular, the range of the condition number and of the maps."""
+        """Samples reached and singular; the range of each coordinate and of ``cond(J)``."""
         ok = np.asarray(self.reached) & ~np.asarray(self.singular)
         cond = np.asarray(self.cond)[ok]
-        rng = (
-            f"cond(J) {quantity(float(cond.min()))} .. {quantity(float(cond.max()))}"
-            if cond.size
-            else "cond(J): none"
-        )
-        return (
+        lines = [
             f"{int(np.count_nonzero(self.reached))} of {len(self.reached)} samples assembled, "
-            f"{int(np.count_nonzero(self.singular))} singular; {rng} (dimensionless); "
-            f"{self.qa.shape[1] if self.qa.ndim == 2 else 0} actuators, coordinates in rad or m"
-        )
+            f"{int(np.count_nonzero(self.singular))} singular; "
+            + (
+                f"cond(J) {quantity(float(cond.min()))} .. {quantity(float(cond.max()))} "
+                "(dimensionless)"
+                if cond.size
+                else "cond(J): none"
+            )
+        ]
+        for what, X in (("actuator", self.qa), ("joint", self.qj)):
+            X = np.asarray(X)[np.asarray(self.reached)]
+            for k in range(X.shape[1] if X.ndim == 2 and X.size else 0):
+                lines.append(
+                    f"  {what} coordinate {k + 1}: {quantity(float(X[:, k].min()), 'rad or m')} "
+                    f".. {quantity(float(X[:, k].max()), 'rad or m')}"
+                )
+        return "\n".join(lines)
 
     def actuator_torques(self, tau_joint: Sequence[float] | np.ndarray) -> np.ndarray:
         """Actuator efforts that deliver joint-space efforts, by virtual work.
