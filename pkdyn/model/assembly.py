@@ -187,6 +187,18 @@ def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryRes
     )
 
 
+def _miss(robot: Robot, q: np.ndarray, target: pin.SE3) -> str:
+    """How far the platform at ``q`` is from ``target``: distance, and angle if controlled."""
+    pin.framesForwardKinematics(robot.model, robot.data, q)
+    assert robot.platform_frame is not None
+    at = robot.data.oMf[robot.platform_frame]
+    text = quantity(float(np.linalg.norm(at.translation - target.translation)), "m")
+    if np.any(np.asarray(robot.task_rows) >= 3):
+        angle = float(np.linalg.norm(pin.log3(target.rotation.T @ at.rotation)))
+        text += f" and {quantity(angle, 'rad')}"
+    return text
+
+
 def _family_of(robot: Robot) -> Family | None:
     """The library family of a robot (:attr:`Robot.family`), or ``None``."""
     name = robot.family
@@ -425,13 +437,12 @@ def inverse_geometry(
     if not sol.converged:
         pos, rpy = pose_to_vector(target)
         name, res = _worst(robot, sol.q)
-        pose_err = float(np.max(np.abs(sol.residual[cs.nc :])))
         raise UnreachablePoseError(
             name,
             res,
-            f"{robot.name}: pose {np.array2string(pos, precision=4)} m, rpy "
-            f"{np.array2string(rpy, precision=4)} rad is out of reach (closest configuration "
-            f"misses it by {pose_err:.3g}; closure '{name}' residual {res:.3g})",
+            f"{robot.name}: pose {vector(pos, 'm')}, rpy {vector(rpy, 'rad')} is out of reach "
+            f"(the closest configuration misses it by {_miss(robot, sol.q, target)}; closure "
+            f"'{name}' residual {res:.3g} m or rad)",
         )
     if partial is None:  # (a partial pose gives no uncontrolled component)
         _check_uncontrolled(robot, pose, target, sol.q)
