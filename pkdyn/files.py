@@ -237,6 +237,7 @@ def input_file(
     path: str | os.PathLike[str],
     limit: int,
     error: Callable[[str], PkdynError],
+    record: bool = True,
 ) -> os.stat_result:
     """Check an input before it is opened: a regular file of at most ``limit`` bytes.
 
@@ -248,6 +249,8 @@ def input_file(
         path: The file (a symbolic link to a regular file is followed).
         limit: Largest size accepted [bytes].
         error: Makes the exception to raise from a message (the caller's type, naming the file).
+        record: Remember it as an input of the command (``False``: a command's own earlier
+            output read back to resume, which it rewrites).
 
     Returns:
         Its ``os.stat`` result.
@@ -265,7 +268,7 @@ def input_file(
     if st.st_size > limit:
         raise error(f"is {st.st_size / 1e6:.3g} MB, more than the {limit / 1e6:.3g} MB accepted")
     reads = _READS.get()
-    if reads is not None:
+    if reads is not None and record:
         reads[(st.st_dev, st.st_ino)] = os.fspath(path)
     return st
 
@@ -274,6 +277,7 @@ def read_bytes(
     path: str | os.PathLike[str],
     limit: int,
     error: Callable[[str], PkdynError],
+    record: bool = True,
 ) -> bytes:
     """The bytes of an input file, refused unless a regular file of at most ``limit`` bytes.
 
@@ -281,12 +285,13 @@ def read_bytes(
         path: The file (a symbolic link to a regular file is followed).
         limit: Largest size accepted [bytes].
         error: Makes the exception to raise from a message (the caller's type, naming the file).
+        record: As for :func:`input_file`.
 
     Raises:
         PkdynError: From ``error`` (:func:`input_file`), or the file grew past ``limit``.
 
     """
-    input_file(path, limit, error)
+    input_file(path, limit, error, record)
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
         with os.fdopen(fd, "rb") as fh:
@@ -305,6 +310,7 @@ def read_text(
     limit: int,
     error: Callable[[str], PkdynError],
     encoding: str = "utf-8",
+    record: bool = True,
 ) -> str:
     """The text of an input file, refused unless a regular file of at most ``limit`` bytes.
 
@@ -316,13 +322,14 @@ def read_text(
         limit: Largest size accepted [bytes].
         error: Makes the exception to raise from a message (the caller's type, naming the file).
         encoding: Text encoding.
+        record: As for :func:`input_file`.
 
     Raises:
         PkdynError: From ``error``: missing, unreadable, not a regular file, too large, or not
             text in ``encoding``.
 
     """
-    data = read_bytes(path, limit, error)
+    data = read_bytes(path, limit, error, record)
     try:
         return data.decode(encoding)
     except UnicodeDecodeError as err:
