@@ -55,6 +55,14 @@ def _cmd_urdf(args: argparse.Namespace) -> None:
                 f"{args.robot} is an {fmt.upper()} description; 'pkdyn urdf' writes library "
                 "robots and URDF files (use 'pkdyn mjcf' for a MuJoCo model)"
             )
+        from pkdyn.model.formats.urdfplus_export import pkdyn_description
+
+        text = pkdyn_description(  # URDF+ loops, couplings, actuation in pkdyn's elements
+            text,
+            args.robot,
+            ignore_elements=tuple(args.ignore_element or ()),
+            repair_inertias=args.repair_inertias,
+        )
         del pkdyn
     if args.out:
         from pkdyn.files import atomic_write

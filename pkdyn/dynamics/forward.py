@@ -114,11 +114,10 @@ def simulate(
     v = np.zeros(robot.nv) if v0 is None else as_finite("v0", v0, robot.nv)
     fd = ForwardDynamics(
         robot.model,
-        list(robot.constraint_models),
+        robot.constraints,
         actuation(robot),
         passive=_passive(robot, passive, viscous, coulomb),
         integrator=integrator,
-        couplings=robot.closure_set.couplings,
     )
     if torque is not None and motor_torque is not None:
         raise InvalidInputError("motor_torque", "give either torque or motor_torque, not both")
@@ -154,7 +153,7 @@ def _check_work(robot: Robot, duration: float, dt: float, record_every: int) -> 
             f"{duration:g} s in steps of {dt:g} s is {steps:.3g} steps (hours of computing at "
             f"~50 us each); at most {MAX_STEPS:.0e}: use a longer dt or a shorter duration",
         )
-    nc = robot.closure_set.nc
+    nc = robot.constraints.n
     per_sample = 8 * (robot.nq + 3 * robot.nv + len(robot.actuators) + nc + 8)
     need = (steps / record_every + 2) * per_sample
     if need > MAX_RECORD_BYTES:

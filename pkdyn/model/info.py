@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.model.description import CouplingSpec
+from pkdyn.model.description import CouplingSpec, LinearCouplingSpec
 from pkdyn.model.robot import Robot
 from pkdyn.results import Result, jsonable
 from pkdyn.units import quantity
@@ -89,7 +89,15 @@ def _actuator(a: dict[str, Any]) -> str:
 
 
 def _coupling(c: dict[str, Any]) -> str:
-    """``name (joint from source, coefficients ...)``, constant term first."""
+    """``name (joint from source, coefficients ...)`` or ``name (a1 joint1 + a2 joint2 = b)``."""
+    if "terms" in c:  # a linear coupling over any number of joints
+        parts = []
+        for t in c["terms"]:
+            a = float(t["coefficient"])
+            scale = "" if abs(a) == 1.0 else f"{abs(a):.6g} "
+            parts.append(f"{'-' if a < 0 else '+'} {scale}{t['joint']}")
+        lhs = " ".join(parts).removeprefix("+ ")
+        return f"{c['name']} ({lhs} = {c['offset']:.6g})"
     coef = " ".join(f"{v:.6g}" for v in c["coefficients"])
     if c["source"] is None:
         return f"{c['name']} ({c['joint']} locked at {c['joint_ref'] + c['coefficients'][0]:.6g})"
@@ -131,7 +139,14 @@ def _limit(value: float) -> float | None:
     return float(value) if np.isfinite(value) else None
 
 
-def _coupling_json(c: CouplingSpec) -> dict[str, Any]:
+def _coupling_json(c: CouplingSpec | LinearCouplingSpec) -> dict[str, Any]:
+    """A coupling's fields: ``terms`` and ``offset`` of a linear one, the polynomial's else."""
+    if isinstance(c, LinearCouplingSpec):
+        return {
+            "name": c.name,
+            "terms": [{"joint": j, "coefficient": a} for j, a in c.terms],
+            "offset": c.offset,
+        }
     return {
         "name": c.name,
         "joint": c.joint,

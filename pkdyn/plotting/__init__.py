@@ -14,7 +14,13 @@ from pkdyn.plotting.design import plot_pareto
 from pkdyn.plotting.dynamics import plot_efforts, plot_simulation
 from pkdyn.plotting.maps import plot_conditioning_map
 from pkdyn.plotting.motors import plot_operating_points
-from pkdyn.plotting.precision import plot_modes, plot_precision_map
+from pkdyn.plotting.precision import (
+    plot_grid_map,
+    plot_modes,
+    plot_monte_carlo,
+    plot_precision_map,
+    plot_ranking,
+)
 from pkdyn.plotting.tripod import plot_comparison, plot_scenario
 from pkdyn.plotting.workspace import (
     plot_clavel,
@@ -29,12 +35,15 @@ __all__ = [
     "plot_comparison",
     "plot_conditioning_map",
     "plot_efforts",
+    "plot_grid_map",
     "plot_mel_study",
     "plot_modes",
+    "plot_monte_carlo",
     "plot_operating_points",
     "plot_orientation_workspace",
     "plot_pareto",
     "plot_precision_map",
+    "plot_ranking",
     "plot_scenario",
     "plot_simulation",
     "plot_translation_workspace",
