@@ -42,7 +42,7 @@ def _one_line(capsys, argv, code=1):
 
 CLI_NUMBERS = {
     "workspace step zero": (["workspace", "delta", "--step", "0"], "step: must be > 0"),
-    "workspace step nan": (["workspace", "delta", "--step", "nan"], "step: must be a finite"),
+    "workspace step nan": (["workspace", "delta", "--step", "nan"], "--step: is nan"),
     "workspace samples one": (["workspace", "delta", "--samples", "1"], "samples"),
     "parameter overflow": (["info", "delta", "--param", "la=1e308"], "parameter 'la'"),
     "parameter nan": (["info", "delta", "--param", "la=nan"], "parameter 'la'"),

@@ -134,12 +134,12 @@ A = ["accuracy", "delta", "--qa", "0", "0", "0"]
 K = ["--actuator-stiffness", "1e4"]
 NUMBERS = {
     "stiffness negative": ([*S, "--actuator-stiffness", "-1"], "must be > 0"),
-    "stiffness nan": ([*S, "--actuator-stiffness", "nan"], "must be > 0"),
+    "stiffness nan": ([*S, "--actuator-stiffness", "nan"], "--actuator-stiffness: is nan"),
     "stiffness zero": ([*S, "--actuator-stiffness", "0"], "must be > 0"),
     "stiffness 1e308": ([*S, "--actuator-stiffness", "1e308"], "beyond any plausible"),
     "stiffness undescribed": (S, "no stiffness described for actuator 'motor1'"),
     "material unknown": ([*S, *K, "--material", "unobtanium"], "unknown material"),
-    "wrench nan": ([*S, *K, "--wrench", "nan", "0", "0"], "component 1 is nan"),
+    "wrench nan": ([*S, *K, "--wrench", "nan", "0", "0"], "--wrench: value #1 is nan"),
     "wrench inf": ([*S, *K, "--wrench", "inf", "0", "0"], "component 1 is inf"),
     "wrench 1e308": ([*S, *K, "--wrench", "1e308", *"00000"], "beyond any plausible force"),
     "point nan": ([*S, *K, "--point", "nan", "0", "0"], "point: value #1 is nan"),

@@ -10,7 +10,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from pkdyn.cli._common import emit, load, output_path, robot_command
+from pkdyn.cli._common import emit, integer, load, number, robot_command
+from pkdyn.cli._paths import input_option, output_option
 
 __all__ = ["register"]
 
@@ -18,8 +19,6 @@ __all__ = ["register"]
 def _cmd_calibrate(args: argparse.Namespace) -> None:
     from pkdyn.calibration import calibrate, read_csv
 
-    output_path("-o", args.output)
-    output_path("--plot", args.plot, figure=True)
     robot = load(args)
     m = read_csv(args.measurements, robot, args.implicit)
     validation = (
@@ -42,15 +41,15 @@ def _cmd_calibrate(args: argparse.Namespace) -> None:
         residual_limit=args.residual_limit,
         correction_limit=args.correction_limit,
     )
-    res.write_urdf(args.output)
+    res.write_urdf(args.out)
     if args.plot:
         res.plot(args.plot)
     out: dict[str, Any] = res.to_json()
-    out["output"] = args.output
+    out["output"] = args.out
     if args.plot:
         out["plot"] = args.plot
     what = "written" if res.trusted else "written although not trusted (--accept)"
-    emit(args, out, res.table() + f"\n{what}: {args.output}")
+    emit(args, out, res.table() + f"\n{what}: {args.out}")
 
 
 def register(sub: Any) -> None:
@@ -58,7 +57,8 @@ def register(sub: Any) -> None:
     from pkdyn.calibration.trust import CORRECTION_LIMIT, RESIDUAL_LIMIT
 
     sp = robot_command(sub, "calibrate", "geometric calibration from measured platform poses")
-    sp.add_argument(
+    input_option(
+        sp,
         "--measurements",
         required=True,
         metavar="FILE",
@@ -66,7 +66,15 @@ def register(sub: Any) -> None:
         "x y z [rx ry rz] (m, rad), or a group column with --implicit, or q_<joint> columns "
         "(encoders on passive joints: self-calibration from extra sensors)",
     )
-    sp.add_argument("-o", "--output", required=True, help="calibrated URDF to write")
+    output_option(
+        sp,
+        "-o",
+        "--out",
+        deprecated=("--output",),
+        required=True,
+        metavar="FILE.urdf",
+        help="calibrated URDF to write",
+    )
     sp.add_argument(
         "--model",
         default="auto",
@@ -78,14 +86,15 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--noise",
         nargs="+",
-        type=float,
+        type=number,
         metavar="SIGMA",
         help="measurement noise: position [m] [orientation [rad]] (default: estimated)",
     )
     sp.add_argument(
-        "--holdout", type=float, default=0.2, help="fraction held out for validation (0.2)"
+        "--holdout", type=number, default=0.2, help="fraction held out for validation (0.2)"
     )
-    sp.add_argument(
+    input_option(
+        sp,
         "--validation",
         metavar="FILE",
         help="held-out measurements (same columns) instead of --holdout: errors before/after",
@@ -99,21 +108,21 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--tolerance",
         nargs="+",
-        type=float,
+        type=number,
         metavar="T",
         help="tolerances the corrections are judged against: length [m] angle [rad] [gain] "
         "(default: 0.5 %% of the robot's size, 0.5 deg, 0.5 %%)",
     )
     sp.add_argument(
         "--residual-limit",
-        type=float,
+        type=number,
         default=RESIDUAL_LIMIT,
         metavar="K",
         help=f"largest residual RMS trusted, times the stated noise ({RESIDUAL_LIMIT:g})",
     )
     sp.add_argument(
         "--correction-limit",
-        type=float,
+        type=number,
         default=CORRECTION_LIMIT,
         metavar="K",
         help=f"largest correction trusted, times its tolerance ({CORRECTION_LIMIT:g})",
@@ -123,9 +132,13 @@ def register(sub: Any) -> None:
         action="store_true",
         help="write the calibrated URDF even when the calibration is not trusted",
     )
-    sp.add_argument(
-        "--plot", metavar="FILE.png", help="residuals per pose and axis, before and after"
+    output_option(
+        sp,
+        "--plot",
+        figure=True,
+        metavar="FILE.png",
+        help="residuals per pose and axis, before and after",
     )
-    sp.add_argument("--seed", type=int, default=0, help="seed of the hold-out split")
+    sp.add_argument("--seed", type=integer, default=0, help="seed of the hold-out split")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_calibrate)

@@ -12,7 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, output_path, robot_command
+from pkdyn.cli._common import emit, load, number, robot_command
+from pkdyn.cli._paths import input_option, output_option
 
 __all__ = ["register"]
 
@@ -24,9 +25,6 @@ def _cmd_identify(args: argparse.Namespace) -> None:
     from pkdyn.tables import write_table
     from pkdyn.units import quantity
 
-    output_path("-o", args.output)
-    output_path("--csv", args.csv)
-    output_path("--plot", args.plot, figure=True)
     if args.csv and not args.predict:
         raise InvalidInputError("--csv", "needs --predict (the motion to predict)")
     robot = load(args)
@@ -62,12 +60,12 @@ def _cmd_identify(args: argparse.Namespace) -> None:
             write_table(args.csv, cols, np.column_stack([other.t, tau]))
             pred["csv"] = args.csv
         payload["prediction"] = pred
-    res.write_urdf(args.output)
+    res.write_urdf(args.out)
     if args.plot:
         res.plot(args.plot)
         payload["plot"] = args.plot
-    payload["output"] = args.output
-    text.append(f"identified description written to {args.output}")
+    payload["output"] = args.out
+    text.append(f"identified description written to {args.out}")
     emit(args, payload, "\n".join(text))
 
 
@@ -76,15 +74,22 @@ def register(sub: Any) -> None:
     sp = robot_command(
         sub, "identify", "identify masses, inertias, friction, rotor inertias from a motion"
     )
-    sp.add_argument(
+    input_option(
+        sp,
         "--data",
         required=True,
         metavar="FILE",
         help="measured motion (CSV or Parquet): columns t, qa_<actuator> (readings), optional "
         "qa_dot_*, qa_ddot_*, and tau_<actuator> (joint-side efforts)",
     )
-    sp.add_argument(
-        "-o", "--output", required=True, metavar="FILE.urdf", help="identified description"
+    output_option(
+        sp,
+        "-o",
+        "--out",
+        deprecated=("--output",),
+        required=True,
+        metavar="FILE.urdf",
+        help="identified description",
     )
     sp.add_argument(
         "--parameters",
@@ -95,18 +100,22 @@ def register(sub: Any) -> None:
     )
     sp.add_argument(
         "--cutoff",
-        type=float,
+        type=number,
         default=None,
         metavar="HZ",
         help="cut-off of the zero-phase position filter when rates are not given "
         "(default 5%% of the sampling rate)",
     )
-    sp.add_argument("--predict", metavar="OTHER", help="another motion to predict")
-    sp.add_argument(
-        "--csv", metavar="PREDICTED.csv", help="write t and tau_<actuator> of --predict"
+    input_option(sp, "--predict", metavar="OTHER.csv", help="another motion to predict")
+    output_option(
+        sp, "--csv", metavar="PREDICTED.csv", help="write t and tau_<actuator> of --predict"
     )
-    sp.add_argument(
-        "--plot", metavar="FILE.png", help="the fit per actuator: measured, predicted, residual"
+    output_option(
+        sp,
+        "--plot",
+        figure=True,
+        metavar="FILE.png",
+        help="the fit per actuator: measured, predicted, residual",
     )
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_identify)

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from pkdyn.cli._common import emit, load, output_path, robot_command
+from pkdyn.cli._common import emit, integer, load, number, robot_command
+from pkdyn.cli._paths import input_option, output_option
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["register"]
@@ -14,9 +15,6 @@ __all__ = ["register"]
 def _cmd_vibration(args: argparse.Namespace) -> None:
     from pkdyn.precision.vibration import vibration
 
-    output_path("--csv", args.csv)
-    output_path("--plot", args.plot, figure=True)
-    output_path("--html", args.html)
     if args.scale is not None and not args.scale > 0.0:
         raise InvalidInputError("--scale", f"must be > 0, got {args.scale:g}")
     if not args.slow > 0.0:
@@ -48,8 +46,9 @@ def _cmd_vibration(args: argparse.Namespace) -> None:
         "profile": args.profile,
     }
     trajectory = args.trajectory
-    result = vibration(robot, trajectory, shaper=args.shaper, shaper_modes=args.shaper_modes,
-                       **options)  # fmt: skip
+    result = vibration(
+        robot, trajectory, shaper=args.shaper, shaper_modes=args.shaper_modes, **options
+    )
     unshaped = None
     if args.shaper is not None:  # what shaping buys: the same motion unshaped
         unshaped = vibration(robot, trajectory, **options)
@@ -86,28 +85,30 @@ def register(sub: Any) -> None:
         "vibration",
         "how the tool deviates from its rigid motion along a motion, and settles after it",
     )
-    sp.add_argument(
+    input_option(
+        sp,
         "--trajectory",
+        or_name=True,
         default="adept",
         metavar="NAME|FILE.csv",
         help="adept, p2p, or a CSV file (a column t [s] and qa_<actuator> columns or the "
         "controlled pose components); from rest to rest",
     )
     sp.add_argument(
-        "--cycle-time", type=float, default=None, help="adept: cycle time; p2p: move duration [s]"
+        "--cycle-time", type=number, default=None, help="adept: cycle time; p2p: move duration [s]"
     )
-    sp.add_argument("--payload", type=float, default=0.0, help="payload at the tool [kg]")
+    sp.add_argument("--payload", type=number, default=0.0, help="payload at the tool [kg]")
     sp.add_argument(
         "--actuator-stiffness",
         nargs="+",
-        type=float,
+        type=number,
         metavar="K",
         help="servo stiffness, one or one per actuator [N m/rad or N/m] (default: the "
         "description's <pkdyn:stiffness>)",
     )
     sp.add_argument(
         "--damping-ratio",
-        type=float,
+        type=number,
         default=None,
         metavar="Z",
         help="damping ratio of the first mode at the middle pose: servo c = 2 Z k / omega_1, "
@@ -116,7 +117,7 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--actuator-damping",
         nargs="+",
-        type=float,
+        type=number,
         metavar="C",
         help="servo damping on the error rate, one or one per actuator [N m s/rad or N s/m] "
         "(default: from --damping-ratio)",
@@ -136,11 +137,11 @@ def register(sub: Any) -> None:
         "--rigid-links", action="store_true", help="ignore the links' described compliance"
     )
     sp.add_argument(
-        "--band", type=float, default=1e-4, help="settling band on the deviation [m] (1e-4)"
+        "--band", type=number, default=1e-4, help="settling band on the deviation [m] (1e-4)"
     )
     sp.add_argument(
         "--dwell",
-        type=float,
+        type=number,
         default=0.5,
         help="time after the motion within which the tool must settle [s] (0.5)",
     )
@@ -159,18 +160,18 @@ def register(sub: Any) -> None:
         "reported too)",
     )
     sp.add_argument(
-        "--shaper-modes", type=int, default=1, metavar="N", help="modes the shaper targets (1)"
+        "--shaper-modes", type=integer, default=1, metavar="N", help="modes the shaper targets (1)"
     )
     sp.add_argument(
         "--modes",
-        type=int,
+        type=integer,
         default=None,
         metavar="N",
         help="modes integrated, the lowest (default: up to 8 times the first frequency)",
     )
     sp.add_argument(
         "--poses",
-        type=int,
+        type=integer,
         default=None,
         metavar="N",
         help="poses along the motion where the modes are computed (modal method; 33, or 65 "
@@ -179,32 +180,38 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--point",
         nargs=3,
-        type=float,
+        type=number,
         metavar=("X", "Y", "Z"),
         help="tool point in the platform frame [m] (default: its origin)",
     )
     sp.add_argument("--profile", choices=("quintic", "jerk"), default="quintic")
-    sp.add_argument("--dt", type=float, default=1e-3, help="sample period of the motion [s]")
-    sp.add_argument(
+    sp.add_argument("--dt", type=number, default=1e-3, help="sample period of the motion [s]")
+    output_option(
+        sp,
         "--csv",
         metavar="FILE",
         help="write the time series (t, deviation_<c>, deviation_norm, deviation_from_rest)",
     )
-    sp.add_argument(
-        "--plot", metavar="FILE.png", help="plot the deviation against time with the band"
+    output_option(
+        sp,
+        "--plot",
+        figure=True,
+        metavar="FILE.png",
+        help="plot the deviation against time with the band",
     )
-    sp.add_argument(
+    output_option(
+        sp,
         "--html",
         metavar="FILE",
         help="save a meshcat animation, the deformation exaggerated (static HTML)",
     )
     sp.add_argument(
         "--scale",
-        type=float,
+        type=number,
         default=None,
         help="exaggeration of the deformation in --html (default: peak shown as 5 %% of the "
         "robot's size)",
     )
-    sp.add_argument("--slow", type=float, default=20.0, help="slow-motion factor of --html (20)")
+    sp.add_argument("--slow", type=number, default=20.0, help="slow-motion factor of --html (20)")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_vibration)

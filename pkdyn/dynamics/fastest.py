@@ -46,6 +46,8 @@ from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import JointTrajectory, TaskTrajectory, map_task_trajectory
 from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, deprecated_alias, jsonable
+from pkdyn.units import quantity
 
 __all__ = ["MAX_PATH_SAMPLES", "FastestResult", "fastest_trajectory", "joint_path"]
 
@@ -62,7 +64,7 @@ units]; the Seidel LP bounds its variables at 1e8."""
 
 
 @dataclass(frozen=True)
-class FastestResult:
+class FastestResult(Result):
     """The time-optimal motion along a path.
 
     Attributes:
@@ -179,17 +181,32 @@ class FastestResult:
         timed = TaskTrajectory(joint.t, task.pose, pose_d, pose_dd, name=traj.name)
         return joint, timed
 
-    def as_json(self) -> dict[str, Any]:
-        """JSON-ready summary."""
-        return {
-            "cycle_time": self.cycle_time,
-            "payload": self.payload,
-            "samples": int(self.trajectory.t.size),
-            "active_fraction": self.active_fraction,
-            "max_torque_utilisation": float(np.max(self.torque_utilisation)),
-            "max_speed_utilisation": float(np.max(self.speed_utilisation)),
-            "toppra_solves": self.iterations,
-        }
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready summary: cycle time [s], payload [kg], samples, use of the limits."""
+        return jsonable(
+            {
+                "cycle_time": self.cycle_time,
+                "payload": self.payload,
+                "samples": int(self.trajectory.t.size),
+                "active_fraction": self.active_fraction,
+                "max_torque_utilisation": float(np.max(self.torque_utilisation)),
+                "max_speed_utilisation": float(np.max(self.speed_utilisation)),
+                "toppra_solves": self.iterations,
+            }
+        )
+
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def table(self) -> str:
+        """The cycle time, how much of it runs on a limit, and the independent check."""
+        return (
+            f"fastest cycle: {quantity(self.cycle_time, 's')} (toppra on "
+            f"{self.trajectory.t.size} samples; a torque or speed limit active on "
+            f"{quantity(100 * self.active_fraction, '%', 3)} of them; inverse dynamics along "
+            f"it: {quantity(100 * float(np.max(self.torque_utilisation)), '%', 6)} of the "
+            f"torque limit, {quantity(100 * float(np.max(self.speed_utilisation)), '%', 6)} of "
+            "the speed limit)"
+        )
 
 
 def joint_path(

@@ -35,6 +35,9 @@ __all__ = ["TASK_COLUMNS", "read_task_csv"]
 TASK_COLUMNS = ("x", "y", "z", "roll", "pitch", "yaw")
 """The task-space columns, in pose order."""
 
+MAX_BYTES = 256_000_000
+"""Largest trajectory file read [bytes] (a FIFO or a device is refused before it is opened)."""
+
 
 def _rates(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Second-order finite-difference first and second derivatives of ``x`` (N, k)."""
