@@ -163,6 +163,43 @@ def test_family_placements_written_in_place_are_the_urdf_ones(name: str) -> None
             assert np.array_equal(a.homogeneous, b.homogeneous)
 
 
+@pytest.mark.parametrize(
+    ("name", "k", "material"),
+    [("gough_stewart", 2e6, None), ("delta", 2e4, "steel"), ("five_bar", 1e3, "aluminium")],
+)
+def test_batched_stiffness_is_the_per_configuration_one(
+    name: str, k: float, material: str | None
+) -> None:
+    from pkdyn.exceptions import PkdynError
+    from pkdyn.precision import elastic_model
+    from pkdyn.precision.batched import batchable, translational_batch
+    from pkdyn.precision.maps import translational
+
+    robot = pkdyn.load(name, geometry=material is not None)
+    em = elastic_model(robot, k, material=material)
+    assert batchable(em)
+    rng = np.random.default_rng(6)
+    home = robot.platform_placement(robot.q_home)
+    planar = len(robot.task_rows) < 6 and name == "five_bar"
+    Q = []
+    for _ in range(12):
+        step = rng.uniform(-0.02, 0.02, 3) * (np.array([1, 1, 0]) if planar else 1.0)
+        try:
+            Q.append(
+                pkdyn.inverse_geometry(robot, pin.SE3(home.rotation, home.translation + step)).q
+            )
+        except PkdynError:
+            continue
+    assert len(Q) >= 8
+    w = np.array([10.0, -5.0, 3.0, 0.1, 0.2, -0.1])
+    kb, db, nb, ob = translational_batch(em, np.array(Q), np.zeros(3), w)
+    assert ob.all()
+    for i, q in enumerate(Q):
+        kr, dr, nr = translational(em, q, np.zeros(3), w)
+        assert kb[i] == pytest.approx(kr, rel=1e-12) and db[i] == pytest.approx(dr, rel=1e-12)
+        assert nb[i] == nr
+
+
 def test_kept_elastic_models_give_the_same_stiffness() -> None:
     robot = pkdyn.load("gough_stewart")
     fresh = pkdyn.load("gough_stewart")

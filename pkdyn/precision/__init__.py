@@ -17,7 +17,8 @@
   ``[i_u, i_v]``) and the map result;
 - :mod:`~pkdyn.precision.vectorised`, :mod:`~pkdyn.precision.maps`: closed forms of the library
   Gough-Stewart and Delta, figures over many poses and maps over workspace slices (the design
-  metrics ``stiffness_min`` and ``f1_min`` use them).
+  metrics ``stiffness_min`` and ``f1_min`` use them); :mod:`~pkdyn.precision.batched`: the
+  general path's condensation over many configurations at once.
 - :mod:`~pkdyn.precision.placements` and the parameter models (:mod:`~pkdyn.precision.
   parameters`: placement parameters, family shortcuts, family parameters);
 - :mod:`~pkdyn.precision.perturbation`: robots with those errors, built exactly;

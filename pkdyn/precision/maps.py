@@ -37,6 +37,7 @@ from pkdyn.analysis.kinematics import NearSingularityWarning
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.precision.batched import batchable, translational_batch
 from pkdyn.precision.condensation import compliance, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.grid import (
@@ -299,6 +300,27 @@ def _general(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NearSingularityWarning)
         warnings.simplefilter("ignore", PrecisionWarning)
+        if batchable(em):  # the poses first, then the stiffness of all at once (batched)
+            found, Q = [], []
+            for i in progress_bar(range(N), "precision", "pose", progress, min_items=200):
+                q = reach(robot, pin.SE3(R[i], P[i]), (q_prev, robot.q_home), check_limits=False)
+                if q is not None:
+                    found.append(i)
+                    Q.append(q)
+                    q_prev = q
+            at = np.array(found, dtype=int)
+            reached[at] = True
+            kmin[at], defl[at], near[at], valid[at] = translational_batch(em, np.array(Q), point, w)
+            if frequency:
+                for i, q in zip(found, Q, strict=True):
+                    if not valid[i]:
+                        continue
+                    try:
+                        f1[i] = modes(em, q, point=point).f1
+                    except PkdynError:
+                        kmin[i] = defl[i] = np.nan
+                        near[i] = valid[i] = False
+            return PoseFigures(valid, kmin, defl, f1, "general", reached, near)
         for i in progress_bar(range(N), "precision", "pose", progress, min_items=200):
             q = reach(robot, pin.SE3(R[i], P[i]), (q_prev, robot.q_home), check_limits=False)
             if q is None:
