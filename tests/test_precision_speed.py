@@ -222,3 +222,59 @@ def test_kept_solvers_give_the_same_efforts_and_motions() -> None:
     a = simulate(robot, 0.02, 1e-3).q
     b = simulate(robot, 0.02, 1e-3).q
     assert np.array_equal(a, b)
+
+
+def test_monte_carlo_on_workers_draws_the_same_robots(tmp_path) -> None:
+    kw = dict(samples=130, seed=2, progress_bar=False)
+    for name, kind in (("gough_stewart", "shortcuts"), ("five_bar", "family")):
+        robot = pkdyn.load(name)
+        model = parameter_model(robot, kind)
+        one = monte_carlo_module.monte_carlo(robot, robot.q_home, model, 1e-5, **kw)
+        two = monte_carlo_module.monte_carlo(robot, robot.q_home, model, 1e-5, workers=2, **kw)
+        assert np.array_equal(one.errors, two.errors) and one.failed == two.failed
+    # a description file: rebuilt from its path in the workers
+    path = tmp_path / "planar.urdf"
+    path.write_text(FAMILIES["planar_3rrr"].build_urdf(FAMILIES["planar_3rrr"].params()))
+    robot = pkdyn.load(path)
+    assert robot.params is None
+    model = parameter_model(robot, "placements")
+    one = monte_carlo_module.monte_carlo(robot, robot.q_home, model, 1e-5, **kw)
+    two = monte_carlo_module.monte_carlo(robot, robot.q_home, model, 1e-5, workers=2, **kw)
+    assert np.array_equal(one.errors, two.errors)
+    # one the workers cannot rebuild as it is (changed after loading): refused, not wrong
+    robot.model.jointPlacements[1].translation += 1e-6
+    with pytest.raises(pkdyn.StudyError, match="one worker"):
+        monte_carlo_module.monte_carlo(robot, robot.q_home, model, 1e-5, workers=2, **kw)
+
+
+def test_maps_on_workers() -> None:
+    from pkdyn.precision import pose_figures
+
+    robot = pkdyn.load("gough_stewart")
+    home = robot.platform_placement(robot.q_home).translation
+    P = home + np.random.default_rng(1).uniform(-0.02, 0.02, (150, 3))
+    kw = dict(material="steel", method="general", progress=False)
+    one = pose_figures(robot, P, None, 2e6, **kw)
+    two = pose_figures(robot, P, None, 2e6, workers=2, **kw)
+    assert one.valid.all() and np.array_equal(one.valid, two.valid)
+    # (the second chunk starts its inverse geometric model from home: the same poses, solved
+    # to the assembly tolerance)
+    assert np.allclose(one.stiffness_min, two.stiffness_min, rtol=1e-9)
+
+
+def test_command_line_workers(capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    from pkdyn.cli import main
+
+    base = ["accuracy", "gough_stewart", "--pose", "0", "0", "0.6", "--samples", "80"]
+    base += ["--tolerance", "1e-5", "--json"]
+    assert main([*base, "--workers", "1"]) == 0
+    one = json.loads(capsys.readouterr().out)
+    assert main([*base, "--workers", "2"]) == 0
+    two = json.loads(capsys.readouterr().out)
+    assert one["monte_carlo"] == two["monte_carlo"]
+    assert main([*base, "--workers", "0"]) == 1
+    assert "--workers: must be >= 1" in capsys.readouterr().err
+    assert main([*base, "--timeout", "-1"]) == 1
+    assert "--timeout" in capsys.readouterr().err

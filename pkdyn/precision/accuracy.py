@@ -141,6 +141,10 @@ def accuracy_budget(
     seed: int = 0,
     top: int | None = 10,
     progress_bar: bool | None = None,
+    *,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    timeout: float = 10.0,
 ) -> Accuracy:
     """Actuator and geometric budgets at ``q`` (and a Monte Carlo check), in one result.
 
@@ -157,6 +161,9 @@ def accuracy_budget(
         seed: Random seed of the Monte Carlo.
         top: Tolerances ranked in the table and JSON (``None``: all).
         progress_bar: Progress bar of the Monte Carlo.
+        workers: Worker processes of the Monte Carlo (:func:`pkdyn.precision.monte_carlo`).
+        scheduler: A Dask scheduler address for the Monte Carlo.
+        timeout: How long to wait for the scheduler or for a worker [s].
 
     Returns:
         The report.
@@ -188,6 +195,18 @@ def accuracy_budget(
     geo.top = top
     mc = None
     if samples:
-        mc = monte_carlo(robot, q, model, tolerance, samples, distribution, seed, progress_bar)
+        mc = monte_carlo(
+            robot,
+            q,
+            model,
+            tolerance,
+            samples,
+            distribution,
+            seed,
+            progress_bar,
+            workers=workers,
+            scheduler=scheduler,
+            timeout=timeout,
+        )
         mc.first_order_rms = geo.position_rms
     return Accuracy(act, geo, mc, tuple(assumed))

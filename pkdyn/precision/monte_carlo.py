@@ -127,6 +127,11 @@ def monte_carlo(
     distribution: str = "uniform",
     seed: int = 0,
     progress_bar: bool | None = None,
+    *,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    client: Any = None,
+    timeout: float = 10.0,
 ) -> MonteCarlo:
     """Pose errors of ``samples`` robots with random geometric errors, solved exactly.
 
@@ -144,12 +149,19 @@ def monte_carlo(
         distribution: ``uniform`` or ``normal``.
         seed: Random seed.
         progress_bar: Force the progress bar on or off (default: on a terminal).
+        workers: Local worker processes (1: this process; ``None``: as many as the machine
+            justifies); the samples are drawn here, so the robots do not depend on it.
+        scheduler: A Dask scheduler address (``tcp://host:8786``) to run the robots on.
+        client: A connected ``distributed.Client`` instead of ``scheduler``.
+        timeout: How long to wait for the scheduler or for a worker [s].
 
     Returns:
         The sampled pose errors.
 
     Raises:
-        InvalidInputError: Malformed tolerances, distribution or sample count.
+        InvalidInputError: Malformed tolerances, distribution, sample count or workers.
+        StudyError: A worker died, the scheduler cannot be reached, or the robot cannot be
+            rebuilt in the workers (:mod:`pkdyn.precision.parallel`).
 
     """
     from pkdyn.inputs import count
@@ -175,23 +187,63 @@ def monte_carlo(
         dp_all = _draw_all(rng, t, distribution, int(samples))
         errors_all, ok = _delta_family_errors(robot, model, dp_all, readings, nominal)
         return MonteCarlo(errors_all[ok], int(np.sum(~ok)), distribution=distribution, seed=seed)
+    if workers != 1 or scheduler or client is not None:
+        from pkdyn.precision.parallel import fingerprint, recipe, run_chunks
+
+        dp_all = _draw_all(rng, t, distribution, int(samples))
+        payload = (recipe(robot), fingerprint(robot), model, qq, family)
+        found = run_chunks(
+            _chunk, payload, list(dp_all), workers, scheduler, client, timeout, chunk=64
+        )
+        kept_rows = [e for e in found if e is not None]
+        return MonteCarlo(
+            np.array(kept_rows).reshape(-1, 6),
+            sum(e is None for e in found),
+            distribution=distribution,
+            seed=seed,
+        )
     errors, failed = [], 0
     for _ in progress(range(int(samples)), "Monte Carlo", "robot", progress_bar, min_items=50):
-        dp = _draw(rng, t, distribution)
-        try:
-            if family:
-                sample = _family_sample(robot, model, dp)
-                qa = readings * (1.0 + model.gains(dp))
-            else:
-                pert = perturbed(robot, model, dp, assemble=False)
-                sample, qa = pert.robot, pert.joint_coordinates(readings)
-            res = forward_geometry(sample, qa, q_init=qq, check_limits=False)
-        except PkdynError:
+        e = _sample_error(robot, model, _draw(rng, t, distribution), qq, family, nominal)
+        if e is None:
             failed += 1
-            continue
-        assert res.placement is not None
-        errors.append(pose_error(nominal, res.placement))
+        else:
+            errors.append(e)
     return MonteCarlo(np.array(errors).reshape(-1, 6), failed, distribution=distribution, seed=seed)
+
+
+def _sample_error(
+    robot: Robot,
+    model: ParameterModel,
+    dp: np.ndarray,
+    q: np.ndarray,
+    family: bool,
+    nominal: pin.SE3,
+) -> np.ndarray | None:
+    """The pose error (6,) of one robot drawn with parameters ``dp``, or ``None`` (no assembly)."""
+    readings = q[robot.actuated_q]
+    try:
+        if family:
+            sample = _family_sample(robot, model, dp)
+            qa = readings * (1.0 + model.gains(dp))
+        else:
+            pert = perturbed(robot, model, dp, assemble=False)
+            sample, qa = pert.robot, pert.joint_coordinates(readings)
+        res = forward_geometry(sample, qa, q_init=q, check_limits=False)
+    except PkdynError:
+        return None
+    assert res.placement is not None
+    return pose_error(nominal, res.placement)
+
+
+def _chunk(payload: Any, chunk: list[np.ndarray]) -> list[np.ndarray | None]:
+    """Pose errors of a chunk of draws, in a worker (:mod:`pkdyn.precision.parallel`)."""
+    from pkdyn.precision.parallel import worker_robot
+
+    how, digest, model, q, family = payload
+    robot = worker_robot(how, digest, geometry=False)
+    nominal = robot.platform_placement(q)
+    return [_sample_error(robot, model, dp, q, family, nominal) for dp in chunk]
 
 
 def _draw_all(rng: np.random.Generator, t: np.ndarray, distribution: str, n: int) -> np.ndarray:
