@@ -362,12 +362,13 @@ def _scaling(n: int) -> list[Row]:
             out.append(
                 (
                     f"{n}-design Delta study, {where}",
-                    f"{wall:.0f} s ({n / wall:.0f} designs/s), efficiency {eff:.2f}",
+                    f"{wall:.0f} s ({n / wall:.0f} designs/s); efficiency {eff:.2f} (wall), "
+                    f"{cpu1 * n / cpu:.2f} (CPU: 1 worker's CPU per design / this one's)",
                     f"{cpu / n * 1e3:.2f} ms CPU per design (1 worker: {cpu1 * 1e3:.2f}); "
                     f"load {load:.1f}",
                 )
             )
-    walls = [float(r[1].split(" s")[0]) for r in out]
+    walls = [float(r[1].split(" s ")[0]) for r in out]
     out.append(
         (
             "... the two tables; the cluster path's overhead per design (wall)",
