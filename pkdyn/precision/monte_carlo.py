@@ -227,7 +227,7 @@ def _sample_error(
             sample = _family_sample(robot, model, dp)
             qa = readings * (1.0 + model.gains(dp))
         else:
-            pert = perturbed(robot, model, dp, assemble=False)
+            pert = perturbed(robot, model, dp, assemble=False, shared=True)
             sample, qa = pert.robot, pert.joint_coordinates(readings)
         res = forward_geometry(sample, qa, q_init=q, check_limits=False)
     except PkdynError:

@@ -21,7 +21,7 @@ import pinocchio as pin
 from pkdyn.model.assembly import forward_geometry
 from pkdyn.model.build import constraint_set
 from pkdyn.model.description import FrameRef
-from pkdyn.model.reuse import kept_data
+from pkdyn.model.reuse import kept, kept_data
 from pkdyn.model.robot import Robot, length_scale_at
 from pkdyn.precision.parameters import ParameterModel, Placement, local_placement
 
@@ -47,7 +47,12 @@ class Perturbed:
 
 
 def perturbed(
-    robot: Robot, model: ParameterModel, p: Sequence[float] | np.ndarray, assemble: bool = True
+    robot: Robot,
+    model: ParameterModel,
+    p: Sequence[float] | np.ndarray,
+    assemble: bool = True,
+    *,
+    shared: bool = False,
 ) -> Perturbed:
     """The robot with parameters ``p`` of ``model`` applied (nonlinear: ``M exp(E p)``).
 
@@ -58,6 +63,8 @@ def perturbed(
 
         assemble: Assemble its home near the original's (``False``: ``q_home`` is the
             original's, for a caller that solves its own configurations, as the Monte Carlo).
+        shared: Write into one working copy of the model kept for ``robot`` (the Monte
+            Carlo's robots, one at a time): the robot returned is valid until the next call.
 
     Returns:
         The perturbed robot and its actuator gains.
@@ -70,7 +77,7 @@ def perturbed(
         for pl, x in zip(model.placements, xi, strict=True)
     ]
     moved = [bool(np.any(x != 0.0)) for x in xi]
-    out = _rebuilt(robot, model.placements, new, moved, assemble)
+    out = _rebuilt(robot, model.placements, new, moved, assemble, shared)
     return Perturbed(out, model.gains(p))
 
 
@@ -102,8 +109,19 @@ def _rebuilt(
     values: Sequence[pin.SE3],
     moved: Sequence[bool],
     assemble: bool = True,
+    shared: bool = False,
 ) -> Robot:
-    model = pin.Model(robot.model)
+    if shared:  # one working copy per robot, every placement written (Monte Carlo, in turn)
+        model = kept(robot, "perturbed model", lambda: pin.Model(robot.model))
+        nominal = robot.model
+        for pl in where:
+            if pl.kind == "joint":
+                model.jointPlacements[pl.joint] = nominal.jointPlacements[pl.joint]
+        if robot.platform_frame is not None:
+            pf = robot.platform_frame
+            model.frames[pf].placement = nominal.frames[pf].placement
+    else:
+        model = pin.Model(robot.model)
     desc = robot.description
     platform = desc.platform
     frames: dict[tuple[str, int], pin.SE3] = {}
