@@ -166,7 +166,14 @@ def main() -> None:
         order = [t for _, t in MODULES]
         titles = sorted(kept, key=lambda t: order.index(t) if t in order else len(order))
         notes = kept.pop("Notes", None)
-        text = head + "\n" + "\n\n".join(kept[t] for t in titles if t != "Notes")
+        stamp = (
+            f"Sections re-run on {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC (load average "
+            f"{load0:.1f} at the start): {', '.join(t for t, _, _ in sections)}."
+        )
+        head = "\n".join(
+            line for line in head.rstrip("\n").split("\n") if not line.startswith("Sections re-run")
+        )
+        text = head + "\n" + stamp + "\n\n" + "\n\n".join(kept[t] for t in titles if t != "Notes")
         text += "\n\n" + (notes if notes else NOTES.rstrip("\n")) + "\n"
         with atomic_write(OUT) as fh:
             fh.write(text)
