@@ -12,9 +12,12 @@ angular Jacobian of body ``k``):
   ``J1, J2`` the local Jacobians of the frames.
 - **hinge** (revolute joint about the axis ``a``, the same unit vector in both frames), its 5
   independent rows: the point rows of the origins, then two axis rows
-  ``r_k = f_k . a2`` with ``a2 = R_c2 a`` and ``f_1 = -R_c1 e_2``, ``f_2 = R_c1 e_1`` (``e_1, e_2,
-  a`` a right-handed orthonormal frame in ``c1``): about the relative rotation of ``c2`` from
-  ``c1`` about ``R_c1 e_k``; ``J_k = w_k^T (J_ang,2 - J_ang,1)``, ``w_k = a2 x f_k``.
+  ``r_k = f_k . a2`` [m] with ``a2 = R_c2 a`` and ``f_1 = -L R_c1 e_2``, ``f_2 = L R_c1 e_1``
+  (``e_1, e_2, a`` a right-handed orthonormal frame in ``c1``, ``L`` = :data:`HINGE_ARM`): the
+  displacement, normal to the axis, of the axis point at ``L`` from the origin, about ``L``
+  times the relative rotation of ``c2`` from ``c1`` about ``R_c1 e_k`` (the units and scale of
+  the former hinge of two points, whose tolerances and reports they keep);
+  ``J_k = w_k^T (J_ang,2 - J_ang,1)``, ``w_k = a2 x f_k``.
 - **planar closures**: where every joint moving either body turns about axes parallel to one
   world-fixed normal ``n`` or slides normal to it (:mod:`solvers.planar`), the rows out of the
   plane are zero by construction and dropped: a point keeps ``E (p1 - p2)`` (``E`` (2, 3) an
@@ -42,6 +45,7 @@ one moment on ``joint1``'s body at ``p1``, world axes.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -56,8 +60,9 @@ CLOSURE_KINDS = ("point", "hinge", "weld")
 """The kinds of closure."""
 
 HINGE_ARM = 0.1
-"""Distance [m] along the axis of the second point of a hinge built from two points (the
-unreduced hinge, 6 rows of rank 5: ``reduce=False``)."""
+"""Distance [m] along a hinge's axis of the point whose displacement its axis rows measure (and
+of the second point of a hinge built from two points: the unreduced hinge, 6 rows of rank 5,
+``reduce=False``)."""
 
 _GAP_TOL = 1e-10
 """Largest out-of-plane gap (relative to the robot's size) [m or rad] of a planar closure whose
@@ -114,6 +119,18 @@ def support_mask(model: pin.Model, j: int) -> np.ndarray:
         mask[jm.idx_v : jm.idx_v + jm.nv] = 1.0
         j = model.parents[j]
     return mask
+
+
+def _turn(R1: np.ndarray, R2: np.ndarray, n: np.ndarray) -> float:
+    """The angle [rad] of ``c1Rc2 = R1^T R2`` about ``m = R1^T n``.
+
+    ``atan2(m . vee(R - R^T) / 2, (tr R - 1) / 2)``: ``m . log3(R)`` for a rotation about
+    ``m``, defined on a whole turn.
+    """
+    R = R1.T @ R2
+    m = R1.T @ n
+    s = 0.5 * (m[0] * (R[2, 1] - R[1, 2]) + m[1] * (R[0, 2] - R[2, 0]) + m[2] * (R[1, 0] - R[0, 1]))
+    return math.atan2(s, 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0))
 
 
 def _perpendicular(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -218,7 +235,7 @@ class ClosureRows:
         out: list[np.ndarray | None] = []
         for c in self.closures:
             cols = np.flatnonzero(self.mask(c.joint1) + self.mask(c.joint2))
-            n = plane_normal(np.asarray(data.J)[:, cols])
+            n = plane_normal(np.reshape(data.J, (6, model.nv))[:, cols])
             if n is not None:
                 o1 = data.oMi[c.joint1] * c.placement1
                 o2 = data.oMi[c.joint2] * c.placement2
@@ -333,7 +350,7 @@ class ClosureRows:
                 a = np.asarray(c.axis, dtype=float)
                 a = a / np.linalg.norm(a)
                 e1, e2 = _perpendicular(a)
-                F = np.column_stack([-e2, e1])  # f_1, f_2 in c1
+                F = HINGE_ARM * np.column_stack([-e2, e1])  # L f_1, L f_2 in c1
                 self._axes.append((b.offset + 3, b0, F, a, c.joint1, c.joint2))
         self._dst = np.array(dst, dtype=int)
         self._src = np.array(src, dtype=int)
@@ -411,8 +428,7 @@ class ClosureRows:
             r[o : o + 2] = (cd.oMc1.rotation @ F).T @ a2
         for o, b, n, _, _ in self._turns:
             cd = cds[b]
-            R1 = cd.oMc1.rotation
-            r[o] = (R1.T @ n) @ pin.log3(R1.T @ cd.oMc2.rotation)
+            r[o] = _turn(cd.oMc1.rotation, cd.oMc2.rotation, n)
         return r
 
     def jacobian(self, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
@@ -435,7 +451,7 @@ class ClosureRows:
         if self._planes:
             J[self._pl_dst] = np.einsum("mij,mjv->miv", self._pl_E, Jb[self._pl_src])
         if self._axes or self._turns:
-            Jang = np.asarray(data.J)[3:]
+            Jang = np.reshape(data.J, (6, nv))[3:]
             cds = self._cds
             for o, b, F, a, j1, j2 in self._axes:
                 cd = cds[b]
@@ -565,7 +581,7 @@ class ClosureRows:
                 e1, e2 = _perpendicular(a)
                 a2 = cd.oMc2.rotation @ a
                 for k, f in enumerate((-e2, e1)):
-                    moment -= lb[3 + k] * np.cross(a2, cd.oMc1.rotation @ f)
+                    moment -= lb[3 + k] * np.cross(a2, cd.oMc1.rotation @ (HINGE_ARM * f))
             out.append((force, moment, p))
         return out
 

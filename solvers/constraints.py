@@ -48,7 +48,9 @@ class ConstraintSet:
             :class:`solvers.coupling.JointCoupling`), or a set whose couplings to take.
         reduce: Reduce the closures to their independent rows (hinges to 5 rows, planar
             closures to their in-plane rows); ``False``: a hinge is two points (6 rows of
-            rank 5) and no row is dropped.
+            rank 5) and no row is dropped. Default: reduce, unless a closure is given as a
+            Pinocchio constraint model (then every model keeps its rows, as the former closure
+            set did).
 
     Attributes:
         model: The kinematic tree.
@@ -72,11 +74,13 @@ class ConstraintSet:
         closures: Sequence[Closure | pin.RigidConstraintModel] = (),
         couplings: Sequence[Coupling] | ConstraintSet = (),
         *,
-        reduce: bool = False,
+        reduce: bool | None = None,
     ) -> None:
         self.model = model
         if isinstance(couplings, ConstraintSet):  # (a set's couplings view, as the former API)
             couplings = couplings.coupling_specs
+        if reduce is None:  # Pinocchio's models are taken row for row
+            reduce = all(isinstance(c, Closure) for c in closures)
         self._closure: ClosureRows | None = ClosureRows(model, closures, reduce)
         self._coupling: CouplingRows | None = (
             CouplingRows(model, couplings) if len(couplings) else None
@@ -121,6 +125,18 @@ class ConstraintSet:
             return self
         return ConstraintSet._view(self.model, None, self._coupling)
 
+    @functools.cached_property
+    def unreduced(self) -> ConstraintSet:
+        """The same constraints with every row (hinges as two points, planar closures whole).
+
+        For what depends on rows that vanish only by construction of the nominal geometry: the
+        sensitivity of the closures to the description's placements (an out-of-plane error
+        opens a planar loop out of its plane), Pinocchio's own constraint models.
+        """
+        if not self.reduce or self._closure is None or self._closure.identity:
+            return self  # (nothing was reduced)
+        return ConstraintSet(self.model, self.closure_specs, self.coupling_specs, reduce=False)
+
     @property
     def closure_rows(self) -> ClosureRows | None:
         """The closures' row evaluator (``None`` in the couplings view)."""
@@ -156,6 +172,7 @@ class ConstraintSet:
         closures: Sequence[Closure | pin.RigidConstraintModel] | None = None,
         couplings: Sequence[Coupling] | None = None,
         model: pin.Model | None = None,
+        reduce: bool | None = None,
     ) -> ConstraintSet:
         """A set of the same kind with other closures, couplings or model (default: these).
 
@@ -163,26 +180,29 @@ class ConstraintSet:
             closures: The closures (default: this set's).
             couplings: The couplings (default: this set's).
             model: The model (default: this set's), e.g. a copy with other joint placements.
+            reduce: Reduce the closures (default: as this set).
 
         Returns:
-            The new set (reduced as this one).
+            The new set.
 
         """
         return ConstraintSet(
             self.model if model is None else model,
             self.closure_specs if closures is None else closures,
             self.coupling_specs if couplings is None else couplings,
-            reduce=self.reduce,
+            reduce=self.reduce if reduce is None else reduce,
         )
 
     @property
     def items(self) -> list[tuple[bool, int, pin.SE3, int, pin.SE3]]:
-        """Per base constraint model of the closures: ``(is_point, joint1, placement1, ...)``.
+        """Per constraint model of the closures, unreduced: ``(is_point, joint1, placement1, ...)``.
 
-        ``(is_point, joint1, placement1, joint2, placement2)`` of the points and welds the
-        closures' rows come from (a hinge built from two points has two).
+        ``(is_point, joint1, placement1, joint2, placement2)`` of the 3D points and 6D welds of
+        :attr:`unreduced` (a hinge is two points), one per Pinocchio constraint model of the
+        closures as the description builds them (the former closure set's items).
         """
-        return self._closure.base_items if self._closure is not None else []
+        rows = self.unreduced.closure_rows
+        return rows.base_items if rows is not None else []
 
     # ------------------------------------------------------------------ evaluation
 

@@ -108,7 +108,7 @@ class ProjectedEulerStep:
             (cm.type == _POINT, cm, cd)
             for cm, cd in zip(list(fd.constraint_models), cds, strict=True)
         ]
-        nc, nv = fd.nc, model.nv
+        nc, nv = fd.n_pin, model.nv
         self._nc = nc
         # right-hand sides of the solves with K: [target; 0] (correction), [0; df] (forces)
         self._rhs = np.zeros(nc + nv)

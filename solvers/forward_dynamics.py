@@ -90,6 +90,7 @@ TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 """Actuator efforts ``tau(t [s], q (nq,), v (nv,)) -> (n_a,)`` [N m or N]."""
 
 _ARG1 = pin.ArgumentPosition.ARG1
+_NO_Q = np.zeros(0)  # (closure rows need no configuration beyond the kinematics in the data)
 _POINT = pin.ContactType.CONTACT_3D
 
 
@@ -202,12 +203,16 @@ class ForwardDynamics:
         cs = self.constraints
         self.constraint_models = pin.StdVec_RigidConstraintModel()
         self.constraint_datas = pin.StdVec_RigidConstraintData()
-        base = cs.closure_rows.base_models() if cs.closure_rows is not None else []
+        # Pinocchio's constraint models: the closures with every row (a hinge is two points)
+        pin_rows = cs.unreduced.closure_rows
+        base = pin_rows.base_models() if pin_rows is not None else []
         for c in base:
             c.setBaumgarteCorrectorParameters(corrector)
             self.constraint_models.append(c)
             self.constraint_datas.append(c.createData())
         self.nc = cs.n  # constraint rows: closures, then couplings
+        self.n_pin = pin_rows.n if pin_rows is not None else 0  # Pinocchio's constraint rows
+        self._same_rows = cs.closure_rows is pin_rows  # (nothing reduced: its forces as they are)
         self._coupled = cs.nk > 0
         self._pd = (float(gains[0]), float(gains[1]))  # Baumgarte gains of the couplings
         n_k = cs.nk
@@ -216,7 +221,7 @@ class ForwardDynamics:
         self._probe = 1.0  # probe force [N m or N]: of the order of the couplings' forces
         # conversion of Pinocchio's multipliers to the rows' convention (see the module doc)
         pts = [k for k, cm in enumerate(self.constraint_models) if cm.type == _POINT]
-        offsets = cs.closure_rows.base_offsets if cs.closure_rows is not None else [0]
+        offsets = pin_rows.base_offsets if pin_rows is not None else [0]
         self._pt_rows = np.array([offsets[k] for k in pts], dtype=int)
         self._pt_joint1 = [self.constraint_models[k].joint1_id for k in pts]
         self._pt_rot1 = np.array(
@@ -629,20 +634,31 @@ class ForwardDynamics:
         3D point: ``R_c1 lambda`` (world-frame force on ``joint1``'s body); 6D weld:
         ``-lambda`` (wrench on ``joint2``'s body in its contact frame, exact at closure).
 
+        Pinocchio's constraint models hold every row of the closures (a hinge is two points);
+        where the constraint set reduces them (hinges, planar closures), the multipliers of its
+        rows are those that apply the same generalized force, ``J_red^T mu = J^T lambda``
+        (minimum norm).
+
         Args:
             kin: Data whose joint placements are those of the current configuration.
-            lambda_c: ``data.lambda_c`` (nc,) of ``pin.constraintDynamics``.
+            lambda_c: ``data.lambda_c`` (n_pin,) of ``pin.constraintDynamics``.
 
         Returns:
-            The multipliers (nc,) [N, N m], as returned by the inverse dynamics (with couplings,
-            their forces at the last evaluation follow the rigid closures').
+            The multipliers (n,) [N, N m] of the constraint rows, as returned by the inverse
+            dynamics (with couplings, their forces at the last evaluation follow the closures').
 
         """
+        lam = np.asarray(lambda_c, dtype=float)[: self.n_pin]
+        rigid = self._rigid_forces(kin, lam) if self.n_pin else lam
+        if not self._same_rows and self.n_pin:
+            cs = self.constraints
+            pin.computeJointJacobians(self.model, kin)  # (from the placements in kin)
+            J_all = cs.unreduced.closures.jacobian_at(kin, _NO_Q)
+            J_red = cs.closures.jacobian_at(kin, _NO_Q)
+            rigid = numerics.lstsq(J_red.T, J_all.T @ rigid, 1e-10)
         if self._coupled:
-            n = self.constraints.nc
-            rigid = self._rigid_forces(kin, np.asarray(lambda_c, dtype=float)[:n])
             return np.concatenate([rigid, self._mu])
-        return self._rigid_forces(kin, lambda_c)
+        return rigid
 
     def _rigid_forces(self, kin: pin.Data, lambda_c: np.ndarray) -> np.ndarray:
         out = -np.asarray(lambda_c, dtype=float)

@@ -295,3 +295,48 @@ def test_malformed_couplings_are_refused():
         ConstraintSet(model, (), [LinearCoupling("nan", ((1, 1.0),), math.nan)])
     with pytest.raises(ValueError, match="'empty'"):
         ConstraintSet(model, (), [LinearCoupling("empty", ())])
+
+
+@pytest.mark.parametrize("build", [spatial_model, planar_model])
+def test_sampled_rows_equal_the_set_state_by_state(build):
+    """The vectorised rows of many states (:class:`solvers.SampledKinematics`): residuals,
+    Jacobians, ``J v`` and ``J a + gamma`` (point-like rows; a full weld's errors are its
+    relative twist) and the drift at ``a = 0``, sample by sample."""
+    from solvers.sampled import SampledKinematics
+
+    model, closures = build()
+    cs = ConstraintSet(model, closures, couplings(model))
+    rng = np.random.default_rng(9)
+    n = 5
+    Q = np.array(
+        [pin.integrate(model, pin.neutral(model), 0.4 * rng.standard_normal(model.nv))
+         for _ in range(n)]
+    )  # fmt: skip
+    V, A = rng.standard_normal((n, model.nv)), rng.standard_normal((n, model.nv))
+    sk = SampledKinematics(model, cs, size=8)
+    data = model.createData()
+    for k in range(n):
+        pin.rnea(model, data, Q[k], V[k], A[k])
+        pin.computeJointJacobians(model, data, Q[k])
+        sk.capture(k, data)
+    r, ev, ea = sk.closure_errors(n, V, Q, A)
+    ref = SampledKinematics(model, cs, size=8)
+    for k in range(n):
+        ref.capture_configuration(k, Q[k])
+    rr, JJ = ref.residuals_and_jacobians(np.arange(n))
+    for k in range(n):
+        ref.capture_drift(k, Q[k], V[k])
+    gamma_batch = ref.acceleration_errors(n, V)
+    point_like = np.concatenate(
+        [np.arange(cs.offsets[i], cs.offsets[i + 1])
+         for i, kind in enumerate(cs.kinds) if kind != "weld" or cs.sizes[i] != 6]
+    )  # fmt: skip
+    for k in range(n):
+        r0, J0 = cs.residual_and_jacobian(data, Q[k])
+        gamma = cs.drift(data, Q[k], V[k])
+        np.testing.assert_allclose(r[k], r0, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(rr[k], r0, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(JJ[k], J0, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(ev[k, point_like], (J0 @ V[k])[point_like], atol=1e-12)
+        np.testing.assert_allclose(ea[k, point_like], (J0 @ A[k] + gamma)[point_like], atol=1e-11)
+        np.testing.assert_allclose(gamma_batch[k, point_like], gamma[point_like], atol=1e-11)

@@ -77,7 +77,7 @@ def test_plain_urdf_matches_pinocchio(path):
     model = robot.model
     assert robot.closures == ()
     assert len(robot.constraint_models) == 0
-    assert robot.closure_set.nc == len(robot.couplings)
+    assert robot.constraints.nk == len(robot.couplings)
     total, broken = _mimics(path)
     assert len(robot.couplings) == total - broken
     if robot.couplings:

@@ -22,9 +22,11 @@ mobilities, like the spin of a Delta's bars, stay still), so that
 
     dx = J dqa + K dp,   J = Jx_a - Jx_p Jc_p^+ Jc_a,   K = X + J diag(qa) G - Jx_p Jc_p^+ C
 
-with ``Jc`` the Jacobian of the robot's constraint layer (``robot.constraints``: the closures'
-rows, then the joint couplings', which take part in the elimination and depend on no
-placement) and ``Jx`` the platform Jacobian. ``J`` is the direct
+with ``Jc`` the Jacobian of the robot's constraint layer (``robot.constraints.unreduced``: the
+closures' rows, every one of them, then the joint couplings', which take part in the
+elimination and depend on no placement; the closures' rows that vanish only by construction of
+the nominal geometry, such as a planar loop's out-of-plane rows, are kept: placement errors
+open them) and ``Jx`` the platform Jacobian. ``J`` is the direct
 kinematic Jacobian of :func:`pkdyn.analysis.kinematics.kinematic_models` (all six pose rows).
 Placement errors the passive joints cannot absorb (an over-constrained mechanism: the
 out-of-plane errors of a planar five-bar) leave a closure residual at first order, reported in
@@ -73,7 +75,8 @@ class PoseSensitivity:
         J: Pose per actuator coordinate (6, n_a) [m or rad per rad or m].
         K: Pose per parameter (6, n_par) [m or rad per parameter unit].
         closure_gap: Closure residual per parameter that no passive motion absorbs (nc, n_par)
-            [m or rad per unit]: zero for parameters the mechanism accommodates.
+            [m or rad per unit], rows of ``robot.constraints.unreduced.closures``: zero for
+            parameters the mechanism accommodates.
         joints: Joint velocity coordinates per parameter (nv, n_par) [rad or m per unit]: how
             the loops (and couplings) move every joint when a parameter changes at fixed
             actuator readings (the actuated rows: the gains' effect); what encoders on
@@ -162,7 +165,7 @@ def _plan(robot: Robot, model: ParameterModel) -> _Plan:
     masks: list[np.ndarray] = []
     points: list[tuple[int, int]] = []
     welds: list[tuple[int, int]] = []
-    cr = robot.constraints.closure_rows
+    cr = robot.constraints.unreduced.closure_rows  # (one base model per constraint model)
     offsets = cr.base_offsets if cr is not None else np.zeros(1, dtype=int)
     for i, (cm, owner) in enumerate(
         zip(robot.constraint_models, robot.constraint_owner, strict=True)
@@ -196,7 +199,7 @@ def _rigid_jacobians(
     """``C`` (nc, n_par) and ``X`` (6, n_par): closures and platform per parameter, fixed ``q``."""
     plan = _plan(robot, model)
     n_par = model.size
-    C = np.zeros((robot.constraints.n, n_par))
+    C = np.zeros((robot.constraints.unreduced.n, n_par))
     X = np.zeros((6, n_par))
     if plan.used.size == 0:
         return C, X
@@ -252,7 +255,8 @@ def _structural_rank(robot: Robot) -> int:
     key = id(robot.model)
     rank = _RANKS.get(key)
     if rank is None:
-        Jc = robot.constraints.jacobian(robot.data, robot.q_home)[:, robot.passive_v]
+        cs = robot.constraints.unreduced
+        Jc = cs.jacobian(robot.data, robot.q_home)[:, robot.passive_v]
         rank = numerics.rank(Jc, _RANK_TOL, 1.0)
         _RANKS[key] = rank
         weakref.finalize(robot.model, _RANKS.pop, key, None)
@@ -289,7 +293,7 @@ def pose_sensitivity(
         raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
     qq = as_finite("q", q, robot.nq)
     m, data = robot.model, robot.data
-    cs = robot.constraints
+    cs = robot.constraints.unreduced
     r = _structural_rank(robot) if cs.n else 0  # (at home: before the kinematics at q)
     if cs.n:  # (runs the kinematics and joint Jacobians at q; coupling rows need q)
         Jc = cs.jacobian(data, qq)
