@@ -45,6 +45,7 @@ one moment on ``joint1``'s body at ``p1``, world axes.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -321,6 +322,18 @@ class ClosureRows:
             )
         ]
         self._welds = [(int(o), cd) for is_point, o, _, cd in self._entries if not is_point]
+        # the point rows' drift: per side, the joint and the point (translation only: the
+        # classical acceleration in the joint frame, turned to world axes by the joint's rotation)
+        self._pt_sides = [
+            (
+                int(self.base_offsets[k]),
+                [(int(j), pin.SE3(np.eye(3), M.translation)) for j, M in ((j1, M1), (j2, M2)) if j],
+                bool(j1),
+            )
+            for k, (is_point, j1, M1, j2, M2) in enumerate(self._base)
+            if is_point
+        ]
+        self._other = [k for k, it in enumerate(self._base) if not it[0]]
 
     def _build_maps(self) -> None:
         """Index maps from the base rows to the rows (module docstring)."""
@@ -381,6 +394,43 @@ class ClosureRows:
             )
             cm.name = c
             out.append(cm)
+        return out
+
+    def pin_closures(self) -> list[Closure]:
+        """The fewest points and welds with the same constraints, for Pinocchio's dynamics.
+
+        Pinocchio's ``constraintDynamics`` takes 3D points and 6D welds: a point or a weld as it
+        is; a planar hinge about the normal as the point of its origins (its other rows vanish
+        by construction: half a hinge of two points' work); a planar weld, or a planar hinge
+        across the plane, as a weld (nothing turns about the hinge's axis in the plane); a
+        spatial hinge as two points on its axis, :data:`HINGE_ARM` apart (6 rows of rank 5,
+        which the proximal solver settles).
+
+        Returns:
+            Point and weld closures (a spatial hinge ``N`` gives ``N`` and ``N/axis``).
+
+        """
+        out: list[Closure] = []
+        for b in self.blocks:
+            c = b.closure
+            if b.normal is not None:
+                out.append(dataclasses.replace(c, kind="weld" if b.size == 3 else "point"))
+            elif c.kind == "hinge":
+                a = np.asarray(c.axis, dtype=float)
+                off = pin.SE3(np.eye(3), HINGE_ARM * a / np.linalg.norm(a))
+                out.append(dataclasses.replace(c, kind="point"))
+                out.append(
+                    Closure(
+                        c.name + "/axis",
+                        "point",
+                        c.joint1,
+                        c.placement1 * off,
+                        c.joint2,
+                        c.placement2 * off,
+                    )
+                )
+            else:
+                out.append(c)
         return out
 
     def _blocks_of_base(self) -> list[str]:
@@ -485,18 +535,18 @@ class ClosureRows:
     def drift(self, data: pin.Data) -> np.ndarray:
         """Acceleration drift ``gamma`` (n,) from ``data`` after ``forwardKinematics(q, v, 0)``."""
         g = np.zeros(self.nb)
+        classic, oMi, vel, acc = pin.classicAcceleration, data.oMi, data.v, data.a
+        for o, sides, first in self._pt_sides:  # classical accelerations of the points, world
+            for i, (j, M) in enumerate(sides):
+                lin = oMi[j].rotation.dot(classic(vel[j], acc[j], M))
+                if i == 0 and first:
+                    g[o : o + 3] = lin
+                else:
+                    g[o : o + 3] -= lin
         zero = pin.Motion.Zero()
-        classic = pin.classicAcceleration
-        for k, (is_point, j1, M1, j2, M2) in enumerate(self._base):
+        for k in self._other:  # welds: the relative spatial acceleration at a = 0
+            _, j1, M1, j2, M2 = self._base[k]
             o = self.base_offsets[k]
-            if is_point:  # classical accelerations of the two contact points, world axes
-                if j1:
-                    lin = classic(data.v[j1], data.a[j1], M1)
-                    g[o : o + 3] = (data.oMi[j1] * M1).rotation.dot(lin)
-                if j2:
-                    lin = classic(data.v[j2], data.a[j2], M2)
-                    g[o : o + 3] -= (data.oMi[j2] * M2).rotation.dot(lin)
-                continue
             c1Mc2 = (data.oMi[j1] * M1).actInv(data.oMi[j2] * M2)
             v1 = c1Mc2.actInv(M1.actInv(data.v[j1])) if j1 else zero
             a1 = c1Mc2.actInv(M1.actInv(data.a[j1])) if j1 else zero

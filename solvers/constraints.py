@@ -386,6 +386,35 @@ class ConstraintSet:
             g[self.nc :] = self._coupling.drift(np.asarray(q), np.asarray(v))
         return g
 
+    def dynamics_terms(
+        self, data: pin.Data, q: np.ndarray, v: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Residual, Jacobian and drift at ``(q, v)`` from one forward kinematics.
+
+        For the dynamics, which need the three at every evaluation: ``forwardKinematics(q, v,
+        0)`` then the joint Jacobians from its placements.
+
+        Args:
+            data: Pinocchio data of ``model`` (its kinematics are overwritten).
+            q: Configuration (nq,).
+            v: Velocity (nv,).
+
+        Returns:
+            Residual (n,), Jacobian (n, nv) and drift (n,).
+
+        """
+        model = self.model
+        pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
+        pin.computeJointJacobians(model, data)
+        r = self._residual(data, q)
+        J = self._jacobian(data, q)
+        g = np.empty(self.n)
+        if self._closure is not None and self.nc:
+            g[: self.nc] = self._closure.drift(data)
+        if self._coupling is not None:
+            g[self.nc :] = self._coupling.drift(np.asarray(q), np.asarray(v))
+        return r, J, g
+
     # ------------------------------------------------------------------ reports
 
     def split(self, r: np.ndarray) -> dict[str, float]:
