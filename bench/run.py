@@ -11,9 +11,9 @@ present), ``actuation_map`` (closed-loop legs, loading public models), ``cli_lat
 start-up against the bare imports), ``identification`` (a Delta identified from 1e5 samples)
 and ``design`` (design-study throughput and a 10,000-design study: several minutes;
 ``PKDYN_BENCH_DESIGNS`` makes it smaller), ``calibration`` (geometric calibration of a
-Gough-Stewart from 100 poses, a Delta from 40, pose sensitivities). Figures are medians of repeated runs; ratios are medians of
-ratios measured on alternating batches (CPU time of the process), so that they hold under a
-varying load.
+Gough-Stewart from 100 poses, a Delta from 40, pose sensitivities). Figures are medians of
+repeated runs; ratios are medians of ratios measured on alternating batches (CPU time of the
+process), so that they hold under a varying load.
 """
 
 from __future__ import annotations
