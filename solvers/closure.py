@@ -460,13 +460,17 @@ class ClosureRows:
 
     def residual(self, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
         """Residual (n,) [m, rad] from the joint placements of ``data`` (updates the datas)."""
-        self.calc(data)
-        rb = self._base_residual()
+        model = self.model
+        rb = np.empty(self.nb) if not self.identity or out is None else out
+        for is_point, o, cm, cd in self._entries:  # (one loop: the datas and the base rows)
+            cm.calc(model, data, cd)
+            if is_point:
+                rb[o : o + 3] = cd.oMc1.translation
+                rb[o : o + 3] -= cd.oMc2.translation
+            else:
+                rb[o : o + 6] = pin.log6(cd.c1Mc2).vector
         if self.identity:
-            if out is None:
-                return rb
-            out[:] = rb
-            return out
+            return rb
         r = np.empty(self.n) if out is None else out
         r[self._dst] = rb[self._src]
         if self._planes:

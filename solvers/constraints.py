@@ -308,27 +308,35 @@ class ConstraintSet:
         pin.computeJointJacobians(self.model, data)
         return self._jacobian(data, q)
 
-    def local_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
-        """Residual in the contact frame of ``joint1`` (runs the forward kinematics).
+    @property
+    def n_local(self) -> int:
+        """Rows of :meth:`local_residual`: every closure row (:attr:`unreduced`'s), then the
+        couplings'."""
+        return self.unreduced.n
 
-        For the solvers: a point's residual is ``R_c1^T (p1 - p2)`` (the world residual
-        rotated, same norm), a weld's ``log6(c2Mc1)``; with :meth:`local_jacobian_after_residual`
+    def local_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
+        """The residual the Newton solvers work on (runs the forward kinematics).
+
+        Every closure row (:attr:`unreduced`: a hinge as two points, a planar loop whole, the
+        same constraints as the reduced rows, redundant ones included), in the contact frame of
+        ``joint1``: a point's residual is ``R_c1^T (p1 - p2)`` (the world residual rotated,
+        same norm), a weld's ``log6(c2Mc1)``; with :meth:`local_jacobian_after_residual`
         (Pinocchio's ``LOCAL`` constraint Jacobian) it is exact at closure, where Newton's
         method needs it (its error is of the order of the residual: convergence stays
-        quadratic). Cheaper than :meth:`residual`: one copy per closure. Sets with reduced
-        rows (hinges, planar closures) use :meth:`residual` instead. Coupling rows are
-        :meth:`residual`'s.
+        quadratic, and the Levenberg-Marquardt solver settles the redundant rows). Cheaper than
+        :meth:`residual`: Pinocchio's C++ and one copy per constraint model. Then the coupling
+        rows (:meth:`residual`'s). Size :attr:`n_local`.
 
         Args:
             data: Pinocchio data of ``model``.
             q: Configuration (nq,).
 
         Returns:
-            Residual (n,) [m, rad].
+            Residual (n_local,) [m, rad].
 
         """
         if not self._local:
-            return self.residual(data, q)
+            return self.unreduced.local_residual(data, q)
         pin.forwardKinematics(self.model, data, q)
         r = np.empty(self.n)
         if self._closure is not None and self.nc:
@@ -338,18 +346,18 @@ class ConstraintSet:
         return r
 
     def local_jacobian_after_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
-        """Jacobian (n, nv) of :meth:`local_residual` at ``q``, exact at closure.
+        """Jacobian (n_local, nv) of :meth:`local_residual` at ``q``, exact at closure.
 
         Args:
             data: The data the last :meth:`local_residual` call at ``q`` used, untouched since.
             q: That configuration (nq,).
 
         Returns:
-            Jacobian (n, nv).
+            Jacobian (n_local, nv).
 
         """
         if not self._local:
-            return self.jacobian_after_residual(data, q)
+            return self.unreduced.local_jacobian_after_residual(data, q)
         pin.computeJointJacobians(self.model, data)
         cl, cp = self._closure, self._coupling
         if cp is None:

@@ -177,9 +177,15 @@ def _check(cs: ConstraintSet, seed: int, spread: float = 0.4) -> None:
         np.testing.assert_allclose(cs.jacobian(data, q), J, rtol=0, atol=1e-15)
         cs.residual(data, q)
         np.testing.assert_allclose(cs.jacobian_after_residual(data, q), J, rtol=0, atol=1e-15)
-        cs.local_residual(data, q)
+        r_loc = cs.local_residual(data, q)  # every row (unreduced), contact frames, for solvers
         J_loc = cs.local_jacobian_after_residual(data, q)
-        assert J_loc.shape == J.shape
+        assert r_loc.shape == (cs.n_local,) and J_loc.shape == (cs.n_local, model.nv)
+        full = cs.unreduced
+        np.testing.assert_allclose(np.abs(r_loc[full.nc :]), np.abs(r[cs.nc :]), atol=1e-15)
+        for k in range(len(full.closures.names)):  # same norm per constraint model as the world
+            lo, hi = full.offsets[k], full.offsets[k + 1]
+            w = full.residual(data, q)[lo:hi]
+            assert np.linalg.norm(r_loc[lo:hi]) == pytest.approx(np.linalg.norm(w), rel=1e-12)
         welds = [k for k, kind in enumerate(cs.kinds) if kind == "weld" and cs.sizes[k] == 6]
         if welds:  # a weld's drift is exact on motions that keep its relative velocity zero
             v = numerics.null_space(J, 1e-9) @ rng.standard_normal(model.nv - numerics.rank(J))
