@@ -310,8 +310,7 @@ class ConstraintSet:
 
     @property
     def n_local(self) -> int:
-        """Rows of :meth:`local_residual`: every closure row (:attr:`unreduced`'s), then the
-        couplings'."""
+        """Rows of :meth:`local_residual`: every closure row, then the couplings'."""
         return self.unreduced.n
 
     def local_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
