@@ -75,6 +75,10 @@ class CoupledDynamics:
         self._rhs = np.zeros((self.n_pin + model.nv, rows.n))
         self.lam = np.zeros(self.n_pin)
         self.mu = np.zeros(rows.n)
+        # the last evaluation's terms, for a caller that reuses its factorization
+        self.G = np.zeros((model.nv, rows.n))
+        self.CG = np.zeros((rows.n, rows.n))
+        self.Minv: np.ndarray | None = None
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Constrained acceleration (nv,) for generalized forces ``tau`` (nv,) [N m or N].
@@ -91,19 +95,33 @@ class CoupledDynamics:
             G, Lam = self._response(C)
         else:
             a0 = np.array(pin.aba(model, data, q, v, tau))
-            G = pin.computeMinverse(model, data, q)
-            G = np.triu(G) + np.triu(G, 1).T
-            G = G.dot(C.T)
+            Minv = pin.computeMinverse(model, data, q)
+            self.Minv = Minv = np.triu(Minv) + np.triu(Minv, 1).T
+            G = Minv.dot(C.T)
             lam0, Lam = np.zeros(0), np.zeros((0, rows.n))
         CG = C.dot(G)
-        b = c - C.dot(a0)
-        if CG.shape == (1, 1):  # one coupling: numerics.lstsq's rule, without its SVD
-            mu = b / CG[0] if CG[0, 0] != 0.0 else np.zeros(1)
-        else:
-            mu = numerics.lstsq(CG, b, 1e-12)
-        self.mu = mu
+        self.G, self.CG = G, CG
+        self.mu = mu = self.solve(c - C.dot(a0))
         self.lam = lam0 + Lam.dot(mu)
         return a0 + G.dot(mu)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """The coupling forces ``mu`` (k,) with ``C G mu = b``, ``G`` of the last evaluation.
+
+        Minimum norm where couplings are redundant with the closures or one another.
+        """
+        CG = self.CG
+        if CG.shape == (1, 1):  # one coupling: numerics.lstsq's rule, without its SVD
+            return b / CG[0] if CG[0, 0] != 0.0 else np.zeros(1)
+        return numerics.lstsq(CG, b, 1e-12)
+
+    def couple(self, x: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """``x + G mu`` with ``C (x + G mu) = r`` (the last evaluation's ``C``, ``G``).
+
+        A motion ``x`` (nv,) that keeps the closures, made to move the couplings by ``r``
+        (k,) in the mass metric.
+        """
+        return x + self.G.dot(self.solve(r - self._C.dot(x)))
 
     def _response(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Accelerations (nv, k) and closure forces (n_pin, k) per unit coupling force.

@@ -555,8 +555,8 @@ class ForwardDynamics:
         every step on the closures (residual within ``project_tol``) by one Newton correction
         with the factorization of the dynamics evaluated at the new state, which the next call
         reuses when given the state this one returned; it costs less than twice a raw Euler
-        step (``bench/dynamics.py``). With joint couplings the step is the general one. The
-        other integrators check the residual after the step
+        step (``bench/dynamics.py``); joint couplings are corrected with the closures, with the
+        same factorization. The other integrators check the residual after the step
         and project above ``project_tol``.
 
         Args:
@@ -574,10 +574,7 @@ class ForwardDynamics:
                 ``dopri5`` underflowed.
 
         """
-        if self.integrator == "euler" and self.project and self.nc and not self._coupled:
-            # (the couplings' forces are not in pin.constraintDynamics' factorization: a coupled
-            # robot takes the general step below, projected when its residual exceeds the
-            # tolerance)
+        if self.integrator == "euler" and self.project and self.nc:
             if self._control is None:
                 self._control = ProjectedEulerStep(self)
             return self._control.step(t, q, v, dt, tau)
