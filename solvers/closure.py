@@ -485,6 +485,16 @@ class ClosureRows:
             r[o] = _turn(cd.oMc1.rotation, cd.oMc2.rotation, n)
         return r
 
+    def jacobian_at(self, data: pin.Data) -> np.ndarray:
+        """Jacobian (n, nv) from ``data`` after the joint Jacobians (updates the datas)."""
+        model = self.model
+        for _, _, cm, cd in self._entries:
+            cm.calc(model, data, cd)
+        if self.identity and not self._welds:  # (points alone: Pinocchio's rows as they are)
+            J = pin.getConstraintsJacobian(model, data, self._cms, self._cds)
+            return np.reshape(J, (self.nb, model.nv))
+        return self.jacobian(data)
+
     def jacobian(self, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
         """Jacobian (n, nv) from ``data`` after the joint Jacobians and :meth:`calc`."""
         model = self.model

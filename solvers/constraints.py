@@ -286,8 +286,12 @@ class ConstraintSet:
             Jacobian (n, nv).
 
         """
-        if self._closure is not None and self.nc:
-            self._closure.calc(data)
+        cl = self._closure
+        if self._only_closures:
+            assert cl is not None
+            return cl.jacobian_at(data)
+        if cl is not None and self.nc:
+            cl.calc(data)
         return self._jacobian(data, q)
 
     def jacobian_after_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:

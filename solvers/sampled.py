@@ -166,6 +166,7 @@ class SampledKinematics:
         items = cr.base_items if cr is not None else []
         base_offsets = cr.base_offsets if cr is not None else np.zeros(1, dtype=int)
         self.nb = int(base_offsets[-1])  # rows of the base constraint models
+        self._identity = cr is None or cr.identity
         used = {int(j) for it in items for j in (it[1], it[3])}
         used |= {int(model.frames[f].parentJoint) for f in frames}
         used.discard(0)
@@ -306,7 +307,8 @@ class SampledKinematics:
             out[2][:, o:] = coupled.acceleration_error(qq, vv, aa)
         if o == 0:
             return out[0], out[1], out[2]
-        r, ev, ea = (np.empty((n, self.nb)) for _ in range(3))
+        direct = cs.nk == 0 and self._identity  # the base rows are the rows: no copy
+        r, ev, ea = out if direct else [np.empty((n, self.nb)) for _ in range(3)]
         V = self._velocities(n, v)
         A = self._accelerations(n)
         H = self.H[:n]
@@ -323,7 +325,8 @@ class SampledKinematics:
             c1Mc2 = np.linalg.solve(H[:, s1] @ M1, oMc2)
             for k in range(n):
                 r[k, o : o + 6] = pin.log6(c1Mc2[k]).vector
-        self._reduce(H, out[0], r, out[1], ev, out[2], ea, V, A)
+        if not direct:
+            self._reduce(H, out[0], r, out[1], ev, out[2], ea, V, A)
         return out[0], out[1], out[2]
 
     def _reduce(
@@ -448,7 +451,8 @@ class SampledKinematics:
             out[:, cs.nc :] = coupled.drift(self.Q[:n], v[:n])
         if cs.nc == 0:
             return out
-        ea = np.empty((n, self.nb))
+        direct = cs.nk == 0 and self._identity
+        ea = out if direct else np.empty((n, self.nb))
         V = self._velocities(n, v)
         if self._drift_from_dJ:  # world accelerations d/dt(J_w) S_j v (no gravity offset)
             A = np.swapaxes((self.dJw[:n] * v[:, None, :]) @ self.masks.T, 1, 2)
@@ -460,7 +464,8 @@ class SampledKinematics:
             ea[:, self._pt_rows] = (side[0][2] - side[1][2]).reshape(n, -1)
         for o, s1, _, s2, M2 in self._welds:
             ea[:, o : o + 6] = _relative_motion(A[:, s2] - A[:, s1], H[:, s2] @ M2)
-        self._reduce(H, ea_out=out, ea=ea, V=V, A=A)
+        if not direct:
+            self._reduce(H, ea_out=out, ea=ea, V=V, A=A)
         return out
 
     def capture_configuration(self, k: int, q: np.ndarray) -> None:
@@ -584,8 +589,9 @@ class SampledKinematics:
         if o == 0:
             return r_out, J_out
         nc = self.nb
-        r = np.empty((m, nc))
-        J = np.empty((m, nc, nv))
+        direct = cs.nk == 0 and self._identity  # the base rows are the rows: no copy
+        r = r_out if direct else np.empty((m, nc))
+        J = J_out if direct else np.empty((m, nc, nv))
         self.update_placements(rows)
         H, Jw = self.H[rows], self.Jw[rows]
         if self._pt_offsets.size:
@@ -621,7 +627,8 @@ class SampledKinematics:
                 M = pin.SE3(c1Mc2[k])
                 r[k, o : o + 6] = pin.log6(M).vector
                 J[k, o : o + 6] = pin.Jlog6(M) @ twist[k]
-        self._reduce(H, r_out=r_out, r=r, J_out=J_out, J=J, Jw=Jw)
+        if not direct:
+            self._reduce(H, r_out=r_out, r=r, J_out=J_out, J=J, Jw=Jw)
         return r_out, J_out
 
     def frame_force(self, n: int, frame: int, W: np.ndarray) -> np.ndarray:
