@@ -17,12 +17,13 @@ import numpy as np
 
 from pkdyn.dynamics.actuation import actuation, drives
 from pkdyn.dynamics.callbacks import user_efforts
+from pkdyn.dynamics.simulation_result import SimulationResult
 from pkdyn.exceptions import InvalidInputError, SimulationError
 from pkdyn.inputs import callable_input, count, positive
 from pkdyn.model.passive import FRICTION_SMOOTHING
 from pkdyn.model.pose import as_configuration, as_finite
 from pkdyn.model.robot import Robot
-from solvers import ForwardDynamics, ForwardResult, IntegrationError, PassiveForces
+from solvers import ForwardDynamics, IntegrationError, PassiveForces
 
 __all__ = ["TorqueFn", "simulate"]
 
@@ -45,7 +46,7 @@ def simulate(
     passive: bool = True,
     step: float | None = None,
     motor_torque: TorqueFn | None = None,
-) -> ForwardResult:
+) -> SimulationResult:
     """Constrained forward dynamics of the robot under gravity and actuator efforts.
 
     Args:
@@ -73,10 +74,11 @@ def simulate(
             motor torque, so the motor friction and the back-driven gearbox still act.
 
     Returns:
-        Time series: q, v, a, efforts (joint side), closure forces and residuals, energies (the
-        springs' in ``elastic``), the work of the joint-side efforts and the energy dissipated
-        by dampers and friction (the losses in the drives are outside the mechanism:
-        ``Drives.losses``).
+        Time series (:class:`~pkdyn.dynamics.simulation_result.SimulationResult`, a
+        :class:`solvers.ForwardResult` with the actuators' names): q, v, a, efforts (joint
+        side), closure forces and residuals, energies (the springs' in ``elastic``), the work
+        of the joint-side efforts and the energy dissipated by dampers and friction (the
+        losses in the drives are outside the mechanism: ``Drives.losses``).
 
     Raises:
         InvalidInputError: Non-positive duration or step, a step longer than the duration,
@@ -132,7 +134,7 @@ def simulate(
     g = max(float(np.linalg.norm(robot.model.gravity.linear)), 1.0)
     mass = sum(robot.model.inertias[j].mass for j in range(robot.model.njoints))
     out.energy_scale = float(mass * g * robot.length_scale)
-    return out
+    return SimulationResult.of(robot, out, integrator, dt)
 
 
 MAX_STEPS = 10_000_000
