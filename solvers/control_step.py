@@ -247,7 +247,14 @@ class ProjectedEulerStep:
 
         """
         fd = self.fd
-        model = fd.model
+        model, data, datas, cms, prox, cd = (
+            fd.model,
+            self.data,
+            self.datas,
+            fd.constraint_models,
+            fd.prox,
+            self._cd,
+        )
         if fd._auto_gains and dt != fd._gains_step:
             fd._euler_gains(dt)
             self._key = None
@@ -256,27 +263,39 @@ class ProjectedEulerStep:
         f = None if tau is None else fd._generalized(t, q, v, tau)[1]
         if fd.passive is not None:
             f = fd.passive.force(q, v) if f is None else f + fd.passive.force(q, v)
+        ff = self._zero if f is None else f
         key = self._key
         if key is None or key[2] != dt or key[0] != q.tobytes() or key[1] != v.tobytes():
             q = np.asarray(q, dtype=float)
             v = np.asarray(v, dtype=float)
-            a = self._dynamics(q, v, self._zero if f is None else f)
+            if cd is None:
+                a = pin.constraintDynamics(model, data, q, v, ff, cms, datas, prox)
+            else:
+                a = self._dynamics(q, v, ff)
             if not self.curvature:
                 self._reach(q)
         elif f is None:
             a = self._a
         else:
             f0 = self._f
-            a = self._a + self._force_response(f if f0 is None else f - f0)
+            df = f if f0 is None else f - f0
+            if cd is None:
+                self._tail_f[:] = df
+                a = self._a + data.constraint_chol.solve(self._rhs_f)[self._nc :]
+            else:
+                a = self._a + self._force_response(df)
         v = v + dt * a
         q = pin.integrate(model, q, dt * v)
         # first same as last: the dynamics at the new state, under the same force
         # (a view on data.ddq, used before the next evaluation overwrites it)
-        self._a = self._dynamics(q, v, self._zero if f is None else f)
+        if cd is None:
+            self._a = pin.constraintDynamics(model, data, q, v, ff, cms, datas, prox)
+        else:
+            self._a = self._dynamics(q, v, ff)
         self._f = f
         # one Newton correction with the factorization at the new state
         self._target()
-        dq = self._correct()
+        dq = data.constraint_chol.solve(self._rhs)[self._nc :] if cd is None else self._correct()
         q = pin.integrate(model, q, dq)
         # that evaluation pulled the closures by the Baumgarte term -Kp e, which the
         # correction removed: K^-1 [-Kp e; 0] = Kp dq (the same solve), taken out of it
