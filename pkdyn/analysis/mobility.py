@@ -292,7 +292,8 @@ def format_mobility(result: MobilityResult) -> str:
         f"{r.joint_mobility} - {r.d} * {r.loops}{coupled} = {r.grubler}",
         f"  rank (Pasqui): Ic = {r.joint_mobility}, Ec = {r.equations}, rc = {r.closure_rank}; "
         f"m = Ic - rc = {r.mobility}, h = Ec - rc = {r.hyperstatism}",
-        f"  closure Jacobian: {r.closure_rows} x {r.nv}, rank {r.rank}",
+        f"  {'constraint' if r.couplings else 'closure'} Jacobian: {r.closure_rows} x {r.nv}, "
+        f"rank {r.rank}",
     ]
     if r.floating:
         lines.append(
