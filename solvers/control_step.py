@@ -154,8 +154,6 @@ class ProjectedEulerStep:
         ``-log6(c1Mc2)``, and its constraint Jacobian ``J`` their derivative: the correction
         ``dq`` solves ``J dq = c1Mc2.translation`` (or ``log6(c1Mc2)``).
         """
-        if not self._nc:
-            return
         if self._points:
             np.concatenate(self._trans, out=self._head)
         else:
@@ -294,8 +292,13 @@ class ProjectedEulerStep:
             self._a = self._dynamics(q, v, ff)
         self._f = f
         # one Newton correction with the factorization at the new state
-        self._target()
-        dq = data.constraint_chol.solve(self._rhs)[self._nc :] if cd is None else self._correct()
+        if cd is None:
+            self._target()
+            dq = data.constraint_chol.solve(self._rhs)[self._nc :]
+        else:
+            if self._nc:
+                self._target()
+            dq = self._correct()
         q = pin.integrate(model, q, dq)
         # that evaluation pulled the closures by the Baumgarte term -Kp e, which the
         # correction removed: K^-1 [-Kp e; 0] = Kp dq (the same solve), taken out of it
