@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
+
+from solvers.conditioning import SingularityEvent
 
 __all__ = ["Evaluation", "ForwardResult", "Recorder"]
 
@@ -44,6 +47,10 @@ class ForwardResult:
         elastic: Potential energy of the springs (N,) [J] (zeros without springs).
         energy_scale: A characteristic energy of the mechanism [J] (e.g. weight x size), the
             floor of :meth:`energy_drift`'s scale (0: none).
+        conditioning: Conditioning ``kappa`` of the closure forces (N,) at the recorded states
+            (:mod:`solvers.conditioning`; 1 without rigid closures).
+        events: Passages near or through singularities of the closures
+            (:class:`~solvers.conditioning.SingularityEvent`), in time order.
 
     """
 
@@ -62,10 +69,27 @@ class ForwardResult:
     extras: dict[str, float] = field(default_factory=dict)
     elastic: np.ndarray | None = None
     energy_scale: float = 0.0
+    conditioning: np.ndarray | None = None
+    events: list[SingularityEvent] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if self.elastic is None:
             self.elastic = np.zeros_like(self.kinetic)
+        if self.conditioning is None:
+            self.conditioning = np.ones_like(self.kinetic)
+
+    @property
+    def valid_until(self) -> float:
+        """Time up to which the motion is the one the model determines [s].
+
+        The start of the first passage through a singularity (``through`` event): past it,
+        the closure forces were not determined and the motion is one of several the model
+        allows (the one rounding chose). The last recorded time when there is none.
+        """
+        for ev in self.events:
+            if ev.through:
+                return ev.start
+        return float(self.t[-1]) if self.t.size else math.nan
 
     @property
     def energy(self) -> np.ndarray:
@@ -73,7 +97,7 @@ class ForwardResult:
         assert self.elastic is not None
         return self.kinetic + self.potential + self.elastic
 
-    def energy_drift(self) -> float:
+    def energy_drift(self, until: float | None = None) -> float:
         """Largest violation of the energy balance, relative to the energy exchanged.
 
         ``max |E(t) - E(0) - work(t) + dissipated(t)|`` divided by the largest of the kinetic
@@ -81,17 +105,23 @@ class ForwardResult:
         undamped run, the relative drift of the mechanical energy (springs included). The
         potential energies are not used as the scale because their origin is arbitrary.
 
+        Args:
+            until: Only the samples up to this time [s] (e.g. :attr:`valid_until`; default:
+                all of them).
+
         Returns:
             The relative drift (0 when nothing moves). Below ``1e-9 energy_scale`` of energy
             exchanged (a mechanism at rest), the scale is that floor: the round-off of a run
             that moves nothing is not reported as a drift of order one.
 
         """
-        e = self.energy - self.energy[0] - self.work + self.dissipated
+        n = self.t.size if until is None else int(np.searchsorted(self.t, until, side="right"))
+        n = max(n, 1)
+        e = (self.energy - self.energy[0] - self.work + self.dissipated)[:n]
         scale = max(
-            float(np.max(self.kinetic)),
-            float(np.max(np.abs(self.work))),
-            float(np.max(self.dissipated)),
+            float(np.max(self.kinetic[:n])),
+            float(np.max(np.abs(self.work[:n]))),
+            float(np.max(self.dissipated[:n])),
             1e-9 * self.energy_scale,  # a run that exchanges no energy: round-off, not 100 %
         )
         return float(np.max(np.abs(e)) / scale) if scale > 0.0 else 0.0
@@ -114,6 +144,7 @@ class Recorder:
         self.work = np.empty(n)
         self.diss = np.empty(n)
         self.el = np.zeros(n)
+        self.cond = np.ones(n)
 
     def add(
         self,
@@ -149,6 +180,7 @@ class Recorder:
         self.pe[k] = pin.computePotentialEnergy(model, kin, q)
         if fd.passive is not None:
             self.el[k] = fd.passive.potential(q)
+        self.cond[k] = fd.conditioning
         self.work[k] = work
         self.diss[k] = dissipated
         self.k = k + 1
@@ -169,4 +201,5 @@ class Recorder:
             self.work[:n],
             self.diss[:n],
             elastic=self.el[:n],
+            conditioning=self.cond[:n],
         )
