@@ -60,6 +60,7 @@ and of the inverse dynamics (:func:`ForwardDynamics.closure_forces`): 3D, the wo
 from __future__ import annotations
 
 import math
+from array import array
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -279,6 +280,7 @@ class ForwardDynamics:
         self._h_cond = math.inf  # dopri5 substep limit from the conditioning [s]
         self._cond_due = -math.inf  # time from which the next check is due [s]
         self._since_check = 0  # steps since the last check
+        self._cond_log: tuple[array, array] | None = None  # (t, kappa) of simulate's checks
         self._eval_id = 0  # dynamics evaluations made (their factorization in self.data)
         self._eig_id = -1  # the evaluation whose kappa a refinement computed
         self._eig_kappa = 1.0
@@ -459,6 +461,9 @@ class ForwardDynamics:
         self._cond_t = t
         self.conditioning = kappa
         self.passages.observe(t, kappa)
+        if self._cond_log is not None:
+            self._cond_log[0].append(t)
+            self._cond_log[1].append(kappa)
         self._since_check = 0
         rate = self._cond_rate
         if kappa < WATCH:
@@ -983,6 +988,36 @@ class ForwardDynamics:
         self._h = self._h_max
         self.steps = self.rejected = 0
         self._reset_conditioning()
+        log = (array("d"), array("d"))
+        self._cond_log = log if self._watch else None
+        try:
+            projections = self._run(q, v, t0, dt, n_steps, record_every, tau, rec)
+        finally:
+            self._cond_log = None
+        out = rec.result()
+        out.events = list(self.passages.events)
+        if self._watch:
+            times, kappas = (np.frombuffer(x, dtype=float) for x in log)
+            out.conditioning = np.interp(out.t, times, kappas)
+        out.projections = projections
+        out.extras["substeps"] = float(
+            self.steps if self.integrator == "dopri5" else n_steps * self._substeps
+        )
+        out.extras["rejected"] = float(self.rejected)
+        return out
+
+    def _run(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        t0: float,
+        dt: float,
+        n_steps: int,
+        record_every: int,
+        tau: TorqueFn | None,
+        rec: Recorder,
+    ) -> int:
+        """The output steps of :meth:`simulate`, recorded in ``rec``; returns the projections."""
         watch = self._watch
         w_act = w_fric = 0.0
         projections = 0
@@ -1023,14 +1058,7 @@ class ForwardDynamics:
                         raise IntegrationError(f"t = {t:.6g} s: {err}", t) from None
                     projections += 1
                     ev = residual = None
-        out = rec.result()
-        out.events = list(self.passages.events)
-        out.projections = projections
-        out.extras["substeps"] = float(
-            self.steps if self.integrator == "dopri5" else n_steps * self._substeps
-        )
-        out.extras["rejected"] = float(self.rejected)
-        return out
+        return projections
 
 
 def simulate(

@@ -47,8 +47,10 @@ class ForwardResult:
         elastic: Potential energy of the springs (N,) [J] (zeros without springs).
         energy_scale: A characteristic energy of the mechanism [J] (e.g. weight x size), the
             floor of :meth:`energy_drift`'s scale (0: none).
-        conditioning: Conditioning ``kappa`` of the closure forces (N,) at the recorded states
-            (:mod:`solvers.conditioning`; 1 without rigid closures).
+        conditioning: Conditioning ``kappa`` of the closure forces (N,) at the recorded times
+            (:mod:`solvers.conditioning`; 1 without rigid closures): checked every step near a
+            singularity and at most ``CHECK_PERIOD`` steps apart elsewhere, interpolated
+            linearly in time between the checks.
         events: Passages near or through singularities of the closures
             (:class:`~solvers.conditioning.SingularityEvent`), in time order.
 
@@ -144,7 +146,6 @@ class Recorder:
         self.work = np.empty(n)
         self.diss = np.empty(n)
         self.el = np.zeros(n)
-        self.cond = np.ones(n)
 
     def add(
         self,
@@ -180,7 +181,6 @@ class Recorder:
         self.pe[k] = pin.computePotentialEnergy(model, kin, q)
         if fd.passive is not None:
             self.el[k] = fd.passive.potential(q)
-        self.cond[k] = fd.conditioning
         self.work[k] = work
         self.diss[k] = dissipated
         self.k = k + 1
@@ -201,5 +201,4 @@ class Recorder:
             self.work[:n],
             self.diss[:n],
             elastic=self.el[:n],
-            conditioning=self.cond[:n],
         )

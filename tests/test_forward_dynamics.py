@@ -3,7 +3,7 @@
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import null_space, simpson_work
+from conftest import null_space, parallelogram_normals_det, simpson_work
 
 import pkdyn
 from solvers.conditioning import NEAR_SINGULAR, THROUGH
@@ -92,29 +92,6 @@ def test_baumgarte_alone_holds_the_closures(robots, name):
     assert res.energy_drift(res.valid_until) < 1e-7
 
 
-def _parallelogram_normals_det(robot: pkdyn.Robot, q: np.ndarray) -> float:
-    """``det [n1 n2 n3]`` of the unit normals of the Delta's three parallelograms at ``q``.
-
-    Each parallelogram is spanned by its bars (direction ``u``) and its elbow axle (the segment
-    between the two bars' upper joints, ``d``): ``n = u x d``. Where the three normals are
-    coplanar the parallelograms no longer hold the nacelle's orientation (it may turn about the
-    line normal to all three): the closures lose rank whatever the arms do. A closed form,
-    independent of the dynamics and of the conditioning figure.
-    """
-    model, data = robot.model, robot.model.createData()
-    pin.forwardKinematics(model, data, q)
-    normals = []
-    for i in (1, 2, 3):
-        ja, jb = model.getJointId(f"bar{i}a_upper"), model.getJointId(f"bar{i}b_upper")
-        a, b = data.oMi[ja].translation, data.oMi[jb].translation
-        cm = next(c for c in robot.constraint_models if c.joint1_id == ja)
-        end = (data.oMi[ja] * cm.joint1_placement).translation
-        u, d = (end - a) / np.linalg.norm(end - a), (b - a) / np.linalg.norm(b - a)
-        n = np.cross(u, d)
-        normals.append(n / np.linalg.norm(n))
-    return float(np.linalg.det(np.array(normals)))
-
-
 def test_free_delta_crossings_are_reported(robots):
     """The falling Delta crosses the singularity of its closures twice in 0.7 s: each crossing
     is one event, through the singularity, at the time the parallelograms' normals become
@@ -124,7 +101,7 @@ def test_free_delta_crossings_are_reported(robots):
     v0 = _tangent_velocity(robot, robot.q_home, 0.5)
     dt = 1e-3
     res = simulate(robot.model, robot.constraint_models, robot.q_home, v0, 0.7, dt)
-    det = np.array([_parallelogram_normals_det(robot, q) for q in res.q])
+    det = np.array([parallelogram_normals_det(robot, q) for q in res.q])
     k = np.flatnonzero(np.sign(det[1:]) != np.sign(det[:-1]))
     crossings = res.t[k] + dt * det[k] / (det[k] - det[k + 1])  # linear interpolation
     assert len(crossings) == 2

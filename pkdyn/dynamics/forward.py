@@ -269,6 +269,12 @@ def _configuration(model: Any, name: str, q: Any) -> np.ndarray:
     return as_configuration(model, name, q)
 
 
+def _finite_state(q: np.ndarray, v: np.ndarray) -> None:
+    """Name a non-finite ``q`` or ``v`` (checked once a step failed: the fast path does not)."""
+    for name, x in (("q", q), ("v", v)):
+        as_finite(name, x)
+
+
 def _velocity(nv: int, name: str, v: Any) -> np.ndarray:
     if type(v) is np.ndarray and v.dtype == np.float64 and v.shape == (nv,):
         return v
@@ -404,13 +410,14 @@ class ForwardDynamics(_SolverDynamics):
         try:
             q1, v1 = super().step(t, q, v, dt, fn)
         except IntegrationError as err:
+            _finite_state(q, v)
             time = err.time if math.isfinite(err.time) else t + dt
             raise SimulationError(_untimed(str(err), time), time) from err
         except np.linalg.LinAlgError as err:
+            _finite_state(q, v)
             raise SimulationError(f"the dynamics could not be solved ({err})", t) from err
-        if not (math.isfinite(float(v1 @ v1)) and math.isfinite(float(q1 @ q1))):
-            for name, x in (("q", q), ("v", v)):
-                as_finite(name, x)  # a non-finite input, named
+        if not (np.isfinite(q1).all() and np.isfinite(v1).all()):
+            _finite_state(q, v)
             raise SimulationError(
                 "the state became non-finite (the step is too long for the motion, or the "
                 "efforts are too large): use a shorter dt",
