@@ -107,9 +107,13 @@ COLLAPSE = 0.25
 value at the start is rejected and shortened (see :meth:`ForwardDynamics.simulate`)."""
 
 CHECK_PERIOD = 8
-"""Largest number of steps (``dopri5`` substeps, fixed steps of :meth:`ForwardDynamics.step`,
-output steps of ``euler`` and ``rk4``) between two checks of the conditioning of the closure
-forces; fewer while it falls, every step near a singularity (:meth:`ForwardDynamics._observe`)."""
+"""Largest number of steps (``dopri5`` substeps, output steps of ``euler`` and ``rk4``)
+between two checks of the conditioning of the closure forces in :meth:`ForwardDynamics.simulate`;
+fewer while it falls, every step near a singularity (:meth:`ForwardDynamics._observe`)."""
+
+STEP_CHECK_PERIOD = 32
+"""The same for the fixed steps of :meth:`ForwardDynamics.step` (a control loop, where a check,
+about one dynamics evaluation, must not double the cost of a step)."""
 
 WATCH = 10.0 * LEAVE * NEAR_SINGULAR
 """Below this conditioning it is checked at every step."""
@@ -253,6 +257,7 @@ class ForwardDynamics:
             [self.constraint_models[k].joint1_placement.rotation for k in pts]
         ).reshape(-1, 3, 3)
         self.prox = pin.ProximalSettings(prox_accuracy, prox_accuracy, prox_mu, prox_max_iter)
+        self._max_iter = int(prox_max_iter)
         if self.closure_set.n_rigid:
             pin.initConstraintDynamics(
                 model, self.data, self.constraint_models, self.constraint_datas
@@ -349,7 +354,7 @@ class ForwardDynamics:
             self.prox,
         )
         self._eval_id += 1
-        if self.prox.iter >= self.prox.max_iter:
+        if self.prox.iter >= self._max_iter:
             return self._refine(a)
         return a
 
@@ -473,10 +478,10 @@ class ForwardDynamics:
         else:
             self._cond_due = math.inf
 
-    def _due(self, t: float) -> bool:
+    def _due(self, t: float, period: int = CHECK_PERIOD) -> bool:
         """Whether a conditioning check is due at ``t`` [s] (counts the steps since the last)."""
         self._since_check += 1
-        return t >= self._cond_due or self._since_check >= CHECK_PERIOD
+        return t >= self._cond_due or self._since_check >= period
 
     def _reset_conditioning(self) -> None:
         self.passages.reset()
@@ -488,8 +493,12 @@ class ForwardDynamics:
         self._h_cond = math.inf
 
     def _scheduled_check(self, t: float, data: pin.Data) -> None:
-        """The conditioning check of a fixed step at ``t`` [s], when due (:meth:`_observe`)."""
-        if self._due(t):
+        """The conditioning check of a fixed step of :meth:`step` at ``t`` [s], when due.
+
+        As :meth:`_observe` plans it, at most :data:`STEP_CHECK_PERIOD` steps apart.
+        """
+        self._since_check += 1
+        if t >= self._cond_due or self._since_check >= STEP_CHECK_PERIOD:
             self._observe(t, self._kappa(data))
 
     def _coupled_accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -677,7 +686,7 @@ class ForwardDynamics:
             # the bare loop
             data, prox = self.data, self.prox
             cms, cds = self.constraint_models, self.constraint_datas
-            dynamics, zero, cap = pin.constraintDynamics, self._zero_nv, prox.max_iter
+            dynamics, zero, cap = pin.constraintDynamics, self._zero_nv, self._max_iter
             for _ in range(n - 1):
                 a = dynamics(model, data, q, v, zero, cms, cds, prox)
                 if prox.iter >= cap:  # (see _solve)
@@ -810,9 +819,10 @@ class ForwardDynamics:
         and records the passages near or through singularities in :attr:`events`: ``dopri5``
         at every substep (and it shortens its substeps through a passage, see
         :meth:`simulate`); ``euler`` and ``rk4`` at the state the step starts from (the
-        control-loop step: the state it ends at), every :data:`CHECK_PERIOD` calls, sooner
-        when the conditioning falls, every call near a singularity (a passage shorter than
-        ``dt`` can go unseen: these steps have a fixed size).
+        control-loop step: the state it ends at), every :data:`STEP_CHECK_PERIOD` calls, sooner
+        when the conditioning falls, every call near a singularity
+        (a passage shorter than ``dt`` is estimated from the samples around it: these steps
+        have a fixed size).
 
         Raises:
             ValueError: ``dt`` not a finite positive number.

@@ -131,19 +131,14 @@ def simulate(
     v = np.zeros(robot.nv) if v0 is None else as_finite("v0", v0, robot.nv)
     if torque is not None and motor_torque is not None:
         raise InvalidInputError("motor_torque", "give either torque or motor_torque, not both")
-    fd = ForwardDynamics(
-        robot, integrator, passive=passive, viscous=viscous, coulomb=coulomb, warn_events=False
-    )
+    fd = ForwardDynamics(robot, integrator, passive=passive, viscous=viscous, coulomb=coulomb)
     drv = drives(robot)
     tau_fn = None
     if torque is not None:
         tau_fn = user_efforts("torque", torque, len(robot.actuators))
     elif motor_torque is not None or not drv.lossless:
         tau_fn = _through_drives(robot, motor_torque)
-    out = fd.simulate(q, v, duration, dt, tau=tau_fn, record_every=record_every, step=step)
-    if out.events:
-        warn(singularity_warning(robot.name, out.events, out.valid_until))
-    return out
+    return fd._simulate(q, v, duration, dt, tau_fn, record_every, 0.0, step)
 
 
 def singularity_warning(
@@ -472,9 +467,22 @@ class ForwardDynamics(_SolverDynamics):
         _check_work(self.robot, duration, dt if step is None else min(dt, step), record_every)
         q = as_configuration(self.model, "q0", q0)
         v = as_finite("v0", v0, self.model.nv)
-        fn = self._torque(tau)
+        return self._simulate(q, v, duration, dt, self._torque(tau), record_every, t0, step)
+
+    def _simulate(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        duration: float,
+        dt: float,
+        tau: TorqueFn | None,
+        record_every: int,
+        t0: float,
+        step: float | None,
+    ) -> ForwardResult:
+        """:meth:`simulate` on checked arguments (``tau`` already wrapped)."""
         try:
-            out = super().simulate(q, v, duration, dt, fn, record_every, t0, step)
+            out = super().simulate(q, v, duration, dt, tau, record_every, t0, step)
         except IntegrationError as err:
             raise SimulationError(_untimed(str(err), err.time), err.time) from None
         except np.linalg.LinAlgError as err:
