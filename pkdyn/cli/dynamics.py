@@ -50,6 +50,8 @@ def _cmd_simulate(args: argparse.Namespace) -> None:
         "energy_drift_rel": res.energy_drift(),
         "max_kinetic_energy": float(np.max(res.kinetic)),
         "projections": int(res.projections),
+        "singular_passages": [ev.to_json() for ev in res.events],
+        "valid_until": float(res.valid_until),
     }
     text = (
         f"{robot.name}: {payload['duration']:g} s passive under gravity, {payload['steps']} steps "
@@ -58,6 +60,14 @@ def _cmd_simulate(args: argparse.Namespace) -> None:
         f"energy drift:         {payload['energy_drift_rel']:.3g} (relative to the largest "
         f"kinetic energy, {payload['max_kinetic_energy']:.4g} J)"
     )
+    for ev in res.events:
+        text += f"\nsingular passage:     {ev.describe()}"
+    if res.events and res.valid_until < res.t[-1]:
+        text += (
+            f"\nexact rigid motion up to t = {res.valid_until:.6g} s (the first passage "
+            "through a singularity); energy drift up to there: "
+            f"{res.energy_drift(res.valid_until):.3g}"
+        )
     emit(args, payload, text)
 
 
