@@ -174,10 +174,9 @@ class ForwardDynamics:
             state evaluated, by the cut-off rule at :data:`solvers.conditioning.SINGULAR`).
 
     Attributes:
-        events: The passages near or through singularities of the closures
-            (:class:`~solvers.conditioning.SingularityEvent`) since the last
-            :meth:`simulate` (or since construction, for :meth:`step`), in time order.
-        conditioning: The conditioning ``kappa`` at the last check (1 without rigid closures).
+        conditioning: The conditioning ``kappa`` at the last check (1 without rigid closures);
+            the passages near or through singularities since the last :meth:`simulate` (or
+            since construction, for :meth:`step`) are :attr:`events`.
 
     Raises:
         ValueError: Unknown integrator or inconsistent sizes.
@@ -440,7 +439,11 @@ class ForwardDynamics:
 
     @property
     def events(self) -> list[SingularityEvent]:
-        """Passages near or through singularities of the closures, in time order."""
+        """Passages near or through singularities of the closures, in time order.
+
+        (:class:`~solvers.conditioning.SingularityEvent`; since the last :meth:`simulate`, or
+        since construction for :meth:`step`.)
+        """
         return self.passages.events
 
     def _kappa(self, data: pin.Data | None = None) -> float:
