@@ -278,7 +278,7 @@ class ForwardDynamics:
         self.conditioner = Conditioning(list(self.constraint_models), length_scale, closure_rank)
         self.passages = Passages()
         self.conditioning = 1.0  # kappa at the last check
-        self._watch = self.closure_set.n_rigid > 0
+        self._watch = len(self.constraint_models) > 0
         self._cond_t = math.nan  # time of the last check [s]
         self._cond_rate = 0.0  # d kappa / dt between the last two checks [1/s]
         self._h_cond = math.inf  # dopri5 substep limit from the conditioning [s]
@@ -384,7 +384,8 @@ class ForwardDynamics:
             The acceleration (nv,); ``data.lambda_c`` updated.
 
         """
-        data, cond, nc, prox = self.data, self.conditioner, self.closure_set.n_rigid, self.prox
+        data, cond, prox = self.data, self.conditioner, self.prox
+        nc = cond.nc  # the rows of Pinocchio's constraint models (the KKT system)
         J = pin.getConstraintsJacobian(
             self.model, data, self.constraint_models, self.constraint_datas
         )
