@@ -19,22 +19,29 @@ others; least squares invert only the ones that count (minimum-norm solution).
   exceeds it).
 
 Everything that decides a rank (mobility, kinematic models, singularities, trajectory mapping,
-constrained inverse dynamics, state projection) goes through this module. Robot-agnostic (numpy
-only).
+constrained inverse dynamics, state projection) goes through this module, and so does the
+**elimination of the passive joints** (:func:`passive_elimination`: the one rule by which the
+kinematic models, the pose sensitivities of accuracy and calibration, and the motions of
+identification solve the closures for the passive rates). Robot-agnostic (numpy only).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 __all__ = [
     "RTOL",
+    "PassiveElimination",
     "cutoff",
     "left_null_space",
     "lstsq",
     "lstsq_null",
     "machine_rtol",
     "null_space",
+    "passive_elimination",
+    "passive_solve",
     "range_space",
     "rank",
     "rank_of",
@@ -258,3 +265,202 @@ def scaled_margins(
     sA = np.linalg.svd(-rows[..., n_a:], compute_uv=False)
     sB = np.linalg.svd(rows[..., :n_a], compute_uv=False)
     return sA, sB, rows
+
+
+# ---------------------------------------------------------------------- passive-joint elimination
+
+
+@dataclass(frozen=True, eq=False)  # numpy fields
+class PassiveElimination:
+    """The closures solved for the passive rates: ``Jp dq_p = -r`` in the least-squares sense.
+
+    One singular value decomposition of the passive columns ``Jp`` (nc, n_p) of a closure
+    Jacobian (or a stack of them, (..., nc, n_p)), ``Jp = U diag(s) V^T``, with the singular
+    values that count by the cut-off rule kept (:func:`passive_elimination`). The passive rates
+    absorbing closure residual rates ``r`` are the minimum-norm least-squares solution
+    ``dq_p = -Jp^+ r`` (internal mobilities, e.g. the spin of a Delta's bars, stay still); what
+    they cannot absorb is the **gap** ``r - Jp Jp^+ r`` (an over-constrained mechanism: the
+    out-of-plane errors of a planar loop).
+
+    Attributes:
+        U: Left singular vectors (..., nc, k), ``k = min(nc, n_p)``.
+        s: Singular values (..., k), largest first.
+        Vt: Right singular vectors (..., k, n_p).
+        keep: Which singular values count (..., k).
+        margin: ``s[rank - 1] / max(s_max, scale)`` with the rank asked for (or found): how far
+            the passive joints are from losing a direction (0: exactly singular; 1 for no
+            passive joint or no closure).
+        singular: ``margin <= rtol``: with a structural rank given, the closures no longer
+            determine the passive rates in one of its directions (a parallel singularity).
+
+    """
+
+    U: np.ndarray
+    s: np.ndarray
+    Vt: np.ndarray
+    keep: np.ndarray
+    margin: np.ndarray | float
+    singular: np.ndarray | bool
+
+    @property
+    def rank(self) -> np.ndarray | int:
+        """Number of singular values that count (per matrix of a stack)."""
+        r = np.count_nonzero(self.keep, axis=-1)
+        return int(r) if np.ndim(r) == 0 else r
+
+    def solve(self, r: np.ndarray) -> np.ndarray:
+        """``Jp^+ r``: the minimum-norm least-squares solution of ``Jp x = r``.
+
+        Args:
+            r: Right-hand sides (..., nc) or (..., nc, m) (the closure rows of actuator
+                columns, of parameters...).
+
+        Returns:
+            ``x`` (..., n_p) or (..., n_p, m); the passive rates that absorb ``r`` are ``-x``.
+
+        """
+        vec = np.ndim(r) == self.U.ndim - 1
+        R = np.asarray(r, dtype=float)[..., None] if vec else np.asarray(r, dtype=float)
+        s_inv = np.where(self.keep, 1.0 / np.where(self.keep, self.s, 1.0), 0.0)
+        y = (np.swapaxes(self.U, -1, -2) @ R) * s_inv[..., :, None]
+        x = np.swapaxes(self.Vt, -1, -2) @ y
+        return x[..., 0] if vec else x
+
+    def gap(self, r: np.ndarray) -> np.ndarray:
+        """``r - Jp Jp^+ r``: the part of ``r`` no passive motion absorbs.
+
+        Args:
+            r: Right-hand sides (..., nc) or (..., nc, m).
+
+        Returns:
+            The gap, same shape as ``r``.
+
+        """
+        vec = np.ndim(r) == self.U.ndim - 1
+        R = np.asarray(r, dtype=float)[..., None] if vec else np.asarray(r, dtype=float)
+        Uk = self.U * self.keep[..., None, :]
+        out = R - Uk @ (np.swapaxes(Uk, -1, -2) @ R)
+        return out[..., 0] if vec else out
+
+
+def passive_elimination(
+    Jp: np.ndarray, rtol: float = RTOL, scale: float = 1.0, rank: int | None = None
+) -> PassiveElimination:
+    """Eliminate the passive joints: the one rule (see :class:`PassiveElimination`).
+
+    **The rule.** The passive columns ``Jp`` of a closure Jacobian are in SI units with entries
+    of order one (metres per radian of a robot of metre size, radians per radian, metres per
+    metre), so they are judged with the cut-off rule of this module at ``scale`` = 1: a singular
+    value counts when ``s > rtol * max(s_max, 1)`` (redundant closure rows, e.g. the
+    out-of-plane rows of a planar hinge, fall to ~1e-16 and are dropped; a robot's closures sit
+    far above 1e-9). A caller that knows how many passive directions the closures determine at a
+    regular configuration (the **structural rank**, e.g. found at the robot's home) passes it as
+    ``rank``: those values count whatever their size, and ``singular`` says when the smallest
+    of them falls to the cut-off (a parallel singularity: the actuators no longer determine the
+    passive joints, and every rate or sensitivity eliminated through them is unbounded).
+
+    Args:
+        Jp: Passive columns (nc, n_p), or a stack (..., nc, n_p).
+        rtol: Relative tolerance (:data:`RTOL`).
+        scale: Reference magnitude (1: closure Jacobians in SI units).
+        rank: Structural rank (``None``: the cut-off rule decides, per matrix).
+
+    Returns:
+        The elimination.
+
+    """
+    J = np.asarray(Jp, dtype=float)
+    nc, n_p = J.shape[-2], J.shape[-1]
+    k = min(nc, n_p)
+    if k == 0:
+        shape = J.shape[:-2]
+        return PassiveElimination(
+            np.zeros(shape + (nc, 0)),
+            np.zeros(shape + (0,)),
+            np.zeros(shape + (0, n_p)),
+            np.zeros(shape + (0,), dtype=bool),
+            1.0 if not shape else np.ones(shape),
+            False if not shape else np.zeros(shape, dtype=bool),
+        )
+    U, s, Vt = np.linalg.svd(J, full_matrices=False)
+    ref = np.maximum(s[..., 0], scale)
+    if rank is None:
+        keep = s > rtol * ref[..., None]
+        r = np.count_nonzero(keep, axis=-1)
+    else:
+        r = np.full(s.shape[:-1], min(int(rank), k))
+        keep = np.arange(k) < r[..., None]
+    last = np.take_along_axis(s, np.maximum(r - 1, 0)[..., None], axis=-1)[..., 0]
+    margin = np.where(r > 0, last / np.where(ref > 0.0, ref, 1.0), 1.0)
+    singular = (r > 0) & (margin <= rtol)
+    if margin.ndim == 0:
+        return PassiveElimination(U, s, Vt, keep, float(margin), bool(singular))
+    return PassiveElimination(U, s, Vt, keep, margin, singular)
+
+
+_GRAM_RTOL = 1e-12
+"""Smallest eigenvalue of a Gram matrix, relative to its largest, solved by normal equations."""
+
+
+def passive_solve(
+    Jp: np.ndarray, x: np.ndarray, rtol: float = RTOL, scale: float = 1.0
+) -> np.ndarray:
+    """``Jp^+ x`` over a stack of closure Jacobians of one motion, by the elimination's rule.
+
+    The same rule, fast on long stacks (identification's thousands of samples): the rank is
+    decided once, on the first matrix of the stack (its singular values by the cut-off rule),
+    then every matrix is solved by normal equations: of its columns when the rank is the number
+    of passive joints (the least-squares solution), else of a set of independent rows (chosen on
+    the first matrix by a pivoted QR; the minimum-norm solution, exact for right-hand sides in
+    the range, as the velocities and accelerations of a motion are: redundant closure rows stay
+    redundant along it). A matrix whose normal equations are ill-conditioned there (a condition
+    number beyond 1e6: a near-singular sample) is solved by its own decomposition.
+
+    Args:
+        Jp: Passive columns (n, nc, n_p).
+        x: Right-hand sides (n, nc) or (n, nc, k).
+        rtol: Relative tolerance (:data:`RTOL`).
+        scale: Reference magnitude (1: closure Jacobians in SI units).
+
+    Returns:
+        ``Jp^+ x``: (n, n_p) or (n, n_p, k).
+
+    """
+    import scipy.linalg
+
+    J = np.asarray(Jp, dtype=float)
+    X = np.asarray(x, dtype=float)
+    vec = X.ndim == 2
+    if vec:
+        X = X[..., None]
+    n, nc, n_p = J.shape
+    out = np.zeros((n, n_p, X.shape[-1]))
+    r = int(passive_elimination(J[0], rtol, scale).rank) if n and nc and n_p else 0
+    if r == 0:
+        return out[..., 0] if vec else out
+    JT = np.swapaxes(J, 1, 2)
+    if r == n_p:  # full column rank: least squares
+        G, rhs = JT @ J, JT @ X
+    else:
+        rows = slice(None)
+        if r < nc:
+            _, _, piv = scipy.linalg.qr(J[0].T, mode="economic", pivoting=True)
+            rows = np.sort(piv[:r])  # type: ignore[assignment]
+        Jr = J[:, rows, :]
+        G, rhs = Jr @ np.swapaxes(Jr, 1, 2), X[:, rows, :]
+    try:
+        L = np.linalg.cholesky(G)
+        d = np.diagonal(L, axis1=1, axis2=2) ** 2
+        bad = d.min(axis=1) <= _GRAM_RTOL * np.diagonal(G, axis1=1, axis2=2).max(axis=1)
+    except np.linalg.LinAlgError:
+        bad = np.ones(n, dtype=bool)
+    if not bad.any():
+        y = np.linalg.solve(G, rhs)
+        out = y if r == n_p else np.swapaxes(Jr, 1, 2) @ y
+    elif not bad.all():
+        good = ~bad
+        y = np.linalg.solve(G[good], rhs[good])
+        out[good] = y if r == n_p else np.swapaxes(Jr[good], 1, 2) @ y
+    if bad.any():
+        out[bad] = passive_elimination(J[bad], rtol, scale).solve(X[bad])
+    return out[..., 0] if vec else out

@@ -137,7 +137,6 @@ NUMBERS = {
     "stiffness nan": ([*S, "--actuator-stiffness", "nan"], "must be > 0"),
     "stiffness zero": ([*S, "--actuator-stiffness", "0"], "must be > 0"),
     "stiffness 1e308": ([*S, "--actuator-stiffness", "1e308"], "beyond any plausible"),
-    "stiffness all rigid": ([*S, "--actuator-stiffness", "inf"], "stiffness is infinite"),
     "stiffness undescribed": (S, "no stiffness described for actuator 'motor1'"),
     "material unknown": ([*S, *K, "--material", "unobtanium"], "unknown material"),
     "wrench nan": ([*S, *K, "--wrench", "nan", "0", "0"], "component 1 is nan"),

@@ -203,8 +203,8 @@ class ActuationMap:
 
     def _solve(self, q0: np.ndarray, free: np.ndarray) -> tuple[np.ndarray, bool]:
         robot, data = self.robot, self._data
-        cs = robot.closure_set
-        if cs.nc == 0:
+        cs = robot.constraints
+        if cs.n == 0:
             return q0, True
         sol = solve_lm(
             robot.model,
@@ -330,8 +330,8 @@ class ActuationMap:
         """Jacobians, reflected inertias, condition number and singularity at ``q``."""
         robot, data = self.robot, self._data
         mv = self.moving_v
-        if robot.closure_set.nc:
-            Jc = robot.closure_set.jacobian(data, q)[:, mv]
+        if robot.constraints.n:
+            Jc = robot.constraints.jacobian(data, q)[:, mv]
             Z = numerics.null_space(Jc, RANK_RTOL, 1.0)
         else:
             Z = np.eye(mv.size)

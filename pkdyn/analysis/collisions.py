@@ -202,6 +202,13 @@ class CollisionChecker:
                 f"loaded: {missing_list(robot.missing_meshes)} (pass package_dirs= or fix "
                 "the paths)"
             )
+        if robot.dropped_collisions:
+            raise PkdynError(
+                f"{robot.name}: collision checks need the collision geometry that was left out "
+                f"when it was loaded (malformed): {'; '.join(robot.dropped_collisions[:3])}"
+                + (" ..." if len(robot.dropped_collisions) > 3 else "")
+                + " (fix the description)"
+            )
         self.robot = robot
         self.ids = collision_pairs(robot, pairs)
         if not self.ids:

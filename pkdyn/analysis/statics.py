@@ -18,10 +18,12 @@ Jacobian, ``J6`` the 6D platform Jacobian and ``g`` the generalised gravity (opt
 springs' generalized force ``f_s(q)`` on the left when the robot has springs (``robot.passive``;
 dampers and friction vanish at rest: the smooth friction model holds nothing), solved in
 the least-squares sense (minimum norm in ``lambda`` when closure equations are redundant, e.g.
-hinges). ``lambda`` holds the closure forces, with the sign of the residual conventions of
-:mod:`solvers.closure`: for a ``point`` closure (residual ``p1 - p2``), the force [N] body 2
-exerts on body 1 at the contact point, world axes; for a 6D weld (residual
-``log6(oMc1^-1 oMc2)``), the wrench [N, N m] body 1 exerts on body 2, in the contact frame.
+an over-constrained loop). ``lambda`` holds the multipliers of the constraint rows
+(``robot.constraints``), with the sign of the residual conventions of :mod:`solvers.closure`:
+for the point rows of a closure (residual ``p1 - p2``), the force [N] body 2 exerts on body 1 at
+the contact point, world axes; for a 6D weld (residual ``log6(oMc1^-1 oMc2)``), the wrench
+[N, N m] body 1 exerts on body 2, in the contact frame; then the couplings' generalized forces.
+:func:`closure_reactions` turns them into one force and one moment per closure.
 """
 
 from __future__ import annotations
@@ -118,9 +120,8 @@ class Reaction:
 
     What the closure's second body (its ``frame2`` link) exerts on the first, world axes, the
     moment about the closure point (``frame1``'s origin). A ``point`` closure carries no moment;
-    a ``hinge``, built from two point constraints along its axis (whose individual forces are
-    only defined up to an exchange along the axis), gets their resultant and the moment of the
-    second about the first's point (normal to the axis); a ``weld`` carries both.
+    a ``hinge`` a moment normal to its axis; a ``weld`` both
+    (:meth:`solvers.ConstraintSet.reactions`).
 
     Attributes:
         force: Force (3,) [N].
@@ -148,33 +149,16 @@ def closure_reactions(robot: Robot, q: np.ndarray, lambdas: np.ndarray) -> dict[
     Args:
         robot: The robot.
         q: Configuration (nq,).
-        lambdas: Closure forces (nc,) in the convention of the module docstring.
+        lambdas: Constraint forces (n,) in the convention of the module docstring (the
+            couplings' rows, if any, are not closures: left out).
 
     Returns:
         ``{closure name: Reaction}``, in the description's order.
 
     """
-    model, data = robot.model, robot.model.createData()
-    pin.forwardKinematics(model, data, q)
-    cs = robot.closure_set
-    out: dict[str, Reaction] = {}
-    for k, (is_point, j1, M1, j2, M2) in enumerate(cs.items):
-        lam = np.asarray(lambdas[cs.offsets[k] : cs.offsets[k + 1]], dtype=float)
-        owner = robot.constraint_owner[k]
-        p = (data.oMi[j1] * M1).translation
-        if is_point:
-            force, moment = lam.copy(), np.zeros(3)
-        else:  # the wrench body 1 exerts on body 2, contact frame: minus it, in world axes
-            R = (data.oMi[j2] * M2).rotation
-            force, moment = -(R @ lam[:3]), -(R @ lam[3:])
-        if owner in out:  # a hinge's second point: add it to the first, with its moment
-            first = out[owner]
-            out[owner] = Reaction(
-                first.force + force, first.moment + np.cross(p - first.point, force), first.point
-            )
-        else:
-            out[owner] = Reaction(force, moment, np.array(p))
-    return out
+    cs = robot.constraints
+    out = cs.reactions(robot.model.createData(), q, np.asarray(lambdas, dtype=float))
+    return {name: Reaction(f, m, p) for name, (f, m, p) in out.items()}
 
 
 @dataclass
@@ -183,7 +167,7 @@ class StaticsResult:
 
     Attributes:
         tau: Actuator efforts (n_a,) [N m or N].
-        lambdas: Closure forces (nc,) [N, N m] (convention in the module docstring).
+        lambdas: Constraint forces (n,) [N, N m] (convention in the module docstring).
         reactions: One force and one moment per closure, by closure name (:class:`Reaction`).
         residual: Norm of the unbalanced generalised force [N m or N] (round-off when the
             equilibrium exists).
@@ -270,8 +254,7 @@ def static_equilibrium(
             f"{robot.name}: parallel singularity: actuator efforts are not unique here",
         )
     tau, lam = sol[:n_a], sol[n_a:]
-    cs = robot.closure_set
-    couplings = {c.name: float(lam[cs.n_rigid + i]) for i, c in enumerate(cs.couplings)}
+    couplings = robot.constraints.coupling_forces(lam)
     return StaticsResult(tau, lam, closure_reactions(robot, km.q, lam), residual, couplings)
 
 

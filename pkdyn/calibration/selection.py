@@ -136,8 +136,8 @@ def design_matrix(
     for i, q in enumerate(qs):
         s = pose_sensitivity(robot, q, model)
         out[i] = s.K[:d] / w[:, None]
-        if s.closure_gap.size:
-            gap = np.maximum(gap, np.max(np.abs(s.closure_gap), axis=0))
+        if s.gap.size:
+            gap = np.maximum(gap, np.max(np.abs(s.gap), axis=0))
     out[:, :, gap > 1e-9] = 0.0
     return out
 

@@ -413,8 +413,8 @@ class _Problem:
         self.last_gap = np.zeros(self.model.size)
         for i, (q, M) in enumerate(zip(qs, poses, strict=True)):
             sens = pose_sensitivity(P.robot, q, self.model, at=p)
-            if sens.closure_gap.size:
-                g = np.max(np.abs(sens.closure_gap), axis=0)
+            if sens.gap.size:
+                g = np.max(np.abs(sens.gap), axis=0)
                 self.last_gap = np.maximum(self.last_gap, g)
             K = sens.K[:, cols]
             if m.kind == "joints":

@@ -168,6 +168,10 @@ def load(args: argparse.Namespace, geometry: bool = False) -> Any:
         from pkdyn.model.formats.xacro_files import parse_xacro_args
 
         extra["xacro_args"] = parse_xacro_args(args.xacro_arg)
+    if getattr(args, "ignore_element", None):
+        extra["ignore_elements"] = tuple(args.ignore_element)
+    if getattr(args, "repair_inertias", False):
+        extra["repair_inertias"] = True
     robot = pkdyn.load(args.robot, geometry=geometry, **extra, **params(args.param))
     _resolve_readings(args, robot)
     return robot
@@ -315,6 +319,20 @@ def robot_command(
         action="append",
         metavar="NAME:=VALUE",
         help="argument of a .xacro file (repeatable), e.g. --xacro-arg prefix:=left_",
+    )
+    sp.add_argument(
+        "--ignore-element",
+        action="append",
+        metavar="NAME",
+        help="leave the file's elements of this name out (repeatable), e.g. --ignore-element "
+        "loop: an element pkdyn does not read whose name says loop, closure, constraint or "
+        "coupling is otherwise an error",
+    )
+    sp.add_argument(
+        "--repair-inertias",
+        action="store_true",
+        help="replace the file's physically invalid inertia tensors by the nearest valid ones "
+        "(same principal axes; the links are named)",
     )
     return sp
 

@@ -26,7 +26,7 @@ from pkdyn.cli._common import (
     units,
 )
 from pkdyn.exceptions import OutputError, PkdynError
-from pkdyn.model.description import CouplingSpec
+from pkdyn.model.description import CouplingSpec, LinearCouplingSpec
 from pkdyn.model.robot import PLATFORM_HINT
 
 __all__ = ["register"]
@@ -66,17 +66,7 @@ def _cmd_info(args: argparse.Namespace) -> None:
         "actuation": actuation,
         "loops": robot.loops,
         "closures": closures,
-        "couplings": [
-            {
-                "name": c.name,
-                "joint": c.joint,
-                "source": c.source,
-                "coefficients": list(c.coefficients),
-                "joint_ref": c.joint_ref,
-                "source_ref": c.source_ref,
-            }
-            for c in robot.couplings
-        ],
+        "couplings": [_coupling_json(c) for c in robot.couplings],
     }
     from pkdyn.model.passive import passive_summary
 
@@ -101,8 +91,32 @@ def _cmd_info(args: argparse.Namespace) -> None:
     emit(args, payload, "\n".join(lines))
 
 
-def _coupling_text(c: CouplingSpec) -> str:
-    """``name (joint = p(source))`` of a coupling, coefficients constant term first."""
+def _coupling_json(c: CouplingSpec | LinearCouplingSpec) -> dict[str, Any]:
+    """A coupling's fields: ``terms`` and ``offset`` of a linear one, the polynomial's else."""
+    if isinstance(c, LinearCouplingSpec):
+        return {
+            "name": c.name,
+            "terms": [{"joint": j, "coefficient": a} for j, a in c.terms],
+            "offset": c.offset,
+        }
+    return {
+        "name": c.name,
+        "joint": c.joint,
+        "source": c.source,
+        "coefficients": list(c.coefficients),
+        "joint_ref": c.joint_ref,
+        "source_ref": c.source_ref,
+    }
+
+
+def _coupling_text(c: CouplingSpec | LinearCouplingSpec) -> str:
+    """``name (joint from source, coefficients)`` or ``name (a1 joint1 + a2 joint2 = b)``."""
+    if isinstance(c, LinearCouplingSpec):
+        lhs = " ".join(
+            f"{'-' if a < 0 else '+'} {'' if abs(a) == 1.0 else f'{abs(a):.6g} '}{j}"
+            for j, a in c.terms
+        ).removeprefix("+ ")
+        return f"{c.name} ({lhs} = {c.offset:.6g})"
     coef = " ".join(f"{v:.6g}" for v in c.coefficients)
     if c.source is None:
         return f"{c.name} ({c.joint} locked at {c.joint_ref + c.coefficients[0]:.6g})"
@@ -155,6 +169,14 @@ def _cmd_urdf(args: argparse.Namespace) -> None:
                 f"{args.robot} is an {fmt.upper()} description; 'pkdyn urdf' writes library "
                 "robots and URDF files (use 'pkdyn mjcf' for a MuJoCo model)"
             )
+        from pkdyn.model.formats.urdfplus_export import pkdyn_description
+
+        text = pkdyn_description(  # URDF+ loops, couplings, actuation in pkdyn's elements
+            text,
+            args.robot,
+            ignore_elements=tuple(args.ignore_element or ()),
+            repair_inertias=args.repair_inertias,
+        )
         del pkdyn
     if args.output:
         from pkdyn.files import atomic_write
@@ -258,8 +280,10 @@ def _cmd_statics(args: argparse.Namespace) -> None:
             f"closure {name}: force {_vector(r['force'])} N, moment {_vector(r['moment'])} N m "
             f"about {_vector(r['point'])} m (on its first body, world axes)"
         )
+    linear = {c.name for c in robot.couplings if isinstance(c, LinearCouplingSpec)}
     for name, f in out["couplings"].items():
-        lines.append(f"coupling {name}: {f + 0.0:.6g} (N m or N, on its driven joint)")
+        on = "each joint times its coefficient" if name in linear else "on its driven joint"
+        lines.append(f"coupling {name}: {f + 0.0:.6g} (N m or N, {on})")
     emit(args, out, "\n".join(lines))
 
 

@@ -37,7 +37,10 @@ Built-in metrics (:data:`METRICS`; groups of them: :data:`GROUPS`):
 - on the required workspace, precision (:mod:`pkdyn.precision`, with the study's
   ``actuator_stiffness`` and ``material``): ``stiffness_min`` [N/m] (smallest principal
   translational stiffness; 0 when a required pose is singular), ``f1_min`` [Hz] (lowest natural
-  frequency);
+  frequency). Options that cannot give them are refused before the study starts
+  (:func:`check_precision`): no actuator stiffness given or described, a count that does not
+  match the actuators, rigid actuators (``inf``) with nothing else compliant (the figures would
+  be infinite: the robot is rigid), no required workspace;
 - on the required workspace: ``error_max`` [m], the largest worst-case platform position error
   of actuator errors of :data:`pkdyn.precision.accuracy.DEFAULT_RESOLUTION` (1e-4 rad, 1e-5 m);
 - ``base_radius`` [m]: largest distance of a base joint from the z axis (a footprint);
@@ -58,7 +61,16 @@ from pkdyn.design.context import DesignContext
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
 
-__all__ = ["GROUPS", "METRICS", "Metric", "metric", "resolve_metrics"]
+__all__ = [
+    "GROUPS",
+    "METRICS",
+    "PRECISION_METRICS",
+    "WORKSPACE_METRICS",
+    "Metric",
+    "check_precision",
+    "metric",
+    "resolve_metrics",
+]
 
 MetricFn = Callable[[Robot, DesignContext], float]
 
@@ -306,6 +318,56 @@ def _per_actuator(name: str) -> Metric | None:
 
 
 # ---------------------------------------------------------------------- precision
+
+PRECISION_METRICS = ("stiffness_min", "f1_min")
+"""Metrics of the elastic model (they need the actuators' stiffness)."""
+
+WORKSPACE_METRICS = ("stiffness_min", "f1_min", "error_max")
+"""Precision metrics evaluated over the required workspace (they need one)."""
+
+
+def check_precision(metrics: Sequence[Metric], conditions: Any, robot: Robot) -> None:
+    """Refuse, before a study starts, precision options that cannot give a metric.
+
+    Args:
+        metrics: The study's metrics.
+        conditions: Its :class:`pkdyn.design.context.Conditions`.
+        robot: A design of the study (its actuators and description).
+
+    Raises:
+        InvalidInputError: No actuator stiffness given nor described, a count that does not
+            match the actuators, or every actuator rigid with nothing else compliant (one line,
+            naming the option and the fix).
+
+    """
+    names = [m.name for m in metrics if m.name in PRECISION_METRICS]
+    if not names:
+        return
+    from pkdyn.precision.elastic import actuator_stiffness
+
+    what = f"metric '{names[0]}'"
+    try:
+        k = actuator_stiffness(robot, conditions.actuator_stiffness)
+    except InvalidInputError as err:
+        text = str(err).removeprefix(f"{err.name}: ")
+        raise InvalidInputError(
+            "actuator_stiffness",
+            f"{what} needs each actuator's stiffness: {text} (study setting actuator_stiffness)",
+        ) from None
+    desc = robot.description
+    compliant = (
+        conditions.material is not None
+        or desc.material is not None
+        or any(c.compliance is not None or c.material is not None for c in desc.compliance)
+        or (robot.passive is not None and bool(np.any(robot.passive.stiffness > 0.0)))
+    )
+    if np.all(np.isinf(k)) and not compliant:
+        raise InvalidInputError(
+            "actuator_stiffness",
+            f"{what}: every actuator is rigid (inf) and nothing else is compliant: every design "
+            "is rigid (infinite stiffness and frequencies), no metric to compare; give finite "
+            "actuator stiffnesses or a material for the links (--material)",
+        )
 
 
 def _precision(ctx: DesignContext, frequency: bool) -> np.ndarray:

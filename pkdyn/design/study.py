@@ -37,7 +37,14 @@ import numpy as np
 from pkdyn.design import fields
 from pkdyn.design.context import Conditions
 from pkdyn.design.goals import Constraint, Objective
-from pkdyn.design.metrics import METRICS, Metric, resolve_metrics
+from pkdyn.design.metrics import (
+    METRICS,
+    PRECISION_METRICS,
+    WORKSPACE_METRICS,
+    Metric,
+    check_precision,
+    resolve_metrics,
+)
 from pkdyn.design.requirement import Requirement
 from pkdyn.design.samplers import SAMPLERS, check_count, unit_points
 from pkdyn.design.space import DesignSpace, Range
@@ -187,11 +194,25 @@ class Study:
         set_(self, "name", fields.text("name", self.name))
         # validate now: bad input fails before any design is evaluated
         _ = self.space, self.conditions, self.metric_list
+        self._check_precision()
         set_(self, "fixed", dict(self.space.fixed))  # text values converted by the space
         _ = self.total
         if self.sampler == "nsga2" and not self.objectives:
             raise InvalidInputError("objectives", "nsga2 needs at least one objective")
         self._check_work(self._check_duty_cycle())
+
+    def _check_precision(self) -> None:
+        """Refuse precision options no design could turn into a metric (on the middle design)."""
+        if not any(m.name in PRECISION_METRICS for m in self.metric_list):
+            return
+        from pkdyn.design.evaluate import build
+        from pkdyn.exceptions import PkdynError
+
+        try:
+            robot = build(self, self.space.values(np.full((1, self.space.dimension), 0.5))[0])
+        except PkdynError:
+            return  # (the middle design does not build: each design says why)
+        check_precision(self.metric_list, self.conditions, robot)
 
     def _check_duty_cycle(self) -> int:
         """Build the duty cycle about a stand-in home: its options fail now, not per design.
@@ -269,6 +290,7 @@ class Study:
             raise InvalidInputError("metrics", "a study needs at least one metric (--metric)")
         metrics = resolve_metrics(names)
         needs = {"contains", "inv_cond_min", "inv_cond_mean", "interference_margin"}
+        needs |= set(WORKSPACE_METRICS)
         if self.requirement is None:
             used = sorted(needs & {m.name for m in metrics})
             if used:

@@ -188,7 +188,7 @@ def _check_work(robot: Robot, duration: float, dt: float, record_every: int) -> 
             f"{duration:g} s in steps of {dt:g} s is {steps:.3g} steps (hours of computing at "
             f"~50 us each); at most {MAX_STEPS:.0e}: use a longer dt or a shorter duration",
         )
-    nc = robot.closure_set.nc
+    nc = robot.constraints.n
     per_sample = 8 * (robot.nq + 3 * robot.nv + len(robot.actuators) + nc + 8)
     need = (steps / record_every + 2) * per_sample
     if need > MAX_RECORD_BYTES:
@@ -332,11 +332,10 @@ class ForwardDynamics(_SolverDynamics):
         try:
             super().__init__(
                 robot.model,
-                list(robot.constraint_models),
+                robot.constraints,
                 actuation(robot),
                 passive=forces,
                 integrator=integrator,
-                couplings=robot.closure_set.couplings,
                 length_scale=robot.length_scale,
                 **options,
             )

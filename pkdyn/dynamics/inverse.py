@@ -175,12 +175,11 @@ def inverse_dynamics(
         weights = 1.0 / effort**2
     solver = (MinMaxInverseDynamics if allocation == "max" else InverseDynamics)(
         robot.model,
-        list(robot.constraint_models),
+        robot.constraints,
         actuation(robot),
         lower=lower,
         upper=upper,
         weights=weights,
-        couplings=robot.closure_set.couplings,
     )
     elements = robot.passive if passive else None
     F_passive = None if elements is None else elements.forces(traj.q, traj.v)  # vectorised

@@ -97,8 +97,8 @@ def actuator_inertia(robot: Robot, q: np.ndarray, armature: bool = False) -> np.
     M = np.triu(M) + np.triu(M, 1).T
     if not armature:
         M -= np.diag(np.asarray(model.armature))
-    if robot.closure_set.nc:
-        _, J = robot.closure_set.residual_and_jacobian(data, q)
+    if robot.constraints.n:
+        _, J = robot.constraints.residual_and_jacobian(data, q)
         Z = null_space(J)
     else:
         Z = np.eye(model.nv)

@@ -9,7 +9,7 @@ its first two time derivatives. :func:`map_task_trajectory` turns it into a
   continuously and the internal mobilities follow their velocities);
 - ``v`` satisfies the closures (``Jc v = 0``) and gives the pose rates (``Jx v = x_dot``);
 - ``a`` satisfies the closures to second order (``Jc a = -gamma_c``, see
-  :meth:`solvers.ClosureSet.drift`) and gives the pose accelerations
+  :meth:`solvers.ConstraintSet.drift`) and gives the pose accelerations
   (``Jx a = x_ddot - gamma_x``);
 - the unactuated internal mobilities (e.g. the spin of a ball-ended Delta bar about its axis)
   move as the dynamics dictate: their accelerations solve ``N^T (M a + h) = 0`` with ``N`` the
@@ -559,7 +559,7 @@ def map_task_trajectory(
                 sample=k,
                 time=tk,
             )
-        gamma_c = robot.closure_set.drift(data, q, v)
+        gamma_c = robot.constraints.drift(data, q, v)
         gamma_x = _platform_drift(robot, q, v)[rows]
         rhs = np.concatenate([-gamma_c, xdd[rows] - gamma_x])
         a, res_a, _ = _lstsq(K, rhs, 1e-10)
@@ -577,7 +577,7 @@ def map_task_trajectory(
             MN = M @ Nint
             NMN = Nint.T @ MN
             v = v - Nint @ np.linalg.solve(NMN, MN.T @ v)
-            gamma_c = robot.closure_set.drift(data, q, v)
+            gamma_c = robot.constraints.drift(data, q, v)
             gamma_x = _platform_drift(robot, q, v)[rows]
             rhs = np.concatenate([-gamma_c, xdd[rows] - gamma_x])
             a, _, _ = _lstsq(K, rhs, 1e-10)

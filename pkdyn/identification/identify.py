@@ -73,8 +73,8 @@ def check_identifiable(robot: Robot) -> None:
             "efforts are not a function of the actuator motion; identification needs "
             "exactly one actuator per degree of freedom",
         )
-    if robot.closure_set.nc:
-        J = robot.closure_set.jacobian(robot.model.createData(), robot.q_home)
+    if robot.constraints.n:
+        J = robot.constraints.jacobian(robot.model.createData(), robot.q_home)
         Z = numerics.null_space(J, numerics.RTOL, 1.0)
         G = Z.T @ actuation(robot).matrix(robot.nv).T
         if numerics.rank(G, numerics.RTOL, 1.0) < n_a:
@@ -113,7 +113,7 @@ def _random_batches(robot: Robot, n: int, seed: int) -> list[MotionBatch]:
         qdd = robot.actuator_scale * rng.standard_normal((m, n_a)) * 10.0
         Q = np.tile(robot.q_home, (m, 1))
         Q[:, robot.actuated_q] = qa
-        J = np.zeros((m, robot.closure_set.nc, robot.nv))
+        J = np.zeros((m, robot.constraints.n, robot.nv))
         failed = sampler.newton_batch(Q, np.arange(m), J)
         keep = np.setdiff1d(np.arange(m), failed)
         if failed.size:  # the buffers of the kept samples moved to rows 0..k-1

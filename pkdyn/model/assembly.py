@@ -38,6 +38,7 @@ __all__ = [
     "assembly_modes",
     "inverse_geometry",
     "closure_residual",
+    "coupling_residual",
     "solve_pose",
 ]
 
@@ -45,7 +46,7 @@ DEFAULT_TOL = 1e-12
 """Convergence threshold on the largest closure / pose residual component [m or rad]."""
 
 _LOCAL_TOL = 1.0
-"""The solvers work on the contact-frame closure residual (:meth:`solvers.ClosureSet.
+"""The solvers work on the contact-frame closure residual (:meth:`solvers.ConstraintSet.
 local_residual`, the world one rotated: same norm per closure); ``tol`` applies to its
 components."""
 
@@ -84,33 +85,45 @@ class GeometryResult:
 
 
 def closure_residual(robot: Robot, q: np.ndarray) -> float:
-    """Largest absolute closure residual component at ``q`` [m or rad] (0 without loops)."""
-    if robot.closure_set.nc == 0:
+    """Largest absolute closure residual component at ``q`` [m or rad] (0 without loops).
+
+    The closures only: :func:`coupling_residual` gives the couplings'.
+    """
+    cs = robot.constraints.closures
+    if cs.n == 0:
         return 0.0
-    return float(np.max(np.abs(robot.closure_set.residual(robot.data, q))))
+    return float(np.max(np.abs(cs.residual(robot.data, q))))
+
+
+def coupling_residual(robot: Robot, q: np.ndarray) -> float:
+    """Largest absolute joint-coupling residual at ``q`` [rad or m] (0 without couplings)."""
+    cs = robot.constraints.couplings
+    if cs.n == 0:
+        return 0.0
+    return float(np.max(np.abs(cs.residual(robot.data, q))))
 
 
 def _solve_closures(
     robot: Robot, q0: np.ndarray, free: np.ndarray | None, tol: float
 ) -> SolveResult:
-    cs, data = robot.closure_set, robot.data
+    cs, data = robot.constraints, robot.data
     return solve_lm(
         robot.model,
         q0,
         partial(cs.local_residual, data),  # contact-frame residual: one copy per closure
-        partial(cs.local_jacobian_after_residual, data),  # at the last residual's q
+        partial(cs.local_jacobian_after_residual, data),  # where the residual just was
         free=free,
         tol=tol * _LOCAL_TOL,
     )
 
 
 def _worst(robot: Robot, q: np.ndarray) -> tuple[str, float]:
-    if robot.closure_set.nc == 0:
+    cs = robot.constraints
+    if cs.n == 0:
         return "-", 0.0
-    per = robot.closure_set.split(robot.closure_set.residual(robot.data, q))
-    owners = dict(zip(robot.closure_set.names, robot.row_owners, strict=True))
+    per = cs.split(cs.residual(robot.data, q))
     name = max(per, key=lambda k: per[k])
-    return owners[name], per[name]
+    return name, per[name]
 
 
 def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryResult:
@@ -145,7 +158,7 @@ def _seeded(
     rows = np.array([r for r in robot.task_rows if r < 3] or [0, 1, 2], dtype=int)
     task = FramePoseTask(robot.model, robot.platform_frame, rows)
     task.target = pin.SE3(np.eye(3), np.asarray(position, dtype=float))
-    cs, data = robot.closure_set, robot.data
+    cs, data = robot.constraints, robot.data
 
     def residual(q: np.ndarray) -> np.ndarray:
         return np.concatenate([cs.residual(data, q), task.residual(data)])
@@ -178,7 +191,7 @@ def project(robot: Robot, q: np.ndarray, tol: float = DEFAULT_TOL) -> np.ndarray
 
     """
     q = as_finite("q", q, robot.nq)
-    if robot.closure_set.nc == 0:
+    if robot.constraints.n == 0:
         return q
     sol = _solve_closures(robot, q, None, tol)
     if not sol.converged:
@@ -357,12 +370,12 @@ def inverse_geometry(
     if seeded is None:  # the working mode of the start, followed by continuation
         seeded = _ik_continuation(robot, q0, target, tol)
     q0 = q0 if seeded is None else seeded
-    cs = robot.closure_set
+    cs = robot.constraints
     sol = solve_pose(robot, task, q0, tol)
     if not sol.converged:
         pos, rpy = pose_to_vector(target)
         name, res = _worst(robot, sol.q)
-        pose_err = float(np.max(np.abs(sol.residual[cs.nc :])))
+        pose_err = float(np.max(np.abs(sol.residual[cs.n :])))
         raise UnreachablePoseError(
             name,
             res,
@@ -374,7 +387,7 @@ def inverse_geometry(
         _check_uncontrolled(robot, pose, target, sol.q)
     if check_limits:
         check_actuator_limits(robot, sol.q)
-    return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.nc]), initial=0.0)))
+    return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.n]), initial=0.0)))
 
 
 FAR = 100.0
@@ -523,7 +536,7 @@ def _fk_continuation(
     a0 = np.array(start[robot.actuated_q], dtype=float)
     scale = CONTINUATION_STEP * robot.actuator_scale
     n = int(np.ceil(min(np.max(np.abs(qa - a0) / scale, initial=0.0), MAX_CONTINUATION_STEPS)))
-    if n <= 1 or robot.closure_set.nc == 0:
+    if n <= 1 or robot.constraints.n == 0:
         return None
     q = np.array(start, dtype=float)
     for t in np.linspace(0.0, 1.0, n + 1)[1:]:
@@ -590,8 +603,8 @@ def solve_pose(
         The solver's outcome: closure rows first, then the task rows.
 
     """
-    cs, data = robot.closure_set, robot.data
-    nc = cs.nc
+    cs, data = robot.constraints, robot.data
+    nc = cs.n
 
     def residual(q: np.ndarray) -> np.ndarray:
         r_c = cs.local_residual(data, q)  # runs the kinematics
@@ -599,7 +612,7 @@ def solve_pose(
         return np.concatenate((r_c, r_t)) if nc else r_t
 
     def jacobian(q: np.ndarray) -> np.ndarray:  # at the last residual's configuration
-        J_c = cs.local_jacobian_after_residual(data)  # also the joint Jacobians of the task
+        J_c = cs.local_jacobian_after_residual(data, q)  # also the joint Jacobians of the task
         J_t = task.jacobian(data)
         return np.concatenate((J_c, J_t)) if nc else J_t
 

@@ -10,9 +10,15 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import PkdynError
-from pkdyn.model.description import ActuatorSpec, ClosureSpec, CouplingSpec, Description
+from pkdyn.model.description import (
+    ActuatorSpec,
+    ClosureSpec,
+    CouplingSpec,
+    Description,
+    LinearCouplingSpec,
+)
 from pkdyn.model.families import FAMILIES
-from solvers import ClosureSet, PassiveForces
+from solvers import ConstraintSet, PassiveForces
 from solvers.numerics import rank
 
 __all__ = ["PLATFORM_HINT", "MODELLING_JOINTS", "Robot"]
@@ -39,10 +45,11 @@ class Robot:
         visual_model: Visual geometry (coal shapes).
         collision_model: Collision geometry (coal shapes).
         description: The parsed extension elements.
-        constraint_models: Pinocchio rigid constraint models (a ``hinge`` gives two).
+        constraint_models: Pinocchio rigid constraint models (a ``hinge`` gives two points).
         constraint_owner: Closure name of each constraint model.
-        closure_set: Residual / Jacobian evaluator of the closures, then the joint couplings
-            (one row each, see :mod:`solvers.coupling`).
+        constraints: The constraint layer (:class:`solvers.ConstraintSet`): the closures' rows
+            (reduced to their independent rows), then one row per joint coupling; views
+            ``constraints.closures`` and ``constraints.couplings``.
         actuators: Actuators in actuator order.
         actuated_joints: Joint id of each actuator.
         actuated_q: Configuration index of each actuator (nq indexing).
@@ -57,6 +64,8 @@ class Robot:
         missing_meshes: Mesh files of the description that were not found: their shapes are
             left out of ``visual_model`` and ``collision_model`` (collision checks refuse to
             run, the viewer warns, both naming them).
+        dropped_collisions: Collision elements of the description left out because their
+            numbers were malformed (collision checks refuse to run, naming them).
 
     """
 
@@ -69,7 +78,7 @@ class Robot:
     description: Description
     constraint_models: pin.StdVec_RigidConstraintModel
     constraint_owner: list[str]
-    closure_set: ClosureSet
+    constraints: ConstraintSet
     actuators: tuple[ActuatorSpec, ...]
     actuated_joints: np.ndarray
     actuated_q: np.ndarray
@@ -81,6 +90,7 @@ class Robot:
     params: Any = None
     passive: PassiveForces | None = None
     missing_meshes: tuple[str, ...] = ()
+    dropped_collisions: tuple[str, ...] = ()
 
     @functools.cached_property
     def length_scale(self) -> float:
@@ -128,14 +138,19 @@ class Robot:
         return self.description.closures
 
     @property
-    def couplings(self) -> tuple[CouplingSpec, ...]:
-        """Joint couplings of the description (gears, mimic joints, locked joints)."""
+    def couplings(self) -> tuple[CouplingSpec | LinearCouplingSpec, ...]:
+        """Joint couplings of the description (sums, gears, mimic joints, locked joints)."""
         return self.description.couplings
 
     @property
+    def closure_set(self) -> ConstraintSet:
+        """The former name of :attr:`constraints` (kept for one release)."""
+        return self.constraints
+
+    @property
     def row_owners(self) -> list[str]:
-        """Closure or coupling name of each entry of ``closure_set`` (its ``names`` order)."""
-        return list(self.constraint_owner) + [c.name for c in self.closure_set.couplings]
+        """Closure or coupling name of each constraint of ``constraints`` (its ``names``)."""
+        return list(self.constraints.names)
 
     @property
     def actuator_prismatic(self) -> np.ndarray:
@@ -244,7 +259,7 @@ class Robot:
     def mobility(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
         """Mobility at ``q`` (default ``q_home``): nv minus the rank of the closure Jacobian.
 
-        The closure Jacobian includes the joint couplings' rows.
+        The constraint Jacobian includes the joint couplings' rows.
 
         Args:
             q: Configuration (nq,).
@@ -257,9 +272,9 @@ class Robot:
 
         """
         qq = self.q_home if q is None else q
-        if self.closure_set.nc == 0:
+        if self.constraints.n == 0:
             return self.nv
-        _, J = self.closure_set.residual_and_jacobian(self.data, qq)
+        _, J = self.constraints.residual_and_jacobian(self.data, qq)
         return self.nv - rank(J, tol, scale=1.0)
 
     def mobility_split(self, q: np.ndarray | None = None, tol: float = 1e-9) -> tuple[int, int]:
@@ -281,8 +296,8 @@ class Robot:
         """
         qq = self.q_home if q is None else q
         nv = self.nv
-        if self.closure_set.nc:
-            _, Jc = self.closure_set.residual_and_jacobian(self.data, qq)
+        if self.constraints.n:
+            _, Jc = self.constraints.residual_and_jacobian(self.data, qq)
             _, s, Vt = np.linalg.svd(Jc)
             rank = int(np.sum(s > tol * max(1.0, float(s[0]) if s.size else 0.0)))
             N = Vt[rank:].T
@@ -291,14 +306,9 @@ class Robot:
         total = N.shape[1]
         if self.platform_frame is None or total == 0:
             return total, 0
-        model, data = self.model, self.data
-        pin.computeJointJacobians(model, data, qq)
-        pin.updateFramePlacements(model, data)
-        lin = pin.getFrameJacobian(
-            model, data, self.platform_frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        )[:3]
-        ang = pin.getFrameJacobian(model, data, self.platform_frame, pin.ReferenceFrame.LOCAL)[3:]
-        Jx = np.vstack([lin, ang])[self.task_rows] @ N
+        from pkdyn.model.platform_jacobian import platform_jacobian
+
+        Jx = platform_jacobian(self, qq, angular="platform")[self.task_rows] @ N
         sx = np.linalg.svd(Jx, compute_uv=False)
         useful = int(np.sum(sx > tol * max(1.0, float(sx[0]) if sx.size else 0.0)))
         return useful, total - useful

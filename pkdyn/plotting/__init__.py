@@ -9,6 +9,20 @@ from __future__ import annotations
 
 from pkdyn.plotting.accuracy import plot_accuracy_map
 from pkdyn.plotting.maps import plot_conditioning_map
-from pkdyn.plotting.precision import plot_modes, plot_precision_map
+from pkdyn.plotting.precision import (
+    plot_grid_map,
+    plot_modes,
+    plot_monte_carlo,
+    plot_precision_map,
+    plot_ranking,
+)
 
-__all__ = ["plot_accuracy_map", "plot_conditioning_map", "plot_modes", "plot_precision_map"]
+__all__ = [
+    "plot_accuracy_map",
+    "plot_conditioning_map",
+    "plot_grid_map",
+    "plot_modes",
+    "plot_monte_carlo",
+    "plot_precision_map",
+    "plot_ranking",
+]

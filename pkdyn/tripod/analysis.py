@@ -46,7 +46,7 @@ from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
 from pkdyn.tripod.modes import branch_numbers, foot_placement
 from pkdyn.tripod.scenario import Phase, WalkPlan, plan_scenario
-from solvers import ClosureSet, numerics
+from solvers import numerics
 
 __all__ = [
     "LEGS",
@@ -280,7 +280,7 @@ def redundant_singularity_distance(robot: Robot, q: np.ndarray) -> float:
         The distance in ``[0, 1]``.
 
     """
-    Jc = robot.closure_set.jacobian(robot.data, q)
+    Jc = robot.constraints.jacobian(robot.data, q)
     rows = np.asarray(robot.task_rows, dtype=int)
     Jx = platform_jacobian(robot, q)[rows]
     a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)
@@ -322,14 +322,8 @@ def _analyse_phase(
     jt = phase.trajectory
     N = jt.t.size
     lock_names = {lk.name for lk in phase.mode.locks}
-    closures = ClosureSet(
-        r.model,
-        [
-            cm
-            for cm, o in zip(r.constraint_models, r.constraint_owner, strict=True)
-            if o not in lock_names
-        ],
-        r.closure_set.couplings,
+    closures = r.constraints.rebuilt(
+        closures=[c for c in r.constraints.closure_specs if c.name not in lock_names]
     )
     data = r.model.createData()
     lo = r.model.lowerPositionLimit[r.actuated_q]
