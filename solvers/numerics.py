@@ -19,10 +19,17 @@ others; least squares invert only the ones that count (minimum-norm solution).
   exceeds it).
 
 Everything that decides a rank (mobility, kinematic models, singularities, trajectory mapping,
-constrained inverse dynamics, state projection) goes through this module, and so does the
-**elimination of the passive joints** (:func:`passive_elimination`: the one rule by which the
-kinematic models, the pose sensitivities of accuracy and calibration, and the motions of
-identification solve the closures for the passive rates). Robot-agnostic (numpy only).
+constrained inverse dynamics, state projection, the identifiability of calibration and dynamic
+identification) goes through this module, and so does the **elimination of the passive joints**
+(:func:`passive_elimination`: the one rule by which the kinematic models, the pose sensitivities
+of accuracy and calibration, and the motions of identification solve the closures for the
+passive rates). Robot-agnostic (numpy only).
+
+**Identifiability** (:func:`column_basis`): the same rule on the diagonal of a QR factorisation
+of the columns (:func:`column_qr`), each column scaled by what its caller knows of it (unit
+columns by default): the independent columns, and of what combination of them each other column
+is (the base-parameter map of dynamic identification, the unidentifiable combinations of
+calibration).
 """
 
 from __future__ import annotations
@@ -32,8 +39,14 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = [
+    "IDENTIFIABILITY_RTOL",
     "RTOL",
+    "ZERO_RTOL",
+    "ColumnBasis",
+    "ColumnQR",
     "PassiveElimination",
+    "column_basis",
+    "column_qr",
     "cutoff",
     "left_null_space",
     "lstsq",
@@ -265,6 +278,217 @@ def scaled_margins(
     sA = np.linalg.svd(-rows[..., n_a:], compute_uv=False)
     sB = np.linalg.svd(rows[..., :n_a], compute_uv=False)
     return sA, sB, rows
+
+
+# ----------------------------------------------------------------------------------------------
+# Identifiability: which columns of a matrix are independent, and how the others combine
+#
+# Calibration (the identification Jacobian of the measured poses) and dynamic identification
+# (the regressor of the efforts) ask the same question of a matrix ``A`` (m, p) whose columns
+# are the effects of p parameters: which parameters can the data tell apart, and of what
+# combination of those is each other parameter's effect? Both answer it here, with the rule
+# above applied to the diagonal of a Householder QR factorisation of the scaled columns.
+
+ZERO_RTOL = 1e-12
+"""A column whose norm is at most this fraction of the largest column's (or of ``scale``) has no
+effect at all: round-off of an exact zero (sensitivities and regressors are exact to ~1e-10)."""
+
+IDENTIFIABILITY_RTOL = 1e-7
+"""Default ``rtol`` of :func:`column_basis` on unit columns: structural losses of rank fall to
+~1e-12, while a column only 1e-7 away from the span of the others would amplify a 1e-5 noise to
+a metre (calibration) or leave its parameter undetermined (identification)."""
+
+_CLEAN = 1e-9  # combination coefficients below this fraction of their column's largest: round-off
+
+
+@dataclass(frozen=True, eq=False)  # numpy fields
+class ColumnQR:
+    """A Householder QR factorisation ``A[:, perm] = Q R`` stopped at the numerical rank.
+
+    Attributes:
+        R: Upper-trapezoidal factor (min(m, n), n) in the order ``perm``; rows beyond ``rank``
+            hold the round-off of the dependent columns.
+        perm: Column order (n,): the ``rank`` independent columns first.
+        rank: Number of columns whose distance to the span of the columns before them passed
+            the cut-off.
+
+    """
+
+    R: np.ndarray
+    perm: np.ndarray
+    rank: int
+
+
+def column_qr(
+    A: np.ndarray, pivot: bool = True, rtol: float = RTOL, scale: float = 0.0
+) -> ColumnQR:
+    """Householder QR of the columns of ``A`` (m, n), stopped where the columns left are dependent.
+
+    **The rule.** Column ``k`` of the factorisation counts when its distance to the span of the
+    columns before it, ``|R_kk|``, exceeds ``rtol * max(c_max, scale)`` with ``c_max`` the
+    largest column norm of ``A`` (the module's rule, with ``|R_kk|`` in place of the singular
+    values, which it brackets). With ``pivot`` (Businger-Golub) the next column is the one of
+    largest remaining norm (the best-determined first: ``|R_kk|`` does not increase); without,
+    it is the next one in the given order whose remaining norm counts (the columns' order is a
+    preference: a dependent column is moved to the end, not used as a pivot, so that the
+    columns after it are judged against the independent ones alone).
+
+    Elementwise numpy (no multithreaded BLAS call: LAPACK's ``geqp3`` can be a hundred times
+    slower on a loaded two-core machine, its threads waiting on each other); it matches
+    ``scipy.linalg.qr(A, pivoting=True)`` to round-off.
+
+    Args:
+        A: Matrix (m, n).
+        pivot: Column pivoting (else: the given order).
+        rtol: Relative tolerance.
+        scale: Reference magnitude (0: the largest column norm alone).
+
+    Returns:
+        ``R``, ``perm`` and ``rank``.
+
+    """
+    R = np.array(A, dtype=float)
+    m, n = R.shape
+    perm = np.arange(n)
+    norms = np.sqrt(np.einsum("ij,ij->j", R, R)) if n else np.zeros(0)
+    cut = rtol * max(float(norms.max(initial=0.0)), scale)
+    rank = 0
+    for k in range(min(m, n)):
+        rest = np.sqrt(np.einsum("ij,ij->j", R[k:, k:], R[k:, k:]))
+        live = np.flatnonzero(rest > cut) if cut > 0.0 else np.flatnonzero(rest > 0.0)
+        if live.size == 0:
+            break
+        j = k + int(live[np.argmax(rest[live])] if pivot else live[0])
+        if j != k:  # bring column j to k, keeping the others in order
+            order = np.r_[j, np.arange(k, j), np.arange(j + 1, n)] if not pivot else None
+            if order is None:
+                R[:, [k, j]] = R[:, [j, k]]
+                perm[[k, j]] = perm[[j, k]]
+            else:
+                R[:, k:] = R[:, order]
+                perm[k:] = perm[order]
+        x = R[k:, k]
+        nx = float(np.sqrt(np.einsum("i,i->", x, x)))
+        v = x.copy()
+        v[0] += nx if x[0] >= 0.0 else -nx
+        vv = float(np.einsum("i,i->", v, v))
+        block = R[k:, k:]
+        block -= np.multiply.outer(v, np.einsum("i,ij->j", v, block) * (2.0 / vv))
+        R[k + 1 :, k] = 0.0
+        rank = k + 1
+    return ColumnQR(np.triu(R[: min(m, n)]), perm, rank)
+
+
+@dataclass(frozen=True, eq=False)  # numpy fields
+class ColumnBasis:
+    """Independent columns of a matrix and the combinations the others are (:func:`column_basis`).
+
+    Attributes:
+        independent: Independent columns (r,), in the order of the factorisation.
+        dependent: The others (p - r,): the dependent ones, then those without effect.
+        beta: Combinations (r, p - r): ``A[:, dependent[k]] = A[:, independent] @ beta[:, k]``
+            (zero for a column without effect; coefficients below 1e-9 of their column's
+            largest are round-off and set to zero).
+        r_diag: ``|R_kk|`` of the scaled columns, in factorisation order (p,) (zero for columns
+            without effect and beyond the factorisation).
+        weak: The dependent columns that are so only because ``|R_kk|`` fell below ``floor``
+            (structurally independent).
+        zero: The columns without any effect (norm at most :data:`ZERO_RTOL` of the largest).
+
+    """
+
+    independent: np.ndarray
+    dependent: np.ndarray
+    beta: np.ndarray
+    r_diag: np.ndarray
+    weak: np.ndarray
+    zero: np.ndarray
+
+    @property
+    def rank(self) -> int:
+        """Number of independent columns."""
+        return int(self.independent.size)
+
+
+def column_basis(
+    A: np.ndarray,
+    rtol: float = IDENTIFIABILITY_RTOL,
+    col_scale: np.ndarray | None = None,
+    floor: float = 0.0,
+    pivot: bool = True,
+) -> ColumnBasis:
+    """The independent columns of ``A`` (m, p) and the combination each other column is.
+
+    **Scaling.** Independence does not depend on the columns' units: each column is judged by
+    its distance to the span of the columns before it *divided by its own norm* (unit columns,
+    judged with ``scale`` 1 as orthonormal bases are: the cut-off is ``rtol``). A caller that
+    knows a magnitude per column passes ``col_scale`` (the columns are multiplied by it):
+    calibration the prior standard deviation of each parameter and identification a plausible
+    magnitude of each base parameter, on a matrix whitened by the noise, so that ``|R_kk|`` of
+    the scaled columns is that magnitude divided by the standard deviation the data give the
+    parameter (the parameters before it known). The pivots then follow the scaled columns (the
+    best-determined parameters first), each still judged by the unit-free rule, and ``floor``
+    also makes a column whose scaled ``|R_kk|`` falls below it dependent (*weak*: the data
+    determine it worse than ``floor`` times its magnitude).
+
+    Columns whose norm is at most :data:`ZERO_RTOL` of the largest have no effect: dependent,
+    with a zero combination.
+
+    Args:
+        A: Matrix (m, p): the effect of each parameter (column) on the data (rows).
+        rtol: Relative tolerance of :func:`column_qr` (:data:`IDENTIFIABILITY_RTOL`).
+        col_scale: Column multipliers (p,) > 0, or ``None`` (unit columns).
+        floor: Smallest ``|R_kk|`` of an independent column (with ``col_scale`` and ``pivot``).
+        pivot: Pivoted (best-determined first) or in the given order (earlier columns kept in
+            preference to later ones they combine with).
+
+    Returns:
+        The independent and dependent columns, the combinations and the factorisation's
+        diagonal.
+
+    Raises:
+        ValueError: ``floor`` without pivoting (the diagonal is not ordered).
+
+    """
+    A = np.asarray(A, dtype=float)
+    p = A.shape[1]
+    if floor > 0.0 and not pivot:
+        raise ValueError("column_basis: floor needs pivoting")
+    norms = np.sqrt(np.einsum("ij,ij->j", A, A)) if p else np.zeros(0)
+    live = np.flatnonzero(norms > ZERO_RTOL * float(norms.max(initial=0.0)))
+    zero = np.setdiff1d(np.arange(p), live)
+    r_diag = np.zeros(p)
+    if live.size == 0:
+        return ColumnBasis(
+            np.zeros(0, int), np.arange(p), np.zeros((0, p)), r_diag, np.zeros(0, int), zero
+        )
+    if col_scale is None:  # unit columns: the rule on the diagonal itself
+        d = 1.0 / norms[live]
+        qr = column_qr(A[:, live] * d, pivot, rtol, 1.0)
+        diag = np.abs(np.diag(qr.R))[: qr.rank]
+        r = struct = qr.rank
+    else:  # the rule on the unit-free distances, the floor on the scaled diagonal
+        d = np.asarray(col_scale, dtype=float)[live]
+        qr = column_qr(A[:, live] * d, pivot, 0.0)
+        diag = np.abs(np.diag(qr.R))[: qr.rank]
+        unit = diag / (norms[live] * d)[qr.perm[: qr.rank]]
+        apart = unit > rtol
+        struct = int(np.count_nonzero(np.cumprod(apart)))
+        r = int(np.count_nonzero(np.cumprod(apart & (diag >= floor))))
+        diag = diag[:struct]
+    r_diag[: diag.size] = diag
+    ind = live[qr.perm[:r]]
+    weak = live[qr.perm[r:struct]]
+    rest = qr.perm[r:]
+    beta = np.zeros((r, rest.size + zero.size))
+    if rest.size and r:
+        coef = np.linalg.solve(qr.R[:r, :r], qr.R[:r, r : r + rest.size])
+        coef = coef * d[qr.perm[:r], None] / d[rest][None, :]
+        big = np.abs(coef).max(axis=0, keepdims=True)
+        coef[np.abs(coef) < _CLEAN * big] = 0.0
+        beta[:, : rest.size] = coef
+    dependent = np.concatenate([live[rest], zero]).astype(int)
+    return ColumnBasis(ind.astype(int), dependent, beta, r_diag, weak.astype(int), zero)
 
 
 # ---------------------------------------------------------------------- passive-joint elimination

@@ -264,7 +264,7 @@ def test_given_configuration(delta_ball):
 
 def test_as_json_and_text(gs_sps):
     _, res = gs_sps
-    out = json.loads(json.dumps(res.as_json()))
+    out = json.loads(json.dumps(res.to_json()))
     assert {"grubler", "mobility", "internal", "hyperstatism", "rank", "d", "useful"} <= set(out)
     assert (out["grubler"], out["mobility"], out["internal"], out["hyperstatism"]) == (12, 12, 6, 0)
     assert (out["rank"], out["d"], out["useful"]) == (18, 6, 6)

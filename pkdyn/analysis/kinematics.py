@@ -51,6 +51,8 @@ from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
 from pkdyn.model.platform_jacobian import platform_jacobian as _platform_jacobian
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, jsonable
+from pkdyn.units import matrix, quantity
 from solvers import numerics
 
 __all__ = [
@@ -291,7 +293,7 @@ def _relations(Jc: np.ndarray, Jx: np.ndarray, a: np.ndarray, p: np.ndarray) -> 
 
 
 @dataclass
-class KinematicModels:
+class KinematicModels(Result):
     """Kinematic models of a robot at one configuration.
 
     ``A x_dot = B qa_dot`` with ``[B, -A]`` orthonormal rows (see the module docstring). ``J``
@@ -316,6 +318,7 @@ class KinematicModels:
         J6: Full platform Jacobian (6, nv) at ``q``.
         actuated_v: Velocity indices of the actuators.
         passive_v: Velocity indices of the passive coordinates.
+        actuator_units: Unit of each actuator coordinate (``rad`` or ``m``).
 
     """
 
@@ -334,7 +337,70 @@ class KinematicModels:
     J6: np.ndarray
     actuated_v: np.ndarray
     passive_v: np.ndarray
+    actuator_units: tuple[str, ...] = ()
     _cache: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    def _optional(self, key: str) -> np.ndarray | None:
+        """``J`` or ``J_inv``, or ``None`` where it does not exist (a singularity)."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NearSingularityWarning)
+            try:
+                return np.asarray(getattr(self, key))
+            except SingularConfigurationError:
+                return None
+
+    def to_json(self) -> dict[str, Any]:
+        """The models as JSON values.
+
+        Returns:
+            ``A``, ``B``, ``J``, ``J_inv`` (``None`` at a parallel / serial singularity),
+            ``task``, ``actuators``, ``cond_A``, ``cond_B`` and the ``twist`` convention.
+
+        """
+        return jsonable(
+            {
+                "A": np.atleast_2d(self.A),
+                "B": np.atleast_2d(self.B),
+                "J": self._optional("J"),
+                "J_inv": self._optional("J_inv"),
+                "task": list(self.task),
+                "actuators": list(self.actuators),
+                "cond_A": self.cond_A,
+                "cond_B": self.cond_B,
+                "twist": "linear: platform origin velocity, world axes [m/s]; "
+                "angular: platform frame [rad/s]",
+            }
+        )
+
+    def table(self) -> str:
+        """``J`` and ``J_inv`` with their units by row and column, ``A``, ``B``, conditions."""
+        task = [f"{c} [{'m' if c in 'xyz' else 'rad'}]" for c in self.task]
+        units = self.actuator_units or ("",) * self.n_a
+        acts = [f"{n} [{u}]" if u else n for n, u in zip(self.actuators, units, strict=True)]
+        lines = []
+        J = self._optional("J")
+        if J is None:
+            lines.append("J: none (parallel singularity: A is singular)")
+        else:
+            lines += ["J = d(pose)/d(qa), x_dot = J qa_dot:", matrix(np.atleast_2d(J), task, acts)]
+        J_inv = self._optional("J_inv")
+        if J_inv is None:
+            lines.append("J_inv: none (serial singularity: B is singular)")
+        else:
+            lines += ["J_inv = d(qa)/d(pose):", matrix(np.atleast_2d(J_inv), acts, task)]
+        rows = [f"relation {k + 1}" for k in range(np.atleast_2d(self.A).shape[0])]
+        lines += [
+            "A, B: A x_dot = B qa_dot, rows of [B, -A] orthonormal (unit scale):",
+            matrix(
+                np.hstack([np.atleast_2d(self.A), np.atleast_2d(self.B)]),
+                rows,
+                [f"A:{c}" for c in self.task] + [f"B:{a}" for a in self.actuators],
+            ),
+            f"cond(A) = {quantity(self.cond_A)}, cond(B) = {quantity(self.cond_B)} (dimensionless)",
+            "twist: linear velocity of the platform origin, world axes [m/s]; angular, platform "
+            "frame [rad/s]",
+        ]
+        return "\n".join(lines)
 
     @property
     def m(self) -> int:
@@ -507,6 +573,7 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
         J6=J6,
         actuated_v=a,
         passive_v=p,
+        actuator_units=tuple("m" if pr else "rad" for pr in robot.actuator_prismatic),
     )
 
 
@@ -589,22 +656,4 @@ def jacobian_json(robot: Robot, q: Sequence[float] | np.ndarray) -> dict[str, An
         ``J`` (``J_inv``) is ``None`` at a parallel (serial) singularity.
 
     """
-    km = kinematic_models(robot, q)
-    out: dict[str, Any] = {
-        "A": _matrix(km.A),
-        "B": _matrix(km.B),
-        "task": list(km.task),
-        "actuators": list(km.actuators),
-        "cond_A": km.cond_A,
-        "cond_B": km.cond_B,
-        "twist": "linear: platform origin velocity, world axes [m/s]; "
-        "angular: platform frame [rad/s]",
-    }
-    for key in ("J", "J_inv"):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", NearSingularityWarning)
-            try:
-                out[key] = _matrix(getattr(km, key))
-            except SingularConfigurationError:
-                out[key] = None
-    return out
+    return kinematic_models(robot, q).to_json()

@@ -36,6 +36,7 @@ from pkdyn.exceptions import AssemblyError, InvalidInputError
 from pkdyn.model.assembly import project
 from pkdyn.model.description import CLOSURE_KINDS
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
+from pkdyn.results import Result, deprecated_alias
 from solvers import FramePoseTask, numerics
 
 __all__ = [
@@ -80,7 +81,7 @@ class InternalMobility:
 
 
 @dataclass(frozen=True)
-class MobilityResult:
+class MobilityResult(Result):
     """Mobility analysis of a robot (see :func:`mobility`).
 
     Attributes:
@@ -136,7 +137,13 @@ class MobilityResult:
         """Description of each internal mobility."""
         return tuple(m.description for m in self.internal_modes)
 
-    def as_json(self) -> dict[str, Any]:
+    def table(self) -> str:
+        """Both counts with their terms, the useful / internal split, the internal mobilities."""
+        return format_mobility(self)
+
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def to_json(self) -> dict[str, Any]:
         """The result as a JSON-serialisable dictionary.
 
         Returns:

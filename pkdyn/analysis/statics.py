@@ -38,8 +38,11 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import SINGULAR_TOL, NearSingularityWarning, kinematic_models
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
+from pkdyn.model.description import LinearCouplingSpec
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity, vector
 from solvers import numerics
 
 __all__ = [
@@ -115,7 +118,7 @@ def platform_wrench(
 
 
 @dataclass(frozen=True)
-class Reaction:
+class Reaction(Result):
     """The reaction of one closure: one force and one moment.
 
     What the closure's second body (its ``frame2`` link) exerts on the first, world axes, the
@@ -134,13 +137,17 @@ class Reaction:
     moment: np.ndarray
     point: np.ndarray
 
-    def to_json(self) -> dict[str, list[float]]:
-        """``{"force", "moment", "point"}`` as lists."""
-        return {
-            "force": self.force.tolist(),
-            "moment": self.moment.tolist(),
-            "point": self.point.tolist(),
-        }
+    def to_json(self) -> dict[str, Any]:
+        """``{"force", "moment", "point"}`` as lists [N, N m, m]."""
+        return jsonable({"force": self.force, "moment": self.moment, "point": self.point})
+
+    def table(self) -> str:
+        """Force, moment and the point it is taken about."""
+        return (
+            f"force {vector(self.force, 'N', roundoff=1e-12)}, moment "
+            f"{vector(self.moment, 'N m', roundoff=1e-12)} about "
+            f"{vector(self.point, 'm', roundoff=1e-12)} (on its first body, world axes)"
+        )
 
 
 def closure_reactions(robot: Robot, q: np.ndarray, lambdas: np.ndarray) -> dict[str, Reaction]:
@@ -162,7 +169,7 @@ def closure_reactions(robot: Robot, q: np.ndarray, lambdas: np.ndarray) -> dict[
 
 
 @dataclass
-class StaticsResult:
+class StaticsResult(Result):
     """Static equilibrium of the whole mechanism.
 
     Attributes:
@@ -174,6 +181,10 @@ class StaticsResult:
         couplings: The force of each joint coupling (:mod:`solvers.coupling`), by coupling
             name: the generalized force [N m or N] it applies to its driven joint (the source
             receives ``-p'`` times it, ``p'`` the law's derivative).
+        actuators: Actuator names, in order.
+        units: Unit of each actuator effort (``N m`` or ``N``).
+        linear_couplings: Names of the linear couplings (their force acts on each joint times
+            its coefficient; the others' on their driven joint).
 
     """
 
@@ -182,15 +193,36 @@ class StaticsResult:
     reactions: dict[str, Reaction]
     residual: float
     couplings: dict[str, float] = field(default_factory=dict)
+    actuators: tuple[str, ...] = ()
+    units: tuple[str, ...] = ()
+    linear_couplings: tuple[str, ...] = ()
 
     def to_json(self) -> dict[str, Any]:
-        """JSON-ready dict."""
-        return {
-            "tau": self.tau.tolist(),
-            "reactions": {k: v.to_json() for k, v in self.reactions.items()},
-            "couplings": dict(self.couplings),
-            "residual": self.residual,
-        }
+        """``tau`` [N m or N], ``actuators``, ``reactions``, ``couplings``, ``residual``."""
+        return jsonable(
+            {
+                "tau": self.tau,
+                "actuators": list(self.actuators),
+                "reactions": {k: v.to_json() for k, v in self.reactions.items()},
+                "couplings": dict(self.couplings),
+                "residual": self.residual,
+            }
+        )
+
+    def table(self) -> str:
+        """One line per actuator effort, per closure reaction and per coupling force."""
+        names = self.actuators or tuple(f"actuator {k + 1}" for k in range(self.tau.size))
+        units = self.units or ("N m or N",) * self.tau.size
+        lines = [f"{n}: {quantity(t, u)}" for n, t, u in zip(names, self.tau, units, strict=True)]
+        lines += [f"closure {k}: {r.table()}" for k, r in self.reactions.items()]
+        for k, f in self.couplings.items():
+            on = (
+                "each joint times its coefficient"
+                if k in self.linear_couplings
+                else ("on its driven joint")
+            )
+            lines.append(f"coupling {k}: {quantity(f)} N m or N ({on})")
+        return "\n".join(lines)
 
 
 def static_equilibrium(
@@ -255,7 +287,17 @@ def static_equilibrium(
         )
     tau, lam = sol[:n_a], sol[n_a:]
     couplings = robot.constraints.coupling_forces(lam)
-    return StaticsResult(tau, lam, closure_reactions(robot, km.q, lam), residual, couplings)
+    linear = tuple(c.name for c in robot.couplings if isinstance(c, LinearCouplingSpec))
+    return StaticsResult(
+        tau,
+        lam,
+        closure_reactions(robot, km.q, lam),
+        residual,
+        couplings,
+        actuators=tuple(robot.actuator_names),
+        units=tuple("N" if p else "N m" for p in robot.actuator_prismatic),
+        linear_couplings=linear,
+    )
 
 
 def statics_json(
@@ -276,7 +318,4 @@ def statics_json(
         ``{"tau", "actuators", "reactions", "couplings", "residual"}``.
 
     """
-    res = static_equilibrium(robot, q, F, gravity)
-    out = res.to_json()
-    out["actuators"] = robot.actuator_names
-    return out
+    return static_equilibrium(robot, q, F, gravity).to_json()

@@ -126,7 +126,7 @@ def design_matrix(
 
     ``pose``: position and rotation rows (divided by ``sigma``); ``position`` (and the implicit
     kinds, for design purposes): position rows. The columns of parameters the mechanism cannot
-    absorb (:attr:`pkdyn.precision.sensitivity.PoseSensitivity.closure_gap`) are zero: they are
+    absorb (:attr:`pkdyn.precision.sensitivity.PoseSensitivity.gap`) are zero: they are
     not identified.
     """
     d = 6 if kind == "pose" else 3

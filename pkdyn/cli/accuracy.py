@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load
+from pkdyn.cli._common import emit, integer, load, number
 from pkdyn.cli.precision import check_map_options, posed_or_map, write_map
 
 __all__ = ["register"]
@@ -98,7 +98,7 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--resolution",
         nargs="+",
-        type=float,
+        type=number,
         default=None,
         metavar="R",
         help="actuator resolution, one or per actuator (rad or m; default 0, named)",
@@ -106,7 +106,7 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--backlash",
         nargs="+",
-        type=float,
+        type=number,
         default=None,
         metavar="B",
         help="actuator backlash, one or per actuator (rad or m; default 0, named)",
@@ -114,7 +114,7 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--tolerance",
         nargs="+",
-        type=float,
+        type=number,
         default=None,
         metavar="T",
         help="geometric tolerance: LENGTH [ANGLE [GAIN]] (m, rad, -; default 5e-5 m, 5e-4 rad, "
@@ -128,7 +128,9 @@ def register(sub: Any) -> None:
         help="geometric parameters (default: family shortcuts when the family has them)",
     )
     sp.add_argument("--distribution", default="uniform", choices=("uniform", "normal"))
-    sp.add_argument("--samples", type=int, default=0, help="Monte Carlo robots (default 0: off)")
-    sp.add_argument("--seed", type=int, default=0)
-    sp.add_argument("--top", type=int, default=10, help="ranked tolerances shown (10)")
+    sp.add_argument(
+        "--samples", type=integer, default=0, help="Monte Carlo robots (default 0: off)"
+    )
+    sp.add_argument("--seed", type=integer, default=0)
+    sp.add_argument("--top", type=integer, default=10, help="ranked tolerances shown (10)")
     sp.set_defaults(func=_cmd_accuracy)

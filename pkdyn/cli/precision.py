@@ -14,7 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, output_path, qa_argument, robot_command
+from pkdyn.cli._common import emit, integer, load, number, qa_argument, robot_command
+from pkdyn.cli._paths import output_option
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["check_map_options", "map_options", "posed_or_map", "register", "write_map"]
@@ -24,7 +25,7 @@ def _options(sp: argparse.ArgumentParser) -> None:
     sp.add_argument(
         "--actuator-stiffness",
         nargs="+",
-        type=float,
+        type=number,
         metavar="K",
         help="joint-side actuator stiffness, one or one per actuator [N m/rad or N/m] "
         "(inf: rigid; default: the description's <pkdyn:stiffness>)",
@@ -46,7 +47,7 @@ def _options(sp: argparse.ArgumentParser) -> None:
     sp.add_argument(
         "--point",
         nargs=3,
-        type=float,
+        type=number,
         metavar=("X", "Y", "Z"),
         help="reference point in the platform frame [m] (default: its origin)",
     )
@@ -64,19 +65,21 @@ def map_options(sp: argparse.ArgumentParser, grid: int, fields: tuple[str, ...])
     sp.add_argument(
         "--center",
         nargs=3,
-        type=float,
+        type=number,
         metavar=("X", "Y", "Z"),
         help="a position of the map's plane [m] (default: the home pose's)",
     )
     sp.add_argument(
         "--extent",
-        type=float,
+        type=number,
         metavar="E",
         help="half-width of the map about the centre [m] (default: the workspace's box)",
     )
-    sp.add_argument("--grid", type=int, default=grid, help=f"map points per axis ({grid})")
-    sp.add_argument("--plot", metavar="FILE", help="save the map's plot (png, pdf, svg...)")
-    sp.add_argument("--csv", metavar="FILE", help="save the map's cells as CSV")
+    sp.add_argument("--grid", type=integer, default=grid, help=f"map points per axis ({grid})")
+    output_option(
+        sp, "--plot", figure=True, metavar="FILE", help="save the map's plot (png, pdf, svg...)"
+    )
+    output_option(sp, "--csv", metavar="FILE", help="save the map's cells as CSV")
     sp.add_argument(
         "--field",
         choices=fields,
@@ -104,7 +107,7 @@ def posed_or_map(
     """
     sp = robot_command(sub, name, help_)
     where = sp.add_mutually_exclusive_group(required=True)
-    where.add_argument("--pose", nargs="+", type=float, help="X Y Z [ROLL PITCH YAW] (m, rad)")
+    where.add_argument("--pose", nargs="+", type=number, help="X Y Z [ROLL PITCH YAW] (m, rad)")
     qa_argument(where)
     where.add_argument(
         "--map",
@@ -117,9 +120,7 @@ def posed_or_map(
 
 
 def check_map_options(args: argparse.Namespace) -> None:
-    """Outputs and options of ``--map`` checked before any work (one line each)."""
-    output_path("--plot", args.plot, figure=True)
-    output_path("--csv", args.csv)
+    """Options of ``--map`` checked before any work (one line each; the paths: the CLI's)."""
     if args.map is None:
         for option, value in (
             ("--plot", args.plot),
@@ -246,7 +247,6 @@ def _cmd_modes(args: argparse.Namespace) -> None:
     from pkdyn.precision.modes import modes
 
     check_map_options(args)
-    output_path("--html", args.html)
     if args.count is not None and args.count < 1:
         raise InvalidInputError("--count", f"{args.count}: give 1 or more")
     if args.map is not None:
@@ -291,7 +291,7 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--wrench",
         nargs="+",
-        type=float,
+        type=number,
         metavar="F",
         help="tool wrench: fx fy fz mx my mz [N, N m] (world axes, moment about the point) or "
         "the task components; its deflection is reported (a field of --map)",
@@ -311,8 +311,8 @@ def register(sub: Any) -> None:
         "the lowest frequency",
     )
     _options(sp)
-    sp.add_argument("--count", type=int, default=None, help="report the lowest COUNT modes")
+    sp.add_argument("--count", type=integer, default=None, help="report the lowest COUNT modes")
     sp.add_argument("--gravity", action="store_true", help="about the equilibrium under gravity")
-    sp.add_argument("--html", metavar="FILE", help="write an animation of a mode (meshcat HTML)")
-    sp.add_argument("--mode", type=int, default=1, help="mode to animate, 1 = lowest (--html)")
+    output_option(sp, "--html", metavar="FILE", help="write an animation of a mode (meshcat HTML)")
+    sp.add_argument("--mode", type=integer, default=1, help="mode to animate, 1 = lowest (--html)")
     sp.set_defaults(func=_cmd_modes)

@@ -40,6 +40,7 @@ from pkdyn.design.goals import Constraint, Objective
 from pkdyn.design.metrics import (
     METRICS,
     PRECISION_METRICS,
+    VIBRATION_METRICS,
     WORKSPACE_METRICS,
     Metric,
     check_precision,
@@ -73,6 +74,9 @@ _CONDITION_KEYS = (
     "clavel_rays",
     "actuator_stiffness",
     "material",
+    "damping_ratio",
+    "band",
+    "dwell",
 )
 
 
@@ -116,8 +120,8 @@ class Study:
         seed: Seed of the sampler or of NSGA-II.
         parametrisation: Name of a parametrisation (:mod:`pkdyn.design.parametrisations`).
         settings: Other conditions: ``limits``, ``length`` [m], ``gamma_max``, ``ab_min`` [rad],
-            ``workspace_samples``, ``clavel_rays``, ``actuator_stiffness``, ``material`` (see
-            :class:`pkdyn.design.Conditions`).
+            ``workspace_samples``, ``clavel_rays``, ``actuator_stiffness``, ``material``,
+            ``damping_ratio``, ``band``, ``dwell`` (see :class:`pkdyn.design.Conditions`).
         name: A label for reports.
 
     Raises:
@@ -297,7 +301,22 @@ class Study:
                 raise InvalidInputError(
                     f"metric '{used[0]}'", "needs a required workspace (--require KIND:...)"
                 )
+        vib = [m.name for m in metrics if m.name in VIBRATION_METRICS]
+        if vib:
+            self._check_vibration(vib[0])
         return metrics
+
+    def _check_vibration(self, name: str) -> None:
+        """Refuse up front the settings a vibration metric cannot be computed with.
+
+        The duty cycle must run from rest to rest (the settling follows a stop); the actuators'
+        stiffness is checked with the precision metrics' (:func:`check_precision`).
+        """
+        if self.trajectory == "sine":
+            raise InvalidInputError(
+                f"metric '{name}'",
+                "needs a duty cycle from rest to rest (adept or p2p), not sine (it ends in motion)",
+            )
 
     @property
     def metric_names(self) -> list[str]:
@@ -332,7 +351,7 @@ class Study:
     def uses_duty(self) -> bool:
         """Whether a metric runs the duty cycle (the sizing metrics)."""
         duty = {"peak_effort", "rms_effort", "peak_speed", "peak_power"}
-        duty |= {"effort_margin", "speed_margin"}
+        duty |= {"effort_margin", "speed_margin", *VIBRATION_METRICS}
         return any(m.name in duty or m.name.rsplit("_", 1)[0] in duty for m in self.metric_list)
 
     @property

@@ -27,6 +27,7 @@ import numpy as np
 
 from pkdyn.dynamics.actuation import actuation, drives
 from pkdyn.dynamics.callbacks import user_efforts
+from pkdyn.dynamics.simulation_result import SimulationResult
 from pkdyn.exceptions import InvalidInputError, SimulationError
 from pkdyn.inputs import callable_input, count, instance, positive, real
 from pkdyn.model.passive import FRICTION_SMOOTHING
@@ -35,7 +36,7 @@ from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn
 from pkdyn.threads import one_blas_thread
 from solvers import ForwardDynamics as _SolverDynamics
-from solvers import ForwardResult, IntegrationError, PassiveForces
+from solvers import IntegrationError, PassiveForces
 from solvers.conditioning import SingularityEvent
 
 __all__ = ["ForwardDynamics", "TorqueFn", "simulate", "singularity_warning"]
@@ -60,7 +61,7 @@ def simulate(
     passive: bool = True,
     step: float | None = None,
     motor_torque: TorqueFn | None = None,
-) -> ForwardResult:
+) -> SimulationResult:
     """Constrained forward dynamics of the robot under gravity and actuator efforts.
 
     Args:
@@ -88,10 +89,11 @@ def simulate(
             motor torque, so the motor friction and the back-driven gearbox still act.
 
     Returns:
-        Time series: q, v, a, efforts (joint side), closure forces and residuals, energies (the
-        springs' in ``elastic``), the work of the joint-side efforts and the energy dissipated
-        by dampers and friction (the losses in the drives are outside the mechanism:
-        ``Drives.losses``).
+        Time series (:class:`~pkdyn.dynamics.simulation_result.SimulationResult`, a
+        :class:`solvers.ForwardResult` with the actuators' names): q, v, a, efforts (joint
+        side), closure forces and residuals, energies (the springs' in ``elastic``), the work
+        of the joint-side efforts and the energy dissipated by dampers and friction (the
+        losses in the drives are outside the mechanism: ``Drives.losses``).
 
     Raises:
         InvalidInputError: Non-positive duration or step, a step longer than the duration,
@@ -432,7 +434,7 @@ class ForwardDynamics(_SolverDynamics):
         record_every: int = 1,
         t0: float = 0.0,
         step: float | None = None,
-    ) -> ForwardResult:
+    ) -> SimulationResult:
         """Integrate from ``(q0, v0)`` (:meth:`solvers.ForwardDynamics.simulate`).
 
         Args:
@@ -446,7 +448,9 @@ class ForwardDynamics(_SolverDynamics):
             step: Integration step [s] (default ``dt``).
 
         Returns:
-            The recorded time series, its singular passages in ``events``.
+            The recorded time series with the robot's names
+            (:class:`~pkdyn.dynamics.simulation_result.SimulationResult`), its singular
+            passages in ``events``.
 
         Raises:
             InvalidInputError: A malformed or out-of-range argument (named).
@@ -478,7 +482,7 @@ class ForwardDynamics(_SolverDynamics):
         record_every: int,
         t0: float,
         step: float | None,
-    ) -> ForwardResult:
+    ) -> SimulationResult:
         """:meth:`simulate` on checked arguments (``tau`` already wrapped)."""
         try:
             out = super().simulate(q, v, duration, dt, tau, record_every, t0, step)
@@ -489,7 +493,7 @@ class ForwardDynamics(_SolverDynamics):
         out.energy_scale = self._energy_scale
         if self.warn_events and out.events:
             warn(singularity_warning(self.robot.name, out.events, out.valid_until))
-        return out
+        return SimulationResult.of(self.robot, out, self.integrator, dt)
 
     def project_state(
         self, q: np.ndarray, v: np.ndarray, tol: float | None = None

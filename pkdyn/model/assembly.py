@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import partial
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -28,6 +29,8 @@ from pkdyn.exceptions import (
 from pkdyn.model.families import FAMILIES, Family
 from pkdyn.model.pose import as_finite, pose_from_vector, pose_to_vector
 from pkdyn.model.robot import PLATFORM_HINT, Robot
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity, vector
 from solvers import FramePoseTask, SolveResult, solve_lm
 
 __all__ = [
@@ -52,7 +55,7 @@ components."""
 
 
 @dataclass
-class GeometryResult:
+class GeometryResult(Result):
     """A solved geometric model.
 
     Attributes:
@@ -62,6 +65,10 @@ class GeometryResult:
         residual: Largest closure residual component after the solve [m or rad] (in the
             contact frames the solver works in: the world residual rotated).
         iterations: Solver iterations.
+        actuators: Actuator names, in order (for the table).
+        units: Unit of each actuator coordinate (``rad`` or ``m``).
+        readings: What the actuators' encoders read (``qa / <pkdyn:encoder gain>``), when a
+            gain is not 1 (a calibrated robot), else ``None``.
 
     """
 
@@ -70,6 +77,51 @@ class GeometryResult:
     placement: pin.SE3 | None
     residual: float
     iterations: int
+    actuators: tuple[str, ...] = ()
+    units: tuple[str, ...] = ()
+    readings: np.ndarray | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The result as JSON values.
+
+        Returns:
+            ``position`` [m], ``rpy`` [rad] (``None`` without a platform), ``qa``, ``q``,
+            ``actuators``, ``residual`` [m or rad], and ``readings`` on a calibrated robot.
+
+        """
+        out: dict[str, Any] = {
+            "position": None if self.placement is None else self.position,
+            "rpy": None if self.placement is None else self.rpy,
+            "q": self.q,
+            "qa": self.qa,
+            "actuators": list(self.actuators),
+            "residual": self.residual,
+        }
+        if self.readings is not None:
+            out["readings"] = self.readings
+        return jsonable(out)
+
+    def table(self) -> str:
+        """The platform pose (when there is a platform) and each actuator coordinate."""
+        lines = []
+        if self.placement is not None:
+            lines.append(f"position: {vector(self.position, 'm', roundoff=1e-12)}")
+            lines.append(f"rpy:      {vector(self.rpy, 'rad', roundoff=1e-12)}")
+        names = self.actuators or tuple(f"actuator {k + 1}" for k in range(self.qa.size))
+        units = self.units or ("",) * self.qa.size
+        width = max((len(n) for n in names), default=0)
+        lines += [
+            f"{n + ':':<{width + 1}} {quantity(v, u, 9)}"
+            for n, v, u in zip(names, self.qa, units, strict=True)
+        ]
+        if self.readings is not None:
+            lines.append("encoder readings (joint coordinate / <pkdyn:encoder gain>):")
+            lines += [
+                f"  {n + ':':<{width + 1}} {quantity(v, u, 9)}"
+                for n, v, u in zip(names, self.readings, units, strict=True)
+            ]
+        lines.append(f"closure residual: {self.residual:.2g} (m or rad)")
+        return "\n".join(lines)
 
     @property
     def position(self) -> np.ndarray:
@@ -134,7 +186,32 @@ def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryRes
     placement = None
     if robot.platform_frame is not None:
         placement = pin.SE3(pin.updateFramePlacement(robot.model, robot.data, robot.platform_frame))
-    return GeometryResult(sol.q, sol.q[robot.actuated_q], placement, closure_error, sol.iterations)
+    qa = sol.q[robot.actuated_q]
+    calibrated = bool(
+        np.any(robot.encoder_gains != 1.0) or np.any(robot.encoder_offsets != 0.0)
+    )  # readings differ from joint coordinates (Robot.readings: gains and offsets)
+    return GeometryResult(
+        sol.q,
+        qa,
+        placement,
+        closure_error,
+        sol.iterations,
+        actuators=tuple(robot.actuator_names),
+        units=tuple("m" if p else "rad" for p in robot.actuator_prismatic),
+        readings=robot.readings(qa) if calibrated else None,
+    )
+
+
+def _miss(robot: Robot, q: np.ndarray, target: pin.SE3) -> str:
+    """How far the platform at ``q`` is from ``target``: distance, and angle if controlled."""
+    pin.framesForwardKinematics(robot.model, robot.data, q)
+    assert robot.platform_frame is not None
+    at = robot.data.oMf[robot.platform_frame]
+    text = quantity(float(np.linalg.norm(at.translation - target.translation)), "m")
+    if np.any(np.asarray(robot.task_rows) >= 3):
+        angle = float(np.linalg.norm(pin.log3(target.rotation.T @ at.rotation)))
+        text += f" and {quantity(angle, 'rad')}"
+    return text
 
 
 def _family_of(robot: Robot) -> Family | None:
@@ -375,13 +452,12 @@ def inverse_geometry(
     if not sol.converged:
         pos, rpy = pose_to_vector(target)
         name, res = _worst(robot, sol.q)
-        pose_err = float(np.max(np.abs(sol.residual[cs.n :])))
         raise UnreachablePoseError(
             name,
             res,
-            f"{robot.name}: pose {np.array2string(pos, precision=4)} m, rpy "
-            f"{np.array2string(rpy, precision=4)} rad is out of reach (closest configuration "
-            f"misses it by {pose_err:.3g}; closure '{name}' residual {res:.3g})",
+            f"{robot.name}: pose {vector(pos, 'm')}, rpy {vector(rpy, 'rad')} is out of reach "
+            f"(the closest configuration misses it by {_miss(robot, sol.q, target)}; closure "
+            f"'{name}' residual {res:.3g} m or rad)",
         )
     if partial is None:  # (a partial pose gives no uncontrolled component)
         _check_uncontrolled(robot, pose, target, sol.q)

@@ -41,8 +41,9 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
 - ``<pkdyn:home q>``: the home configuration to assemble (actuator coordinates, or a full
   configuration in Pinocchio's order), as ``pkdyn.load(..., home=)`` takes it: written by
   ``pkdyn calibrate`` so that a calibrated robot loads in the assembly mode it was measured in.
-- ``<pkdyn:encoder gain>`` in a transmission's ``<actuator>``: the actuated joint's coordinate is
-  ``gain`` times the actuator's reading (a calibrated scale error of the encoder or screw).
+- ``<pkdyn:encoder gain offset>`` in a transmission's ``<actuator>``: the actuated joint's
+  coordinate is ``gain`` times the actuator's reading plus ``offset`` (a calibrated scale error of
+  the encoder or screw; the joint coordinate at a zero reading).
 
 The URDF part is validated by :mod:`pkdyn.model.validate` (numbers, physics, tree), the pkdyn
 elements here (unknown elements, mistyped namespaces, duplicates).
@@ -209,6 +210,9 @@ class ActuatorSpec:
             (``pkdyn:stiffness value``), ``None`` when not described.
         encoder_gain: Joint coordinate per unit of the actuator's reading (``pkdyn:encoder
             gain``, > 0; default 1), from a geometric calibration.
+        encoder_offset: Joint coordinate at a zero reading [rad or m] (``pkdyn:encoder
+            offset``; default 0): ``q = encoder_gain * reading + encoder_offset``
+            (:meth:`pkdyn.Robot.joint_coordinates`).
 
     """
 
@@ -224,6 +228,7 @@ class ActuatorSpec:
     coulomb: float = 0.0
     stiffness: float | None = None
     encoder_gain: float = 1.0
+    encoder_offset: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
@@ -613,6 +618,7 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
         ("motor_friction", "viscous", "viscous", 0.0, math.inf),
         ("motor_friction", "coulomb", "coulomb", 0.0, math.inf),
         ("encoder", "gain", "encoder_gain", 0.0, math.inf),
+        ("encoder", "offset", "encoder_offset", -math.inf, math.inf),
     )
     for tag, attr, key, lo, hi in fields:
         child = el.find(_NS + tag)
@@ -625,9 +631,11 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
             raise DescriptionError(source, f"{where} {err.culprit}", msg) from None
         positive = key.endswith("efficiency") or key == "encoder_gain"
         ok = lo < value <= hi if positive else lo <= value < hi
+        ok = ok and math.isfinite(value) if key == "encoder_offset" else ok
         if not ok:
             interval = "(0, 1]" if key.endswith("efficiency") else "[0, inf)"
             interval = "(0, inf)" if key == "encoder_gain" else interval
+            interval = "(-inf, inf)" if key == "encoder_offset" else interval
             raise DescriptionError(
                 source,
                 f"{where} <pkdyn:{tag}> {attr}='{child.get(attr)}'",

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import PkdynError
+from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.description import (
     ActuatorSpec,
     ClosureSpec,
@@ -186,6 +186,73 @@ class Robot:
     def actuated_joint_names(self) -> list[str]:
         """Names of the actuated joints (e.g. ``arm1``), in actuator order."""
         return [a.joint for a in self.actuators]
+
+    @property
+    def encoder_gains(self) -> np.ndarray:
+        """Joint coordinate per unit of each actuator's reading (n_a,) (``pkdyn:encoder gain``)."""
+        return np.array([float(a.encoder_gain) for a in self.actuators])
+
+    @property
+    def encoder_offsets(self) -> np.ndarray:
+        """Joint coordinate at a zero reading, per actuator (n_a,) [rad or m]."""
+        return np.array([float(a.encoder_offset) for a in self.actuators])
+
+    def joint_coordinates(self, readings: Any, rates: bool = False) -> np.ndarray:
+        """Actuated joint coordinates of actuator readings: **the one readings rule**.
+
+        ``qa = encoder_gain * reading + encoder_offset`` per actuator (the description's
+        ``<pkdyn:encoder gain offset>``; 1 and 0 unless a calibration wrote them). Every
+        feature that reads actuator readings (``qa_<actuator>`` columns of measurement,
+        motion and trajectory files; ``--readings``) turns them into joint coordinates here;
+        the joints coupled to the actuated ones (``robot.couplings``) then follow by assembly.
+
+        Args:
+            readings: Readings (..., n_a) [rad or m], or their rates / accelerations with
+                ``rates`` (the offset drops out: ``qa_dot = gain * reading_dot``).
+            rates: The values are time derivatives of readings.
+
+        Returns:
+            Joint coordinates (or their derivatives), same shape.
+
+        Raises:
+            InvalidInputError: Not numbers, or not ``n_a`` per row.
+
+        """
+        r = self._readings_array("readings", readings)
+        g = self.encoder_gains
+        return r * g if rates else r * g + self.encoder_offsets
+
+    def readings(self, qa: Any, rates: bool = False) -> np.ndarray:
+        """Actuator readings of actuated joint coordinates (the inverse of joint_coordinates).
+
+        Args:
+            qa: Joint coordinates (..., n_a) [rad or m] (their derivatives with ``rates``).
+            rates: The values are time derivatives.
+
+        Returns:
+            Readings, same shape.
+
+        Raises:
+            InvalidInputError: Not numbers, or not ``n_a`` per row.
+
+        """
+        q = self._readings_array("qa", qa)
+        g = self.encoder_gains
+        return q / g if rates else (q - self.encoder_offsets) / g
+
+    def _readings_array(self, name: str, value: Any) -> np.ndarray:
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidInputError(name, f"expected numbers, got {value!r:.60}") from None
+        n_a = len(self.actuators)
+        if arr.ndim == 0 or arr.shape[-1] != n_a:
+            raise InvalidInputError(
+                name,
+                f"expected {n_a} values per row ({', '.join(self.actuator_names)}), got shape "
+                f"{arr.shape}",
+            )
+        return arr
 
     def components(self) -> list[int]:
         """Connected component of each joint's body over physical edges (union-find).

@@ -14,6 +14,7 @@ import numpy as np
 from pkdyn.analysis.maps import ConditioningMap
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.plotting._save import save_figure
+from pkdyn.results import register_plot
 
 __all__ = ["plot_conditioning_map"]
 
@@ -26,6 +27,7 @@ _LABELS = {
 }
 
 
+@register_plot(ConditioningMap)
 def plot_conditioning_map(
     cmap: ConditioningMap,
     field: str = "lci",

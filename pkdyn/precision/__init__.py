@@ -26,7 +26,13 @@
 - :mod:`~pkdyn.precision.budgets`, :mod:`~pkdyn.precision.monte_carlo`,
   :mod:`~pkdyn.precision.accuracy_maps`: error budgets (worst case, RMS, ranking of the
   tolerances), their Monte Carlo check and pose-error maps; :mod:`~pkdyn.precision.accuracy`
-  puts them in one report.
+  puts them in one report;
+- :mod:`~pkdyn.precision.vibration`: :func:`vibration`, the tool's deviation from its rigid
+  motion along a motion and its settling (the command: ``vibration_command``; the damping:
+  ``vibration_damping``; the modal and multibody methods: ``vibration_modal``,
+  ``vibration_multibody``; the figures: ``vibration_figures``; the result:
+  ``vibration_result``; input shaping: ``vibration_shaping``; the fastest settling cycle:
+  ``vibration_fastest``; the MJCF export with servos: ``vibration_mjcf``).
 
 Every result derives from :class:`pkdyn.results.Result` (``table()``, ``to_json()``, ``plot()``
 where a picture helps) and carries ``valid`` and ``warnings``.
@@ -54,6 +60,8 @@ from pkdyn.precision.modes import Modes, mode_trajectory, modes
 from pkdyn.precision.monte_carlo import MonteCarlo, monte_carlo
 from pkdyn.precision.stiffness import Principal, Stiffness, stiffness, stiffness_json, transport
 from pkdyn.precision.validity import PrecisionWarning, Validity
+from pkdyn.precision.vibration import vibration
+from pkdyn.precision.vibration_result import VibrationResult
 
 __all__ = [
     "ALUMINIUM",
@@ -84,6 +92,7 @@ __all__ = [
     "Principal",
     "Section",
     "Stiffness",
+    "VibrationResult",
     "actuator_stiffness",
     "as_material",
     "centre_compliance",
@@ -97,4 +106,5 @@ __all__ = [
     "stiffness_json",
     "tip_compliance",
     "transport",
+    "vibration",
 ]
