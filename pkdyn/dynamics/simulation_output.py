@@ -1,4 +1,4 @@
-"""A simulation's time series as a CSV file: actuators, energies, closure residual."""
+"""A simulation's time series as a CSV file: actuators, energies, closures, conditioning."""
 
 from __future__ import annotations
 
@@ -23,7 +23,8 @@ def simulation_columns(robot: Robot, result: ForwardResult) -> dict[str, np.ndar
     ``potential``, ``work`` (of the efforts), ``dissipated`` (dampers and friction) [J];
     ``energy_balance`` (``kinetic + potential - work + dissipated`` minus its start value: 0
     for an exact integration) [J]; ``closure_residual`` [m or rad]; with couplings,
-    ``coupling_residual`` [rad or m].
+    ``coupling_residual`` [rad or m]; ``conditioning`` (of the closure forces,
+    :mod:`solvers.conditioning`: below 1e-4 near a singularity, below 1e-5 through one).
 
     Args:
         robot: The simulated robot.
@@ -51,6 +52,9 @@ def simulation_columns(robot: Robot, result: ForwardResult) -> dict[str, np.ndar
     coupled = bool(getattr(result, "couplings", ())) or bool(getattr(constraints, "nk", 0))
     if coupled and result.coupling_residual is not None:
         out["coupling_residual"] = result.coupling_residual
+    out["conditioning"] = (
+        result.conditioning if result.conditioning is not None else np.ones_like(result.t)
+    )
     return out
 
 
