@@ -20,19 +20,34 @@ position, rate and acceleration at both ends (:class:`Hermite5`).
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
+from pkdyn.dynamics.delta import DeltaDynamics
 from pkdyn.dynamics.inverse import inverse_dynamics
 from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import JointTrajectory, TaskTrajectory, map_task_trajectory
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.robot import Robot
 from pkdyn.precision.elastic import ElasticModel
+from pkdyn.precision.vibration_closed_form import (
+    ActuatorMotion,
+    arm_motion,
+    closed_form,
+    gravity_efforts,
+)
 
-__all__ = ["FEEDFORWARDS", "REST_TOL", "Command", "Hermite5", "command", "uniform"]
+__all__ = [
+    "FEEDFORWARDS",
+    "REST_TOL",
+    "Command",
+    "Hermite5",
+    "command",
+    "extended_motion",
+    "uniform",
+]
 
 FEEDFORWARDS = ("none", "gravity", "rigid")
 """The servo feedforward terms (see :mod:`pkdyn.precision.vibration`)."""
@@ -189,26 +204,72 @@ def _check_rest(task: TaskTrajectory) -> None:
 class Command:
     """The commanded motion on a uniform grid and its feedforward (see the module docstring).
 
+    The joint trajectory of the whole mechanism is mapped when first asked for
+    (:attr:`joint`): a closed-form analysis (:mod:`pkdyn.precision.vibration_closed_form`)
+    needs the actuators' motion only.
+
     Attributes:
         task: The commanded platform trajectory (uniform samples, ``t[0] = 0``).
-        joint: Its joint trajectory on the robot as loaded.
-        q: Commanded configurations of the elastic model (N, nq_ext), links undeformed.
-        v: Commanded velocities (N, nv_ext).
-        a: Commanded accelerations (N, nv_ext).
         tau_ff: Actuator feedforward (N, n_a) [N m or N], joint side.
         feedforward: ``none``, ``gravity`` or ``rigid``.
         loaded: The robot as loaded, with the payload (the rigid model of the feedforward).
+        em: The elastic model the command is embedded in (its ``base`` is the robot as loaded).
+        arms: The actuators' motion and rigid efforts in closed form, when the robot has one.
+        progress: Progress bar of the mapping.
+        payload: The payload ``loaded`` carries [kg].
+        point: Where, platform frame [m].
+        delta: The closed forms of the Delta read from ``loaded``
+            (:class:`pkdyn.dynamics.delta.DeltaDynamics`), when they apply.
+        mapped: The joint trajectory, once mapped.
 
     """
 
     task: TaskTrajectory
-    joint: JointTrajectory
-    q: np.ndarray
-    v: np.ndarray
-    a: np.ndarray
     tau_ff: np.ndarray
     feedforward: str
     loaded: Robot
+    em: ElasticModel
+    arms: ActuatorMotion | None = None
+    progress: bool | None = None
+    payload: float = 0.0
+    point: np.ndarray | None = None
+    delta: DeltaDynamics | None = field(default=None, repr=False)
+    mapped: JointTrajectory | None = field(default=None, repr=False)
+    _extended: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+
+    @property
+    def joint(self) -> JointTrajectory:
+        """Its joint trajectory on the robot as loaded (mapped on first use).
+
+        Raises:
+            TrajectoryError: The motion leaves the workspace or meets a singularity.
+
+        """
+        if self.mapped is None:
+            self.mapped = map_task_trajectory(
+                self.em.base, self.task, check_speeds=False, progress=self.progress
+            )
+        return self.mapped
+
+    def _ext(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if self._extended is None:
+            self._extended = extended_motion(self.em, self.joint)
+        return self._extended
+
+    @property
+    def q(self) -> np.ndarray:
+        """Commanded configurations of the elastic model (N, nq_ext), links undeformed."""
+        return self._ext()[0]
+
+    @property
+    def v(self) -> np.ndarray:
+        """Commanded velocities (N, nv_ext)."""
+        return self._ext()[1]
+
+    @property
+    def a(self) -> np.ndarray:
+        """Commanded accelerations (N, nv_ext)."""
+        return self._ext()[2]
 
     @property
     def t(self) -> np.ndarray:
@@ -227,6 +288,9 @@ class Command:
 
     def actuators(self) -> Hermite5:
         """Interpolation of the actuators' commanded positions, rates and accelerations."""
+        if self.arms is not None:
+            m = self.arms
+            return Hermite5(self.t, m.qa, m.qa_dot, m.qa_ddot)
         jt = self.joint
         return Hermite5(jt.t, jt.qa, jt.qa_dot, jt.qa_ddot)
 
@@ -281,16 +345,26 @@ def command(
     task = uniform(task)
     _check_rest(task)
     robot = em.base
-    joint = map_task_trajectory(robot, task, check_speeds=False, progress=progress)
-    q, v, a = extended_motion(em, joint)
     loaded = with_payload(robot, payload, offset=tuple(point)) if payload > 0.0 else robot
     n_a = len(robot.actuators)
-    if feedforward == "none":
-        tau = np.zeros((task.t.size, n_a))
-    else:
-        jt = joint
+    cmd = Command(
+        task, np.zeros((task.t.size, n_a)), feedforward, loaded, em, None, progress, payload,
+        np.array(point, dtype=float),
+    )  # fmt: skip
+    if closed_form(robot):
+        cmd.delta = DeltaDynamics(loaded)
+        arms = arm_motion(cmd.delta, task)
+        cmd.arms = arms
         if feedforward == "gravity":
-            zero = np.zeros_like(joint.v)
-            jt = dataclasses.replace(joint, v=zero, a=zero)
-        tau = inverse_dynamics(loaded, jt).tau
-    return Command(task, joint, q, v, a, np.asarray(tau, dtype=float), feedforward, loaded)
+            cmd.tau_ff = gravity_efforts(cmd.delta, task)
+        elif feedforward == "rigid":
+            cmd.tau_ff = arms.tau.copy()
+    else:
+        joint = cmd.joint  # (mapped here: its errors before any other work)
+        if feedforward != "none":
+            jt = joint
+            if feedforward == "gravity":
+                zero = np.zeros_like(joint.v)
+                jt = dataclasses.replace(joint, v=zero, a=zero)
+            cmd.tau_ff = np.asarray(inverse_dynamics(loaded, jt).tau, dtype=float)
+    return cmd

@@ -390,10 +390,7 @@ def fastest_settling(
         )
     p = np.zeros(3)
     joint1, task1 = fast.scaled(1.0)
-    cmd1 = Command(
-        task1, joint1, *extended_motion(em, joint1), np.asarray(fast.efforts.tau), feedforward,
-        robot,
-    )  # fmt: skip
+    cmd1 = Command(task1, np.asarray(fast.efforts.tau), feedforward, robot, em, mapped=joint1)
     st = prepare(
         robot, em, cmd1, p, payload, feedforward, damping_ratio, actuator_damping, band, dwell,
         modes, poses, progress,
