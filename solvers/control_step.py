@@ -234,7 +234,7 @@ class ProjectedEulerStep:
         if self.curvature * dq2 > 0.25 * fd.project_tol or self.steps % CALIBRATION_PERIOD == 1:
             q, restored = self._restore(q, dq2)
             if not restored:
-                q, v = fd.project_state(q, v)
+                q, v = fd._project_state(q, v)
                 self.projections += 1
                 self._key = None
                 return q, v

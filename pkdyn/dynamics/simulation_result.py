@@ -90,8 +90,11 @@ class SimulationResult(ForwardResult, Result):
         Returns:
             ``robot, duration`` [s], ``dt`` [s], ``integrator``, ``steps``, ``substeps``,
             ``max_closure_residual`` [m or rad], ``energy_drift_rel``, ``max_kinetic_energy``
-            [J], ``work`` [J] (of the actuator efforts), ``projections``, and ``actuators``:
-            per actuator ``name``, ``start``, ``end`` [rad or m], ``peak_rate`` [rad/s or m/s].
+            [J], ``work`` [J] (of the actuator efforts), ``projections``, ``actuators``:
+            per actuator ``name``, ``start``, ``end`` [rad or m], ``peak_rate`` [rad/s or m/s];
+            ``singular_passages`` (:meth:`solvers.conditioning.SingularityEvent.to_json`),
+            ``valid_until`` [s] (the start of the first passage through a singularity, or the
+            end) and ``energy_drift_rel_valid`` (the energy drift up to it).
 
         """
         qa, qd = self.qa, self.qa_dot
@@ -117,6 +120,9 @@ class SimulationResult(ForwardResult, Result):
                     }
                     for k, name in enumerate(self.actuators)
                 ],
+                "singular_passages": [ev.to_json() for ev in self.events],
+                "valid_until": float(self.valid_until),
+                "energy_drift_rel_valid": self.energy_drift(self.valid_until),
             }
         )
 
@@ -149,4 +155,12 @@ class SimulationResult(ForwardResult, Result):
             f"{quantity(float(self.work[-1]), 'J')}",
             f"energy drift: {quantity(100 * self.energy_drift(), '%', 3)} of the energy exchanged",
         ]
+        lines += [f"singular passage: {ev.describe()}" for ev in self.events]
+        if self.valid_until < float(self.t[-1]):
+            drift = self.energy_drift(self.valid_until)
+            lines.append(
+                f"exact rigid motion up to t = {quantity(self.valid_until, 's')} (the first "
+                "passage through a singularity); energy drift up to there: "
+                f"{quantity(100 * drift, '%', 3)}"
+            )
         return "\n".join(lines)
