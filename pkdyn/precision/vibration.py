@@ -75,6 +75,7 @@ from pkdyn.precision.vibration_modal import (
 from pkdyn.precision.vibration_multibody import multibody_response
 from pkdyn.precision.vibration_result import Display, DominantMode, VibrationResult
 from pkdyn.precision.vibration_shaping import SHAPERS, Shaper, shape, shaper_modes, tracked
+from pkdyn.threads import one_blas_thread
 
 __all__ = [
     "DEFAULT_BAND",
@@ -263,6 +264,7 @@ def _dominant(
     ]
 
 
+@one_blas_thread
 def vibration(
     robot: Robot,
     trajectory: str | Path | TaskTrajectory = "adept",
@@ -455,6 +457,7 @@ class Setup:
         return sub
 
 
+@one_blas_thread
 def prepare(
     robot: Robot,
     em: ElasticModel,
@@ -501,6 +504,7 @@ def prepare(
     )  # fmt: skip
 
 
+@one_blas_thread
 def analyse(st: Setup, cmd: Command, method: str, shaped: Shaper | None = None) -> VibrationResult:
     """The analysis of one command by one method (see :func:`vibration`)."""
     emL, p = st.elastic, st.point

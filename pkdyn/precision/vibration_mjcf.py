@@ -62,6 +62,10 @@ POINT_SITE = "vibration/point"
 """Name of the site at the reference point."""
 
 
+_DENSE_NV = 150
+"""Largest model (velocity coordinates) exported with MuJoCo's dense constraint Jacobian."""
+
+
 def _num(x: float) -> str:
     text = repr(float(x))
     return text[:-2] if text.endswith(".0") else text
@@ -99,6 +103,9 @@ def elastic_mjcf(
         timestep=1e-4, integrator="RK4", contacts=False, visual=False, collision=False
     )
     root = ET.fromstring(to_mjcf(r, opt))
+    option = root.find("option")
+    if option is not None and r.nv <= _DENSE_NV:
+        option.set("jacobian", "dense")  # (faster than MuJoCo's sparse choice at this size)
     for old in root.findall("actuator"):
         root.remove(old)
     act = ET.SubElement(root, "actuator")
@@ -199,24 +206,30 @@ def simulate_mujoco(
     n_a = len(em.robot.actuators)
     T = cmd.duration
     h = model.opt.timestep
+    # the controls held over a step: their value at its middle for RK4; at its start for the
+    # Euler-type integrators, whose new velocity (used for the new position) stands for the
+    # middle of the step and the force it comes from for its start (symplectic Euler)
+    lead = 0.5 if int(model.opt.integrator) == int(mujoco.mjtIntegrator.mjINT_RK4) else 0.0
     every = max(1, int(round(record / h)))
     steps = int(np.ceil((T + rest) / h))
-    times, dev = [], []
+    tm = h * (np.arange(steps) + lead)  # (controls of every step, at once)
+    ctrl = np.empty((steps, 3 * n_a))
+    qa, qad, _ = act(tm)
+    ctrl[:, 0::3], ctrl[:, 1::3] = qa, qad
+    ctrl[:, 2::3] = ff(np.minimum(tm, T))
+    times, at = [], []
     for i in range(steps + 1):
-        t = i * h
         if i % every == 0:
-            mujoco.mj_forward(model, data)
-            times.append(t)
-            dev.append(np.array(data.site_xpos[site]) - target(t)[0])
+            mujoco.mj_kinematics(model, data)
+            times.append(i * h)
+            at.append(np.array(data.site_xpos[site]))
         if i == steps:
             break
-        tm = t + 0.5 * h  # controls are held over a step: their value at its middle
-        qa, qad, _ = act(tm)
-        data.ctrl[0 : 3 * n_a : 3] = qa
-        data.ctrl[1 : 3 * n_a : 3] = qad
-        data.ctrl[2 : 3 * n_a : 3] = ff(min(tm, T))
+        data.ctrl[:] = ctrl[i]
         mujoco.mj_step(model, data)
-    return MujocoRun(np.array(times), np.array(dev), steps)
+    tt = np.array(times)
+    dev = np.array(at) - target(tt)[0]
+    return MujocoRun(tt, dev, steps)
 
 
 _AXES = (pin.JointModelPX, pin.JointModelPY, pin.JointModelPZ)
@@ -257,7 +270,8 @@ def six_joint_robot(em: ElasticModel, damping: np.ndarray | None = None) -> Robo
         A robot for the MJCF export (its ``passive`` and ``model.damping`` as described).
 
     Raises:
-        InvalidInputError: A damping of the wrong size.
+        InvalidInputError: A damping of the wrong size, or a virtual spring whose tip part has
+            no mass (MuJoCo needs one on every moving body).
 
     """
     r = em.robot
@@ -265,6 +279,17 @@ def six_joint_robot(em: ElasticModel, damping: np.ndarray | None = None) -> Robo
         return r
     model = r.model
     virtual = set(_virtual(em))
+    for j in sorted(virtual):
+        if model.inertias[j].mass <= 0.0:
+            first = [int(row[0]) for row in np.asarray(em.deflection_v)]
+            link = em.links[first.index(int(model.idx_vs[j]))].link
+            raise InvalidInputError(
+                "links",
+                f"link '{link}': the part past its virtual spring carries no mass of its own "
+                "(its inertia could not be split at the spring), and MuJoCo needs a mass on "
+                "every moving body; describe the link's mass as its material's "
+                '(mass="from-material") or keep it rigid to export the elastic model',
+            )
     new = pin.Model()
     new.name = model.name
     new.gravity = model.gravity
