@@ -161,7 +161,7 @@ def _joint_elements(model: pin.Model, jid: int, source: str) -> tuple[str, list[
 
 def _composite_elements(jm: pin.JointModel, name: str, source: str) -> list[MjJoint]:
     """Hinges and slides of a composite of 1-DoF revolute and prismatic joints."""
-    out = []
+    out: list[MjJoint] = []
     axes = np.eye(3)
     composite = jm.extract() if hasattr(jm, "extract") else jm
     for k, (sub, M) in enumerate(zip(composite.joints, composite.jointPlacements, strict=True)):
