@@ -7,6 +7,10 @@
   Adept cycle (realistic stiffness: 2e4 N m/rad servos, rigid links: 187 to 200 Hz at home,
   91 to 157 Hz with the 0.5 kg payload at the pick points), within 2 % in peak deviation,
   residual amplitude and settling time (the same motion in MuJoCo: ``test_vibration_mjcf.py``);
+- the Delta's closed forms (the nacelle's coordinates) against the general path: the same
+  modes along the path (1e-9), the same response as the general path at 101 poses (within
+  its interpolation: 0.5 %, 1 %, 0.2 %), the display's deformation closure-consistent and
+  moving the platform by the deviation;
 - the free vibration after a stop (undamped multibody run) against the frequency
   :func:`pkdyn.precision.modes` gives about the loaded equilibrium (FFT peak, 1e-4), and the
   run's energy balance;
@@ -126,6 +130,51 @@ def test_modal_agrees_with_the_multibody_simulation(delta_adept):
     assert modal.settling_time == pytest.approx(mb.settling_time, rel=0.02)
     assert modal.static_deflection == pytest.approx(mb.static_deflection, rel=1e-3, abs=1e-9)
     assert [m.mode for m in modal.dominant_modes[:2]] == [m.mode for m in mb.dominant_modes[:2]]
+
+
+def test_closed_form_is_the_general_modal_method():
+    """The Delta's closed forms: the same modes as the general path, the same response."""
+    import dataclasses
+
+    from pkdyn.dynamics.trajectory import named_task
+    from pkdyn.precision.condensation import constraint_rows
+    from pkdyn.precision.vibration import analyse, prepare
+    from pkdyn.precision.vibration_command import command
+    from pkdyn.precision.vibration_modal import path_modes
+
+    robot = pkdyn.load("delta")
+    em = elastic_model(robot, [2e4, 3e4, 2.5e4])
+    p = np.zeros(3)
+    cmd = command(em, named_task(robot, "adept", cycle_time=0.5), 0.5, p)
+    st = prepare(robot, em, cmd, p, 0.5, "none", None, None, 2e-5, 0.3, None, None)
+    closed = analyse(st, cmd, "modal")
+    assert st.arms is not None and cmd.mapped is None  # (no pose solved)
+    # its modes at poses along the path are the general ones (frequencies, platform motions)
+    samples = np.array([0, 77, 250, 401, 500])
+    poses = st.arms.poses(cmd.task.pose[samples, :3])
+    pm = st.arms.path_modes(poses, samples)
+    general = path_modes(st.elastic, cmd.joint.q, samples, p)
+    assert pm.frequencies == pytest.approx(general.frequencies, rel=1e-9)
+    for a, b in zip(pm.platform, general.platform, strict=True):  # (a mode's sign is arbitrary)
+        gap = np.minimum(np.abs(a - b).max(axis=1), np.abs(a + b).max(axis=1))
+        assert gap.max() <= 1e-9 * np.abs(a).max()
+    # the response: the general path's at many poses (in the tree's coordinates)
+    general = analyse(dataclasses.replace(st, arms=None, poses=101), cmd, "modal")
+    assert closed.peak_deviation == pytest.approx(general.peak_deviation, rel=5e-3)
+    assert closed.residual_amplitude == pytest.approx(general.residual_amplitude, rel=1e-2)
+    assert closed.settling_time == pytest.approx(general.settling_time, rel=2e-3)
+    assert closed.static_deflection == pytest.approx(general.static_deflection, rel=1e-9, abs=1e-15)
+    assert closed.internal == general.internal == 6
+    # the display's deformation, mapped on demand: closure-consistent, it moves the platform
+    # by the deviation
+    from pkdyn.model.platform_jacobian import platform_jacobian
+
+    t_c, Q, U = closed.animation()
+    for k in (0, 150, 300, 450, 700):
+        assert np.abs(constraint_rows(st.elastic, Q[k]) @ U[k]).max() <= 1e-9 * np.abs(U[k]).max()
+        d = platform_jacobian(st.elastic.robot, Q[k], point=p)[:3] @ U[k]
+        i = int(np.argmin(np.abs(closed.t - t_c[k])))
+        assert d == pytest.approx(closed.deviation[i], rel=1e-6, abs=1e-6 * closed.peak_deviation)
 
 
 def test_static_deflection_is_the_loaded_stiffness_deflection(delta_adept):
