@@ -100,12 +100,9 @@ def test_exported_compliance_and_frequencies_are_pkdyns(name, k, material, where
 def _modal_and_mujoco(material, timestep, integrator):
     """The Delta's Adept cycle (0.5 s, 0.5 kg, 2e4 N m/rad) by the modal method and MuJoCo."""
     from pkdyn.dynamics.trajectory import named_task
-    from pkdyn.model.formats.mjcf import MjcfOptions
     from pkdyn.precision.vibration import analyse, prepare
     from pkdyn.precision.vibration_command import command
-    from pkdyn.precision.vibration_figures import figures
-    from pkdyn.precision.vibration_mjcf import simulate_mujoco
-    from pkdyn.precision.vibration_multibody import equilibrium
+    from pkdyn.precision.vibration_mjcf import mujoco_figures
 
     robot = pkdyn.load("delta")
     em = elastic_model(robot, 2e4, material=material)
@@ -113,16 +110,7 @@ def _modal_and_mujoco(material, timestep, integrator):
     cmd = command(em, named_task(robot, "adept", cycle_time=0.5), 0.5, p)
     st = prepare(robot, em, cmd, p, 0.5, "none", None, None, 2e-5, 0.3, None, None)
     modal = analyse(st, cmd, "modal")  # (as vibration(robot, "adept", ...))
-    links = st.c.copy()  # the links' Rayleigh damping (the servos' are the velocity actuators)
-    links[np.asarray(st.elastic.robot.actuated_v)] = 0.0
-    q0 = equilibrium(st.elastic, cmd.q[0], cmd.tau_ff[0], p)
-    o = MjcfOptions(timestep=timestep, integrator=integrator, contacts=False, visual=False,
-                    collision=False)  # fmt: skip
-    run = simulate_mujoco(
-        st.elastic, cmd, modal.damping.actuator, q0, p, 0.35, timestep, 2.4e-4, o, links
-    )
-    rate = np.gradient(run.deviation, run.t, axis=0)
-    fig = figures(run.t, run.deviation, rate, modal.static_deflection, 0.5, 0.3, 2e-5, 0.35)
+    _, fig = mujoco_figures(st, cmd, modal, timestep, integrator)
     return modal, fig
 
 

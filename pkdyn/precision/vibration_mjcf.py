@@ -36,6 +36,7 @@ import dataclasses
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -46,12 +47,14 @@ from pkdyn.model.formats.mjcf_state import StateMap
 from pkdyn.model.robot import Robot
 from pkdyn.precision.elastic import ElasticModel
 from pkdyn.precision.vibration_command import Command, Hermite5
+from pkdyn.precision.vibration_figures import Figures, figures
 from solvers import ConstraintSet, PassiveForces
 
 __all__ = [
     "POINT_SITE",
     "MujocoRun",
     "elastic_mjcf",
+    "mujoco_figures",
     "simulate_mujoco",
     "six_joint_q",
     "six_joint_robot",
@@ -230,6 +233,63 @@ def simulate_mujoco(
     tt = np.array(times)
     dev = np.array(at) - target(tt)[0]
     return MujocoRun(tt, dev, steps)
+
+
+def mujoco_figures(
+    st: Any,
+    cmd: Command,
+    result: Any,
+    timestep: float = 4e-5,
+    integrator: str = "implicitfast",
+    record: float = 2.4e-4,
+) -> tuple[MujocoRun, Figures]:
+    """MuJoCo's run of an analysis and its figures, to compare with the analysis's own.
+
+    The elastic model of the set-up (payload included) exported with its servos' damping and
+    its links' damping, run along ``cmd`` from the multibody method's start (the nonlinear
+    static equilibrium of the first pose) for the time the analysis observes after the
+    motion; the figures are read as the analysis's, about its static deflection.
+
+    Args:
+        st: The analysis's set-up (:func:`pkdyn.precision.vibration.prepare`).
+        cmd: Its command.
+        result: Its result (:class:`~pkdyn.precision.vibration_result.VibrationResult`).
+        timestep: MuJoCo's step [s] (RK4: stable below about 2.8 / omega_max and the
+            overdamped modes' rates; the Euler-type integrators, implicit in the dampers:
+            below 2 / omega_max).
+        integrator: ``RK4``, ``implicitfast``, ``implicit`` or ``Euler``.
+        record: Recording period [s].
+
+    Returns:
+        The run and its figures (translation of the reference point).
+
+    Raises:
+        ImportError: MuJoCo is not installed.
+
+    """
+    from pkdyn.precision.vibration_multibody import equilibrium
+
+    em = st.elastic
+    links = np.array(st.c, dtype=float)
+    if em.robot.passive is not None:
+        links -= np.asarray(em.robot.passive.damping)  # (the export writes the robot's own)
+    links[np.asarray(em.robot.actuated_v)] = 0.0  # (the servos' is the velocity actuators')
+    q0 = equilibrium(em, cmd.q[0], cmd.tau_ff[0], st.point)
+    opts = MjcfOptions(
+        timestep=timestep, integrator=integrator, contacts=False, visual=False, collision=False
+    )
+    run = simulate_mujoco(
+        em, cmd, st.damping.actuator, q0, st.point, st.rest, timestep, record, opts, links
+    )
+    static = np.zeros(3)
+    for i, c in enumerate(result.task):
+        if c in ("x", "y", "z"):
+            static["xyz".index(c)] = result.static_deflection[i]
+    rate = np.gradient(run.deviation, run.t, axis=0)
+    fig = figures(
+        run.t, run.deviation, rate, static, cmd.duration, st.dwell, st.band, st.rest
+    )  # fmt: skip
+    return run, fig
 
 
 _AXES = (pin.JointModelPX, pin.JointModelPY, pin.JointModelPZ)
