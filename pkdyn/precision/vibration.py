@@ -27,8 +27,10 @@ that the figures compare with other tools):
   (:mod:`pkdyn.precision.vibration_figures`).
 
 Two methods: ``modal`` (:mod:`pkdyn.precision.vibration_modal`: the pose-dependent modes along
-the path, superposed; fast) and ``multibody`` (:mod:`pkdyn.precision.vibration_multibody`: the
-elastic model simulated, nothing linearised; the reference). An input shaper
+the path, superposed; fast; in closed form on the library Delta with rigid links,
+:mod:`pkdyn.precision.vibration_closed_form`, where no pose is solved) and ``multibody``
+(:mod:`pkdyn.precision.vibration_multibody`: the elastic model simulated, nothing linearised;
+the reference). An input shaper
 (:mod:`pkdyn.precision.vibration_shaping`, ``zv`` or ``zvd``) can be applied to the command.
 """
 
@@ -316,7 +318,8 @@ def vibration(
             methods (the lowest; the others respond quasi-statically in the modal method);
             ``None``: those up to 8 times the first frequency at the middle pose.
         poses: Poses along the motion where the modes are computed (modal method; default 33
-            with rigid links, 65 with compliant ones).
+            with rigid links, 65 with compliant ones; every sample where the closed form
+            applies: :mod:`pkdyn.precision.vibration_closed_form`).
         point: Reference point (tool), platform frame [m] (default: the platform origin).
         dt: Sample period of a named trajectory [s].
         profile: Motion law of a named trajectory (``quintic`` or ``jerk``).

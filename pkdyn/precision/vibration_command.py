@@ -5,8 +5,10 @@ It is put on a uniform time grid (resampled by quintic Hermite interpolation whe
 are not evenly spaced: exact for the quintic and polynomial motion laws within a move), mapped
 to the joints (:func:`pkdyn.dynamics.trajectory.map_task_trajectory`: closure-consistent ``q``,
 ``v``, ``a``) and embedded in the elastic model (links undeformed, actuators at their commanded
-positions). The command must start and end at rest: the residual vibration and the settling
-are defined after a stop.
+positions). On the library Delta the actuators' motion and the rigid efforts are closed forms
+(:mod:`pkdyn.precision.vibration_closed_form`) and the joints are mapped only when an analysis
+asks for them (:attr:`Command.joint`). The command must start and end at rest: the residual
+vibration and the settling are defined after a stop.
 
 The actuators' feedforward ``tau_ff`` (the servo law's last term, see
 :mod:`pkdyn.precision.vibration`) is computed here: ``none`` (zero), ``gravity`` (the rigid
