@@ -117,7 +117,7 @@ def rows() -> list[Row]:
     return [
         (
             "delta, Adept cycle 0.5 s + 0.5 s dwell, 0.5 kg, rigid links (3 modes): "
-            "`vibration(robot, \"adept\", ...)` from scratch",
+            '`vibration(robot, "adept", ...)` from scratch',
             f"**{1e6 / t_user:.3g} cycles/s** ({1e-3 * t_user:.1f} ms)",
             ">= 50/s",
         ),
