@@ -39,20 +39,21 @@ of a hinge closure. On top of it:
 - actuation: efforts ``tau(t, q, v) -> (n_a,)`` mapped to generalized forces by an
   :class:`Actuation` selection.
 
-Joint couplings (:mod:`solvers.coupling`: gears, mimic joints), which ``pin.constraintDynamics``
-cannot take (it accepts 3D / 6D rigid constraints only and rejects mimic joints): the rigid
-closures stay Pinocchio's, the couplings' forces ``C^T mu`` are added to the generalized forces.
-The constrained acceleration is affine in the force, ``a(tau + C^T mu) = a(tau) + G mu``; ``G``
-is read from ``k`` more calls with probe forces (``k`` couplings), ``mu`` solves the couplings'
-acceleration equations ``C a = -gamma_c - Kd C v - Kp r_c`` (the same Baumgarte gains, minimum
-norm when couplings are redundant with the closures) and a last call at ``tau + C^T mu`` gives
-the acceleration and the rigid forces; ``k + 2`` calls per evaluation (``aba`` when there are no
-rigid closures). Without couplings nothing changes: one call.
+The constraints are a :class:`~solvers.constraints.ConstraintSet`. Without couplings the
+accelerations are Pinocchio's ``pin.constraintDynamics`` on the fewest 3D points and 6D welds
+with the set's closures (:meth:`solvers.closure.ClosureRows.pin_closures`: a planar hinge is one
+point, a spatial hinge two): one call per evaluation. Joint couplings (:mod:`solvers.coupling`),
+which ``pin.constraintDynamics`` cannot take (it accepts 3D / 6D rigid constraints only and
+rejects mimic joints), act through their forces, found with the factorization of that one call
+(:class:`solvers.coupled_dynamics.CoupledDynamics`: one Pinocchio call and a few
+back-substitutions, the same Baumgarte gains and proximal treatment of redundant rows),
+whatever the number of couplings.
 
 Units: SI. Pinocchio's constraint forces (``data.lambda_c``, for ``J =
 pin.getConstraintsJacobian``) are, per constraint model, the force (3D) or wrench (6D) on
 ``joint1``'s body at its contact frame, expressed in that frame. The recorded
-``constraint_forces`` are converted to the convention of :mod:`solvers.closure`
+``constraint_forces`` are the multipliers of the set's rows, converted to the convention of
+:mod:`solvers.closure`
 and of the inverse dynamics (:func:`ForwardDynamics.closure_forces`): 3D, the world-frame force
 [N] on ``joint1``'s body; 6D, the wrench [N, N m] on ``joint2``'s body in its contact frame.
 """
@@ -68,7 +69,7 @@ import pinocchio as pin
 
 from solvers import numerics
 from solvers.actuation import Actuation
-from solvers.closure import Closure
+from solvers.closure import Closure, ClosureRows
 from solvers.conditioning import (
     LEAVE,
     NEAR_SINGULAR,
@@ -80,6 +81,7 @@ from solvers.conditioning import (
 )
 from solvers.constraints import ConstraintSet, constraint_set
 from solvers.control_step import ProjectedEulerStep
+from solvers.coupled_dynamics import CoupledDynamics
 from solvers.coupling import Coupling
 from solvers.energy import KineticEnergy
 from solvers.integrators import COMMUTATIVE_JOINTS, DOPRI5, RK4, Tableau
@@ -101,6 +103,7 @@ TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 """Actuator efforts ``tau(t [s], q (nq,), v (nv,)) -> (n_a,)`` [N m or N]."""
 
 _ARG1 = pin.ArgumentPosition.ARG1
+_NO_Q = np.zeros(0)  # (closure rows need no configuration beyond the kinematics in the data)
 _POINT = pin.ContactType.CONTACT_3D
 
 COLLAPSE = 0.25
@@ -241,21 +244,24 @@ class ForwardDynamics:
         cs = self.constraints
         self.constraint_models = pin.StdVec_RigidConstraintModel()
         self.constraint_datas = pin.StdVec_RigidConstraintData()
-        base = cs.closure_rows.base_models() if cs.closure_rows is not None else []
+        # Pinocchio's constraint models: the fewest points and welds with the set's closures
+        cr = cs.closure_rows
+        pin_rows = ClosureRows(model, cr.pin_closures() if cr is not None else [], reduce=False)
+        self._pin_rows = pin_rows
+        base = pin_rows.base_models()
         for c in base:
             c.setBaumgarteCorrectorParameters(corrector)
             self.constraint_models.append(c)
             self.constraint_datas.append(c.createData())
         self.nc = cs.n  # constraint rows: closures, then couplings
+        self.n_pin = pin_rows.n  # Pinocchio's constraint rows
+        # (the set's closures are those points and welds: Pinocchio's forces as they are)
+        self._same_rows = cr is None or (cr.identity and pin_rows.n == cr.n)
         self._coupled = cs.nk > 0
-        self._pd = (float(gains[0]), float(gains[1]))  # Baumgarte gains of the couplings
-        n_k = cs.nk
-        self._C = np.zeros((n_k, model.nv))  # the couplings' Jacobian rows
-        self._mu = np.zeros(n_k)  # the couplings' forces at the last evaluation
-        self._probe = 1.0  # probe force [N m or N]: of the order of the couplings' forces
+        self._pd = (float(gains[0]), float(gains[1]))
         # conversion of Pinocchio's multipliers to the rows' convention (see the module doc)
         pts = [k for k, cm in enumerate(self.constraint_models) if cm.type == _POINT]
-        offsets = cs.closure_rows.base_offsets if cs.closure_rows is not None else [0]
+        offsets = pin_rows.base_offsets
         self._pt_rows = np.array([offsets[k] for k in pts], dtype=int)
         self._pt_joint1 = [self.constraint_models[k].joint1_id for k in pts]
         self._pt_rot1 = np.array(
@@ -267,6 +273,20 @@ class ForwardDynamics:
             pin.initConstraintDynamics(
                 model, self.data, self.constraint_models, self.constraint_datas
             )
+        # with couplings: their forces from the factorization of one Pinocchio call
+        self._schur = (
+            CoupledDynamics(
+                model,
+                cs.coupling_rows,
+                self.constraint_models,
+                self.constraint_datas,
+                self.data,
+                self.prox,
+                self._pd,
+            )
+            if cs.coupling_rows is not None
+            else None
+        )
         self._chart = any(
             model.joints[j].shortname() not in COMMUTATIVE_JOINTS for j in range(1, model.njoints)
         )
@@ -309,6 +329,8 @@ class ForwardDynamics:
         for cm in self.constraint_models:
             cm.setBaumgarteCorrectorParameters(corrector)
         self._pd = (w * w, 2.0 * w)
+        if self._schur is not None:
+            self._schur.gains = self._pd
         self._gains_step = h
 
     # ------------------------------------------------------------------ dynamics
@@ -331,17 +353,11 @@ class ForwardDynamics:
 
     def _accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Acceleration as a view on ``data.ddq`` (overwritten by the next call)."""
-        if self._coupled:
-            return self._coupled_accel(q, v, tau)
+        if self._schur is not None:
+            return self._schur.acceleration(q, v, tau)
         if self.nc:
             return self._solve(q, v, tau)
         return pin.aba(self.model, self.data, q, v, tau)
-
-    def _rigid(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """Acceleration under the rigid closures alone (a copy); forces in ``data.lambda_c``."""
-        if self.constraints.nc:
-            return np.array(self._solve(q, v, tau))
-        return np.array(pin.aba(self.model, self.data, q, v, tau))
 
     def _solve(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """``pin.constraintDynamics``, made exact where its proximal iterations stop short.
@@ -515,31 +531,6 @@ class ForwardDynamics:
         self._since_check += 1
         if t >= self._cond_due or self._since_check >= STEP_CHECK_PERIOD:
             self._observe(t, self._kappa(data))
-
-    def _coupled_accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """Acceleration with the couplings' forces added (see the module docstring).
-
-        The couplings' forces are left in ``self._mu``, the rigid ones in ``data.lambda_c``.
-        """
-        rows = self.constraints.coupling_rows
-        assert rows is not None
-        C = rows.jacobian(q, self._C)
-        kp, kd = self._pd
-        c = -rows.drift(q, v) - kd * C.dot(v) - kp * rows.residual(q)
-        a0 = self._rigid(q, v, tau)
-        s = self._probe
-        G = np.empty((C.shape[1], C.shape[0]))
-        for i in range(C.shape[0]):
-            G[:, i] = (self._rigid(q, v, tau + s * C[i]) - a0) / s
-        CG = C.dot(G)
-        b = c - C.dot(a0)
-        if CG.shape == (1, 1):  # one coupling: numerics.lstsq's rule, without its SVD
-            mu = b / CG[0] if CG[0, 0] != 0.0 else np.zeros(1)
-        else:
-            mu = numerics.lstsq(CG, b, 1e-12)
-        self._mu = mu
-        self._probe = max(float(np.abs(mu).max()), 1e-6)
-        return self._rigid(q, v, tau + C.T.dot(mu))
 
     def _generalized(
         self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
@@ -816,8 +807,8 @@ class ForwardDynamics:
         every step on the closures (residual within ``project_tol``) by one Newton correction
         with the factorization of the dynamics evaluated at the new state, which the next call
         reuses when given the state this one returned; it costs less than twice a raw Euler
-        step (``bench/dynamics.py``). With joint couplings the step is the general one. The
-        other integrators check the residual after the step
+        step (``bench/dynamics.py``); joint couplings are corrected with the closures, with the
+        same factorization. The other integrators check the residual after the step
         and project above ``project_tol``.
 
         Args:
@@ -847,10 +838,7 @@ class ForwardDynamics:
         """
         if not 0.0 < dt < math.inf:
             raise ValueError(f"dt must be a finite positive number of seconds, got {dt!r}")
-        if self.integrator == "euler" and self.project and self.nc and not self._coupled:
-            # (the couplings' forces are not in pin.constraintDynamics' factorization: a coupled
-            # robot takes the general step below, projected when its residual exceeds the
-            # tolerance)
+        if self.integrator == "euler" and self.project and self.nc:
             if self._control is None:
                 self._control = ProjectedEulerStep(self)
             q, v = self._control.step(t, q, v, dt, tau)
@@ -891,20 +879,33 @@ class ForwardDynamics:
         3D point: ``R_c1 lambda`` (world-frame force on ``joint1``'s body); 6D weld:
         ``-lambda`` (wrench on ``joint2``'s body in its contact frame, exact at closure).
 
+        Pinocchio's constraint models hold every row of the closures (a hinge is two points);
+        where the constraint set reduces them (hinges, planar closures), the multipliers of its
+        rows are those that apply the same generalized force, ``J_red^T mu = J^T lambda``
+        (minimum norm).
+
         Args:
             kin: Data whose joint placements are those of the current configuration.
-            lambda_c: ``data.lambda_c`` (nc,) of ``pin.constraintDynamics``.
+            lambda_c: ``data.lambda_c`` (n_pin,) of ``pin.constraintDynamics``.
 
         Returns:
-            The multipliers (nc,) [N, N m], as returned by the inverse dynamics (with couplings,
-            their forces at the last evaluation follow the rigid closures').
+            The multipliers (n,) [N, N m] of the constraint rows, as returned by the inverse
+            dynamics (with couplings, their forces at the last evaluation follow the closures').
 
         """
-        if self._coupled:
-            n = self.constraints.nc
-            rigid = self._rigid_forces(kin, np.asarray(lambda_c, dtype=float)[:n])
-            return np.concatenate([rigid, self._mu])
-        return self._rigid_forces(kin, lambda_c)
+        lam = np.asarray(lambda_c, dtype=float)[: self.n_pin]
+        if self._schur is not None:  # the closures' response to the couplings included
+            lam = self._schur.lam
+        rigid = self._rigid_forces(kin, lam) if self.n_pin else lam
+        if not self._same_rows and self.n_pin:
+            pin.computeJointJacobians(self.model, kin)  # (from the placements in kin)
+            self._pin_rows.calc(kin)
+            J_pin = self._pin_rows.jacobian(kin)
+            J_red = self.constraints.closures.jacobian_at(kin, _NO_Q)
+            rigid = numerics.lstsq(J_red.T, J_pin.T @ rigid, 1e-10)
+        if self._schur is not None:
+            return np.concatenate([rigid, self._schur.mu])
+        return rigid
 
     def _rigid_forces(self, kin: pin.Data, lambda_c: np.ndarray) -> np.ndarray:
         out = -np.asarray(lambda_c, dtype=float)
