@@ -162,12 +162,24 @@ class Hermite5:
             k = min(int(np.searchsorted(T, t, side="right")) - 1, T.size - 2)
         h = self.h[k]
         s = (t - T[k]) / h
-        c = self.c[k]
-        c0, c1, c2, c3, c4, c5 = c[0], c[1], c[2], c[3], c[4], c[5]
-        x = c0 + s * (c1 + s * (c2 + s * (c3 + s * (c4 + s * c5))))
-        xd = (c1 + s * (2 * c2 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))) / h
-        xdd = (2 * c2 + s * (6 * c3 + s * (12 * c4 + s * 20 * c5))) / (h * h)
-        return x, xd, xdd
+        s2 = s * s
+        s3 = s2 * s
+        basis = np.array(
+            [
+                [1.0, s, s2, s3, s2 * s2, s3 * s2],
+                [0.0, 1.0 / h, 2.0 * s / h, 3.0 * s2 / h, 4.0 * s3 / h, 5.0 * s2 * s2 / h],
+                [
+                    0.0,
+                    0.0,
+                    2.0 / (h * h),
+                    6.0 * s / (h * h),
+                    12.0 * s2 / (h * h),
+                    20.0 * s3 / (h * h),
+                ],
+            ]
+        )
+        out = basis @ self.c[k]  # (3, n): value, rate, acceleration
+        return out[0], out[1], out[2]
 
 
 def uniform(task: TaskTrajectory) -> TaskTrajectory:
