@@ -136,7 +136,7 @@ def test_closed_form_is_the_general_modal_method():
     """The Delta's closed forms: the same modes as the general path, the same response."""
     import dataclasses
 
-    from pkdyn.dynamics.trajectory import named_task
+    from pkdyn.dynamics.trajectory import map_task_trajectory, named_task
     from pkdyn.precision.condensation import constraint_rows
     from pkdyn.precision.vibration import analyse, prepare
     from pkdyn.precision.vibration_command import command
@@ -149,6 +149,7 @@ def test_closed_form_is_the_general_modal_method():
     st = prepare(robot, em, cmd, p, 0.5, "none", None, None, 2e-5, 0.3, None, None)
     closed = analyse(st, cmd, "modal")
     assert st.arms is not None and cmd.mapped is None  # (no pose solved)
+    cmd.mapped = map_task_trajectory(robot, cmd.task, check_speeds=False)  # (the general path)
     # its modes at poses along the path are the general ones (frequencies, platform motions)
     samples = np.array([0, 77, 250, 401, 500])
     poses = st.arms.poses(cmd.task.pose[samples, :3])
@@ -175,6 +176,49 @@ def test_closed_form_is_the_general_modal_method():
         d = platform_jacobian(st.elastic.robot, Q[k], point=p)[:3] @ U[k]
         i = int(np.argmin(np.abs(closed.t - t_c[k])))
         assert d == pytest.approx(closed.deviation[i], rel=1e-6, abs=1e-6 * closed.peak_deviation)
+
+
+def test_closed_form_joint_trajectory_is_the_mechanisms():
+    """The Delta's joints along a motion in closed form: assembled, on the path, no bar spin."""
+    import pinocchio as pin
+
+    from pkdyn.dynamics.delta import DeltaDynamics
+    from pkdyn.dynamics.inverse import inverse_dynamics
+    from pkdyn.dynamics.trajectory import named_task
+    from pkdyn.precision.vibration_closed_form import arm_motion, delta_joint_trajectory
+    from solvers import numerics
+
+    robot = pkdyn.load("delta", geometry=False)
+    task = named_task(robot, "adept", cycle_time=0.5)
+    dd = DeltaDynamics(robot)
+    arms = arm_motion(dd, task)
+    jt = delta_joint_trajectory(robot, dd, task, arms)
+    model, data, cs, fid = robot.model, robot.data, robot.constraints, robot.platform_frame
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    for k in range(0, task.t.size, 50):
+        q, v, a = jt.q[k], jt.v[k], jt.a[k]
+        assert np.abs(cs.residual(data, q)).max() < 1e-12  # closures [m]
+        Jc = cs.jacobian(data, q)
+        assert np.abs(Jc @ v).max() < 1e-12 and np.abs(Jc @ a + cs.drift(data, q, v)).max() < 1e-9
+        pin.forwardKinematics(model, data, q, v, a)
+        M = pin.updateFramePlacement(model, data, fid)
+        assert M.translation == pytest.approx(task.pose[k, :3], abs=1e-12)
+        assert pin.getFrameVelocity(model, data, fid, lwa).linear == pytest.approx(
+            task.pose_d[k, :3], abs=1e-12
+        )
+        acc = pin.getFrameClassicalAcceleration(model, data, fid, lwa).linear
+        assert acc == pytest.approx(task.pose_dd[k, :3], abs=1e-9)
+        # the internal mobilities (the bars' spins): zero momentum, their dynamics satisfied
+        S = np.zeros((3, model.nv))
+        S[np.arange(3), robot.actuated_v] = 1.0
+        N = numerics.null_space(np.vstack([Jc, S]), 1e-9, 1.0)
+        assert N.shape[1] == 6
+        Mq = pin.crba(model, data, q)
+        Mq = np.triu(Mq) + np.triu(Mq, 1).T
+        assert np.abs(N.T @ Mq @ v).max() < 1e-12
+        assert np.abs(N.T @ pin.rnea(model, data, q, v, a)).max() < 1e-9
+    # the rigid efforts along it are the closed form's
+    assert inverse_dynamics(robot, jt).tau == pytest.approx(arms.tau, abs=1e-9)
 
 
 def test_static_deflection_is_the_loaded_stiffness_deflection(delta_adept):

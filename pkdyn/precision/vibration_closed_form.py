@@ -33,9 +33,10 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 from pkdyn.dynamics.delta import DeltaDynamics
-from pkdyn.dynamics.trajectory import TaskTrajectory
+from pkdyn.dynamics.trajectory import JointTrajectory, TaskTrajectory
 from pkdyn.exceptions import SingularConfigurationError
 from pkdyn.model.robot import Robot
 from pkdyn.precision.elastic import ElasticModel
@@ -44,6 +45,7 @@ from pkdyn.precision.vibration_modal import PathModes
 
 __all__ = [
     "ActuatorMotion",
+    "delta_joint_trajectory",
     "DeltaModes",
     "DeltaPoses",
     "applies",
@@ -200,6 +202,139 @@ class DeltaModes:
             internal=self.internal,
             coordinates="platform",
         )
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.stack(
+        [
+            a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+            a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+            a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0],
+        ],
+        axis=-1,
+    )
+
+
+def _turn(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The smallest rotations (..., 3, 3) taking unit vectors ``a`` to ``b`` (..., 3)."""
+    k = _cross(a, b)
+    c = np.einsum("...i,...i->...", a, b)
+    K = np.zeros((*k.shape[:-1], 3, 3))
+    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -k[..., 2], k[..., 1], -k[..., 0]
+    K[..., 1, 0], K[..., 2, 0], K[..., 2, 1] = k[..., 2], -k[..., 1], k[..., 0]
+    return np.eye(3) + K + (K @ K) / (1.0 + c)[..., None, None]
+
+
+def delta_joint_trajectory(
+    robot: Robot, dd: DeltaDynamics, task: TaskTrajectory, arms: ActuatorMotion
+) -> JointTrajectory | None:
+    """The library Delta's joint trajectory along ``task``, in closed form (no pose solved).
+
+    The trajectory :func:`pkdyn.dynamics.trajectory.map_task_trajectory` maps, built from the
+    arms' closed-form motion: arm ``k`` at ``alpha_k``; both bars of the arm along
+    ``u_k = d_k / L_k`` (elbow to nacelle), turning at ``omega = u x u'`` and ``u x u''`` (no
+    spin: their spin momentum stays zero, as the general mapping makes it), their spin
+    carried along the samples by the smallest rotation between successive axes (parallel
+    transport, from the home configuration's); the nacelle translating. Each spherical joint's
+    velocity is the bar's angular velocity relative to its arm, in the bar frame, and its
+    acceleration the rate of that vector; the nacelle's free joint's are its velocity and
+    acceleration in its own frame.
+
+    Args:
+        robot: The Delta as loaded.
+        dd: Its closed forms (:class:`~pkdyn.dynamics.delta.DeltaDynamics`).
+        task: The platform trajectory (uniform samples).
+        arms: The arms' motion along it (:func:`arm_motion`).
+
+    Returns:
+        The joint trajectory, or ``None`` when the model is not the library's tree (arms on
+        the world, spherical bar joints on the arms, the nacelle a free joint on the world).
+
+    """
+    model = robot.model
+    arm_j = [int(j) for j in robot.actuated_joints]
+    fid = robot.platform_frame
+    if fid is None:
+        return None
+    nac = int(model.frames[fid].parentJoint)
+    if model.joints[nac].shortname() != "JointModelFreeFlyer" or int(model.parents[nac]) != 0:
+        return None
+    bars = []
+    for cm in robot.constraint_models:
+        j = int(cm.joint1_id)
+        parent = int(model.parents[j])
+        if (
+            model.joints[j].shortname() != "JointModelSpherical"
+            or parent not in arm_j
+            or int(cm.joint2_id) != nac
+        ):
+            return None
+        p = np.asarray(cm.joint1_placement.translation, dtype=float)
+        bars.append((j, arm_j.index(parent), np.asarray(model.jointPlacements[j].rotation), p))
+    if model.njoints - 1 != len(arm_j) + len(bars) + 1:
+        return None
+    P, Pd, Pdd = task.pose[:, :3], task.pose_d[:, :3], task.pose_dd[:, :3]
+    alpha, ad, add = arms.qa, arms.qa_dot, arms.qa_ddot
+    N = P.shape[0]
+    c, s = np.cos(alpha), np.sin(alpha)
+    a = dd.axis[None]  # (1, arm, 3)
+    E = dd.O[None] + dd._in_world(c, s, dd.elbow)
+    d = P[:, None, :] + dd.attach[None] - E
+    L = dd.length[None, :, None]
+    E1 = _cross(a, E - dd.O[None])
+    E2 = _cross(a, E1)
+    u = d / L
+    ud = (Pd[:, None, :] - E1 * ad[..., None]) / L
+    udd = (Pdd[:, None, :] - E1 * add[..., None] - E2 * (ad**2)[..., None]) / L
+    w_bar = _cross(u, ud)  # (N, arm, 3): the bars' angular velocity, world axes
+    al_bar = _cross(u, udd)
+    w_rel = w_bar - ad[..., None] * a  # relative to the arm
+    al_rel = al_bar - add[..., None] * a
+    # arm frames R0 Ry(alpha) (N, arm, 3, 3)
+    Ry = np.zeros((N, 3, 3, 3))
+    Ry[..., 0, 0], Ry[..., 0, 2], Ry[..., 1, 1] = c, s, 1.0
+    Ry[..., 2, 0], Ry[..., 2, 2] = -s, c
+    R_arm = dd.R0[None] @ Ry
+    Q = np.tile(robot.q_home, (N, 1))
+    V = np.zeros((N, model.nv))
+    A = np.zeros((N, model.nv))
+    for k, j in enumerate(arm_j):
+        jm = model.joints[j]
+        Q[:, jm.idx_q], V[:, jm.idx_v], A[:, jm.idx_v] = alpha[:, k], ad[:, k], add[:, k]
+    from scipy.spatial.transform import Rotation
+
+    data = robot.model.createData()
+    pin.forwardKinematics(model, data, robot.q_home)
+    for j, k, R_pl, p in bars:
+        z = p / np.linalg.norm(p)
+        base = R_arm[:, k] @ R_pl  # (N, 3, 3): the bar frame at zero relative rotation
+        R = np.empty((N, 3, 3))
+        home = np.asarray(data.oMi[j].rotation)
+        R[0] = _turn(home @ z, u[0, k]) @ home  # (the home's spin, turned onto the axis)
+        steps = _turn(u[:-1, k], u[1:, k])
+        for i in range(N - 1):
+            R[i + 1] = steps[i] @ R[i]
+        rel = np.swapaxes(base, 1, 2) @ R
+        jm = model.joints[j]
+        Q[:, jm.idx_q : jm.idx_q + 4] = Rotation.from_matrix(rel).as_quat()  # (x, y, z, w)
+        Rt = np.swapaxes(R, 1, 2)
+        v = np.einsum("nij,nj->ni", Rt, w_rel[:, k])
+        V[:, jm.idx_v : jm.idx_v + 3] = v
+        w_local = np.einsum("nij,nj->ni", Rt, w_bar[:, k])
+        A[:, jm.idx_v : jm.idx_v + 3] = np.einsum("nij,nj->ni", Rt, al_rel[:, k]) - _cross(
+            w_local, v
+        )
+    jm = model.joints[nac]
+    Mp = model.jointPlacements[nac]
+    Rn = dd.R_nacelle
+    Rp = np.asarray(Mp.rotation)
+    Q[:, jm.idx_q : jm.idx_q + 3] = (P - dd.f_off - np.asarray(Mp.translation)) @ Rp
+    Q[:, jm.idx_q + 3 : jm.idx_q + 7] = Rotation.from_matrix(Rp.T @ Rn).as_quat()
+    V[:, jm.idx_v : jm.idx_v + 3] = Pd @ Rn
+    A[:, jm.idx_v : jm.idx_v + 3] = Pdd @ Rn
+    return JointTrajectory(
+        task.t.copy(), Q, V, A, robot.actuated_q, robot.actuated_v, task=task, name=task.name
+    )
 
 
 def joint_deformation(em: ElasticModel, Q: np.ndarray, E: np.ndarray) -> np.ndarray:

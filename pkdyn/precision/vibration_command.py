@@ -38,6 +38,7 @@ from pkdyn.precision.vibration_closed_form import (
     ActuatorMotion,
     arm_motion,
     closed_form,
+    delta_joint_trajectory,
     gravity_efforts,
 )
 
@@ -253,12 +254,18 @@ class Command:
 
     @property
     def joint(self) -> JointTrajectory:
-        """Its joint trajectory on the robot as loaded (mapped on first use).
+        """Its joint trajectory on the robot as loaded, mapped on first use.
+
+        In closed form on the library Delta
+        (:func:`~pkdyn.precision.vibration_closed_form.delta_joint_trajectory`), else by
+        :func:`~pkdyn.dynamics.trajectory.map_task_trajectory`.
 
         Raises:
             TrajectoryError: The motion leaves the workspace or meets a singularity.
 
         """
+        if self.mapped is None and self.delta is not None and self.arms is not None:
+            self.mapped = delta_joint_trajectory(self.em.base, self.delta, self.task, self.arms)
         if self.mapped is None:
             self.mapped = map_task_trajectory(
                 self.em.base, self.task, check_speeds=False, progress=self.progress
