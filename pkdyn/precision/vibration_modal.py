@@ -428,15 +428,13 @@ def modal_response(
         inv = 1.0 / W2[:, m:]
         Rp = np.swapaxes(pm.platform[:, m:] * inv[:, :, None], 1, 2) @ Uq
         Ru = np.swapaxes(Uq * inv[:, :, None], 1, 2) @ Uq
-        Fin = _hermite3(t, ends, sub)
-        Fdin = _hermite3(t, ends, sub, derivative=True)
-        segs, lams = np.repeat(seg, sub), np.repeat(lam, sub)[:, None]
-        d += (1.0 - lams) * np.einsum("icv,iv->ic", Rp[segs], Fin) + lams * np.einsum(
-            "icv,iv->ic", Rp[segs + 1], Fin
-        )
-        dd += (1.0 - lams) * np.einsum("icv,iv->ic", Rp[segs], Fdin) + lams * np.einsum(
-            "icv,iv->ic", Rp[segs + 1], Fdin
-        )
+        # per interval, the two poses' maps blended at its middle, applied to the forcing's
+        # end values and rates (the cubic interpolant is linear in them)
+        lk = lam[:, None, None]
+        Rk = (1.0 - lk) * Rp[seg] + lk * Rp[seg + 1]  # (K, 6, nv)
+        projected = tuple(np.einsum("kcv,kv->kc", Rk, X) for X in ends)
+        d += _hermite3(t, projected, sub)
+        dd += _hermite3(t, projected, sub, derivative=True)
     # at rest after the motion: constant coefficients at the end pose
     jE = P - 1
     wE = omega_all[jE, :m]
@@ -464,7 +462,9 @@ def modal_response(
     if Ru is not None:
         segc = np.append(np.minimum(seg + np.rint(lam).astype(int), P - 1), [jE] * (n_rest + 1))
         Fc = np.vstack([F, np.tile(FE, (n_rest, 1))])
-        u += np.einsum("kwv,kv->kw", Ru[segc], Fc)
+        for j in np.unique(segc):  # (by pose: no copy of a map per sample)
+            at = segc == j
+            u[at] += Fc[at] @ Ru[j].T
     jM = int(np.argmin(np.abs(np.asarray(pose_t) - 0.5 * t[-1])))
     zM = np.diagonal(Cb[jM]) / (2.0 * omega_all[jM, :m])
     return ModalResponse(
