@@ -6,7 +6,7 @@
   matrix against :func:`pkdyn.precision.modes.modes` to 1e-6: rigid links, the Delta with carbon
   links (each virtual spring six joints at the beam's mid-span), the planar 3-RRR with steel
   links (hinge closures); a link whose part past its spring has no mass (the Gough-Stewart's
-  steel rods) is refused, naming it;
+  steel rods) is refused, naming it, as bad servo dampings and integrators;
 - the Delta's vibration on the Adept cycle (0.5 s, 0.5 kg payload, 2e4 N m/rad servos)
   simulated by MuJoCo on that export, with rigid and with carbon links, against the modal
   method: within 2 % in peak deviation, residual amplitude and settling time.
@@ -133,9 +133,17 @@ def test_mujoco_runs_the_exported_model_as_the_modal_method(material, timestep, 
     assert fig.settling_time == pytest.approx(modal.settling_time, rel=0.02)
 
 
-def test_a_massless_tip_is_refused_naming_the_link():
+def test_refusals_name_the_culprit():
     from pkdyn.exceptions import InvalidInputError
+    from pkdyn.precision.vibration_mjcf import mujoco_figures
 
     em = elastic_model(pkdyn.load("gough_stewart"), 2e6, material="steel")
-    with pytest.raises(InvalidInputError, match="leg1_rod"):
+    with pytest.raises(InvalidInputError, match="leg1_rod"):  # (MuJoCo: a mass per body)
         elastic_mjcf(em, np.zeros(6))
+    delta = elastic_model(pkdyn.load("delta"), 2e4, material="carbon")
+    with pytest.raises(InvalidInputError, match="servo_damping"):
+        elastic_mjcf(delta, np.zeros(2))
+    with pytest.raises(InvalidInputError, match="damping"):
+        elastic_mjcf(delta, np.zeros(3), damping=np.zeros(5))
+    with pytest.raises(InvalidInputError, match="integrator"):
+        mujoco_figures(None, None, None, integrator="leapfrog")

@@ -51,6 +51,7 @@ from pkdyn.precision.vibration_figures import Figures, figures
 from solvers import ConstraintSet, PassiveForces
 
 __all__ = [
+    "INTEGRATORS",
     "POINT_SITE",
     "MujocoRun",
     "elastic_mjcf",
@@ -64,6 +65,9 @@ __all__ = [
 POINT_SITE = "vibration/point"
 """Name of the site at the reference point."""
 
+
+INTEGRATORS = ("RK4", "implicitfast", "implicit", "Euler")
+"""MuJoCo's integrators :func:`mujoco_figures` takes."""
 
 _DENSE_NV = 150
 """Largest model (velocity coordinates) exported with MuJoCo's dense constraint Jacobian."""
@@ -101,6 +105,11 @@ def elastic_mjcf(
     k = np.asarray(em.actuator_stiffness, dtype=float)
     if not np.all(np.isfinite(k)):
         raise InvalidInputError("actuator_stiffness", "a servo needs a finite stiffness")
+    c = np.asarray(servo_damping, dtype=float)
+    if c.shape != k.shape or not np.all(np.isfinite(c)) or np.any(c < 0.0):
+        raise InvalidInputError(
+            "servo_damping", f"one finite coefficient >= 0 per actuator ({k.size})"
+        )
     r = six_joint_robot(em, damping)
     opt = options or MjcfOptions(
         timestep=1e-4, integrator="RK4", contacts=False, visual=False, collision=False
@@ -112,7 +121,6 @@ def elastic_mjcf(
     for old in root.findall("actuator"):
         root.remove(old)
     act = ET.SubElement(root, "actuator")
-    c = np.asarray(servo_damping, dtype=float)
     for a, ki, ci in zip(r.actuators, k, c, strict=True):
         ET.SubElement(act, "position", name=f"{a.name}/servo", joint=a.joint, kp=_num(ki))
         ET.SubElement(act, "velocity", name=f"{a.name}/damper", joint=a.joint, kv=_num(ci))
@@ -269,6 +277,10 @@ def mujoco_figures(
     """
     from pkdyn.precision.vibration_multibody import equilibrium
 
+    if integrator not in INTEGRATORS:
+        raise InvalidInputError(
+            "integrator", f"unknown {integrator!r} (one of {', '.join(INTEGRATORS)})"
+        )
     em = st.elastic
     links = np.array(st.c, dtype=float)
     if em.robot.passive is not None:
