@@ -89,9 +89,10 @@ class PathModes:
         platform: Platform motion per mode (P, n, 6): reference point [m], rotation [rad].
         mass: Mass matrix of the elastic model at each pose (P, nv_ext, nv_ext).
         internal: Internal mobilities without stiffness (not modes).
-        coordinates: ``extended`` (the extended tree's velocity coordinates) or ``actuators``
-            (the actuators' deviations: :mod:`pkdyn.precision.vibration_closed_form`); the
-            shapes, mass, forces and damping of a response share them.
+        coordinates: ``extended`` (the extended tree's velocity coordinates) or ``platform``
+            (the platform's translation, world axes: the Delta's closed form,
+            :mod:`pkdyn.precision.vibration_closed_form`); the shapes, mass, forces and damping
+            of a response share them.
 
     """
 
@@ -260,7 +261,7 @@ class ModalResponse:
         d: Platform deviation at ``t`` (M, 6): reference point [m], rotation [rad], world axes.
         d_dot: Its rate (M, 6) [m/s, rad/s].
         t_coarse: Times of ``u`` (K,) [s]: the command's samples, then the same step at rest.
-        u: Deformation at ``t_coarse`` (K, nv_ext) (extended velocity coordinates).
+        u: Deformation at ``t_coarse`` (K, nv_ext) (in the coordinates of the modes).
         eta_end: Modal coordinates at the end of the motion (n_kept,), end-pose modes.
         eta_dot_end: Their rates (n_kept,).
         eta_static_end: Their static equilibrium at the end pose (n_kept,).
