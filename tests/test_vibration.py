@@ -116,7 +116,7 @@ def test_shaping_on_the_delta_removes_the_targeted_mode():
 @pytest.fixture(scope="module")
 def delta_adept():
     robot = pkdyn.load("delta")
-    opts = dict(cycle_time=0.5, payload=0.5, actuator_stiffness=2e4, band=2e-5, dwell=0.3)
+    opts = dict(cycle_time=0.5, payload=0.5, actuator_stiffness=2e4, band=2e-5, dwell=0.2)
     return robot, opts, vibration(robot, "adept", **opts)
 
 
