@@ -268,7 +268,9 @@ class DeltaDynamics:
         R0 = self.R0
         return x[..., None] * R0[:, :, 0] + e[:, 1, None] * R0[:, :, 1] + z[..., None] * R0[:, :, 2]
 
-    def solve(self, task: TaskTrajectory, check_limits: bool = True) -> ActuatorTrajectory:
+    def solve(
+        self, task: TaskTrajectory, check_limits: bool = True, check_speeds: bool = True
+    ) -> ActuatorTrajectory:
         """Actuator motion and efforts along a platform trajectory (see the module docstring).
 
         Args:
@@ -276,6 +278,8 @@ class DeltaDynamics:
                 frame; the orientation columns are ignored: the nacelle keeps its own).
             check_limits: Raise if an arm leaves its angle or speed limits (as
                 :func:`pkdyn.dynamics.trajectory.map_task_trajectory` does).
+            check_speeds: With ``check_limits``, also raise beyond a speed limit (``False``:
+                the angle limits only, as ``map_task_trajectory(..., check_speeds=False)``).
 
         Returns:
             Arm angles, rates, accelerations and joint-side torques.
@@ -304,7 +308,7 @@ class DeltaDynamics:
         alpha_d = _dot(d, Pd[:, None, :]) / g
         dd = Pd[:, None, :] - E1 * alpha_d[..., None]
         alpha_dd = (_dot(d, Pdd[:, None, :]) - alpha_d**2 * _dot(d, E2) + _dot(dd, dd)) / g
-        if check_limits:
+        if check_limits and check_speeds:
             self._check_speeds(t, alpha_d)
         Edd = E1 * alpha_dd[..., None] + E2 * (alpha_d**2)[..., None]  # elbow accelerations
         Jinv = d / g[..., None]  # (N, 3 arms, 3)

@@ -31,9 +31,10 @@
 - :mod:`~pkdyn.precision.vibration`: :func:`vibration`, the tool's deviation from its rigid
   motion along a motion and its settling (the command: ``vibration_command``; the damping:
   ``vibration_damping``; the modal and multibody methods: ``vibration_modal``,
-  ``vibration_multibody``; the figures: ``vibration_figures``; the result:
-  ``vibration_result``; input shaping: ``vibration_shaping``; the fastest settling cycle:
-  ``vibration_fastest``; the MJCF export with servos: ``vibration_mjcf``).
+  ``vibration_multibody``; the library Delta's closed forms: ``vibration_closed_form``; the
+  figures: ``vibration_figures``; the result: ``vibration_result``; input shaping:
+  ``vibration_shaping``; the fastest settling cycle: ``vibration_fastest``; the MJCF export
+  with servos and compliant links, and MuJoCo's run: ``vibration_mjcf``).
 
 Every result derives from :class:`pkdyn.results.Result` (``table()``, ``to_json()``, ``plot()``
 where a picture helps) and carries ``valid`` and ``warnings``.
