@@ -8,12 +8,12 @@ import math
 import os
 import re
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 
-from pkdyn.exceptions import InvalidInputError, OutputError, close_match
+from pkdyn.cli._paths import check_figure
+from pkdyn.exceptions import InvalidInputError, close_match
 
 __all__ = [
     "NEGATIVE_NUMBER",
@@ -29,7 +29,6 @@ __all__ = [
     "load",
     "check_numbers",
     "number",
-    "output_path",
     "params",
     "posed_command",
     "qa_argument",
@@ -206,62 +205,6 @@ def add_param_option(sp: argparse.ArgumentParser) -> None:
         metavar="NAME=VALUE",
         help="builder parameters (SI units), e.g. --param la=0.3 lb=0.8; see pkdyn list",
     )
-
-
-def output_path(option: str, path: str | None, figure: bool = False) -> str | None:
-    """Check an output file name before any work is done (the file is written at the end).
-
-    The rules of :func:`pkdyn.files.output_target`: a regular file (a symbolic link to one is
-    followed, the link kept) or a new name in an existing, writable directory; never a FIFO,
-    a device or a directory; a name the file system accepts.
-
-    Args:
-        option: The option that names it, for messages (``--csv``).
-        path: The file, or ``None`` (no output).
-        figure: The file is a figure: its extension must name a matplotlib format.
-
-    Returns:
-        ``path``.
-
-    Raises:
-        OutputError: Not a regular file, a missing or read-only directory, a name too long, or
-            an unknown figure format.
-
-    """
-    if path is None:
-        return None
-    from pkdyn.files import output_target
-
-    output_target(path, option)
-    if figure:
-        check_figure(option, path)
-    from pkdyn.files import check_writable
-
-    try:
-        check_writable(path)  # (root passes os.access; /proc takes no new file)
-    except OutputError as err:
-        raise OutputError(path, f"{option}: {str(err).split(': ', 1)[1]}") from None
-    return path
-
-
-def check_figure(option: str, path: str) -> None:
-    """Refuse a figure file whose extension names no matplotlib format.
-
-    Raises:
-        OutputError: No extension, or an unknown one (the message lists the known ones).
-
-    """
-    from matplotlib.figure import Figure
-
-    from pkdyn.files import shown
-
-    p = Path(path)
-    supported = Figure().canvas.get_supported_filetypes()
-    fmt = p.suffix.lower().lstrip(".")
-    if fmt not in supported:
-        known = ", ".join(f".{k}" for k in sorted(supported))
-        what = f"unknown figure format '{p.suffix}'" if fmt else "no file extension"
-        raise OutputError(shown(path), f"{option}: {what}; name the file with one of {known}")
 
 
 def load(args: argparse.Namespace, geometry: bool = False) -> Any:

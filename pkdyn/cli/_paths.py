@@ -23,11 +23,15 @@ import os
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
+
+from pkdyn.exceptions import OutputError
 
 __all__ = [
     "INPUT_LIMIT",
     "PathRole",
+    "check_figure",
     "check_paths",
     "chosen_parser",
     "input_option",
@@ -175,6 +179,26 @@ def _name(action: argparse.Action) -> str:
     return str(action.metavar or action.dest).upper()
 
 
+def check_figure(option: str, path: str) -> None:
+    """Refuse a figure file whose extension names no matplotlib format.
+
+    Raises:
+        OutputError: No extension, or an unknown one (the message lists the known ones).
+
+    """
+    from matplotlib.figure import Figure
+
+    from pkdyn.files import shown
+
+    p = Path(path)
+    supported = Figure().canvas.get_supported_filetypes()
+    fmt = p.suffix.lower().lstrip(".")
+    if fmt not in supported:
+        known = ", ".join(f".{k}" for k in sorted(supported))
+        what = f"unknown figure format '{p.suffix}'" if fmt else "no file extension"
+        raise OutputError(shown(path), f"{option}: {what}; name the file with one of {known}")
+
+
 def check_paths(parser: Any, args: argparse.Namespace) -> None:
     """Check every path the command named on the command line, before it runs (module doc).
 
@@ -201,9 +225,6 @@ def check_paths(parser: Any, args: argparse.Namespace) -> None:
     if not inputs and not outputs:
         return
     resolve_paths(inputs, [o for o, _ in outputs], INPUT_LIMIT)
-    from pkdyn.cli._common import check_figure
-    from pkdyn.exceptions import OutputError
-
     for out, role in outputs:
         if role.figure:
             check_figure(out.option, out.path)
