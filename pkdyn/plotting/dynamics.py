@@ -102,7 +102,7 @@ def plot_simulation(
 
     from pkdyn.dynamics.simulation_output import simulation_columns
 
-    cols = simulation_columns(robot, result)
+    cols = simulation_columns(robot, result, readings=False)  # (joint coordinates)
     t = cols["t"]
     fig = Figure(figsize=(8.0, 11.0))
     axes = fig.subplots(5, 1, sharex=True)
