@@ -99,6 +99,23 @@ class Robot:
         P = np.array([M.translation for M in data.oMi])
         return max(float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))), 1e-9)
 
+    def closure_tolerance(self, rtol: float) -> float:
+        """The closure residual [m or rad] that is ``rtol`` of the robot's size.
+
+        ``rtol * min(1, length_scale)``: a gap in metres judged against the robot's length, a
+        gap in radians (a weld's rotation, a coupling) against one radian, whichever is the
+        stricter, so that a millimetre robot is assembled as closely, relative to its size, as
+        a metre one.
+
+        Args:
+            rtol: Relative tolerance (e.g. 1e-10).
+
+        Returns:
+            The tolerance [m or rad].
+
+        """
+        return float(rtol) * min(1.0, self.length_scale)
+
     @property
     def nq(self) -> int:
         """Size of the configuration vector."""
