@@ -9,7 +9,7 @@ three modes, 91 to 157 Hz at the pick points), CPU time of this process:
 - a whole modal analysis of a new command, the mapping to the joints excepted (modes at 33
   poses, the unbalanced forces at 501 samples, the response, the figures);
 - the multibody simulation of the same cycle (the reference);
-- ``size --fastest --settle``'s search (the unshaped scan and bisection) on the Delta.
+- ``size --fastest --band``'s search (the unshaped scan and bisection) on the Delta.
 
 Run ``python bench/vibration.py``; prints the rows as a markdown table.
 """

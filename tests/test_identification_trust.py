@@ -59,7 +59,9 @@ def test_positions_in_degrees_are_refused_naming_the_line(five_bar, tmp_path, ca
     cols = ["t", *(f"qa_{n}" for n in names), *(f"tau_{n}" for n in names)]
     path = tmp_path / "deg.csv"
     write_table(path, cols, np.column_stack([t, np.rad2deg(qa), tau]))
-    assert main(["identify", "five_bar", "--data", str(path), "-o", str(tmp_path / "x")]) == 1
+    assert (
+        main(["identify", "five_bar", "--measurements", str(path), "-o", str(tmp_path / "x")]) == 1
+    )
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "line 2, column qa_motor1" in err
     assert (

@@ -13,6 +13,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from pkdyn.cli._paths import check_figure
+from pkdyn.cli._spelling import spelled_option
 from pkdyn.exceptions import InvalidInputError, close_match
 
 __all__ = [
@@ -301,15 +302,16 @@ def configuration(args: argparse.Namespace, geometry: bool = False) -> tuple[Any
 def qa_argument(parser: Any, required: bool = False) -> None:
     """Add ``--qa QA...`` (joint coordinates) and ``--readings R...`` (encoder readings).
 
-    ``--qa`` (alias ``--q``): the actuated joint coordinates, in actuator order. ``--readings``:
+    ``--qa``: the actuated joint coordinates, in actuator order (``--q``, its former spelling,
+    kept for one release). ``--readings``:
     the actuators' encoder readings, the description's ``<pkdyn:encoder gain>`` applied (joint
     coordinate = gain x reading). One of them is required when ``required``.
     """
     where = parser.add_mutually_exclusive_group(required=True) if required else parser
-    where.add_argument(
+    spelled_option(
+        where,
         "--qa",
-        "--q",
-        dest="qa",
+        deprecated=("--q",),
         nargs="+",
         type=number,
         metavar="QA",

@@ -28,8 +28,8 @@ from pkdyn.precision.parameters import (
 )
 from pkdyn.precision.perturbation import perturbed, with_placements
 from pkdyn.precision.sensitivity import pose_sensitivity
-from pkdyn.progress import progress
-from pkdyn.results import Result, jsonable
+from pkdyn.progress import progress as progress_bar
+from pkdyn.results import Result, jsonable, renamed_keyword
 from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
 
@@ -116,6 +116,7 @@ def _draw(rng: np.random.Generator, t: np.ndarray, distribution: str) -> np.ndar
     return rng.normal(0.0, 1.0, t.size) * (t / 3.0)
 
 
+@renamed_keyword("progress_bar", "progress")
 @one_blas_thread
 def monte_carlo(
     robot: Robot,
@@ -125,7 +126,7 @@ def monte_carlo(
     samples: int = 200,
     distribution: str = "uniform",
     seed: int = 0,
-    progress_bar: bool | None = None,
+    progress: bool | None = None,
 ) -> MonteCarlo:
     """Pose errors of ``samples`` robots with random geometric errors, solved exactly.
 
@@ -142,7 +143,8 @@ def monte_carlo(
         samples: Number of robots (at most 100,000).
         distribution: ``uniform`` or ``normal``.
         seed: Random seed.
-        progress_bar: Force the progress bar on or off (default: on a terminal).
+        progress: Force the progress bar on or off (default: on a terminal;
+            ``progress_bar``, its former name, is kept for one release).
 
     Returns:
         The sampled pose errors.
@@ -170,7 +172,7 @@ def monte_carlo(
     rng = np.random.default_rng(seed)
     errors, failed = [], 0
     family = model.kind == "family parameters"
-    for _ in progress(range(int(samples)), "Monte Carlo", "robot", progress_bar, min_items=50):
+    for _ in progress_bar(range(int(samples)), "Monte Carlo", "robot", progress, min_items=50):
         dp = _draw(rng, t, distribution)
         try:
             if family:
