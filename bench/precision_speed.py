@@ -57,7 +57,7 @@ def monte_carlo_rows() -> list[Row]:
         model = parameter_model(robot, kind)
         per = _cpu_per(
             lambda robot=robot, model=model, n=n: monte_carlo(
-                robot, robot.q_home, model, 1e-5, samples=n, progress_bar=False
+                robot, robot.q_home, model, 1e-5, samples=n, progress=False
             ),
             n,
         )

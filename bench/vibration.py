@@ -15,7 +15,7 @@ three modes, 91 to 157 Hz at the pick points) and a 0.5 s dwell, CPU time of thi
 - the multibody simulation of the rigid-link cycle (the reference), and MuJoCo running the
   exported elastic model (rigid links: RK4 at 50 us; carbon links: implicit-in-velocity at
   40 us);
-- ``size --fastest --settle``'s search (the unshaped scan and bisection) on the Delta.
+- ``size --fastest --band``'s search (the unshaped scan and bisection) on the Delta.
 
 Run ``python bench/vibration.py``; prints the rows as a markdown table.
 """

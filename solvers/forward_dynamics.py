@@ -62,13 +62,13 @@ from __future__ import annotations
 
 import math
 from array import array
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
 
 from solvers import numerics
-from solvers.actuation import Actuation
+from solvers.actuation import Actuation, TorqueFn
 from solvers.closure import Closure, ClosureRows
 from solvers.conditioning import (
     LEAVE,
@@ -98,9 +98,6 @@ __all__ = [
     "TorqueFn",
     "simulate",
 ]
-
-TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
-"""Actuator efforts ``tau(t [s], q (nq,), v (nv,)) -> (n_a,)`` [N m or N]."""
 
 _ARG1 = pin.ArgumentPosition.ARG1
 _NO_Q = np.zeros(0)  # (closure rows need no configuration beyond the kinematics in the data)

@@ -131,7 +131,7 @@ def test_delta_family_monte_carlo_is_the_general_path(
 ) -> None:
     robot = pkdyn.load("delta")
     model = parameter_model(robot, "family", gains=True)
-    kw = dict(samples=40, distribution=distribution, seed=5, progress_bar=False)
+    kw = dict(samples=40, distribution=distribution, seed=5, progress=False)
     fast = monte_carlo_module.monte_carlo(robot, robot.q_home, model, 1e-4, **kw)
     monkeypatch.setattr(monte_carlo_module, "_delta_closed_form", lambda *a: False)
     slow = monte_carlo_module.monte_carlo(robot, robot.q_home, model, 1e-4, **kw)
@@ -225,7 +225,7 @@ def test_kept_solvers_give_the_same_efforts_and_motions() -> None:
 
 
 def test_monte_carlo_on_workers_draws_the_same_robots(tmp_path) -> None:
-    kw = dict(samples=130, seed=2, progress_bar=False)
+    kw = dict(samples=130, seed=2, progress=False)
     for name, kind in (("gough_stewart", "shortcuts"), ("five_bar", "family")):
         robot = pkdyn.load(name)
         model = parameter_model(robot, kind)

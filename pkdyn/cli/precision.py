@@ -16,6 +16,7 @@ import numpy as np
 
 from pkdyn.cli._common import emit, integer, load, number, qa_argument, robot_command
 from pkdyn.cli._paths import output_option
+from pkdyn.cli._spelling import spelled_option
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = [
@@ -292,8 +293,8 @@ def _cmd_modes(args: argparse.Namespace) -> None:
     from pkdyn.precision.modes import modes
 
     check_map_options(args)
-    if args.count is not None and args.count < 1:
-        raise InvalidInputError("--count", f"{args.count}: give 1 or more")
+    if args.top is not None and args.top < 1:
+        raise InvalidInputError("--top", f"{args.top}: give 1 or more")
     if args.map is not None:
         for option, value in (("--html", args.html), ("--gravity", args.gravity or None)):
             if value is not None:
@@ -303,7 +304,7 @@ def _cmd_modes(args: argparse.Namespace) -> None:
     robot, em = _elastic(args)
     q = _configuration(args, robot)
     result = modes(em, q, point=args.point, gravity=args.gravity)
-    result.count = args.count
+    result.top = args.top
     out = result.to_json()
     text = result.table()
     if args.html is not None:
@@ -356,7 +357,15 @@ def register(sub: Any) -> None:
         "the lowest frequency",
     )
     _options(sp)
-    sp.add_argument("--count", type=integer, default=None, help="report the lowest COUNT modes")
+    spelled_option(
+        sp,
+        "--top",
+        deprecated=("--count",),
+        type=integer,
+        default=None,
+        metavar="N",
+        help="report the lowest N modes",
+    )
     sp.add_argument("--gravity", action="store_true", help="about the equilibrium under gravity")
     output_option(sp, "--html", metavar="FILE", help="write an animation of a mode (meshcat HTML)")
     sp.add_argument("--mode", type=integer, default=1, help="mode to animate, 1 = lowest (--html)")

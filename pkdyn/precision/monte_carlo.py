@@ -29,8 +29,8 @@ from pkdyn.precision.parameters import (
 )
 from pkdyn.precision.perturbation import perturbed, with_placements
 from pkdyn.precision.sensitivity import pose_sensitivity
-from pkdyn.progress import progress
-from pkdyn.results import Result, jsonable
+from pkdyn.progress import progress as progress_bar
+from pkdyn.results import Result, jsonable, renamed_keyword
 from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
 
@@ -117,6 +117,7 @@ def _draw(rng: np.random.Generator, t: np.ndarray, distribution: str) -> np.ndar
     return rng.normal(0.0, 1.0, t.size) * (t / 3.0)
 
 
+@renamed_keyword("progress_bar", "progress")
 @one_blas_thread
 def monte_carlo(
     robot: Robot,
@@ -126,7 +127,7 @@ def monte_carlo(
     samples: int = 200,
     distribution: str = "uniform",
     seed: int = 0,
-    progress_bar: bool | None = None,
+    progress: bool | None = None,
     *,
     workers: int | None = 1,
     scheduler: str | None = None,
@@ -148,7 +149,8 @@ def monte_carlo(
         samples: Number of robots (at most 100,000).
         distribution: ``uniform`` or ``normal``.
         seed: Random seed.
-        progress_bar: Force the progress bar on or off (default: on a terminal).
+        progress: Force the progress bar on or off (default: on a terminal;
+            ``progress_bar``, its former name, is kept for one release).
         workers: Local worker processes (1: this process; ``None``: as many as the machine
             justifies); the samples are drawn here, so the robots do not depend on it.
         scheduler: A Dask scheduler address (``tcp://host:8786``) to run the robots on.
@@ -203,7 +205,7 @@ def monte_carlo(
             seed=seed,
         )
     errors, failed = [], 0
-    for _ in progress(range(int(samples)), "Monte Carlo", "robot", progress_bar, min_items=50):
+    for _ in progress_bar(range(int(samples)), "Monte Carlo", "robot", progress, min_items=50):
         e = _sample_error(robot, model, _draw(rng, t, distribution), qq, family, nominal)
         if e is None:
             failed += 1
