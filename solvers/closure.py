@@ -70,6 +70,14 @@ _GAP_TOL = 1e-10
 """Largest out-of-plane gap (relative to the robot's size) [m or rad] of a planar closure whose
 out-of-plane rows are dropped."""
 
+_FREE_JOINTS = frozenset({"JointModelSpherical", "JointModelFreeFlyer"})
+"""Joints whose world twist columns turn about three orthonormal axes at every configuration."""
+
+_FREE_SCALE = 1e9
+"""Largest robot size [m] (``1 +`` the farthest joint origin at neutral) for which a closure moved
+by one of :data:`_FREE_JOINTS` is known not to be planar without computing it (see
+:meth:`ClosureRows._turns_freely`)."""
+
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _LOCAL = pin.ReferenceFrame.LOCAL
 _3D = pin.ContactType.CONTACT_3D
@@ -204,6 +212,7 @@ class ClosureRows:
             if c.kind == "hinge" and not np.linalg.norm(c.axis) > 0.0:
                 raise ValueError(f"closure {c.name!r}: the hinge axis is zero")
         self._masks: dict[int, np.ndarray] = {}
+        self._free: dict[int, bool] = {}
         self._base: list[tuple[bool, int, pin.SE3, int, pin.SE3]] = []
         normals = self._normals() if self.reduce else [None] * len(self.closures)
         self.blocks = [self._plan(c, n) for c, n in zip(self.closures, normals, strict=True)]
@@ -236,6 +245,11 @@ class ClosureRows:
         scale = 1.0 + max((float(np.linalg.norm(M.translation)) for M in data.oMi), default=0.0)
         out: list[np.ndarray | None] = []
         for c in self.closures:
+            if scale < _FREE_SCALE and (
+                self._turns_freely(c.joint1) or self._turns_freely(c.joint2)
+            ):
+                out.append(None)
+                continue
             cols = np.flatnonzero(self.mask(c.joint1) + self.mask(c.joint2))
             n = plane_normal(np.reshape(data.J, (6, model.nv))[:, cols])
             if n is not None:
@@ -247,6 +261,24 @@ class ClosureRows:
                     n = None
             out.append(n)
         return out
+
+    def _turns_freely(self, j: int) -> bool:
+        """Whether a ball or free joint moves joint ``j``'s body (then no closure on it is planar).
+
+        Such a joint's world twist columns turn about three orthonormal axes ``w_i`` (columns of
+        its world rotation) whatever the configuration: for any unit ``n``, ``sum |w_i x n|^2 =
+        2``, so one of them is at least ``sqrt(2/3)`` off ``n`` while its twist's norm is at most
+        ``sqrt(1 + |p|^2)`` (``p`` its origin): :func:`~solvers.planar.plane_normal` finds no
+        plane as long as ``|p| < 1e9`` m (checked by the caller), without the arithmetic.
+        """
+        found = self._free.get(j)
+        if found is None:
+            k, found = j, False
+            while k > 0 and not found:
+                found = self.model.joints[k].shortname() in _FREE_JOINTS
+                k = int(self.model.parents[k])
+            self._free[j] = found
+        return found
 
     def _add_base(self, is_point: bool, c: Closure, off: pin.SE3 | None = None) -> int:
         M1, M2 = c.placement1, c.placement2
