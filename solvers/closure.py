@@ -213,6 +213,14 @@ class ClosureRows:
                 raise ValueError(f"closure {c.name!r}: the hinge axis is zero")
         self._masks: dict[int, np.ndarray] = {}
         self._free: dict[int, bool] = {}
+        self._loc: (
+            tuple[
+                pin.StdVec_RigidConstraintModel,
+                pin.StdVec_RigidConstraintData,
+                list[tuple[bool, int, pin.RigidConstraintModel, pin.RigidConstraintData]],
+            ]
+            | None
+        ) = None
         self._base: list[tuple[bool, int, pin.SE3, int, pin.SE3]] = []
         normals = self._normals() if self.reduce else [None] * len(self.closures)
         self.blocks = [self._plan(c, n) for c, n in zip(self.closures, normals, strict=True)]
@@ -329,8 +337,6 @@ class ClosureRows:
         model = self.model
         self._cms = pin.StdVec_RigidConstraintModel()
         self._cds = pin.StdVec_RigidConstraintData()
-        self._loc_cms = pin.StdVec_RigidConstraintModel()
-        self._loc_cds = pin.StdVec_RigidConstraintData()
         sizes = [3 if it[0] else 6 for it in self._base]
         self.base_offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
         self.nb = int(self.base_offsets[-1])
@@ -339,19 +345,10 @@ class ClosureRows:
             c = pin.RigidConstraintModel(kind, model, j1, M1, j2, M2, _LWA if is_point else _LOCAL)
             self._cms.append(c)
             self._cds.append(c.createData())
-            c = pin.RigidConstraintModel(kind, model, j1, M1, j2, M2, _LOCAL)
-            self._loc_cms.append(c)
-            self._loc_cds.append(c.createData())
         self._entries = [
             (it[0], int(o), cm, cd)
             for it, o, cm, cd in zip(
                 self._base, self.base_offsets, self._cms, self._cds, strict=False
-            )
-        ]
-        self._loc_entries = [
-            (it[0], int(o), cm, cd)
-            for it, o, cm, cd in zip(
-                self._base, self.base_offsets, self._loc_cms, self._loc_cds, strict=False
             )
         ]
         self._welds = [(int(o), cd) for is_point, o, _, cd in self._entries if not is_point]
@@ -367,6 +364,30 @@ class ClosureRows:
             if is_point
         ]
         self._other = [k for k, it in enumerate(self._base) if not it[0]]
+
+    def _local(
+        self,
+    ) -> tuple[
+        pin.StdVec_RigidConstraintModel,
+        pin.StdVec_RigidConstraintData,
+        list[tuple[bool, int, pin.RigidConstraintModel, pin.RigidConstraintData]],
+    ]:
+        """The base models with ``LOCAL`` rows, their datas and entries (made on first use)."""
+        if self._loc is None:
+            cms = pin.StdVec_RigidConstraintModel()
+            cds = pin.StdVec_RigidConstraintData()
+            for is_point, j1, M1, j2, M2 in self._base:
+                c = pin.RigidConstraintModel(
+                    _3D if is_point else _6D, self.model, j1, M1, j2, M2, _LOCAL
+                )
+                cms.append(c)
+                cds.append(c.createData())
+            entries = [
+                (it[0], int(o), cm, cd)
+                for it, o, cm, cd in zip(self._base, self.base_offsets, cms, cds, strict=False)
+            ]
+            self._loc = (cms, cds, entries)
+        return self._loc
 
     def _build_maps(self) -> None:
         """Index maps from the base rows to the rows (module docstring)."""
@@ -566,7 +587,7 @@ class ClosureRows:
         :attr:`identity`.
         """
         model = self.model
-        for is_point, o, cm, cd in self._loc_entries:
+        for is_point, o, cm, cd in self._local()[2]:
             cm.calc(model, data, cd)
             if is_point:
                 out[o : o + 3] = cd.c1Mc2.translation
@@ -576,7 +597,8 @@ class ClosureRows:
 
     def local_jacobian(self, data: pin.Data) -> np.ndarray:
         """Pinocchio's ``LOCAL`` constraint Jacobian (n, nv): only when :attr:`identity`."""
-        J = pin.getConstraintsJacobian(self.model, data, self._loc_cms, self._loc_cds)
+        cms, cds, _ = self._local()
+        J = pin.getConstraintsJacobian(self.model, data, cms, cds)
         return np.reshape(J, (self.n, self.model.nv))
 
     def drift(self, data: pin.Data) -> np.ndarray:
