@@ -147,6 +147,31 @@ class _Bar:
     inertia_t: float  # transverse inertia about the centre of mass [kg m^2]
 
 
+def _solid(
+    p_bar: np.ndarray, lever: np.ndarray, Ic: np.ndarray
+) -> tuple[float, float, float, bool]:
+    """A bar's axial figures, and whether it is not a solid of revolution about its axis.
+
+    Returns ``(length [m], transverse inertia [kg m^2], centre-of-mass fraction, not one)``.
+
+    Args:
+        p_bar: Lower ball centre in the bar frame (3,) [m] (the upper one at its origin).
+        lever: Centre of mass in the bar frame (3,) [m].
+        Ic: Inertia about the centre of mass, bar frame (3, 3) [kg m^2].
+
+    """
+    length = float(np.linalg.norm(p_bar))
+    z = p_bar / length
+    It = float(Ic.trace() - z @ Ic @ z) / 2.0
+    Ia = float(z @ Ic @ z)
+    sym = It * (np.eye(3) - np.outer(z, z)) + Ia * np.outer(z, z)
+    bad = bool(
+        np.linalg.norm(_cross3(lever, z)) > 1e-12
+        or np.max(np.abs(Ic - sym)) > 1e-12 * (1.0 + abs(It))
+    )
+    return length, It, float(lever @ z) / length, bad
+
+
 class DeltaDynamics:
     """The Delta's kinematic and inertial data read from a loaded model, for many trajectories.
 
@@ -201,22 +226,23 @@ class DeltaDynamics:
             raise PkdynError(f"payload must be >= 0 kg, got {payload}")
         self.nacelle_mass = float(model.inertias[nac].mass) + float(payload)
         bars = []
+        # a bar's axial figures are a function of its lower ball and its inertia alone: the
+        # bars of a library Delta share them, computed once (the same numbers, bit for bit)
+        solids: dict[bytes, tuple[float, float, float, float]] = {}
         for cm in robot.constraint_models:
             j1, j2 = int(cm.joint1_id), int(cm.joint2_id)
             if j2 != nac or int(model.parents[j1]) not in arms:
                 raise PkdynError(f"{robot.name}: closure on joint {model.names[j1]} is not a bar")
             p_bar = np.array(cm.joint1_placement.translation)  # lower ball, bar frame
-            length = float(np.linalg.norm(p_bar))
             inert = model.inertias[j1]
-            z = p_bar / length
             lever = np.array(inert.lever)
             Ic = np.array(inert.inertia)
-            It = float(Ic.trace() - z @ Ic @ z) / 2.0
-            Ia = float(z @ Ic @ z)
-            sym = It * (np.eye(3) - np.outer(z, z)) + Ia * np.outer(z, z)
-            if np.linalg.norm(_cross3(lever, z)) > 1e-12 or np.max(np.abs(Ic - sym)) > 1e-12 * (
-                1.0 + abs(It)
-            ):
+            key = p_bar.tobytes() + lever.tobytes() + Ic.tobytes()
+            solid = solids.get(key)
+            if solid is None:
+                solid = solids[key] = _solid(p_bar, lever, Ic)
+            length, It, fraction, bad = solid
+            if bad:
                 raise PkdynError(
                     f"{robot.name}: bar '{model.names[j1]}' is not a solid of revolution about "
                     "its axis; use pkdyn.dynamics.inverse_dynamics"
@@ -227,7 +253,7 @@ class DeltaDynamics:
                     elbow=np.array(model.jointPlacements[j1].translation),
                     nacelle=self.R_nacelle @ np.array(cm.joint2_placement.translation) - f_off,
                     mass=float(inert.mass),
-                    fraction=float(lever @ z) / length,
+                    fraction=fraction,
                     length=length,
                     inertia_t=It,
                 )
