@@ -170,6 +170,12 @@ class Params:
         reach = self.la + self.lb + self.ra
         return middle_of_reach(NAME, "z_home", -reach, 0.0, self._reachable)
 
+    @functools.cached_property
+    def _home(self) -> tuple[float, ...]:
+        """:func:`home` of these parameters (the layout and the assembly both ask for it)."""
+        alpha, _ = cf.inverse(self, np.array([0.0, 0.0, self.home_height()]))
+        return tuple(float(a) for a in alpha[0])
+
     def home_height(self) -> float:
         """Nacelle height at home [m]: ``z_home``, or the middle of the vertical reach."""
         return float(self.z_home) if self.z_home is not None else self._derived_height()
@@ -189,8 +195,7 @@ _SIGNED = {
 
 def home(p: Params) -> list[float]:
     """Arm angles [rad] with the nacelle at ``(0, 0, p.home_height())``."""
-    alpha, _ = cf.inverse(p, np.array([0.0, 0.0, p.home_height()]))
-    return [float(a) for a in alpha[0]]
+    return list(p._home)
 
 
 def forward_position(
