@@ -205,16 +205,17 @@ class DeltaDynamics:
         self.arm_mass = np.array([float(i.mass) for i in arm_I])
         self.arm_lever = np.array([np.array(i.lever) for i in arm_I])  # arm frame
         y = np.array([0.0, 1.0, 0.0])
-        self.arm_axial = (
-            np.array(
-                [
-                    float(i.inertia[1, 1])
-                    + float(i.mass) * float(np.sum(_cross3(y, np.asarray(i.lever)) ** 2))
-                    for i in arm_I
-                ]
-            )
-            + np.asarray(model.armature)[iv]
-        )
+        axial: dict[bytes, float] = {}  # (the arms of a library Delta share it: computed once)
+        keys = []
+        for i in arm_I:
+            lever, inertia = np.asarray(i.lever), np.asarray(i.inertia)
+            key = float(i.mass).hex().encode() + lever.tobytes() + inertia.tobytes()
+            keys.append(key)
+            if key not in axial:
+                axial[key] = float(inertia[1, 1]) + float(i.mass) * float(
+                    np.sum(_cross3(y, lever) ** 2)
+                )
+        self.arm_axial = np.array([axial[k] for k in keys]) + np.asarray(model.armature)[iv]
         self.gravity = np.array(model.gravity.linear)
         frame = model.frames[robot.platform_frame]
         nac = int(frame.parentJoint)

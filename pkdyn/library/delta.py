@@ -400,10 +400,10 @@ def layout(p: Params) -> UrdfWriter:
             if hinged:
                 _hinged_bar(w, p, i, side, u, theta, pitch, cone)
                 continue
-            R_j = pin.rpy.rpyToMatrix(*jrpy)
             if p.bar_joint == "spherical":
                 w.spherical(f"{bar}_upper", arm, bar, (p.la, sign * s, 0.0), jrpy, cone=cone)
             else:
+                R_j = pin.rpy.rpyToMatrix(*jrpy)
                 axis1 = R_j.T @ np.array([0.0, 1.0, 0.0])
                 axis2 = np.cross(np.array([0.0, 0.0, 1.0]), axis1)
                 w.universal(
