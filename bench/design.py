@@ -123,7 +123,7 @@ def _floor(inputs: list[tuple[Any, ...]]) -> None:
             A, B = delta_AB(p, Pk, ak)
             Jinv = A / np.einsum("nii->ni", B)[..., None]
             np.linalg.svd(Jinv, compute_uv=False)
-            _, E, tip = ev.elbows(ak)
+            _, E, tip = ev._elbows(ak)
             ev._clearance(Pk, E, tip)
         try:
             at = dd.solve(task)
