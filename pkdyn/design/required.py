@@ -36,7 +36,7 @@ from pkdyn.design.requirement import Requirement
 from pkdyn.exceptions import AssemblyError, PkdynError
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.robot import Robot
-from pkdyn.workspace.delta import DeltaEvaluator, Elbows, elbow_rows
+from pkdyn.workspace.delta import DeltaEvaluator
 from pkdyn.workspace.legs import HexapodLegs
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, check_kinds
 from pkdyn.workspace.numeric import configuration_violation
@@ -114,15 +114,9 @@ class _DeltaCheck(RequiredCheck):
         return delta_cf.inverse(self.robot.params, self.P)
 
     @cached_property
-    def _elbows(self) -> Elbows:
-        """The arms and elbows at the poses' angles, shared by the checks (NaN: not reached)."""
-        return self._evaluator.elbows(self._solved[0])
-
-    @cached_property
     def codes(self) -> np.ndarray:
         P = self.P
-        elbows = self._elbows if {"joint", "interference"} & set(self.kinds) else None
-        return self._evaluator.violations(P, np.eye(3), self.kinds, 0.0, self._solved, elbows)
+        return self._evaluator.violations(P, np.eye(3), self.kinds, 0.0, self._solved)
 
     @cached_property
     def inv_cond(self) -> np.ndarray:
@@ -145,10 +139,7 @@ class _DeltaCheck(RequiredCheck):
         ok = self.reached
         out = np.full(ok.size, np.nan)
         if ok.any():
-            rows = np.flatnonzero(ok)
-            out[ok] = self._evaluator.clearance(
-                self.P[ok], self._solved[0][ok], elbow_rows(self._elbows, rows)
-            )
+            out[ok] = self._evaluator.clearance(self.P[ok], self._solved[0][ok])
         return out
 
 

@@ -31,7 +31,7 @@ from pkdyn.workspace.placed_interference import (
     RigidBody,
 )
 
-__all__ = ["DeltaEvaluator", "Elbows", "elbow_rows"]
+__all__ = ["DeltaEvaluator"]
 
 
 def _rot_y(a: np.ndarray) -> np.ndarray:
@@ -39,25 +39,6 @@ def _rot_y(a: np.ndarray) -> np.ndarray:
     R = np.zeros(a.shape + (3, 3))
     R[..., 0, 0], R[..., 0, 2], R[..., 1, 1], R[..., 2, 0], R[..., 2, 2] = c, s, 1.0, -s, c
     return R
-
-
-Elbows = tuple[np.ndarray, list[np.ndarray], np.ndarray]
-"""Arm rotations (N, 3, 3, 3), bar joint centres per bar (N, 3), arm tips (N, 3, 3)."""
-
-
-def elbow_rows(elbows: Elbows, rows: np.ndarray) -> Elbows:
-    """Some rows of :meth:`DeltaEvaluator.elbows`.
-
-    Args:
-        elbows: The elbows of N poses.
-        rows: Row indices (n,).
-
-    Returns:
-        The elbows of those rows.
-
-    """
-    R_arm, E, tip = elbows
-    return R_arm[rows], [e[rows] for e in E], tip[rows]
 
 
 class DeltaEvaluator(PoseEvaluator):
@@ -97,8 +78,6 @@ class DeltaEvaluator(PoseEvaluator):
         if any(model.joints[j].shortname() != "JointModelRY" for j in arms):
             raise PkdynError(f"{robot.name}: arms must turn about their y axis")
         self.M_arm = [model.jointPlacements[j] for j in arms]
-        self._O = np.array([m.translation for m in self.M_arm])
-        self._R0 = [np.array(m.rotation) for m in self.M_arm]
         iq = [model.idx_qs[j] for j in arms]
         self.lo = np.array(model.lowerPositionLimit[iq])
         self.hi = np.array(model.upperPositionLimit[iq])
@@ -147,19 +126,10 @@ class DeltaEvaluator(PoseEvaluator):
         self.bar_r = max((radius.get(j, 0.0) for j in bar_joints), default=0.0)
         self.la = float(robot.params.la)
 
-    def elbows(self, alpha: np.ndarray) -> Elbows:
-        """Arm rotations (N, 3, 3, 3), bar joint centres per bar (N, 3), arm tips (N, 3, 3).
-
-        Row by row (a row's figures do not depend on the others): the elbows of some arm
-        angles, given to :meth:`violations` and :meth:`clearance` by a caller that asks both,
-        are computed once (NaN rows where the angles are NaN).
-
-        Args:
-            alpha: Arm angles (N, 3) [rad].
-
-        """
-        R_arm = np.stack([self._R0[k] @ _rot_y(alpha[:, k]) for k in range(3)], axis=1)
-        O = self._O
+    def _elbows(self, alpha: np.ndarray) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
+        """Arm rotations (N, 3, 3, 3), bar joint centres per bar (N, 3), arm tips (N, 3, 3)."""
+        R_arm = np.stack([self.M_arm[k].rotation @ _rot_y(alpha[:, k]) for k in range(3)], axis=1)
+        O = np.array([m.translation for m in self.M_arm])
         E = [O[k] + R_arm[:, k] @ Mb.translation for k, Mb, _, _ in self.bars]
         tip = O[None] + R_arm @ np.array([self.la, 0.0, 0.0])
         return R_arm, E, tip
@@ -171,12 +141,11 @@ class DeltaEvaluator(PoseEvaluator):
         kinds: tuple[str, ...],
         margin: float,
         solved: tuple[np.ndarray, np.ndarray] | None = None,
-        elbows: Elbows | None = None,
     ) -> np.ndarray:
         """See :meth:`PoseEvaluator.violations`; the nacelle keeps its orientation (R ignored).
 
         ``solved``: Clavel's inverse model at ``P`` (``inverse(params, P)``) when the caller
-        has it; ``elbows``: :meth:`elbows` of its angles (with ``solved``).
+        has it.
         """
         P = np.atleast_2d(np.asarray(P, dtype=float))
         alpha, ok = inverse(self.robot.params, P) if solved is None else solved
@@ -192,9 +161,7 @@ class DeltaEvaluator(PoseEvaluator):
             todo, a = todo[~bad], a[~bad]
         if not ({"joint", "interference"} & set(kinds)) or todo.size == 0:
             return out
-        R_arm, E, tip = (
-            self.elbows(a) if elbows is None or solved is None else elbow_rows(elbows, todo)
-        )
+        R_arm, E, tip = self._elbows(a)
         Pk = P[todo]
         if "joint" in kinds:
             bad = np.zeros(todo.size, dtype=bool)
@@ -236,7 +203,7 @@ class DeltaEvaluator(PoseEvaluator):
     def _placements(self, P: np.ndarray, R_arm: np.ndarray, E: list[np.ndarray]) -> Placements:
         """Placements of :attr:`interference`'s bodies at nacelle positions ``P`` (N, 3)."""
         n = P.shape[0]
-        O = self._O
+        O = np.array([m.translation for m in self.M_arm])
         out: Placements = {
             f"arm{k}": (R_arm[:, k], np.broadcast_to(O[k], (n, 3))) for k in range(3)
         }
@@ -253,7 +220,7 @@ class DeltaEvaluator(PoseEvaluator):
                 f"{self.robot.name}: interference needs collision geometry (geometry=True)"
             )
         ends = [P + p_nac for _, _, p_nac, _ in self.bars]
-        O = self._O
+        O = np.array([m.translation for m in self.M_arm])
         p1, q1, p2, q2, radii = [], [], [], [], []
         for b1, (k1, _, _, _) in enumerate(self.bars):
             for b2 in range(b1 + 1, len(self.bars)):
@@ -273,9 +240,7 @@ class DeltaEvaluator(PoseEvaluator):
         d, _, _ = segment_distance(np.stack(p1), np.stack(q1), np.stack(p2), np.stack(q2))
         return np.min(d - np.array(radii)[:, None], axis=0)
 
-    def clearance(
-        self, P: np.ndarray, alpha: np.ndarray | None = None, elbows: Elbows | None = None
-    ) -> np.ndarray:
+    def clearance(self, P: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
         """Smallest distance between the bars and the arms, as axis distances minus radii [m].
 
         Bars of different arms against each other and bars against the other arms, as
@@ -286,7 +251,6 @@ class DeltaEvaluator(PoseEvaluator):
             P: Nacelle positions (N, 3) [m].
             alpha: Their arm angles (N, 3) [rad] (Clavel's inverse model) when the caller has
                 them.
-            elbows: :meth:`elbows` of ``alpha`` (with ``alpha``).
 
         Returns:
             (N,) clearances [m]; NaN where the position is out of reach.
@@ -299,8 +263,7 @@ class DeltaEvaluator(PoseEvaluator):
             ok = np.all(np.isfinite(alpha), axis=1)
         out = np.full(P.shape[0], np.nan)
         if ok.any():
-            rows = np.flatnonzero(ok)
-            _, E, tip = self.elbows(alpha[ok]) if elbows is None else elbow_rows(elbows, rows)
+            _, E, tip = self._elbows(alpha[ok])
             out[ok] = self._clearance(P[ok], E, tip)
         return out
 
