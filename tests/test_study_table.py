@@ -1,4 +1,4 @@
-"""The worked Delta study's table, byte for byte, against the table of the code before its speed-ups.
+"""The worked Delta study's table, byte for byte, against the table of the code before the speedups.
 
 ``tests/data/design/delta_cylinder_300.<kernel>.csv`` is the CSV of ``studies/delta_cylinder.yaml``
 with 300 designs, written by the code of ``main`` before the speed-ups of issue 37 (in-place
