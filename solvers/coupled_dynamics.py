@@ -33,6 +33,16 @@ _RTOL = 1e-12
 """Relative cut-off of the couplings' equations (:func:`solvers.numerics.lstsq`)."""
 
 
+_LOWER: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _lower(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the strict lower triangle of an (n, n) matrix (made once per size)."""
+    if n not in _LOWER:
+        _LOWER[n] = np.tril_indices(n, -1)
+    return _LOWER[n]
+
+
 class CoupledDynamics:
     """Accelerations and forces of closures and couplings (see the module docstring).
 
@@ -83,7 +93,7 @@ class CoupledDynamics:
         self.CG = np.zeros((rows.n, rows.n))
         self.Minv: np.ndarray | None = None
         self._Li: np.ndarray | None = None  # the inverse Cholesky factor of CG, if certified
-        self._lower = np.tril_indices(model.nv, -1)
+        self._lower = _lower(model.nv)
         self._lam0 = np.zeros(0)
         self._Lam = np.zeros((0, rows.n))
         # rows without a source: a constant Jacobian (filled once) and no drift
