@@ -26,6 +26,7 @@ __all__ = [
     "flag",
     "instance",
     "non_negative",
+    "number_array",
     "positive",
     "real",
     "seed",
@@ -189,6 +190,29 @@ def instance(name: str, value: Any, kind: type | tuple[type, ...], what: str) ->
     return value
 
 
+def number_array(name: str, value: Any, what: str = "numbers") -> np.ndarray:
+    """A number or a sequence of numbers as a flat float array (not checked further).
+
+    Args:
+        name: The input's name, for the message.
+        value: A number or a (nested) sequence of numbers.
+        what: What the input holds, for the message (``numbers [N, N m]``).
+
+    Returns:
+        A float array copy (n,), NaN and infinite values included.
+
+    Raises:
+        InvalidInputError: Strings, mappings, complex numbers or nested ragged lists.
+
+    """
+    try:
+        if isinstance(value, str | bytes | dict) or np.iscomplexobj(value):
+            raise TypeError
+        return np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):  # (a ragged list makes np.iscomplexobj raise too)
+        raise InvalidInputError(name, f"expected {what}, got {value!r:.60}") from None
+
+
 def vector(
     name: str,
     value: Any,
@@ -216,12 +240,7 @@ def vector(
             infinite or absurd values.
 
     """
-    if isinstance(value, str | bytes | dict) or np.iscomplexobj(value):
-        raise InvalidInputError(name, f"expected numbers, got {value!r:.60}")
-    try:
-        arr = np.array(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InvalidInputError(name, f"expected numbers, got {value!r:.60}") from None
+    arr = number_array(name, value)
     sizes = (size,) if isinstance(size, int) else size
     if sizes is not None and arr.size not in sizes:
         want = " or ".join(str(s) for s in sizes)

@@ -9,7 +9,7 @@ from typing import Any
 from pkdyn.exceptions import OutputError
 from pkdyn.files import atomic_path
 
-__all__ = ["save_figure"]
+__all__ = ["finish_figure", "save_figure"]
 
 
 def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int) -> None:
@@ -39,3 +39,28 @@ def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int) -> None:
             fig.savefig(tmp, dpi=dpi, format=fmt)
         except (OSError, ValueError) as err:
             raise OutputError(str(path), str(err)) from None
+
+
+def finish_figure(
+    fig: Any, path: str | os.PathLike[str] | None, dpi: int = 120, tight: bool = True
+) -> Any:
+    """Lay a finished figure out, save it when a path is given, and return it.
+
+    Args:
+        fig: The figure.
+        path: Output file (its extension is the format), or ``None`` to only return it.
+        dpi: Resolution of raster formats [dots per inch].
+        tight: Tighten the layout first (``fig.tight_layout()``).
+
+    Returns:
+        The figure.
+
+    Raises:
+        OutputError: The file cannot be written (see :func:`save_figure`).
+
+    """
+    if tight:
+        fig.tight_layout()
+    if path is not None:
+        save_figure(fig, path, dpi=dpi)
+    return fig

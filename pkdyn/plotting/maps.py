@@ -13,7 +13,7 @@ import numpy as np
 
 from pkdyn.analysis.maps import ConditioningMap
 from pkdyn.exceptions import InvalidInputError
-from pkdyn.plotting._save import save_figure
+from pkdyn.plotting._save import finish_figure
 from pkdyn.results import register_plot
 
 __all__ = ["plot_conditioning_map"]
@@ -83,6 +83,4 @@ def plot_conditioning_map(
     ax.set_ylabel(f"{cmap.axes[1]} [{'rad' if cmap.axes[1] == 'phi' else 'm'}]")
     fixed = ", ".join(f"{k} = {v:.4g}" for k, v in cmap.fixed.items())
     ax.set_title(title if title is not None else f"{cmap.robot}: {field} ({fixed})")
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path, tight=False)

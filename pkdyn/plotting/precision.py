@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
-from pkdyn.plotting._save import save_figure
+from pkdyn.plotting._save import finish_figure
 from pkdyn.precision.budgets import ToleranceRanking
 from pkdyn.precision.grid import SINGULAR, UNREACHABLE, GridMap
 from pkdyn.precision.maps import PrecisionMap
@@ -55,13 +55,6 @@ def _axes(ax: Any, size: tuple[float, float]) -> tuple[Any, Any]:
 
     fig = Figure(figsize=size, layout="constrained")
     return fig, fig.add_subplot(1, 1, 1)
-
-
-def _done(fig: Any, path: str | Path | None) -> Any:
-    """Save the figure when a path is given (atomically); return it."""
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
 
 
 def _edges(x: np.ndarray) -> tuple[float, float]:
@@ -148,7 +141,7 @@ def plot_grid_map(
         f"{c['unreachable']} unreachable grey, {c['singular']} singular red)",
         fontsize=9,
     )
-    return _done(fig, path)
+    return finish_figure(fig, path, tight=False)
 
 
 def plot_precision_map(
@@ -224,7 +217,7 @@ def plot_modes(
         default += " (NOT VALID here: see the warnings)"
     ax.set_title(title if title is not None else default)
     ax.legend(loc="upper right", fontsize=8)
-    return _done(fig, path)
+    return finish_figure(fig, path, tight=False)
 
 
 @register_plot(MonteCarlo)
@@ -269,7 +262,7 @@ def plot_monte_carlo(
     ax.set_ylabel("robots")
     ax.set_title(title if title is not None else f"Monte Carlo: {len(e)} robots")
     ax.legend(fontsize=8)
-    return _done(fig, path)
+    return finish_figure(fig, path, tight=False)
 
 
 @register_plot(ToleranceRanking)
@@ -297,4 +290,4 @@ def plot_ranking(
     ax.barh(names, share, color="C0")
     ax.set_xlabel("share of the position variance [%]")
     ax.set_title(title if title is not None else f"tolerances ({result.total} parameters)")
-    return _done(fig, path)
+    return finish_figure(fig, path, tight=False)

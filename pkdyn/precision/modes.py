@@ -35,14 +35,14 @@ from pkdyn.model.robot import Robot
 from pkdyn.precision._format import chop
 from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
 from pkdyn.precision.elastic import ElasticModel
-from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
+from pkdyn.precision.equilibrium import loaded_equilibrium, reassembled, tangent_along
 from pkdyn.precision.material import Material
 from pkdyn.precision.stiffness import nothing_compliant, prepared
 from pkdyn.precision.validity import Flagged, Validity, stiffness_check
 from pkdyn.results import Result, deprecated, jsonable, renamed_keyword
 from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
-from solvers import numerics, solve_lm
+from solvers import numerics
 
 __all__ = ["Modes", "mass_matrix", "mode_trajectory", "modes", "modes_json"]
 
@@ -376,19 +376,10 @@ def mode_trajectory(
         raise InvalidInputError("amplitude", f"must be > 0 m, got {amplitude}")
     t = np.linspace(0.0, cycles * period, int(cycles * samples) + 1)
     Q = np.empty((t.size, r.nq))
-    free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
-    cs, data = r.constraints, r.data
     for i, ti in enumerate(t):
         qi = pin.integrate(r.model, q0, a * np.sin(2.0 * np.pi * ti / period) * u)
-        if cs.n:
-            qi = solve_lm(
-                r.model,
-                qi,
-                lambda x: cs.local_residual(data, x),
-                lambda x: cs.local_jacobian_after_residual(data, x),
-                free=free,
-                tol=1e-10,
-            ).q
+        if r.constraints.n:
+            qi = reassembled(em, qi).q
         Q[i] = qi
     return t, Q
 

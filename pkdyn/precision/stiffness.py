@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.analysis.kinematics import ASSEMBLY_TOL, TASK_NAMES
+from pkdyn.analysis.kinematics import TASK_NAMES, check_assembled
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
@@ -295,17 +295,10 @@ def transport(K: np.ndarray, r: np.ndarray) -> np.ndarray:
 def _wrench(robot: Robot, wrench: Sequence[float] | np.ndarray | None) -> np.ndarray | None:
     if wrench is None:
         return None
-    from pkdyn.inputs import MAX_MAGNITUDE
+    from pkdyn.inputs import MAX_MAGNITUDE, number_array
 
     rows = np.asarray(robot.task_rows, dtype=int)
-    if isinstance(wrench, str | bytes | dict) or np.iscomplexobj(wrench):
-        raise InvalidInputError("wrench", f"expected numbers [N, N m], got {wrench!r:.60}")
-    try:
-        arr = np.atleast_1d(np.asarray(wrench, dtype=float)).reshape(-1)
-    except (TypeError, ValueError):
-        raise InvalidInputError(
-            "wrench", f"expected numbers [N, N m], got {wrench!r:.60}"
-        ) from None
+    arr = number_array("wrench", wrench, "numbers [N, N m]")
     if arr.size not in (6, rows.size):
         raise InvalidInputError(
             "wrench",
@@ -349,18 +342,6 @@ def _principal(
 def _scaled(C: np.ndarray, rows: list[int], L: float) -> np.ndarray:
     W = np.array([1.0 if i < 3 else L for i in rows])
     return np.asarray(W[:, None] * C * W[None, :])
-
-
-def _check_assembled(robot: Robot, q: np.ndarray) -> None:
-    if robot.constraints.n == 0:
-        return
-    res = float(np.max(np.abs(robot.constraints.residual(robot.data, q))))
-    if res > ASSEMBLY_TOL:
-        raise InvalidInputError(
-            "q",
-            f"not an assembled configuration of {robot.name} (closure residual {res:.3g}); "
-            "obtain q from pkdyn.forward_geometry, inverse_geometry or project",
-        )
 
 
 def nothing_compliant(em: ElasticModel) -> bool:
@@ -478,7 +459,7 @@ def prepared(
     if base.platform_frame is None:
         raise InvalidInputError("robot", f"{base.name} declares no platform frame")
     qq = as_finite("q", q, base.nq)
-    _check_assembled(base, qq)
+    check_assembled(base, qq)
     p = _point(point, base)
     w = _wrench(base, wrench)
     em = (
