@@ -98,6 +98,10 @@ def output_target(path: str | os.PathLike[str], option: str = "") -> Path:
             those; a name too long; a missing or read-only directory.
 
     """
+    if not isinstance(path, str | os.PathLike):
+        raise OutputError(
+            repr(path)[:80], f"{option + ': ' if option else ''}expected a file name (str or Path)"
+        )
     p = Path(path)
     where = f"{option}: " if option else ""
     name = shown(path)

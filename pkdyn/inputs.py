@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -25,6 +25,9 @@ __all__ = [
     "count",
     "flag",
     "instance",
+    "is_complex",
+    "matrix",
+    "names",
     "non_negative",
     "positive",
     "real",
@@ -189,6 +192,18 @@ def instance(name: str, value: Any, kind: type | tuple[type, ...], what: str) ->
     return value
 
 
+def is_complex(value: Any) -> bool:
+    """``value`` holds complex numbers.
+
+    ``False`` for what numpy cannot make an array of, such as rows of unequal length
+    (``np.iscomplexobj`` raises ``ValueError`` on those: the caller refuses them as such).
+    """
+    try:
+        return bool(np.iscomplexobj(value))
+    except (TypeError, ValueError):  # ragged: refused as such by the caller
+        return False
+
+
 def vector(
     name: str,
     value: Any,
@@ -216,7 +231,7 @@ def vector(
             infinite or absurd values.
 
     """
-    if isinstance(value, str | bytes | dict) or np.iscomplexobj(value):
+    if isinstance(value, str | bytes | dict) or is_complex(value):
         raise InvalidInputError(name, f"expected numbers, got {value!r:.60}")
     try:
         arr = np.array(value, dtype=float).reshape(-1)
@@ -239,3 +254,120 @@ def vector(
             f"(at most {bound:g})",
         )
     return arr
+
+
+def matrix(
+    name: str,
+    value: Any,
+    rows: int | None = None,
+    cols: int | None = None,
+    unit: str = "",
+    *,
+    bound: float = MAX_MAGNITUDE,
+) -> np.ndarray:
+    """A 2-D array of finite real numbers (rows of values), each of magnitude at most ``bound``.
+
+    Args:
+        name: The input's name, for the message.
+        value: Rows of numbers (a sequence of sequences, or an array).
+        rows: Required number of rows, or ``None`` for any (at least one).
+        cols: Required number of columns, or ``None`` for any (at least one).
+        unit: Unit, for the message.
+        bound: Largest magnitude accepted.
+
+    Returns:
+        A float array copy (rows, cols).
+
+    Raises:
+        InvalidInputError: Not rows of numbers (strings, complex numbers, rows of unequal
+            length, more or fewer than 2 dimensions), the wrong shape, no value, NaN, infinite
+            or absurd values.
+
+    """
+    if isinstance(value, str | bytes | dict) or is_complex(value):
+        raise InvalidInputError(name, f"expected rows of numbers, got {value!r:.60}")
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            name, f"expected rows of numbers (each as long), got {value!r:.60}"
+        ) from None
+    if arr.ndim != 2 or arr.size == 0:
+        raise InvalidInputError(name, f"expected rows of numbers (2-D), got shape {arr.shape}")
+    for axis, want, what in ((0, rows, "rows"), (1, cols, "columns")):
+        if want is not None and arr.shape[axis] != want:
+            raise InvalidInputError(
+                name, f"expected {want} {what}, got {arr.shape[axis]} (shape {arr.shape})"
+            )
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        i, j = (int(k) for k in np.argwhere(bad)[0])
+        raise InvalidInputError(
+            name, f"row {i + 1}, value #{j + 1} is {arr[i, j]}; give finite numbers"
+        )
+    big = np.abs(arr) > bound
+    if big.any():
+        i, j = (int(k) for k in np.argwhere(big)[0])
+        raise InvalidInputError(
+            name,
+            f"row {i + 1}, value #{j + 1} = {arr[i, j]:g}{_unit(unit)} is beyond any plausible "
+            f"value (at most {bound:g})",
+        )
+    return arr
+
+
+def names(
+    name: str,
+    value: Any,
+    known: Sequence[str] | None = None,
+    what: str = "name",
+    *,
+    empty: bool = False,
+) -> tuple[str, ...]:
+    """A list of names (joints, actuators, frames, metrics...), each a string, none twice.
+
+    A single string is one name (not a sequence of one-letter names).
+
+    Args:
+        name: The input's name, for the message.
+        value: A string or a sequence of strings.
+        known: The names accepted, or ``None`` for any.
+        what: What a name is, for the message (``joint``).
+        empty: An empty list is accepted.
+
+    Returns:
+        The names, in order.
+
+    Raises:
+        InvalidInputError: Not strings (numbers, nested lists, a mapping, ``None``), no name
+            when one is needed, a name given twice, or one not in ``known`` (the message lists
+            the closest).
+
+    """
+    if isinstance(value, str):
+        value = (value,)
+    if isinstance(value, Mapping) or not isinstance(value, Iterable):
+        raise InvalidInputError(
+            name, f"expected a list of {what} names, got {type(value).__name__} {value!r:.60}"
+        )
+    out = tuple(value)
+    for v in out:
+        if not isinstance(v, str):
+            raise InvalidInputError(
+                name, f"expected {what} names (strings), got {type(v).__name__} {v!r:.60}"
+            )
+    if not out and not empty:
+        raise InvalidInputError(name, f"name at least one {what}")
+    seen: set[str] = set()
+    for v in out:
+        if v in seen:
+            raise InvalidInputError(name, f"{what} '{v}' is named twice")
+        seen.add(v)
+        if known is not None and v not in known:
+            from pkdyn.exceptions import close_match
+
+            listed = ", ".join(known[:12]) + (" ..." if len(known) > 12 else "")
+            raise InvalidInputError(
+                name, f"'{v}' is not a {what} ({listed}){close_match(v, list(known))}"
+            )
+    return out

@@ -49,6 +49,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 from solvers import FramePoseTask, numerics
@@ -146,6 +147,7 @@ def robot_scales(robot: Robot, task_rows: np.ndarray) -> tuple[np.ndarray, np.nd
     return a_scale, x_scale
 
 
+@public
 def platform_jacobian(robot: Robot, q: np.ndarray) -> np.ndarray:
     """Full 6D platform Jacobian (6, nv) in the task convention, kinematics at ``q`` computed.
 
@@ -365,6 +367,7 @@ def _relation_count(robot: Robot, rows: np.ndarray) -> int:
     return count
 
 
+@public
 def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> KinematicModels:
     """Parallel matrix ``A``, serial matrix ``B`` and Jacobians of a robot at ``q``.
 

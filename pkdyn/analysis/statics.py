@@ -36,6 +36,7 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import SINGULAR_TOL, NearSingularityWarning, kinematic_models
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from solvers import numerics
@@ -209,6 +210,7 @@ class StaticsResult:
         }
 
 
+@public
 def static_equilibrium(
     robot: Robot,
     q: Sequence[float] | np.ndarray,

@@ -34,6 +34,8 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
+from pkdyn.exceptions import InvalidInputError
+
 __all__ = [
     "INDICES",
     "RTOL",
@@ -63,7 +65,12 @@ def observability(s: np.ndarray, poses: int) -> dict[str, float]:
         ``{"O1": ..., "O5": ...}`` (zeros when ``s`` is empty or has a zero).
 
     """
-    s = np.sort(np.asarray(s, dtype=float))[::-1]
+    from pkdyn.inputs import count, vector
+
+    s = np.sort(vector("s", s, unit="", bound=np.inf))[::-1]
+    poses = count("poses", poses, 1)
+    if np.any(s < 0.0):
+        raise InvalidInputError("s", "singular values are >= 0")
     if s.size == 0 or s[-1] <= 0.0:
         return dict.fromkeys(INDICES, 0.0)
     return {
@@ -130,7 +137,12 @@ class Identifiability:
             do. Empty when the parameter moves nothing measured.
 
         """
-        c = self.combinations.get(int(j))
+        from pkdyn.inputs import count, positive
+
+        j = count("j", j, 0, len(self.names) - 1)
+        tol = positive("tol", tol)
+        top = count("top", top, 1)
+        c = self.combinations.get(j)
         if c is None or c.size == 0 or np.max(np.abs(c)) == 0.0:
             return []
         order = np.argsort(-np.abs(c))
@@ -224,8 +236,20 @@ def identifiability(
         The identifiability analysis.
 
     """
-    W = np.asarray(W, dtype=float)
+    from pkdyn.inputs import count, matrix, positive, vector
+    from pkdyn.inputs import names as names_
+
+    W = matrix("W", W, bound=np.inf)
     n = W.shape[1]
+    names = names_("names", names, what="parameter")
+    if len(names) != n:
+        raise InvalidInputError("names", f"{len(names)} names for {n} columns of W")
+    poses = count("poses", poses, 1)
+    rtol = positive("rtol", rtol)
+    if scale is not None:
+        scale = vector("scale", scale, n)
+    if prior is not None:
+        prior = vector("prior", prior, n, bound=np.inf)
     norms = np.linalg.norm(W, axis=0)
     big = float(np.max(norms, initial=0.0))
     live = np.flatnonzero(norms > 1e-12 * max(big, 1e-300))

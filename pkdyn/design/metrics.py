@@ -56,6 +56,7 @@ import numpy as np
 
 from pkdyn.design.context import DesignContext
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
 
 __all__ = ["GROUPS", "METRICS", "Metric", "metric", "resolve_metrics"]
@@ -113,6 +114,7 @@ _BUILTIN: set[str] = set()
 """The built-in metric and group names (a plug-in may not replace them), filled below."""
 
 
+@public
 def metric(
     name: str, unit: str, summary: str = "", geometry: bool = False
 ) -> Callable[[MetricFn], MetricFn]:

@@ -28,6 +28,7 @@ from pkdyn.design.study import MAX_STUDY_FILE, Study
 from pkdyn.design.table import PartialFile, Table, output_paths
 from pkdyn.exceptions import InvalidInputError, PkdynError, StudyError
 from pkdyn.files import atomic_write, read_text
+from pkdyn.model.arguments import public
 from pkdyn.progress import progress as progress_bar
 
 __all__ = ["run_study"]
@@ -137,6 +138,7 @@ def _belonging(study: Study, rows: list[Row], source: Path) -> dict[int, Row]:
     return kept
 
 
+@public
 def run_study(
     study: Study,
     out: str | os.PathLike[str] | None = None,

@@ -19,6 +19,7 @@ from pkdyn.dynamics.actuation import actuation, drives
 from pkdyn.dynamics.callbacks import user_efforts
 from pkdyn.exceptions import InvalidInputError, SimulationError
 from pkdyn.inputs import callable_input, count, positive
+from pkdyn.model.arguments import public
 from pkdyn.model.passive import FRICTION_SMOOTHING
 from pkdyn.model.pose import as_configuration, as_finite
 from pkdyn.model.robot import Robot
@@ -31,6 +32,7 @@ TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 """Actuator efforts ``tau(t, q, v)`` (n_a,) [N m or N] from the time [s], ``q`` and ``v``."""
 
 
+@public
 def simulate(
     robot: Robot,
     duration: float,
@@ -172,7 +174,9 @@ def _untimed(message: str, time: float) -> str:
 
 
 def _extra(name: str, x: float | Sequence[float], nv: int) -> np.ndarray:
-    arr = np.asarray(x, dtype=float)
+    from pkdyn.inputs import vector
+
+    arr = vector(name, x, (1, nv))
     if arr.ndim > 1 or arr.size not in (1, nv) or not np.all(np.isfinite(arr)):
         raise InvalidInputError(name, f"expected one or {nv} finite values, got {arr.tolist()}")
     if np.any(arr < 0.0):

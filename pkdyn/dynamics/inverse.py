@@ -20,6 +20,7 @@ import numpy as np
 from pkdyn.dynamics.actuation import actuation
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.progress import progress as progress_bar
 from solvers import InconsistentMotionError, InverseDynamics
@@ -87,7 +88,9 @@ class EffortTrajectory:
 def _wrench_series(robot: Robot, wrench: Any, n: int) -> np.ndarray | None:
     if wrench is None:
         return None
-    W = np.asarray(wrench, dtype=float)
+    from pkdyn.inputs import matrix, vector
+
+    W = vector("wrench", wrench, 6) if np.ndim(_probe(wrench)) <= 1 else matrix("wrench", wrench)
     if W.shape == (6,):
         W = np.broadcast_to(W, (n, 6))
     if W.shape != (n, 6) or not np.all(np.isfinite(W)):
@@ -99,6 +102,14 @@ def _wrench_series(robot: Robot, wrench: Any, n: int) -> np.ndarray | None:
     return W
 
 
+def _probe(x: Any) -> Any:
+    """``x`` as an array for its number of dimensions (a scalar when it cannot be one)."""
+    try:
+        return np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        return 0.0
+
+
 CONSISTENCY_TOL = 1e-7
 """Largest closure error of a trajectory sample accepted by the inverse dynamics, relative to
 ``max(1, |v|)`` for velocities and ``max(1, |a|)`` for accelerations [m, m/s, m/s^2]."""
@@ -107,6 +118,7 @@ _CHUNK = 2048
 """Samples per call of the solver (one step of the progress bar)."""
 
 
+@public
 def inverse_dynamics(
     robot: Robot,
     trajectory: JointTrajectory,
@@ -151,7 +163,13 @@ def inverse_dynamics(
             not satisfy the closures (position, velocity or acceleration, :data:`CONSISTENCY_TOL`).
 
     """
-    traj = trajectory
+    from pkdyn.inputs import instance, vector
+
+    traj = instance("trajectory", trajectory, JointTrajectory, "a JointTrajectory")
+    if weights is not None:
+        weights = vector("weights", weights, len(robot.actuators))
+        if np.any(weights <= 0.0):
+            raise InvalidInputError("weights", f"must be > 0, got {weights.tolist()}")
     N = traj.t.size
     if traj.q.shape != (N, robot.nq) or traj.v.shape != (N, robot.nv):
         raise TrajectoryError(

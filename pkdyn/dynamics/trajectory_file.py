@@ -38,13 +38,15 @@ TASK_COLUMNS = ("x", "y", "z", "roll", "pitch", "yaw")
 def _table(path: Path) -> tuple[list[str], np.ndarray]:
     """Header and (N, k) numbers of a CSV file, each cell checked."""
     name = str(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as fh:
+    try:  # (utf-8-sig: a byte-order mark, as spreadsheets write, is not part of the header)
+        with open(path, newline="", encoding="utf-8-sig") as fh:
             rows = list(csv.reader(fh))
     except FileNotFoundError:
         raise InvalidInputError("trajectory", f"'{name}': no such file") from None
     except (OSError, UnicodeDecodeError) as err:
         raise InvalidInputError("trajectory", f"'{name}': cannot be read ({err})") from None
+    except csv.Error as err:  # a cell beyond the csv module's field limit, a NUL byte
+        raise InvalidInputError("trajectory", f"'{name}': not a CSV table ({err})") from None
     rows = [r for r in rows if any(c.strip() for c in r)]
     if len(rows) < 4:
         raise InvalidInputError(

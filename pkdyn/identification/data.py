@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 
 __all__ = ["Measurements", "read_measurements"]
 
@@ -47,6 +48,22 @@ class Measurements:
     qa_ddot: np.ndarray | None = None
     tau: np.ndarray | None = None
     source: str = "data"
+
+    def __post_init__(self) -> None:
+        from pkdyn.inputs import instance, matrix, vector
+
+        instance("source", self.source, str, "a name for messages (str)")
+        t = vector("t", self.t, unit="s", bound=MAX_VALUE)
+        if t.size < 2:
+            raise InvalidInputError("t", f"{t.size} samples: at least 2")
+        object.__setattr__(self, "t", t)  # (frozen: the checked copies replace what was given)
+        qa = matrix("qa", self.qa, t.size, None, "rad or m", bound=MAX_VALUE)
+        object.__setattr__(self, "qa", qa)
+        for name in ("qa_dot", "qa_ddot", "tau"):
+            value = getattr(self, name)
+            if value is not None:
+                arr = matrix(name, value, t.size, qa.shape[1], bound=MAX_VALUE)
+                object.__setattr__(self, name, arr)
 
 
 MAX_BYTES = 512_000_000
@@ -81,7 +98,7 @@ def _read_table(path: Path) -> tuple[list[str], np.ndarray]:
         raise InvalidInputError(str(path), f"cannot read the file ({err.strerror})") from None
     except UnicodeDecodeError:
         raise InvalidInputError(str(path), "not a text CSV file") from None
-    lines = text.splitlines()
+    lines = text.lstrip("\ufeff").splitlines()  # (a spreadsheet's byte-order mark)
     if not lines or not lines[0].strip():
         raise InvalidInputError(str(path), "empty file: expected a header line t,qa_...,tau_...")
     header = [h.strip() for h in lines[0].split(",")]
@@ -105,6 +122,7 @@ def _read_table(path: Path) -> tuple[list[str], np.ndarray]:
     return header, np.column_stack([np.asarray(c, dtype=float) for c in cols])
 
 
+@public
 def read_measurements(
     path: str | os.PathLike[str], actuators: list[str], need_tau: bool = True
 ) -> Measurements:
@@ -123,6 +141,10 @@ def read_measurements(
             times that do not increase, fewer than 2 rows.
 
     """
+    from pkdyn.inputs import instance, names
+
+    instance("path", path, str | os.PathLike, "a CSV file name")
+    actuators = list(names("actuators", actuators, what="actuator"))
     p = Path(path)
     src = str(path)
     _check_file(p, src)

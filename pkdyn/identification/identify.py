@@ -31,6 +31,7 @@ from pkdyn.identification.parameters import ParameterSet, parameter_set
 from pkdyn.identification.physical import consistent_parameters
 from pkdyn.identification.regressor import ClosedLoopRegressor
 from pkdyn.identification.result import IdentificationResult
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
 from pkdyn.threads import single_blas_thread
@@ -279,6 +280,7 @@ def prior_weights(effect: np.ndarray, nominal: np.ndarray, base: BaseParameters)
     return out
 
 
+@public
 def identify(
     robot: Robot,
     data: Measurements,
@@ -325,14 +327,26 @@ def _identify(
     workers: int | None,
 ) -> IdentificationResult:
     start = time.perf_counter()
-    from pkdyn.inputs import instance
+    from pkdyn.inputs import count, flag, instance, positive
 
     instance("robot", robot, Robot, "a Robot (pkdyn.load)")
     instance("data", data, Measurements, "Measurements (pkdyn.identification.read_measurements)")
+    if cutoff is not None:
+        cutoff = positive("cutoff", cutoff, "Hz")
+    if workers is not None:
+        workers = count("workers", workers, 1, 1024)
+    if progress is not None:
+        progress = flag("progress", progress)
     check_identifiable(robot)
     n_a = len(robot.actuators)
     if data.tau is None:
         raise InvalidInputError(data.source, "no tau_* columns: the efforts to identify from")
+    if not np.any(data.tau):
+        raise InvalidInputError(
+            data.source,
+            "every tau_* value is 0: the efforts carry nothing to identify from (check the "
+            "tau_* columns: joint-side efforts [N m or N])",
+        )
     if data.qa.shape[1] != n_a:
         raise InvalidInputError(data.source, f"{data.qa.shape[1]} actuators for {n_a}")
     N = data.t.size

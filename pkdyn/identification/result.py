@@ -11,11 +11,13 @@ import numpy as np
 from pkdyn.identification.base import BaseParameters
 from pkdyn.identification.estimation import Estimate
 from pkdyn.identification.parameters import ParameterSet
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 
 __all__ = ["IdentificationResult", "predict_efforts"]
 
 
+@public
 def predict_efforts(
     robot: Robot,
     ps: ParameterSet,
@@ -45,7 +47,16 @@ def predict_efforts(
     """
     from pkdyn.identification.motion import BATCH, MotionSampler
     from pkdyn.identification.regressor import ClosedLoopRegressor
+    from pkdyn.inputs import instance, matrix, vector
 
+    instance("ps", ps, ParameterSet, "a ParameterSet (pkdyn.identification.parameter_set)")
+    theta = vector("theta", theta, ps.p)
+    t = vector("t", t, unit="s")
+    n_a = len(robot.actuators)
+    qa, qa_dot, qa_ddot = (
+        matrix(name, x, t.size, n_a, "rad or m")
+        for name, x in (("qa", qa), ("qa_dot", qa_dot), ("qa_ddot", qa_ddot))
+    )
     reg = ClosedLoopRegressor(robot, ps)
     sampler = MotionSampler(robot)
     N = t.size
@@ -186,6 +197,9 @@ class IdentificationResult:
 
     def table(self, limit: int = 40) -> str:
         """A text report: fit, base parameters with their relative deviations, what is left."""
+        from pkdyn.inputs import count
+
+        limit = count("limit", limit, 1)
         e = self.estimate
         lines = [
             f"{self.robot.name}: {e.samples} samples, {self.base.size} base parameters "

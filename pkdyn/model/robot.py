@@ -256,7 +256,7 @@ class Robot:
             (``dof + internal`` of :meth:`mobility_split`).
 
         """
-        qq = self.q_home if q is None else q
+        qq, tol = self._q_tol(q, tol)
         if self.closure_set.nc == 0:
             return self.nv
         _, J = self.closure_set.residual_and_jacobian(self.data, qq)
@@ -279,7 +279,7 @@ class Robot:
             ``(dof, internal)``.
 
         """
-        qq = self.q_home if q is None else q
+        qq, tol = self._q_tol(q, tol)
         nv = self.nv
         if self.closure_set.nc:
             _, Jc = self.closure_set.residual_and_jacobian(self.data, qq)
@@ -313,6 +313,13 @@ class Robot:
             + f", platform task: {task}>"
         )
 
+    def _q_tol(self, q: Any, tol: Any) -> tuple[np.ndarray, float]:
+        """A configuration (default home) and a relative tolerance, checked."""
+        from pkdyn.inputs import positive, vector
+
+        qq = self.q_home if q is None else vector("q", q, self.nq, "rad or m")
+        return qq, positive("tol", tol)
+
     def platform_placement(self, q: np.ndarray) -> pin.SE3:
         """World placement of the platform frame at ``q``.
 
@@ -325,6 +332,9 @@ class Robot:
         """
         if self.platform_frame is None:
             raise PkdynError(f"{self.name} declares no platform frame; {PLATFORM_HINT}")
+        from pkdyn.inputs import vector
+
+        q = vector("q", q, self.nq, "rad or m")
         pin.framesForwardKinematics(self.model, self.data, q)
         return pin.SE3(self.data.oMf[self.platform_frame])
 

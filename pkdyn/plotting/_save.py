@@ -27,6 +27,8 @@ def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int) -> None:
         OutputError: No or unknown extension, missing directory, or the file cannot be written.
 
     """
+    if not isinstance(path, str | os.PathLike):
+        raise OutputError(repr(path)[:80], "expected a file name (str or Path)")
     target = Path(path)
     fmt = target.suffix.lower().lstrip(".")
     supported = fig.canvas.get_supported_filetypes()

@@ -46,7 +46,10 @@ def plot_accuracy_map(
     """
     from matplotlib.figure import Figure
 
-    if field not in _LABELS:
+    from pkdyn.inputs import instance
+
+    instance("amap", amap, AccuracyMap, "an AccuracyMap (pkdyn.precision.accuracy)")
+    if not isinstance(field, str) or field not in _LABELS:
         raise InvalidInputError("field", f"must be one of {', '.join(_LABELS)}, got {field!r}")
     if len(amap.shape) != 2:
         raise InvalidInputError(

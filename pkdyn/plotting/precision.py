@@ -45,7 +45,12 @@ def plot_precision_map(
     """
     from matplotlib.figure import Figure
 
-    if field not in pmap.values:
+    from pkdyn.inputs import instance, positive
+
+    instance("pmap", pmap, PrecisionMap, "a PrecisionMap (pkdyn.precision.precision_map)")
+    if reference is not None:
+        reference = positive("reference", reference)
+    if not isinstance(field, str) or field not in pmap.values:
         raise InvalidInputError(
             "field", f"'{field}': this map holds {', '.join(pmap.values) or 'nothing'}"
         )
@@ -108,6 +113,13 @@ def plot_modes(
 
     """
     from matplotlib.figure import Figure
+
+    from pkdyn.inputs import instance, positive, vector
+
+    instance("result", result, Modes, "Modes (pkdyn.precision.modes)")
+    length = positive("length", length, "m")
+    if band is not None:
+        band = tuple(vector("band", band, 2, "Hz"))
 
     if ax is None:
         fig = Figure(figsize=(7.0, 3.5), layout="constrained")

@@ -37,6 +37,8 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.inputs import is_complex
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.precision.links import LinkCompliance, link_compliances
 from pkdyn.precision.material import Material
@@ -105,17 +107,23 @@ class ElasticModel:
 
     def embed(self, q: np.ndarray) -> np.ndarray:
         """Extended configuration of a configuration of the robot, links undeformed."""
+        from pkdyn.inputs import vector
+
+        q = vector("q", q, self.base.nq, "rad or m")
         if self.robot is self.base:
-            return np.array(q, dtype=float)
+            return q
         out = pin.neutral(self.robot.model)
         out[self.q_index] = q
         return out
 
     def restrict(self, q: np.ndarray) -> np.ndarray:
         """The robot's coordinates (nq,) of an extended configuration (deflections dropped)."""
-        return np.array(np.asarray(q, dtype=float)[self.q_index])
+        from pkdyn.inputs import vector
+
+        return np.array(vector("q", q, self.robot.nq, "rad or m")[self.q_index])
 
 
+@public
 def actuator_stiffness(
     robot: Robot, value: float | Sequence[float] | np.ndarray | None = None
 ) -> np.ndarray:
@@ -146,7 +154,7 @@ def actuator_stiffness(
                 "<pkdyn:stiffness value=...> in its transmission",
             )
         return np.array([float(a.stiffness) for a in robot.actuators])  # type: ignore[arg-type]
-    if isinstance(value, bool | str | bytes | dict) or np.iscomplexobj(value):
+    if isinstance(value, bool | str | bytes | dict) or is_complex(value):
         raise InvalidInputError("actuator_stiffness", f"{value!r:.60} is not a number")
     try:
         arr = np.atleast_1d(np.asarray(value, dtype=float)).reshape(-1)
@@ -174,6 +182,7 @@ def actuator_stiffness(
     return arr
 
 
+@public
 def elastic_model(
     robot: Robot,
     actuator_stiffness: float | Sequence[float] | np.ndarray | None = None,

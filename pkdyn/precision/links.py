@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.description import ComplianceSpec
 from pkdyn.model.robot import Robot
 from pkdyn.precision.beam import Section, centre_compliance
@@ -165,6 +166,7 @@ def _body_joint(robot: Robot, link: str) -> int:
     raise InvalidInputError("link", f"{robot.name} has no link '{link}'")
 
 
+@public
 def link_compliances(
     robot: Robot,
     material: str | Material | None = None,

@@ -30,6 +30,8 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import NearSingularityWarning
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.inputs import is_complex
+from pkdyn.model.arguments import public
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
@@ -81,7 +83,7 @@ class PoseFigures:
 
 
 def _poses(P: np.ndarray, R: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    if isinstance(P, str | bytes | dict) or np.iscomplexobj(P):
+    if isinstance(P, str | bytes | dict) or is_complex(P):
         raise InvalidInputError("P", f"expected finite positions (N, 3) [m], got {P!r:.60}")
     try:
         P = np.atleast_2d(np.asarray(P, dtype=float))
@@ -101,6 +103,7 @@ def _poses(P: np.ndarray, R: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]
     return P, np.broadcast_to(Rm, (P.shape[0], 3, 3)) if Rm.ndim == 2 else Rm
 
 
+@public
 def pose_figures(
     robot: Robot,
     P: np.ndarray,
@@ -243,6 +246,10 @@ class PrecisionMap:
 
         The smallest stiffness or frequency, the largest deflection.
         """
+        if not isinstance(name, str) or name not in self.values:
+            raise InvalidInputError(
+                "name", f"{name!r:.40} is not a field of the map ({', '.join(self.values)})"
+            )
         x = self.values[name]
         if not np.isfinite(x).any():
             return float("nan")
@@ -253,6 +260,7 @@ _AXES = {"x": 0, "y": 1, "z": 2}
 
 
 @one_blas_thread
+@public
 def precision_map(
     robot: Robot,
     plane: str = "xy",
@@ -299,13 +307,20 @@ def precision_map(
     """
     from pkdyn.workspace.translation import evaluator_for
 
-    if len(plane) != 2 or any(c not in _AXES for c in plane) or plane[0] == plane[1]:
+    if (
+        not isinstance(plane, str)
+        or len(plane) != 2
+        or any(c not in _AXES for c in plane)
+        or plane[0] == plane[1]
+    ):
         raise InvalidInputError("plane", f"'{plane}': two of x, y, z, e.g. xy")
     from pkdyn.inputs import count, vector
 
     samples = count("samples", samples, 2, 2001)
     if value is not None:
-        value = float(vector("value", value, 1, "m", bound=100.0 * robot.length_scale)[0])
+        from pkdyn.inputs import real
+
+        value = real("value", value, "m", bound=100.0 * robot.length_scale)
     R = pin.rpy.rpyToMatrix(*as_finite("rpy", rpy, 3))
     iu, iv = _AXES[plane[0]], _AXES[plane[1]]
     iw = 3 - iu - iv
@@ -324,7 +339,9 @@ def precision_map(
     P = np.zeros((U.size, 3))
     P[:, iu], P[:, iv] = U.ravel(), V.ravel()
     P[:, iw] = home[iw] if value is None else float(value)
-    codes = ev.violations(P, R, ("reach", *limits), 0.0)
+    from pkdyn.workspace.limits import check_kinds
+
+    codes = ev.violations(P, R, check_kinds(limits), 0.0)
     inside = codes == REACHABLE
     fig = pose_figures(
         robot,

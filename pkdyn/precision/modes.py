@@ -31,6 +31,7 @@ import pinocchio as pin
 import scipy.linalg
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
@@ -130,6 +131,7 @@ def _eigen(red: Reduced, M: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     return lam, X, int(massless.sum())
 
 
+@public
 def modes(
     robot: Robot | ElasticModel,
     q: Sequence[float] | np.ndarray,

@@ -44,6 +44,8 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import ASSEMBLY_TOL, TASK_NAMES
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
+from pkdyn.inputs import is_complex
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision.condensation import Reduced, compliance, reduce
@@ -182,7 +184,10 @@ def transport(K: np.ndarray, r: np.ndarray) -> np.ndarray:
         ``T d``).
 
     """
-    r = np.asarray(r, dtype=float)
+    from pkdyn.inputs import matrix, vector
+
+    K = matrix("K", K, 6, 6, bound=np.inf)
+    r = vector("r", r, 3, "m")
     T_inv = np.eye(6)
     T_inv[:3, 3:] = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
     return np.asarray(T_inv.T @ K @ T_inv)
@@ -194,7 +199,7 @@ def _wrench(robot: Robot, wrench: Sequence[float] | np.ndarray | None) -> np.nda
     from pkdyn.inputs import MAX_MAGNITUDE
 
     rows = np.asarray(robot.task_rows, dtype=int)
-    if isinstance(wrench, str | bytes | dict) or np.iscomplexobj(wrench):
+    if isinstance(wrench, str | bytes | dict) or is_complex(wrench):
         raise InvalidInputError("wrench", f"expected numbers [N, N m], got {wrench!r:.60}")
     try:
         arr = np.atleast_1d(np.asarray(wrench, dtype=float)).reshape(-1)
@@ -337,6 +342,7 @@ def _result(
     )
 
 
+@public
 def stiffness(
     robot: Robot | ElasticModel,
     q: Sequence[float] | np.ndarray,
@@ -427,6 +433,7 @@ def _frame(em: ElasticModel, q: np.ndarray) -> tuple[int, pin.SE3]:
     return fid, pin.SE3(r.data.oMf[fid])
 
 
+@public
 def stiffness_json(robot: Robot, q: np.ndarray, **kwargs: Any) -> dict[str, Any]:
     """JSON-ready :func:`stiffness` for the CLI (keys of :meth:`Stiffness.to_json`)."""
     return stiffness(robot, q, **kwargs).to_json()

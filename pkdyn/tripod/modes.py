@@ -45,6 +45,7 @@ import pinocchio as pin
 from pkdyn.closed_form import tripod as tripod_cf
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.library import tripod
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.tripod.locks import Lock, lock_constraint, lock_values
 from solvers import ClosureSet
@@ -219,6 +220,7 @@ def pp_mode() -> Mode:
     return Mode("PP")
 
 
+@public
 def be_mode(
     robot: Robot, q: np.ndarray, branch: int, values: Sequence[float] | None = None
 ) -> Mode:
@@ -266,6 +268,7 @@ def foot_frame(foothold: pin.SE3) -> pin.SE3:
     return pin.SE3(foothold) * _FOOT_TURN
 
 
+@public
 def foot_placement(robot: Robot, q: np.ndarray, branch: int) -> pin.SE3:
     """Foot frame ``R_A`` of branch ``i`` at ``q`` (origin ``A_i``, ``w_a`` the sole normal).
 
@@ -284,6 +287,7 @@ def foot_placement(robot: Robot, q: np.ndarray, branch: int) -> pin.SE3:
     return pin.SE3(robot.data.oMf[fid]) * _FOOT_TURN.inverse()
 
 
+@public
 def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = None) -> Robot:
     """The tripod with the constraint set and platform of a mode on a stance.
 

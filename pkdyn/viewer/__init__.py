@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.viewer.animation import chain, check_trajectory
 from pkdyn.viewer.camera import Camera, bounding_box, frame_box, project
@@ -43,6 +44,7 @@ __all__ = [
 ]
 
 
+@public
 def animate(
     robot: Robot,
     t: np.ndarray,

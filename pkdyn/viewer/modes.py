@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pkdyn.model.arguments import public
 from pkdyn.precision.elastic import ElasticModel
 from pkdyn.precision.modes import Modes, mode_trajectory
 from pkdyn.viewer.scene import Scene
@@ -9,6 +10,7 @@ from pkdyn.viewer.scene import Scene
 __all__ = ["animate_mode"]
 
 
+@public
 def animate_mode(
     model: ElasticModel,
     result: Modes,

@@ -36,6 +36,7 @@ import numpy as np
 
 from pkdyn.closed_form.delta import THETA, DeltaGeometry, elbow_points, inverse
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.arguments import public
 from pkdyn.progress import progress_steps
 
 __all__ = [
@@ -289,6 +290,7 @@ class _Sampler:
         return best
 
 
+@public
 def clavel_numeric(
     g: DeltaGeometry,
     gamma_max: float = GAMMA_MAX,

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.description import ConeLimit, PyramidLimit
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
@@ -71,6 +72,7 @@ def dextrous_violations(legs: HexapodLegs, C: np.ndarray, joint_limits: bool) ->
     return out
 
 
+@public
 def dextrous_workspace(
     robot: Robot,
     bounds: np.ndarray | Sequence[Sequence[float]] | None = None,

@@ -31,6 +31,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.description import PyramidLimit
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
@@ -240,6 +241,7 @@ def _codes(
     return out
 
 
+@public
 def orientation_workspace(
     robot: Robot,
     center: Sequence[float] | None = None,
@@ -478,6 +480,7 @@ MEL_CASES = {
 """Merlet's three studies of the MEL prototype (chapter 3, Figs. 3.2-3.10)."""
 
 
+@public
 def mel_study(
     robot: Robot,
     center: Sequence[float] | None = None,

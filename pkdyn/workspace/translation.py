@@ -23,6 +23,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.inputs import count, positive
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, check_kinds
 
@@ -273,6 +274,7 @@ MAX_GRID_SAMPLES = 10_000_000
 numerically): larger requests are refused before any work, with the estimate."""
 
 
+@public
 def translation_workspace(
     robot: Robot,
     rpy: Sequence[float] = (0.0, 0.0, 0.0),

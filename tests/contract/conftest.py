@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 
-from hypothesis import HealthCheck, settings
+from hypothesis import HealthCheck, Phase, settings
 
 settings.register_profile(
     "contract",
@@ -15,4 +15,6 @@ settings.register_profile(
     max_examples=int(os.environ.get("PKDYN_CONTRACT_EXAMPLES", "3")),
     print_blob=False,
     suppress_health_check=list(HealthCheck),
+    # PKDYN_CONTRACT_SHRINK=0: report the first failing example as found (faster while fixing)
+    phases=[p for p in Phase if os.environ.get("PKDYN_CONTRACT_SHRINK", "1") != "0" or p not in (Phase.shrink, Phase.explain)],
 )

@@ -298,7 +298,7 @@ class Vector(Kind):
                 lambda v: make("huge", f"[.., {v}]", poison(v), refuse=False)
             ),
             "ragged": st.just(
-                make("ragged", "[[0, 0], [0]]", lambda n: [[0.0] * max(n - 1, 1), [0.0]])
+                make("ragged", "[[0, ...], [0]]", lambda n: [[0.0] * (n + 1), [0.0]])
             ),
             "empty": st.just(make("empty", "[]", lambda n: [], refuse=not self.empty_ok)),
             "wrong_type": st.sampled_from(
