@@ -90,7 +90,11 @@ class Modes:
             count: Report the lowest ``count`` modes (default: all).
 
         """
-        n = self.frequencies.size if count is None else min(count, self.frequencies.size)
+        from pkdyn.inputs import count as count_
+
+        n = self.frequencies.size
+        if count is not None:
+            n = min(count_("count", count, 1), n)
         unit = np.linalg.norm(self.platform[:n], axis=1, keepdims=True)
         return {
             "frequencies": [float(f) for f in self.frequencies[:n]],
@@ -253,12 +257,19 @@ def mode_trajectory(
         InvalidInputError: No such mode, or a non-positive amplitude, period or count.
 
     """
+    from pkdyn.inputs import count, instance, positive
+
+    instance("em", em, ElasticModel, "an ElasticModel (pkdyn.precision.elastic_model)")
+    instance("result", result, Modes, "Modes (pkdyn.precision.modes)")
     n = result.frequencies.size
-    if not 0 <= index < n:
-        raise InvalidInputError("mode", f"{index + 1} is not a mode number: 1 to {n}")
-    for what, value in (("period", period), ("cycles", cycles), ("samples", samples)):
-        if not (np.isfinite(value) and value > 0):
-            raise InvalidInputError(what, f"must be > 0, got {value}")
+    index = count("index", index, 0, max(n - 1, 0))
+    if n == 0:
+        raise InvalidInputError("index", "these results hold no mode")
+    period = positive("period", period, "s")
+    cycles = count("cycles", cycles, 1, 1000)
+    samples = count("samples", samples, 2, 10_000)
+    if amplitude is not None:
+        amplitude = positive("amplitude", amplitude, "m")
     r = em.robot
     q0 = result.q_elastic
     u = result.shapes[index]

@@ -76,4 +76,7 @@ def animate(
 
 def export_html(scene: Scene, path: str | Path) -> Path:
     """Write the scene as one self-contained HTML file (see :meth:`Scene.save_html`)."""
+    from pkdyn.inputs import instance
+
+    instance("scene", scene, Scene, "a Scene (pkdyn.viewer.Scene)")
     return scene.save_html(path)

@@ -59,7 +59,9 @@ def singularity_labels(
 
     """
     from pkdyn.analysis.singularity import classify
+    from pkdyn.inputs import matrix
 
+    Q = matrix("Q", Q, None, robot.nq, "rad or m")
     labels = np.zeros(len(Q), dtype=int)
     kinds: list[str] = []
     with warnings.catch_warnings():

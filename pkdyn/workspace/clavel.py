@@ -100,11 +100,28 @@ class ClavelFigures:
         return out
 
 
+def _check_geometry(g: Any) -> None:
+    """``g`` has Clavel's lengths ``ra, rb, la, lb`` [m] (a Delta's parameters)."""
+    from pkdyn.inputs import non_negative, positive
+
+    if not all(hasattr(g, a) for a in ("ra", "rb", "la", "lb")):
+        raise InvalidInputError(
+            "g", f"expected a Delta geometry (ra, rb, la, lb; robot.params), got {g!r:.60}"
+        )
+    for a in ("ra", "la", "lb"):
+        positive(f"g.{a}", getattr(g, a), "m")
+    non_negative("g.rb", g.rb, "m")
+
+
 def _check_limits(gamma_max: float, ab_min: float) -> None:
+    from pkdyn.inputs import real
+
+    gamma_max = real("gamma_max", gamma_max, "rad")
+    ab_min = real("ab_min", ab_min, "rad")
     if not 0.0 < gamma_max < math.pi / 2:
         raise InvalidInputError("gamma_max", f"{gamma_max} rad: need 0 < gamma_max < pi/2")
     if not 0.0 <= ab_min < math.pi:
-        raise InvalidInputError("(alpha+beta)_min", f"{ab_min} rad: need 0 <= value < pi")
+        raise InvalidInputError("ab_min", f"(alpha+beta)_min = {ab_min} rad: need 0 <= value < pi")
 
 
 def clavel_closed_form(
@@ -335,9 +352,18 @@ def clavel_numeric(
         PkdynError: No valid position on the axis.
 
     """
+    from pkdyn.inputs import count, positive
+
+    _check_geometry(g)
     _check_limits(gamma_max, ab_min)
-    if rays < 12 or fractions < 3 or heights < 20:
-        raise InvalidInputError("sampling", "need rays >= 12, fractions >= 3, heights >= 20")
+    rays = count("rays", rays, 12)
+    fractions = count("fractions", fractions, 3)
+    heights = count("heights", heights, 20)
+    tol = positive("tol", tol, "m")
+    if tol < 1e-13 * g.la:
+        raise InvalidInputError(
+            "tol", f"{tol:g} m: below what floating point resolves on a {g.la:g} m arm (1e-13 la)"
+        )
     if rays * fractions * heights > 50_000_000:
         raise InvalidInputError(
             "sampling",

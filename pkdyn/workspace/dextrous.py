@@ -113,7 +113,9 @@ def dextrous_workspace(
             hi = np.maximum(hi, lo + 1e-3)
         box = np.column_stack([lo, hi])
     else:
-        box = np.asarray(bounds, dtype=float)
+        from pkdyn.inputs import matrix
+
+        box = matrix("bounds", bounds, 3, 2, "m")
     if box.shape != (3, 2) or not np.all(np.isfinite(box)):
         raise InvalidInputError("bounds", "expected 3 rows (min, max) of finite numbers [m]")
     xs, ys, zs = _grid_axes(box, step, samples, (0, 1, 2), np.zeros(3))

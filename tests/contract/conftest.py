@@ -16,5 +16,10 @@ settings.register_profile(
     print_blob=False,
     suppress_health_check=list(HealthCheck),
     # PKDYN_CONTRACT_SHRINK=0: report the first failing example as found (faster while fixing)
-    phases=[p for p in Phase if os.environ.get("PKDYN_CONTRACT_SHRINK", "1") != "0" or p not in (Phase.shrink, Phase.explain)],
+    phases=[
+        p
+        for p in Phase
+        if os.environ.get("PKDYN_CONTRACT_SHRINK", "1") != "0"
+        or p not in (Phase.shrink, Phase.explain)
+    ],
 )

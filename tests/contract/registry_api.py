@@ -98,6 +98,20 @@ def _elastic() -> Any:
 
 
 @functools.cache
+def _elastic_geo() -> Any:
+    from pkdyn.precision import elastic_model
+
+    return elastic_model(fx.robot("five_bar", True), 2e4)
+
+
+@functools.cache
+def _modes_geo() -> Any:
+    from pkdyn.precision import modes
+
+    return modes(_elastic_geo(), fx.robot("five_bar", True).q_home)
+
+
+@functools.cache
 def _modes() -> Any:
     from pkdyn.precision import modes
 
@@ -820,7 +834,7 @@ API: list[Api] = [
          "theta2": Arg(Vector(2), [0.0, 1.0], names=("theta2",))},
         robot="gough_stewart", obj=lambda s: _orientation_ws()),
     Api("pkdyn.workspace.OrientationWorkspace.solid_angle",
-        {"half": Arg(Choice(("0", "1")), None, names=("half",))},
+        {"half": Arg(Count(minimum=0, optional=True), 0, names=("half",))},
         robot="gough_stewart", obj=lambda s: _orientation_ws()),
     Api("pkdyn.workspace.OrientationWorkspace.arc_points",
         {"per_radian": Arg(Count(), 10, names=("per_radian",))},
@@ -847,7 +861,8 @@ API: list[Api] = [
                          names=("foothold",))}, robot=None),
     Api("pkdyn.tripod.lock_values",
         {"model": Arg(Obj("pin.Model"), Lazy(lambda s: s.robot.model), names=("model",)),
-         "q": Q(), "joint": Arg(Choice(), "branch1_q1", names=("joint",)),
+         "q": Q(), "joint": Arg(Choice(), Lazy(lambda s: pkdyn.tripod.be_mode(
+             s.robot, s.robot.q_home, 1).locks[1].joint), names=("joint", "lock")),
          "coordinates": Arg(Vector(None), [0], names=("coordinates",))},
         robot="tripod"),
     Api("pkdyn.tripod.lock_constraint",
@@ -945,13 +960,13 @@ API: list[Api] = [
          "collision": Arg(Flag(), False, names=("collision",))},
         robot="five_bar", geometry=True),
     Api("pkdyn.viewer.animate_mode",
-        {"model": Arg(Obj("ElasticModel"), Lazy(lambda s: _elastic()), names=("model",)),
-         "result": Arg(Obj("Modes"), Lazy(lambda s: _modes()), names=("result",)),
+        {"model": Arg(Obj("ElasticModel"), Lazy(lambda s: _elastic_geo()), names=("model", "em")),
+         "result": Arg(Obj("Modes"), Lazy(lambda s: _modes_geo()), names=("result",)),
          "index": Arg(Count(minimum=0), 0, names=("index",)),
          "amplitude": Arg(Real(sign="positive", optional=True), None, names=("amplitude",)),
          "period": Arg(Real("s", sign="positive"), 2.0, names=("period",)),
          "cycles": Arg(Count(), 1, names=("cycles",))},
-        timeout=30),
+        robot="five_bar", geometry=True, timeout=30),
     Api("pkdyn.viewer.bounding_box",
         {"model": Arg(Obj("pin.Model"), Lazy(lambda s: s.robot.model), names=("model",)),
          "geometry_model": Arg(Obj("pin.GeometryModel"), Lazy(lambda s: s.robot.visual_model),

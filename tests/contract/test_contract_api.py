@@ -100,6 +100,8 @@ def _run(entry, arg_name, case):
             outcome, _ = check_api(
                 call, names, case.refuse if case else False, entry.timeout, entry.nan_ok
             )
+        if arg_name is None:
+            assert outcome == "accepted", f"the registered baseline call is refused: {_}"
         changed, created, removed = file_changes(before, snapshot(s.dir))
         assert not changed and not removed, f"input files changed {changed} or removed {removed}"
         if outcome == "refused":

@@ -80,6 +80,8 @@ def test_contract_onto_input_two_outputs_one_file(entry, first, second):
         argv = argv_for(entry, first, [str(target)], s)
         argv = [*argv, second, str(target)]
         before = snapshot(s.dir)
-        check_cli(argv, (first.lstrip("-"), second.lstrip("-"), "same", target.name), True, True, 30)
+        check_cli(
+            argv, (first.lstrip("-"), second.lstrip("-"), "same", target.name), True, True, 30
+        )
         changed, created, removed = file_changes(before, snapshot(s.dir))
         assert not changed and not removed and not created, (changed, created, removed)

@@ -21,7 +21,6 @@ from pathlib import Path
 
 import pytest
 
-
 SLOW_METRIC = Path(__file__).resolve().parents[1] / "support" / "slow_metric.py"
 
 READY = "import sys; from pkdyn.cli import main; print('ready', flush=True); sys.exit(main({}))"
@@ -137,5 +136,3 @@ def test_contract_unbounded_memory_limit_is_effective():
         timeout=120, check=False,
     )  # fmt: skip
     assert proc.returncode != 0 and "MemoryError" in proc.stderr
-
-
