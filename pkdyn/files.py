@@ -176,6 +176,8 @@ def read_text(
             text in ``encoding``.
 
     """
+    if not isinstance(path, str | os.PathLike):  # (an int would be a file descriptor)
+        raise error(f"expected a file name (str or Path), got {type(path).__name__}")
     try:
         st = os.stat(path)
     except OSError as err:

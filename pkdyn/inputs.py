@@ -356,6 +356,8 @@ def names(
             raise InvalidInputError(
                 name, f"expected {what} names (strings), got {type(v).__name__} {v!r:.60}"
             )
+        if not v.strip():
+            raise InvalidInputError(name, f"an empty {what} name")
     if not out and not empty:
         raise InvalidInputError(name, f"name at least one {what}")
     seen: set[str] = set()

@@ -212,7 +212,11 @@ class Measurements:
             The measurements.
 
         """
-        if isinstance(placements, pin.SE3) or not all(isinstance(M, pin.SE3) for M in placements):
+        if (
+            isinstance(placements, pin.SE3)
+            or not isinstance(placements, Sequence)
+            or not all(isinstance(M, pin.SE3) for M in placements)
+        ):
             raise InvalidInputError("placements", "expected a sequence of pin.SE3 placements")
         vec = [pose_to_vector(M) for M in placements]
         P = np.array([v[0] for v in vec]).reshape(-1, 3)
@@ -393,6 +397,9 @@ def write_csv(path: str | os.PathLike[str], robot: Robot, m: Measurements) -> No
         m: The measurements.
 
     """
+    from pkdyn.inputs import instance
+
+    instance("m", m, Measurements, "Measurements (pkdyn.calibration.read_csv)")
     from pkdyn.files import atomic_write
 
     cols = _columns(robot, m.kind, m.joints)

@@ -225,6 +225,8 @@ def _directories(value: Any) -> list[str]:
         return []
     from pkdyn.inputs import names
 
+    if isinstance(value, list | tuple):
+        value = list(dict.fromkeys(value)) if all(isinstance(v, str) for v in value) else value
     dirs = list(names("package_dirs", value, what="directory", empty=True))
     for d in dirs:
         if not Path(d).is_dir():

@@ -112,7 +112,7 @@ def chain(
         Qs.append(np.asarray(Q, dtype=float))
         end = float(ts[-1][-1])
     if not ts:
-        raise InvalidInputError("trajectories", "nothing to chain")
+        raise InvalidInputError("segments", "nothing to chain")
     return np.concatenate(ts), np.vstack(Qs)
 
 

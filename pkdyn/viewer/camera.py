@@ -165,7 +165,10 @@ def project(camera: Camera, points: np.ndarray, width: int, height: int) -> np.n
     from pkdyn.inputs import count, instance, matrix
 
     instance("camera", camera, Camera, "a Camera (pkdyn.viewer.frame_box)")
-    points = matrix("points", np.atleast_2d(_numbers(points)), None, 3, "m")
+    pts = _numbers(points)
+    if isinstance(pts, np.ndarray) and pts.ndim == 1:
+        pts = pts[None, :]
+    points = matrix("points", pts, None, 3, "m")
     width, height = count("width", width, 1, 100_000), count("height", height, 1, 100_000)
     f = camera.target - camera.position
     f = f / np.linalg.norm(f)

@@ -79,7 +79,7 @@ def static_html(commands: Sequence[bytes], title: str = "pkdyn viewer") -> str:
 
     if not isinstance(title, str):
         raise InvalidInputError("title", f"expected a string, got {title!r:.40}")
-    if isinstance(commands, str | bytes) or not all(
+    if isinstance(commands, str | bytes | dict) or not all(
         isinstance(c, bytes) for c in (commands if hasattr(commands, "__iter__") else [None])
     ):
         raise InvalidInputError("commands", "expected a sequence of bytes (meshcat commands)")

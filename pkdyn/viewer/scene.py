@@ -32,6 +32,11 @@ BACKGROUND = ((1.0, 1.0, 1.0), (0.82, 0.84, 0.86))
 """Background gradient (top, bottom): light and neutral, so that every part colour shows."""
 
 
+def _probe(x: Any) -> np.ndarray:
+    """A colour's components (3 or 4), once :func:`rgb` accepted it."""
+    return np.asarray(x, dtype=float).reshape(-1)
+
+
 def _name(name: Any) -> str:
     """A scene object's name: a non-empty string."""
     if not isinstance(name, str) or not name:
@@ -298,7 +303,7 @@ class Scene:
 
         _name(name)
         P = matrix("points", points, None, 3, "m")
-        obj = point_cloud(P, color, positive("size", size, "m"))
+        obj = point_cloud(P, rgb(color)[: len(_probe(color))], positive("size", size, "m"))
         self.vis[f"overlays/{name}"].set_object(obj)
         self._boxes.append((P.min(axis=0), P.max(axis=0)))
         if self._auto_camera:

@@ -142,6 +142,7 @@ def clavel_closed_form(
         PkdynError: The hexagon is wider than the arms and bars reach: no complete prism.
 
     """
+    _check_geometry(g)
     _check_limits(gamma_max, ab_min)
     la = g.la
     r, b = (g.ra - g.rb) / la, g.lb / la

@@ -433,10 +433,11 @@ class Choice(Kind):
     optional: bool = False
 
     def api(self) -> dict[str, st.SearchStrategy]:
+        wrong = [v for v in (3, ["a"], b"x", 1.5) if v not in self.options]
         return {
             "unknown": _const("unknown", ["no_such_choice", "x" * 300]),
             "empty": _const("empty", [""]),
-            "wrong_type": _const("wrong_type", [3, ["a"], b"x", 1.5] + self._none()),
+            "wrong_type": _const("wrong_type", wrong + self._none()),
         }
 
     def cli(self) -> dict[str, st.SearchStrategy]:
@@ -469,7 +470,7 @@ class Mapping(Kind):
         key = next(iter(self.example), "x")
         out = {
             "wrong_type": _const("wrong_type", [[1, 2], 3, "k=v", [("a", 1)]] + self._none()),
-            "bad_value": _const("bad_value", [{key: "abc"}, {key: None}, {key: [1, [2]]}]),
+            "bad_value": _const("bad_value", [{key: "abc"}, {key: [1, [2]]}, {key: {"a": 1}}]),
         }
         if not self.open:
             out["unknown"] = _const("unknown", [{"no_such_key": 1.0}, {3: 1.0}])
