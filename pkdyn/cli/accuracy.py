@@ -48,7 +48,10 @@ def _cmd_accuracy(args: argparse.Namespace) -> None:
     seed("--seed", args.seed)
     if args.plot and args.map is None:
         raise InvalidInputError("--plot", "plots a map: give --map xy|xz|yz")
-    if not 1 <= len(args.tolerance) <= 3 or min(args.tolerance) < 0:
+    from pkdyn.inputs import vector
+
+    tolerance = vector("--tolerance", args.tolerance, (1, 2, 3), "m, rad, -")
+    if np.any(tolerance < 0.0):
         raise InvalidInputError("--tolerance", "give LENGTH [ANGLE [GAIN]] >= 0 (m, rad, -)")
     robot = load(args)
     model = parameter_model(robot, args.model)

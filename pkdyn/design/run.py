@@ -245,7 +245,15 @@ def run_study(
         partial.close(remove=True)
     if study.requirement is not None:
         contains = table.column("contains")
-        reached = float(np.nanmax(contains)) if np.isfinite(contains).any() else 0.0
+        if not np.isfinite(contains).any():  # not one design could be checked: say why
+            reasons = [r.reason for r in table.rows if r.reason]
+            common = max(set(reasons), key=reasons.count) if reasons else "no value"
+            raise StudyError(
+                "requirement",
+                f"no design of the {len(table)} could be checked against the required "
+                f"workspace: {common}",
+            )
+        reached = float(np.nanmax(contains))
         if reached < 1.0:
             where = f"; the table is in {paths['csv']}" if paths else ""
             raise StudyError(

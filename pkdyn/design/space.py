@@ -54,6 +54,14 @@ class Range:
             raise InvalidInputError(
                 f"range '{self.name}'", f"bounds must be finite, got {self.low}:{self.high}"
             )
+        from pkdyn.inputs import MAX_MAGNITUDE
+
+        if max(abs(self.low), abs(self.high)) > MAX_MAGNITUDE:
+            raise InvalidInputError(
+                f"range '{self.name}'",
+                f"{self.low:g}:{self.high:g} is beyond any plausible value (at most "
+                f"{MAX_MAGNITUDE:g} in SI units)",
+            )
         if self.high == self.low:
             raise InvalidInputError(
                 f"range '{self.name}'",

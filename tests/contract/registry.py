@@ -75,7 +75,7 @@ reason (``xfail(strict=True)``: the lead removes the mark when the branches meet
 # the command line
 
 CLAVEL = ("--clavel",)
-ORIENTATION = ("--kind", "orientation", "--n1", "6", "--n2", "12")
+ORIENTATION = ("ROBOT=gough_stewart", "--kind", "orientation", "--n1", "6", "--n2", "12")
 MAP = ("--map", "xy", "--grid", "3")
 MONTE_CARLO = ("--samples", "4")
 CATALOG = ("--catalog", "{catalog.yaml}")
@@ -367,7 +367,7 @@ CLI: list[Cli] = [
             ),
             "--payload": Arg(Real(sign="non_negative"), names=("payload",), context=SIZING),
             "--cycle-time": Arg(Real(sign="positive"), names=("cycle",), context=SIZING),
-            "--depth": Arg(Real(sign="positive"), names=("depth",), context=SIZING),
+            "--depth": Arg(Real(sign="non_negative"), names=("depth",), context=SIZING),
             "--dt": Arg(Real(sign="positive"), names=("dt",), context=SIZING),
             "--length": Arg(Real(sign="positive"), names=("length",), context=REQUIRE),
             "--actuator-stiffness": Arg(

@@ -348,8 +348,9 @@ def test_contract_plugin_named_like_an_installed_module(tmp_path):
         path = tmp_path / f"{name}.py"
         path.write_text("X = 1\n")
         refused(lambda p=path: load_plugin(str(p)), "plugin", f"{name}.py")
-        one_line(["design", "delta", "--plugin", str(path), "--range", "la=0.2:0.3",
-                  "--metric", "moving_mass", "--n", "2", "--workers", "1"], f"{name}.py")  # fmt: skip
+        argv = ["design", "delta", "--plugin", str(path), "--range", "la=0.2:0.3",
+                "--metric", "moving_mass", "--n", "2", "--workers", "1"]  # fmt: skip
+        one_line(argv, f"{name}.py")
     assert json.dumps([1]) == "[1]"  # the standard library's json still in place
 
 
