@@ -5,7 +5,12 @@ from __future__ import annotations
 
 import os
 
+import pytest
 from hypothesis import HealthCheck, Phase, settings
+
+SHRINK = os.environ.get("PKDYN_CONTRACT_SHRINK", "1") != "0"
+"""``PKDYN_CONTRACT_SHRINK=0``: report the first failing example as found (faster while
+fixing)."""
 
 settings.register_profile(
     "contract",
@@ -15,11 +20,9 @@ settings.register_profile(
     max_examples=int(os.environ.get("PKDYN_CONTRACT_EXAMPLES", "3")),
     print_blob=False,
     suppress_health_check=list(HealthCheck),
-    # PKDYN_CONTRACT_SHRINK=0: report the first failing example as found (faster while fixing)
-    phases=[
-        p
-        for p in Phase
-        if os.environ.get("PKDYN_CONTRACT_SHRINK", "1") != "0"
-        or p not in (Phase.shrink, Phase.explain)
-    ],
+    phases=[p for p in Phase if SHRINK or p not in (Phase.shrink, Phase.explain)],
 )
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "slow: a contract case run in real processes (seconds)")

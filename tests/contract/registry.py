@@ -31,8 +31,9 @@ from contract.kinds import (
     Real,
     Vector,
 )
+from contract.pending import PENDING_CLI
 
-__all__ = ["API", "CLI", "EXEMPT", "Api", "Cli", "Exempt", "PENDING"]
+__all__ = ["API", "CLI", "EXEMPT", "PENDING", "Api", "Cli", "Exempt", "pending"]
 
 
 DEP1_STEP = "fixed on branch dep1 (ForwardDynamics.step's inputs are pkdyn errors)"
@@ -66,7 +67,18 @@ PENDING: dict[str, str] = {
         for cls in ("trailing_slash", "onto_input")
     },
     "pkdyn.design.run_study|out|trailing_slash": CLI_PATHS,
+    **PENDING_CLI,
 }
+
+
+def pending(tid: str) -> str | None:
+    """The reason a case is expected to fail on this branch (``PENDING``: an exact test id,
+    or a prefix ending with ``|``), else ``None``."""
+    if tid in PENDING:
+        return PENDING[tid]
+    return next((r for k, r in PENDING.items() if k.endswith("|") and tid.startswith(k)), None)
+
+
 """Cases known to fail on this branch because their fix is on another: test id prefix ->
 reason (``xfail(strict=True)``: the lead removes the mark when the branches meet)."""
 

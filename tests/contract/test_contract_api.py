@@ -19,8 +19,8 @@ import pytest
 from hypothesis import given, settings
 
 from contract.contract import check_api, file_changes, snapshot, temporaries
-from contract.drive import scratch
-from contract.registry import API, PENDING
+from contract.drive import PENDING_SETTINGS, scratch
+from contract.registry import API, pending
 
 settings.load_profile("contract")
 
@@ -78,7 +78,7 @@ def _cases() -> list:
                     continue
                 tid = f"{entry.name}|{arg_name}|{cls}"
                 m = list(marks)
-                reason = next((r for k, r in PENDING.items() if tid.startswith(k)), None)
+                reason = pending(tid)
                 if reason:
                     m.append(pytest.mark.xfail(strict=True, reason=reason))
                 out.append(pytest.param(entry, arg_name, cls, id=tid, marks=m))
@@ -119,6 +119,7 @@ def test_contract_api(entry, arg_name, cls):
         _run(entry, None, Case("baseline", "", lambda s: None, refuse=False))
         return
 
+    @PENDING_SETTINGS(pending(f"{entry.name}|{arg_name}|{cls}"))
     @given(case=entry.args[arg_name].kind.api()[cls])
     def run(case):
         _run(entry, arg_name, case)

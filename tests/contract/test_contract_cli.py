@@ -12,8 +12,8 @@ import pytest
 from hypothesis import given, settings
 
 from contract.contract import check_cli, file_changes, run_cli, same_result, snapshot, temporaries
-from contract.drive import parser_of, resolve, scratch, without
-from contract.registry import CLI, PENDING
+from contract.drive import PENDING_SETTINGS, parser_of, resolve, scratch, without
+from contract.registry import CLI, pending
 
 settings.load_profile("contract")
 
@@ -27,7 +27,7 @@ def _cases() -> list:
                     continue
                 tid = f"{entry.name.replace(' ', '.')}|{option}|{cls}"
                 marks = [pytest.mark.slow] if entry.slow else []
-                reason = next((r for k, r in PENDING.items() if tid.startswith(k)), None)
+                reason = pending(tid)
                 if reason:
                     marks.append(pytest.mark.xfail(strict=True, reason=reason))
                 out.append(pytest.param(entry, option, cls, id=tid, marks=marks))
@@ -59,6 +59,7 @@ def test_contract_cli(entry, option, cls):
     arg = entry.options[option]
     names = arg.names or (option, option.lstrip("-"), option.lstrip("-").replace("-", "_"))
 
+    @PENDING_SETTINGS(pending(f"{entry.name.replace(' ', '.')}|{option}|{cls}"))
     @given(case=arg.kind.cli()[cls])
     def run(case):
         with scratch(entry.inputs, entry.robot) as s:

@@ -15,12 +15,12 @@ import pytest
 from contract.contract import check_cli, file_changes, snapshot
 from contract.drive import resolve, scratch
 from contract.kinds import PathIn, PathOut
-from contract.registry import CLI, PENDING
+from contract.registry import CLI, pending
 from contract.test_contract_cli import argv_for
 
 
 def _pending(tid: str) -> list:
-    reason = next((r for k, r in PENDING.items() if tid.startswith(k)), None)
+    reason = pending(tid)
     return [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
 
 
