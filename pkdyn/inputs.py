@@ -231,7 +231,7 @@ def vector(
             infinite or absurd values.
 
     """
-    if isinstance(value, str | bytes | dict) or is_complex(value):
+    if isinstance(value, str | bytes | dict | bool) or is_complex(value):
         raise InvalidInputError(name, f"expected numbers, got {value!r:.60}")
     try:
         arr = np.array(value, dtype=float).reshape(-1)

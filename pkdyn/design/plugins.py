@@ -127,6 +127,12 @@ def _check_unshadowed(path: Path, name: str) -> None:
     """
     loaded = sys.modules.get(name)
     origin = getattr(loaded, "__file__", None) if loaded is not None else None
+    if name in _LOADED and origin and Path(origin).resolve() != path.resolve():
+        raise InvalidInputError(
+            "--plugin",
+            f"'{path}': a plug-in named '{name}' is already loaded from {origin}; rename one "
+            "of the files",
+        )
     if loaded is None:
         try:
             spec = importlib.util.find_spec(name)

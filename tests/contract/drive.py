@@ -7,6 +7,7 @@ import contextlib
 import re
 import shutil
 import tempfile
+import uuid
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,8 @@ def scratch(
     try:
         paths = {}
         for key, make in inputs.items():
-            p = d / key
+            # (a plug-in is imported under its file's name, once per process: one name each)
+            p = d / (f"{key[:-3]}_{uuid.uuid4().hex[:8]}.py" if key.endswith(".py") else key)
             p.write_bytes(make())
             paths[key] = p
         yield Scratch(d, fx.robot(family, geometry) if family else None, paths)
