@@ -174,7 +174,7 @@ def flag(name: str, value: Any) -> bool:
     raise InvalidInputError(name, f"expected True or False, got {value!r} ({type(value).__name__})")
 
 
-def instance(name: str, value: Any, kind: type | tuple[type, ...], what: str) -> Any:
+def instance(name: str, value: Any, kind: Any, what: str) -> Any:
     """``value`` if it is an instance of ``kind``.
 
     Args:

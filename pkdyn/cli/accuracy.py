@@ -50,6 +50,8 @@ def _cmd_accuracy(args: argparse.Namespace) -> None:
         raise InvalidInputError("--plot", "plots a map: give --map xy|xz|yz")
     from pkdyn.inputs import vector
 
+    if not 1 <= len(args.tolerance) <= 3:
+        raise InvalidInputError("--tolerance", "give LENGTH [ANGLE [GAIN]] >= 0 (m, rad, -)")
     tolerance = vector("--tolerance", args.tolerance, (1, 2, 3), "m, rad, -")
     if np.any(tolerance < 0.0):
         raise InvalidInputError("--tolerance", "give LENGTH [ANGLE [GAIN]] >= 0 (m, rad, -)")

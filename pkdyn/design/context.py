@@ -90,13 +90,13 @@ class Conditions:
             "trajectory_options",
             fields.mapping("trajectory_options", self.trajectory_options),
         )
-        from pkdyn.dynamics.trajectory import TRAJECTORIES, _check_named
+        from pkdyn.dynamics.trajectory import TRAJECTORIES, _check_named, _number
 
         set_(self, "trajectory", fields.text("trajectory", self.trajectory, TRAJECTORIES))
         _check_named(self.trajectory, self.trajectory_options)
-        for key, value in self.trajectory_options.items():
+        for key in self.trajectory_options:
             if key not in _TEXT_OPTIONS:  # (their ranges: checked when the cycle is built)
-                fields.number(f"trajectory_options {key}", value)
+                _number(self.trajectory, dict(self.trajectory_options), key, 0.0)
         set_(self, "payload", fields.number("payload", self.payload, 0.0, unit="kg"))
         if self.length is not None:
             set_(self, "length", fields.number("length", self.length, 0.0, open_low=True, unit="m"))

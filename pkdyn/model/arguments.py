@@ -8,8 +8,8 @@ name and annotation, so that no bad value reaches numpy, Pinocchio or a solver:
   :class:`~pkdyn.model.robot.Robot` (annotated with other types too, ``Robot | ElasticModel``:
   the sizes below are checked when it is a Robot, the rest is the body's);
 - ``q``, ``q0``, ``q_init``, ``q_ref``: a configuration of the robot (nq,), finite numbers;
-- ``v``, ``v0``: a velocity (nv,); ``qa``: actuator coordinates (n_a,) (for a function whose
-  ``qa`` holds one configuration; rows of them are the function's own to check);
+- ``v``, ``v0``: a velocity (nv,) (actuator coordinates ``qa`` are the functions' own to
+  check: their reach depends on the robot's scale);
 - ``tol`` and the arguments named ``*_tol``: a finite number > 0;
 - every argument annotated ``bool`` (or ``bool | None``): ``True`` or ``False`` (or
   ``None``) — a string ``"no"`` would otherwise count as true.
@@ -100,8 +100,6 @@ def public(fn: F) -> F:
             for name in _VELOCITIES:
                 if a.get(name) is not None:
                     a[name] = vector(name, a[name], robot.nv, "rad/s or m/s")
-            if a.get("qa") is not None and np.ndim(_shape_probe(a["qa"])) <= 1:
-                a["qa"] = vector("qa", a["qa"], len(robot.actuators), "rad or m")
         for name in tols:
             if a.get(name) is not None:
                 a[name] = positive(name, a[name])
@@ -111,11 +109,3 @@ def public(fn: F) -> F:
         return fn(*bound.args, **bound.kwargs)
 
     return wrapper  # type: ignore[return-value]
-
-
-def _shape_probe(value: Any) -> Any:
-    """``value`` as an array when it is one (for its number of dimensions), else a scalar."""
-    try:
-        return np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        return 0.0

@@ -262,9 +262,9 @@ def mode_trajectory(
     instance("em", em, ElasticModel, "an ElasticModel (pkdyn.precision.elastic_model)")
     instance("result", result, Modes, "Modes (pkdyn.precision.modes)")
     n = result.frequencies.size
-    index = count("index", index, 0, max(n - 1, 0))
-    if n == 0:
-        raise InvalidInputError("index", "these results hold no mode")
+    index = count("index", index, 0)
+    if not index < n:
+        raise InvalidInputError("mode", f"{index + 1} is not a mode number: 1 to {n}")
     period = positive("period", period, "s")
     cycles = count("cycles", cycles, 1, 1000)
     samples = count("samples", samples, 2, 10_000)
