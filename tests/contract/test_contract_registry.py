@@ -141,3 +141,30 @@ def test_nothing_is_registered_twice():
     names = [e.name for e in API] + [e.name for e in EXEMPT]
     twice = sorted({n for n in names if names.count(n) > 1})
     assert not twice, f"registered twice: {twice}"
+
+
+def _aliases() -> list:
+    from pkdyn.cli import commands
+
+    out = []
+    for c in commands():
+        for alias in c.aliases:
+            entry = next((e for e in CLI if e.words == c.words), None)
+            out.append(pytest.param(entry, alias, id=f"{' '.join(c.words)}={alias}"))
+    return out
+
+
+@pytest.mark.parametrize("entry, alias", _aliases())
+def test_every_alias_runs_its_command(entry, alias):
+    """An alias (``fk``, ``ik``) is the registered command: the same baseline, the same output."""
+    from contract.contract import run_cli
+    from contract.drive import resolve, scratch
+
+    assert entry is not None, "the command of this alias is not registered"
+    with scratch(entry.inputs, entry.robot) as s:
+        base = [resolve(t, s) for t in entry.baseline]
+        words = list(entry.words)
+        plain = run_cli([*words, *base], entry.timeout)
+        other = run_cli([*words[:-1], alias, *base], entry.timeout)
+    assert plain.code == other.code == 0, (plain.err, other.err)
+    assert plain.out == other.out
