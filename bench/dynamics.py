@@ -263,7 +263,7 @@ def coupled_rows(n: int = 1000) -> list[Row]:
     model = robot.model
     q, v = consistent_state(robot)
     zero = np.zeros(model.nv)
-    fd = ForwardDynamics(model, robot.constraint_models, couplings=robot.closure_set.couplings)
+    fd = ForwardDynamics(model, robot.constraints)
     rigid = ForwardDynamics(model, robot.constraint_models)
     data, cms, cds, prox = rigid.data, rigid.constraint_models, rigid.constraint_datas, rigid.prox
 

@@ -22,8 +22,7 @@ from timing import Row, median_us, paired, print_table, us
 
 import pkdyn
 from pkdyn.precision import elastic_model, stiffness
-from pkdyn.precision.condensation import translational
-from pkdyn.precision.maps import pose_figures
+from pkdyn.precision.maps import pose_figures, translational
 from pkdyn.precision.modes import modes
 
 N_MAP = 100_000

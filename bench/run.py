@@ -11,9 +11,10 @@ public models), ``cli_latency`` (command start-up against the bare imports), ``i
 (a Delta identified from 1e5 samples) and ``design``
 (design-study throughput and a 10,000-design study: several minutes; ``PKDYN_BENCH_DESIGNS``
 makes it smaller), ``calibration`` (geometric calibration of a Gough-Stewart from 100 poses, a
-Delta from 40, pose sensitivities). Figures are medians of repeated runs; ratios are medians of
-ratios measured on alternating batches (CPU time of the process), so that they hold under a
-varying load.
+Delta from 40, pose sensitivities), ``vibration`` (the modal method's cycles per second, the
+multibody simulation, the settling search). Figures are medians of repeated runs; ratios are
+medians of ratios measured on alternating batches (CPU time of the process), so that they hold
+under a varying load.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ MODULES = (
     ("workspace", "Workspace throughput"),
     ("actuation_map", "Closed-loop legs (actuation maps) and loading public models"),
     ("precision", "Precision: stiffness and frequency maps, closed forms and general path"),
+    ("vibration", "Vibration along a motion: the modal method against the multibody simulation"),
     ("design", "Design studies: designs/s on 1 and 2 workers, a 10,000-design Delta study"),
     ("sizing", "Sizing: fastest cycle (toppra) and motor selection"),
     (

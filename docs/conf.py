@@ -34,6 +34,8 @@ extensions = [
 
 # MyST: anchors for the headings of the guide (links such as `loading.md#tolerance-and-home`)
 myst_heading_anchors = 3
+# no typographic quotes and dashes: "--pose" must stay two hyphens (copied into a shell)
+smartquotes = False
 
 # API reference: one page per public module, members from __all__, Google docstrings
 autosummary_generate = True

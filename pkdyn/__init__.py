@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 from pkdyn import library as _library  # noqa: F401  (registers the families with the loader)
 from pkdyn.exceptions import (
     AssemblyError,
+    CalibrationError,
     CatalogError,
     DescriptionError,
     InfeasibleEffortError,
@@ -86,6 +87,7 @@ def __dir__() -> list[str]:
 __all__ = [
     "ActuationMap",
     "AssemblyError",
+    "CalibrationError",
     "CatalogError",
     "DescriptionError",
     "GeometryResult",

@@ -28,6 +28,7 @@ __all__ = [
     "StudyError",
     "CatalogError",
     "NoFeasibleDriveError",
+    "CalibrationError",
 ]
 
 
@@ -303,4 +304,30 @@ class NoFeasibleDriveError(PkdynError):
         super().__init__(
             f"no feasible motor x gearbox pair for actuator '{actuator}'; closest: "
             + "; ".join(closest)
+        )
+
+
+class CalibrationError(PkdynError):
+    """A calibration that should not be trusted (:mod:`pkdyn.calibration.trust`).
+
+    It did not converge, left residuals beyond a multiple of the noise, or made corrections
+    beyond a multiple of the tolerances; the message names the reasons and the likely cause
+    (units, axis order, orientation convention, another robot).
+
+    Attributes:
+        reasons: Why, one phrase each.
+        cause: The likely cause, or ``""``.
+        result: The calibration itself (:class:`pkdyn.calibration.CalibrationResult`), to
+            inspect or to keep anyway.
+
+    """
+
+    def __init__(self, robot: str, reasons: list[str], cause: str, result: Any = None) -> None:
+        self.reasons = list(reasons)
+        self.cause = cause
+        self.result = result
+        super().__init__(
+            f"calibration of {robot} not trusted: {'; '.join(reasons)}"
+            + (f"; likely cause: {cause}" if cause else "")
+            + "; nothing is written unless it is accepted (--accept, accept=True)"
         )

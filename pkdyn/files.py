@@ -16,25 +16,56 @@ and every output path is checked by :func:`output_target` (also before any work,
   refused;
 - a name longer than the file system allows (255 bytes on most) is refused with its length.
 
-**Inputs** that pkdyn reads whole (study files, catalogs) go through :func:`read_text`: a
-regular file (or a link to one) no larger than a limit given by the caller; a FIFO or a device
-(``/dev/zero``) is refused before it is opened, so reading never blocks or runs away.
+**Inputs** are checked by :func:`input_file` before they are opened: a regular file (or a link
+to one) no larger than a limit given by the caller; a FIFO, a device (``/dev/zero``) or a
+directory is refused, so reading never blocks or runs away. :func:`read_text` and
+:func:`read_bytes` read through it.
+
+**Inputs are never outputs.** :func:`resolve_paths` takes every input and output path of a
+command (the command line declares them: :mod:`pkdyn.cli._paths`) and, before any work, refuses
+an output that is the same file as an input or as another output: by device and inode for
+existing files (a link, a hard link or a relative path does not slip through), by resolved path
+for new ones. A trailing slash means a directory: ``-o old.urdf/`` where ``old.urdf`` is a file
+is refused, and so is ``-o newdir/`` (never a file called ``newdir``) unless the output is a
+directory. While :func:`recording_reads` is active (the command line runs every command in it),
+every file read through :func:`input_file` is remembered, and :func:`output_target` refuses to
+write onto one of them: the includes, sidecars and catalogs a command discovers while it works
+are protected too.
 """
 
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import errno
 import os
 import stat
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
-from pkdyn.exceptions import OutputError, PkdynError
+from pkdyn.exceptions import InvalidInputError, OutputError, PkdynError
 
-__all__ = ["atomic_path", "atomic_write", "check_writable", "output_target", "read_text", "shown"]
+__all__ = [
+    "PathArg",
+    "atomic_path",
+    "atomic_write",
+    "check_writable",
+    "input_file",
+    "output_target",
+    "read_bytes",
+    "read_text",
+    "recording_reads",
+    "resolve_paths",
+    "shown",
+]
+
+_READS: contextvars.ContextVar[dict[tuple[int, int], str] | None] = contextvars.ContextVar(
+    "pkdyn_reads", default=None
+)
+"""The files read by the running command (device, inode) -> path, while recorded."""
 
 _KIND = {
     stat.S_IFIFO: "a FIFO (named pipe)",
@@ -45,7 +76,7 @@ _KIND = {
 }
 
 
-def shown(path: str | os.PathLike[str], width: int = 80) -> str:
+def shown(path: str | os.PathLike[str], width: int = 240) -> str:
     """A path for a message: shortened in the middle when longer than ``width`` characters."""
     text = str(path)
     if len(text) <= width:
@@ -105,6 +136,22 @@ def output_target(path: str | os.PathLike[str], option: str = "") -> Path:
     p = Path(path)
     where = f"{option}: " if option else ""
     name = shown(path)
+    if _trailing_slash(path):
+        if p.is_dir():
+            raise OutputError(
+                name, f"{where}a directory, not a regular file; pkdyn writes regular files only"
+            )
+        if p.exists():
+            raise OutputError(
+                name,
+                f"{where}a trailing slash names a directory, but '{shown(p)}' is a file; "
+                "drop the slash to write the file",
+            )
+        raise OutputError(
+            name,
+            f"{where}names a directory (trailing slash); this output is a file: name one "
+            "(no file named after the directory is written)",
+        )
     if p.name in ("", ".", ".."):
         raise OutputError(name, f"{where}names a directory, not a file")
     parent = p.parent if str(p.parent) else Path(".")
@@ -151,7 +198,115 @@ def output_target(path: str | os.PathLike[str], option: str = "") -> Path:
         raise OutputError(name, f"{where}directory '{shown(directory)}' does not exist")
     if not os.access(directory, os.W_OK):
         raise OutputError(name, f"{where}directory '{shown(directory)}' is not writable")
+    reads = _READS.get()
+    if reads and st is not None:
+        key = _identity(target)
+        if key is not None and key in reads:
+            raise OutputError(
+                name,
+                f"{where}is the file '{shown(reads[key])}' this command read; an output never "
+                "replaces an input: choose another name",
+            )
     return target
+
+
+def _trailing_slash(path: str | os.PathLike[str]) -> bool:
+    text = os.fspath(path)
+    return isinstance(text, str) and len(text) > 1 and text.endswith(("/", os.sep))
+
+
+def _identity(path: str | os.PathLike[str]) -> tuple[int, int] | None:
+    """(device, inode) of the file ``path`` leads to, or ``None`` when there is none."""
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    return (st.st_dev, st.st_ino)
+
+
+@contextlib.contextmanager
+def recording_reads() -> Iterator[None]:
+    """Remember every file read through :func:`input_file` meanwhile; refuse outputs onto them.
+
+    The command line runs each command inside it (module docstring).
+    """
+    token = _READS.set({})
+    try:
+        yield
+    finally:
+        _READS.reset(token)
+
+
+def input_file(
+    path: str | os.PathLike[str],
+    limit: int,
+    error: Callable[[str], PkdynError],
+    record: bool = True,
+) -> os.stat_result:
+    """Check an input before it is opened: a regular file of at most ``limit`` bytes.
+
+    A FIFO, a device or a directory (or a symbolic link to one) is refused before it is
+    opened: opening a FIFO waits for a writer, ``/dev/zero`` never ends. The file is
+    remembered while :func:`recording_reads` is active.
+
+    Args:
+        path: The file (a symbolic link to a regular file is followed).
+        limit: Largest size accepted [bytes].
+        error: Makes the exception to raise from a message (the caller's type, naming the file).
+        record: Remember it as an input of the command (``False``: a command's own earlier
+            output read back to resume, which it rewrites).
+
+    Returns:
+        Its ``os.stat`` result.
+
+    Raises:
+        PkdynError: From ``error``: missing, unreadable, not a regular file, or too large.
+
+    """
+    try:
+        st = os.stat(path)
+    except OSError as err:
+        raise error(f"cannot be read ({err.strerror or err})") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise error(f"cannot be read: {_kind(st.st_mode)}, not a regular file")
+    if st.st_size > limit:
+        raise error(f"is {st.st_size / 1e6:.3g} MB, more than the {limit / 1e6:.3g} MB accepted")
+    reads = _READS.get()
+    if reads is not None and record:
+        reads[(st.st_dev, st.st_ino)] = os.fspath(path)
+    return st
+
+
+def read_bytes(
+    path: str | os.PathLike[str],
+    limit: int,
+    error: Callable[[str], PkdynError],
+    record: bool = True,
+) -> bytes:
+    """The bytes of an input file, refused unless a regular file of at most ``limit`` bytes.
+
+    Args:
+        path: The file (a symbolic link to a regular file is followed).
+        limit: Largest size accepted [bytes].
+        error: Makes the exception to raise from a message (the caller's type, naming the file).
+        record: As for :func:`input_file`.
+
+    Raises:
+        PkdynError: From ``error`` (:func:`input_file`), or the file grew past ``limit``.
+
+    """
+    input_file(path, limit, error, record)
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        with os.fdopen(fd, "rb") as fh:
+            if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):  # replaced since the check
+                raise error("cannot be read: not a regular file")
+            data = fh.read(limit + 1)
+    except OSError as err:
+        raise error(f"cannot be read ({err.strerror or err})") from None
+    if len(data) > limit:
+        raise error(f"is more than the {limit / 1e6:.3g} MB accepted")
+    return data
 
 
 def read_text(
@@ -159,6 +314,7 @@ def read_text(
     limit: int,
     error: Callable[[str], PkdynError],
     encoding: str = "utf-8",
+    record: bool = True,
 ) -> str:
     """The text of an input file, refused unless a regular file of at most ``limit`` bytes.
 
@@ -170,6 +326,7 @@ def read_text(
         limit: Largest size accepted [bytes].
         error: Makes the exception to raise from a message (the caller's type, naming the file).
         encoding: Text encoding.
+        record: As for :func:`input_file`.
 
     Raises:
         PkdynError: From ``error``: missing, unreadable, not a regular file, too large, or not
@@ -178,24 +335,7 @@ def read_text(
     """
     if not isinstance(path, str | os.PathLike):  # (an int would be a file descriptor)
         raise error(f"expected a file name (str or Path), got {type(path).__name__}")
-    try:
-        st = os.stat(path)
-    except OSError as err:
-        raise error(f"cannot be read ({err.strerror or err})") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise error(f"cannot be read: {_kind(st.st_mode)}, not a regular file")
-    if st.st_size > limit:
-        raise error(f"is {st.st_size / 1e6:.3g} MB, more than the {limit / 1e6:.3g} MB accepted")
-    try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-        with os.fdopen(fd, "rb") as fh:
-            if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):  # replaced since the check
-                raise error("cannot be read: not a regular file")
-            data = fh.read(limit + 1)
-    except OSError as err:
-        raise error(f"cannot be read ({err.strerror or err})") from None
-    if len(data) > limit:
-        raise error(f"is more than the {limit / 1e6:.3g} MB accepted")
+    data = read_bytes(path, limit, error, record)
     try:
         return data.decode(encoding)
     except UnicodeDecodeError as err:
@@ -312,3 +452,85 @@ def atomic_write(
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
+
+
+@dataclass(frozen=True)
+class PathArg:
+    """One input or output path of a command, as given.
+
+    Attributes:
+        option: The option or argument that names it, for messages (``--csv``, ``ROBOT``).
+        path: The path as given.
+        directory: An output that is a directory the command writes into (a trailing slash
+            is then expected, not refused).
+
+    """
+
+    option: str
+    path: str
+    directory: bool = False
+
+
+def _keys(path: str) -> set[Any]:
+    """What identifies a file: its (device, inode) when it exists, and its resolved path."""
+    keys: set[Any] = {os.path.realpath(path)}
+    ident = _identity(path)
+    if ident is not None:
+        keys.add(ident)
+    return keys
+
+
+def _input_error(arg: PathArg) -> Callable[[str], PkdynError]:
+    return lambda msg: InvalidInputError(arg.option, f"'{shown(arg.path)}' {msg}")
+
+
+def resolve_paths(
+    inputs: Sequence[PathArg],
+    outputs: Sequence[PathArg],
+    limit: int,
+) -> None:
+    """Check every input and output path of a command together, before any work.
+
+    - every input is a regular file (or a link to one) of at most ``limit`` bytes
+      (:func:`input_file`): no FIFO, device or directory;
+    - every output is one pkdyn may write (:func:`output_target`; a trailing slash names a
+      directory: refused unless the output is one);
+    - no output is the same file as an input or as another output: compared by device and
+      inode where the file exists (links, hard links, ``./x`` and ``x`` alike) and by
+      resolved path where it does not.
+
+    Args:
+        inputs: The command's input files.
+        outputs: The command's output files (a command writing several files from one option,
+            such as a study's table, lists each).
+        limit: Largest input accepted [bytes].
+
+    Raises:
+        InvalidInputError: An input that is not a regular file, is missing or too large.
+        OutputError: An output that cannot be written, or that is an input or another output.
+
+    """
+    seen: list[tuple[PathArg, set[Any], str]] = []
+    for arg in inputs:
+        input_file(arg.path, limit, _input_error(arg))
+        seen.append((arg, _keys(arg.path), "input"))
+    for arg in outputs:
+        keys = _keys(arg.path)
+        for other, other_keys, kind in seen:
+            if keys & other_keys:
+                same = "" if other.path == arg.path else f" ('{shown(other.path)}')"
+                raise OutputError(
+                    shown(arg.path),
+                    f"{arg.option}: is the same file as the {kind} {other.option}{same}; "
+                    f"an output never replaces {'an input' if kind == 'input' else 'another'}"
+                    ": choose another name",
+                )
+        if arg.directory and _trailing_slash(arg.path):
+            if os.path.exists(arg.path) and not os.path.isdir(arg.path):
+                raise OutputError(
+                    shown(arg.path),
+                    f"{arg.option}: a trailing slash names a directory, but it is a file",
+                )
+        else:
+            output_target(arg.path, arg.option)
+        seen.append((arg, keys, "output"))

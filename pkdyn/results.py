@@ -18,11 +18,12 @@ from __future__ import annotations
 
 import importlib
 import math
+import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["Result", "jsonable", "plotter_for", "register_plot"]
+__all__ = ["Result", "deprecated", "deprecated_alias", "jsonable", "plotter_for", "register_plot"]
 
 _PLOTTERS: dict[type, Callable[..., Any]] = {}
 
@@ -83,7 +84,7 @@ def jsonable(value: Any) -> Any:
     if isinstance(value, int):
         return int(value)
     if isinstance(value, float):
-        return value if math.isfinite(value) else None
+        return value + 0.0 if math.isfinite(value) else None  # (+ 0.0: no negative zero)
     if isinstance(value, (list, tuple)):
         return [jsonable(v) for v in value]
     raise TypeError(f"{type(value).__name__} is not a JSON value")
@@ -119,3 +120,39 @@ class Result:
         if fn is None:
             raise NotImplementedError(f"{type(self).__name__} has no plot")
         return fn(self, path=path, **options)
+
+
+def deprecated(old: str, new: str) -> None:
+    """Warn (``DeprecationWarning``) that ``old`` is kept for one release and ``new`` replaces it.
+
+    Args:
+        old: The old spelling (``CalibrationResult.as_dict``).
+        new: What to use instead (``to_json()``).
+
+    """
+    warnings.warn(
+        f"{old} is deprecated and will be removed in the next release: use {new}",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+
+
+def deprecated_alias(old: str, new: str) -> Any:
+    """A method ``old`` that warns (``DeprecationWarning``) and calls ``new``, for one release.
+
+    ``as_json = deprecated_alias("as_json", "to_json")`` in a class body keeps the old
+    spelling working while every caller moves to the one of the result protocol.
+    """
+
+    def alias(self: Any, *args: Any, **kwargs: Any) -> Any:
+        warnings.warn(
+            f"{type(self).__name__}.{old}() is deprecated and will be removed in the next "
+            f"release; use {new}()",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return getattr(self, new)(*args, **kwargs)
+
+    alias.__name__ = old
+    alias.__doc__ = f"Deprecated alias of :meth:`{new}` (kept for one release)."
+    return alias

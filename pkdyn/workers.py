@@ -1,13 +1,14 @@
 """Local worker processes: how many, and never outliving the process that started them.
 
-pkdyn fans work out over local processes in two places (design studies,
-:mod:`pkdyn.design.executors`; split workspace grids, :mod:`pkdyn.workspace.numeric`). Both
-start their workers with :func:`worker_init`, which ties each worker to its parent: on Linux the
-kernel kills it when the parent dies (``PR_SET_PDEATHSIG``), and on every platform a watchdog
-thread ends it within :data:`WATCH_PERIOD` once its parent is gone (the parent id changes when
-an orphan is adopted). A study killed with ``kill -9`` therefore leaves no worker behind. The
-workers also ignore Ctrl-C: the terminal sends SIGINT to the whole process group, and the parent
-alone reports it (one line) and stops them.
+pkdyn fans work out over local processes in three places (design studies,
+:mod:`pkdyn.design.executors`; split workspace grids, :mod:`pkdyn.workspace.numeric`; the
+samples of an identification, :mod:`pkdyn.identification.identify`, through :func:`fork_map`).
+They start their workers with :func:`worker_init`, which ties each worker to its parent: on
+Linux the kernel kills it when the parent dies (``PR_SET_PDEATHSIG``), and on every platform a
+watchdog thread ends it within :data:`WATCH_PERIOD` once its parent is gone (the parent id
+changes when an orphan is adopted). A study killed with ``kill -9`` therefore leaves no worker
+behind. The workers also ignore Ctrl-C: the terminal sends SIGINT to the whole process group,
+and the parent alone reports it (one line) and stops them.
 
 :func:`worker_count` caps a requested number of workers at what the machine and the work justify
 (the usable cores, the items to share out, the memory), saying so when it lowers a request.
@@ -21,8 +22,22 @@ import sys
 import threading
 import time
 import warnings
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
 
-__all__ = ["MEMORY_PER_WORKER", "WATCH_PERIOD", "usable_cores", "worker_count", "worker_init"]
+__all__ = [
+    "MEMORY_PER_WORKER",
+    "WATCH_PERIOD",
+    "can_fork",
+    "fork_map",
+    "usable_cores",
+    "worker_count",
+    "worker_init",
+]
+
+S = TypeVar("S")
+J = TypeVar("J")
+R = TypeVar("R")
 
 WATCH_PERIOD = 0.5
 """How often a worker checks that its parent is alive [s]."""
@@ -119,3 +134,84 @@ def worker_init(parent: int) -> None:
     if os.getppid() != parent:  # the parent died while this worker started
         os._exit(1)
     threading.Thread(target=_watch, args=(parent,), daemon=True, name="pkdyn-parent").start()
+
+
+def can_fork() -> bool:
+    """Whether worker processes can be forked here (POSIX; not on Windows)."""
+    import multiprocessing
+
+    return "fork" in multiprocessing.get_all_start_methods()
+
+
+def _run(fn: Callable[[Any, Any], Any], shared: Any, job: Any, send: Any, parent: int) -> None:
+    """A forked worker: one job, its result (or its exception) sent back through a pipe."""
+    worker_init(parent)
+    try:
+        message: tuple[str, Any] = ("ok", fn(shared, job))
+    except BaseException as err:  # noqa: BLE001 - every failure goes back to the parent
+        message = ("error", err)
+    try:
+        send.send(message)
+    except Exception:  # noqa: BLE001 - an unpicklable exception: its text instead
+        send.send(("error", RuntimeError(f"{type(message[1]).__name__}: {message[1]}")))
+    finally:
+        send.close()
+
+
+def fork_map(fn: Callable[[S, J], R], shared: S, jobs: Sequence[J]) -> list[R]:
+    """``[fn(shared, job) for job in jobs]``, each job in its own forked worker process.
+
+    The workers are forked: ``fn`` and ``shared`` (a robot, arrays of samples...) reach them as
+    this process's memory, not pickled, and no module holds them in a global; each result comes
+    back pickled through a pipe. The workers are tied to this process (:func:`worker_init`: they
+    die with it and ignore Ctrl-C); an exception raised in a worker is raised here as it was
+    (pickled), and an interruption or an error here stops every worker before it propagates.
+
+    Args:
+        fn: The work of one job: ``fn(shared, job)``; its result must pickle.
+        shared: What every job reads.
+        jobs: One item per worker process.
+
+    Returns:
+        The results, in the order of ``jobs``.
+
+    Raises:
+        RuntimeError: A worker died without a result (killed, out of memory).
+        Exception: What a worker raised.
+
+    """
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork")
+    parent = os.getpid()
+    procs, pipes = [], []
+    try:
+        for job in jobs:
+            recv, send = ctx.Pipe(duplex=False)
+            proc = ctx.Process(target=_run, args=(fn, shared, job, send, parent), daemon=True)
+            proc.start()
+            send.close()
+            procs.append(proc)
+            pipes.append(recv)
+        out: list[R] = []
+        for proc, recv in zip(procs, pipes, strict=True):
+            try:
+                status, value = recv.recv()
+            except EOFError:
+                proc.join()
+                raise RuntimeError(
+                    f"worker process {proc.pid} ended without a result (exit code "
+                    f"{proc.exitcode}: killed or out of memory)"
+                ) from None
+            if status == "error":
+                raise value
+            out.append(value)
+        return out
+    finally:
+        for proc in procs:
+            if proc.is_alive():
+                proc.kill()
+        for proc in procs:
+            proc.join()
+        for recv in pipes:
+            recv.close()

@@ -3,9 +3,11 @@
 Nothing here knows about Deltas or hexapods: inputs are a ``pin.Model``, rigid constraint models
 (3D point or 6D weld) and index sets. Depends on pinocchio, numpy (and proxsuite) only.
 
-Modules: :mod:`~solvers.closure` (closure residuals, Jacobians, drift), :mod:`~solvers.coupling`
-(scalar joint couplings: gears, mimic joints), :mod:`~solvers.energy` (kinetic energy with every
-armature), :mod:`~solvers.lm`
+Modules: :mod:`~solvers.constraints` (the constraint layer: closures and couplings, rows of named
+kinds with residual, Jacobian and drift at an explicit state), :mod:`~solvers.closure` (point, hinge
+and weld closures reduced to their independent rows), :mod:`~solvers.coupling` (joint couplings:
+linear sums, gears, cam laws, mimic joints), :mod:`~solvers.planar` (planar motion),
+:mod:`~solvers.energy` (kinetic energy with every armature), :mod:`~solvers.lm`
 (Levenberg-Marquardt on the configuration manifold), :mod:`~solvers.pose_task`,
 :mod:`~solvers.actuation` (actuation selection, drives), :mod:`~solvers.passive` (springs,
 dampers, friction), :mod:`~solvers.integrators`
@@ -18,8 +20,9 @@ stepping), :mod:`~solvers.sampled` (kinematics and closure errors of many sample
 
 from typing import TYPE_CHECKING, Any
 
-from solvers.closure import ClosureSet
-from solvers.coupling import JointCoupling
+from solvers.closure import Closure
+from solvers.constraints import ClosureSet, ConstraintSet
+from solvers.coupling import JointCoupling, LinearCoupling
 from solvers.lm import SolveResult, solve_lm
 from solvers.pose_task import FramePoseTask
 
@@ -72,7 +75,9 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "Actuation",
+    "Closure",
     "ClosureSet",
+    "ConstraintSet",
     "Drives",
     "ForwardDynamics",
     "ForwardResult",
@@ -85,6 +90,7 @@ __all__ = [
     "InverseTrajectory",
     "IntegrationError",
     "JointCoupling",
+    "LinearCoupling",
     "PassiveForces",
     "SampledKinematics",
     "SolveResult",

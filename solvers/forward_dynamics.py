@@ -30,9 +30,9 @@ of a hinge closure. On top of it:
   projection of the state onto the closures after each output step whose closure residual
   exceeds a threshold (``project_tol``, 1e-9 by default: only where the gains do not suffice):
   ``q`` by minimum-norm Gauss-Newton / Levenberg-Marquardt steps on
-  :class:`~solvers.closure.ClosureSet`, then ``v`` by the kinetic-energy-metric projection onto
-  the null space of the closure Jacobian (``v+ = argmin |v+ - v|_M  s.t.  J v+ = 0``, the
-  velocity after a perfectly inelastic impulse, which never adds energy);
+  :class:`~solvers.constraints.ConstraintSet`, then ``v`` by the kinetic-energy-metric
+  projection onto the null space of the closure Jacobian (``v+ = argmin |v+ - v|_M  s.t.
+  J v+ = 0``, the velocity after a perfectly inelastic impulse, which never adds energy);
 - passive elements (:class:`~solvers.passive.PassiveForces`): joint springs, viscous dampers,
   smooth Coulomb friction and two-frame springs, a separate generalized-force term; the
   springs' energy is recorded as ``elastic``, the dampers' and friction's as ``dissipated``;
@@ -52,7 +52,7 @@ rigid closures). Without couplings nothing changes: one call.
 Units: SI. Pinocchio's constraint forces (``data.lambda_c``, for ``J =
 pin.getConstraintsJacobian``) are, per constraint model, the force (3D) or wrench (6D) on
 ``joint1``'s body at its contact frame, expressed in that frame. The recorded
-``constraint_forces`` are converted to the convention of :class:`~solvers.closure.ClosureSet`
+``constraint_forces`` are converted to the convention of :mod:`solvers.closure`
 and of the inverse dynamics (:func:`ForwardDynamics.closure_forces`): 3D, the world-frame force
 [N] on ``joint1``'s body; 6D, the wrench [N, N m] on ``joint2``'s body in its contact frame.
 """
@@ -67,9 +67,10 @@ import pinocchio as pin
 
 from solvers import numerics
 from solvers.actuation import Actuation
-from solvers.closure import ClosureSet
+from solvers.closure import Closure
+from solvers.constraints import ConstraintSet, constraint_set
 from solvers.control_step import ProjectedEulerStep
-from solvers.coupling import JointCoupling
+from solvers.coupling import Coupling
 from solvers.energy import KineticEnergy
 from solvers.integrators import COMMUTATIVE_JOINTS, DOPRI5, RK4, Tableau
 from solvers.passive import PassiveForces
@@ -113,8 +114,10 @@ class ForwardDynamics:
 
     Args:
         model: The kinematic tree (no mimic joints: ``pin.constraintDynamics`` rejects them).
-        constraints: CONTACT_3D / CONTACT_6D rigid constraint models; copied (the Baumgarte
-            gains are set on the copies).
+        constraints: The constraint set (closures and couplings), or the closures alone
+            (:class:`~solvers.closure.Closure` or CONTACT_3D / CONTACT_6D rigid constraint
+            models); the closures' constraint models are copied (the Baumgarte gains are set
+            on the copies).
         actuation: Actuated coordinates (default: none).
         passive: Springs, dampers and friction (default: none).
         integrator: ``"dopri5"``, ``"rk4"`` or ``"euler"`` (see the module docstring).
@@ -138,8 +141,9 @@ class ForwardDynamics:
             blowing-up state would otherwise shrink the steps without end).
         max_speed: Largest joint speed [rad/s or m/s] accepted; beyond, the state is taken as
             blowing up and the run stops with :class:`IntegrationError`.
-        couplings: Scalar joint couplings (:mod:`solvers.coupling`); with any, the
-            evaluation adds their forces to the closures' (see the module docstring).
+        couplings: Joint couplings (:mod:`solvers.coupling`) when ``constraints`` are closures;
+            with any, the evaluation adds their forces to the closures' (see the module
+            docstring).
 
     Raises:
         ValueError: Unknown integrator or inconsistent sizes.
@@ -149,7 +153,7 @@ class ForwardDynamics:
     def __init__(
         self,
         model: pin.Model,
-        constraints: Sequence[pin.RigidConstraintModel],
+        constraints: ConstraintSet | Sequence[Closure | pin.RigidConstraintModel],
         actuation: Actuation | None = None,
         *,
         passive: PassiveForces | None = None,
@@ -165,7 +169,7 @@ class ForwardDynamics:
         prox_max_iter: int = 30,
         max_substeps: int = 100_000,
         max_speed: float = 1e4,
-        couplings: Sequence[JointCoupling] = (),
+        couplings: Sequence[Coupling] | ConstraintSet = (),
     ) -> None:
         if integrator not in ("rk4", "dopri5", "euler"):
             raise ValueError(f"unknown integrator {integrator!r} (rk4, dopri5 or euler)")
@@ -194,30 +198,32 @@ class ForwardDynamics:
         self._gains_step = 0.0  # the Euler step the automatic gains were set for
         gains = (2500.0, 100.0) if baumgarte is None else baumgarte
         corrector = pin.BaumgarteCorrectorParameters(float(gains[0]), float(gains[1]))
+        self.constraints = constraint_set(model, constraints, couplings)
+        cs = self.constraints
         self.constraint_models = pin.StdVec_RigidConstraintModel()
         self.constraint_datas = pin.StdVec_RigidConstraintData()
-        for cm in constraints:
-            c = pin.RigidConstraintModel(cm)
+        base = cs.closure_rows.base_models() if cs.closure_rows is not None else []
+        for c in base:
             c.setBaumgarteCorrectorParameters(corrector)
             self.constraint_models.append(c)
             self.constraint_datas.append(c.createData())
-        self.closure_set = ClosureSet(model, list(self.constraint_models), couplings)
-        self.nc = self.closure_set.nc
-        self._coupled = bool(self.closure_set.couplings)
+        self.nc = cs.n  # constraint rows: closures, then couplings
+        self._coupled = cs.nk > 0
         self._pd = (float(gains[0]), float(gains[1]))  # Baumgarte gains of the couplings
-        n_k = len(self.closure_set.couplings)
+        n_k = cs.nk
         self._C = np.zeros((n_k, model.nv))  # the couplings' Jacobian rows
         self._mu = np.zeros(n_k)  # the couplings' forces at the last evaluation
         self._probe = 1.0  # probe force [N m or N]: of the order of the couplings' forces
-        # conversion of Pinocchio's multipliers to the ClosureSet convention (see the module doc)
+        # conversion of Pinocchio's multipliers to the rows' convention (see the module doc)
         pts = [k for k, cm in enumerate(self.constraint_models) if cm.type == _POINT]
-        self._pt_rows = np.array([self.closure_set.offsets[k] for k in pts], dtype=int)
+        offsets = cs.closure_rows.base_offsets if cs.closure_rows is not None else [0]
+        self._pt_rows = np.array([offsets[k] for k in pts], dtype=int)
         self._pt_joint1 = [self.constraint_models[k].joint1_id for k in pts]
         self._pt_rot1 = np.array(
             [self.constraint_models[k].joint1_placement.rotation for k in pts]
         ).reshape(-1, 3, 3)
         self.prox = pin.ProximalSettings(prox_accuracy, prox_accuracy, prox_mu, prox_max_iter)
-        if self.closure_set.n_rigid:
+        if cs.nc:
             pin.initConstraintDynamics(
                 model, self.data, self.constraint_models, self.constraint_datas
             )
@@ -232,6 +238,11 @@ class ForwardDynamics:
         self._h_max = 0.0  # largest dopri5 substep of the current run
         self._substeps = 1  # fixed steps per output step (euler, rk4)
         self._control: ProjectedEulerStep | None = None  # the Euler control-loop step
+
+    @property
+    def closure_set(self) -> ConstraintSet:
+        """The former name of :attr:`constraints` (kept for one release)."""
+        return self.constraints
 
     def _euler_gains(self, h: float) -> None:
         """Automatic Baumgarte gains of the Euler step ``h``: critically damped at ``0.5 / h``."""
@@ -281,7 +292,7 @@ class ForwardDynamics:
 
     def _rigid(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Acceleration under the rigid closures alone (a copy); forces in ``data.lambda_c``."""
-        if self.closure_set.n_rigid:
+        if self.constraints.nc:
             return np.array(
                 pin.constraintDynamics(
                     self.model,
@@ -301,7 +312,7 @@ class ForwardDynamics:
 
         The couplings' forces are left in ``self._mu``, the rigid ones in ``data.lambda_c``.
         """
-        rows = self.closure_set.coupling_rows
+        rows = self.constraints.coupling_rows
         assert rows is not None
         C = rows.jacobian(q, self._C)
         kp, kd = self._pd
@@ -604,7 +615,7 @@ class ForwardDynamics:
             self._h_max = dt
             q, v, _, _, _ = self._advance(t, q, v, dt, tau, self._evaluate(t, q, v, tau))
         if self.project and self.nc:
-            r = self.closure_set.residual(self._kin, q)
+            r = self.constraints.residual(self._kin, q)
             if float(np.max(np.abs(r))) > self.project_tol:
                 try:
                     q, v = self.project_state(q, v)
@@ -613,7 +624,7 @@ class ForwardDynamics:
         return q, v
 
     def closure_forces(self, kin: pin.Data, lambda_c: np.ndarray) -> np.ndarray:
-        """Pinocchio's constraint forces in the :class:`~solvers.closure.ClosureSet` convention.
+        """Pinocchio's constraint forces in the convention of the rows (:mod:`solvers.closure`).
 
         3D point: ``R_c1 lambda`` (world-frame force on ``joint1``'s body); 6D weld:
         ``-lambda`` (wrench on ``joint2``'s body in its contact frame, exact at closure).
@@ -628,7 +639,7 @@ class ForwardDynamics:
 
         """
         if self._coupled:
-            n = self.closure_set.n_rigid
+            n = self.constraints.nc
             rigid = self._rigid_forces(kin, np.asarray(lambda_c, dtype=float)[:n])
             return np.concatenate([rigid, self._mu])
         return self._rigid_forces(kin, lambda_c)
@@ -664,7 +675,7 @@ class ForwardDynamics:
         aim = self.project_tol * 1e-2 if tol is None else tol
         accept = self.project_tol if tol is None else tol
         try:
-            return project_state(self.model, self._kin, self.closure_set, q, v, aim, accept)
+            return project_state(self.model, self._kin, self.constraints, q, v, aim, accept)
         except ProjectionError as err:
             raise IntegrationError(str(err), float("nan")) from None
 
@@ -752,7 +763,7 @@ class ForwardDynamics:
             t = t0 + (k + 1) * dt
             residual = None
             if self.project and self.nc and (k + 1) % self.project_every == 0:
-                residual = float(np.max(np.abs(self.closure_set.residual(self._kin, q))))
+                residual = float(np.max(np.abs(self.constraints.residual(self._kin, q))))
                 if residual > self.project_tol:
                     try:
                         q, v = self.project_state(q, v)

@@ -1,22 +1,22 @@
 """Inverse dynamics of a closed-loop mechanism: actuator efforts and closure forces.
 
 Given a state and an acceleration ``(q, v, a)`` consistent with the closures, find actuator
-efforts ``tau`` (n_a,) and closure forces ``lambda`` (nc,) with
+efforts ``tau`` (n_a,) and constraint forces ``lambda`` (n,) with
 
     M(q) a + h(q, v) = S^T tau + J^T lambda + f_ext,
 
 where ``M a + h`` comes from ``pin.rnea``, ``S`` from the :class:`~solvers.Actuation`
-selection, ``J`` is :meth:`ClosureSet.jacobian <solvers.closure.ClosureSet.jacobian>` and
+selection, ``J`` is :meth:`ConstraintSet.jacobian <solvers.constraints.ConstraintSet.jacobian>` and
 ``f_ext`` (nv,) an optional generalized external force (``J_frame^T F`` of a wrench ``F`` applied
 to the mechanism, e.g. a machining wrench or a payload's weight).
-``lambda`` is the multiplier in that convention: for a 3D point closure, the world-frame force
-[N] applied at the contact point of ``joint1``'s body (the opposite force acts on ``joint2``'s
-body); for a 6D weld, the wrench [N, N m] applied on ``joint2``'s body at its contact frame,
-expressed in that frame (the opposite on ``joint1``'s); for a joint coupling
-(:mod:`solvers.coupling`), the generalized force [N m or N] on the driven joint (the source
-receiving ``-p'`` times it). Among all multipliers the minimum-norm
-one is returned (the limit of a vanishing regularisation ``eps |lambda|^2``), which settles the
-redundant equations of hinge closures.
+``lambda`` holds the multipliers of the constraint rows (:mod:`solvers.closure`: for point
+rows the world-frame force [N] applied at the contact point of ``joint1``'s body, the opposite
+force acting on ``joint2``'s body; for a weld the wrench [N, N m] applied on ``joint2``'s body at
+its contact frame, expressed in that frame; :meth:`ConstraintSet.reactions
+<solvers.constraints.ConstraintSet.reactions>` gives one force and one moment per closure;
+:mod:`solvers.coupling`: a coupling's generalized force [N m or N]). Among all multipliers the
+minimum-norm one is returned (the limit of a vanishing regularisation ``eps |lambda|^2``), which
+settles redundant closures (an over-constrained loop).
 
 Method (null-space reduction, exact and well conditioned):
 
@@ -43,7 +43,7 @@ with one refinement step; their residual is the unreachable part of the equation
 ``tau = (b_a - J_a^T lambda) / gains``. The margins guarantee that the general method would find
 the same ranks (``J`` of full row rank, ``G`` of rank ``n_a``); otherwise, or when the equation
 cannot be satisfied or a bound is violated, the general method runs (and raises). The Jacobian
-is :class:`ClosureSet`'s (Pinocchio's C++ ``getConstraintsJacobian``).
+is :class:`~solvers.constraints.ConstraintSet`'s (Pinocchio's C++ ``getConstraintsJacobian``).
 
 The direct QP over ``(tau, lambda)`` with the full equation as its equality constraint and a
 tiny weight on ``lambda`` gives the same solution in the limit, but proxsuite does not converge
@@ -65,8 +65,9 @@ from proxsuite import proxqp
 
 from solvers import numerics
 from solvers.actuation import Actuation
-from solvers.closure import ClosureSet
-from solvers.coupling import JointCoupling
+from solvers.closure import Closure
+from solvers.constraints import ConstraintSet, constraint_set
+from solvers.coupling import Coupling
 from solvers.energy import KineticEnergy
 from solvers.sampled import SampledKinematics
 
@@ -183,7 +184,9 @@ class InverseDynamics:
 
     Args:
         model: The kinematic tree.
-        constraints: CONTACT_3D / CONTACT_6D rigid constraint models of the closures.
+        constraints: The constraint set (closures and couplings), or the closures alone
+            (:class:`~solvers.closure.Closure` or CONTACT_3D / CONTACT_6D rigid constraint
+            models).
         actuation: Actuated coordinates and gains.
         lower: Lower effort bounds (n_a,) [N m or N] (default: none).
         upper: Upper effort bounds (n_a,) [N m or N] (default: none).
@@ -196,9 +199,9 @@ class InverseDynamics:
             ``max(1, |M a + h|)``.
         eps: Absolute accuracy of the QP [N m or N].
         max_iter: Iteration cap of the QP.
-        couplings: Scalar joint couplings (:mod:`solvers.coupling`), rows of ``J`` after the
-            rigid closures; their multipliers are the generalized forces [N m or N] on the
-            driven joints.
+        couplings: Joint couplings (:mod:`solvers.coupling`) when ``constraints`` are closures:
+            rows of ``J`` after the closures; their multipliers are generalized forces
+            [N m or N] (:mod:`solvers.coupling`).
 
     Raises:
         ValueError: Inconsistent sizes or bounds.
@@ -208,7 +211,7 @@ class InverseDynamics:
     def __init__(
         self,
         model: pin.Model,
-        constraints: Sequence[pin.RigidConstraintModel],
+        constraints: ConstraintSet | Sequence[Closure | pin.RigidConstraintModel],
         actuation: Actuation,
         lower: Sequence[float] | np.ndarray | None = None,
         upper: Sequence[float] | np.ndarray | None = None,
@@ -217,12 +220,12 @@ class InverseDynamics:
         consistency_tol: float = 1e-7,
         eps: float = 1e-11,
         max_iter: int = 200,
-        couplings: Sequence[JointCoupling] = (),
+        couplings: Sequence[Coupling] | ConstraintSet = (),
     ) -> None:
         self.model = model
         self.data = model.createData()
         self._kin = model.createData()
-        self.closure_set = ClosureSet(model, list(constraints), couplings)
+        self.constraints = constraint_set(model, constraints, couplings)
         self.actuation = actuation
         n = actuation.n
         if n == 0:
@@ -254,6 +257,11 @@ class InverseDynamics:
         self._sampled: SampledKinematics | None = None
         self._kinetic = KineticEnergy(model)
 
+    @property
+    def closure_set(self) -> ConstraintSet:
+        """The former name of :attr:`constraints` (kept for one release)."""
+        return self.constraints
+
     def passive_forces(self, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
         """Generalized forces (nv,) of everything but the actuators, closures and wrenches.
 
@@ -274,8 +282,8 @@ class InverseDynamics:
         return None
 
     def _jacobian(self, q: np.ndarray) -> np.ndarray:
-        """Closure Jacobian (nc, nv) at ``q`` (:class:`ClosureSet`, Pinocchio's C++)."""
-        return self.closure_set.jacobian(self._kin, q)
+        """Constraint Jacobian (n, nv) at ``q`` (:class:`ConstraintSet`)."""
+        return self.constraints.jacobian(self._kin, q)
 
     # ------------------------------------------------------------------ one state
 
@@ -311,14 +319,14 @@ class InverseDynamics:
         f = self.passive_forces(q, v)
         if f is not None:
             b -= f
-        J = self._jacobian(q) if self.closure_set.nc else np.zeros((0, model.nv))
+        J = self._jacobian(q) if self.constraints.n else np.zeros((0, model.nv))
         return self._solve_state(b, J, sample)
 
     def _solve_state(self, b: np.ndarray, J: np.ndarray, sample: int | None) -> InverseResult:
         """:meth:`solve` given ``b = M a + h - f_ext`` (nv,) and the closure Jacobian (nc, nv)."""
         model = self.model
-        cs = self.closure_set
-        if cs.nc:
+        cs = self.constraints
+        if cs.n:
             fast = self._solve_unique(b, J)
             if fast is not None:
                 return fast
@@ -361,7 +369,7 @@ class InverseDynamics:
         else:
             tau, iterations = self._qp_solve(E, f, scale, sample)
         y = b - self.S.T @ tau
-        lam = U[:, :r] @ ((Vt[:r] @ y) / s[:r]) if r else np.zeros(cs.nc)
+        lam = U[:, :r] @ ((Vt[:r] @ y) / s[:r]) if r else np.zeros(cs.n)
         residual = float(np.max(np.abs(y - J.T @ lam), initial=0.0))
         return InverseResult(tau, lam, residual, redundancy, iterations)
 
@@ -566,7 +574,7 @@ class InverseDynamics:
                 f"{N} configurations, {v.shape[0]} velocities, {a.shape[0]} accelerations"
             )
         model = self.model
-        nv, nc = model.nv, self.closure_set.nc
+        nv, nc = model.nv, self.constraints.n
         out = InverseTrajectory(
             np.empty((N, self.actuation.n)),
             np.empty((N, nc)),
@@ -579,7 +587,7 @@ class InverseDynamics:
         frames: tuple[int, ...] = () if wrench is None else (int(wrench[0]),)
         kin = self._sampled
         if kin is None or tuple(kin._frame_slot) != frames:
-            kin = self._sampled = SampledKinematics(model, self.closure_set, frames, _BATCH)
+            kin = self._sampled = SampledKinematics(model, self.constraints, frames, _BATCH)
         for s in range(0, N, _BATCH):
             e = min(N, s + _BATCH)
             b, J = self._sample_terms(kin, q[s:e], v[s:e], a[s:e], out, s)
@@ -627,12 +635,12 @@ class InverseDynamics:
         """
         model, kd = self.model, self._kin
         n = q.shape[0]
-        nc = self.closure_set.nc
+        nc = self.constraints.n
         b = np.empty((n, model.nv))
         J = np.empty((n, nc, model.nv))
         rnea, jac = pin.rnea, pin.computeJointJacobians
         kinetic, potential = pin.computeKineticEnergy, pin.computePotentialEnergy
-        jacobian_at, capture = self.closure_set.jacobian_at, kin.capture
+        jacobian_at, capture = self.constraints.jacobian_at, kin.capture
         ke, pe = out.kinetic[s:], out.potential[s:]
         passive = self.passive_forces
         for i in range(n):
@@ -669,7 +677,7 @@ class InverseDynamics:
             return None
         i = int(hit[0])
         c = next(c for c in range(3) if bad[c][i])
-        per = self.closure_set.split(checks[c][1][i])
+        per = self.constraints.split(checks[c][1][i])
         name = max(per, key=lambda k: per[k])
         return i, checks[c][0], name, float(worst[c][i])
 
@@ -683,7 +691,7 @@ class InverseDynamics:
         n = b.shape[0]
         done = np.zeros(n, dtype=bool)
         n_p = self._vp.size
-        nc = self.closure_set.nc
+        nc = self.constraints.n
         if n == 0 or n_p == 0 or nc == 0:
             return done
         Jp, Ja = J[:, :, self._vp], J[:, :, self._va]

@@ -72,7 +72,7 @@ def solve_lm(
     With ``residual`` and ``jacobian``, trial steps evaluate only the residual and the Jacobian
     is evaluated at accepted points that have not converged yet, always right after the
     residual at the same configuration (so ``jacobian`` may reuse what ``residual`` computed,
-    e.g. :meth:`solvers.ClosureSet.jacobian_after_residual`). With ``residual_and_jacobian``
+    e.g. :meth:`solvers.ConstraintSet.jacobian_after_residual`). With ``residual_and_jacobian``
     both come from one evaluation at every trial point (cheaper when a residual costs nearly as
     much as both, as with Pinocchio's C++ constraint Jacobian: one evaluation per iteration when
     the steps are accepted, the usual case near a solution).

@@ -1,7 +1,7 @@
 """Projection of a state onto the closures: ``q`` by Gauss-Newton, ``v`` in the mass metric.
 
 ``q`` is moved by minimum-norm Gauss-Newton / Levenberg-Marquardt steps on a
-:class:`~solvers.closure.ClosureSet`; then ``v+`` minimises the kinetic energy of ``v+ - v``
+:class:`~solvers.constraints.ConstraintSet`; then ``v+`` minimises the kinetic energy of ``v+ - v``
 under ``J v+ = 0`` (the velocity after a perfectly inelastic impulse, which never adds
 energy; Euclidean norm if the mass matrix is singular).
 """
@@ -14,7 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from solvers import numerics
-from solvers.closure import ClosureSet
+from solvers.constraints import ConstraintSet
 from solvers.lm import solve_lm
 
 __all__ = ["ProjectionError", "project_state"]
@@ -27,7 +27,7 @@ class ProjectionError(RuntimeError):
 def project_state(
     model: pin.Model,
     data: pin.Data,
-    closure_set: ClosureSet,
+    closure_set: ConstraintSet,
     q: np.ndarray,
     v: np.ndarray,
     aim: float,
@@ -38,7 +38,7 @@ def project_state(
     Args:
         model: The kinematic tree.
         data: Scratch data of ``model``.
-        closure_set: The closures.
+        closure_set: The constraints (closures and couplings).
         q: Configuration (nq,).
         v: Velocity (nv,).
         aim: Closure residual the Gauss-Newton iterations aim at [m or rad].

@@ -31,8 +31,9 @@ class ForwardResult:
         v: Velocities (N, nv).
         a: Accelerations (N, nv) at the recorded states.
         tau: Actuator efforts (N, n_a) at the recorded states [N m or N].
-        constraint_forces: Closure multipliers ``lambda`` (N, nc) at the recorded states
-            [N, N m], in the convention of the inverse dynamics (see the module docstring).
+        constraint_forces: Constraint multipliers ``lambda`` (N, n) at the recorded states
+            [N, N m], in the convention of the inverse dynamics (see the module docstring):
+            the closures' rows, then the couplings'.
         closure_residual: Largest closure residual component (N,) [m or rad].
         kinetic: Kinetic energy (N,) [J].
         potential: Gravitational potential energy (N,) [J].
@@ -44,6 +45,8 @@ class ForwardResult:
         elastic: Potential energy of the springs (N,) [J] (zeros without springs).
         energy_scale: A characteristic energy of the mechanism [J] (e.g. weight x size), the
             floor of :meth:`energy_drift`'s scale (0: none).
+        coupling_residual: Largest coupling residual component (N,) [rad or m] (zeros
+            without couplings).
 
     """
 
@@ -62,10 +65,13 @@ class ForwardResult:
     extras: dict[str, float] = field(default_factory=dict)
     elastic: np.ndarray | None = None
     energy_scale: float = 0.0
+    coupling_residual: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.elastic is None:
             self.elastic = np.zeros_like(self.kinetic)
+        if self.coupling_residual is None:
+            self.coupling_residual = np.zeros_like(self.kinetic)
 
     @property
     def energy(self) -> np.ndarray:
@@ -109,6 +115,7 @@ class Recorder:
         self.tau = np.empty((n, na))
         self.lam = np.empty((n, nc))
         self.res = np.empty(n)
+        self.res_k = np.zeros(n)
         self.ke = np.empty(n)
         self.pe = np.empty(n)
         self.work = np.empty(n)
@@ -128,8 +135,9 @@ class Recorder:
     ) -> None:
         """Store one sample (``fd``: the :class:`~solvers.ForwardDynamics` recording).
 
-        ``residual``: the largest closure residual component at ``q`` when already known,
-        with the kinematics of ``q`` in ``fd._kin`` (else computed here).
+        ``residual``: the largest constraint residual component at ``q`` when already known,
+        with the kinematics of ``q`` in ``fd._kin`` (else computed here; always with couplings,
+        whose residual is recorded apart).
         """
         k = self.k
         model, kin = fd.model, fd._kin
@@ -139,8 +147,11 @@ class Recorder:
         self.a[k] = ev.a
         self.tau[k] = ev.tau
         if fd.nc:  # the residual runs the kinematics the force conversion needs
-            if residual is None:
-                residual = float(np.max(np.abs(fd.closure_set.residual(kin, q))))
+            cs = fd.constraints
+            if residual is None or cs.nk:
+                r = np.abs(cs.residual(kin, q))
+                residual = float(np.max(r[: cs.nc], initial=0.0))
+                self.res_k[k] = float(np.max(r[cs.nc :], initial=0.0))
             self.res[k] = residual
             self.lam[k] = fd.closure_forces(kin, fd.data.lambda_c)
         else:
@@ -169,4 +180,5 @@ class Recorder:
             self.work[:n],
             self.diss[:n],
             elastic=self.el[:n],
+            coupling_residual=self.res_k[:n],
         )

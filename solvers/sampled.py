@@ -16,14 +16,14 @@ which the time variation of ``J_w`` leaves out for joints such as the universal 
 ``p`` of that body moves at ``v_p = V_lin + w x p`` and accelerates (classical acceleration) at
 ``a_p = A_lin + alpha x p + w x v_p``. The gravity offset, a uniform translation acceleration of
 every body, cancels in the differences below. Per closure (conventions of
-:class:`~solvers.closure.ClosureSet`):
+:class:`~solvers.constraints.ConstraintSet`):
 
 - 3D point: residual ``p1 - p2``, velocity error ``v_p1 - v_p2 = J v`` and acceleration error
   ``a_p1 - a_p2 = J a + gamma``, world axes [m, m/s, m/s^2];
 - 6D weld: residual ``log6(c1Mc2)``; velocity and acceleration errors: the relative twist
   ``X(oMc2)^-1 (V_2 - V_1)`` and its rate ``X(oMc2)^-1 (A_2 - A_1)`` in the contact frame of
   ``joint2`` (equal to ``J v`` and ``J a + gamma`` up to the factor ``Jlog6(c1Mc2) = I + O(|r|)``;
-  the rate is exact when the relative twist vanishes, as the drift of ``ClosureSet`` is);
+  the rate is exact when the relative twist vanishes, as the drift of ``ConstraintSet`` is);
 - joint coupling (:mod:`solvers.coupling`): residual, ``J v`` and ``J a + gamma`` from the
   configurations, velocities and accelerations themselves [rad or m, per s, per s^2].
 """
@@ -35,7 +35,8 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from solvers.closure import ClosureSet
+from solvers.closure import support_mask
+from solvers.constraints import ConstraintSet
 
 __all__ = ["SampledKinematics"]
 
@@ -122,7 +123,7 @@ def _drift_model(model: pin.Model) -> pin.Model | None:
     pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
     pin.computeJointJacobiansTimeVariation(out, data2, q, v)
     for j in range(1, model.njoints):
-        A = data2.dJ @ (ClosureSet._support_mask(model, j) * v)
+        A = data2.dJ @ (support_mask(model, j) * v)
         ref = data.oMi[j].act(data.a[j]).vector
         if np.abs(A - ref).max() > _DRIFT_CHECK_TOL * max(1.0, np.abs(ref).max()):
             return None
@@ -134,7 +135,7 @@ class SampledKinematics:
 
     Args:
         model: The kinematic tree.
-        closure_set: The closures.
+        closure_set: The constraint set (closures and couplings).
         frames: Frame ids whose placement is also captured (for :meth:`frame_force`).
         size: Number of samples the buffers hold.
 
@@ -143,14 +144,17 @@ class SampledKinematics:
     def __init__(
         self,
         model: pin.Model,
-        closure_set: ClosureSet,
+        closure_set: ConstraintSet,
         frames: Sequence[int] = (),
         size: int = 256,
     ) -> None:
         self.model = model
         self.closure_set = closure_set
         self.size = int(size)
-        items = closure_set.items
+        cr = closure_set.closure_rows
+        items = cr.base_items if cr is not None else []
+        base_offsets = cr.base_offsets if cr is not None else np.zeros(1, dtype=int)
+        self.nb = int(base_offsets[-1])  # rows of the base constraint models
         used = {int(j) for it in items for j in (it[1], it[3])}
         used |= {int(model.frames[f].parentJoint) for f in frames}
         used.discard(0)
@@ -161,14 +165,14 @@ class SampledKinematics:
         self.masks = np.zeros((nj, nv))
         for s, j in enumerate(self.joints):
             if j:
-                self.masks[s] = ClosureSet._support_mask(model, j)
+                self.masks[s] = support_mask(model, j)
         self.H = np.empty((self.size, nj, 4, 4))
         self.H[:, 0] = np.eye(4)
         self.Jw = np.empty((self.size, 6, nv))
         self.acc = np.empty((self.size, nj, 6))
         self.acc[:, 0] = -model.gravity.vector  # the world's, as rnea sets it
         pts = [k for k, it in enumerate(items) if it[0]]
-        self._pt_offsets = np.array([closure_set.offsets[k] for k in pts], dtype=int)
+        self._pt_offsets = np.array([base_offsets[k] for k in pts], dtype=int)
         self._pt_slot = np.array(
             [[slot[int(items[k][1])] for k in pts], [slot[int(items[k][3])] for k in pts]],
             dtype=int,
@@ -180,7 +184,7 @@ class SampledKinematics:
         self._point_columns(nv)
         self._welds = [
             (
-                int(closure_set.offsets[k]),
+                int(base_offsets[k]),
                 slot[int(items[k][1])],
                 items[k][2].homogeneous,
                 slot[int(items[k][3])],
@@ -278,23 +282,20 @@ class SampledKinematics:
             ValueError: The closures have couplings and ``q`` or ``a`` is missing.
 
         """
-        nc = self.closure_set.nc
-        r = np.empty((n, nc))
-        ev = np.empty((n, nc))
-        ea = np.empty((n, nc))
-        if not nc:
-            return r, ev, ea
-        coupled = self.closure_set.coupling_rows
+        cs = self.closure_set
+        o = cs.nc
+        out = [np.empty((n, cs.n)) for _ in range(3)]
+        coupled = cs.coupling_rows
         if coupled is not None:
             if q is None or a is None:
                 raise ValueError("coupling rows need the configurations and accelerations")
-            o = self.closure_set.n_rigid
             qq, vv, aa = q[:n], v[:n], a[:n]
-            r[:, o:] = coupled.residual(qq)
-            ev[:, o:] = coupled.velocity_error(qq, vv)
-            ea[:, o:] = coupled.acceleration_error(qq, vv, aa)
-            if o == 0:
-                return r, ev, ea
+            out[0][:, o:] = coupled.residual(qq)
+            out[1][:, o:] = coupled.velocity_error(qq, vv)
+            out[2][:, o:] = coupled.acceleration_error(qq, vv, aa)
+        if o == 0:
+            return out[0], out[1], out[2]
+        r, ev, ea = (np.empty((n, self.nb)) for _ in range(3))
         V = self._velocities(n, v)
         A = self._accelerations(n)
         H = self.H[:n]
@@ -311,7 +312,17 @@ class SampledKinematics:
             c1Mc2 = np.linalg.solve(H[:, s1] @ M1, oMc2)
             for k in range(n):
                 r[k, o : o + 6] = pin.log6(c1Mc2[k]).vector
-        return r, ev, ea
+        for x, b in zip(out, (r, ev, ea), strict=True):
+            x[:, : cs.nc] = self._rows(b)
+        return out[0], out[1], out[2]
+
+    def _rows(self, base: np.ndarray) -> np.ndarray:
+        """The closure rows (n, nc[, nv]) of base rows (n, nb[, nv])."""
+        cr = self.closure_set.closure_rows
+        assert cr is not None
+        if cr.identity:
+            return base
+        raise NotImplementedError("reduced closure rows in sampled kinematics")
 
     def _point_sides(
         self, H: np.ndarray, V: np.ndarray, A: np.ndarray
@@ -345,15 +356,14 @@ class SampledKinematics:
             (no residual: no ``log6``); coupling rows ``-p'' v_s^2``.
 
         """
-        ea = np.empty((n, self.closure_set.nc))
-        if not ea.shape[1]:
-            return ea
-        coupled = self.closure_set.coupling_rows
+        cs = self.closure_set
+        out = np.empty((n, cs.n))
+        coupled = cs.coupling_rows
         if coupled is not None:
-            o = self.closure_set.n_rigid
-            ea[:, o:] = coupled.drift(self.Q[:n], v[:n])
-            if o == 0:
-                return ea
+            out[:, cs.nc :] = coupled.drift(self.Q[:n], v[:n])
+        if cs.nc == 0:
+            return out
+        ea = np.empty((n, self.nb))
         V = self._velocities(n, v)
         if self._drift_from_dJ:  # world accelerations d/dt(J_w) S_j v (no gravity offset)
             A = np.swapaxes((self.dJw[:n] * v[:, None, :]) @ self.masks.T, 1, 2)
@@ -365,7 +375,8 @@ class SampledKinematics:
             ea[:, self._pt_rows] = (side[0][2] - side[1][2]).reshape(n, -1)
         for o, s1, _, s2, M2 in self._welds:
             ea[:, o : o + 6] = _relative_motion(A[:, s2] - A[:, s1], H[:, s2] @ M2)
-        return ea
+        out[:, : cs.nc] = self._rows(ea)
+        return out
 
     def capture_configuration(self, k: int, q: np.ndarray) -> None:
         """Joint Jacobians and placements of sample ``k`` (one Pinocchio call, one array read).
@@ -460,7 +471,7 @@ class SampledKinematics:
         ) + Hs[..., :3, 3]
 
     def residuals_and_jacobians(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Closure residuals and Jacobians of captured samples (:class:`ClosureSet` conventions).
+        """Closure residuals and Jacobians of captured samples (:class:`ConstraintSet` conventions).
 
         Point rows: ``J = J_lin(p1) - J_lin(p2)``, the linear velocity of a point ``p`` of body
         ``j`` being ``(J_w,lin - [p]x J_w,ang) S_j v``. Weld rows:
@@ -474,22 +485,22 @@ class SampledKinematics:
             Residuals (m, nc) [m, rad] and Jacobians (m, nc, nv).
 
         """
-        m, nc, nv = rows.size, self.closure_set.nc, self.model.nv
+        cs = self.closure_set
+        m, nv, o = rows.size, self.model.nv, cs.nc
+        r_out = np.empty((m, cs.n))
+        J_out = np.empty((m, cs.n, nv))
+        coupled = cs.coupling_rows
+        if coupled is not None:
+            Q = self.Q[rows]
+            r_out[:, o:] = coupled.residual(Q)
+            Jc = J_out[:, o:]
+            Jc[:] = 0.0
+            coupled.jacobian(Q, Jc)
+        if o == 0:
+            return r_out, J_out
+        nc = self.nb
         r = np.empty((m, nc))
         J = np.empty((m, nc, nv))
-        if not nc:
-            return r, J
-        coupled = self.closure_set.coupling_rows
-        if coupled is not None:
-            o = self.closure_set.n_rigid
-            Q = self.Q[rows]
-            r[:, o:] = coupled.residual(Q)
-            Jc = J[:, o:]
-            Jc[:] = 0.0
-            Jc[:, coupled.rows, coupled.sv] = -coupled.slopes(Q)  # (then the driven joint)
-            Jc[:, coupled.rows, coupled.jv] = 1.0
-            if o == 0:
-                return r, J
         self.update_placements(rows)
         H, Jw = self.H[rows], self.Jw[rows]
         if self._pt_offsets.size:
@@ -525,7 +536,9 @@ class SampledKinematics:
                 M = pin.SE3(c1Mc2[k])
                 r[k, o : o + 6] = pin.log6(M).vector
                 J[k, o : o + 6] = pin.Jlog6(M) @ twist[k]
-        return r, J
+        r_out[:, : cs.nc] = self._rows(r)
+        J_out[:, : cs.nc] = self._rows(J)
+        return r_out, J_out
 
     def frame_force(self, n: int, frame: int, W: np.ndarray) -> np.ndarray:
         """Generalized forces (n, nv) of wrenches applied at a frame's origin.

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import pkdyn
+from pkdyn.analysis.collisions import CollisionChecker
 from pkdyn.exceptions import (
     DescriptionError,
     InvalidInputError,
@@ -71,7 +72,7 @@ def test_the_base_document_is_valid():
 BAD_DESCRIPTIONS = {
     # masses
     "negative mass": (doc(mass="-1"), "link 'arm' <mass value='-1'>"),
-    "zero mass": (doc(mass="0"), "link 'arm' <mass value='0'>"),
+    "zero mass": (doc(mass="0", inertia=("0", "0", "0")), "link 'arm' <mass value='0'>"),
     "nan mass": (doc(mass="nan"), "link 'arm' <mass> attribute value='nan'"),
     "text mass": (doc(mass="heavy"), "link 'arm' <mass> attribute value='heavy'"),
     # inertias
@@ -82,16 +83,6 @@ BAD_DESCRIPTIONS = {
     ),
     "triangle violated": (doc(inertia=("0.01", "0.01", "0.05")), "triangle inequality"),
     "text inertia": (doc(inertia=("a", "0.01", "0.01")), "<inertia> attribute ixx='a'"),
-    # geometry sizes (would silently drop the body from the collision checks)
-    "nan radius": (doc(geom='<sphere radius="nan"/>'), "<sphere> attribute radius='nan'"),
-    "inf length": (doc(geom='<cylinder radius="0.01" length="inf"/>'), "length='inf'"),
-    "negative box": (doc(geom='<box size="0.1 -0.2 0.1"/>'), "<box> attribute size="),
-    "zero radius": (doc(geom='<sphere radius="0"/>'), "<sphere> attribute radius='0'"),
-    "box two sizes": (doc(geom='<box size="0.1 0.2"/>'), "expected 3 numbers"),
-    "zero mesh scale": (
-        doc(geom='<mesh filename="x.stl" scale="0 1 1"/>'),
-        "<mesh> attribute scale='0 1 1'",
-    ),
     # joints
     "zero axis": (doc(axis="0 0 0"), "joint 'j' <axis xyz='0 0 0'>"),
     "inverted limits": (doc(limit='lower="1" upper="-1" effort="5" velocity="3"'), "lower='1'"),
@@ -138,15 +129,48 @@ def test_bad_descriptions_name_the_element(text, culprit):
     assert message.startswith("bad.urdf: ") and "\n" not in message
 
 
+MALFORMED_SHAPES = {
+    # geometry sizes: the shape is left out with a warning naming its line (as a missing mesh)
+    "nan radius": ('<sphere radius="nan"/>', "<sphere> attribute radius='nan'"),
+    "inf length": ('<cylinder radius="0.01" length="inf"/>', "length='inf'"),
+    "negative box": ('<box size="0.1 -0.2 0.1"/>', "<box> attribute size="),
+    "zero radius": ('<sphere radius="0"/>', "<sphere> attribute radius='0'"),
+    "box two sizes": ('<box size="0.1 0.2"/>', "expected 3 numbers"),
+    "zero mesh scale": ('<mesh filename="x.stl" scale="0 1 1"/>', "<mesh> attribute scale"),
+    "typo in a radius": ("<sphere radius='0.1\"'/>", "<sphere> attribute radius='0.1\"'"),
+}
+
+
+@pytest.mark.parametrize("geom, culprit", MALFORMED_SHAPES.values(), ids=list(MALFORMED_SHAPES))
+def test_malformed_shapes_are_left_out_with_a_warning_naming_them(geom, culprit):
+    """A typo in one shape costs that shape, not the robot; collision checks then say so."""
+    text = doc(geom=geom)
+    with pytest.warns(UserWarning, match="<collision> \\(line 1\\)") as caught:
+        robot = pkdyn.load_string(text, "bad.urdf", geometry=True, package_dirs=[])
+    assert any(culprit in str(w.message) for w in caught), [str(w.message) for w in caught]
+    assert len(robot.collision_model.geometryObjects) == 0
+    assert robot.dropped_collisions and "link 'arm'" in robot.dropped_collisions[0]
+    with pytest.raises(pkdyn.PkdynError, match="left out when it was loaded"):
+        CollisionChecker(robot)
+    visual = text.replace("<collision>", "<visual>").replace("</collision>", "</visual>")
+    with pytest.warns(UserWarning, match="<visual> \\(line 1\\).*visual shape is left out"):
+        robot = pkdyn.load_string(visual, "bad.urdf", geometry=True, package_dirs=[])
+    assert robot.dropped_collisions == () and len(robot.visual_model.geometryObjects) == 0
+
+
 def test_plain_urdf_keeps_zero_masses_and_warns_for_impossible_inertias():
     """ROS descriptions give massless frames mass 0 and often rounded inertias: they load."""
     text = doc(mass="0", ns="").replace("<pkdyn:", "<x_").replace("</pkdyn:", "</x_")
-    robot = pkdyn.load_string(text, "plain.urdf", geometry=False)
+    with pytest.raises(DescriptionError, match="<x_closure name='c'> \\(line 1\\)"):
+        pkdyn.load_string(text, "plain.urdf", geometry=False)  # a loop pkdyn cannot read
+    ignore = ("x_closure", "x_platform")
+    with pytest.warns(UserWarning, match="rotational inertia and no mass.*'arm'"):
+        robot = pkdyn.load_string(text, "plain.urdf", geometry=False, ignore_elements=ignore)
     assert robot.closures == ()
     odd = doc(inertia=("0.01", "0.01", "0.05"), ns="")
     odd = odd.replace("<pkdyn:", "<x_").replace("</pkdyn:", "</x_")
     with pytest.warns(UserWarning, match="link 'arm'.*triangle inequality"):
-        pkdyn.load_string(odd, "plain.urdf", geometry=False)
+        pkdyn.load_string(odd, "plain.urdf", geometry=False, ignore_elements=ignore)
 
 
 def chain(n: int, parent=lambda i: f"l{i - 1}", jtype="revolute") -> str:

@@ -11,52 +11,20 @@ import json
 
 import numpy as np
 import pytest
-from support.urdf_edit import family_xml, load_like, where_of, with_twists
+from support.calibration_truth import draw as _draw
+from support.calibration_truth import measure as _measure
+from support.calibration_truth import readings as _readings
+from support.calibration_truth import truth_of as _truth
+from support.urdf_edit import family_xml
 
 import pkdyn
 from pkdyn.calibration import Measurements, calibrate, identifiability, observability, write_csv
-from pkdyn.calibration.identifiability import pivoted_qr
 from pkdyn.calibration.planner import plan_calibration
 from pkdyn.calibration.selection import candidate_poses, design_matrix, select_poses
-from pkdyn.calibration.writer import joint_coordinates, write_calibrated
 from pkdyn.cli import main
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.precision.parameters import family_shortcuts, placement_parameters
-
-MM, DEG = 2e-3, np.deg2rad(0.5)
-
-
-def _readings(robot, n, seed, spread=0.3):
-    """Actuator readings around home that the nominal robot assembles within its limits."""
-    rng = np.random.default_rng(seed)
-    home = robot.q_home[robot.actuated_q]
-    lo = robot.model.lowerPositionLimit[robot.actuated_q]
-    hi = robot.model.upperPositionLimit[robot.actuated_q]
-    out = []
-    while len(out) < n:
-        qa = home + spread * robot.actuator_scale * rng.uniform(-1, 1, home.size)
-        if np.any(qa < lo) or np.any(qa > hi):
-            continue
-        try:
-            pkdyn.forward_geometry(robot, qa)
-        except pkdyn.PkdynError:
-            continue
-        out.append(qa)
-    return np.array(out)
-
-
-def _measure(truth, readings, kind, sigma, rng, sigma_rot=None, gains=0.0):
-    poses = [
-        pkdyn.forward_geometry(
-            truth, (1.0 + gains) * r, q_init=truth.q_home, check_limits=False
-        ).placement
-        for r in readings
-    ]
-    m = Measurements.from_placements(readings, poses, kind)
-    m.position = m.position + rng.normal(0.0, sigma, m.position.shape)
-    if kind == "pose":
-        m.rpy = m.rpy + rng.normal(0.0, sigma_rot, m.rpy.shape)
-    return m, poses
+from solvers import numerics
 
 
 def _expected(res, p_true):
@@ -79,29 +47,6 @@ def _check_recovered(res, p_true, k=4.5):
     assert ratio.max() < k, (ratio.max(), res.model.names[est[int(np.argmax(ratio))]])
     not_est = np.setdiff1d(np.arange(res.model.size), est)
     assert np.all(res.p[not_est] == 0.0) and np.all(np.isnan(res.std[not_est]))
-
-
-def _truth(robot, model, p_true):
-    """The nominal description with every placement moved by its error, loaded from text.
-
-    ``p_true`` (errors of ``model``'s parameters) is written as ``M exp(xi)`` into the numbers
-    of the URDF; the loader builds the truth robot from that text. Gains are returned apart:
-    the truth's joint coordinate is ``(1 + gain) * reading``.
-    """
-    xml = family_xml(robot)
-    xi = model.twists(p_true)
-    twists = {where_of(pl): x for pl, x in zip(model.placements, xi, strict=True) if np.any(x)}
-    return load_like(with_twists(xml, twists), robot), model.gains(p_true)
-
-
-def _draw(model, rng, names=None):
-    """Errors within +-2 mm, +-0.5 deg (gains +-1e-3) of the named parameters (default all)."""
-    t = model.tolerances(MM, DEG, 1e-3)
-    p = rng.uniform(-1.0, 1.0, model.size) * t
-    if names is not None:
-        keep = np.array([any(n.endswith(s) for s in names) for n in model.names])
-        p = np.where(keep, p, 0.0)
-    return p
 
 
 # ---------------------------------------------------------------------------------- Delta
@@ -145,12 +90,12 @@ def test_delta_recovers_the_clavel_errors_and_reports_ra_rb(delta_case):
 def test_delta_calibrated_urdf_reproduces_the_measurements(delta_case, tmp_path):
     robot, truth, model, p_true, m, exact, res = delta_case
     path = tmp_path / "delta_calibrated.urdf"
-    write_calibrated(res, path)
+    res.write_urdf(path)
     loaded = pkdyn.load(path, geometry=False)
     assert loaded.family is None and loaded.nq == robot.nq
     err_truth, err_meas = [], []
     for r, M_true, x in zip(m.qa, exact, m.position, strict=True):
-        g = pkdyn.forward_geometry(loaded, joint_coordinates(loaded, r), check_limits=False)
+        g = pkdyn.forward_geometry(loaded, loaded.joint_coordinates(r), check_limits=False)
         err_truth.append(np.linalg.norm(g.placement.translation - M_true.translation))
         err_meas.append(np.linalg.norm(g.placement.translation - x))
     assert max(err_truth) < 2e-5  # against the noise-free truth
@@ -267,9 +212,10 @@ def test_pivoted_qr_and_combinations_on_a_known_matrix():
     W = rng.normal(size=(40, 6))
     W[:, 4] = 2.0 * W[:, 1] - 0.5 * W[:, 3]  # a known dependent column
     W[:, 5] = 0.0  # a parameter nothing measures
-    R, piv = pivoted_qr(W[:, :5])
+    qr = numerics.column_qr(W[:, :5], rtol=0.0)
     _, R2, piv2 = scipy.linalg.qr(W[:, :5], mode="economic", pivoting=True)
-    np.testing.assert_allclose(np.abs(np.diag(R)), np.abs(np.diag(R2)), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(np.abs(np.diag(qr.R)), np.abs(np.diag(R2)), rtol=1e-10, atol=1e-12)
+    assert numerics.column_qr(W[:, :5]).rank == 4  # the rule: the fifth is a combination
     ident = identifiability(W, list("abcdef"), poses=10)
     assert ident.rank == 4
     assert set(ident.unidentifiable) >= {5}
@@ -318,7 +264,9 @@ def test_planner_says_what_reaches_a_target():
     assert plan.rms[1, 1] < plan.rms[0, 1]  # more poses, more accurate
     rec = plan.recommendation()
     assert rec[1e-6] is not None and rec[1e-4] is None
-    assert "1e-06" in plan.summary()
+    assert "1 um" in plan.summary() and "um" in plan.table()
+    json.dumps(plan.to_json(), allow_nan=False)
+    assert len(plan.plot().axes) == 1
 
 
 # ---------------------------------------------------------------------- CLI and bad input
@@ -407,7 +355,7 @@ def test_description_home_and_encoder_gain_elements(tmp_path):
     loaded = pkdyn.load_string(text, "x.urdf", geometry=False)
     np.testing.assert_allclose(loaded.q_home, robot.q_home, atol=1e-12)  # the described mode
     assert [a.encoder_gain for a in loaded.actuators] == [1.002, 1.0]
-    np.testing.assert_allclose(joint_coordinates(loaded, [1.0, 1.0]), [1.002, 1.0])
+    np.testing.assert_allclose(loaded.joint_coordinates([1.0, 1.0]), [1.002, 1.0])
     bad = text.replace('gain="1.002"', 'gain="-1"')
     with pytest.raises(DescriptionError, match="encoder"):
         pkdyn.load_string(bad, "x.urdf", geometry=False)

@@ -126,7 +126,7 @@ def test_prismatic_actuators_in_newtons_and_metres_per_second(capsys):
     assert {a["type"] for a in acts} == {"prismatic"}
     assert acts[0]["units"] == {"position": "m", "velocity": "m/s", "effort": "N"}
     assert main(["info", "gough_stewart"]) == 0
-    assert "800 N, 0.25 m/s" in capsys.readouterr().out
+    assert "800 N, 250 mm/s" in capsys.readouterr().out
     assert main(["size", "gough_stewart", "--trajectory", "sine", "--cycle-time", "1"]) == 0
     table = capsys.readouterr().out
     assert "[N]" in table and "[m/s]" in table and "[rad/s]" not in table.split("\n")[2]

@@ -213,7 +213,7 @@ def test_explicit_pairs_and_json(gough_stewart):
         {"leg1_rod_0", "leg6_rod_0"},
         {"base_0", "platform_0"},
     ]
-    out = rep.as_json()
+    out = rep.to_json()
     assert set(out) >= {"min_distance", "pairs", "in_collision"}
     assert out["pairs"][0]["distance"] == out["min_distance"]
     assert len(out["pairs"][0]["point_a"]) == 3

@@ -164,7 +164,7 @@ def test_coupling_rows_match_finite_differences():
         second = (r_of(h) - 2 * r_of(0.0) + r_of(-h)) / h**2
         np.testing.assert_allclose(J @ a + cs.drift(data, q, v), second, atol=1e-5)
         np.testing.assert_allclose(cs.local_residual(data, q), r, atol=1e-15)
-        np.testing.assert_allclose(cs.local_jacobian_after_residual(data), J, atol=1e-15)
+        np.testing.assert_allclose(cs.local_jacobian_after_residual(data, q), J, atol=1e-15)
     # sampled rows: the same residual, J v and J a + gamma, vectorised
     Q = np.array([pin.normalize(model, rng.normal(size=model.nq)) for _ in range(5)])
     V, A = rng.normal(size=(5, model.nv)), rng.normal(size=(5, model.nv))

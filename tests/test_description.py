@@ -557,10 +557,6 @@ MALFORMED = {
     "transmission without joint": _doc(
         '<pkdyn:platform link="arm"/><transmission name="t"><actuator name="m"/></transmission>'
     ),
-    "transmission continuous joint": _doc(
-        '<pkdyn:platform link="arm"/><transmission name="t"><joint name="j"/></transmission>',
-        jtype="continuous",
-    ),
     "reduction text": _doc(
         '<transmission name="t"><joint name="j"/><actuator name="m">'
         "<mechanicalReduction>ten</mechanicalReduction></actuator></transmission>"
@@ -607,3 +603,19 @@ def test_bad_passive_limit_names_the_joint(limit):
     )
     with pytest.raises(pkdyn.DescriptionError, match="'s'"):
         pkdyn.load_string(text, "lim.urdf", geometry=False)
+
+
+def test_an_actuated_continuous_joint_drives_one_coordinate():
+    """A transmission on a continuous joint: the joint becomes a revolute joint of one
+    coordinate (no cos/sin pair), unbounded, with its axis, limits of effort and velocity."""
+    text = _doc(
+        '<pkdyn:platform link="arm"/><transmission name="t"><joint name="j"/></transmission>',
+        jtype="continuous",
+    )
+    robot = pkdyn.load_string(text, "ok.urdf")
+    assert robot.nq == robot.nv == 1 and robot.actuated_q.tolist() == [0]
+    assert np.isinf(robot.model.upperPositionLimit[0])
+    plain = pkdyn.load_string(
+        text.replace('<transmission name="t"><joint name="j"/></transmission>', ""), "plain.urdf"
+    )
+    assert plain.nq == 2  # unactuated: Pinocchio's unbounded joint, as the URDF parser reads it

@@ -149,11 +149,11 @@ def test_user_metric_and_units():
     assert s.metric_names == ["peak_speed_2", "ratio"]
     assert s.units["peak_speed_2"] == "rad/s"
     res = run_study(s, workers=1)
-    assert np.allclose(res.table.column("ratio"), [0.38 / 0.2, 0.38 / 0.3])
+    assert np.allclose(res.designs.column("ratio"), [0.38 / 0.2, 0.38 / 0.3])
     assert len(calls) == 2
     bad = Study("delta", {"la": (0.2, 0.3)}, metrics=[Metric("nan", "-", lambda r, c: math.nan)],
                 sampler="grid", n=2)  # fmt: skip
-    rows = run_study(bad, workers=1).table.rows
+    rows = run_study(bad, workers=1).designs.rows
     assert not rows[0].feasible and "not finite" in rows[0].reason
     assert [m.name for m in resolve_metrics(["clavel"])][:2] == ["clavel_D", "clavel_S"]
 
@@ -219,7 +219,7 @@ def test_hexapod_required_check_against_the_general_path():
 
 def test_infeasible_designs_are_recorded_with_their_reason():
     s = _delta_study(ranges={"la": (0.05, 0.3), "lb": (0.2, 0.5)}, sampler="grid", n=3)
-    rows = run_study(s, workers=1).table.rows
+    rows = run_study(s, workers=1).designs.rows
     reasons = [r.reason for r in rows if not r.feasible]
     assert any(r.startswith("build: ParameterError") for r in reasons)  # z_home out of reach
     assert any("breaks" in r for r in reasons) or any("TrajectoryError" in r for r in reasons)
@@ -235,21 +235,21 @@ def test_executors_give_identical_tables(tmp_path):
     a = (tmp_path / "serial.csv").read_text()
     assert a == (tmp_path / "pool.csv").read_text()
     assert len(serial.table) == 8 and serial.best() == pooled.best()
-    assert serial.table.feasible.any()
+    assert serial.designs.feasible.any()
 
 
 def test_dask_local_cluster_gives_the_serial_table(tmp_path):
     from distributed import Client, LocalCluster
 
     s = _delta_study(n=6)
-    serial = run_study(s, workers=1).table.to_csv()
+    serial = run_study(s, workers=1).designs.to_csv()
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                       dashboard_address=None) as cluster, Client(cluster) as client:  # fmt: skip
         res = run_study(s, tmp_path / "dask.csv", client=client)
         by_address = run_study(s, scheduler=cluster.scheduler_address)
     assert "Dask" in res.executor and "Dask" in by_address.executor
     assert (tmp_path / "dask.csv").read_text() == serial
-    assert by_address.table.to_csv() == serial
+    assert by_address.designs.to_csv() == serial
 
 
 def test_files_study_file_and_rerun(tmp_path, capsys):
@@ -262,14 +262,14 @@ def test_files_study_file_and_rerun(tmp_path, capsys):
 
     t = pq.read_table(paths["parquet"])
     assert t.num_rows == 8 and t.schema.field("peak_effort").metadata[b"unit"] == b"N m"
-    assert np.array_equal(t.column("peak_effort").to_numpy(), res.table.column("peak_effort"),
+    assert np.array_equal(t.column("peak_effort").to_numpy(), res.designs.column("peak_effort"),
                           equal_nan=True)  # fmt: skip
     again = Study.load(paths["study"])
     assert again.digest() == s.digest()
     assert main(["design", "--study", str(paths["study"]), "--out", str(tmp_path / "b.csv"),
                  "--workers", "1", "--json"]) == 0  # fmt: skip
     summary = json.loads(capsys.readouterr().out)
-    assert summary["best"]["index"] == res.table.rows[res.best()].index
+    assert summary["best"]["index"] == res.designs.rows[res.best()].index
     assert (tmp_path / "b.csv").read_text() == out.read_text()
     res.write_urdf(tmp_path / "best.urdf")
     robot = pkdyn.load(str(tmp_path / "best.urdf"))
@@ -302,7 +302,7 @@ def test_resume_after_an_interruption(tmp_path):
     assert paths["partial"].exists()
     _Interrupt.calls, _Interrupt.stop_at = 0, None
     res = run_study(s, out, workers=1)
-    built = sum(1 for r in res.table.rows if "build:" not in r.reason)
+    built = sum(1 for r in res.designs.rows if "build:" not in r.reason)
     assert _Interrupt.calls <= built - 5  # the designs done before the interruption are kept
     _Interrupt.calls = 0
     fresh = run_study(s, tmp_path / "fresh.csv", workers=1)
@@ -314,7 +314,7 @@ def test_resume_after_an_interruption(tmp_path):
     paths["partial"].write_text("# pkdyn design study 0123456789abcdef\n")
     with pytest.raises(StudyError, match="different study"):
         run_study(other, out, workers=1)
-    assert fresh.best() is None or fresh.table.feasible.any()
+    assert fresh.best() is None or fresh.designs.feasible.any()
 
 
 def test_nsga2_is_reproducible_and_improves(tmp_path):
@@ -342,10 +342,10 @@ def test_unreachable_requirement(tmp_path, capsys):
 def test_clavel_chart_numeric_prism_height():
     s = clavel_chart_study(r=(0.5, 0.8), b=(1.8, 2.2), grid=2, rays=12)
     res = run_study(s, workers=1)
-    h, hn = res.table.column("clavel_h"), res.table.column("clavel_h_numeric")
-    assert res.table.feasible.all()
+    h, hn = res.designs.column("clavel_h"), res.designs.column("clavel_h_numeric")
+    assert res.designs.feasible.all()
     assert np.max(np.abs(h - hn)) < 1e-5  # mechanism sampled with Clavel's limits
-    d, b = res.table.column("clavel_d"), res.table.column("clavel_b")
+    d, b = res.designs.column("clavel_d"), res.designs.column("clavel_b")
     assert np.allclose(d, 2 * b * np.sin(np.radians(40)))  # seed: d = 2 b sin(gamma_max)
     text = clavel_chart_text(res)
     assert "Tableau 21" in text and len(text.splitlines()) == 6
@@ -467,4 +467,4 @@ def test_verify_picks_a_design_that_passes_a_denser_requirement():
     assert required_check(robot, dense).fraction == 1.0
     if chosen != first:  # the sweep's best misses a sliver of the cylinder
         assert required_check(res.robot(first), dense).fraction < 1.0
-    assert "9 samples per axis" in res.summary()
+    assert "9 samples per axis" in res.table()

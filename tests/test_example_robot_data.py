@@ -69,25 +69,42 @@ def _upper(M: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("path", URDFS, ids=_id)
 def test_plain_urdf_matches_pinocchio(path):
     """The loader adds nothing to a plain URDF but its ``<mimic>`` couplings: the same model as
-    ``pin.buildModelFromUrdf`` (whose mimic joints stay tree joints too), assembled on them."""
+    ``pin.buildModelFromUrdf`` (whose mimic joints stay tree joints too), assembled on them;
+    an actuated ``continuous`` joint (a transmission on a wheel) has one coordinate, not
+    Pinocchio's (cos, sin) pair."""
     ref = _plain_model(path)
+    total, broken = _mimics(path)
+    ignore: tuple[str, ...] = ()
+    if broken:  # a mimic of a joint that does not exist (one file): refused, as documented
+        with pytest.raises(pkdyn.DescriptionError, match="<mimic>"):
+            pkdyn.load(path, geometry=False)
+        ignore, total = ("mimic",), 0
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # mimics of joints that do not exist (one file)
-        robot = pkdyn.load(path, geometry=False)
+        warnings.simplefilter("ignore")  # elements pkdyn does not read (gazebo, ros2_control)
+        robot = pkdyn.load(path, geometry=False, ignore_elements=ignore)
     model = robot.model
     assert robot.closures == ()
     assert len(robot.constraint_models) == 0
-    assert robot.closure_set.nc == len(robot.couplings)
-    total, broken = _mimics(path)
-    assert len(robot.couplings) == total - broken
+    assert robot.constraints.nc == 0
+    assert robot.constraints.nk == len(robot.couplings)
+    assert len(robot.couplings) == total
     if robot.couplings:
         assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
-    assert (model.nq, model.nv, model.njoints) == (ref.nq, ref.nv, ref.njoints)
+    unbounded = sum(ref.joints[ref.getJointId(a.joint)].nq == 2 for a in robot.actuators)
+    assert (model.nq + unbounded, model.nv, model.njoints) == (ref.nq, ref.nv, ref.njoints)
     assert list(model.names) == list(ref.names)
     for a, b in zip(model.inertias, ref.inertias, strict=True):
         assert a.isApprox(b, 1e-14)
     for a, b in zip(model.jointPlacements, ref.jointPlacements, strict=True):
         assert a.isApprox(b, 1e-14)
+
+
+def _load(path: Path, geometry: bool) -> pkdyn.Robot:
+    """The file as a user loads it: mimics of missing or fixed joints left out explicitly."""
+    ignore = ("mimic",) if _mimics(path)[1] else ()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # elements pkdyn does not read (gazebo, ros2_control)
+        return pkdyn.load(path, geometry=geometry, ignore_elements=ignore)
 
 
 def _mimics(path: Path) -> tuple[int, int]:
@@ -165,7 +182,7 @@ def test_plain_urdf_dynamics_match_yourdfpy(path):
     """Link poses, mass matrix, gravity and the power of the inverse dynamics against yourdfpy's
     kinematics and inertias (an independent parser and forward kinematics)."""
     _plain_model(path)  # skips the files Pinocchio itself rejects
-    robot = pkdyn.load(path, geometry=False)
+    robot = _load(path, geometry=False)
     model, data = robot.model, robot.data
     y = _yourdfpy_model(path)
     rng = np.random.default_rng(zlib.crc32(_id(path).encode()))
@@ -207,7 +224,7 @@ def test_geometry_matches_pinocchio(sub):
         pytest.skip(f"{sub} is not shipped by this example-robot-data release")
     share = ROBOTS.parent.parent  # package://example-robot-data/robots/... resolves here
     _, ref_collision, ref_visual = pin.buildModelsFromUrdf(str(path), package_dirs=[str(share)])
-    robot = pkdyn.load(path, geometry=True)
+    robot = _load(path, geometry=True)
     for geom, ref in ((robot.visual_model, ref_visual), (robot.collision_model, ref_collision)):
         assert geom.ngeoms == ref.ngeoms > 0
         for g, r in zip(geom.geometryObjects, ref.geometryObjects, strict=True):

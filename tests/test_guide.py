@@ -40,7 +40,7 @@ def test_the_described_robot_is_what_the_page_says():
     lifter = pkdyn.load_string(xml, "lifter.urdf")
     assert (lifter.dof(), lifter.loops) == (2, 2)
     assert [c.kind for c in lifter.closures] == ["hinge", "point", "weld"]
-    m = mobility(lifter).as_json()
+    m = mobility(lifter).to_json()
     assert (m["mobility"], m["internal"], m["hyperstatism"]) == (2, 0, 4)
     assert pkdyn.closure_residual(lifter, lifter.q_home) < 1e-12  # the zero pose is assembled
     assert classify(lifter, lifter.q_home).kind == "regular"

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from support.dynamics_truth import multisine
 
 import pkdyn
 from pkdyn.dynamics.actuation import with_drives
@@ -28,19 +29,7 @@ from pkdyn.identification.regressor import ClosedLoopRegressor
 
 
 def _motion(robot, n, amp, dt=1e-3):
-    rng = np.random.default_rng(11)
-    t = np.arange(n) * dt
-    k = len(robot.actuators)
-    qa = np.tile(robot.q_home[robot.actuated_q], (n, 1))
-    qd, qdd = np.zeros_like(qa), np.zeros_like(qa)
-    for h in range(1, 4):
-        w = 2 * np.pi * 1.5 * h
-        A, B = amp * rng.uniform(-1, 1, k) / h, amp * rng.uniform(-1, 1, k) / h
-        s, c = np.sin(w * t[:, None]), np.cos(w * t[:, None])
-        qa += A * s + B * (c - 1)
-        qd += w * (A * c - B * s)
-        qdd += -w * w * (A * s + B * c)
-    return t, qa, qd, qdd
+    return multisine(robot, n, dt, amp, 11, harmonics=3, f0=1.5)
 
 
 def _reference_rows(robot, ps, Q, qd, qdd):

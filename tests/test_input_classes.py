@@ -42,7 +42,7 @@ def _one_line(capsys, argv, code=1):
 
 CLI_NUMBERS = {
     "workspace step zero": (["workspace", "delta", "--step", "0"], "step: must be > 0"),
-    "workspace step nan": (["workspace", "delta", "--step", "nan"], "step: must be a finite"),
+    "workspace step nan": (["workspace", "delta", "--step", "nan"], "--step: is nan"),
     "workspace samples one": (["workspace", "delta", "--samples", "1"], "samples"),
     "parameter overflow": (["info", "delta", "--param", "la=1e308"], "parameter 'la'"),
     "parameter nan": (["info", "delta", "--param", "la=nan"], "parameter 'la'"),
@@ -355,7 +355,10 @@ def test_size_a_trajectory_read_from_csv(capsys, tmp_path, space):
         ("t,qa_motor1\n0,0\n0.1,0\n0.2,0\n", "qa_motor2"),
         ("x,y,z\n0,0,-0.3\n0,0,-0.3\n0,0,-0.3\n", "no column 't'"),
         ("t,x,y,z\n0,0,0,-0.3\n0,0,0,-0.3\n0.1,0,0,-0.3\n", "does not increase"),
-        ("t,x,y,z\n0,0,0,-0.3\n0.1,0,zero,-0.3\n0.2,0,0,-0.3\n", "is no number"),
+        (
+            "t,x,y,z\n0,0,0,-0.3\n0.1,0,zero,-0.3\n0.2,0,0,-0.3\n",
+            "line 3, column y: 'zero' is not a number",
+        ),
         ("t,x,y\n0,0,0\n0.1,0,0\n0.2,0,0\n", "missing z"),
     ],
     ids=["actuator missing", "no time", "time backwards", "text", "task component missing"],

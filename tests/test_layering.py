@@ -20,6 +20,8 @@ RANK = {
     "threads": 1,
     "results": 1,
     "units": 1,
+    "tables": 2,
+    "identifiability": 2,
     "model": 2,
     "closed_form": 3,
     "library": 4,

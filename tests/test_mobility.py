@@ -226,15 +226,20 @@ def test_spinning_bar_between_two_tree_ball_joints():
     assert _moves_freely(robot, res.q, mode.direction) < 1e-12
 
 
-def test_free_floating_base_is_not_counted():
+def test_free_floating_base_is_counted_and_said():
+    """A floating base's six coordinates are degrees of freedom (``Robot.mobility`` counts them,
+    as a legged robot's mobility does), reported apart as ``floating``."""
     w = UrdfWriter("floater")
     w.link("base")
     w.link("body", 1.0)
     w.rod("arm", 0.1, 0.005, (0, 0, 0), (0.2, 0, 0))
     w.joint("root", "floating", "base", "body")
     w.joint("elbow", "revolute", "body", "arm", axis=(0, 0, 1), limit=(-3, 3, 1, 1))
-    res = mobility(pkdyn.load_string(w.to_string(), "floater", geometry=False))
-    assert (res.grubler, res.mobility, res.floating, res.loops) == (1, 1, 6, 0)
+    robot = pkdyn.load_string(w.to_string(), "floater", geometry=False)
+    res = mobility(robot)
+    assert (res.grubler, res.mobility, res.floating, res.loops) == (7, 7, 6, 0)
+    assert res.mobility == robot.mobility() and res.as_json()["floating"] == 6
+    assert "7 = 1 useful + 0 internal + 6 free-floating" in format_mobility(res)
 
 
 # --- API ----------------------------------------------------------------------------------------
@@ -259,7 +264,7 @@ def test_given_configuration(delta_ball):
 
 def test_as_json_and_text(gs_sps):
     _, res = gs_sps
-    out = json.loads(json.dumps(res.as_json()))
+    out = json.loads(json.dumps(res.to_json()))
     assert {"grubler", "mobility", "internal", "hyperstatism", "rank", "d", "useful"} <= set(out)
     assert (out["grubler"], out["mobility"], out["internal"], out["hyperstatism"]) == (12, 12, 6, 0)
     assert (out["rank"], out["d"], out["useful"]) == (18, 6, 6)

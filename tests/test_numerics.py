@@ -68,3 +68,53 @@ def test_no_other_rank_rule():
         if pattern.search(line)
     ]
     assert offenders == []
+
+
+# ---------------------------------------------------------------------------------------------
+# identifiability: column_qr and column_basis
+
+
+def test_column_qr_matches_lapack_and_stops_at_the_rank():
+    import scipy.linalg
+
+    rng = np.random.default_rng(4)
+    A = rng.standard_normal((30, 6))
+    A[:, 5] = A[:, 0] - 2.0 * A[:, 3]
+    qr = numerics.column_qr(A, rtol=0.0)
+    _, R2, _ = scipy.linalg.qr(A, mode="economic", pivoting=True)
+    np.testing.assert_allclose(np.abs(np.diag(qr.R)), np.abs(np.diag(R2)), atol=1e-12)
+    assert numerics.column_qr(A).rank == 5
+    assert numerics.column_qr(np.zeros((4, 3))).rank == 0
+
+
+def test_column_basis_combinations_and_scale_independence():
+    rng = np.random.default_rng(5)
+    A = rng.standard_normal((40, 5))
+    A[:, 3] = 2.0 * A[:, 1] - 0.5 * A[:, 2]  # a combination
+    A[:, 4] = 0.0  # no effect
+    b = numerics.column_basis(A)
+    assert b.rank == 3 and list(b.zero) == [4] and 4 in b.dependent
+    np.testing.assert_allclose(A[:, b.dependent] - A[:, b.independent] @ b.beta, 0.0, atol=1e-12)
+    # units do not decide: columns scaled by 1e-4 .. 1e4 give a basis of the same size (a
+    # column 1e12 times smaller than the largest is an exact zero: ZERO_RTOL)
+    D = 10.0 ** np.array([-4.0, 3.0, 0.0, 4.0, 1.0])
+    b2 = numerics.column_basis(A * D)
+    assert b2.rank == 3
+    np.testing.assert_allclose(
+        (A * D)[:, b2.dependent] - (A * D)[:, b2.independent] @ b2.beta, 0.0, atol=1e-6
+    )
+    # in the given order, earlier columns are kept: 0, 1 and 2 before 3 (which 1 and 2 make)
+    ordered = numerics.column_basis(A, pivot=False)
+    assert list(ordered.independent) == [0, 1, 2] and list(ordered.dependent) == [3, 4]
+    np.testing.assert_allclose(ordered.beta[:, 0], [0.0, 2.0, -0.5], atol=1e-12)
+
+
+def test_column_basis_floor_makes_weakly_seen_columns_dependent():
+    rng = np.random.default_rng(6)
+    A = rng.standard_normal((50, 3))
+    A[:, 2] *= 1e-3  # a parameter the data see a thousand times less
+    assert numerics.column_basis(A).rank == 3  # structurally independent
+    weak = numerics.column_basis(A, col_scale=np.ones(3), floor=1.0)
+    assert weak.rank == 2 and list(weak.weak) == [2]  # determined worse than its magnitude
+    big = numerics.column_basis(A, col_scale=np.array([1.0, 1.0, 1e3]), floor=1.0)
+    assert big.rank == 3 and big.weak.size == 0  # a magnitude a thousand times larger: seen

@@ -82,7 +82,7 @@ def test_plugin_on_the_command_line(plugin, tmp_path, capsys):
     best = json.loads(capsys.readouterr().out)["best"]
     assert best[f"arm_{k}"] == best["la"]
     s = Study.load(f)
-    t = run_study(s, workers=1).table
+    t = run_study(s, workers=1).designs
     assert list(t.column(f"arm_{k}")) == list(t.column("la"))
     assert t.column(f"bar_{k}")[0] == pytest.approx(s.space.params(t.x[0]).lb)
 
@@ -92,7 +92,7 @@ def test_plugin_file_and_parametrisation(plugin, tmp_path):
     load_plugin(str(tmp_path / f"{name}.py"))
     s = Study("delta", {"k": (0.8, 1.2)}, metrics=["moving_mass"], n=2,
               parametrisation=f"{name}:scaled")  # fmt: skip
-    t = run_study(s, workers=2).table  # a file plug-in travels to the workers by value
+    t = run_study(s, workers=2).designs  # a file plug-in travels to the workers by value
     assert t.feasible.all()
     assert [s.space.params(x).la for x in t.x] == pytest.approx(0.25 * t.column("k"))
 

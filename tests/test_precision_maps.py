@@ -65,7 +65,7 @@ def test_map_of_the_delta_and_its_worst_pose(delta):
     assert 0 < inside.sum() < inside.size
     assert np.all(np.isfinite(m.values["f1"][inside])) and np.all(np.isnan(m.values["f1"][~inside]))
     # the worst pose of the map, recomputed on the general path
-    iv, iu = np.unravel_index(np.nanargmin(m.values["f1"]), inside.shape)
+    iu, iv = np.unravel_index(np.nanargmin(m.values["f1"]), inside.shape)  # values[i_u, i_v]
     q = pkdyn.inverse_geometry(delta, [m.u[iu], m.fixed["y"], m.v[iv]]).q
     assert modes(delta, q, 2e4).f1 == pytest.approx(m.extreme("f1"), rel=1e-9)
     from pkdyn.plotting import plot_precision_map

@@ -203,16 +203,25 @@ def test_deflection_and_loaded_tangent_match_nonlinear_equilibria(name):
 
 
 def test_leg_beams_in_series_with_the_actuators(gough_stewart):
-    """A U-P-S leg carries axial force only: its beams add ``L / (E A)`` to each actuator."""
+    """A U-P-S leg carries axial force only: its beams add ``L / (E A)`` to each actuator.
+
+    The cylinder over its length, the rod over its part outside the cylinder, which follows
+    the stroke: ``rho - cylinder_length`` (issue 35 item 4), at poses across the stroke.
+    """
     robot = gough_stewart
     k_a = 1e6
-    S = stiffness(robot, robot.q_home, k_a, material=STEEL)
     p = robot.params
     A = Section(p.leg_radius).area
-    Lr = min(p.rho_min[0], p.cylinder_length)  # every rod has this length here
-    k_leg = 1.0 / (1.0 / k_a + (p.cylinder_length + Lr) / (STEEL.E * A))
-    K_ref = stiffness(robot, robot.q_home, k_leg, links=False).K
-    assert np.abs(S.K - K_ref).max() <= 1e-10 * np.abs(K_ref).max()
+    home = robot.platform_placement(robot.q_home).translation
+    for dz in (-0.08, 0.0, 0.08):
+        q = pkdyn.inverse_geometry(robot, [0.01, -0.02, home[2] + dz]).q
+        rho = q[robot.actuated_q]
+        S = stiffness(robot, q, k_a, material=STEEL)
+        outside = rho - p.cylinder_length
+        assert np.all(outside > 0.0)
+        k_leg = 1.0 / (1.0 / k_a + (p.cylinder_length + outside) / (STEEL.E * A))
+        K_ref = stiffness(robot, q, k_leg, links=False).K
+        assert np.abs(S.K - K_ref).max() <= 1e-10 * np.abs(K_ref).max()
 
 
 def test_beam_compliance_by_castigliano():

@@ -86,7 +86,7 @@ def test_mobility_report(model):
     mob = mobility(robot)
     assert mob.mobility == dof == robot.mobility()
     assert mob.loops == robot.loops >= 1
-    assert mob.as_json()["mobility"] == dof
+    assert mob.to_json()["mobility"] == dof
 
 
 def test_inverse_dynamics_along_a_short_motion(model):

@@ -68,7 +68,7 @@ def test_feasible_pairs_pass_every_check_and_are_ranked(case):
     assert sel.feasible and len(sel.choice()) == 3
     text = sel.table()
     assert "feasible of 126 pairs" in text and "optimal ratio" in text
-    js = json.loads(json.dumps(sel.as_json()))
+    js = json.loads(json.dumps(sel.to_json()))
     assert js["actuators"][0]["rejected"][0]["why"]
 
 

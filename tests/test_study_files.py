@@ -103,7 +103,7 @@ EVERY_DESIGN_FAILS = {
     "zero cycle time": (["--cycle-time", "0"], "cycle_time: must be > 0"),
     "negative step": (["--dt", "-0.001"], "dt: sample period must be > 0 s"),
     "step longer than a move": (["--dt", "0.2"], "dt: 0.2 s samples the"),
-    "NaN depth": (["--depth", "nan"], "depth: adept: expected a finite number"),
+    "NaN depth": (["--depth", "nan"], "--depth: is nan"),
     "NaN fixed parameter": (["--fix", "lb=nan"], "parameter 'lb': fixed at nan"),
     "infinite fixed parameter": (["--fix", "lb=inf"], "parameter 'lb': fixed at inf"),
     "parametrisation missing its variables": (
@@ -124,7 +124,7 @@ EVERY_DESIGN_FAILS = {
     "verify below 2": (["--verify", "1", "--require", "cylinder:D=0.1,H=0.1,z=-0.3"], "--verify"),
     "verify without requirement": (["--verify", "5"], "--verify: checks a required workspace"),
     "negative timeout": (["--timeout", "-1"], "--timeout: must be a number of seconds"),
-    "NaN timeout": (["--timeout", "nan"], "--timeout: must be a number of seconds"),
+    "NaN timeout": (["--timeout", "nan"], "--timeout: is nan"),
     "endless timeout": (["--timeout", "1e9"], "--timeout: must be a number of seconds"),
     "zero workers": (["--workers", "0"], "--workers: must be >= 1"),
 }
@@ -235,7 +235,7 @@ def test_a_resumed_study_takes_only_its_own_rows(tmp_path):
     assert "4 rows that do not belong to this study dropped" in msg
     assert "2 with an index outside 0..5" in msg and "1 with design values" in msg
     assert "1 with an index given again" in msg and "2 kept" in msg
-    assert len(res.table) == 6 and list(res.table.index) == list(range(6))
+    assert len(res.designs) == 6 and list(res.designs.index) == list(range(6))
     assert out.read_text() == fresh.read_text()
 
 
@@ -248,7 +248,7 @@ def test_a_complete_table_with_foreign_rows_is_not_reused(tmp_path):
     out.write_text("\n".join([*lines, lines[-1].replace(lines[-1].split(",")[0], "9", 1)]) + "\n")
     with pytest.warns(UserWarning, match="index outside 0..3"):
         res = run_study(s, out, workers=1)
-    assert len(res.table) == 4 and out.read_text() == good
+    assert len(res.designs) == 4 and out.read_text() == good
 
 
 def test_errors_cross_process_boundaries():

@@ -216,7 +216,7 @@ def test_forces_at_rest_are_the_gradient_of_the_potential_energy(report):
 
 
 def test_report_json_has_the_phase_keys(report):
-    out = json.loads(json.dumps(report.as_json()))
+    out = json.loads(json.dumps(report.to_json()))
     keys = {
         "mode",
         "branch",

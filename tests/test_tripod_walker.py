@@ -448,8 +448,6 @@ def test_unavoidable_collision_names_phase_branch_and_bodies():
 
 
 def test_cli_walker_json_has_the_phase_keys_and_the_objective(capsys):
-    from pkdyn.cli.tripod import _text
-
     args = ["tripod", "scenario", "--branches", "4", "--cycles", "1", "--dt", "0.5"]
     assert main([*args, "--no-machining", "--stride", "4", "--allocation", "max", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
@@ -474,8 +472,9 @@ def test_cli_walker_json_has_the_phase_keys_and_the_objective(capsys):
         else:
             assert ph["redundancy"] is None
     assert out["summary"]["branches"] == 4 and out["summary"]["violations"] == []
-    text = _text(out)
-    assert "objective mm" in text and " -> " in text
+    assert main([*args, "--no-machining", "--stride", "4", "--allocation", "max"]) == 0
+    text = capsys.readouterr().out
+    assert "objective: baseline -> chosen" in text and " mm -> " in text
 
 
 def test_cli_walker_error_is_one_line(capsys):
@@ -496,7 +495,7 @@ def test_comparison_table_json_and_plot(tmp_path):
         ("tripod", "cylinder R = 3 m"),
         ("walker", "cylinder R = 3 m"),
     ]
-    rows = json.loads(json.dumps(comp.as_json()))["rows"]
+    rows = json.loads(json.dumps(comp.to_json()))["rows"]
     assert all(r["error"] is None and r["phases_with_violation"] == 0 for r in rows)
     tri, walk = comp.row("tripod", "plane").values(), comp.row("walker", "plane").values()
     assert walk["mass"] - tri["mass"] == pytest.approx(tri["swing_mass"], rel=1e-9)

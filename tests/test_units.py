@@ -25,6 +25,14 @@ from pkdyn.units import quantity, vector
         (math.inf, "N/m", "inf N/m"),
         (-math.inf, "N/m", "-inf N/m"),
         (0.5, "", "0.5"),
+        (0.2066773, "m^2", "0.2067 m^2"),
+        (0.03784269, "m^3", "0.03784 m^3"),
+        (0.01, "kg m^2", "10 g m^2"),
+        (2.5e-6, "kg", "2.5 mg"),
+        (2000.0, "kg", "2000 kg"),
+        (-1.304e-10, "m", "-130.4 pm"),
+        (1234.0, "rad", "1234 rad"),
+        (123456.0, "rad", "123500 rad"),
     ],
 )
 def test_quantity(value, unit, text):

@@ -157,7 +157,7 @@ def test_planar_3rrr_numeric_path_matches_closed_form():
     """Numeric path (LM per pose) on an area: reach agrees with Pasqui's inverse model."""
     robot = pkdyn.load("planar_3rrr", geometry=False)
     ws = translation_workspace(robot, samples=11, limits=(), progress=False)
-    assert ws.as_json()["volume_unit"] == "m^2" and ws.axes[2].size == 1
+    assert ws.to_json()["volume_unit"] == "m^2" and ws.axes[2].size == 1
     pts = ws.points(np.ones_like(ws.reachable))
     poses = np.column_stack([pts[:, 0], pts[:, 1], np.zeros(len(pts))])
     _, ok = rrr_cf.inverse(robot.params, poses)

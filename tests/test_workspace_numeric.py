@@ -144,6 +144,6 @@ def test_tripod_level_workspace_is_not_empty(robots):
     home = robot.platform_placement(robot.q_home).translation
     box = np.column_stack([home - 0.15, home + 0.15])
     ws = translation_workspace(robot, bounds=box, samples=5, evaluator=ev, progress=False)
-    assert ws.as_json()["reachable"] > 0
+    assert ws.to_json()["reachable"] > 0
     assert len(ev.excluded_pairs) == 12
     assert all(a.split("_")[0] == b.split("_")[0] for a, b in ev.excluded_pairs)

@@ -102,7 +102,7 @@ def test_merlet_fig_2_13_interference_cuts_every_circle(gs):
 
 
 def test_as_json_and_errors(gs, study):
-    out = study["stroke+joint"].as_json()
+    out = study["stroke+joint"].to_json()
     assert set(out) >= {"volume", "bounds", "samples", "limits_hit"}
     assert out["volume_unit"] == "sr" and out["samples"] == 36 * 180
     with pytest.raises(pkdyn.PkdynError, match="leg robot"):

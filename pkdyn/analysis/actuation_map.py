@@ -38,6 +38,8 @@ import pinocchio as pin
 from pkdyn.exceptions import AssemblyError, InvalidInputError
 from pkdyn.model.arguments import public
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity
 from solvers import numerics, solve_lm
 
 __all__ = ["MAX_SAMPLES", "ActuationMap", "MapSamples", "actuation_map"]
@@ -50,7 +52,7 @@ RANK_RTOL = numerics.RTOL
 
 
 @dataclass(frozen=True)
-class MapSamples:
+class MapSamples(Result):
     """The maps at ``N`` samples (``n`` actuators, ``n`` joint coordinates).
 
     Attributes:
@@ -78,6 +80,33 @@ class MapSamples:
     cond: np.ndarray
     singular: np.ndarray
     reached: np.ndarray
+
+    def to_json(self) -> dict[str, Any]:
+        """Every array as nested lists (``None`` where not finite), SI units."""
+        return jsonable(dict(self.__dict__))
+
+    def table(self) -> str:
+        """Samples reached and singular; the range of each coordinate and of ``cond(J)``."""
+        ok = np.asarray(self.reached) & ~np.asarray(self.singular)
+        cond = np.asarray(self.cond)[ok]
+        lines = [
+            f"{int(np.count_nonzero(self.reached))} of {len(self.reached)} samples assembled, "
+            f"{int(np.count_nonzero(self.singular))} singular; "
+            + (
+                f"cond(J) {quantity(float(cond.min()))} .. {quantity(float(cond.max()))} "
+                "(dimensionless)"
+                if cond.size
+                else "cond(J): none"
+            )
+        ]
+        for what, X in (("actuator", self.qa), ("joint", self.qj)):
+            X = np.asarray(X)[np.asarray(self.reached)]
+            for k in range(X.shape[1] if X.ndim == 2 and X.size else 0):
+                lines.append(
+                    f"  {what} coordinate {k + 1}: {quantity(float(X[:, k].min()), 'rad or m')} "
+                    f".. {quantity(float(X[:, k].max()), 'rad or m')}"
+                )
+        return "\n".join(lines)
 
     def actuator_torques(self, tau_joint: Sequence[float] | np.ndarray) -> np.ndarray:
         """Actuator efforts that deliver joint-space efforts, by virtual work.
@@ -220,8 +249,8 @@ class ActuationMap:
 
     def _solve(self, q0: np.ndarray, free: np.ndarray) -> tuple[np.ndarray, bool]:
         robot, data = self.robot, self._data
-        cs = robot.closure_set
-        if cs.nc == 0:
+        cs = robot.constraints
+        if cs.n == 0:
             return q0, True
         sol = solve_lm(
             robot.model,
@@ -349,8 +378,8 @@ class ActuationMap:
         """Jacobians, reflected inertias, condition number and singularity at ``q``."""
         robot, data = self.robot, self._data
         mv = self.moving_v
-        if robot.closure_set.nc:
-            Jc = robot.closure_set.jacobian(data, q)[:, mv]
+        if robot.constraints.n:
+            Jc = robot.constraints.jacobian(data, q)[:, mv]
             Z = numerics.null_space(Jc, RANK_RTOL, 1.0)
         else:
             Z = np.eye(mv.size)

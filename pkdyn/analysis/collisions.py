@@ -33,6 +33,8 @@ from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, deprecated_alias, jsonable
+from pkdyn.units import columns, quantity
 
 __all__ = [
     "PairDistance",
@@ -49,7 +51,7 @@ _GJK_TOLERANCE = 1e-10
 
 
 @dataclass(frozen=True)
-class PairDistance:
+class PairDistance(Result):
     """Distance between two collision geometries.
 
     Attributes:
@@ -67,19 +69,27 @@ class PairDistance:
     point_a: np.ndarray
     point_b: np.ndarray
 
-    def as_json(self) -> dict[str, Any]:
-        """Plain-JSON form (lists of floats)."""
-        return {
-            "a": self.a,
-            "b": self.b,
-            "distance": self.distance,
-            "point_a": [float(x) for x in self.point_a],
-            "point_b": [float(x) for x in self.point_b],
-        }
+    def to_json(self) -> dict[str, Any]:
+        """Plain-JSON form (lists of floats) [m]."""
+        return jsonable(
+            {
+                "a": self.a,
+                "b": self.b,
+                "distance": self.distance,
+                "point_a": self.point_a,
+                "point_b": self.point_b,
+            }
+        )
+
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def table(self) -> str:
+        """``a - b  distance``."""
+        return f"{self.a} - {self.b}: {quantity(self.distance, 'm')}"
 
 
 @dataclass
-class CollisionReport:
+class CollisionReport(Result):
     """Distances between geometry pairs at one configuration.
 
     Attributes:
@@ -102,16 +112,33 @@ class CollisionReport:
         """The pairs closer than the margin."""
         return [p for p in self.pairs if p.distance < self.margin]
 
-    def as_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         """Plain-JSON form: ``min_distance`` (``None`` if no pair), ``in_collision``, ``pairs``."""
         finite = bool(np.isfinite(self.min_distance))
-        return {
-            "min_distance": float(self.min_distance) if finite else None,
-            "in_collision": self.in_collision,
-            "margin": self.margin,
-            "pairs": [p.as_json() for p in self.pairs],
-            "excluded": [list(p) for p in self.excluded],
-        }
+        return jsonable(
+            {
+                "min_distance": float(self.min_distance) if finite else None,
+                "in_collision": self.in_collision,
+                "margin": self.margin,
+                "pairs": [p.to_json() for p in self.pairs],
+                "excluded": [list(p) for p in self.excluded],
+            }
+        )
+
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def table(self, top: int = 10) -> str:
+        """The smallest distance, the verdict, and the ``top`` closest pairs (0: all)."""
+        state = "IN COLLISION" if self.in_collision else "clear"
+        lines = [
+            f"min distance {quantity(self.min_distance, 'm')} ({state}, margin "
+            f"{quantity(self.margin, 'm')})"
+        ]
+        shown = self.pairs[:top] if top else self.pairs
+        rows = [[f"  {p.a}", "-", p.b, quantity(p.distance, "m")] for p in shown]
+        if rows:
+            lines.append(columns(rows))
+        return "\n".join(lines)
 
 
 def _joint_adjacency(robot: Robot) -> set[tuple[int, int]]:
@@ -202,6 +229,13 @@ class CollisionChecker:
                 f"{len(robot.missing_meshes)} mesh file(s) that were not found when it was "
                 f"loaded: {missing_list(robot.missing_meshes)} (pass package_dirs= or fix "
                 "the paths)"
+            )
+        if robot.dropped_collisions:
+            raise PkdynError(
+                f"{robot.name}: collision checks need the collision geometry that was left out "
+                f"when it was loaded (malformed): {'; '.join(robot.dropped_collisions[:3])}"
+                + (" ..." if len(robot.dropped_collisions) > 3 else "")
+                + " (fix the description)"
             )
         self.robot = robot
         self.ids = collision_pairs(robot, pairs)

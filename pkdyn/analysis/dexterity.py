@@ -24,6 +24,8 @@ from pkdyn.analysis.kinematics import COND_MAX, kinematic_models
 from pkdyn.exceptions import PkdynError, SingularConfigurationError
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity
 
 __all__ = [
     "Dexterity",
@@ -111,7 +113,7 @@ def local_conditioning_index(J: np.ndarray) -> np.ndarray | float:
 
 
 @dataclass
-class Dexterity:
+class Dexterity(Result):
     """Dexterity of one configuration.
 
     Attributes:
@@ -130,13 +132,24 @@ class Dexterity:
     singular: bool
 
     def to_json(self) -> dict[str, Any]:
-        """JSON-ready dict."""
-        return {
-            "manipulability": self.manipulability,
-            "cond": self.cond,
-            "lci": self.lci,
-            "singular": self.singular,
-        }
+        """JSON-ready dict (dimensionless indices of the homogenised Jacobian)."""
+        return jsonable(
+            {
+                "manipulability": self.manipulability,
+                "cond": self.cond,
+                "lci": self.lci,
+                "singular": self.singular,
+            }
+        )
+
+    def table(self) -> str:
+        """The three indices (dimensionless: the Jacobian is homogenised by a length)."""
+        if self.singular:
+            return "singular (parallel singularity: J does not exist)"
+        return (
+            f"manipulability {quantity(self.manipulability)}, cond(J) {quantity(self.cond)}, "
+            f"LCI {quantity(self.lci)} (dimensionless, homogenised J)"
+        )
 
 
 def dexterity(
@@ -169,7 +182,7 @@ def dexterity(
 
 
 @dataclass
-class DexterityMap:
+class DexterityMap(Result):
     """Dexterity over a list of poses (general numeric path).
 
     Attributes:
@@ -186,6 +199,26 @@ class DexterityMap:
     manipulability: np.ndarray
     cond: np.ndarray
     lci: np.ndarray
+
+    def to_json(self) -> dict[str, Any]:
+        """Poses [m, rad], validity and the indices (``None`` where not valid)."""
+        return jsonable(
+            {
+                "poses": self.poses,
+                "valid": self.valid,
+                "manipulability": self.manipulability,
+                "cond": self.cond,
+                "lci": self.lci,
+            }
+        )
+
+    def table(self) -> str:
+        """How many poses are valid, and the range of each index over them."""
+        return (
+            f"{int(np.count_nonzero(self.valid))} of {self.valid.size} poses reached and "
+            f"regular; {_range('LCI', self.lci)}, {_range('cond(J)', self.cond)}, "
+            f"{_range('manipulability', self.manipulability)} (dimensionless)"
+        )
 
 
 def dexterity_map(
@@ -226,3 +259,12 @@ def dexterity_map(
         valid[i] = True
         out["w"][i], out["k"][i], out["l"][i] = d.manipulability, d.cond, d.lci
     return DexterityMap(P, valid, out["w"], out["k"], out["l"])
+
+
+def _range(name: str, x: np.ndarray, unit: str = "") -> str:
+    """``name min .. max unit`` over the finite values (or ``none``)."""
+    x = np.asarray(x, dtype=float)
+    ok = x[np.isfinite(x)]
+    if ok.size == 0:
+        return f"{name}: none"
+    return f"{name} {quantity(float(ok.min()), unit)} .. {quantity(float(ok.max()), unit)}"

@@ -46,13 +46,15 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
 from pkdyn.model.arguments import public
+from pkdyn.model.platform_jacobian import platform_jacobian as _platform_jacobian
 from pkdyn.model.pose import as_finite
-from pkdyn.model.robot import PLATFORM_HINT, Robot
-from solvers import FramePoseTask, numerics
+from pkdyn.model.robot import Robot
+from pkdyn.results import Result, jsonable
+from pkdyn.units import matrix, quantity
+from solvers import numerics
 
 __all__ = [
     "TASK_NAMES",
@@ -64,6 +66,8 @@ __all__ = [
     "NearSingularityWarning",
     "KinematicModels",
     "kinematic_models",
+    "PassiveMap",
+    "passive_map",
     "platform_jacobian",
     "platform_twist",
     "actuator_rates",
@@ -148,35 +152,119 @@ def robot_scales(robot: Robot, task_rows: np.ndarray) -> tuple[np.ndarray, np.nd
 
 
 @public
-def platform_jacobian(robot: Robot, q: np.ndarray) -> np.ndarray:
+def platform_jacobian(
+    robot: Robot,
+    q: np.ndarray | None,
+    *,
+    point: np.ndarray | None = None,
+    angular: str = "platform",
+) -> np.ndarray:
     """Full 6D platform Jacobian (6, nv) in the task convention, kinematics at ``q`` computed.
 
-    Rows: linear velocity of the platform frame origin in world axes [m/s], then angular
-    velocity in the platform frame [rad/s] (``FramePoseTask`` rows at zero error).
+    Rows: linear velocity of the platform frame origin (or of ``point``) in world axes [m/s],
+    then angular velocity in the platform frame [rad/s] (``FramePoseTask`` rows at zero error;
+    ``angular="world"``: world axes, the precision convention). The one construction,
+    :func:`pkdyn.model.platform_jacobian.platform_jacobian`.
 
     Args:
         robot: The robot (must declare a platform).
-        q: Configuration (nq,).
+        q: Configuration (nq,) (``None``: the joint Jacobians in ``robot.data`` are current).
+        point: Reference point in the platform frame [m] (default: its origin).
+        angular: ``platform`` (the task convention) or ``world``.
 
     Returns:
         Jacobian (6, nv) with respect to increments applied by ``pin.integrate``.
 
     """
-    if robot.platform_frame is None:
-        raise InvalidInputError(
-            "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
-        )
-    pin.computeJointJacobians(robot.model, robot.data, q)
-    oMf = pin.updateFramePlacement(robot.model, robot.data, robot.platform_frame)
-    task = FramePoseTask(robot.model, robot.platform_frame, np.arange(6))
-    task.target = pin.SE3(oMf)
-    return task.residual_and_jacobian(robot.data)[1]
+    return _platform_jacobian(robot, q, point=point, angular=angular)
+
+
+@dataclass(eq=False)  # numpy fields
+class PassiveMap:
+    """The closures solved for the passive rates at one configuration (the one elimination).
+
+    With the closure Jacobian ``Jc`` split into actuated and passive columns, the passive rates
+    that keep the loops closed are ``v_p = -Jc_p^+ (Jc_a qa_dot + r)`` for closure residual
+    rates ``r`` (:func:`solvers.numerics.passive_elimination`: minimum norm, so internal
+    mobilities stay still), and the platform moves by ``J qa_dot``,
+    ``J = Jx_a - Jx_p Jc_p^+ Jc_a``.
+
+    Attributes:
+        Jc: Closure Jacobian (nc, nv) (the robot's constraint layer: closures and couplings).
+        Jx: Platform Jacobian (6, nv) (:func:`platform_jacobian`).
+        elimination: The elimination of ``Jc_p``.
+        actuated_v: Velocity indices of the actuators (n_a,).
+        passive_v: Velocity indices of the passive coordinates (n_p,).
+
+    """
+
+    Jc: np.ndarray
+    Jx: np.ndarray
+    elimination: numerics.PassiveElimination
+    actuated_v: np.ndarray
+    passive_v: np.ndarray
+
+    def passive(self, rhs: np.ndarray) -> np.ndarray:
+        """Passive rates (n_p,) or (n_p, k) absorbing closure residual rates ``rhs``."""
+        return -self.elimination.solve(rhs)
+
+    def platform(self, rhs: np.ndarray) -> np.ndarray:
+        """Platform motion (6,) or (6, k) of the passive rates absorbing ``rhs``."""
+        return np.asarray(self.Jx[:, self.passive_v] @ self.passive(rhs))
+
+    @property
+    def J(self) -> np.ndarray:
+        """Platform motion per actuator rate (6, n_a): the direct kinematic Jacobian."""
+        a = self.actuated_v
+        return np.asarray(self.Jx[:, a] + self.platform(self.Jc[:, a]))
+
+    @property
+    def V(self) -> np.ndarray:
+        """Joint velocities per actuator rate (nv, n_a) (passive ones minimum-norm)."""
+        a, p = self.actuated_v, self.passive_v
+        V = np.zeros((self.Jc.shape[1], a.size))
+        V[a, np.arange(a.size)] = 1.0
+        V[p] = self.passive(self.Jc[:, a])
+        return V
+
+
+def passive_map(
+    robot: Robot,
+    q: np.ndarray,
+    *,
+    angular: str = "platform",
+    point: np.ndarray | None = None,
+    rank: int | None = None,
+) -> PassiveMap:
+    """Closure and platform Jacobians at ``q`` with the passive joints eliminated.
+
+    Args:
+        robot: The robot (with a platform frame).
+        q: Configuration (nq,) (not checked: the caller's).
+        angular: Axes of the platform Jacobian's angular rows (``platform``: task convention).
+        point: Reference point of the platform Jacobian, platform frame [m].
+        rank: Structural rank of the passive closure columns (``None``: decided at ``q``).
+
+    Returns:
+        The map; the kinematics and joint Jacobians of ``robot.data`` are at ``q``.
+
+    """
+    cs = robot.constraints
+    if cs.n:  # (runs the kinematics and joint Jacobians at q; closures and couplings)
+        Jc = cs.jacobian(robot.data, q)
+        Jx = _platform_jacobian(robot, None, point=point, angular=angular)
+    else:
+        Jc = np.zeros((0, robot.nv))
+        Jx = _platform_jacobian(robot, q, point=point, angular=angular)
+    a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)
+    el = numerics.passive_elimination(Jc[:, p], rank=rank)
+    return PassiveMap(Jc, Jx, el, a, p)
 
 
 def _checked_q(robot: Robot, q: Sequence[float] | np.ndarray) -> np.ndarray:
     qq = as_finite("q", q, robot.nq)
-    if robot.closure_set.nc:
-        res = float(np.max(np.abs(robot.closure_set.residual(robot.data, qq))))
+    if robot.constraints.n:
+        res = float(np.max(np.abs(robot.constraints.residual(robot.data, qq))))
         if res > ASSEMBLY_TOL:
             raise InvalidInputError(
                 "q",
@@ -207,7 +295,7 @@ def _relations(Jc: np.ndarray, Jx: np.ndarray, a: np.ndarray, p: np.ndarray) -> 
 
 
 @dataclass
-class KinematicModels:
+class KinematicModels(Result):
     """Kinematic models of a robot at one configuration.
 
     ``A x_dot = B qa_dot`` with ``[B, -A]`` orthonormal rows (see the module docstring). ``J``
@@ -232,6 +320,7 @@ class KinematicModels:
         J6: Full platform Jacobian (6, nv) at ``q``.
         actuated_v: Velocity indices of the actuators.
         passive_v: Velocity indices of the passive coordinates.
+        actuator_units: Unit of each actuator coordinate (``rad`` or ``m``).
 
     """
 
@@ -250,7 +339,70 @@ class KinematicModels:
     J6: np.ndarray
     actuated_v: np.ndarray
     passive_v: np.ndarray
+    actuator_units: tuple[str, ...] = ()
     _cache: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    def _optional(self, key: str) -> np.ndarray | None:
+        """``J`` or ``J_inv``, or ``None`` where it does not exist (a singularity)."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NearSingularityWarning)
+            try:
+                return np.asarray(getattr(self, key))
+            except SingularConfigurationError:
+                return None
+
+    def to_json(self) -> dict[str, Any]:
+        """The models as JSON values.
+
+        Returns:
+            ``A``, ``B``, ``J``, ``J_inv`` (``None`` at a parallel / serial singularity),
+            ``task``, ``actuators``, ``cond_A``, ``cond_B`` and the ``twist`` convention.
+
+        """
+        return jsonable(
+            {
+                "A": np.atleast_2d(self.A),
+                "B": np.atleast_2d(self.B),
+                "J": self._optional("J"),
+                "J_inv": self._optional("J_inv"),
+                "task": list(self.task),
+                "actuators": list(self.actuators),
+                "cond_A": self.cond_A,
+                "cond_B": self.cond_B,
+                "twist": "linear: platform origin velocity, world axes [m/s]; "
+                "angular: platform frame [rad/s]",
+            }
+        )
+
+    def table(self) -> str:
+        """``J`` and ``J_inv`` with their units by row and column, ``A``, ``B``, conditions."""
+        task = [f"{c} [{'m' if c in 'xyz' else 'rad'}]" for c in self.task]
+        units = self.actuator_units or ("",) * self.n_a
+        acts = [f"{n} [{u}]" if u else n for n, u in zip(self.actuators, units, strict=True)]
+        lines = []
+        J = self._optional("J")
+        if J is None:
+            lines.append("J: none (parallel singularity: A is singular)")
+        else:
+            lines += ["J = d(pose)/d(qa), x_dot = J qa_dot:", matrix(np.atleast_2d(J), task, acts)]
+        J_inv = self._optional("J_inv")
+        if J_inv is None:
+            lines.append("J_inv: none (serial singularity: B is singular)")
+        else:
+            lines += ["J_inv = d(qa)/d(pose):", matrix(np.atleast_2d(J_inv), acts, task)]
+        rows = [f"relation {k + 1}" for k in range(np.atleast_2d(self.A).shape[0])]
+        lines += [
+            "A, B: A x_dot = B qa_dot, rows of [B, -A] orthonormal (unit scale):",
+            matrix(
+                np.hstack([np.atleast_2d(self.A), np.atleast_2d(self.B)]),
+                rows,
+                [f"A:{c}" for c in self.task] + [f"B:{a}" for a in self.actuators],
+            ),
+            f"cond(A) = {quantity(self.cond_A)}, cond(B) = {quantity(self.cond_B)} (dimensionless)",
+            "twist: linear velocity of the platform origin, world axes [m/s]; angular, platform "
+            "frame [rad/s]",
+        ]
+        return "\n".join(lines)
 
     @property
     def m(self) -> int:
@@ -337,7 +489,7 @@ class KinematicModels:
             V = np.zeros((nv, a.size))
             V[a, np.arange(a.size)] = 1.0
             if self.Jc.shape[0]:
-                V[p] = -numerics.lstsq(self.Jc[:, p], self.Jc[:, a], 1e-10)
+                V[p] = -numerics.passive_elimination(self.Jc[:, p]).solve(self.Jc[:, a])
             self._cache["V"] = V
         return np.array(self._cache["V"])
 
@@ -357,7 +509,7 @@ def _relation_count(robot: Robot, rows: np.ndarray) -> int:
     count = _RELATION_COUNTS.get(key)
     if count is None:
         q = robot.q_home
-        Jc = robot.closure_set.jacobian(robot.data, q) if robot.closure_set.nc else None
+        Jc = robot.constraints.jacobian(robot.data, q) if robot.constraints.n else None
         Jc = np.zeros((0, robot.nv)) if Jc is None else Jc
         Jx = platform_jacobian(robot, q)[rows]
         rel = _relations(Jc, Jx, np.asarray(robot.actuated_v), np.asarray(robot.passive_v))
@@ -386,7 +538,7 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
     rows = np.asarray(robot.task_rows, dtype=int)
     r = _relation_count(robot, rows)  # (at home, once: before the kinematics at q)
     nv = robot.nv
-    Jc = robot.closure_set.jacobian(robot.data, qq) if robot.closure_set.nc else np.zeros((0, nv))
+    Jc = robot.constraints.jacobian(robot.data, qq) if robot.constraints.n else np.zeros((0, nv))
     J6 = platform_jacobian(robot, qq)
     Jx = J6[rows]
     a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)
@@ -424,6 +576,7 @@ def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> Kinematic
         J6=J6,
         actuated_v=a,
         passive_v=p,
+        actuator_units=tuple("m" if pr else "rad" for pr in robot.actuator_prismatic),
     )
 
 
@@ -506,22 +659,4 @@ def jacobian_json(robot: Robot, q: Sequence[float] | np.ndarray) -> dict[str, An
         ``J`` (``J_inv``) is ``None`` at a parallel (serial) singularity.
 
     """
-    km = kinematic_models(robot, q)
-    out: dict[str, Any] = {
-        "A": _matrix(km.A),
-        "B": _matrix(km.B),
-        "task": list(km.task),
-        "actuators": list(km.actuators),
-        "cond_A": km.cond_A,
-        "cond_B": km.cond_B,
-        "twist": "linear: platform origin velocity, world axes [m/s]; "
-        "angular: platform frame [rad/s]",
-    }
-    for key in ("J", "J_inv"):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", NearSingularityWarning)
-            try:
-                out[key] = _matrix(getattr(km, key))
-            except SingularConfigurationError:
-                out[key] = None
-    return out
+    return kinematic_models(robot, q).to_json()

@@ -24,6 +24,7 @@ rotation); :func:`pkdyn.analysis.singularity.classify` on the full model does. P
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -44,6 +45,8 @@ from pkdyn.analysis.screws import delta_AB, normalise, planar_3rrr_AB, planar_3r
 from pkdyn.closed_form import delta as delta_cf
 from pkdyn.closed_form import planar_3rrr as rrr_cf
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity
 
 __all__ = [
     "KIND_NAMES",
@@ -61,7 +64,7 @@ KIND_NAMES = ("regular", "serial", "parallel", "both")
 
 
 @dataclass
-class Conditioning:
+class Conditioning(Result):
     """Singularity and conditioning indicators of N poses.
 
     Attributes:
@@ -88,6 +91,23 @@ class Conditioning:
     manipulability: np.ndarray
     kind: np.ndarray
     near: np.ndarray
+
+    def to_json(self) -> dict[str, Any]:
+        """Every indicator (dimensionless; ``None`` where not finite), ``kind`` codes."""
+        return jsonable(dict(self.__dict__))
+
+    def table(self) -> str:
+        """Reachable poses, how many are singular of each kind, the range of the LCI."""
+        kind = np.asarray(self.kind)
+        counts = ", ".join(
+            f"{name} {int(np.count_nonzero(kind == code))}"
+            for code, name in enumerate(("regular", "serial", "parallel", "both"))
+        )
+        return (
+            f"{int(np.count_nonzero(self.valid))} of {np.asarray(self.valid).size} poses "
+            f"reachable: {counts}; {int(np.count_nonzero(self.near))} near a singularity; "
+            f"{_range('LCI', self.lci)} (dimensionless)"
+        )
 
     def reshape(self, shape: tuple[int, ...]) -> Conditioning:
         """The same indicators reshaped (e.g. to a grid)."""
@@ -213,7 +233,7 @@ def planar_3rrr_conditioning(
 
 
 @dataclass
-class ConditioningMap:
+class ConditioningMap(Result):
     """Indicators on a 2D grid of a workspace slice.
 
     Attributes:
@@ -232,6 +252,32 @@ class ConditioningMap:
     v: np.ndarray
     fixed: dict[str, float] = field(default_factory=dict)
     data: Conditioning | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The grid (``u``, ``v`` [m or rad]), the slice and the indicators ((nv, nu) each)."""
+        return jsonable(
+            {
+                "robot": self.robot,
+                "axes": list(self.axes),
+                "u": self.u,
+                "v": self.v,
+                "fixed": self.fixed,
+                "data": None if self.data is None else self.data.to_json(),
+            }
+        )
+
+    def table(self) -> str:
+        """The slice and the grid, then the indicators' summary."""
+        unit = {"x": "m", "y": "m", "z": "m"}
+        grid = ", ".join(
+            f"{ax} {quantity(float(w[0]), unit.get(ax, 'rad'))} .. "
+            f"{quantity(float(w[-1]), unit.get(ax, 'rad'))} ({w.size})"
+            for ax, w in zip(self.axes, (self.u, self.v), strict=True)
+            if w.size
+        )
+        fixed = ", ".join(f"{k} = {quantity(v, unit.get(k, 'rad'))}" for k, v in self.fixed.items())
+        head = f"{self.robot} map: {grid}" + (f"; {fixed}" if fixed else "")
+        return head + ("" if self.data is None else "\n" + self.data.table())
 
 
 _DELTA_AXES = {"xy": (0, 1, 2), "xz": (0, 2, 1), "yz": (1, 2, 0)}
@@ -316,3 +362,12 @@ def planar_3rrr_map(
         {"phi": float(phi)},
         planar_3rrr_conditioning(g, X, mode, length).reshape(Xg.shape),
     )
+
+
+def _range(name: str, x: np.ndarray, unit: str = "") -> str:
+    """``name min .. max unit`` over the finite values (or ``none``)."""
+    x = np.asarray(x, dtype=float)
+    ok = x[np.isfinite(x)]
+    if ok.size == 0:
+        return f"{name}: none"
+    return f"{name} {quantity(float(ok.min()), unit)} .. {quantity(float(ok.max()), unit)}"

@@ -36,6 +36,7 @@ from pkdyn.exceptions import AssemblyError, InvalidInputError
 from pkdyn.model.assembly import project
 from pkdyn.model.description import CLOSURE_KINDS
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
+from pkdyn.results import Result, deprecated_alias
 from solvers import FramePoseTask, numerics
 
 __all__ = [
@@ -80,7 +81,7 @@ class InternalMobility:
 
 
 @dataclass(frozen=True)
-class MobilityResult:
+class MobilityResult(Result):
     """Mobility analysis of a robot (see :func:`mobility`).
 
     Attributes:
@@ -94,8 +95,7 @@ class MobilityResult:
         nv: Velocity coordinates of the model (modelling joints included).
         closure_rows: Rows of the closure Jacobian of the model (a hinge gives 6 rows).
         rank: Rank of the closure Jacobian ``J_c`` (closure_rows x nv) at ``q``; the platform's
-            free-flyer or planar coordinates count in ``nv``, so ``mobility = nv - rank``
-            (less the ``floating`` coordinates).
+            free-flyer or planar coordinates count in ``nv``, so ``mobility = nv - rank``.
         closure_rank: Pasqui's ``rc = Ic - m``, rank of the ``Ec`` closure equations.
         mobility: Mobility ``m`` (degrees of freedom, internal ones included).
         hyperstatism: Degree of hyperstatism ``h = Ec - rc`` (redundant closure equations).
@@ -104,7 +104,8 @@ class MobilityResult:
         internal: Internal mobility ``m_i = m - m_u``.
         internal_modes: Description of each internal mobility.
         floating: Degrees of freedom of free-floating components (a floating base not tied to
-            the ground), excluded from ``mobility`` as from Grübler's count.
+            the ground): counted in ``mobility`` and in both counts' ``Ic`` (as in
+            :meth:`pkdyn.Robot.mobility`: the Mini Cheetah has 18 = 6 + 12), said apart.
         q: Assembled configuration the ranks were computed at (nq,).
         singular_values: Singular values of ``J_c``, decreasing.
         couplings: Number of joint couplings (one row of ``J_c`` each).
@@ -136,7 +137,13 @@ class MobilityResult:
         """Description of each internal mobility."""
         return tuple(m.description for m in self.internal_modes)
 
-    def as_json(self) -> dict[str, Any]:
+    def table(self) -> str:
+        """Both counts with their terms, the useful / internal split, the internal mobilities."""
+        return format_mobility(self)
+
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def to_json(self) -> dict[str, Any]:
         """The result as a JSON-serialisable dictionary.
 
         Returns:
@@ -159,6 +166,7 @@ class MobilityResult:
             "equations": self.equations,
             "closure_rank": self.closure_rank,
             "couplings": self.couplings,
+            "floating": self.floating,
             "internal_names": list(self.internal_names),
         }
 
@@ -207,8 +215,8 @@ def mobility(
     Ic += sum(CLOSURE_FREEDOM[kinds[name]] for name in dict.fromkeys(robot.constraint_owner))
     loops = robot.loops
 
-    if robot.closure_set.nc:
-        _, Jc = robot.closure_set.residual_and_jacobian(data, qq)
+    if robot.constraints.n:
+        _, Jc = robot.constraints.residual_and_jacobian(data, qq)
     else:
         Jc = np.zeros((0, model.nv))
         pin.computeJointJacobians(model, data, qq)
@@ -221,7 +229,7 @@ def mobility(
     m = N.shape[1]
     if d is None:
         d = 3 if _plane_normal(robot, physical) is not None else 6
-    n_k = len(robot.closure_set.couplings)
+    n_k = robot.constraints.nk
     Ec = d * loops + n_k
     rc = Ic - m
 
@@ -235,23 +243,24 @@ def mobility(
         useful = m - coeffs.shape[1]
         V = N @ coeffs
     modes = _describe_internal(robot, V, tol)
+    nf = len(float_v)  # a floating base's coordinates: degrees of freedom, counted and said
     return MobilityResult(
         robot=robot.name,
         d=d,
         loops=loops,
-        joint_mobility=Ic,
-        grubler=Ic - Ec,
+        joint_mobility=Ic + nf,
+        grubler=Ic + nf - Ec,
         equations=Ec,
         nv=int(model.nv),
         closure_rows=int(Jc.shape[0]),
         rank=rank,
         closure_rank=rc,
-        mobility=m,
+        mobility=m + nf,
         hyperstatism=Ec - rc,
         useful=useful,
         internal=m - useful,
         internal_modes=modes,
-        floating=len(float_v),
+        floating=nf,
         q=qq,
         singular_values=sv,
         couplings=n_k,
@@ -272,9 +281,10 @@ def format_mobility(result: MobilityResult) -> str:
     r = result
     space = "planar, d = 3" if r.d == 3 else "spatial, d = 6"
     coupled = f" - {r.couplings}" if r.couplings else ""
+    floating = f" + {r.floating} free-floating" if r.floating else ""
     lines = [
-        f"{r.robot}: mobility {r.mobility} = {r.useful} useful + {r.internal} internal "
-        f"({space}, {r.loops} loop{'' if r.loops == 1 else 's'}"
+        f"{r.robot}: mobility {r.mobility} = {r.useful} useful + {r.internal} internal"
+        f"{floating} ({space}, {r.loops} loop{'' if r.loops == 1 else 's'}"
         + (f", {r.couplings} coupling{'' if r.couplings == 1 else 's'}" if r.couplings else "")
         + ")",
         f"  Grübler-Kutzbach: MO = sum f_i - d * loops{' - couplings' if coupled else ''} = "
@@ -284,7 +294,10 @@ def format_mobility(result: MobilityResult) -> str:
         f"  closure Jacobian: {r.closure_rows} x {r.nv}, rank {r.rank}",
     ]
     if r.floating:
-        lines.append(f"  free-floating: {r.floating} more degrees of freedom (not counted)")
+        lines.append(
+            f"  free-floating: {r.floating} of them move a base not tied to the ground (its "
+            "joint counts in sum f_i)"
+        )
     if r.hyperstatism > 0:
         lines.append(
             f"  Grübler's count is wrong here: {r.hyperstatism} closure "

@@ -63,6 +63,8 @@ from pkdyn.analysis.kinematics import (
 )
 from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result
+from pkdyn.units import quantity
 from solvers import numerics
 
 __all__ = ["SingularityReport", "classify", "singularity_json"]
@@ -72,7 +74,7 @@ _PLATFORM_RELATIONS: dict[int, int] = {}
 
 
 @dataclass
-class SingularityReport:
+class SingularityReport(Result):
     """Singularity analysis of one configuration.
 
     Attributes:
@@ -114,6 +116,29 @@ class SingularityReport:
     task: tuple[str, ...]
     actuators: tuple[str, ...]
 
+    def table(self) -> str:
+        """The kind, the scale-aware margin and the conditions; the singular directions."""
+        lines = [
+            f"{self.kind}: margin = {quantity(self.margin)} (scale-aware, 0: singular), "
+            f"cond(A) = {quantity(self.cond_A)}, cond(B) = {quantity(self.cond_B)} "
+            "(dimensionless)"
+            + ("; near a singularity" if self.near and self.kind == "regular" else "")
+        ]
+        task = [f"{c} [{'m/s' if c in 'xyz' else 'rad/s'}]" for c in self.task]
+        for D, what, names in (
+            (self.parallel_directions, "uncontrolled platform velocity", task),
+            (
+                self.serial_directions,
+                "actuator rates that do not move the platform",
+                list(self.actuators),
+            ),
+        ):
+            for d in np.atleast_2d(D):
+                if d.size:
+                    parts = ", ".join(f"{n} {_num(v)}" for n, v in zip(names, d, strict=True))
+                    lines.append(f"  {what} (unit direction): {parts}")
+        return "\n".join(lines)
+
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dict (see :func:`singularity_json`)."""
         return {
@@ -133,6 +158,10 @@ class SingularityReport:
             "task": list(self.task),
             "actuators": list(self.actuators),
         }
+
+
+def _num(v: float) -> str:
+    return quantity(v if abs(v) > 1e-12 else 0.0, "", 3)
 
 
 def _null_dirs(M: np.ndarray, n: int, tol: float) -> tuple[float, np.ndarray]:

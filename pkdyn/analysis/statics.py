@@ -18,10 +18,12 @@ Jacobian, ``J6`` the 6D platform Jacobian and ``g`` the generalised gravity (opt
 springs' generalized force ``f_s(q)`` on the left when the robot has springs (``robot.passive``;
 dampers and friction vanish at rest: the smooth friction model holds nothing), solved in
 the least-squares sense (minimum norm in ``lambda`` when closure equations are redundant, e.g.
-hinges). ``lambda`` holds the closure forces, with the sign of the residual conventions of
-:mod:`solvers.closure`: for a ``point`` closure (residual ``p1 - p2``), the force [N] body 2
-exerts on body 1 at the contact point, world axes; for a 6D weld (residual
-``log6(oMc1^-1 oMc2)``), the wrench [N, N m] body 1 exerts on body 2, in the contact frame.
+an over-constrained loop). ``lambda`` holds the multipliers of the constraint rows
+(``robot.constraints``), with the sign of the residual conventions of :mod:`solvers.closure`:
+for the point rows of a closure (residual ``p1 - p2``), the force [N] body 2 exerts on body 1 at
+the contact point, world axes; for a 6D weld (residual ``log6(oMc1^-1 oMc2)``), the wrench
+[N, N m] body 1 exerts on body 2, in the contact frame; then the couplings' generalized forces.
+:func:`closure_reactions` turns them into one force and one moment per closure.
 """
 
 from __future__ import annotations
@@ -37,8 +39,11 @@ import pinocchio as pin
 from pkdyn.analysis.kinematics import SINGULAR_TOL, NearSingularityWarning, kinematic_models
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
 from pkdyn.model.arguments import public
+from pkdyn.model.description import LinearCouplingSpec
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity, vector
 from solvers import numerics
 
 __all__ = [
@@ -114,14 +119,13 @@ def platform_wrench(
 
 
 @dataclass(frozen=True)
-class Reaction:
+class Reaction(Result):
     """The reaction of one closure: one force and one moment.
 
     What the closure's second body (its ``frame2`` link) exerts on the first, world axes, the
     moment about the closure point (``frame1``'s origin). A ``point`` closure carries no moment;
-    a ``hinge``, built from two point constraints along its axis (whose individual forces are
-    only defined up to an exchange along the axis), gets their resultant and the moment of the
-    second about the first's point (normal to the axis); a ``weld`` carries both.
+    a ``hinge`` a moment normal to its axis; a ``weld`` both
+    (:meth:`solvers.ConstraintSet.reactions`).
 
     Attributes:
         force: Force (3,) [N].
@@ -134,13 +138,17 @@ class Reaction:
     moment: np.ndarray
     point: np.ndarray
 
-    def to_json(self) -> dict[str, list[float]]:
-        """``{"force", "moment", "point"}`` as lists."""
-        return {
-            "force": self.force.tolist(),
-            "moment": self.moment.tolist(),
-            "point": self.point.tolist(),
-        }
+    def to_json(self) -> dict[str, Any]:
+        """``{"force", "moment", "point"}`` as lists [N, N m, m]."""
+        return jsonable({"force": self.force, "moment": self.moment, "point": self.point})
+
+    def table(self) -> str:
+        """Force, moment and the point it is taken about."""
+        return (
+            f"force {vector(self.force, 'N', roundoff=1e-12)}, moment "
+            f"{vector(self.moment, 'N m', roundoff=1e-12)} about "
+            f"{vector(self.point, 'm', roundoff=1e-12)} (on its first body, world axes)"
+        )
 
 
 def closure_reactions(robot: Robot, q: np.ndarray, lambdas: np.ndarray) -> dict[str, Reaction]:
@@ -149,48 +157,35 @@ def closure_reactions(robot: Robot, q: np.ndarray, lambdas: np.ndarray) -> dict[
     Args:
         robot: The robot.
         q: Configuration (nq,).
-        lambdas: Closure forces (nc,) in the convention of the module docstring.
+        lambdas: Constraint forces (n,) in the convention of the module docstring (the
+            couplings' rows, if any, are not closures: left out).
 
     Returns:
         ``{closure name: Reaction}``, in the description's order.
 
     """
-    model, data = robot.model, robot.model.createData()
-    pin.forwardKinematics(model, data, q)
-    cs = robot.closure_set
-    out: dict[str, Reaction] = {}
-    for k, (is_point, j1, M1, j2, M2) in enumerate(cs.items):
-        lam = np.asarray(lambdas[cs.offsets[k] : cs.offsets[k + 1]], dtype=float)
-        owner = robot.constraint_owner[k]
-        p = (data.oMi[j1] * M1).translation
-        if is_point:
-            force, moment = lam.copy(), np.zeros(3)
-        else:  # the wrench body 1 exerts on body 2, contact frame: minus it, in world axes
-            R = (data.oMi[j2] * M2).rotation
-            force, moment = -(R @ lam[:3]), -(R @ lam[3:])
-        if owner in out:  # a hinge's second point: add it to the first, with its moment
-            first = out[owner]
-            out[owner] = Reaction(
-                first.force + force, first.moment + np.cross(p - first.point, force), first.point
-            )
-        else:
-            out[owner] = Reaction(force, moment, np.array(p))
-    return out
+    cs = robot.constraints
+    out = cs.reactions(robot.model.createData(), q, np.asarray(lambdas, dtype=float))
+    return {name: Reaction(f, m, p) for name, (f, m, p) in out.items()}
 
 
 @dataclass
-class StaticsResult:
+class StaticsResult(Result):
     """Static equilibrium of the whole mechanism.
 
     Attributes:
         tau: Actuator efforts (n_a,) [N m or N].
-        lambdas: Closure forces (nc,) [N, N m] (convention in the module docstring).
+        lambdas: Constraint forces (n,) [N, N m] (convention in the module docstring).
         reactions: One force and one moment per closure, by closure name (:class:`Reaction`).
         residual: Norm of the unbalanced generalised force [N m or N] (round-off when the
             equilibrium exists).
         couplings: The force of each joint coupling (:mod:`solvers.coupling`), by coupling
             name: the generalized force [N m or N] it applies to its driven joint (the source
             receives ``-p'`` times it, ``p'`` the law's derivative).
+        actuators: Actuator names, in order.
+        units: Unit of each actuator effort (``N m`` or ``N``).
+        linear_couplings: Names of the linear couplings (their force acts on each joint times
+            its coefficient; the others' on their driven joint).
 
     """
 
@@ -199,15 +194,36 @@ class StaticsResult:
     reactions: dict[str, Reaction]
     residual: float
     couplings: dict[str, float] = field(default_factory=dict)
+    actuators: tuple[str, ...] = ()
+    units: tuple[str, ...] = ()
+    linear_couplings: tuple[str, ...] = ()
 
     def to_json(self) -> dict[str, Any]:
-        """JSON-ready dict."""
-        return {
-            "tau": self.tau.tolist(),
-            "reactions": {k: v.to_json() for k, v in self.reactions.items()},
-            "couplings": dict(self.couplings),
-            "residual": self.residual,
-        }
+        """``tau`` [N m or N], ``actuators``, ``reactions``, ``couplings``, ``residual``."""
+        return jsonable(
+            {
+                "tau": self.tau,
+                "actuators": list(self.actuators),
+                "reactions": {k: v.to_json() for k, v in self.reactions.items()},
+                "couplings": dict(self.couplings),
+                "residual": self.residual,
+            }
+        )
+
+    def table(self) -> str:
+        """One line per actuator effort, per closure reaction and per coupling force."""
+        names = self.actuators or tuple(f"actuator {k + 1}" for k in range(self.tau.size))
+        units = self.units or ("N m or N",) * self.tau.size
+        lines = [f"{n}: {quantity(t, u)}" for n, t, u in zip(names, self.tau, units, strict=True)]
+        lines += [f"closure {k}: {r.table()}" for k, r in self.reactions.items()]
+        for k, f in self.couplings.items():
+            on = (
+                "each joint times its coefficient"
+                if k in self.linear_couplings
+                else ("on its driven joint")
+            )
+            lines.append(f"coupling {k}: {quantity(f)} N m or N ({on})")
+        return "\n".join(lines)
 
 
 @public
@@ -272,9 +288,18 @@ def static_equilibrium(
             f"{robot.name}: parallel singularity: actuator efforts are not unique here",
         )
     tau, lam = sol[:n_a], sol[n_a:]
-    cs = robot.closure_set
-    couplings = {c.name: float(lam[cs.n_rigid + i]) for i, c in enumerate(cs.couplings)}
-    return StaticsResult(tau, lam, closure_reactions(robot, km.q, lam), residual, couplings)
+    couplings = robot.constraints.coupling_forces(lam)
+    linear = tuple(c.name for c in robot.couplings if isinstance(c, LinearCouplingSpec))
+    return StaticsResult(
+        tau,
+        lam,
+        closure_reactions(robot, km.q, lam),
+        residual,
+        couplings,
+        actuators=tuple(robot.actuator_names),
+        units=tuple("N" if p else "N m" for p in robot.actuator_prismatic),
+        linear_couplings=linear,
+    )
 
 
 def statics_json(
@@ -295,7 +320,4 @@ def statics_json(
         ``{"tau", "actuators", "reactions", "couplings", "residual"}``.
 
     """
-    res = static_equilibrium(robot, q, F, gravity)
-    out = res.to_json()
-    out["actuators"] = robot.actuator_names
-    return out
+    return static_equilibrium(robot, q, F, gravity).to_json()

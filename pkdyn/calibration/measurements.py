@@ -18,17 +18,17 @@ Kinds (:data:`KINDS`):
 Implicit kinds add unknowns (the point's 3 coordinates, the plane's normal and offset) that the
 calibration identifies with the robot's parameters.
 
-CSV file (:func:`read_csv`): one row per measurement, columns ``qa_<actuator>`` (actuator
-readings [rad or m], every actuator, by name) and ``x y z`` (position), ``x y z rx ry rz``
-(pose), ``group`` (``point`` and ``plane``, which the caller names), or ``q_<joint>`` (``joints``:
-read whenever such columns are present). Missing or extra columns, empty or non-numeric cells
-and NaN are refused with one line naming them.
+Table file (:func:`read_csv`: CSV or Parquet, read by :func:`pkdyn.tables.read_table` with its
+rules and limits): one row per measurement, columns ``qa_<actuator>`` (actuator **readings**
+[rad or m], every actuator, by name: the robot turns them into joint coordinates,
+:meth:`pkdyn.Robot.joint_coordinates`) and ``x y z`` (position), ``x y z rx ry rz`` (pose),
+``group`` (``point`` and ``plane``, which the caller names), or ``q_<joint>`` (``joints``: read
+whenever such columns are present). Missing or extra columns are refused with one line naming
+them.
 """
 
 from __future__ import annotations
 
-import csv
-import io
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -72,6 +72,10 @@ class Measurements:
             or plane per group).
         joints: Names of the measured passive joints (``joints``).
         q: Their measured coordinates (N, len(joints)) [rad or m] (``joints``).
+        lines: Line (CSV) or row (Parquet) of each measurement in its file (N,), for
+            messages; ``None`` for measurements made in memory.
+        source: The file they were read from (``""``: made in memory).
+        line_word: ``line`` (CSV) or ``row`` (Parquet), for messages.
 
     """
 
@@ -83,6 +87,18 @@ class Measurements:
     joints: tuple[str, ...] = ()
     q: np.ndarray | None = None
     _rotations: np.ndarray | None = field(default=None, repr=False)
+    lines: np.ndarray | None = field(default=None, repr=False)
+    source: str = ""
+    _rows: np.ndarray | None = field(default=None, repr=False)
+    line_word: str = field(default="line", repr=False)
+
+    def where(self, i: int) -> str:
+        """``line L`` of its file (``row R`` of a Parquet file, or of the measurements given)."""
+        if self.lines is not None:
+            return f"{self.line_word} {int(self.lines[int(i)])}"
+        if self._rows is not None:
+            return f"row {int(self._rows[int(i)])}"
+        return f"row {int(i) + 1}"
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -138,7 +154,8 @@ class Measurements:
             if np.any(np.abs(arr) > MAX_MAGNITUDE):
                 row = int(np.argwhere(np.abs(arr) > MAX_MAGNITUDE)[0][0])
                 raise InvalidInputError(
-                    name, f"row {row + 1} holds a value beyond any plausible one (at most 1e9)"
+                    name,
+                    f"{self.where(row)} holds a value beyond any plausible one (at most 1e9)",
                 )
             if name == "group":
                 if np.any(arr != np.round(arr)):
@@ -195,6 +212,26 @@ class Measurements:
             None if self.group is None else self.group[i],
             self.joints,
             None if self.q is None else self.q[i],
+            lines=None if self.lines is None else self.lines[i],
+            source=self.source,
+            _rows=(np.arange(1, len(self) + 1) if self._rows is None else self._rows)[i],
+            line_word=self.line_word,
+        )
+
+    def with_readings(self, qa: np.ndarray) -> Measurements:
+        """The same measurements with other actuator values (N, n_a) (e.g. joint coordinates)."""
+        return Measurements(
+            self.kind,
+            qa,
+            self.position,
+            self.rpy,
+            self.group,
+            self.joints,
+            self.q,
+            lines=self.lines,
+            source=self.source,
+            _rows=self._rows,
+            line_word=self.line_word,
         )
 
     @classmethod
@@ -279,42 +316,39 @@ def _columns(robot: Robot, kind: str, joints: Sequence[str] = ()) -> list[str]:
 
 @public
 def read_csv(path: str | os.PathLike[str], robot: Robot, kind: str | None = None) -> Measurements:
-    """Measurements from a CSV file (module docstring).
+    """Measurements from a table file (module docstring): CSV or Parquet.
+
+    The file is read by :func:`pkdyn.tables.read_table` (its rules: quoting, encodings, empty,
+    non-numeric and non-finite cells, ragged rows, limits), then its columns are checked.
 
     Args:
         path: The file.
         robot: The robot (its actuator names give the ``qa_<actuator>`` columns).
         kind: ``point`` or ``plane`` for implicit measurements (a ``group`` column); default:
-            ``pose`` when ``rx ry rz`` are present, else ``position``.
+            ``joints`` when ``q_<joint>`` columns are present, ``pose`` when ``rx ry rz`` are,
+            else ``position``.
 
     Returns:
-        The measurements.
+        The measurements (readings as recorded: :func:`~pkdyn.calibration.calibrate` applies the
+        robot's readings rule).
 
     Raises:
-        InvalidInputError: Missing or extra columns, non-numeric or NaN cells, no rows, or an
-            unreadable file (one line naming what is wrong).
+        InvalidInputError: Missing, extra or repeated columns, non-numeric or NaN cells, no
+            rows, or an unreadable file (one line naming what is wrong).
 
     """
-    from pkdyn.files import read_text
+    from pkdyn.tables import read_table
 
-    text = read_text(
-        path, MAX_BYTES, lambda msg: InvalidInputError(str(path), f"measurements file {msg}")
+    table = read_table(
+        path,
+        "measurement",
+        MAX_BYTES,
+        MAX_ROWS,
+        hint="each calibration iteration solves the forward geometry at every pose; a few "
+        "hundred well chosen poses suffice (pkdyn.calibration.selection)",
     )
-    try:
-        rows = list(csv.reader(io.StringIO(text.lstrip("\ufeff"), newline="")))
-    except csv.Error as err:  # a cell beyond the csv module's field limit, a NUL byte
-        raise InvalidInputError(str(path), f"measurements file: not a CSV table ({err})") from None
-    rows = [r for r in rows if any(c.strip() for c in r)]
-    if len(rows) - 1 > MAX_ROWS:
-        raise InvalidInputError(
-            str(path),
-            f"{len(rows) - 1} measurements: at most {MAX_ROWS} (each calibration iteration "
-            "solves the forward geometry at every pose; a few hundred well chosen poses "
-            "suffice, see pkdyn.calibration.selection)",
-        )
-    if not rows:
-        raise InvalidInputError(str(path), "is empty: expected a header and one row per pose")
-    header = [c.strip() for c in rows[0]]
+    src = table.source
+    header = list(table.columns)
     sensors = [c[2:] for c in header if c.startswith("q_")]
     if kind is None:
         if sensors:
@@ -330,66 +364,46 @@ def read_csv(path: str | os.PathLike[str], robot: Robot, kind: str | None = None
                 from pkdyn.exceptions import close_match
 
                 raise InvalidInputError(
-                    str(path),
+                    src,
                     f"column q_{name}: '{name}' is not a passive 1-DoF joint of {robot.name}"
                     f"{close_match(name, known)} (measurable: {', '.join(known) or 'none'})",
                 )
         if not sensors:
             raise InvalidInputError(
-                str(path), "joints measurements need q_<joint> columns (passive joint encoders)"
+                src, "joints measurements need q_<joint> columns (passive joint encoders)"
             )
-    want = _columns(robot, kind, list(dict.fromkeys(sensors)))
+    want = _columns(robot, kind, sensors)
     missing = [c for c in want if c not in header]
     extra = [c for c in header if c not in want]
-    dupes = sorted({c for c in header if header.count(c) > 1})
-    if missing or extra or dupes:
+    if missing or extra:
         parts = []
         if missing:
             parts.append(f"missing column(s) {', '.join(missing)}")
         if extra:
             parts.append(f"unexpected column(s) {', '.join(extra)}")
-        if dupes:
-            parts.append(f"repeated column(s) {', '.join(dupes)}")
         raise InvalidInputError(
-            str(path),
-            f"{'; '.join(parts)} (a {kind} CSV has exactly: {' '.join(want)})",
+            src, f"{'; '.join(parts)} (a {kind} table has exactly: {' '.join(want)})"
         )
-    data = np.empty((len(rows) - 1, len(want)))
-    if len(data) == 0:
-        raise InvalidInputError(str(path), "has a header but no measurement rows")
-    col = [header.index(c) for c in want]
-    for i, r in enumerate(rows[1:], start=2):
-        if len(r) != len(header):
-            raise InvalidInputError(
-                str(path), f"line {i} has {len(r)} cells, the header {len(header)}"
-            )
-        for j, c in enumerate(col):
-            text = r[c].strip()
-            try:
-                v = float(text)
-            except ValueError:
-                raise InvalidInputError(
-                    str(path), f"line {i}, column {want[j]}: '{text}' is not a number"
-                ) from None
-            if not np.isfinite(v):
-                raise InvalidInputError(
-                    str(path), f"line {i}, column {want[j]}: {text} (give finite numbers)"
-                )
-            data[i - 2, j] = v
+    data = table.select(want)
     n_a = len(robot.actuators)
     qa = data[:, :n_a]
+    at = {"lines": table.lines, "source": src, "line_word": table.where(0).split()[0]}
     if kind == "pose":
-        return Measurements(kind, qa, data[:, n_a : n_a + 3], data[:, n_a + 3 : n_a + 6])
+        P, rpy = data[:, n_a : n_a + 3], data[:, n_a + 3 : n_a + 6]
+        return Measurements(kind, qa, P, rpy, **at)  # type: ignore[arg-type]
     if kind == "position":
-        return Measurements(kind, qa, data[:, n_a : n_a + 3])
+        return Measurements(kind, qa, data[:, n_a : n_a + 3], **at)  # type: ignore[arg-type]
     if kind == "joints":
-        return Measurements(kind, qa, joints=tuple(c[2:] for c in want[n_a:]), q=data[:, n_a:])
-    return Measurements(kind, qa, group=data[:, n_a])
+        joints = tuple(c[2:] for c in want[n_a:])
+        return Measurements(kind, qa, joints=joints, q=data[:, n_a:], **at)  # type: ignore[arg-type]
+    return Measurements(kind, qa, group=data[:, n_a], **at)  # type: ignore[arg-type]
 
 
 @public
 def write_csv(path: str | os.PathLike[str], robot: Robot, m: Measurements) -> None:
-    """Write measurements as a CSV file :func:`read_csv` reads back (atomically).
+    """Write measurements as a table :func:`read_csv` reads back exactly (atomically).
+
+    CSV, or Parquet when the file name ends in ``.parquet``.
 
     Args:
         path: The file.
@@ -398,9 +412,9 @@ def write_csv(path: str | os.PathLike[str], robot: Robot, m: Measurements) -> No
 
     """
     from pkdyn.inputs import instance
+    from pkdyn.tables import write_table
 
     instance("m", m, Measurements, "Measurements (pkdyn.calibration.read_csv)")
-    from pkdyn.files import atomic_write
 
     cols = _columns(robot, m.kind, m.joints)
     if m.kind == "joints":
@@ -415,6 +429,4 @@ def write_csv(path: str | os.PathLike[str], robot: Robot, m: Measurements) -> No
     else:
         assert m.group is not None
         data = np.hstack([m.qa, m.group[:, None]])
-    lines = [",".join(cols)] + [",".join(repr(float(v)) for v in row) for row in data]
-    with atomic_write(path) as fh:
-        fh.write("\n".join(lines) + "\n")
+    write_table(path, cols, data)

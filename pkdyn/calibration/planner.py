@@ -11,11 +11,11 @@ the calibrated robot reach a target accuracy?" from simulated calibrations of pe
    (:func:`~pkdyn.precision.perturbation.perturbed`) and solves its forward geometry at the
    readings of every pose (the truth);
 3. for each pose count ``N`` and noise ``sigma``, the truth at the ``N`` poses plus Gaussian
-   noise is the measurement; the identifiable parameters are estimated by Gauss-Newton
-   iterations (the nominal identification Jacobian, the residuals from the forward geometry of
-   the current estimate, :data:`ITERATIONS` of them, which is where :func:`~pkdyn.calibration.
-   calibrate` converges for millimetre errors); the estimated robot's position error at the
-   validation poses (RMS and largest) is recorded.
+   noise is the measurement, and :func:`~pkdyn.calibration.calibrate` itself estimates the
+   errors from it (the estimator a calibration uses: robust weights, the prior, iterations to
+   convergence; stated noise ``sigma``, no hold-out, the trust rules not applied); the
+   estimated robot's position error at the validation poses (RMS and largest) is recorded (a
+   calibration that fails counts as an infinite error).
 
 The result (:class:`CalibrationPlan`) tabulates the mean errors over the trials and, per noise,
 the smallest pose count that meets the target.
@@ -23,6 +23,7 @@ the smallest pose count that meets the target.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -30,27 +31,28 @@ from typing import Any
 import numpy as np
 
 from pkdyn.calibration.identifiability import identifiability
+from pkdyn.calibration.measurements import Measurements
 from pkdyn.calibration.selection import candidate_poses, design_matrix, select_poses
+from pkdyn.calibration.solve import calibrate
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.assembly import forward_geometry
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel, parameter_model
 from pkdyn.precision.perturbation import perturbed
 from pkdyn.progress import progress
+from pkdyn.results import Result, deprecated
 from pkdyn.threads import one_blas_thread
-from solvers import numerics
+from pkdyn.units import quantity
 
-__all__ = ["ITERATIONS", "CalibrationPlan", "plan_calibration"]
+__all__ = ["CalibrationPlan", "plan_calibration"]
 
-MAX_RUNS = 20_000
-"""Most simulated calibrations of one plan (trials x noise levels x pose counts)."""
-
-ITERATIONS = 3
-"""Gauss-Newton iterations of a simulated calibration."""
+MAX_RUNS = 2_000
+"""Most simulated calibrations of one plan (trials x noise levels x pose counts): each is a
+whole calibration (0.1 to 1 s), so that a plan stays under about half an hour."""
 
 
 @dataclass
-class CalibrationPlan:
+class CalibrationPlan(Result):
     """Simulated calibration accuracy per pose count and measurement noise.
 
     Attributes:
@@ -98,17 +100,45 @@ class CalibrationPlan:
         if not rec:
             return (
                 f"no tested pose count and noise reaches a {what} position error of "
-                f"{self.target:.3g} m (best: {float(np.min(self.rms)):.3g} m RMS)"
+                f"{quantity(self.target, 'm')} (best: {quantity(float(np.min(self.rms)), 'm')} "
+                "RMS)"
             )
         s_max = max(rec)
         return (
-            f"a {what} position error <= {self.target:.3g} m needs a measurement noise <= "
-            f"{s_max:.3g} m with >= {rec[s_max]} poses"
-            + "".join(f"; noise {s:.3g} m: {n} poses" for s, n in sorted(rec.items()) if s != s_max)
+            f"a {what} position error <= {quantity(self.target, 'm')} needs a measurement "
+            f"noise <= {quantity(s_max, 'm')} with >= {rec[s_max]} poses"
+            + "".join(
+                f"; noise {quantity(s, 'm')}: {n} poses"
+                for s, n in sorted(rec.items())
+                if s != s_max
+            )
         )
 
+    def table(self) -> str:
+        """The mean errors after calibration per pose count (rows) and noise (columns)."""
+        head = f"{'poses':>6} " + " ".join(f"{quantity(s, 'm'):>22}" for s in self.noise)
+        lines = [
+            f"{self.trials} simulated robots, {self.identifiable} identifiable parameters; "
+            f"uncalibrated: {quantity(self.before, 'm')} RMS at the validation poses",
+            "position error after calibration, RMS / largest, per measurement noise:",
+            head,
+        ]
+        for i, n in enumerate(self.poses):
+            cells = [
+                f"{quantity(self.rms[i, j], 'm')} / {quantity(self.worst[i, j], 'm')}"
+                for j in range(self.noise.size)
+            ]
+            lines.append(f"{int(n):>6} " + " ".join(f"{c:>22}" for c in cells))
+        lines.append(self.summary())
+        return "\n".join(lines)
+
     def as_dict(self) -> dict[str, Any]:
-        """JSON-ready form."""
+        """Deprecated: :meth:`to_json`."""
+        deprecated("CalibrationPlan.as_dict", "to_json()")
+        return self.to_json()
+
+    def to_json(self) -> dict[str, Any]:
+        """The plan as JSON values (errors and noise [m])."""
         return {
             "poses": [int(n) for n in self.poses],
             "noise": [float(s) for s in self.noise],
@@ -235,10 +265,8 @@ def plan_calibration(
             f"{len(qc)} candidates",
         )
     order = select_poses(blocks, counts[-1]).order
-    readings_c = np.array([q[robot.actuated_q] for q in qc])
+    qa_c = np.array([q[robot.actuated_q] for q in qc])  # joint coordinates
     readings_v = np.array([q[robot.actuated_q] for q in qv])
-    f0_c = np.array([robot.platform_placement(q).translation for q in qc])
-    K = blocks[:, :, cols]  # (M, 3, r) nominal position sensitivities
     rng = np.random.default_rng(seed + 1)
     rms = np.zeros((len(counts), len(noise)))
     worst = np.zeros_like(rms)
@@ -248,7 +276,7 @@ def plan_calibration(
         p_true = rng.uniform(-1.0, 1.0, pm.size) * t
         try:
             truth = perturbed(robot, pm, p_true)
-            x_c = _positions(truth.robot, truth.gains, readings_c, qc)
+            x_c = _positions(truth.robot, truth.gains, qa_c, qc)
             x_v = _positions(truth.robot, truth.gains, readings_v, qv)
         except PkdynError:
             continue
@@ -257,22 +285,13 @@ def plan_calibration(
         before.append(float(np.sqrt(np.mean(np.sum((x_v - f0_v) ** 2, axis=1)))))
         for a, n in enumerate(counts):
             sel = order[:n]
-            A = K[sel].reshape(-1, r)
             for b, s in enumerate(noise):
-                y = x_c[sel] + rng.normal(0.0, s, (n, 3))
-                p = np.zeros(pm.size)
-                f = f0_c[sel]
-                qs_est = [qc[i] for i in sel]
-                for _ in range(ITERATIONS):
-                    dz = numerics.lstsq(A, (y - f).reshape(-1))
-                    p[cols] += dz
-                    try:
-                        est = perturbed(robot, pm, p)
-                        f = _positions(est.robot, est.gains, readings_c[sel], qs_est)
-                    except PkdynError:
-                        break
+                measured = x_c[sel] + rng.normal(0.0, s, (n, 3))
+                m = Measurements("position", robot.readings(qa_c[sel]), measured)
                 try:
-                    est = perturbed(robot, pm, p)
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        est = calibrate(robot, m, pm, noise=s, holdout=0.0, accept=True)
                     xv_est = _positions(est.robot, est.gains, readings_v, qv)
                 except PkdynError:
                     rms[a, b] += np.inf

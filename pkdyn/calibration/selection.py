@@ -127,7 +127,7 @@ def design_matrix(
 
     ``pose``: position and rotation rows (divided by ``sigma``); ``position`` (and the implicit
     kinds, for design purposes): position rows. The columns of parameters the mechanism cannot
-    absorb (:attr:`pkdyn.precision.sensitivity.PoseSensitivity.closure_gap`) are zero: they are
+    absorb (:attr:`pkdyn.precision.sensitivity.PoseSensitivity.gap`) are zero: they are
     not identified.
     """
     d = 6 if kind == "pose" else 3
@@ -137,8 +137,8 @@ def design_matrix(
     for i, q in enumerate(qs):
         s = pose_sensitivity(robot, q, model)
         out[i] = s.K[:d] / w[:, None]
-        if s.closure_gap.size:
-            gap = np.maximum(gap, np.max(np.abs(s.closure_gap), axis=0))
+        if s.gap.size:
+            gap = np.maximum(gap, np.max(np.abs(s.gap), axis=0))
     out[:, :, gap > 1e-9] = 0.0
     return out
 

@@ -4,11 +4,12 @@
 library robot, else its URDF file): every placement the calibration moved becomes ``M exp(xi)``
 (:mod:`pkdyn.precision.parameters`) in the element that holds it (a joint's ``<origin>``, a
 closure's ``<pkdyn:frame>``, the ``<pkdyn:platform>``), identified gains become
-``<pkdyn:encoder gain>`` in their transmission's ``<actuator>``, and ``<pkdyn:home q>`` records
-the calibrated home configuration so that the file loads in the assembly mode it was measured in.
-A ``<pkdyn:family>`` element is dropped (the dimensions are no longer the family's). The file is
-a pkdyn URDF like any other: :func:`pkdyn.load` reads it, and its forward geometry at the
-measured readings (times the gains) reproduces the measurements.
+``<pkdyn:encoder gain>`` (and a described encoder offset is scaled with it) in their
+transmission's ``<actuator>``, and ``<pkdyn:home q>`` records the calibrated home configuration
+so that the file loads in the assembly mode it was measured in. A ``<pkdyn:family>`` element is
+dropped (the dimensions are no longer the family's). The file is a pkdyn URDF like any other:
+:func:`pkdyn.load` reads it, and its forward geometry at the joint coordinates of the measured
+readings (:meth:`pkdyn.Robot.joint_coordinates`) reproduces the measurements.
 """
 
 from __future__ import annotations
@@ -16,51 +17,21 @@ from __future__ import annotations
 import io
 import os
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.calibration.solve import CalibrationResult
+from pkdyn.calibration.result import CalibrationResult
 from pkdyn.exceptions import InvalidInputError
-from pkdyn.files import atomic_write
+from pkdyn.identification.writer import source_urdf
 from pkdyn.model.description import NAMESPACE
-from pkdyn.model.families import FAMILIES
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel
+from pkdyn.results import deprecated
 
 __all__ = ["calibrated_urdf", "joint_coordinates", "source_urdf", "write_calibrated"]
 
 _NS = "{" + NAMESPACE + "}"
-
-
-def source_urdf(robot: Robot) -> str:
-    """The URDF text a robot was built from (the family builder's, or its file's).
-
-    Raises:
-        InvalidInputError: The robot came from another format (MJCF, SDFormat) or from text
-            that is not at hand.
-
-    """
-    if robot.params is not None and robot.family is not None:
-        return FAMILIES[robot.family].build_urdf(robot.params)
-    path = Path(robot.source)
-    if path.is_file():
-        text = path.read_text(encoding="utf-8")
-        if text.lstrip().startswith("<?xml") or "<robot" in text[:2000]:
-            root = ET.fromstring(text)
-            if root.tag == "robot":
-                return text
-        raise InvalidInputError(
-            "robot",
-            f"{robot.source} is not a URDF: the calibrated description is written as a pkdyn "
-            "URDF of the robot's own URDF (convert the model to URDF first)",
-        )
-    raise InvalidInputError(
-        "robot",
-        f"the description of {robot.name} ({robot.source}) is not at hand: give its URDF text "
-        "(calibrated_urdf(..., xml=...))",
-    )
 
 
 def _origin_of(el: ET.Element) -> tuple[ET.Element, pin.SE3]:
@@ -97,7 +68,7 @@ def calibrated_urdf(result: CalibrationResult, xml: str | None = None) -> str:
 
     """
     robot = result.nominal
-    text = source_urdf(robot) if xml is None else xml
+    text = source_urdf(robot, "calibrated placements") if xml is None else xml
     ET.register_namespace("pkdyn", NAMESPACE)
     root = ET.fromstring(text, parser=ET.XMLParser(target=ET.TreeBuilder(insert_comments=True)))
     model: ParameterModel = result.model
@@ -134,8 +105,9 @@ def calibrated_urdf(result: CalibrationResult, xml: str | None = None) -> str:
             _write(plat, _read(plat) * step)
     for a, g in zip(robot.actuators, result.gains, strict=True):
         if g == 0.0:
-            continue
-        _set_gain(root, a.name, a.joint, float(a.encoder_gain) * (1.0 + float(g)))
+            continue  # q = (1 + g) (gain r + offset): both scale
+        scale = 1.0 + float(g)
+        _set_encoder(root, a.name, a.joint, a.encoder_gain * scale, a.encoder_offset * scale)
     for el in root.findall(_NS + "family"):
         root.remove(el)
     for el in root.findall(_NS + "home"):
@@ -144,7 +116,7 @@ def calibrated_urdf(result: CalibrationResult, xml: str | None = None) -> str:
     home.set("q", " ".join(repr(float(v)) for v in result.robot.q_home))
     note = (
         f" calibrated by pkdyn from {result.calibration_rows.size} poses: {model.kind} model, "
-        f"{result.identifiability.rank} parameters identified; RMS error "
+        f"{result.estimated.size} parameters identified; RMS error "
         + (
             f"{result.before.position_rms:.3g} m -> {result.after.position_rms:.3g} m "
             if result.before.joint_rms == 0.0
@@ -158,7 +130,7 @@ def calibrated_urdf(result: CalibrationResult, xml: str | None = None) -> str:
     return '<?xml version="1.0"?>\n' + buf.getvalue() + "\n"
 
 
-def _set_gain(root: ET.Element, actuator: str, joint: str, gain: float) -> None:
+def _set_encoder(root: ET.Element, actuator: str, joint: str, gain: float, offset: float) -> None:
     for t in root.findall("transmission"):
         j = t.find("joint")
         act = t.find("actuator")
@@ -168,7 +140,9 @@ def _set_gain(root: ET.Element, actuator: str, joint: str, gain: float) -> None:
         el = parent.find(_NS + "encoder")
         if el is None:
             el = ET.SubElement(parent, _NS + "encoder")
-        el.set("gain", repr(gain))
+        el.set("gain", repr(float(gain)))
+        if offset != 0.0 or el.get("offset") is not None:
+            el.set("offset", repr(float(offset)))
         return
     raise InvalidInputError("robot", f"no <transmission> of actuator '{actuator}' to hold its gain")
 
@@ -176,35 +150,12 @@ def _set_gain(root: ET.Element, actuator: str, joint: str, gain: float) -> None:
 def write_calibrated(
     result: CalibrationResult, path: str | os.PathLike[str], xml: str | None = None
 ) -> str:
-    """Write :func:`calibrated_urdf` to ``path`` (atomically).
-
-    Args:
-        result: The calibration.
-        path: Output file.
-        xml: The nominal robot's URDF text (default: :func:`source_urdf`).
-
-    Returns:
-        The text written.
-
-    """
-    text = calibrated_urdf(result, xml)
-    with atomic_write(path) as fh:
-        fh.write(text)
-    return text
+    """Deprecated: :meth:`CalibrationResult.write_urdf` (``result.write_urdf(path)``)."""
+    deprecated("pkdyn.calibration.writer.write_calibrated", "CalibrationResult.write_urdf(path)")
+    return result.write_urdf(path, xml)
 
 
 def joint_coordinates(robot: Robot, readings: np.ndarray) -> np.ndarray:
-    """Actuated joint coordinates of actuator readings: ``encoder_gain * reading``.
-
-    The gains are the ``<pkdyn:encoder gain>`` of a calibrated description (1 elsewhere).
-
-    Args:
-        robot: The robot.
-        readings: Actuator readings (..., n_a) [rad or m].
-
-    Returns:
-        Joint coordinates, same shape.
-
-    """
-    g = np.array([a.encoder_gain for a in robot.actuators])
-    return np.asarray(readings, dtype=float) * g
+    """Deprecated: :meth:`pkdyn.Robot.joint_coordinates` (``robot.joint_coordinates(r)``)."""
+    deprecated("pkdyn.calibration.writer.joint_coordinates", "Robot.joint_coordinates")
+    return robot.joint_coordinates(readings)

@@ -3,6 +3,11 @@
 ``ROBOT`` is a library family name or a URDF path; ``--param k=v`` overrides builder parameters;
 ``--json`` prints one JSON object. A user error prints one line on stderr and exits with 1.
 
+Every command declares which of its arguments are files it reads and which it writes
+(:mod:`pkdyn.cli._paths`); they are all checked together before the command runs (no output
+onto an input or onto another output, no FIFO or device read), and the files a command reads
+while it works are protected from its outputs too (:func:`pkdyn.files.recording_reads`).
+
 Exit codes (:data:`EXIT_CODES`): 0 success, 1 user error (one line ``pkdyn: error: ...`` on
 stderr), 2 usage error (bad arguments), 130 interrupted by Ctrl-C (SIGINT), 143 terminated
 (SIGTERM). An interrupted run prints one line and leaves every output file as it was (files are
@@ -34,6 +39,7 @@ COMMAND_MODULES = (
     "dynamics",
     "workspace",
     "precision",
+    "vibration",
     "design",
     "viewer",
     "mjcf",
@@ -61,6 +67,7 @@ COMMANDS = {
     "size": "dynamics",
     "stiffness": "precision",
     "modes": "precision",
+    "vibration": "vibration",
     "collisions": "workspace",
     "workspace": "workspace",
     "design": "design",
@@ -250,7 +257,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     shown = warnings.showwarning
     filters = list(warnings.filters)
     try:
-        args = _parser(argv).parse_args(argv)
+        parser = _parser(argv)
+        args = parser.parse_args(argv)
         warnings.showwarning = _one_line_warning
         # libraries' deprecation notices are for developers, not for command-line users
         warnings.filterwarnings("ignore", category=DeprecationWarning)
@@ -259,8 +267,15 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         if getattr(args, "command", None) in _SCIPY_COMMANDS:  # loaded first: BLAS limited too
             import scipy.linalg  # noqa: F401
-        with single_blas_thread():  # (many small matrices: pkdyn.threads)
-            args.func(args)
+        from pkdyn.cli._common import check_numbers
+        from pkdyn.cli._paths import check_paths
+        from pkdyn.files import recording_reads
+
+        with recording_reads():  # outputs never replace a file the command read
+            check_numbers(parser, args)  # no NaN
+            check_paths(parser, args)  # every input and output, before any work
+            with single_blas_thread():  # (many small matrices: pkdyn.threads)
+                args.func(args)
     except PkdynError as err:
         text = " ".join(str(err).splitlines())
         print(f"pkdyn: error: {text}", file=sys.stderr)

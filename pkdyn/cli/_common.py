@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import difflib
 import math
 import os
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
@@ -14,6 +16,7 @@ import numpy as np
 from pkdyn.exceptions import InvalidInputError, OutputError, close_match
 
 __all__ = [
+    "NEGATIVE_NUMBER",
     "Parser",
     "add_param_option",
     "check_figure",
@@ -21,7 +24,11 @@ __all__ = [
     "emit",
     "fmt",
     "gains_of",
+    "reads_differently",
+    "integer",
     "load",
+    "check_numbers",
+    "number",
     "output_path",
     "params",
     "posed_command",
@@ -47,25 +54,126 @@ class _Formatter(argparse.HelpFormatter):
         super().__init__(prog, **kwargs)
 
 
+NEGATIVE_NUMBER = re.compile(
+    r"^-(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf|infinity|nan)$", re.IGNORECASE
+)
+"""A negative number in any notation (``-3``, ``-.5``, ``-3.6e-1``, ``-5E+1``; ``-inf`` and
+``-nan`` too, so that the number's type refuses them with a message): a value, not an option.
+argparse's own matcher knows only ``-3`` and ``-3.5``."""
+
+
 class Parser(argparse.ArgumentParser):
-    """Argument parser whose errors are one line and exit code 2."""
+    """Argument parser whose errors are one line and exit code 2.
+
+    Negative numbers in any notation are values (:data:`NEGATIVE_NUMBER`); a mistyped option
+    is refused before anything else with the closest option of the command
+    (``unrecognized option '--pos'; did you mean '--pose'?``).
+    """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("formatter_class", _Formatter)
         super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"pkdyn: error: {message}{_did_you_mean(message)} (see {self.prog} --help)\n")
 
+    def parse_known_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        if args is not None and not any(
+            isinstance(a, argparse._SubParsersAction) for a in self._actions
+        ):
+            self._check_options(list(args))
+        return super().parse_known_args(args, namespace)
+
+    def _check_options(self, args: list[str]) -> None:
+        """Refuse an option this (leaf) command does not have, with the closest one."""
+        known = list(self._option_string_actions)
+        for tok in args:
+            if tok == "--":
+                return
+            if not tok.startswith("-") or tok == "-" or " " in tok:
+                continue
+            if self._negative_number_matcher.match(tok):
+                continue
+            opt = tok.split("=", 1)[0] if tok.startswith("--") else tok
+            if opt in known:
+                continue
+            if tok.startswith("--") and any(k.startswith(opt) for k in known):
+                continue  # an abbreviation: argparse resolves it (or says it is ambiguous)
+            if not tok.startswith("--") and len(tok) > 2 and tok[:2] in known:
+                continue  # -ofile: -o with its value attached
+            close = difflib.get_close_matches(opt, known, n=2, cutoff=0.6)
+            hint = "; did you mean " + " or ".join(f"'{c}'" for c in close) + "?" if close else ""
+            self.error(f"unrecognized option '{opt}'{hint}")
+
 
 def _did_you_mean(message: str) -> str:
     """``; did you mean 'fk'?`` for an argparse "invalid choice" close to a valid one."""
-    import re
-
     m = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
     if m is None:
         return ""
     return close_match(m[1], re.findall(r"'([^']*)'", m[2]))
+
+
+def number(text: str) -> float:
+    """The argparse type of a numeric option: a number in any notation (``-3.6e-1``, ``-.5``).
+
+    NaN is refused by :func:`check_numbers` after parsing (exit 1, naming the option); an
+    infinity is left to the command, which refuses it where it is not meaningful (a rigid
+    ``--actuator-stiffness inf`` is; most are not).
+
+    Raises:
+        argparse.ArgumentTypeError: Not a number (exit 2, one line).
+
+    """
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+
+
+def check_numbers(parser: Any, args: argparse.Namespace) -> None:
+    """Refuse NaN in every numeric option of the command, before any work.
+
+    Raises:
+        InvalidInputError: A value is NaN (``nan``, ``-nan``), naming the option and which value.
+
+    """
+    from pkdyn.cli._paths import chosen_parser
+
+    for action in getattr(chosen_parser(parser, args), "_actions", ()):
+        if action.type is not number:
+            continue
+        value = getattr(args, action.dest, None)
+        values = value if isinstance(value, list) else [value]
+        flat = [v for item in values for v in (item if isinstance(item, list) else [item])]
+        for k, v in enumerate(flat):
+            if isinstance(v, float) and math.isnan(v):
+                name = (action.option_strings or [action.dest])[-1]
+                which = f"value #{k + 1} is nan" if len(flat) > 1 else "is nan"
+                raise InvalidInputError(name, f"{which} (not a number); give a finite number")
+
+
+def integer(text: str) -> int:
+    """The argparse type of a count: a whole number (``-2``, ``1000``, ``1e3``).
+
+    Raises:
+        argparse.ArgumentTypeError: Not a whole number.
+
+    """
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+    if not (math.isfinite(x) and x.is_integer() and abs(x) < 1e15):
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number")
+    return int(x)
 
 
 def params(items: Sequence[str] | None) -> dict[str, Any]:
@@ -168,6 +276,10 @@ def load(args: argparse.Namespace, geometry: bool = False) -> Any:
         from pkdyn.model.formats.xacro_files import parse_xacro_args
 
         extra["xacro_args"] = parse_xacro_args(args.xacro_arg)
+    if getattr(args, "ignore_element", None):
+        extra["ignore_elements"] = tuple(args.ignore_element)
+    if getattr(args, "repair_inertias", False):
+        extra["repair_inertias"] = True
     robot = pkdyn.load(args.robot, geometry=geometry, **extra, **params(args.param))
     _resolve_readings(args, robot)
     return robot
@@ -190,13 +302,24 @@ def _non_finite(value: Any, where: str = "") -> str | None:
     return None
 
 
-def emit(args: argparse.Namespace, payload: dict[str, Any], text: str) -> None:
+def emit(args: argparse.Namespace, payload: Any, text: str | None = None) -> None:
     """Print the result: one JSON object with ``--json`` (never NaN or Infinity), else text.
+
+    Args:
+        args: The parsed command line (``--json``).
+        payload: A :class:`pkdyn.results.Result` (its ``to_json()`` and ``table()`` are
+            printed), or a JSON-ready dict with its ``text``.
+        text: The text (for a dict payload).
 
     Raises:
         InvalidInputError: A result is not finite (an input overflowed the computation).
 
     """
+    from pkdyn.results import Result
+
+    if isinstance(payload, Result):
+        text = payload.table() if text is None else text
+        payload = payload.to_json()
     bad = _non_finite(payload)
     if bad is not None:
         raise InvalidInputError(
@@ -207,7 +330,7 @@ def emit(args: argparse.Namespace, payload: dict[str, Any], text: str) -> None:
 
         print(json.dumps(payload, allow_nan=False))
     else:
-        print(text)
+        print(text or "")
 
 
 def units(robot: Any) -> list[tuple[str, str, str]]:
@@ -245,14 +368,14 @@ def qa_argument(parser: Any, required: bool = False) -> None:
         "--q",
         dest="qa",
         nargs="+",
-        type=float,
+        type=number,
         metavar="QA",
         help="actuated joint coordinates in actuator order (rad or m)",
     )
     where.add_argument(
         "--readings",
         nargs="+",
-        type=float,
+        type=number,
         metavar="R",
         help="actuator (encoder) readings in actuator order: the description's "
         "<pkdyn:encoder gain> applied (joint coordinate = gain x reading)",
@@ -260,8 +383,13 @@ def qa_argument(parser: Any, required: bool = False) -> None:
 
 
 def gains_of(robot: Any) -> np.ndarray:
-    """The actuators' encoder gains (n_a,): joint coordinate = gain x reading."""
-    return np.array([float(a.encoder_gain) for a in robot.actuators])
+    """The actuators' encoder gains (n_a,) (:meth:`pkdyn.Robot.joint_coordinates`'s rule)."""
+    return np.asarray(robot.encoder_gains)
+
+
+def reads_differently(robot: Any) -> bool:
+    """Whether the robot's readings differ from its joint coordinates (gains or offsets)."""
+    return bool(np.any(robot.encoder_gains != 1.0) or np.any(robot.encoder_offsets != 0.0))
 
 
 def _resolve_readings(args: argparse.Namespace, robot: Any) -> None:
@@ -275,8 +403,8 @@ def _resolve_readings(args: argparse.Namespace, robot: Any) -> None:
         from pkdyn.inputs import vector
 
         r = vector("--readings", readings, len(gains), "rad or m")
-        args.qa = [float(v) for v in gains * r]
-    elif getattr(args, "qa", None) is not None and np.any(gains != 1.0):
+        args.qa = [float(v) for v in robot.joint_coordinates(r)]  # the one readings rule
+    elif getattr(args, "qa", None) is not None and reads_differently(robot):
         import sys
 
         listed = ", ".join(
@@ -294,18 +422,22 @@ def robot_command(
 ) -> argparse.ArgumentParser:
     """A sub-command taking ``ROBOT`` and ``--param NAME=VALUE`` (also called ``aliases``)."""
     sp: argparse.ArgumentParser = sub.add_parser(name, help=help_, aliases=list(aliases))
-    sp.add_argument("robot", help="library family name, or a URDF, MJCF or SDFormat file")
+    from pkdyn.cli._paths import input_option
+
+    input_option(
+        sp, "robot", or_name=True, help="library family name, or a URDF, MJCF or SDFormat file"
+    )
     add_param_option(sp)
     sp.add_argument(
         "--home",
         nargs="+",
-        type=float,
+        type=number,
         metavar="Q",
         help="home configuration to assemble: actuator coordinates, or a full configuration",
     )
     sp.add_argument(
         "--tol",
-        type=float,
+        type=number,
         metavar="TOL",
         help="assembly tolerance (m or rad): closure errors of a CAD-rounded description that "
         "are absorbed with a warning (default 1e-4)",
@@ -316,6 +448,20 @@ def robot_command(
         metavar="NAME:=VALUE",
         help="argument of a .xacro file (repeatable), e.g. --xacro-arg prefix:=left_",
     )
+    sp.add_argument(
+        "--ignore-element",
+        action="append",
+        metavar="NAME",
+        help="leave the file's elements of this name out (repeatable), e.g. --ignore-element "
+        "loop: an element pkdyn does not read whose name says loop, closure, constraint or "
+        "coupling is otherwise an error",
+    )
+    sp.add_argument(
+        "--repair-inertias",
+        action="store_true",
+        help="replace the file's physically invalid inertia tensors by the nearest valid ones "
+        "(same principal axes; the links are named)",
+    )
     return sp
 
 
@@ -323,7 +469,7 @@ def posed_command(sub: Any, name: str, help_: str) -> argparse.ArgumentParser:
     """A robot sub-command at one configuration given by ``--pose`` or ``--qa``, with ``--json``."""
     sp = robot_command(sub, name, help_)
     where = sp.add_mutually_exclusive_group(required=True)
-    where.add_argument("--pose", nargs="+", type=float, help="X Y Z [ROLL PITCH YAW] (m, rad)")
+    where.add_argument("--pose", nargs="+", type=number, help="X Y Z [ROLL PITCH YAW] (m, rad)")
     qa_argument(where)
     sp.add_argument("--json", action="store_true")
     return sp

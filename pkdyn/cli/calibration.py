@@ -1,86 +1,80 @@
-"""``pkdyn calibrate``: geometric calibration from measured poses, a calibrated URDF written."""
+"""``pkdyn calibrate``: geometric calibration from measured poses, a calibrated URDF written.
+
+The command reads the tables, calls :func:`pkdyn.calibration.calibrate` and prints the result's
+``table()`` (``--json``: its ``to_json()``); it writes the calibrated description only when the
+calibration can be trusted (:mod:`pkdyn.calibration.trust`), or with ``--accept``.
+"""
 
 from __future__ import annotations
 
 import argparse
 from typing import Any
 
-import numpy as np
-
-from pkdyn.cli._common import emit, load, output_path, robot_command
+from pkdyn.cli._common import emit, integer, load, number, robot_command
+from pkdyn.cli._paths import input_option, output_option
 
 __all__ = ["register"]
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> None:
     from pkdyn.calibration import calibrate, read_csv
-    from pkdyn.calibration.writer import write_calibrated
 
-    output_path("-o", args.output)
     robot = load(args)
     m = read_csv(args.measurements, robot, args.implicit)
+    validation = (
+        read_csv(args.validation, robot, m.kind if m.kind in ("point", "plane") else None)
+        if args.validation
+        else None
+    )
     res = calibrate(
         robot,
         m,
         model=args.model,
         noise=args.noise,
         holdout=args.holdout,
+        validation=validation,
         robust=args.robust,
         gains=args.gains,
         seed=args.seed,
+        tolerance=args.tolerance,
+        accept=args.accept,
+        residual_limit=args.residual_limit,
+        correction_limit=args.correction_limit,
     )
-    write_calibrated(res, args.output)
-    out = res.as_dict()
-    out["output"] = args.output
-    field, unit, what = (
-        ("joint_rms", "rad or m", "passive joint error RMS")
-        if m.kind == "joints"
-        else ("position_rms", "m", "position error RMS")
-    )
-    lines = [
-        f"{res.model.kind} model: {res.identifiability.rank} of {res.model.size} parameters "
-        f"identified from {res.calibration_rows.size} poses ({m.kind})",
-        f"{what}: {getattr(res.before, field):.4g} {unit} before, "
-        f"{getattr(res.after, field):.4g} {unit} after (calibration poses)",
-    ]
-    if res.validation_after is not None and res.validation_before is not None:
-        lines.append(
-            f"held-out poses ({res.validation_rows.size}): "
-            f"{getattr(res.validation_before, field):.4g} {unit} before, "
-            f"{getattr(res.validation_after, field):.4g} {unit} after"
-        )
-    unid = out["unidentifiable"]
-    if unid:
-        names = ", ".join(u["name"] for u in unid[:8]) + (" ..." if len(unid) > 8 else "")
-        lines.append(f"not identifiable (held at nominal): {names}")
-    if len(res.outliers):
-        rows = np.asarray(res.outliers) + 2  # CSV lines (the header is line 1)
-        shown = ", ".join(str(int(r)) for r in rows[:8]) + (" ..." if len(rows) > 8 else "")
-        lines.append(f"outliers (down-weighted by the robust weights): CSV lines {shown}")
-    if res.not_assembling:
-        lines.append(f"not assembling (held at nominal): {len(res.not_assembling)} parameters")
-    idx = res.identifiability.indices
-    lines.append(
-        "observability: "
-        + ", ".join(f"{k} = {v:.3g}" for k, v in idx.items())
-        + " (O4: noise amplification index)"
-    )
-    lines.append(f"written: {args.output}")
-    emit(args, out, "\n".join(lines))
+    res.write_urdf(args.out)
+    if args.plot:
+        res.plot(args.plot)
+    out: dict[str, Any] = res.to_json()
+    out["output"] = args.out
+    if args.plot:
+        out["plot"] = args.plot
+    what = "written" if res.trusted else "written although not trusted (--accept)"
+    emit(args, out, res.table() + f"\n{what}: {args.out}")
 
 
 def register(sub: Any) -> None:
     """Add this module's sub-commands to the ``pkdyn`` parser."""
+    from pkdyn.calibration.trust import CORRECTION_LIMIT, RESIDUAL_LIMIT
+
     sp = robot_command(sub, "calibrate", "geometric calibration from measured platform poses")
-    sp.add_argument(
+    input_option(
+        sp,
         "--measurements",
         required=True,
-        metavar="FILE.csv",
-        help="CSV: qa_<actuator> columns (encoder readings) and the measured x y z [rx ry rz] "
-        "(m, rad), or a group column with --implicit, or q_<joint> columns (encoders on "
-        "passive joints: self-calibration from extra sensors)",
+        metavar="FILE",
+        help="table (CSV or Parquet): qa_<actuator> columns (encoder readings) and the measured "
+        "x y z [rx ry rz] (m, rad), or a group column with --implicit, or q_<joint> columns "
+        "(encoders on passive joints: self-calibration from extra sensors)",
     )
-    sp.add_argument("-o", "--output", required=True, help="calibrated URDF to write")
+    output_option(
+        sp,
+        "-o",
+        "--out",
+        deprecated=("--output",),
+        required=True,
+        metavar="FILE.urdf",
+        help="calibrated URDF to write",
+    )
     sp.add_argument(
         "--model",
         default="auto",
@@ -92,12 +86,18 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--noise",
         nargs="+",
-        type=float,
+        type=number,
         metavar="SIGMA",
         help="measurement noise: position [m] [orientation [rad]] (default: estimated)",
     )
     sp.add_argument(
-        "--holdout", type=float, default=0.2, help="fraction held out for validation (0.2)"
+        "--holdout", type=number, default=0.2, help="fraction held out for validation (0.2)"
+    )
+    input_option(
+        sp,
+        "--validation",
+        metavar="FILE",
+        help="held-out measurements (same columns) instead of --holdout: errors before/after",
     )
     sp.add_argument("--robust", default="huber", choices=("huber", "cauchy", "none"))
     sp.add_argument(
@@ -105,6 +105,40 @@ def register(sub: Any) -> None:
         choices=("point", "plane"),
         help="self-calibration: the platform held on one unknown point / plane per group",
     )
-    sp.add_argument("--seed", type=int, default=0, help="seed of the hold-out split")
+    sp.add_argument(
+        "--tolerance",
+        nargs="+",
+        type=number,
+        metavar="T",
+        help="tolerances the corrections are judged against: length [m] angle [rad] [gain] "
+        "(default: 0.5 %% of the robot's size, 0.5 deg, 0.5 %%)",
+    )
+    sp.add_argument(
+        "--residual-limit",
+        type=number,
+        default=RESIDUAL_LIMIT,
+        metavar="K",
+        help=f"largest residual RMS trusted, times the stated noise ({RESIDUAL_LIMIT:g})",
+    )
+    sp.add_argument(
+        "--correction-limit",
+        type=number,
+        default=CORRECTION_LIMIT,
+        metavar="K",
+        help=f"largest correction trusted, times its tolerance ({CORRECTION_LIMIT:g})",
+    )
+    sp.add_argument(
+        "--accept",
+        action="store_true",
+        help="write the calibrated URDF even when the calibration is not trusted",
+    )
+    output_option(
+        sp,
+        "--plot",
+        figure=True,
+        metavar="FILE.png",
+        help="residuals per pose and axis, before and after",
+    )
+    sp.add_argument("--seed", type=integer, default=0, help="seed of the hold-out split")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_calibrate)

@@ -16,7 +16,8 @@ import argparse
 import json
 from typing import Any
 
-from pkdyn.cli._common import params
+from pkdyn.cli._common import integer, number, params
+from pkdyn.cli._paths import input_option, output_option
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["register"]
@@ -91,6 +92,9 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
             ("length", args.length),
             ("actuator_stiffness", args.actuator_stiffness),
             ("material", args.material),
+            ("damping_ratio", args.damping_ratio),
+            ("band", args.band),
+            ("dwell", args.dwell),
         )
         if v is not None
     }
@@ -152,7 +156,9 @@ def _clavel_chart(args: argparse.Namespace) -> None:
     result = _run(study, args)
     if args.json:
         print(
-            json.dumps({"rows": [_plain(result.table.record(i)) for i in range(len(result.table))]})
+            json.dumps(
+                {"rows": [_plain(result.designs.record(i)) for i in range(len(result.designs))]}
+            )
         )
     else:
         print(clavel_chart_text(result))
@@ -182,19 +188,15 @@ def _plain(rec: dict[str, Any]) -> dict[str, Any]:
 
 
 def _check_options(args: argparse.Namespace) -> None:
-    """The options that are not part of the study, checked before any work."""
-    from pkdyn.cli._common import output_path
+    """The options that are not part of the study, checked before any work.
+
+    (The paths are checked by the command line before: :mod:`pkdyn.cli._paths`.)
+    """
     from pkdyn.design.executors import check_timeout
-    from pkdyn.design.table import output_paths
 
     check_timeout(args.timeout, "--timeout")
     if args.workers is not None and args.workers < 1:
         raise InvalidInputError("--workers", f"must be >= 1, got {args.workers}")
-    if args.out is not None:
-        output_paths(args.out)
-    output_path("--plot", args.plot, figure=True)
-    output_path("--urdf", args.urdf)
-    output_path("--save-study", args.save_study)
     if args.verify is not None:
         if args.verify < 2:
             raise InvalidInputError("--verify", f"samples per axis must be >= 2, got {args.verify}")
@@ -221,15 +223,19 @@ def _cmd_design(args: argparse.Namespace) -> None:
     if args.verify:
         result.verify(args.verify)
     if args.plot:
-        from pkdyn.plotting.design import plot_pareto
-
-        plot_pareto(result, path=args.plot)
+        result.plot(args.plot)
     if args.urdf:
         result.write_urdf(args.urdf)
-    if args.json:
-        print(json.dumps(result.as_json()))
-    else:
-        print(result.summary())
+    from pkdyn.cli._common import emit
+
+    emit(args, result)
+
+
+def _study_files(out: str) -> list[str]:
+    """Every file a study writes for ``--out`` (the tables, the study file, the partial file)."""
+    from pkdyn.design.table import output_paths
+
+    return [str(p) for p in output_paths(out).values()]
 
 
 def register(sub: Any) -> None:
@@ -240,16 +246,18 @@ def register(sub: Any) -> None:
         description="Design study over a family's parameters; see pkdyn.design.",
     )
     sp.add_argument("family", nargs="?", help="library family (any registered family)")
-    sp.add_argument("--study", metavar="FILE.yaml", help="study file (options given override it)")
-    sp.add_argument(
+    input_option(sp, "--study", metavar="FILE.yaml", help="study file (options given override it)")
+    input_option(
+        sp,
         "--plugin",
+        or_name=True,
         action="append",
         nargs="+",
         metavar="MODULE",
         help="load a plug-in first (a module name or a .py file) whose metrics or "
         "parametrisations the study names; a study file never imports code by itself",
     )
-    sp.add_argument("--save-study", metavar="FILE.yaml", help="write the study file and run it")
+    output_option(sp, "--save-study", metavar="FILE.yaml", help="write the study file and run it")
     sp.add_argument("--range", action="append", nargs="+", metavar="NAME=LOW:HIGH")
     sp.add_argument(
         "--fix",
@@ -268,7 +276,8 @@ def register(sub: Any) -> None:
         action="append",
         nargs="+",
         metavar="NAME",
-        help="metric or group (clavel, required, sizing, workspace, clavel_chart)",
+        help="metric or group (clavel, required, sizing, workspace, precision, vibration, "
+        "clavel_chart)",
     )
     sp.add_argument("--constraint", action="append", nargs="+", metavar="NAME>=VALUE")
     sp.add_argument("--minimize", action="append", nargs="+", metavar="METRIC")
@@ -279,49 +288,68 @@ def register(sub: Any) -> None:
         help="required workspace: cylinder:D=,H=,x=,y=,z= | box:dx=,dy=,dz=,... | "
         "orientation:roll=,pitch=,yaw=,x=,y=,z=",
     )
-    sp.add_argument("--samples", type=int, help="samples per axis of the required workspace")
+    sp.add_argument("--samples", type=integer, help="samples per axis of the required workspace")
     sp.add_argument("--trajectory", choices=("adept", "sine", "p2p"), help="duty cycle")
-    sp.add_argument("--payload", type=float, help="payload on the duty cycle [kg]")
-    sp.add_argument("--cycle-time", type=float, help="duty cycle time [s]")
-    sp.add_argument("--depth", type=float, help="adept: pick line below home [m]")
-    sp.add_argument("--dt", type=float, help="duty cycle sample period [s]")
-    sp.add_argument("--length", type=float, help="characteristic length for 1/cond [m]")
+    sp.add_argument("--payload", type=number, help="payload on the duty cycle [kg]")
+    sp.add_argument("--cycle-time", type=number, help="duty cycle time [s]")
+    sp.add_argument("--depth", type=number, help="adept: pick line below home [m]")
+    sp.add_argument("--dt", type=number, help="duty cycle sample period [s]")
+    sp.add_argument("--length", type=number, help="characteristic length for 1/cond [m]")
     sp.add_argument(
         "--actuator-stiffness",
-        type=float,
+        type=number,
         nargs="+",
         metavar="K",
-        help="actuator stiffness for stiffness_min / f1_min [N m/rad or N/m]",
+        help="actuator stiffness for stiffness_min, f1_min and the vibration metrics "
+        "[N m/rad or N/m]",
     )
-    sp.add_argument("--material", help="link material for stiffness_min / f1_min (steel...)")
+    sp.add_argument(
+        "--material", help="link material for stiffness_min, f1_min, vibration (steel...)"
+    )
+    sp.add_argument(
+        "--damping-ratio",
+        type=number,
+        help="damping ratio of the first mode for the vibration metrics (0.02)",
+    )
+    sp.add_argument("--band", type=number, help="settling band of settling_time [m] (1e-4)")
+    sp.add_argument(
+        "--dwell", type=number, help="time after the duty cycle to settle within [s] (0.5)"
+    )
     how = sp.add_mutually_exclusive_group()
-    how.add_argument("--n", type=int, help="number of designs (lhs, sobol, random)")
-    how.add_argument("--grid", type=int, help="full grid, values per variable")
+    how.add_argument("--n", type=integer, help="number of designs (lhs, sobol, random)")
+    how.add_argument("--grid", type=integer, help="full grid, values per variable")
     sp.add_argument("--sampler", choices=("lhs", "sobol", "random"))
     sp.add_argument("--optimize", choices=("nsga2",), help="multi-objective optimisation")
-    sp.add_argument("--generations", type=int, help="nsga2 generations")
-    sp.add_argument("--population", type=int, help="nsga2 population")
-    sp.add_argument("--seed", type=int)
+    sp.add_argument("--generations", type=integer, help="nsga2 generations")
+    sp.add_argument("--population", type=integer, help="nsga2 population")
+    sp.add_argument("--seed", type=integer)
     sp.add_argument(
         "--workers",
-        type=int,
+        type=integer,
         help="local worker processes (default: the usable cores, at most one per design; more "
         "are capped, with a warning)",
     )
     sp.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786")
     sp.add_argument(
         "--timeout",
-        type=float,
+        type=number,
         default=10.0,
         help="seconds to wait for the scheduler to answer, or for a worker (10; at most 3600)",
     )
-    sp.add_argument("--out", metavar="FILE.csv", help="results table (.csv and .parquet)")
+    output_option(
+        sp,
+        "-o",
+        "--out",
+        companions=_study_files,
+        metavar="FILE.csv",
+        help="results table (.csv and .parquet; also FILE.study.yaml, the study file)",
+    )
     sp.add_argument("--no-resume", action="store_true", help="ignore earlier partial results")
-    sp.add_argument("--plot", metavar="FILE.png", help="Pareto front plot")
-    sp.add_argument("--urdf", metavar="FILE.urdf", help="URDF of the chosen design")
+    output_option(sp, "--plot", figure=True, metavar="FILE.png", help="Pareto front plot")
+    output_option(sp, "--urdf", metavar="FILE.urdf", help="URDF of the chosen design")
     sp.add_argument(
         "--verify",
-        type=int,
+        type=integer,
         metavar="SAMPLES",
         help="choose the best design that passes the required workspace at SAMPLES per axis",
     )

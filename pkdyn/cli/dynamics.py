@@ -7,29 +7,58 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, output_path, robot_command
+from pkdyn.cli._common import emit, integer, load, number, robot_command
+from pkdyn.cli._paths import input_option, output_option
 from pkdyn.exceptions import InvalidInputError, LimitsExceededError
 from pkdyn.inputs import non_negative
 
 __all__ = ["register"]
 
 
+def _initial_velocity(robot: Any, v0: list[float] | None) -> np.ndarray | None:
+    """``--v0``: the actuators' rates (n_a values) or every velocity coordinate (nv values)."""
+    if v0 is None:
+        return None
+    from pkdyn.inputs import vector
+
+    n_a, nv = len(robot.actuators), robot.nv
+    v = vector("--v0", v0, (n_a, nv), "rad/s or m/s")
+    if v.size == nv and nv != n_a:
+        return v
+    from pkdyn.analysis.kinematics import joint_velocities
+
+    return joint_velocities(robot, robot.q_home, v)  # passive rates from the closures
+
+
+def _constant_effort(robot: Any, torque: list[float] | None) -> Any:
+    """``--torque``: constant joint-side efforts of the actuators [N m or N]."""
+    if torque is None:
+        return None
+    from pkdyn.inputs import vector
+
+    tau = vector("--torque", torque, len(robot.actuators), "N m or N")
+    return lambda t, q, v: tau
+
+
 def _cmd_simulate(args: argparse.Namespace) -> None:
     from pkdyn.dynamics import simulate
 
-    output_path("--csv", args.csv)
-    output_path("--plot", args.plot, figure=True)
-    output_path("--html", args.html)
     robot = load(args, geometry=args.html is not None)
-    res = simulate(robot, args.duration, args.dt, integrator=args.integrator, step=args.step)
+    res = simulate(
+        robot,
+        args.duration,
+        args.dt,
+        v0=_initial_velocity(robot, args.v0),
+        torque=_constant_effort(robot, args.torque),
+        integrator=args.integrator,
+        step=args.step,
+    )
     if args.csv:
         from pkdyn.dynamics.simulation_output import write_simulation_csv
 
         write_simulation_csv(robot, res, args.csv)
     if args.plot:
-        from pkdyn.plotting.dynamics import plot_simulation
-
-        plot_simulation(robot, res, path=args.plot)
+        res.plot(args.plot)
     if args.html:
         from pkdyn.viewer import Scene
 
@@ -39,26 +68,7 @@ def _cmd_simulate(args: argparse.Namespace) -> None:
             scene.save_html(args.html)
         finally:
             scene.close()
-    payload = {
-        "robot": robot.name,
-        "duration": float(res.t[-1] - res.t[0]),
-        "dt": args.dt,
-        "integrator": args.integrator,
-        "steps": int(res.t.size - 1),
-        "substeps": int(res.extras.get("substeps", res.t.size - 1)),
-        "max_closure_residual": float(np.max(res.closure_residual)),
-        "energy_drift_rel": res.energy_drift(),
-        "max_kinetic_energy": float(np.max(res.kinetic)),
-        "projections": int(res.projections),
-    }
-    text = (
-        f"{robot.name}: {payload['duration']:g} s passive under gravity, {payload['steps']} steps "
-        f"of {args.dt:g} s ({args.integrator}, {payload['substeps']} substeps)\n"
-        f"max closure residual: {payload['max_closure_residual']:.3g} m\n"
-        f"energy drift:         {payload['energy_drift_rel']:.3g} (relative to the largest "
-        f"kinetic energy, {payload['max_kinetic_energy']:.4g} J)"
-    )
-    emit(args, payload, text)
+    emit(args, res)
 
 
 def _trajectory_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -130,13 +140,31 @@ def _fastest_options(args: argparse.Namespace) -> dict[str, Any]:
     return opts
 
 
+def _check_settle(args: argparse.Namespace) -> None:
+    """The settling options of ``size --fastest --settle``, refused where they do not apply."""
+    if args.settle is None:
+        for option, given in (
+            ("--dwell", args.dwell is not None),
+            ("--actuator-stiffness", args.actuator_stiffness is not None),
+            ("--damping-ratio", args.damping_ratio is not None),
+            ("--material", args.material is not None),
+            ("--shaper", args.shaper is not None),
+        ):
+            if given:
+                raise InvalidInputError(option, "applies with --fastest --settle BAND")
+        return
+    if not args.fastest:
+        raise InvalidInputError("--settle", "needs --fastest (the fastest cycle that settles)")
+    if not args.settle > 0.0:
+        raise InvalidInputError("--settle", f"a band must be > 0 m, got {args.settle:g}")
+    if args.dwell is not None and not args.dwell > 0.0:
+        raise InvalidInputError("--dwell", f"must be > 0 s, got {args.dwell:g}")
+
+
 def _cmd_size(args: argparse.Namespace) -> None:
     from pkdyn.dynamics.sizing import size, sizing_from_efforts
     from pkdyn.dynamics.trajectory import named_task, named_trajectory
 
-    output_path("--csv", args.csv)
-    output_path("--plot", args.plot, figure=True)
-    output_path("--operating-points", args.operating_points, figure=True)
     catalog = None
     if args.catalog:  # read (and refused) before any work
         from pkdyn.dynamics.motors import load_catalog
@@ -146,13 +174,15 @@ def _cmd_size(args: argparse.Namespace) -> None:
             catalog = catalog + load_catalog(args.gearboxes)
     elif args.gearboxes:
         raise InvalidInputError("--gearboxes", "needs --catalog (the motors to pair them with)")
-    robot = load(args)
+    _check_settle(args)
+    robot = load(args, geometry=args.material is not None)
     non_negative("--payload", args.payload, "kg")
     if args.show < 0:
         raise InvalidInputError("--show", f"must be >= 0, got {args.show}")
     if args.operating_points and not args.catalog:
         raise InvalidInputError("--operating-points", "needs --catalog (the motors to plot)")
     fast = None
+    settled = None
     from_file = _trajectory_file(args, robot)
     if args.fastest:
         from pkdyn.dynamics.fastest import fastest_trajectory
@@ -161,6 +191,21 @@ def _cmd_size(args: argparse.Namespace) -> None:
         fast = fastest_trajectory(robot, task, payload=args.payload)
         traj = fast.trajectory
         result = sizing_from_efforts(robot, fast.efforts, args.payload)
+        if args.settle is not None:
+            from pkdyn.precision.vibration_fastest import fastest_settling
+
+            settled = fastest_settling(
+                robot,
+                task,
+                args.settle,
+                0.5 if args.dwell is None else args.dwell,
+                payload=args.payload,
+                actuator_stiffness=args.actuator_stiffness,
+                material=args.material,
+                damping_ratio=args.damping_ratio,
+                shaper={None: "zv", "none": None}.get(args.shaper, args.shaper),
+                fast=fast,
+            )
     else:
         # speeds are reported (their margins), not refused: a sizing answers how far off it is
         if from_file is not None:
@@ -185,44 +230,31 @@ def _cmd_size(args: argparse.Namespace) -> None:
             efforts=result.efforts,
         )
     if args.operating_points and selection is not None:
-        from pkdyn.plotting.motors import plot_operating_points
-
-        plot_operating_points(selection, path=args.operating_points)
+        selection.plot(args.operating_points)
     if args.csv:
         result.write_csv(args.csv)
     if args.plot:
-        from pkdyn.plotting.dynamics import plot_efforts
-
-        plot_efforts(result, path=args.plot)
-    head = (
-        f"{robot.name}: {result.trajectory}, {result.duration:.4g} s, payload {args.payload:g} kg"
-        + ("" if result.feasible else "  -- LIMITS EXCEEDED")
-    )
-    payload = result.as_json()
-    text = [head, result.table()]
+        result.plot(args.plot)
+    payload = result.to_json()
+    text = [result.table()]
     if args.no_passive:  # the same without the springs, dampers and friction
         bare = size(robot, traj, payload=args.payload, passive=False)
-        payload["without_passive"] = bare.as_json()
+        payload["without_passive"] = bare.to_json()
         what = "without" if robot.passive is not None else "(the robot has none) without"
         text = [
-            head,
             "with passive elements:",
             result.table(),
-            f"{what} passive elements:" + ("" if bare.feasible else "  -- LIMITS EXCEEDED"),
+            f"{what} passive elements:",
             bare.table(),
         ]
     if fast is not None:
-        payload["fastest"] = fast.as_json()
-        text.insert(
-            0,
-            f"fastest cycle: {fast.cycle_time:.4g} s (toppra on {traj.t.size} samples; a torque "
-            f"or speed limit active on {100 * fast.active_fraction:.0f} % of them; inverse "
-            f"dynamics along it: {100 * float(np.max(fast.torque_utilisation)):.3f} % of the "
-            f"torque limit, {100 * float(np.max(fast.speed_utilisation)):.3f} % of the speed "
-            "limit)",
-        )
+        payload["fastest"] = fast.to_json()
+        text.insert(0, fast.table())
+    if settled is not None:
+        payload["settling"] = settled.to_json()
+        text.insert(1, settled.table())
     if selection is not None:
-        payload["selection"] = selection.as_json()
+        payload["selection"] = selection.to_json()
         text.append(selection.table(show=args.show))
     emit(args, payload, "\n".join(text))
     if not result.feasible:  # the report stands; the exit status and one line say no
@@ -235,42 +267,76 @@ def _cmd_size(args: argparse.Namespace) -> None:
 
 def register(sub: Any) -> None:
     """Add ``simulate`` and ``size`` to the ``pkdyn`` parser."""
-    sp = robot_command(sub, "simulate", "passive constrained dynamics under gravity")
-    sp.add_argument("--duration", type=float, default=1.0, help="simulated time [s]")
-    sp.add_argument("--dt", type=float, default=1e-3, help="output time step [s]")
-    sp.add_argument("--integrator", choices=("dopri5", "rk4", "euler"), default="dopri5")
-    sp.add_argument("--step", type=float, default=None, help="integration step [s] (default: --dt)")
+    sp = robot_command(
+        sub,
+        "simulate",
+        "constrained dynamics under gravity, from rest or --v0, free or under a --torque",
+    )
+    sp.add_argument("--duration", type=number, default=1.0, help="simulated time [s]")
+    sp.add_argument("--dt", type=number, default=1e-3, help="output time step [s]")
     sp.add_argument(
+        "--v0",
+        nargs="+",
+        type=number,
+        metavar="V",
+        help="initial velocity: the actuators' rates in actuator order (rad/s or m/s; the "
+        "passive joints follow the closures) or every velocity coordinate (nv values); "
+        "default: at rest",
+    )
+    sp.add_argument(
+        "--torque",
+        nargs="+",
+        type=number,
+        metavar="T",
+        help="constant actuator efforts, joint side, in actuator order (N m or N); default: "
+        "free actuators",
+    )
+    sp.add_argument("--integrator", choices=("dopri5", "rk4", "euler"), default="dopri5")
+    sp.add_argument(
+        "--step", type=number, default=None, help="integration step [s] (default: --dt)"
+    )
+    output_option(
+        sp,
         "--csv",
         metavar="FILE",
         help="write the time series (t, qa_, qa_dot_, tau_, energies, closure_residual)",
     )
-    sp.add_argument("--plot", metavar="FILE.png", help="plot actuators, energies, closures vs time")
-    sp.add_argument("--html", metavar="FILE", help="save a meshcat animation (static HTML)")
+    output_option(
+        sp,
+        "--plot",
+        figure=True,
+        metavar="FILE.png",
+        help="plot actuators, energies, closures vs time",
+    )
+    output_option(sp, "--html", metavar="FILE", help="save a meshcat animation (static HTML)")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_simulate)
     sp = robot_command(sub, "size", "actuator efforts, speeds and powers along a trajectory")
-    sp.add_argument(
+    input_option(
+        sp,
         "--trajectory",
+        or_name=True,
         default="adept",
         metavar="NAME|FILE.csv",
         help="adept, sine, p2p, or a CSV file: a column t [s] and qa_<actuator> columns "
         "(actuator space) or the controlled pose components among x y z roll pitch yaw",
     )
-    sp.add_argument("--payload", type=float, default=0.0, help="payload mass [kg]")
+    sp.add_argument("--payload", type=number, default=0.0, help="payload mass [kg]")
     sp.add_argument(
         "--cycle-time",
-        type=float,
+        type=number,
         default=None,
         help="adept: cycle time; sine: period; p2p: move duration [s]",
     )
-    sp.add_argument("--cycles", type=int, default=1, help="number of cycles (adept, sine)")
+    sp.add_argument("--cycles", type=integer, default=1, help="number of cycles (adept, sine)")
     sp.add_argument("--profile", choices=("quintic", "jerk"), default="quintic")
-    sp.add_argument("--dt", type=float, default=1e-3, help="sample period [s]")
-    sp.add_argument(
-        "--csv", metavar="FILE", help="write the time series (t, qa_, qa_dot_, tau_, energy)"
+    sp.add_argument("--dt", type=number, default=1e-3, help="sample period [s]")
+    output_option(
+        sp, "--csv", metavar="FILE", help="write the time series (t, qa_, qa_dot_, tau_, energy)"
     )
-    sp.add_argument("--plot", metavar="FILE.png", help="plot effort, speed, power vs time")
+    output_option(
+        sp, "--plot", figure=True, metavar="FILE.png", help="plot effort, speed, power vs time"
+    )
     sp.add_argument(
         "--no-passive",
         action="store_true",
@@ -282,21 +348,60 @@ def register(sub: Any) -> None:
         help="traverse the trajectory's path as fast as the torque and speed limits allow "
         "(toppra); --cycle-time / --dt then set the path's sampling (default 1 s / 1 ms)",
     )
-    sp.add_argument(
+    settle = sp.add_argument_group(
+        "settling (with --fastest): the fastest cycle whose tool settles, with and without "
+        "input shaping (the elastic model: pkdyn vibration)"
+    )
+    settle.add_argument(
+        "--settle",
+        type=number,
+        metavar="BAND",
+        help="settling band on the tool's deviation [m]",
+    )
+    settle.add_argument(
+        "--dwell", type=number, help="time after the motion within which to settle [s] (0.5)"
+    )
+    settle.add_argument(
+        "--actuator-stiffness",
+        nargs="+",
+        type=number,
+        metavar="K",
+        help="servo stiffness, one or one per actuator [N m/rad or N/m] (default: described)",
+    )
+    settle.add_argument(
+        "--damping-ratio", type=number, help="damping ratio of the first mode (0.02)"
+    )
+    settle.add_argument("--material", help="link material (steel, aluminium, carbon)")
+    settle.add_argument(
+        "--shaper",
+        choices=("zv", "zvd", "none"),
+        help="input shaper compared with the unshaped motion (default zv)",
+    )
+    input_option(
+        sp,
         "--catalog",
+        or_name=True,
         metavar="FILE",
         help="motor (and gearbox) catalog, YAML or CSV, or 'example': select motors",
     )
-    sp.add_argument("--gearboxes", metavar="FILE", help="gearbox catalog (YAML, CSV, 'example')")
+    input_option(
+        sp,
+        "--gearboxes",
+        or_name=True,
+        metavar="FILE",
+        help="gearbox catalog (YAML, CSV, 'example')",
+    )
     sp.add_argument(
         "--criterion",
         choices=("rated_torque", "mass", "price"),
         default="rated_torque",
         help="ranking of the feasible motor x gearbox pairs (smallest first)",
     )
-    sp.add_argument("--show", type=int, default=5, help="pairs listed per actuator")
-    sp.add_argument(
+    sp.add_argument("--show", type=integer, default=5, help="pairs listed per actuator")
+    output_option(
+        sp,
         "--operating-points",
+        figure=True,
         metavar="FILE.png",
         help="plot the chosen motors' operating points over their envelopes (with --catalog)",
     )

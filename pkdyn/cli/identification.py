@@ -1,4 +1,9 @@
-"""``pkdyn identify``: dynamic parameters from a measured motion, written as a description."""
+"""``pkdyn identify``: dynamic parameters from a measured motion, written as a description.
+
+The command reads the tables, calls :func:`pkdyn.identification.identify` and prints the
+result's ``table()`` (``--json``: its ``to_json()``); ``--predict`` compares the identified
+model with another motion.
+"""
 
 from __future__ import annotations
 
@@ -7,26 +12,19 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, load, output_path, robot_command
+from pkdyn.cli._common import emit, load, number, robot_command
+from pkdyn.cli._paths import input_option, output_option
 
 __all__ = ["register"]
-
-
-def _write_predicted(path: str, t: np.ndarray, names: list[str], tau: np.ndarray) -> None:
-    from pkdyn.files import atomic_write
-
-    with atomic_write(path) as fh:
-        fh.write(",".join(["t", *(f"tau_{n}" for n in names)]) + "\n")
-        np.savetxt(fh, np.column_stack([t, tau]), delimiter=",", fmt="%.10g")
 
 
 def _cmd_identify(args: argparse.Namespace) -> None:
     from pkdyn.exceptions import InvalidInputError
     from pkdyn.identification import identify, read_measurements
     from pkdyn.identification.filtering import derivatives
+    from pkdyn.tables import write_table
+    from pkdyn.units import quantity
 
-    output_path("-o", args.output)
-    output_path("--csv", args.csv)
     if args.csv and not args.predict:
         raise InvalidInputError("--csv", "needs --predict (the motion to predict)")
     robot = load(args)
@@ -34,7 +32,7 @@ def _cmd_identify(args: argparse.Namespace) -> None:
     data = read_measurements(args.data, names, need_tau=True)
     other = read_measurements(args.predict, names, need_tau=False) if args.predict else None
     res = identify(robot, data, parameters=args.parameters, cutoff=args.cutoff)
-    payload: dict[str, Any] = res.as_json()
+    payload: dict[str, Any] = res.to_json()
     text = [res.table()]
     if other is not None:
         qa, qd, qdd = other.qa, other.qa_dot, other.qa_ddot
@@ -50,17 +48,24 @@ def _cmd_identify(args: argparse.Namespace) -> None:
             pred["relative_rms_error"] = dict(
                 zip(names, (rms / np.where(scale > 0, scale, 1.0)).tolist(), strict=True)
             )
+            units = ["N" if p else "N m" for p in robot.actuator_prismatic]
             text.append(
                 f"prediction of {args.predict}: RMS error "
-                + ", ".join(f"{n} {r:.3g}" for n, r in zip(names, rms, strict=True))
+                + ", ".join(
+                    f"{n} {quantity(r, u)}" for n, r, u in zip(names, rms, units, strict=True)
+                )
             )
         if args.csv:
-            _write_predicted(args.csv, other.t, names, tau)
+            cols = ["t", *(f"tau_{n}" for n in names)]
+            write_table(args.csv, cols, np.column_stack([other.t, tau]))
             pred["csv"] = args.csv
         payload["prediction"] = pred
-    res.write_urdf(args.output)
-    payload["output"] = args.output
-    text.append(f"identified description written to {args.output}")
+    res.write_urdf(args.out)
+    if args.plot:
+        res.plot(args.plot)
+        payload["plot"] = args.plot
+    payload["output"] = args.out
+    text.append(f"identified description written to {args.out}")
     emit(args, payload, "\n".join(text))
 
 
@@ -69,15 +74,22 @@ def register(sub: Any) -> None:
     sp = robot_command(
         sub, "identify", "identify masses, inertias, friction, rotor inertias from a motion"
     )
-    sp.add_argument(
+    input_option(
+        sp,
         "--data",
         required=True,
-        metavar="FILE.csv",
-        help="measured motion: columns t, qa_<actuator>, optional qa_dot_*, qa_ddot_*, "
-        "and tau_<actuator> (joint-side efforts)",
+        metavar="FILE",
+        help="measured motion (CSV or Parquet): columns t, qa_<actuator> (readings), optional "
+        "qa_dot_*, qa_ddot_*, and tau_<actuator> (joint-side efforts)",
     )
-    sp.add_argument(
-        "-o", "--output", required=True, metavar="FILE.urdf", help="identified description"
+    output_option(
+        sp,
+        "-o",
+        "--out",
+        deprecated=("--output",),
+        required=True,
+        metavar="FILE.urdf",
+        help="identified description",
     )
     sp.add_argument(
         "--parameters",
@@ -88,15 +100,22 @@ def register(sub: Any) -> None:
     )
     sp.add_argument(
         "--cutoff",
-        type=float,
+        type=number,
         default=None,
         metavar="HZ",
         help="cut-off of the zero-phase position filter when rates are not given "
         "(default 5%% of the sampling rate)",
     )
-    sp.add_argument("--predict", metavar="OTHER.csv", help="another motion to predict")
-    sp.add_argument(
-        "--csv", metavar="PREDICTED.csv", help="write t and tau_<actuator> of --predict"
+    input_option(sp, "--predict", metavar="OTHER.csv", help="another motion to predict")
+    output_option(
+        sp, "--csv", metavar="PREDICTED.csv", help="write t and tau_<actuator> of --predict"
+    )
+    output_option(
+        sp,
+        "--plot",
+        figure=True,
+        metavar="FILE.png",
+        help="the fit per actuator: measured, predicted, residual",
     )
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=_cmd_identify)

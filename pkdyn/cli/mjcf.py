@@ -6,7 +6,8 @@ import argparse
 import sys
 from typing import Any
 
-from pkdyn.cli._common import load, output_path, robot_command
+from pkdyn.cli._common import load, number, robot_command
+from pkdyn.cli._paths import output_option
 from pkdyn.inputs import positive
 
 __all__ = ["register"]
@@ -16,11 +17,10 @@ def _cmd_mjcf(args: argparse.Namespace) -> None:
     from pkdyn.model.formats.mjcf import MjcfOptions, to_mjcf, write_mjcf
 
     positive("--timestep", args.timestep, "s")
-    output_path("-o", args.output)
     robot = load(args, geometry=True)
     options = MjcfOptions(timestep=args.timestep, contacts=not args.no_contacts)
-    if args.output:
-        write_mjcf(robot, args.output, options)
+    if args.out:
+        write_mjcf(robot, args.out, options)
     else:
         sys.stdout.write(to_mjcf(robot, options))
 
@@ -28,9 +28,9 @@ def _cmd_mjcf(args: argparse.Namespace) -> None:
 def register(sub: Any) -> None:
     """Add the ``mjcf`` sub-command to the ``pkdyn`` parser."""
     sp = robot_command(sub, "mjcf", "write a MuJoCo model (MJCF) of the robot")
-    sp.add_argument("-o", "--output", help="output file (default: stdout)")
+    output_option(sp, "-o", "--out", deprecated=("--output",), help="output file (default: stdout)")
     sp.add_argument(
-        "--timestep", type=float, default=1e-3, help="simulation time step [s] (default 0.001)"
+        "--timestep", type=number, default=1e-3, help="simulation time step [s] (default 0.001)"
     )
     sp.add_argument(
         "--no-contacts", action="store_true", help="write collision geoms without contacts"

@@ -8,43 +8,13 @@ JSON entry adds ``redundancy`` (the objective's values, baseline and chosen path
 from __future__ import annotations
 
 import argparse
-import json
 from typing import Any
 
-from pkdyn.cli._common import Parser, add_param_option, output_path, params
+from pkdyn.cli._common import Parser, add_param_option, emit, integer, number, params
+from pkdyn.cli._paths import output_option
 from pkdyn.exceptions import InvalidInputError, PkdynError
 
 __all__ = ["register"]
-
-
-def _objective(ph: dict[str, Any]) -> str:
-    red = ph.get("redundancy")
-    if red is None:
-        return ""
-    return f"  {1e3 * red['objective_baseline']:.1f} -> {1e3 * red['objective']:.1f}"
-
-
-def _text(out: dict[str, Any]) -> str:
-    walker = out["summary"].get("branches", 3) != 3
-    lines = [
-        f"{'#':>2} {'phase':<15} {'mode':<4} {'br':>2} {'closure':>9} {'force N':>8} "
-        f"{'legs mm':>8} {'stroke mm':>9} {'1/cond':>7}"
-        + ("  objective mm (baseline -> chosen)" if walker else "")
-    ]
-    for k, ph in enumerate(out["phases"]):
-        lines.append(
-            f"{k:>2} {ph['name']:<15} {ph['mode']:<4} {ph['branch'] or '-':>2} "
-            f"{ph['max_closure_residual']:>9.1e} {ph['max_actuator_force']:>8.1f} "
-            f"{1e3 * ph['min_leg_distance']:>8.1f} {1e3 * ph['min_stroke_margin']:>9.1f} "
-            f"{ph['min_singularity_distance']:>7.3f}" + _objective(ph)
-        )
-    s = out["summary"]
-    lines.append(
-        f"{s['duration']:.1f} s, {s['samples']} samples; locks held to "
-        f"{s['max_lock_drift']:.1e} rad, feet to {s['max_support_drift']:.1e} m; "
-        + ("no violation" if not s["violations"] else "; ".join(s["violations"]))
-    )
-    return "\n".join(lines)
 
 
 def _cmd_scenario(args: argparse.Namespace) -> None:
@@ -53,8 +23,6 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
     from pkdyn.tripod.machining import MachiningPlan
     from pkdyn.tripod.scenario import WalkPlan
 
-    output_path("--plot", args.plot, figure=True)
-    output_path("--html", args.html)
     overrides = params(args.param)
     if args.branches is not None:
         overrides["branches"] = args.branches
@@ -73,18 +41,12 @@ def _cmd_scenario(args: argparse.Namespace) -> None:
         surface_radius=args.surface_radius,
     )
     report = run_scenario(robot, plan, stride=args.stride, allocation=args.allocation)
-    out = report.as_json()
     if args.plot:
-        from pkdyn.plotting.tripod import plot_scenario
-
-        plot_scenario(report, path=args.plot)
+        report.plot(args.plot)
     if args.html:
         _html(robot, report, args.html)
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print(_text(out))
-    bad = out["summary"]["violations"]
+    emit(args, report)
+    bad = report.violations()
     if bad:
         more = f" (and {len(bad) - 1} more, see the report)" if len(bad) > 1 else ""
         raise PkdynError(f"the scenario is not feasible: {bad[0]}{more}")
@@ -108,7 +70,7 @@ def register(sub: Any) -> None:
     add_param_option(sc)
     sc.add_argument(
         "--branches",
-        type=int,
+        type=integer,
         choices=(3, 4),
         help="3: the tripod (default); 4: the four-branch walker (redundancy while swinging)",
     )
@@ -118,34 +80,36 @@ def register(sub: Any) -> None:
         default="norm",
         help="the walker's redundant actuation in PP: least norm (default) or least largest force",
     )
-    sc.add_argument("--cycles", type=int, default=2, help="walking cycles (default 2)")
+    sc.add_argument("--cycles", type=integer, default=2, help="walking cycles (default 2)")
     sc.add_argument(
         "--step",
         nargs=2,
-        type=float,
+        type=number,
         default=[0.10, 0.0],
         metavar=("DX", "DY"),
         help="foot displacement per cycle [m] (default 0.10 0)",
     )
-    sc.add_argument("--lift", type=float, default=0.03, help="foot lift [m] (default 0.03)")
+    sc.add_argument("--lift", type=number, default=0.03, help="foot lift [m] (default 0.03)")
     sc.add_argument(
-        "--tilt", type=float, default=0.10, help="nacelle tilt at swing end [rad] (default 0.1)"
+        "--tilt", type=number, default=0.10, help="nacelle tilt at swing end [rad] (default 0.1)"
     )
-    sc.add_argument("--swing-time", type=float, default=2.5, help="[s] (default 2.5)")
-    sc.add_argument("--reconfiguration-time", type=float, default=1.5, help="[s] (default 1.5)")
-    sc.add_argument("--dt", type=float, default=0.05, help="sample period [s] (default 0.05)")
+    sc.add_argument("--swing-time", type=number, default=2.5, help="[s] (default 2.5)")
+    sc.add_argument("--reconfiguration-time", type=number, default=1.5, help="[s] (default 1.5)")
+    sc.add_argument("--dt", type=number, default=0.05, help="sample period [s] (default 0.05)")
     sc.add_argument("--no-machining", action="store_true", help="walk only")
     sc.add_argument(
         "--surface-radius",
-        type=float,
+        type=number,
         default=float("inf"),
         metavar="R",
         help="walk across a cylindrical support of radius R [m] (default: a plane)",
     )
     sc.add_argument(
-        "--stride", type=int, default=1, help="singularity margin every N samples (default 1)"
+        "--stride", type=integer, default=1, help="singularity margin every N samples (default 1)"
     )
     sc.add_argument("--json", action="store_true")
-    sc.add_argument("--plot", metavar="FILE", help="save the summary figure (png, pdf, svg)")
-    sc.add_argument("--html", metavar="FILE", help="save a meshcat animation (static HTML)")
+    output_option(
+        sc, "--plot", figure=True, metavar="FILE", help="save the summary figure (png, pdf, svg)"
+    )
+    output_option(sc, "--html", metavar="FILE", help="save a meshcat animation (static HTML)")
     sc.set_defaults(func=_cmd_scenario)

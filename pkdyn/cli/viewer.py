@@ -5,12 +5,12 @@ from __future__ import annotations
 import argparse
 import signal
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import load, output_path, qa_argument, robot_command
+from pkdyn.cli._common import load, number, qa_argument, robot_command
+from pkdyn.cli._paths import input_option, output_option
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["register"]
@@ -18,11 +18,18 @@ __all__ = ["register"]
 
 def _read_points(path: str) -> np.ndarray:
     """An (N, 3) point array [m] from ``.npy`` or a text file (comma or blank separated)."""
+    import io
+
+    from pkdyn.files import read_bytes
+
+    data = read_bytes(
+        path, 256_000_000, lambda msg: InvalidInputError("--points", f"'{path}' {msg}")
+    )
     try:
         if path.endswith(".npy"):
-            P = np.load(path, allow_pickle=False)
+            P = np.load(io.BytesIO(data), allow_pickle=False)
         else:
-            text = Path(path).read_text().replace(",", " ")
+            text = data.decode("utf-8").replace(",", " ")
             P = np.loadtxt(text.splitlines(), ndmin=2)
     except (OSError, ValueError) as err:
         raise InvalidInputError("--points", f"cannot read '{path}': {err}") from None
@@ -97,7 +104,6 @@ def _configuration(robot: Any, args: argparse.Namespace) -> np.ndarray | None:
 def _cmd_view(args: argparse.Namespace) -> None:
     from pkdyn.viewer import Scene, chain
 
-    output_path("--html", args.html)
     robot = load(args, geometry=True)
     segments = []
     if args.trajectory:
@@ -141,7 +147,7 @@ def register(sub: Any) -> None:
     """Add ``view`` to the ``pkdyn`` parser."""
     sp = robot_command(sub, "view", "meshcat scene of a robot (live, or a self-contained HTML)")
     where = sp.add_mutually_exclusive_group()
-    where.add_argument("--pose", nargs="+", type=float, help="X Y Z [ROLL PITCH YAW] (m, rad)")
+    where.add_argument("--pose", nargs="+", type=number, help="X Y Z [ROLL PITCH YAW] (m, rad)")
     qa_argument(where)
     sp.add_argument(
         "--trajectory",
@@ -150,7 +156,7 @@ def register(sub: Any) -> None:
         metavar="NAME",
         help="animate built-in trajectories one after the other (adept, sine, p2p)",
     )
-    sp.add_argument("--html", metavar="FILE", help="write a self-contained HTML file, no server")
+    output_option(sp, "--html", metavar="FILE", help="write a self-contained HTML file, no server")
     sp.add_argument(
         "--host",
         default="127.0.0.1",
@@ -164,7 +170,8 @@ def register(sub: Any) -> None:
     sp.add_argument(
         "--closest", action="store_true", help="colour the two bodies closest to collision"
     )
-    sp.add_argument(
+    input_option(
+        sp,
         "--points",
         action="append",
         metavar="FILE",

@@ -63,7 +63,7 @@ def clavel_chart_study(
 
 def clavel_chart_text(result: StudyResult) -> str:
     """Clavel's table: ``d, s, h`` (closed form and numeric), ``hmax, v, z_h`` per ``(r, b)``."""
-    t = result.table
+    t = result.designs
     s = result.study
     gm = math.degrees(float(s.settings.get("gamma_max", GAMMA_MAX)))
     ab = math.degrees(float(s.settings.get("ab_min", AB_MIN)))

@@ -63,6 +63,10 @@ class Conditions:
             ``None``: the description's ``<pkdyn:stiffness>``.
         material: Material of the links for the precision metrics (a preset name of
             :mod:`pkdyn.precision.material`); ``None``: rigid links (or the description's).
+        damping_ratio: Damping ratio of the first mode for the vibration metrics
+            (``settling_time``, ``residual_amplitude``); ``None``: 0.02.
+        band: Settling band of ``settling_time`` [m].
+        dwell: Time after the duty cycle within which the tool must settle [s].
 
     """
 
@@ -78,6 +82,9 @@ class Conditions:
     clavel_rays: int = 24
     actuator_stiffness: float | tuple[float, ...] | None = None
     material: str | None = None
+    damping_ratio: float | None = None
+    band: float = 1e-4
+    dwell: float = 0.5
     _tasks: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -127,6 +134,16 @@ class Conditions:
             from pkdyn.precision.material import as_material
 
             as_material(self.material)
+        if self.damping_ratio is not None:
+            from pkdyn.precision.vibration_damping import MAX_DAMPING_RATIO
+
+            set_(
+                self,
+                "damping_ratio",
+                fields.number("damping_ratio", self.damping_ratio, 0.0, MAX_DAMPING_RATIO),
+            )
+        set_(self, "band", fields.number("band", self.band, 0.0, 10.0, open_low=True, unit="m"))
+        set_(self, "dwell", fields.number("dwell", self.dwell, 0.0, 60.0, open_low=True, unit="s"))
 
     def as_dict(self) -> dict[str, Any]:
         """Plain form for study files."""
@@ -149,6 +166,9 @@ class Conditions:
                 else list(self.actuator_stiffness)
             ),
             "material": self.material,
+            "damping_ratio": self.damping_ratio,
+            "band": self.band,
+            "dwell": self.dwell,
         }
 
     @classmethod

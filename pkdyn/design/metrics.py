@@ -37,7 +37,18 @@ Built-in metrics (:data:`METRICS`; groups of them: :data:`GROUPS`):
 - on the required workspace, precision (:mod:`pkdyn.precision`, with the study's
   ``actuator_stiffness`` and ``material``): ``stiffness_min`` [N/m] (smallest principal
   translational stiffness; 0 when a required pose is singular), ``f1_min`` [Hz] (lowest natural
-  frequency);
+  frequency). Options that cannot give them are refused before the study starts
+  (:func:`check_precision`): no actuator stiffness given or described, a count that does not
+  match the actuators, rigid actuators (``inf``) with nothing else compliant (the figures would
+  be infinite: the robot is rigid), no required workspace;
+- on the duty cycle, vibration (:func:`pkdyn.precision.vibration.vibration`, modal method,
+  with the study's ``actuator_stiffness``, ``material``, ``damping_ratio``, ``band`` and
+  ``dwell``, the payload at the platform): ``settling_time`` [s] (after the motion, until the
+  tool stays within the band; a design whose tool does not settle within the window observed is
+  infeasible), ``residual_amplitude`` [m] (largest deviation from the end pose's equilibrium over
+  0.2 s after the motion), ``motion_settled`` [s] (the duty cycle's duration plus its settling
+  time: the real cycle time); the duty cycle must start and end at rest (``adept``, ``p2p``),
+  and the actuators' stiffness is checked up front as for the precision metrics;
 - on the required workspace: ``error_max`` [m], the largest worst-case platform position error
   of actuator errors of :data:`pkdyn.precision.accuracy.DEFAULT_RESOLUTION` (1e-4 rad, 1e-5 m);
 - ``base_radius`` [m]: largest distance of a base joint from the z axis (a footprint);
@@ -55,11 +66,21 @@ from typing import Any
 import numpy as np
 
 from pkdyn.design.context import DesignContext
-from pkdyn.exceptions import InvalidInputError
+from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.arguments import public
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
 
-__all__ = ["GROUPS", "METRICS", "Metric", "metric", "resolve_metrics"]
+__all__ = [
+    "GROUPS",
+    "METRICS",
+    "PRECISION_METRICS",
+    "VIBRATION_METRICS",
+    "WORKSPACE_METRICS",
+    "Metric",
+    "check_precision",
+    "metric",
+    "resolve_metrics",
+]
 
 MetricFn = Callable[[Robot, DesignContext], float]
 
@@ -325,6 +346,60 @@ def _per_actuator(name: str) -> Metric | None:
 
 # ---------------------------------------------------------------------- precision
 
+VIBRATION_METRICS = ("settling_time", "residual_amplitude", "motion_settled")
+"""The metrics of a design's vibration on the duty cycle (checked up front by a study)."""
+
+
+PRECISION_METRICS = ("stiffness_min", "f1_min", *VIBRATION_METRICS)
+"""Metrics of the elastic model (they need the actuators' stiffness)."""
+
+WORKSPACE_METRICS = ("stiffness_min", "f1_min", "error_max")
+"""Precision metrics evaluated over the required workspace (they need one)."""
+
+
+def check_precision(metrics: Sequence[Metric], conditions: Any, robot: Robot) -> None:
+    """Refuse, before a study starts, precision options that cannot give a metric.
+
+    Args:
+        metrics: The study's metrics.
+        conditions: Its :class:`pkdyn.design.context.Conditions`.
+        robot: A design of the study (its actuators and description).
+
+    Raises:
+        InvalidInputError: No actuator stiffness given nor described, a count that does not
+            match the actuators, or every actuator rigid with nothing else compliant (one line,
+            naming the option and the fix).
+
+    """
+    names = [m.name for m in metrics if m.name in PRECISION_METRICS]
+    if not names:
+        return
+    from pkdyn.precision.elastic import actuator_stiffness
+
+    what = f"metric '{names[0]}'"
+    try:
+        k = actuator_stiffness(robot, conditions.actuator_stiffness)
+    except InvalidInputError as err:
+        text = str(err).removeprefix(f"{err.name}: ")
+        raise InvalidInputError(
+            "actuator_stiffness",
+            f"{what} needs each actuator's stiffness: {text} (study setting actuator_stiffness)",
+        ) from None
+    desc = robot.description
+    compliant = (
+        conditions.material is not None
+        or desc.material is not None
+        or any(c.compliance is not None or c.material is not None for c in desc.compliance)
+        or (robot.passive is not None and bool(np.any(robot.passive.stiffness > 0.0)))
+    )
+    if np.all(np.isinf(k)) and not compliant:
+        raise InvalidInputError(
+            "actuator_stiffness",
+            f"{what}: every actuator is rigid (inf) and nothing else is compliant: every design "
+            "is rigid (infinite stiffness and frequencies), no metric to compare; give finite "
+            "actuator stiffnesses or a material for the links (--material)",
+        )
+
 
 def _precision(ctx: DesignContext, frequency: bool) -> np.ndarray:
     """Stiffness (or lowest frequency) at the reached required poses (0: singular)."""
@@ -364,6 +439,66 @@ def _stiffness_min(robot: Robot, ctx: DesignContext) -> float:
 @metric("f1_min", "Hz", "lowest natural frequency over the required workspace", geometry=True)
 def _f1_min(robot: Robot, ctx: DesignContext) -> float:
     return float(np.min(_precision(ctx, True)))
+
+
+def _vibration(ctx: DesignContext) -> Any:
+    """The vibration of the design on the duty cycle (shared by the vibration metrics)."""
+    from pkdyn.dynamics.trajectory import named_task
+    from pkdyn.precision.vibration import vibration
+
+    def run() -> Any:
+        c = ctx.conditions
+        task = named_task(ctx.robot, c.trajectory, **dict(c.trajectory_options))
+        return vibration(
+            ctx.robot,
+            task,
+            payload=c.payload,
+            actuator_stiffness=c.actuator_stiffness,
+            material=c.material,
+            damping_ratio=c.damping_ratio,
+            band=c.band,
+            dwell=c.dwell,
+            progress=False,
+        )
+
+    return ctx.cached("vibration", run)
+
+
+@metric(
+    "settling_time",
+    "s",
+    "time after the duty cycle until the tool stays within the band (vibration)",
+    geometry=True,  # the links' beams are read from their cylinders
+)
+def _settling_time(robot: Robot, ctx: DesignContext) -> float:
+    r = _vibration(ctx)
+    if r.settling_time is None:
+        raise PkdynError(
+            f"the tool does not settle within {ctx.conditions.band:g} m in the "
+            f"{float(r.t[-1] - r.duration):.3g} s observed after the duty cycle"
+        )
+    return float(r.settling_time)
+
+
+@metric(
+    "residual_amplitude",
+    "m",
+    "largest deviation from the end equilibrium over 0.2 s after the duty cycle (vibration)",
+    geometry=True,
+)
+def _residual_amplitude(robot: Robot, ctx: DesignContext) -> float:
+    return float(_vibration(ctx).residual_amplitude)
+
+
+@metric(
+    "motion_settled",
+    "s",
+    "duty cycle duration plus its settling time: the cycle time the vibration allows",
+    geometry=True,
+)
+def _motion_settled(robot: Robot, ctx: DesignContext) -> float:
+    r = _vibration(ctx)
+    return float(r.duration) + _settling_time(robot, ctx)
 
 
 @metric(
@@ -412,6 +547,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
     ),
     "required": ("contains", "inv_cond_min", "inv_cond_mean", "interference_margin"),
     "precision": ("stiffness_min", "f1_min"),
+    "vibration": VIBRATION_METRICS,
     "sizing": (
         "peak_effort",
         "rms_effort",

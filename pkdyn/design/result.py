@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -15,6 +16,8 @@ from pkdyn.design.study import Study
 from pkdyn.design.table import Table
 from pkdyn.exceptions import InvalidInputError, StudyError
 from pkdyn.files import atomic_write
+from pkdyn.results import Result, deprecated_alias, jsonable
+from pkdyn.units import quantity
 
 __all__ = ["StudyResult", "check_verify"]
 
@@ -64,12 +67,16 @@ def _param_text(v: Any) -> str:
 
 
 @dataclass
-class StudyResult:
+class StudyResult(Result):
     """What a study found.
+
+    ``result.table()`` is the report the command line prints (the result protocol); the table
+    of designs is ``result.designs`` (``result.table.rows`` and the other attributes of the
+    table still work, with a deprecation warning, for one release).
 
     Attributes:
         study: The study.
-        table: Every design, sorted by index.
+        designs: Every design, sorted by index.
         seconds: Wall time of the run [s].
         executor: Where the designs were evaluated.
         paths: Files written (``csv``, ``parquet``, ``study``), empty when none.
@@ -79,7 +86,7 @@ class StudyResult:
     """
 
     study: Study
-    table: Table
+    designs: Table
     seconds: float
     executor: str
     paths: dict[str, Path] = field(default_factory=dict)
@@ -90,15 +97,15 @@ class StudyResult:
 
     def objective_matrix(self) -> np.ndarray:
         """Objectives of every row as minimised values (N, n_obj) (maximised ones negated)."""
-        cols = [o.sign() * self.table.column(o.metric) for o in self.study.objective_list]
-        return np.column_stack(cols) if cols else np.zeros((len(self.table), 0))
+        cols = [o.sign() * self.designs.column(o.metric) for o in self.study.objective_list]
+        return np.column_stack(cols) if cols else np.zeros((len(self.designs), 0))
 
     def pareto(self) -> np.ndarray:
         """Positions (in the table) of the feasible designs on the Pareto front.
 
         Non-dominated on the objectives, sorted by the first objective.
         """
-        feas = np.flatnonzero(self.table.feasible)
+        feas = np.flatnonzero(self.designs.feasible)
         if feas.size == 0 or not self.study.objective_list:
             return np.zeros(0, dtype=int)
         F = self.objective_matrix()[feas]
@@ -113,7 +120,7 @@ class StudyResult:
         """
         if self.verified:
             return self._chosen
-        feas = np.flatnonzero(self.table.feasible)
+        feas = np.flatnonzero(self.designs.feasible)
         if feas.size == 0:
             return None
         if not self.study.objective_list:
@@ -149,11 +156,11 @@ class StudyResult:
         if self.study.requirement is None:
             return self.best()
         dense = check_verify(self.study, samples, candidates)
-        feas = np.flatnonzero(self.table.feasible)
+        feas = np.flatnonzero(self.designs.feasible)
         if self.study.objective_list:
             feas = feas[np.lexsort(self.objective_matrix()[feas].T[::-1])]
         for i in feas[:candidates]:
-            r = self.table.rows[int(i)]
+            r = self.designs.rows[int(i)]
             if evaluate_design(dense, r.index, r.x).feasible:
                 return int(i)
         return None
@@ -180,22 +187,22 @@ class StudyResult:
         if i is None:
             raise StudyError(
                 "study",
-                f"no feasible design among {len(self.table)}; widen the ranges or relax "
+                f"no feasible design among {len(self.designs)}; widen the ranges or relax "
                 "the constraints (see the reason column)",
             )
         return i
 
     def record(self, i: int | None = None) -> dict[str, Any]:
         """A row (default: the chosen design) as ``{column: value}``."""
-        return self.table.record(self._row(i))
+        return self.designs.record(self._row(i))
 
     def overrides(self, i: int | None = None) -> dict[str, Any]:
         """Builder parameter overrides of a design (default: the chosen one)."""
-        return self.study.space.overrides(self.table.rows[self._row(i)].x)
+        return self.study.space.overrides(self.designs.rows[self._row(i)].x)
 
     def params(self, i: int | None = None) -> Any:
         """Builder parameters of a design (default: the chosen one)."""
-        return self.study.space.params(self.table.rows[self._row(i)].x)
+        return self.study.space.params(self.designs.rows[self._row(i)].x)
 
     def robot(self, i: int | None = None, geometry: bool = True) -> Any:
         """The built design (default: the chosen one)."""
@@ -243,7 +250,7 @@ class StudyResult:
 
     def counts(self) -> dict[str, int]:
         """Designs evaluated, feasible, failed (could not be evaluated), constraint-broken."""
-        rows = self.table.rows
+        rows = self.designs.rows
         failed = sum(1 for r in rows if not all(np.isfinite(r.values)))
         feasible = sum(1 for r in rows if r.feasible)
         return {
@@ -253,22 +260,28 @@ class StudyResult:
             "constrained": len(rows) - feasible - failed,
         }
 
-    def as_json(self) -> dict[str, Any]:
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def to_json(self) -> dict[str, Any]:
         """Summary: counts, timing, the chosen design, the Pareto front, the files."""
         best = self.best()
         front = self.pareto()
-        return {
-            "study": self.study.name or self.study.family,
-            "digest": self.study.digest(),
-            **self.counts(),
-            "seconds": self.seconds,
-            "designs_per_second": len(self.table) / self.seconds if self.seconds > 0 else None,
-            "executor": self.executor,
-            "best": None if best is None else _json_record(self.table.record(best)),
-            "best_params": None if best is None else _plain(self.overrides(best)),
-            "pareto": [_json_record(self.table.record(int(i))) for i in front],
-            "files": {k: str(v) for k, v in self.paths.items()},
-        }
+        return jsonable(
+            {
+                "study": self.study.name or self.study.family,
+                "digest": self.study.digest(),
+                **self.counts(),
+                "seconds": self.seconds,
+                "designs_per_second": len(self.designs) / self.seconds
+                if self.seconds > 0
+                else None,
+                "executor": self.executor,
+                "best": None if best is None else _json_record(self.designs.record(best)),
+                "best_params": None if best is None else _plain(self.overrides(best)),
+                "pareto": [_json_record(self.designs.record(int(i))) for i in front],
+                "files": {k: str(v) for k, v in self.paths.items()},
+            }
+        )
 
     def study_file(self) -> str:
         """The study file written beside the table: the study, then a ``results`` summary."""
@@ -279,14 +292,21 @@ class StudyResult:
         data["results"] = {
             "digest": self.study.digest(),
             **self.counts(),
-            "best_index": None if best is None else int(self.table.rows[best].index),
+            "best_index": None if best is None else int(self.designs.rows[best].index),
             "best_params": None if best is None else _plain(self.overrides(best)),
         }
         return "# pkdyn design study: rerun with `pkdyn design --study THIS_FILE`\n" + str(
             yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
         )
 
-    def summary(self, top: int = 5) -> str:
+    summary = deprecated_alias("summary", "report")
+
+    @property
+    def table(self) -> Any:
+        """Called, the report (:meth:`report`); its attributes: deprecated, see :attr:`designs`."""
+        return _ReportOrTable(self)
+
+    def report(self, top: int = 5) -> str:
         """A readable report: counts, reasons, the chosen design, the front."""
         from pkdyn.design import fields
 
@@ -294,13 +314,13 @@ class StudyResult:
         c = self.counts()
         s = self.study
         lines = [
-            f"{s.name or s.family}: {c['designs']} designs in {self.seconds:.1f} s "
+            f"{s.name or s.family}: {c['designs']} designs in {quantity(self.seconds, 's')} "
             f"({c['designs'] / max(self.seconds, 1e-9):.1f} designs/s, {self.executor}); "
             f"{c['feasible']} feasible, {c['constrained']} break a constraint, "
             f"{c['failed']} could not be evaluated"
         ]
         reasons: dict[str, int] = {}
-        for r in self.table.rows:
+        for r in self.designs.rows:
             if r.reason:
                 key = r.reason.split(":")[0] if not all(np.isfinite(r.values)) else "constraint"
                 if key == "constraint":
@@ -316,14 +336,14 @@ class StudyResult:
                 + (f" passes {self.verified} samples per axis" if self.verified else "")
             )
             return "\n".join(lines)
-        rec = self.table.record(best)
+        rec = self.designs.record(best)
         obj = ", ".join(str(o) for o in s.objective_list) or "first feasible"
         if self.verified:
             obj += f"; passes the required workspace at {self.verified} samples per axis"
         lines.append(f"chosen ({obj}): design {rec['index']}")
         for name in s.space.names:
             lines.append(f"  {name:>22s} = {rec[name]:.6g}")
-        units = self.table.units
+        units = self.designs.units
         for name in s.metric_names:
             lines.append(f"  {name:>22s} = {rec[name]:.6g} {units.get(name, '')}")
         front = self.pareto()
@@ -331,6 +351,38 @@ class StudyResult:
             lines.append(f"Pareto front: {len(front)} designs")
         lines.append(f"check: {self.command('size' if s.uses_duty else 'workspace', best)}")
         return "\n".join(lines)
+
+
+class _ReportOrTable:
+    """``result.table``: called, the report (the result protocol).
+
+    Otherwise, for one release, the table of designs (now ``result.designs``), with a
+    deprecation warning.
+    """
+
+    def __init__(self, result: StudyResult) -> None:
+        self._result = result
+
+    def __call__(self, top: int = 5) -> str:
+        return self._result.report(top)
+
+    def _designs(self) -> Table:
+        warnings.warn(
+            "StudyResult.table is the report now (table()); the table of designs is "
+            "StudyResult.designs",
+            DeprecationWarning,
+            stacklevel=3,
+        )
+        return self._result.designs
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._designs(), name)
+
+    def __len__(self) -> int:
+        return len(self._designs())
+
+    def __iter__(self) -> Any:
+        return iter(self._designs().rows)
 
 
 def _plain(v: Any) -> Any:

@@ -77,7 +77,9 @@ def _complete(paths: dict[str, Path], study: Study, header: list[str]) -> list[R
         return None
     try:
         meta = yaml.safe_load(
-            read_text(paths["study"], MAX_STUDY_FILE, lambda m: StudyError("study file", m))
+            read_text(  # (this run's own study file, rewritten when it ends: not an input)
+                paths["study"], MAX_STUDY_FILE, lambda m: StudyError("study file", m), record=False
+            )
         )
         results = meta.get("results") if isinstance(meta, dict) else None
         if not isinstance(results, dict) or results.get("digest") != study.digest():

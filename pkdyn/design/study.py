@@ -37,7 +37,15 @@ import numpy as np
 from pkdyn.design import fields
 from pkdyn.design.context import Conditions
 from pkdyn.design.goals import Constraint, Objective
-from pkdyn.design.metrics import METRICS, Metric, resolve_metrics
+from pkdyn.design.metrics import (
+    METRICS,
+    PRECISION_METRICS,
+    VIBRATION_METRICS,
+    WORKSPACE_METRICS,
+    Metric,
+    check_precision,
+    resolve_metrics,
+)
 from pkdyn.design.requirement import Requirement
 from pkdyn.design.samplers import SAMPLERS, check_count, unit_points
 from pkdyn.design.space import DesignSpace, Range
@@ -66,6 +74,9 @@ _CONDITION_KEYS = (
     "clavel_rays",
     "actuator_stiffness",
     "material",
+    "damping_ratio",
+    "band",
+    "dwell",
 )
 
 
@@ -109,8 +120,8 @@ class Study:
         seed: Seed of the sampler or of NSGA-II.
         parametrisation: Name of a parametrisation (:mod:`pkdyn.design.parametrisations`).
         settings: Other conditions: ``limits``, ``length`` [m], ``gamma_max``, ``ab_min`` [rad],
-            ``workspace_samples``, ``clavel_rays``, ``actuator_stiffness``, ``material`` (see
-            :class:`pkdyn.design.Conditions`).
+            ``workspace_samples``, ``clavel_rays``, ``actuator_stiffness``, ``material``,
+            ``damping_ratio``, ``band``, ``dwell`` (see :class:`pkdyn.design.Conditions`).
         name: A label for reports.
 
     Raises:
@@ -187,11 +198,25 @@ class Study:
         set_(self, "name", fields.text("name", self.name))
         # validate now: bad input fails before any design is evaluated
         _ = self.space, self.conditions, self.metric_list
+        self._check_precision()
         set_(self, "fixed", dict(self.space.fixed))  # text values converted by the space
         _ = self.total
         if self.sampler == "nsga2" and not self.objectives:
             raise InvalidInputError("objectives", "nsga2 needs at least one objective")
         self._check_work(self._check_duty_cycle())
+
+    def _check_precision(self) -> None:
+        """Refuse precision options no design could turn into a metric (on the middle design)."""
+        if not any(m.name in PRECISION_METRICS for m in self.metric_list):
+            return
+        from pkdyn.design.evaluate import build
+        from pkdyn.exceptions import PkdynError
+
+        try:
+            robot = build(self, self.space.values(np.full((1, self.space.dimension), 0.5))[0])
+        except PkdynError:
+            return  # (the middle design does not build: each design says why)
+        check_precision(self.metric_list, self.conditions, robot)
 
     def _check_duty_cycle(self) -> int:
         """Build the duty cycle about a stand-in home: its options fail now, not per design.
@@ -269,13 +294,29 @@ class Study:
             raise InvalidInputError("metrics", "a study needs at least one metric (--metric)")
         metrics = resolve_metrics(names)
         needs = {"contains", "inv_cond_min", "inv_cond_mean", "interference_margin"}
+        needs |= set(WORKSPACE_METRICS)
         if self.requirement is None:
             used = sorted(needs & {m.name for m in metrics})
             if used:
                 raise InvalidInputError(
                     f"metric '{used[0]}'", "needs a required workspace (--require KIND:...)"
                 )
+        vib = [m.name for m in metrics if m.name in VIBRATION_METRICS]
+        if vib:
+            self._check_vibration(vib[0])
         return metrics
+
+    def _check_vibration(self, name: str) -> None:
+        """Refuse up front the settings a vibration metric cannot be computed with.
+
+        The duty cycle must run from rest to rest (the settling follows a stop); the actuators'
+        stiffness is checked with the precision metrics' (:func:`check_precision`).
+        """
+        if self.trajectory == "sine":
+            raise InvalidInputError(
+                f"metric '{name}'",
+                "needs a duty cycle from rest to rest (adept or p2p), not sine (it ends in motion)",
+            )
 
     @property
     def metric_names(self) -> list[str]:
@@ -310,7 +351,7 @@ class Study:
     def uses_duty(self) -> bool:
         """Whether a metric runs the duty cycle (the sizing metrics)."""
         duty = {"peak_effort", "rms_effort", "peak_speed", "peak_power"}
-        duty |= {"effort_margin", "speed_margin"}
+        duty |= {"effort_margin", "speed_margin", *VIBRATION_METRICS}
         return any(m.name in duty or m.name.rsplit("_", 1)[0] in duty for m in self.metric_list)
 
     @property

@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -47,6 +48,7 @@ from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.description import FrameRef, SpringSpec
 from pkdyn.model.passive import with_passive
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, jsonable
 from solvers import numerics
 
 __all__ = [
@@ -61,7 +63,7 @@ METRICS = ("rms", "peak")
 
 
 @dataclass(frozen=True)
-class BalancingResult:
+class BalancingResult(Result):
     """Springs chosen by :func:`balance_springs` and the torques with and without them.
 
     Attributes:
@@ -110,6 +112,40 @@ class BalancingResult:
     def peak_after(self) -> np.ndarray:
         """Peak ``|torque|`` per actuator with the springs (n_a,)."""
         return np.max(np.abs(self.tau_after), axis=0)
+
+    def to_json(self) -> dict[str, Any]:
+        """The springs and the torques with and without them.
+
+        Returns:
+            ``groups`` (``stiffness`` [N/m], ``rest_length`` [m], member ``springs``),
+            ``preload`` [N] per spring, and per actuator the RMS and peak torques before and
+            after [N m or N].
+
+        """
+        return jsonable(
+            {
+                "robot": self.robot.name,
+                "metric": self.metric,
+                "groups": [
+                    {
+                        "stiffness": float(k),
+                        "rest_length": float(L0),
+                        "springs": [
+                            s.name
+                            for s, gi in zip(self.springs, self.groups, strict=True)
+                            if gi == g
+                        ],
+                    }
+                    for g, (k, L0) in enumerate(zip(self.stiffness, self.rest_length, strict=True))
+                ],
+                "preload": dict(zip([s.name for s in self.springs], self.preload, strict=True)),
+                "actuators": list(self.robot.actuator_names),
+                "rms_before": self.rms_before,
+                "rms_after": self.rms_after,
+                "peak_before": self.peak_before,
+                "peak_after": self.peak_after,
+            }
+        )
 
     def table(self) -> str:
         """A readable summary: springs, then torques before / after per actuator."""

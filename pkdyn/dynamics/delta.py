@@ -31,21 +31,24 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from pkdyn.analysis.kinematics import SINGULAR_TOL
 from pkdyn.closed_form.delta import inverse
+from pkdyn.dynamics.series import series_table
 from pkdyn.dynamics.trajectory import TaskTrajectory
 from pkdyn.exceptions import PkdynError, TrajectoryError
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, jsonable
 
 __all__ = ["ActuatorTrajectory", "DeltaDynamics", "delta_inverse_dynamics", "has_delta_dynamics"]
 
 
 @dataclass(frozen=True)
-class ActuatorTrajectory:
+class ActuatorTrajectory(Result):
     """Actuator motion and efforts along a trajectory.
 
     Attributes:
@@ -69,6 +72,32 @@ class ActuatorTrajectory:
     def power(self) -> np.ndarray:
         """Actuator powers ``tau * qa_dot`` (N, n_a) [W]."""
         return self.tau * self.qa_dot
+
+    def to_json(self) -> dict[str, Any]:
+        """The series: ``t`` [s], ``actuators``, ``qa`` [rad], ``qa_dot``, ``qa_ddot``, ``tau``."""
+        return jsonable(
+            {
+                "t": self.t,
+                "actuators": list(self.actuators),
+                "qa": self.qa,
+                "qa_dot": self.qa_dot,
+                "qa_ddot": self.qa_ddot,
+                "tau": self.tau,
+            }
+        )
+
+    def table(self) -> str:
+        """Per actuator: the range of its angle, rate and effort."""
+        n = list(self.actuators)
+        return series_table(
+            "actuator trajectory",
+            self.t,
+            [
+                ("qa", self.qa, n, ["rad"] * len(n)),
+                ("qa_dot", self.qa_dot, n, ["rad/s"] * len(n)),
+                ("tau", self.tau, n, ["N m"] * len(n)),
+            ],
+        )
 
 
 def has_delta_dynamics(robot: Robot) -> bool:

@@ -46,6 +46,8 @@ from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import JointTrajectory, TaskTrajectory, map_task_trajectory
 from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, deprecated_alias, jsonable
+from pkdyn.units import quantity
 
 __all__ = ["MAX_PATH_SAMPLES", "FastestResult", "fastest_trajectory", "joint_path"]
 
@@ -62,7 +64,7 @@ units]; the Seidel LP bounds its variables at 1e8."""
 
 
 @dataclass(frozen=True)
-class FastestResult:
+class FastestResult(Result):
     """The time-optimal motion along a path.
 
     Attributes:
@@ -138,17 +140,73 @@ class FastestResult:
 
         return mix(self.A) * u + mix(self.B) * sd * sd + mix(self.C) + mix(self.P)
 
-    def as_json(self) -> dict[str, Any]:
-        """JSON-ready summary."""
-        return {
-            "cycle_time": self.cycle_time,
-            "payload": self.payload,
-            "samples": int(self.trajectory.t.size),
-            "active_fraction": self.active_fraction,
-            "max_torque_utilisation": float(np.max(self.torque_utilisation)),
-            "max_speed_utilisation": float(np.max(self.speed_utilisation)),
-            "toppra_solves": self.iterations,
-        }
+    def scaled(self, scale: float = 1.0) -> tuple[JointTrajectory, TaskTrajectory]:
+        """The motion slowed down uniformly (times ``scale t``, rates and accelerations divided).
+
+        Rates are divided by ``scale``, accelerations by ``scale^2``.
+        A slower copy stays within the limits (its efforts are ``C + (tau - C) / scale^2``, a
+        convex combination of the fastest motion's and of those at rest), minus the dampers'
+        and drives' speed-dependent losses, which only fall.
+
+        Args:
+            scale: Slow-down factor (>= 1 keeps the limits).
+
+        Returns:
+            ``(joint, task)``: the joint and platform trajectories (non-uniform times).
+
+        Raises:
+            InvalidInputError: A path without its task trajectory, or a scale not > 0.
+
+        """
+        from pkdyn.inputs import positive
+
+        scale = positive("scale", scale)
+        traj = self.trajectory
+        joint = JointTrajectory(
+            traj.t * scale,
+            traj.q,
+            traj.v / scale,
+            traj.a / scale**2,
+            traj.actuated_q,
+            traj.actuated_v,
+            name=traj.name,
+        )
+        task = self.path.task
+        if task is None:
+            raise InvalidInputError("path", "this motion was built in joint space: no task path")
+        sd = self.s_dot[:, None] / scale
+        sdd = self.s_ddot[:, None] / scale**2
+        pose_d = task.pose_d * sd
+        pose_dd = task.pose_d * sdd + task.pose_dd * sd * sd
+        timed = TaskTrajectory(joint.t, task.pose, pose_d, pose_dd, name=traj.name)
+        return joint, timed
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready summary: cycle time [s], payload [kg], samples, use of the limits."""
+        return jsonable(
+            {
+                "cycle_time": self.cycle_time,
+                "payload": self.payload,
+                "samples": int(self.trajectory.t.size),
+                "active_fraction": self.active_fraction,
+                "max_torque_utilisation": float(np.max(self.torque_utilisation)),
+                "max_speed_utilisation": float(np.max(self.speed_utilisation)),
+                "toppra_solves": self.iterations,
+            }
+        )
+
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def table(self) -> str:
+        """The cycle time, how much of it runs on a limit, and the independent check."""
+        return (
+            f"fastest cycle: {quantity(self.cycle_time, 's')} (toppra on "
+            f"{self.trajectory.t.size} samples; a torque or speed limit active on "
+            f"{quantity(100 * self.active_fraction, '%', 3)} of them; inverse dynamics along "
+            f"it: {quantity(100 * float(np.max(self.torque_utilisation)), '%', 6)} of the "
+            f"torque limit, {quantity(100 * float(np.max(self.speed_utilisation)), '%', 6)} of "
+            "the speed limit)"
+        )
 
 
 def joint_path(

@@ -17,13 +17,14 @@ import numpy as np
 
 from pkdyn.dynamics.actuation import actuation, drives
 from pkdyn.dynamics.callbacks import user_efforts
+from pkdyn.dynamics.simulation_result import SimulationResult
 from pkdyn.exceptions import InvalidInputError, SimulationError
 from pkdyn.inputs import callable_input, count, positive
 from pkdyn.model.arguments import public
 from pkdyn.model.passive import FRICTION_SMOOTHING
 from pkdyn.model.pose import as_configuration, as_finite
 from pkdyn.model.robot import Robot
-from solvers import ForwardDynamics, ForwardResult, IntegrationError, PassiveForces
+from solvers import ForwardDynamics, IntegrationError, PassiveForces
 
 __all__ = ["TorqueFn", "simulate"]
 
@@ -47,7 +48,7 @@ def simulate(
     passive: bool = True,
     step: float | None = None,
     motor_torque: TorqueFn | None = None,
-) -> ForwardResult:
+) -> SimulationResult:
     """Constrained forward dynamics of the robot under gravity and actuator efforts.
 
     Args:
@@ -75,10 +76,11 @@ def simulate(
             motor torque, so the motor friction and the back-driven gearbox still act.
 
     Returns:
-        Time series: q, v, a, efforts (joint side), closure forces and residuals, energies (the
-        springs' in ``elastic``), the work of the joint-side efforts and the energy dissipated
-        by dampers and friction (the losses in the drives are outside the mechanism:
-        ``Drives.losses``).
+        Time series (:class:`~pkdyn.dynamics.simulation_result.SimulationResult`, a
+        :class:`solvers.ForwardResult` with the actuators' names): q, v, a, efforts (joint
+        side), closure forces and residuals, energies (the springs' in ``elastic``), the work
+        of the joint-side efforts and the energy dissipated by dampers and friction (the
+        losses in the drives are outside the mechanism: ``Drives.losses``).
 
     Raises:
         InvalidInputError: Non-positive duration or step, a step longer than the duration,
@@ -114,11 +116,10 @@ def simulate(
     v = np.zeros(robot.nv) if v0 is None else as_finite("v0", v0, robot.nv)
     fd = ForwardDynamics(
         robot.model,
-        list(robot.constraint_models),
+        robot.constraints,
         actuation(robot),
         passive=_passive(robot, passive, viscous, coulomb),
         integrator=integrator,
-        couplings=robot.closure_set.couplings,
     )
     if torque is not None and motor_torque is not None:
         raise InvalidInputError("motor_torque", "give either torque or motor_torque, not both")
@@ -135,7 +136,7 @@ def simulate(
     g = max(float(np.linalg.norm(robot.model.gravity.linear)), 1.0)
     mass = sum(robot.model.inertias[j].mass for j in range(robot.model.njoints))
     out.energy_scale = float(mass * g * robot.length_scale)
-    return out
+    return SimulationResult.of(robot, out, integrator, dt)
 
 
 MAX_STEPS = 10_000_000
@@ -154,7 +155,7 @@ def _check_work(robot: Robot, duration: float, dt: float, record_every: int) -> 
             f"{duration:g} s in steps of {dt:g} s is {steps:.3g} steps (hours of computing at "
             f"~50 us each); at most {MAX_STEPS:.0e}: use a longer dt or a shorter duration",
         )
-    nc = robot.closure_set.nc
+    nc = robot.constraints.n
     per_sample = 8 * (robot.nq + 3 * robot.nv + len(robot.actuators) + nc + 8)
     need = (steps / record_every + 2) * per_sample
     if need > MAX_RECORD_BYTES:

@@ -18,11 +18,13 @@ from typing import Any
 import numpy as np
 
 from pkdyn.dynamics.actuation import actuation
+from pkdyn.dynamics.series import series_table
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
 from pkdyn.model.arguments import public
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.progress import progress as progress_bar
+from pkdyn.results import Result, jsonable
 from solvers import InconsistentMotionError, InverseDynamics
 from solvers import InfeasibleError as _SolverInfeasible
 from solvers.minmax_effort import MinMaxInverseDynamics
@@ -34,7 +36,7 @@ ALLOCATIONS = ("norm", "max")
 
 
 @dataclass(frozen=True)
-class EffortTrajectory:
+class EffortTrajectory(Result):
     """Actuator efforts along a joint trajectory.
 
     Attributes:
@@ -78,6 +80,36 @@ class EffortTrajectory:
         """Mechanical energy, kinetic + potential + elastic (N,) [J]."""
         assert self.elastic is not None
         return self.kinetic + self.potential + self.elastic
+
+    def to_json(self) -> dict[str, Any]:
+        """``t`` [s], ``actuators``, ``tau`` [N m or N], energies [J], ``residual``."""
+        return jsonable(
+            {
+                "t": self.t,
+                "actuators": list(self.actuators),
+                "tau": self.tau,
+                "kinetic": self.kinetic,
+                "potential": self.potential,
+                "elastic": self.elastic,
+                "dissipation": self.dissipation,
+                "residual": self.residual,
+            }
+        )
+
+    def table(self) -> str:
+        """Per actuator: its effort's range; the kinetic energy; the dynamics' residual."""
+        n = list(self.actuators)
+        return (
+            series_table(
+                f"efforts along {self.trajectory.name}",
+                self.t,
+                [
+                    ("tau", self.tau, n, ["N m or N"] * len(n)),
+                    ("energy", self.kinetic[:, None], ["kinetic"], ["J"]),
+                ],
+            )
+            + f"\nlargest residual of the dynamics: {float(np.max(self.residual)):.2g} N m or N"
+        )
 
     @property
     def power(self) -> np.ndarray:
@@ -193,12 +225,11 @@ def inverse_dynamics(
         weights = 1.0 / effort**2
     solver = (MinMaxInverseDynamics if allocation == "max" else InverseDynamics)(
         robot.model,
-        list(robot.constraint_models),
+        robot.constraints,
         actuation(robot),
         lower=lower,
         upper=upper,
         weights=weights,
-        couplings=robot.closure_set.couplings,
     )
     elements = robot.passive if passive else None
     F_passive = None if elements is None else elements.forces(traj.q, traj.v)  # vectorised

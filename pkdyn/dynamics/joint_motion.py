@@ -9,7 +9,7 @@ actuator space. At every sample:
   the assembly mode is followed); floating-base joints (free-flyer, planar) stay where they
   are, with zero velocity and acceleration;
 - ``v`` solves ``Jc v = 0`` with the actuator rates imposed, and ``a`` solves
-  ``Jc a = -gamma`` (the closures' drift, :meth:`solvers.ClosureSet.drift`) with the actuator
+  ``Jc a = -gamma`` (the closures' drift, :meth:`solvers.ConstraintSet.drift`) with the actuator
   accelerations imposed;
 - the internal mobilities that no actuator moves (the spin of a ball-ended rod, a leaf spring)
   have zero momentum (``N^T M v = 0``) and move as the dynamics dictate
@@ -82,7 +82,7 @@ def actuator_trajectory(
     QD = _samples(qa_dot, (N, n_a), "qa_dot")
     QDD = _samples(qa_ddot, (N, n_a), "qa_ddot")
     model, data = robot.model, robot.model.createData()
-    cs = robot.closure_set
+    cs = robot.constraints
     held = [
         i
         for j in range(1, model.njoints)
@@ -100,7 +100,7 @@ def actuator_trajectory(
     A = np.empty((N, model.nv))
     for k in range(N):
         q[robot.actuated_q] = QA[k]
-        if cs.nc:
+        if cs.n:
             sol = solve_lm(
                 model,
                 q,
@@ -133,7 +133,7 @@ def actuator_trajectory(
             K = Nm.T @ M @ Nm
             v = v - Nm @ np.linalg.solve(K, Nm.T @ M @ v)
         rhs_a = np.zeros(G.shape[0])
-        if cs.nc:
+        if cs.n:
             rhs_a[: Jc.shape[0]] = -cs.drift(data, q, v)
         rhs_a[Jc.shape[0] + act_rows] = QDD[k]
         a = numerics.lstsq(G, rhs_a, numerics.RTOL, 1.0)

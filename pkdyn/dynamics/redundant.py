@@ -96,7 +96,7 @@ def map_redundant_trajectory(
     r, rd, rdd = arrays
     model, data = robot.model, robot.data
     rows = robot.task_rows
-    cs = robot.closure_set
+    cs = robot.constraints
     pose_task = FramePoseTask(model, robot.platform_frame, rows)
     S = np.zeros((m, robot.nv))
     S[np.arange(m), iv] = 1.0
@@ -130,7 +130,7 @@ def map_redundant_trajectory(
         q = sol.q
         pin.computeJointJacobians(model, data, q)
         K = jacobian(q)
-        nc = cs.nc
+        nc = cs.n
         xd, xdd = _task_rates(task.pose[k], task.pose_d[k], task.pose_dd[k])
         rhs_v = np.concatenate([np.zeros(nc), xd[rows], rd[k]])
         v, res_v, null = _lstsq(K, rhs_v, 1e-10)

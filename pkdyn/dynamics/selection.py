@@ -49,6 +49,8 @@ from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InvalidInputError, NoFeasibleDriveError
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, deprecated_alias
+from pkdyn.units import quantity
 from solvers import Drives
 from solvers.numerics import lstsq, null_space
 
@@ -97,8 +99,8 @@ def actuator_inertia(robot: Robot, q: np.ndarray, armature: bool = False) -> np.
     M = np.triu(M) + np.triu(M, 1).T
     if not armature:
         M -= np.diag(np.asarray(model.armature))
-    if robot.closure_set.nc:
-        _, J = robot.closure_set.residual_and_jacobian(data, q)
+    if robot.constraints.n:
+        _, J = robot.constraints.residual_and_jacobian(data, q)
         Z = null_space(J)
     else:
         Z = np.eye(model.nv)
@@ -109,7 +111,7 @@ def actuator_inertia(robot: Robot, q: np.ndarray, armature: bool = False) -> np.
 
 
 @dataclass(frozen=True)
-class Check:
+class Check(Result):
     """One requirement of a pair against one limit.
 
     Attributes:
@@ -153,7 +155,7 @@ class Check:
             f"{_fmt(self.capacity, self.unit)}{excess}{when}"
         )
 
-    def as_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         """JSON-ready dict."""
         return {
             "name": self.name,
@@ -166,6 +168,16 @@ class Check:
             "speed": self.speed,
         }
 
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def table(self) -> str:
+        """Demand against capacity, with the unit, and whether it passes."""
+        state = "ok" if self.ok else "FAILS"
+        return (
+            f"{self.name}: {_fmt(self.demand, self.unit)} needed, "
+            f"{_fmt(self.capacity, self.unit)} available ({state})"
+        )
+
 
 def _fmt(x: float, unit: str) -> str:
     if unit == "rad/s":
@@ -174,7 +186,7 @@ def _fmt(x: float, unit: str) -> str:
 
 
 @dataclass(frozen=True)
-class Candidate:
+class Candidate(Result):
     """A motor (x gearbox) on one actuator along the trajectory.
 
     Attributes:
@@ -244,7 +256,17 @@ class Candidate:
         bad = self.failures
         return "; ".join(c.describe() for c in bad) if bad else "feasible"
 
-    def as_json(self) -> dict[str, Any]:
+    def table(self) -> str:
+        """The pair, its reduction, torques and speed, and why it is rejected (if it is)."""
+        return (
+            f"{self.actuator}: {self.name}, reduction {quantity(self.reduction, '', 4)}, motor "
+            f"peak {quantity(self.motor_peak, 'N m')}, RMS {quantity(self.motor_rms, 'N m')}, "
+            f"peak speed {self.peak_speed * _RPM:.0f} rpm; {self.why()}"
+        )
+
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def to_json(self) -> dict[str, Any]:
         """JSON-ready dict (no time series)."""
         return {
             "motor": self.motor.name,
@@ -260,7 +282,7 @@ class Candidate:
             "copper_loss": self.copper_loss,
             "mass": self.mass,
             "score": self.score if math.isfinite(self.score) else None,
-            "checks": [c.as_json() for c in self.checks],
+            "checks": [c.to_json() for c in self.checks],
             "why": self.why(),
         }
 
@@ -320,7 +342,7 @@ class ActuatorSelection:
 
 
 @dataclass(frozen=True)
-class Selection:
+class Selection(Result):
     """Motor (x gearbox) selection of every actuator.
 
     Attributes:
@@ -362,7 +384,9 @@ class Selection:
             out.append(a.best)
         return out
 
-    def as_json(self) -> dict[str, Any]:
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def to_json(self) -> dict[str, Any]:
         """JSON-ready dict: every candidate, with its checks and the reasons of rejection."""
         return {
             "robot": self.robot,
@@ -377,8 +401,8 @@ class Selection:
                     "actuator": a.actuator,
                     "load_inertia": a.load_inertia,
                     "best": None if a.best is None else a.best.name,
-                    "feasible": [c.as_json() for c in a.feasible],
-                    "rejected": [c.as_json() for c in a.rejected],
+                    "feasible": [c.to_json() for c in a.feasible],
+                    "rejected": [c.to_json() for c in a.rejected],
                     "optimal_ratios": [
                         {
                             "motor": r.motor,
@@ -412,7 +436,7 @@ class Selection:
         for a in self.actuators:
             n = len(a.feasible) + len(a.rejected)
             lines.append(
-                f"{a.actuator}: load inertia {a.load_inertia:.4g} kg m^2, "
+                f"{a.actuator}: load inertia {quantity(a.load_inertia, 'kg m^2')}, "
                 f"{len(a.feasible)} feasible of {n} pairs"
             )
             if a.feasible:

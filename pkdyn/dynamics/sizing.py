@@ -28,6 +28,8 @@ from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import OutputError
 from pkdyn.files import atomic_write
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, deprecated_alias, jsonable
+from pkdyn.units import quantity
 
 __all__ = [
     "FEASIBLE_TOL",
@@ -45,7 +47,7 @@ limits exactly, such as the fastest cycle)."""
 
 
 @dataclass(frozen=True)
-class ActuatorSizing:
+class ActuatorSizing(Result):
     """Sizing figures of one actuator.
 
     Attributes:
@@ -104,16 +106,26 @@ class ActuatorSizing:
             return ("N", "m/s", "N", "m/s")
         return ("N", "m/s", "N m", "rad/s")
 
-    def as_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         """JSON-ready dict (infinite limits as ``None``)."""
-        out: dict[str, Any] = {}
-        for k, v in self.__dict__.items():
-            out[k] = None if isinstance(v, float) and not math.isfinite(v) else v
-        return out
+        return jsonable(dict(self.__dict__))
+
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def table(self) -> str:
+        """Peak and RMS effort against the limit, peak speed, power, in the actuator's units."""
+        e, v, _, _ = self.units
+        limit = quantity(self.limit, e) if math.isfinite(self.limit) else "none"
+        return (
+            f"{self.name}: peak {quantity(self.peak, e)}, RMS {quantity(self.rms, e)}, limit "
+            f"{limit} (margin {percent(self.margin).strip()}); peak speed "
+            f"{quantity(self.peak_speed, v)} (margin {percent(self.speed_margin).strip()}); "
+            f"peak power {quantity(self.peak_power, 'W')}"
+        )
 
 
 @dataclass(frozen=True)
-class SizingResult:
+class SizingResult(Result):
     """Sizing of every actuator along a trajectory.
 
     Attributes:
@@ -156,18 +168,30 @@ class SizingResult:
                     out.append(f"{a.name} {what} by {-100 * m:.3g} %")
         return out
 
-    def as_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         """JSON-ready summary (``actuators``: list of per-actuator dicts)."""
-        return {
-            "robot": self.robot,
-            "trajectory": self.trajectory,
-            "payload": self.payload,
-            "duration": self.duration,
-            "feasible": self.feasible,
-            "actuators": [a.as_json() for a in self.actuators],
-        }
+        return jsonable(
+            {
+                "robot": self.robot,
+                "trajectory": self.trajectory,
+                "payload": self.payload,
+                "duration": self.duration,
+                "feasible": self.feasible,
+                "actuators": [a.to_json() for a in self.actuators],
+            }
+        )
+
+    as_json = deprecated_alias("as_json", "to_json")
 
     def table(self) -> str:
+        """What was sized, then the figures (units per actuator kind: N m, rad/s or N, m/s)."""
+        head = (
+            f"{self.robot}: {self.trajectory}, {quantity(self.duration, 's')}, payload "
+            f"{quantity(self.payload, 'kg')}" + ("" if self.feasible else "  -- LIMITS EXCEEDED")
+        )
+        return head + "\n" + self.figures()
+
+    def figures(self) -> str:
         """A readable table of the figures (units per actuator kind: N m, rad/s or N, m/s)."""
         head = (
             f"{'actuator':<10} {'peak':>9} {'rms':>9} {'limit':>8} {'margin':>7} "

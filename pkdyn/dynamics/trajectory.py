@@ -9,7 +9,7 @@ its first two time derivatives. :func:`map_task_trajectory` turns it into a
   continuously and the internal mobilities follow their velocities);
 - ``v`` satisfies the closures (``Jc v = 0``) and gives the pose rates (``Jx v = x_dot``);
 - ``a`` satisfies the closures to second order (``Jc a = -gamma_c``, see
-  :meth:`solvers.ClosureSet.drift`) and gives the pose accelerations
+  :meth:`solvers.ConstraintSet.drift`) and gives the pose accelerations
   (``Jx a = x_ddot - gamma_x``);
 - the unactuated internal mobilities (e.g. the spin of a ball-ended Delta bar about its axis)
   move as the dynamics dictate: their accelerations solve ``N^T (M a + h) = 0`` with ``N`` the
@@ -40,6 +40,7 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import SINGULAR_TOL, kinematic_models
 from pkdyn.dynamics.profiles import MotionLaw, motion_law
+from pkdyn.dynamics.series import series_table
 from pkdyn.exceptions import (
     InvalidInputError,
     JointLimitError,
@@ -51,6 +52,7 @@ from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.pose import pose_from_vector, pose_to_vector
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.progress import progress as progress_bar
+from pkdyn.results import Result, jsonable
 from solvers import numerics
 
 __all__ = [
@@ -75,7 +77,7 @@ _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 @dataclass(frozen=True)
-class TaskTrajectory:
+class TaskTrajectory(Result):
     """Sampled platform poses and their derivatives.
 
     Attributes:
@@ -113,9 +115,33 @@ class TaskTrajectory:
         """Duration [s]."""
         return float(self.t[-1] - self.t[0])
 
+    def to_json(self) -> dict[str, Any]:
+        """``name``, ``t`` [s], ``pose`` (N, 6) [m, rad] and its derivatives."""
+        return jsonable(
+            {
+                "name": self.name,
+                "t": self.t,
+                "pose": self.pose,
+                "pose_d": self.pose_d,
+                "pose_dd": self.pose_dd,
+            }
+        )
+
+    def table(self) -> str:
+        """Per pose component: its range and its speed's."""
+        names = ["x", "y", "z", "roll", "pitch", "yaw"]
+        return series_table(
+            self.name,
+            self.t,
+            [
+                ("pose", self.pose, names, ["m"] * 3 + ["rad"] * 3),
+                ("speed", self.pose_d, names, ["m/s"] * 3 + ["rad/s"] * 3),
+            ],
+        )
+
 
 @dataclass(frozen=True)
-class JointTrajectory:
+class JointTrajectory(Result):
     """A trajectory of the whole mechanism, consistent with the closures.
 
     Attributes:
@@ -153,6 +179,33 @@ class JointTrajectory:
     def qa_ddot(self) -> np.ndarray:
         """Actuator accelerations (N, n_a) [rad/s^2 or m/s^2]."""
         return self.a[:, self.actuated_v]
+
+    def to_json(self) -> dict[str, Any]:
+        """``name``, ``t`` [s], the actuators' ``qa``, ``qa_dot``, ``qa_ddot``, and ``q``, ``v``."""
+        return jsonable(
+            {
+                "name": self.name,
+                "t": self.t,
+                "qa": self.qa,
+                "qa_dot": self.qa_dot,
+                "qa_ddot": self.qa_ddot,
+                "q": self.q,
+                "v": self.v,
+            }
+        )
+
+    def table(self) -> str:
+        """Per actuator: the range of its coordinate and rate (rad or m)."""
+        k = self.qa.shape[1]
+        names = [f"#{i + 1}" for i in range(k)]
+        return series_table(
+            self.name,
+            self.t,
+            [
+                ("qa", self.qa, names, ["rad or m"] * k),
+                ("qa_dot", self.qa_dot, names, ["rad/s or m/s"] * k),
+            ],
+        )
 
 
 # ---------------------------------------------------------------------- task-space builders
@@ -559,7 +612,7 @@ def map_task_trajectory(
                 sample=k,
                 time=tk,
             )
-        gamma_c = robot.closure_set.drift(data, q, v)
+        gamma_c = robot.constraints.drift(data, q, v)
         gamma_x = _platform_drift(robot, q, v)[rows]
         rhs = np.concatenate([-gamma_c, xdd[rows] - gamma_x])
         a, res_a, _ = _lstsq(K, rhs, 1e-10)
@@ -577,7 +630,7 @@ def map_task_trajectory(
             MN = M @ Nint
             NMN = Nint.T @ MN
             v = v - Nint @ np.linalg.solve(NMN, MN.T @ v)
-            gamma_c = robot.closure_set.drift(data, q, v)
+            gamma_c = robot.constraints.drift(data, q, v)
             gamma_x = _platform_drift(robot, q, v)[rows]
             rhs = np.concatenate([-gamma_c, xdd[rows] - gamma_x])
             a, _, _ = _lstsq(K, rhs, 1e-10)

@@ -1,11 +1,13 @@
 """Trajectories read from CSV files: in actuator space or in task space.
 
-A file has a header row and one row per sample; a column ``t`` [s], strictly increasing, and
-either
+A table (CSV or Parquet, read by :func:`pkdyn.tables.read_table`: its rules and limits) with one
+row per sample; a column ``t`` [s], strictly increasing, and either
 
-- **actuator space**: ``qa_<actuator>`` for every actuator (``robot.actuator_names``) [rad or
-  m], the motion given to the actuators (the platform follows by the direct geometric model,
-  sample after sample in one assembly mode); or
+- **actuator space**: ``qa_<actuator>`` for every actuator (``robot.actuator_names``), the
+  actuators' **readings** [rad or m] (turned into joint coordinates by
+  :meth:`pkdyn.Robot.joint_coordinates`: a calibrated description's encoder gains applied), the
+  motion given to the actuators (the platform follows by the direct geometric model, sample
+  after sample in one assembly mode); or
 - **task space**: the platform pose components the robot controls, among ``x y z`` [m] and
   ``roll pitch yaw`` [rad] (the others may be given; they are not imposed).
 
@@ -17,8 +19,6 @@ path): in actuator space, the platform poses the direct model gives.
 
 from __future__ import annotations
 
-import csv
-import math
 from pathlib import Path
 
 import numpy as np
@@ -28,56 +28,15 @@ from pkdyn.exceptions import InvalidInputError, TrajectoryError
 from pkdyn.model.assembly import forward_geometry
 from pkdyn.model.pose import pose_to_vector
 from pkdyn.model.robot import PLATFORM_HINT, Robot
+from pkdyn.tables import read_table
 
 __all__ = ["TASK_COLUMNS", "read_task_csv"]
 
 TASK_COLUMNS = ("x", "y", "z", "roll", "pitch", "yaw")
 """The task-space columns, in pose order."""
 
-
-def _table(path: Path) -> tuple[list[str], np.ndarray]:
-    """Header and (N, k) numbers of a CSV file, each cell checked."""
-    name = str(path)
-    try:  # (utf-8-sig: a byte-order mark, as spreadsheets write, is not part of the header)
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            rows = list(csv.reader(fh))
-    except FileNotFoundError:
-        raise InvalidInputError("trajectory", f"'{name}': no such file") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise InvalidInputError("trajectory", f"'{name}': cannot be read ({err})") from None
-    except csv.Error as err:  # a cell beyond the csv module's field limit, a NUL byte
-        raise InvalidInputError("trajectory", f"'{name}': not a CSV table ({err})") from None
-    rows = [r for r in rows if any(c.strip() for c in r)]
-    if len(rows) < 4:
-        raise InvalidInputError(
-            "trajectory", f"'{name}': a header row and at least 3 samples are needed"
-        )
-    if len(rows) - 1 > MAX_SAMPLES:
-        raise InvalidInputError(
-            "trajectory", f"'{name}': {len(rows) - 1} samples; at most {MAX_SAMPLES:.0e}"
-        )
-    head = [h.strip() for h in rows[0]]
-    if len(set(head)) != len(head):
-        raise InvalidInputError("trajectory", f"'{name}': a column name is repeated: {head}")
-    data = np.empty((len(rows) - 1, len(head)))
-    for i, row in enumerate(rows[1:], start=2):
-        if len(row) != len(head):
-            raise InvalidInputError(
-                "trajectory", f"'{name}' line {i}: {len(row)} cells for {len(head)} columns"
-            )
-        for j, cell in enumerate(row):
-            try:
-                x = float(cell)
-            except ValueError:
-                raise InvalidInputError(
-                    "trajectory", f"'{name}' line {i}, column '{head[j]}': '{cell}' is no number"
-                ) from None
-            if not math.isfinite(x):
-                raise InvalidInputError(
-                    "trajectory", f"'{name}' line {i}, column '{head[j]}': {x} is not finite"
-                )
-            data[i - 2, j] = x
-    return head, data
+MAX_BYTES = 256_000_000
+"""Largest trajectory file read [bytes] (a FIFO or a device is refused before it is opened)."""
 
 
 def _rates(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -107,26 +66,27 @@ def read_task_csv(robot: Robot, path: str | Path) -> TaskTrajectory:
             "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
         )
     p = Path(path)
-    head, data = _table(p)
-    if "t" not in head:
-        raise InvalidInputError("trajectory", f"'{p}': no column 't' (time [s]) in {head}")
-    t = data[:, head.index("t")]
+    table = read_table(
+        p, "sample", max_rows=MAX_SAMPLES, min_rows=3, hint="resample the trajectory coarser"
+    )
+    head = list(table.columns)
+    if "t" not in table:
+        raise table.error(f"no column 't' (time [s]) among {', '.join(head)}")
+    t = table.column("t")
     steps = np.diff(t)
     if not np.all(steps > 0.0):
         k = int(np.argmax(steps <= 0.0))
-        raise InvalidInputError(
-            "trajectory", f"'{p}' line {k + 3}: t = {t[k + 1]:g} s does not increase"
-        )
+        raise table.error(f"t = {t[k + 1]:g} s does not increase", k + 1, "t")
     names = robot.actuator_names
     qa_cols = [f"qa_{n}" for n in names]
     home = np.concatenate(pose_to_vector(robot.platform_placement(robot.q_home)))
     if any(c in head for c in qa_cols):
         missing = [c for c in qa_cols if c not in head]
         if missing:
-            raise InvalidInputError(
-                "trajectory", f"'{p}': actuator columns {missing} missing (needs {qa_cols})"
+            raise table.error(
+                f"actuator column(s) {', '.join(missing)} missing (needs {', '.join(qa_cols)})"
             )
-        qa = data[:, [head.index(c) for c in qa_cols]]
+        qa = robot.joint_coordinates(table.select(qa_cols))
         pose = np.empty((t.size, 6))
         q = robot.q_home
         for k in range(t.size):
@@ -141,15 +101,14 @@ def read_task_csv(robot: Robot, path: str | Path) -> TaskTrajectory:
         need = [TASK_COLUMNS[r] for r in rows]
         missing = [c for c in need if c not in head]
         if missing:
-            raise InvalidInputError(
-                "trajectory",
-                f"'{p}': give the actuators ({', '.join(qa_cols)}) or the controlled pose "
-                f"components ({', '.join(need)}); missing {', '.join(missing)}",
+            raise table.error(
+                f"give the actuators ({', '.join(qa_cols)}) or the controlled pose "
+                f"components ({', '.join(need)}); missing {', '.join(missing)}"
             )
         pose = np.tile(home, (t.size, 1))
         for r, c in enumerate(TASK_COLUMNS):
             if c in head:
-                pose[:, r] = data[:, head.index(c)]
+                pose[:, r] = table.column(c)
         what = "task"
     pose[:, 3:] = np.unwrap(pose[:, 3:], axis=0)
     pd, pdd = _rates(t, pose)

@@ -8,10 +8,12 @@ parameters with their standard deviations and a physically consistent full set, 
 
 Modules: :mod:`~.parameters` (standard parameters and groups), :mod:`~.motion` (joint motions
 from actuator samples), :mod:`~.regressor` (the closed-loop regressor), :mod:`~.base` (base
-parameters), :mod:`~.estimation` (weighted least squares), :mod:`~.physical` (physically
-consistent parameters), :mod:`~.filtering` (rates from positions), :mod:`~.excitation`
-(optimal excitation trajectories), :mod:`~.data` (the CSV columns), :mod:`~.result` and
-:mod:`~.writer`.
+parameters, :mod:`pkdyn.identifiability`), :mod:`~.structure` (what any motion can identify),
+:mod:`~.checks` (limits, motion, closures of the recorded readings), :mod:`~.estimation`
+(weighted least squares, and what the motion excites), :mod:`~.magnitudes` (plausible sizes of
+the parameters), :mod:`~.physical` (physically consistent parameters), :mod:`~.filtering` (rates
+from positions), :mod:`~.excitation` (optimal excitation trajectories), :mod:`~.data` (the table
+columns), :mod:`~.identify` (the procedure), :mod:`~.result` and :mod:`~.writer`.
 
 Layering: uses :mod:`pkdyn.model`, :mod:`pkdyn.dynamics` and :mod:`solvers`.
 """

@@ -1,31 +1,34 @@
-"""Measured motions: the CSV columns of ``pkdyn identify`` and their checks.
+"""Measured motions: the columns of ``pkdyn identify`` and their checks.
 
-Columns (one header line, then one row per sample, comma-separated):
+A table (CSV or Parquet, read by :func:`pkdyn.tables.read_table`: its rules and limits) with the
+columns
 
 - ``t``: time [s], increasing;
-- ``qa_<actuator>``: actuator positions [rad or m], one per actuator (required);
-- ``qa_dot_<actuator>``, ``qa_ddot_<actuator>``: rates and accelerations (optional, both or
-  neither; without them they come from the positions by zero-phase filtering,
+- ``qa_<actuator>``: actuator **readings** [rad or m], one per actuator (required); the robot
+  turns them into joint coordinates (:meth:`pkdyn.Robot.joint_coordinates`: a calibrated
+  description's encoder gains and offsets applied);
+- ``qa_dot_<actuator>``, ``qa_ddot_<actuator>``: their rates and accelerations (optional, both
+  or neither; without them they come from the positions by zero-phase filtering,
   :mod:`pkdyn.identification.filtering`);
 - ``tau_<actuator>``: measured efforts, joint side [N m or N] (reduction x motor torque; required
   to identify, optional in a motion to predict).
 
-Any other column, a missing one, a value that is not a finite number, or times that do not
-increase is refused with one line naming the column (and the row).
+Any other column, a missing one, a value beyond :data:`MAX_VALUE`, or times that do not increase
+is refused with one line naming the column and the line.
 """
 
 from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.arguments import public
+from pkdyn.tables import Table, read_table
 
-__all__ = ["Measurements", "read_measurements"]
+__all__ = ["MAX_BYTES", "MAX_SAMPLES", "Measurements", "read_measurements"]
 
 
 @dataclass(frozen=True, eq=False)  # numpy fields
@@ -34,11 +37,15 @@ class Measurements:
 
     Attributes:
         t: Times (N,) [s].
-        qa: Actuator positions (N, n_a) [rad or m].
-        qa_dot: Rates (N, n_a), or ``None`` (to be filtered).
+        qa: Actuator readings (N, n_a) [rad or m] (joint coordinates where the robot has no
+            encoder gain or offset).
+        qa_dot: Their rates (N, n_a), or ``None`` (to be filtered).
         qa_ddot: Accelerations (N, n_a), or ``None``.
         tau: Efforts (N, n_a) [N m or N], or ``None``.
         source: File name, for messages.
+        lines: Line (CSV) or row (Parquet) of each sample in the file (N,), for messages, or
+            ``None`` (samples given in memory: counted from 0).
+        line_word: ``line`` (CSV) or ``row`` (Parquet), for messages.
 
     """
 
@@ -48,6 +55,14 @@ class Measurements:
     qa_ddot: np.ndarray | None = None
     tau: np.ndarray | None = None
     source: str = "data"
+    lines: np.ndarray | None = None
+    line_word: str = "line"
+
+    def where(self, k: int) -> str:
+        """``line L`` of sample ``k`` in its file (``row R``: Parquet), or ``sample k`` (from 0)."""
+        if self.lines is None:
+            return f"sample {k}"
+        return f"{self.line_word} {int(self.lines[k])}"
 
     def __post_init__(self) -> None:
         from pkdyn.inputs import instance, matrix, vector
@@ -68,58 +83,12 @@ class Measurements:
 
 MAX_BYTES = 512_000_000
 """Largest motion file read [bytes] (several million samples)."""
+MAX_SAMPLES = 2_000_000
+"""Largest number of samples accepted (about 3 minutes for a Delta on one core)."""
 MAX_VALUE = 1e9
 """Largest magnitude of a time, position, rate or effort in a motion file [SI units]."""
 MIN_STEP = 1e-9
 """Smallest time step between samples [s]."""
-
-
-def _check_file(p: Path, src: str) -> None:
-    """Refuse a missing file, a directory, a FIFO or a device, or a file too large, unopened."""
-    import stat
-
-    try:
-        st = p.stat()
-    except OSError as err:
-        raise InvalidInputError(src, f"cannot be read ({err.strerror or err})") from None
-    if not stat.S_ISREG(st.st_mode):
-        kind = "a directory" if stat.S_ISDIR(st.st_mode) else "a FIFO, device or socket"
-        raise InvalidInputError(src, f"cannot be read: {kind}, not a regular file")
-    if st.st_size > MAX_BYTES:
-        raise InvalidInputError(
-            src, f"is {st.st_size / 1e6:.3g} MB, more than the {MAX_BYTES / 1e6:.3g} MB accepted"
-        )
-
-
-def _read_table(path: Path) -> tuple[list[str], np.ndarray]:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise InvalidInputError(str(path), f"cannot read the file ({err.strerror})") from None
-    except UnicodeDecodeError:
-        raise InvalidInputError(str(path), "not a text CSV file") from None
-    lines = text.lstrip("\ufeff").splitlines()  # (a spreadsheet's byte-order mark)
-    if not lines or not lines[0].strip():
-        raise InvalidInputError(str(path), "empty file: expected a header line t,qa_...,tau_...")
-    header = [h.strip() for h in lines[0].split(",")]
-    body = [ln for ln in lines[1:] if ln.strip()]
-    if not body:
-        raise InvalidInputError(str(path), "no data rows after the header")
-    import pyarrow as pa
-    from pyarrow import csv as pacsv
-
-    try:
-        table = pacsv.read_csv(
-            pa.py_buffer(("\n".join([",".join(header), *body]) + "\n").encode()),
-            convert_options=pacsv.ConvertOptions(
-                column_types={h: pa.float64() for h in header}, strings_can_be_null=True
-            ),
-        )
-    except (pa.ArrowInvalid, pa.ArrowTypeError) as err:
-        msg = str(err).splitlines()[0]
-        raise InvalidInputError(str(path), f"malformed CSV ({msg})") from None
-    cols = [table.column(i).to_numpy(zero_copy_only=False) for i in range(table.num_columns)]
-    return header, np.column_stack([np.asarray(c, dtype=float) for c in cols])
 
 
 @public
@@ -129,31 +98,32 @@ def read_measurements(
     """Read and check a measured motion (module doc).
 
     Args:
-        path: CSV file.
+        path: CSV or Parquet file.
         actuators: Actuator names of the robot, in order.
         need_tau: The ``tau_*`` columns are required.
 
     Returns:
-        The measurements.
+        The measurements (readings as recorded: :func:`pkdyn.identification.identify` applies
+        the robot's readings rule).
 
     Raises:
-        InvalidInputError: Missing, unknown or duplicated columns, values that are not finite,
-            times that do not increase, fewer than 2 rows.
+        InvalidInputError: An unreadable file or table (:func:`pkdyn.tables.read_table`);
+            missing, unknown or partial column groups; values beyond :data:`MAX_VALUE`; times
+            that do not increase.
 
     """
     from pkdyn.inputs import instance, names
 
     instance("path", path, str | os.PathLike, "a CSV file name")
     actuators = list(names("actuators", actuators, what="actuator"))
-    p = Path(path)
-    src = str(path)
-    _check_file(p, src)
-    header, X = _read_table(p)
-    seen: set[str] = set()
-    for h in header:
-        if h in seen:
-            raise InvalidInputError(src, f"column '{h}' is given twice")
-        seen.add(h)
+    table = read_table(
+        path,
+        "data",
+        MAX_BYTES,
+        MAX_SAMPLES,
+        hint="decimate the recording (a few thousand samples of a rich motion identify any robot)",
+    )
+    src = table.source
     groups = {
         "qa": [f"qa_{a}" for a in actuators],
         "qa_dot": [f"qa_dot_{a}" for a in actuators],
@@ -161,58 +131,61 @@ def read_measurements(
         "tau": [f"tau_{a}" for a in actuators],
     }
     known = {"t", *(c for cols in groups.values() for c in cols)}
-    extra = [h for h in header if h not in known]
+    extra = [h for h in table.columns if h not in known]
     if extra:
         raise InvalidInputError(
             src,
-            f"unknown column '{extra[0]}' (the columns are t, qa_<actuator>, qa_dot_<actuator>, "
+            f"unknown column {extra[0]} (the columns are t, qa_<actuator>, qa_dot_<actuator>, "
             f"qa_ddot_<actuator>, tau_<actuator> with the actuators {', '.join(actuators)})",
         )
     required = ["t", *groups["qa"], *(groups["tau"] if need_tau else [])]
-    missing = [c for c in required if c not in seen]
+    missing = [c for c in required if c not in table]
     if missing:
         raise InvalidInputError(
             src, f"missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)}"
         )
     for g in ("qa_dot", "qa_ddot", "tau"):
-        have = [c for c in groups[g] if c in seen]
+        have = [c for c in groups[g] if c in table]
         if have and len(have) != len(actuators):
-            absent = [c for c in groups[g] if c not in seen]
+            absent = [c for c in groups[g] if c not in table]
             raise InvalidInputError(src, f"missing column {absent[0]} (give all {g}_* or none)")
-    if ("qa_dot_" + actuators[0] in seen) != ("qa_ddot_" + actuators[0] in seen):
+    if (groups["qa_dot"][0] in table) != (groups["qa_ddot"][0] in table):
         raise InvalidInputError(src, "give both the qa_dot_* and qa_ddot_* columns, or neither")
-    bad = ~np.isfinite(X)
-    if bad.any():
-        row, col = (int(i) for i in np.argwhere(bad)[0])
-        raise InvalidInputError(
-            src, f"row {row + 2}, column '{header[col]}': not a finite number (NaN or empty)"
-        )
-    if X.shape[0] < 2:
-        raise InvalidInputError(src, "fewer than 2 samples")
-    big = np.abs(X) > MAX_VALUE
-    if big.any():
-        row, col = (int(i) for i in np.argwhere(big)[0])
-        raise InvalidInputError(
-            src,
-            f"row {row + 2}, column '{header[col]}': {X[row, col]:g} is beyond any plausible "
-            f"value (at most {MAX_VALUE:g} in SI units)",
-        )
-    idx = {h: i for i, h in enumerate(header)}
-    t = X[:, idx["t"]]
-    dt = np.diff(t)
-    if np.any(dt <= 0.0):
-        k = int(np.flatnonzero(dt <= 0.0)[0])
-        raise InvalidInputError(src, f"row {k + 3}, column 't': times must increase")
-    if np.any(dt < MIN_STEP):
-        k = int(np.flatnonzero(dt < MIN_STEP)[0])
-        raise InvalidInputError(
-            src, f"row {k + 3}, column 't': a time step of {dt[k]:g} s (at least {MIN_STEP:g} s)"
-        )
+    _check_values(table)
 
     def cols(g: str) -> np.ndarray | None:
-        names = groups[g]
-        return X[:, [idx[c] for c in names]] if names[0] in idx else None
+        return table.select(groups[g]) if groups[g][0] in table else None
 
     qa = cols("qa")
     assert qa is not None
-    return Measurements(t, qa, cols("qa_dot"), cols("qa_ddot"), cols("tau"), src)
+    return Measurements(
+        table.column("t").copy(),
+        qa,
+        cols("qa_dot"),
+        cols("qa_ddot"),
+        cols("tau"),
+        src,
+        table.lines,
+        "line" if table.kind == "csv" else "row",
+    )
+
+
+def _check_values(table: Table) -> None:
+    """Refuse absurd magnitudes and times that do not increase (the line and column named)."""
+    X = table.data
+    big = np.abs(X) > MAX_VALUE
+    if big.any():
+        row, col = (int(i) for i in np.argwhere(big)[0])
+        raise table.error(
+            f"{X[row, col]:g} is beyond any plausible value (at most {MAX_VALUE:g} in SI units)",
+            row,
+            table.columns[col],
+        )
+    t = table.column("t")
+    dt = np.diff(t)
+    if np.any(dt <= 0.0):
+        k = int(np.flatnonzero(dt <= 0.0)[0])
+        raise table.error("times must increase", k + 1, "t")
+    if np.any(dt < MIN_STEP):
+        k = int(np.flatnonzero(dt < MIN_STEP)[0])
+        raise table.error(f"a time step of {dt[k]:g} s (at least {MIN_STEP:g} s)", k + 1, "t")

@@ -4,30 +4,46 @@ The rows of each actuator ``j`` are folded into the triangular factor ``R_j`` of
 ``[Y_j  y_j]`` (QR, never the normal equations), so memory stays ``n_a (p_b + 1)^2`` whatever
 the number of samples. Then (Gautier's weighted least squares):
 
-1. ordinary least squares on all rows: ``theta_0``;
+1. ordinary least squares on all rows (unit columns, minimum norm: :func:`solvers.numerics.
+   lstsq` with :data:`EXCITATION_RTOL`): ``theta_0``;
 2. per actuator the noise variance ``sigma_j^2 = |y_j - Y_j theta_0|^2 / (N - p_b / n_a)``;
-3. the rows of actuator ``j`` weighted by ``1 / sigma_j``: ``theta_b`` and its covariance
-   ``s^2 (W^T W)^-1`` (``W``: the weighted regressor, ``s^2`` its residual variance per degree
-   of freedom), hence the standard deviation of each base parameter.
+3. the rows of actuator ``j`` weighted by ``1 / sigma_j``: the weighted regressor ``W``;
+4. **which base parameters the motion excites** (:func:`solvers.numerics.column_basis` on ``W``,
+   each column scaled by a plausible magnitude of its parameter, ``reference``: the nominal value
+   of the combination, or a typical one of its kind): a parameter is *excited* unless the data
+   determine it worse than :data:`EXCITATION_MIN` of that magnitude (the pivoted QR's ``|R_kk|
+   >= EXCITATION_MIN``: its standard deviation, the better-determined parameters known, below
+   ten times its magnitude: the data see it). The others are not estimated: they are held at
+   their nominal values and flagged, never given the small standard deviation a wild estimate
+   would have relative to itself;
+5. the excited parameters: ``theta_b`` and their covariance ``s^2 (W_e^T W_e)^-1`` (``s^2`` the
+   residual variance per degree of freedom), hence the standard deviation of each; the
+   unexcited ones get the standard deviation the data would give them, the excited ones known.
 
-The motion must excite every base parameter: the condition number of the weighted regressor
-with unit columns is reported, and a numerically rank-deficient one (an unexciting motion) is
-refused, naming the base parameters it leaves undetermined.
+``excitation = reference / std`` says per parameter how well the motion excites it: the
+standard deviation relative to the parameter's plausible magnitude, not to its estimate (which
+would flatter a wild estimate). The condition number of the weighted regressor with unit columns
+is reported.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
+from solvers import numerics
 
-__all__ = ["EXCITATION_RTOL", "Accumulator", "Estimate"]
+__all__ = ["EXCITATION_MIN", "EXCITATION_RTOL", "Accumulator", "Estimate"]
 
 EXCITATION_RTOL = 1e-8
-"""Smallest singular value, relative to the largest, of the unit-column weighted regressor
-below which a motion leaves a base parameter undetermined."""
+"""Relative tolerance of the rank rule on the unit-column weighted regressor: a motion leaves a
+base parameter undetermined below it whatever its magnitude."""
+
+EXCITATION_MIN = 0.1
+"""Smallest ``reference / std`` of an excited base parameter: a standard deviation beyond ten
+times the parameter's plausible magnitude means the data do not see it."""
 
 _FOLD_ROWS = 4096
 
@@ -42,14 +58,22 @@ class Estimate:
     """Weighted least-squares estimate of the base parameters.
 
     Attributes:
-        theta: Base parameters (p_b,).
-        std: Their standard deviations (p_b,).
-        covariance: Their covariance (p_b, p_b).
+        theta: Base parameters (p_b,) (the unexcited ones: their nominal values, held).
+        std: Their standard deviations (p_b,) (the unexcited ones: what the data would give
+            them, the excited ones known; ``inf`` where they have no effect on the data).
+        covariance: Covariance of the excited ones (p_b, p_b) (zero rows and columns for the
+            unexcited ones, whose variance ``std^2`` is on the diagonal).
         sigma: Noise standard deviation per actuator (n_a,) [N m or N] (ordinary residuals).
         rms: Residual RMS per actuator with ``theta`` (n_a,) [N m or N].
         condition: Condition number of the weighted regressor with unit columns.
         samples: Number of samples.
-        R: Triangular factor (p_b, p_b) of the weighted regressor (``R^T R = W^T W``).
+        R: Triangular factor (p_b, p_b) of the weighted regressor (``R^T R = W^T W``):
+            ``|R (theta' - theta)|^2`` is the misfit of other base parameters ``theta'`` in
+            noise units (what the data say of every direction, the unexcited ones weakly).
+        excited: Whether the motion excites each base parameter (p_b,) bool.
+        excitation: ``reference / std`` per base parameter (p_b,) (excited from
+            :data:`EXCITATION_MIN` on).
+        reference: The magnitude each base parameter was judged against (p_b,).
 
     """
 
@@ -61,6 +85,9 @@ class Estimate:
     condition: float
     samples: int
     R: np.ndarray
+    excited: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    excitation: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    reference: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 class Accumulator:
@@ -121,18 +148,20 @@ class Accumulator:
                 self._pending[j] = []
         self._rows = 0
 
-    def estimate(self, names: list[str]) -> Estimate:
+    def estimate(self, names: list[str], reference: np.ndarray, nominal: np.ndarray) -> Estimate:
         """The weighted least-squares estimate (module doc).
 
         Args:
-            names: Base parameter formulas, for the message of an unexciting motion.
+            names: Base parameter formulas, for messages.
+            reference: A plausible magnitude of each base parameter (p_b,) > 0.
+            nominal: The nominal value of each base parameter (p_b,): held where the motion does
+                not excite it.
 
         Returns:
             The estimate.
 
         Raises:
-            InvalidInputError: Fewer rows than base parameters, or a motion that does not
-                excite every base parameter.
+            InvalidInputError: Fewer rows than base parameters, or a motion that excites none.
 
         """
         self._fold()
@@ -144,7 +173,9 @@ class Accumulator:
                 f"record at least {int(np.ceil(p / n_a)) + 1} samples (many more in practice)",
             )
         Rs = [self._square(R) for R in self.R]
-        theta0 = self._solve(np.vstack(Rs), names, weighted=False)
+        # 1-2. ordinary least squares (unit columns, minimum norm), noise per actuator
+        S = _qr_r(np.vstack(Rs))
+        theta0 = _unit_lstsq(S[:p, :p], S[:p, p], EXCITATION_RTOL)
         dof = max(N - p / n_a, 1.0)
         x = np.append(theta0, -1.0)
         rss = np.array([float(np.sum((R @ x) ** 2)) for R in Rs])
@@ -152,24 +183,45 @@ class Accumulator:
         top = float(sigma.max())
         # an exact fit (no residual at all) has no noise to weigh the actuators by
         w = 1.0 / np.maximum(sigma, 1e-12 * top) if top > 0.0 else np.ones_like(sigma)
-        Rw = _qr_r(np.vstack([R * wj for R, wj in zip(Rs, w, strict=True)]))
-        Rw = self._square(Rw)
-        theta = self._solve(Rw, names, weighted=True)
-        A = Rw[:p, :p]
+        # 3. the weighted factor [A b]
+        Rw = self._square(_qr_r(np.vstack([R * wj for R, wj in zip(Rs, w, strict=True)])))
+        A, b = Rw[:p, :p], Rw[:p, p]
+        # 4. what the motion excites
+        ref = np.asarray(reference, dtype=float)
+        basis = numerics.column_basis(A, EXCITATION_RTOL, col_scale=ref, floor=EXCITATION_MIN)
+        E = np.sort(basis.independent)
+        if E.size == 0:
+            raise InvalidInputError(
+                "data",
+                "the motion does not excite any base parameter (every one is determined worse "
+                "than its magnitude); use a richer excitation (pkdyn.identification.excitation)",
+            )
+        U = np.setdiff1d(np.arange(p), E)
+        theta = np.asarray(nominal, dtype=float).copy()
+        # 5. the excited parameters, the others held
+        AE = A[:, E]
+        theta[E] = _unit_lstsq(AE, b - A[:, U] @ theta[U], numerics.machine_rtol(AE))
         xw = np.append(theta, -1.0)
-        s2 = float(np.sum((Rw @ xw) ** 2)) / max(N * n_a - p, 1)
-        Ainv = np.linalg.inv(A)
-        cov = s2 * (Ainv @ Ainv.T)
+        s2 = float(np.sum((Rw @ xw) ** 2)) / max(N * n_a - E.size, 1)
+        RE = _qr_r(AE)[: E.size]
+        RE_inv = np.linalg.inv(RE)
+        cov = np.zeros((p, p))
+        cov[np.ix_(E, E)] = s2 * (RE_inv @ RE_inv.T)
+        std = np.zeros(p)
+        std[E] = np.sqrt(np.diag(cov)[E])
+        if U.size:  # what the data would give them, the excited ones known
+            rest = A[:, U] - AE @ (RE_inv @ (RE_inv.T @ (AE.T @ A[:, U])))
+            dist = np.linalg.norm(rest, axis=0)
+            with np.errstate(divide="ignore"):
+                std[U] = np.where(dist > 0.0, np.sqrt(s2) / dist, np.inf)
+            cov[U, U] = std[U] ** 2
         rms = np.sqrt(np.array([float(np.sum((R @ xw) ** 2)) for R in Rs]) / N)
+        with np.errstate(divide="ignore"):
+            excitation = np.where(std > 0.0, ref / std, np.inf)
+        excited = np.zeros(p, dtype=bool)
+        excited[E] = True
         return Estimate(
-            theta,
-            np.sqrt(np.diag(cov)),
-            cov,
-            sigma,
-            rms,
-            self._condition(A),
-            N,
-            A,
+            theta, std, cov, sigma, rms, self._condition(A), N, A, excited, excitation, ref
         )
 
     def _square(self, R: np.ndarray) -> np.ndarray:
@@ -184,23 +236,10 @@ class Accumulator:
         s = np.linalg.svd(A / np.where(norms > 0.0, norms, 1.0), compute_uv=False)
         return float(s[0] / s[-1]) if s[-1] > 0.0 else float("inf")
 
-    def _solve(self, R: np.ndarray, names: list[str], weighted: bool) -> np.ndarray:
-        """Least squares from a stacked factor ``[R_Y  r_y]``; refuse a rank-deficient one."""
-        p = self.p
-        F = _qr_r(R) if R.shape[0] > p + 1 else R
-        A, b = F[:p, :p], F[:p, p]
-        norms = np.linalg.norm(A, axis=0)
-        dead = norms <= 0.0
-        U, s, Vt = np.linalg.svd(A / np.where(dead, 1.0, norms), full_matrices=False)
-        if dead.any() or s[-1] <= EXCITATION_RTOL * s[0]:
-            v = Vt[-1] if not dead.any() else dead.astype(float)
-            order = np.argsort(-np.abs(v))
-            worst = [names[i] for i in order[:3] if abs(v[i]) > 0.1 * abs(v[order[0]])]
-            raise InvalidInputError(
-                "data",
-                "the motion does not excite every base parameter (rank-deficient regressor, "
-                f"condition {s[0] / max(s[-1], 1e-300):.3g}): {'; '.join(worst)} "
-                "cannot be told apart; use a richer excitation "
-                "(pkdyn.identification.excitation)",
-            )
-        return (Vt.T @ ((U.T @ b) / s)) / norms
+
+def _unit_lstsq(A: np.ndarray, b: np.ndarray, rtol: float) -> np.ndarray:
+    """Minimum-norm least squares of ``A x = b`` with unit columns (the rank rule, ``rtol``)."""
+    norms = np.linalg.norm(A, axis=0)
+    safe = np.where(norms > 0.0, norms, 1.0)
+    x = numerics.lstsq(A / safe, b, rtol, 1.0)
+    return np.where(norms > 0.0, x / safe, 0.0)

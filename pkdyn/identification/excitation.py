@@ -117,7 +117,7 @@ def excitation_trajectory(
     from scipy.optimize import minimize
 
     from pkdyn import inputs
-    from pkdyn.identification.identify import check_identifiable, structural_base
+    from pkdyn.identification.structure import check_identifiable, structural_base
 
     period = inputs.positive("period", period, "s", bound=1e6)
     harmonics = inputs.count("harmonics", harmonics, 2, 50)
@@ -147,7 +147,7 @@ def excitation_trajectory(
     emax = np.array([a.effort for a in robot.actuators])
     t = np.linspace(0.0, period, samples, endpoint=False)
     w = 2.0 * np.pi / period
-    ind = base.independent
+    ind = base.identifiable
     cache: dict[bytes, tuple[float, np.ndarray]] = {}
 
     def evaluate(x: np.ndarray) -> tuple[float, np.ndarray]:

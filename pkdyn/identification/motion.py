@@ -37,7 +37,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import TrajectoryError
 from pkdyn.model.robot import Robot
-from solvers import SampledKinematics, solve_lm
+from solvers import SampledKinematics, numerics, solve_lm
 
 __all__ = [
     "ANCHOR_SPACING",
@@ -67,7 +67,6 @@ SINGULAR_RTOL = 1e-8
 sample (the actuators cannot move independently)."""
 
 _NEWTON_STEPS = 12
-_REG = 1e-15  # relative regularisation of the Gram matrices (rank-deficient closure rows)
 
 
 @dataclass(eq=False)  # numpy fields
@@ -78,7 +77,7 @@ class MotionBatch:
         q: Configurations (n, nq).
         v: Velocities (n, nv).
         a: Accelerations (n, nv).
-        J: Closure Jacobians (n, nc, nv) (:class:`solvers.ClosureSet` convention).
+        J: Closure Jacobians (n, nc, nv) (:class:`solvers.ConstraintSet` convention).
         first: Index of the first sample in the whole series.
         passive_map: ``J_p^+ J_a`` (n, n_p, n_a) when computed (``v_p = -J_p^+ J_a qa_dot``),
             else ``None``.
@@ -94,7 +93,10 @@ class MotionBatch:
 
 
 def passive_solve(Jp: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Least-squares, least-norm solutions ``J_p^+ x`` of a batch, by regularised normal equations.
+    """Least-squares, least-norm solutions ``J_p^+ x`` of a batch (the passive-joint elimination).
+
+    :func:`solvers.numerics.passive_elimination`: the one rule of the kinematic models and the
+    sensitivities (redundant closure rows dropped by the scale-aware cut-off).
 
     Args:
         Jp: Passive columns of the closure Jacobians (n, nc, n_p).
@@ -104,31 +106,12 @@ def passive_solve(Jp: np.ndarray, x: np.ndarray) -> np.ndarray:
         ``J_p^+ x``: (n, n_p) or (n, n_p, k).
 
     """
-    vec = x.ndim == 2
-    X = x[..., None] if vec else x
-    n, nc, n_p = Jp.shape
-    JpT = np.swapaxes(Jp, 1, 2)
-    if nc <= n_p:
-        G = Jp @ JpT
-        G += _REG * np.trace(G, axis1=1, axis2=2)[:, None, None] * np.eye(nc)
-        out = JpT @ np.linalg.solve(G, X)
-    else:
-        G = JpT @ Jp
-        G += _REG * np.trace(G, axis1=1, axis2=2)[:, None, None] * np.eye(n_p)
-        out = np.linalg.solve(G, JpT @ X)
-    return out[..., 0] if vec else out
+    return numerics.passive_solve(Jp, x)
 
 
 def _step(Jp: np.ndarray, r: np.ndarray) -> np.ndarray:
     """One sample's least-squares, least-norm ``J_p^+ r`` (as :func:`passive_solve`)."""
-    nc, n_p = Jp.shape
-    if nc <= n_p:
-        G = Jp @ Jp.T
-        G.flat[:: nc + 1] += _REG * G.trace()
-        return Jp.T @ np.linalg.solve(G, r)
-    G = Jp.T @ Jp
-    G.flat[:: n_p + 1] += _REG * G.trace()
-    return np.linalg.solve(G, Jp.T @ r)
+    return numerics.passive_elimination(Jp).solve(r)
 
 
 def _hermite(s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -150,8 +133,8 @@ class MotionSampler:
         self.robot = robot
         self.model = robot.model
         self.data = robot.model.createData()
-        self.cs = robot.closure_set
-        self.kin = SampledKinematics(robot.model, robot.closure_set, (), BATCH)
+        self.cs = robot.constraints
+        self.kin = SampledKinematics(robot.model, robot.constraints, (), BATCH)
         self.va = np.asarray(robot.actuated_v, dtype=int)
         self.aq = np.asarray(robot.actuated_q, dtype=int)
         self.vp = np.setdiff1d(np.arange(robot.nv), self.va)
@@ -332,8 +315,8 @@ class MotionSampler:
             return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
         model, cs = self.model, self.cs
         Q = np.empty((n, model.nq))
-        J = np.empty((n, cs.nc, model.nv))
-        if not cs.nc:
+        J = np.empty((n, cs.n, model.nv))
+        if not cs.n:
             for k in range(n):
                 q = self._guess(first + k)
                 q[self.aq] = qa[k]
@@ -472,7 +455,7 @@ class MotionSampler:
         A[:, self.va] = qdd
         err = np.zeros(n)
         X = None
-        if cs.nc and self.vp.size:
+        if cs.n and self.vp.size:
             Jp, Ja = J[:, :, self.vp], J[:, :, self.va]
             X = passive_solve(Jp, Ja)
             V[:, self.vp] = -(X @ qd[..., None])[..., 0]

@@ -27,7 +27,14 @@ from pkdyn.identification.parameters import ParameterSet, body_links, placement_
 from pkdyn.model.description import NAMESPACE
 from pkdyn.model.robot import Robot
 
-__all__ = ["body_inertias", "identified_robot", "identified_urdf", "write_urdf"]
+__all__ = [
+    "MAX_SOURCE_BYTES",
+    "body_inertias",
+    "identified_robot",
+    "identified_urdf",
+    "source_urdf",
+    "write_urdf",
+]
 
 _NS = "{" + NAMESPACE + "}"
 
@@ -101,22 +108,53 @@ def identified_robot(robot: Robot, ps: ParameterSet, theta: np.ndarray) -> Robot
     )
 
 
-def _source_text(robot: Robot) -> str:
+MAX_SOURCE_BYTES = 64_000_000
+"""Largest URDF file read back to write an identified or calibrated description [bytes]."""
+
+
+def source_urdf(robot: Robot, purpose: str = "identified parameters") -> str:
+    """The URDF text a robot was built from: its family builder's output, or its URDF file.
+
+    Calibration and identification write their results into this text.
+
+    Args:
+        robot: The robot.
+        purpose: What is written, for the message.
+
+    Returns:
+        The URDF text.
+
+    Raises:
+        InvalidInputError: The robot came from another format (MJCF, SDFormat) or from text that
+            is not at hand.
+
+    """
+    from pkdyn.files import read_text
     from pkdyn.model.families import FAMILIES
 
-    if robot.source in FAMILIES and robot.params is not None:
-        return str(FAMILIES[robot.source].build_urdf(robot.params))
+    if robot.params is not None and robot.family is not None:
+        return str(FAMILIES[robot.family].build_urdf(robot.params))
     path = Path(robot.source)
     if path.is_file():
-        text = path.read_text(encoding="utf-8")
-        if text.lstrip().startswith("<?xml") or "<robot" in text:
-            root = ET.fromstring(text)
-            if root.tag == "robot":
+        text = read_text(
+            path, MAX_SOURCE_BYTES, lambda msg: InvalidInputError("robot", f"{path} {msg}")
+        )
+        if text.lstrip().startswith("<?xml") or "<robot" in text[:2000]:
+            try:
+                root = ET.fromstring(text)
+            except ET.ParseError:
+                root = None
+            if root is not None and root.tag == "robot":
                 return text
+        raise InvalidInputError(
+            "robot",
+            f"{robot.source} is not a URDF: {purpose} are written into the robot's own URDF "
+            "(convert the model to URDF first)",
+        )
     raise InvalidInputError(
         "robot",
-        f"{robot.source}: identified parameters are written into URDF descriptions (a library "
-        "family or a URDF file); export this robot to URDF first",
+        f"the description of {robot.name} ({robot.source}) is not at hand: {purpose} are "
+        "written into URDF descriptions (a library family or a URDF file)",
     )
 
 
@@ -161,7 +199,7 @@ def identified_urdf(robot: Robot, ps: ParameterSet, theta: np.ndarray) -> str:
 
     """
     ET.register_namespace("pkdyn", NAMESPACE)
-    root = ET.fromstring(_source_text(robot))
+    root = ET.fromstring(source_urdf(robot))
     for fam in root.findall(_NS + "family"):
         root.remove(fam)
     links = {el.get("name"): el for el in root.findall("link")}
@@ -204,8 +242,11 @@ def identified_urdf(robot: Robot, ps: ParameterSet, theta: np.ndarray) -> str:
 
 def write_urdf(
     path: str | os.PathLike[str], robot: Robot, ps: ParameterSet, theta: np.ndarray
-) -> None:
+) -> str:
     """Write :func:`identified_urdf` atomically (temporary file, then rename).
+
+    Returns:
+        The text written.
 
     Raises:
         OutputError: The file cannot be written (an existing file is left intact).
@@ -214,3 +255,4 @@ def write_urdf(
     text = identified_urdf(robot, ps, theta)
     with atomic_write(path) as fh:
         fh.write(text)
+    return text

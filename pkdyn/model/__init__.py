@@ -3,6 +3,7 @@
 Modules: :mod:`~pkdyn.model.description` (parsing pkdyn's URDF extension elements),
 :mod:`~pkdyn.model.build` (Pinocchio model, geometry and constraint models from a description),
 :mod:`~pkdyn.model.robot` (:class:`Robot`), :mod:`~pkdyn.model.pose` (pose vectors),
+:mod:`~pkdyn.model.inertia` (physically valid inertias, their repair),
 :mod:`~pkdyn.model.assembly` (closure residuals, direct and inverse geometric models,
 projection), :mod:`~pkdyn.model.home` (the home search and the assembly tolerance),
 :mod:`~pkdyn.model.families` (the registry the robot library fills),

@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import partial
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -29,6 +30,8 @@ from pkdyn.model.arguments import public
 from pkdyn.model.families import FAMILIES, Family
 from pkdyn.model.pose import as_finite, pose_from_vector, pose_to_vector
 from pkdyn.model.robot import PLATFORM_HINT, Robot
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity, vector
 from solvers import FramePoseTask, SolveResult, solve_lm
 
 __all__ = [
@@ -39,6 +42,7 @@ __all__ = [
     "assembly_modes",
     "inverse_geometry",
     "closure_residual",
+    "coupling_residual",
     "solve_pose",
 ]
 
@@ -46,13 +50,13 @@ DEFAULT_TOL = 1e-12
 """Convergence threshold on the largest closure / pose residual component [m or rad]."""
 
 _LOCAL_TOL = 1.0
-"""The solvers work on the contact-frame closure residual (:meth:`solvers.ClosureSet.
+"""The solvers work on the contact-frame closure residual (:meth:`solvers.ConstraintSet.
 local_residual`, the world one rotated: same norm per closure); ``tol`` applies to its
 components."""
 
 
 @dataclass
-class GeometryResult:
+class GeometryResult(Result):
     """A solved geometric model.
 
     Attributes:
@@ -62,6 +66,10 @@ class GeometryResult:
         residual: Largest closure residual component after the solve [m or rad] (in the
             contact frames the solver works in: the world residual rotated).
         iterations: Solver iterations.
+        actuators: Actuator names, in order (for the table).
+        units: Unit of each actuator coordinate (``rad`` or ``m``).
+        readings: What the actuators' encoders read (``qa / <pkdyn:encoder gain>``), when a
+            gain is not 1 (a calibrated robot), else ``None``.
 
     """
 
@@ -70,6 +78,51 @@ class GeometryResult:
     placement: pin.SE3 | None
     residual: float
     iterations: int
+    actuators: tuple[str, ...] = ()
+    units: tuple[str, ...] = ()
+    readings: np.ndarray | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The result as JSON values.
+
+        Returns:
+            ``position`` [m], ``rpy`` [rad] (``None`` without a platform), ``qa``, ``q``,
+            ``actuators``, ``residual`` [m or rad], and ``readings`` on a calibrated robot.
+
+        """
+        out: dict[str, Any] = {
+            "position": None if self.placement is None else self.position,
+            "rpy": None if self.placement is None else self.rpy,
+            "q": self.q,
+            "qa": self.qa,
+            "actuators": list(self.actuators),
+            "residual": self.residual,
+        }
+        if self.readings is not None:
+            out["readings"] = self.readings
+        return jsonable(out)
+
+    def table(self) -> str:
+        """The platform pose (when there is a platform) and each actuator coordinate."""
+        lines = []
+        if self.placement is not None:
+            lines.append(f"position: {vector(self.position, 'm', roundoff=1e-12)}")
+            lines.append(f"rpy:      {vector(self.rpy, 'rad', roundoff=1e-12)}")
+        names = self.actuators or tuple(f"actuator {k + 1}" for k in range(self.qa.size))
+        units = self.units or ("",) * self.qa.size
+        width = max((len(n) for n in names), default=0)
+        lines += [
+            f"{n + ':':<{width + 1}} {quantity(v, u, 9)}"
+            for n, v, u in zip(names, self.qa, units, strict=True)
+        ]
+        if self.readings is not None:
+            lines.append("encoder readings (joint coordinate / <pkdyn:encoder gain>):")
+            lines += [
+                f"  {n + ':':<{width + 1}} {quantity(v, u, 9)}"
+                for n, v, u in zip(names, self.readings, units, strict=True)
+            ]
+        lines.append(f"closure residual: {self.residual:.2g} (m or rad)")
+        return "\n".join(lines)
 
     @property
     def position(self) -> np.ndarray:
@@ -86,33 +139,45 @@ class GeometryResult:
 
 @public
 def closure_residual(robot: Robot, q: np.ndarray) -> float:
-    """Largest absolute closure residual component at ``q`` [m or rad] (0 without loops)."""
-    if robot.closure_set.nc == 0:
+    """Largest absolute closure residual component at ``q`` [m or rad] (0 without loops).
+
+    The closures only: :func:`coupling_residual` gives the couplings'.
+    """
+    cs = robot.constraints.closures
+    if cs.n == 0:
         return 0.0
-    return float(np.max(np.abs(robot.closure_set.residual(robot.data, q))))
+    return float(np.max(np.abs(cs.residual(robot.data, q))))
+
+
+def coupling_residual(robot: Robot, q: np.ndarray) -> float:
+    """Largest absolute joint-coupling residual at ``q`` [rad or m] (0 without couplings)."""
+    cs = robot.constraints.couplings
+    if cs.n == 0:
+        return 0.0
+    return float(np.max(np.abs(cs.residual(robot.data, q))))
 
 
 def _solve_closures(
     robot: Robot, q0: np.ndarray, free: np.ndarray | None, tol: float
 ) -> SolveResult:
-    cs, data = robot.closure_set, robot.data
+    cs, data = robot.constraints, robot.data
     return solve_lm(
         robot.model,
         q0,
         partial(cs.local_residual, data),  # contact-frame residual: one copy per closure
-        partial(cs.local_jacobian_after_residual, data),  # at the last residual's q
+        partial(cs.local_jacobian_after_residual, data),  # where the residual just was
         free=free,
         tol=tol * _LOCAL_TOL,
     )
 
 
 def _worst(robot: Robot, q: np.ndarray) -> tuple[str, float]:
-    if robot.closure_set.nc == 0:
+    cs = robot.constraints
+    if cs.n == 0:
         return "-", 0.0
-    per = robot.closure_set.split(robot.closure_set.residual(robot.data, q))
-    owners = dict(zip(robot.closure_set.names, robot.row_owners, strict=True))
+    per = cs.split(cs.residual(robot.data, q))
     name = max(per, key=lambda k: per[k])
-    return owners[name], per[name]
+    return name, per[name]
 
 
 def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryResult:
@@ -123,7 +188,32 @@ def _result(robot: Robot, sol: SolveResult, closure_error: float) -> GeometryRes
     placement = None
     if robot.platform_frame is not None:
         placement = pin.SE3(pin.updateFramePlacement(robot.model, robot.data, robot.platform_frame))
-    return GeometryResult(sol.q, sol.q[robot.actuated_q], placement, closure_error, sol.iterations)
+    qa = sol.q[robot.actuated_q]
+    calibrated = bool(
+        np.any(robot.encoder_gains != 1.0) or np.any(robot.encoder_offsets != 0.0)
+    )  # readings differ from joint coordinates (Robot.readings: gains and offsets)
+    return GeometryResult(
+        sol.q,
+        qa,
+        placement,
+        closure_error,
+        sol.iterations,
+        actuators=tuple(robot.actuator_names),
+        units=tuple("m" if p else "rad" for p in robot.actuator_prismatic),
+        readings=robot.readings(qa) if calibrated else None,
+    )
+
+
+def _miss(robot: Robot, q: np.ndarray, target: pin.SE3) -> str:
+    """How far the platform at ``q`` is from ``target``: distance, and angle if controlled."""
+    pin.framesForwardKinematics(robot.model, robot.data, q)
+    assert robot.platform_frame is not None
+    at = robot.data.oMf[robot.platform_frame]
+    text = quantity(float(np.linalg.norm(at.translation - target.translation)), "m")
+    if np.any(np.asarray(robot.task_rows) >= 3):
+        angle = float(np.linalg.norm(pin.log3(target.rotation.T @ at.rotation)))
+        text += f" and {quantity(angle, 'rad')}"
+    return text
 
 
 def _family_of(robot: Robot) -> Family | None:
@@ -147,7 +237,7 @@ def _seeded(
     rows = np.array([r for r in robot.task_rows if r < 3] or [0, 1, 2], dtype=int)
     task = FramePoseTask(robot.model, robot.platform_frame, rows)
     task.target = pin.SE3(np.eye(3), np.asarray(position, dtype=float))
-    cs, data = robot.closure_set, robot.data
+    cs, data = robot.constraints, robot.data
 
     def residual(q: np.ndarray) -> np.ndarray:
         return np.concatenate([cs.residual(data, q), task.residual(data)])
@@ -181,7 +271,7 @@ def project(robot: Robot, q: np.ndarray, tol: float = DEFAULT_TOL) -> np.ndarray
 
     """
     q = as_finite("q", q, robot.nq)
-    if robot.closure_set.nc == 0:
+    if robot.constraints.n == 0:
         return q
     sol = _solve_closures(robot, q, None, tol)
     if not sol.converged:
@@ -372,24 +462,23 @@ def inverse_geometry(
     if seeded is None:  # the working mode of the start, followed by continuation
         seeded = _ik_continuation(robot, q0, target, tol)
     q0 = q0 if seeded is None else seeded
-    cs = robot.closure_set
+    cs = robot.constraints
     sol = solve_pose(robot, task, q0, tol)
     if not sol.converged:
         pos, rpy = pose_to_vector(target)
         name, res = _worst(robot, sol.q)
-        pose_err = float(np.max(np.abs(sol.residual[cs.nc :])))
         raise UnreachablePoseError(
             name,
             res,
-            f"{robot.name}: pose {np.array2string(pos, precision=4)} m, rpy "
-            f"{np.array2string(rpy, precision=4)} rad is out of reach (closest configuration "
-            f"misses it by {pose_err:.3g}; closure '{name}' residual {res:.3g})",
+            f"{robot.name}: pose {vector(pos, 'm')}, rpy {vector(rpy, 'rad')} is out of reach "
+            f"(the closest configuration misses it by {_miss(robot, sol.q, target)}; closure "
+            f"'{name}' residual {res:.3g} m or rad)",
         )
     if partial is None:  # (a partial pose gives no uncontrolled component)
         _check_uncontrolled(robot, pose, target, sol.q)
     if check_limits:
         check_actuator_limits(robot, sol.q)
-    return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.nc]), initial=0.0)))
+    return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.n]), initial=0.0)))
 
 
 FAR = 100.0
@@ -538,7 +627,7 @@ def _fk_continuation(
     a0 = np.array(start[robot.actuated_q], dtype=float)
     scale = CONTINUATION_STEP * robot.actuator_scale
     n = int(np.ceil(min(np.max(np.abs(qa - a0) / scale, initial=0.0), MAX_CONTINUATION_STEPS)))
-    if n <= 1 or robot.closure_set.nc == 0:
+    if n <= 1 or robot.constraints.n == 0:
         return None
     q = np.array(start, dtype=float)
     for t in np.linspace(0.0, 1.0, n + 1)[1:]:
@@ -605,8 +694,8 @@ def solve_pose(
         The solver's outcome: closure rows first, then the task rows.
 
     """
-    cs, data = robot.closure_set, robot.data
-    nc = cs.nc
+    cs, data = robot.constraints, robot.data
+    nc = cs.n
 
     def residual(q: np.ndarray) -> np.ndarray:
         r_c = cs.local_residual(data, q)  # runs the kinematics
@@ -614,7 +703,7 @@ def solve_pose(
         return np.concatenate((r_c, r_t)) if nc else r_t
 
     def jacobian(q: np.ndarray) -> np.ndarray:  # at the last residual's configuration
-        J_c = cs.local_jacobian_after_residual(data)  # also the joint Jacobians of the task
+        J_c = cs.local_jacobian_after_residual(data, q)  # also the joint Jacobians of the task
         J_t = task.jacobian(data)
         return np.concatenate((J_c, J_t)) if nc else J_t
 

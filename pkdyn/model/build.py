@@ -13,9 +13,17 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
-from pkdyn.model.description import ClosureSpec, CouplingSpec, FrameRef, JointSpec
+from pkdyn.model.description import (
+    ClosureSpec,
+    CouplingSpec,
+    FrameRef,
+    JointSpec,
+    LinearCouplingSpec,
+)
 from pkdyn.model.validate import check_data_size
-from solvers.coupling import MAX_COEFFICIENTS, JointCoupling
+from solvers.closure import HINGE_ARM, Closure
+from solvers.constraints import ConstraintSet
+from solvers.coupling import MAX_COEFFICIENTS, Coupling, JointCoupling, LinearCoupling
 
 __all__ = [
     "HINGE_ARM",
@@ -25,12 +33,11 @@ __all__ = [
     "check_model_size",
     "replace_joints",
     "resolve_frame",
+    "closures",
     "constraint_models",
+    "constraint_set",
     "joint_couplings",
 ]
-
-HINGE_ARM = 0.1
-"""Distance [m] between the two point constraints a ``hinge`` closure is built from."""
 
 
 @contextlib.contextmanager
@@ -436,49 +443,153 @@ def _coupled_joint(model: pin.Model, name: str, source: str, what: str) -> int:
     return int(jid)
 
 
+def _finite(value: object) -> bool:
+    try:
+        return math.isfinite(float(value))  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return False
+
+
+def _linear_coupling(model: pin.Model, c: LinearCouplingSpec, source: str) -> LinearCoupling:
+    what = f"coupling '{c.name}'"
+    if not c.terms:
+        raise DescriptionError(source, what, "no terms: give at least one joint and coefficient")
+    seen: set[str] = set()
+    terms = []
+    for joint, coef in c.terms:
+        if joint in seen:
+            raise DescriptionError(
+                source, what, f"joint '{joint}' appears twice; give each joint once"
+            )
+        seen.add(joint)
+        if not _finite(coef) or float(coef) == 0.0:
+            raise DescriptionError(
+                source,
+                what,
+                f"coefficient {coef!r} of joint '{joint}': give a finite, non-zero number",
+            )
+        terms.append((_coupled_joint(model, joint, source, what), float(coef)))
+    if not _finite(c.offset):
+        raise DescriptionError(source, what, f"offset {c.offset!r} is not a finite number")
+    return LinearCoupling(c.name, tuple(terms), float(c.offset))
+
+
+def _polynomial_coupling(model: pin.Model, c: CouplingSpec, source: str) -> JointCoupling:
+    what = f"coupling '{c.name}'"
+    n = len(c.coefficients)
+    if not 1 <= n <= MAX_COEFFICIENTS:
+        raise DescriptionError(
+            source, what, f"{n} polynomial coefficients; give 1 to {MAX_COEFFICIENTS}"
+        )
+    values = (*c.coefficients, c.joint_ref, c.source_ref)
+    if not all(_finite(x) for x in values):
+        raise DescriptionError(
+            source, what, "coefficients and reference positions must be finite numbers"
+        )
+    jid = _coupled_joint(model, c.joint, source, what)
+    sid = None if c.source is None else _coupled_joint(model, c.source, source, what)
+    if sid == jid:
+        raise DescriptionError(source, what, f"joint '{c.joint}' cannot drive itself")
+    return JointCoupling(
+        c.name, jid, sid, tuple(float(x) for x in c.coefficients), c.joint_ref, c.source_ref
+    )
+
+
 def joint_couplings(
-    model: pin.Model, couplings: Sequence[CouplingSpec], source: str
-) -> list[JointCoupling]:
-    """The solver couplings (:class:`solvers.coupling.JointCoupling`) of coupling specs.
+    model: pin.Model, couplings: Sequence[CouplingSpec | LinearCouplingSpec], source: str
+) -> list[Coupling]:
+    """The solver couplings (:mod:`solvers.coupling`) of coupling specs.
+
+    A :class:`~pkdyn.model.description.LinearCouplingSpec` gives a
+    :class:`solvers.coupling.LinearCoupling`, a :class:`~pkdyn.model.description.CouplingSpec`
+    a :class:`solvers.coupling.JointCoupling`.
 
     Args:
         model: The model.
-        couplings: Coupling specifications.
+        couplings: Coupling specifications (either kind).
         source: File or robot name, for error messages.
 
     Returns:
         One coupling per spec, joints resolved to Pinocchio joint ids.
 
     Raises:
-        DescriptionError: A coupling names a missing joint or one that is not 1-DoF, couples
-            a joint to itself, has no or more than 5 coefficients or non-finite numbers, or
-            two couplings share a name.
+        DescriptionError: Naming the coupling: a missing joint or one that is not 1-DoF, a
+            joint coupled to itself or named twice, no terms, a zero coefficient, no or more
+            than 5 polynomial coefficients, non-finite numbers, or two couplings of one name.
 
     """
-    out: list[JointCoupling] = []
+    out: list[Coupling] = []
     names: set[str] = set()
     for c in couplings:
         what = f"coupling '{c.name}'"
         if c.name in names:
             raise DescriptionError(source, what, "coupling names must be unique")
         names.add(c.name)
-        n = len(c.coefficients)
-        if not 1 <= n <= MAX_COEFFICIENTS:
-            raise DescriptionError(
-                source, what, f"{n} polynomial coefficients; give 1 to {MAX_COEFFICIENTS}"
-            )
-        values = (*c.coefficients, c.joint_ref, c.source_ref)
-        if not all(math.isfinite(float(x)) for x in values):
-            raise DescriptionError(
-                source, what, "coefficients and reference positions must be finite numbers"
-            )
-        jid = _coupled_joint(model, c.joint, source, what)
-        sid = None if c.source is None else _coupled_joint(model, c.source, source, what)
-        if sid == jid:
-            raise DescriptionError(source, what, f"joint '{c.joint}' cannot drive itself")
-        out.append(
-            JointCoupling(
-                c.name, jid, sid, tuple(float(x) for x in c.coefficients), c.joint_ref, c.source_ref
-            )
-        )
+        if isinstance(c, LinearCouplingSpec):
+            out.append(_linear_coupling(model, c, source))
+        else:
+            out.append(_polynomial_coupling(model, c, source))
     return out
+
+
+def closures(model: pin.Model, specs: Sequence[ClosureSpec], source: str) -> list[Closure]:
+    """The solver closures (:class:`solvers.closure.Closure`) of closure specs.
+
+    Args:
+        model: The model.
+        specs: Closure specifications.
+        source: File or robot name, for error messages.
+
+    Returns:
+        One closure per spec, frames resolved to joint ids and placements.
+
+    Raises:
+        DescriptionError: A closure names a missing link, or both frames are on one body.
+
+    """
+    out: list[Closure] = []
+    for c in specs:
+        j1, M1 = resolve_frame(model, c.frame1, source, f"closure '{c.name}'")
+        j2, M2 = resolve_frame(model, c.frame2, source, f"closure '{c.name}'")
+        if j1 == j2:
+            raise DescriptionError(
+                source, f"closure '{c.name}'", "both frames are on the same body; nothing to close"
+            )
+        axis = tuple(float(x) for x in np.asarray(c.axis, dtype=float).reshape(3))
+        out.append(Closure(c.name, c.kind, int(j1), M1, int(j2), M2, axis))  # type: ignore[arg-type]
+    return out
+
+
+def constraint_set(
+    model: pin.Model,
+    closure_specs: Sequence[ClosureSpec],
+    coupling_specs: Sequence[CouplingSpec | LinearCouplingSpec],
+    source: str,
+) -> ConstraintSet:
+    """The constraint layer of a description: its closures, then its couplings.
+
+    Args:
+        model: The model.
+        closure_specs: Closure specifications.
+        coupling_specs: Coupling specifications (either kind).
+        source: File or robot name, for error messages.
+
+    Returns:
+        The :class:`solvers.ConstraintSet`.
+
+    Raises:
+        DescriptionError: A bad closure or coupling (:func:`closures`, :func:`joint_couplings`),
+            or a coupling named as a closure.
+
+    """
+    cl = closures(model, closure_specs, source)
+    cp = joint_couplings(model, coupling_specs, source)
+    clash = {c.name for c in coupling_specs} & {c.name for c in closure_specs}
+    if clash:
+        raise DescriptionError(
+            source, f"coupling '{sorted(clash)[0]}'", "a closure has the same name"
+        )
+    try:
+        return ConstraintSet(model, cl, cp)
+    except ValueError as err:  # checked above: a model the specs do not describe
+        raise DescriptionError(source, "constraints", str(err)) from None

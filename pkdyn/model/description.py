@@ -23,7 +23,10 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
   source_ref]>``: a scalar relation between two 1-DoF joint coordinates (a gear pair, a rack,
   a cam law): ``joint - joint_ref = offset + multiplier (source - source_ref)``, or the polynomial
   ``sum_k polycoef[k] (source - source_ref)^k`` (1 to 5 coefficients); without ``source`` the
-  joint is locked at ``joint_ref + offset``. The standard URDF ``<mimic joint multiplier
+  joint is locked at ``joint_ref + offset``. ``<pkdyn:coupling name [offset]>`` with
+  ``<pkdyn:term joint coefficient>`` children: a linear relation over any number of 1-DoF
+  joints, ``sum_i coefficient_i joint_i = offset`` (a rotor geared to the sum of a knee and an
+  ankle angle). The standard URDF ``<mimic joint multiplier
   offset>`` of a joint is read as the coupling ``<joint name>_mimic`` (the joint stays a tree
   joint).
 - Compliance (:mod:`pkdyn.precision`): ``<pkdyn:stiffness value>`` in a ``<transmission>`` (or
@@ -38,8 +41,9 @@ prefix ``pkdyn``); URDF parsers ignore them. See ``urdf/README.md`` for the full
 - ``<pkdyn:home q>``: the home configuration to assemble (actuator coordinates, or a full
   configuration in Pinocchio's order), as ``pkdyn.load(..., home=)`` takes it: written by
   ``pkdyn calibrate`` so that a calibrated robot loads in the assembly mode it was measured in.
-- ``<pkdyn:encoder gain>`` in a transmission's ``<actuator>``: the actuated joint's coordinate is
-  ``gain`` times the actuator's reading (a calibrated scale error of the encoder or screw).
+- ``<pkdyn:encoder gain offset>`` in a transmission's ``<actuator>``: the actuated joint's
+  coordinate is ``gain`` times the actuator's reading plus ``offset`` (a calibrated scale error of
+  the encoder or screw; the joint coordinate at a zero reading).
 
 The URDF part is validated by :mod:`pkdyn.model.validate` (numbers, physics, tree), the pkdyn
 elements here (unknown elements, mistyped namespaces, duplicates).
@@ -56,7 +60,6 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.validate import check_urdf, unit_vector
-from pkdyn.model.warn import warn
 
 __all__ = [
     "NAMESPACE",
@@ -207,6 +210,9 @@ class ActuatorSpec:
             (``pkdyn:stiffness value``), ``None`` when not described.
         encoder_gain: Joint coordinate per unit of the actuator's reading (``pkdyn:encoder
             gain``, > 0; default 1), from a geometric calibration.
+        encoder_offset: Joint coordinate at a zero reading [rad or m] (``pkdyn:encoder
+            offset``; default 0): ``q = encoder_gain * reading + encoder_offset``
+            (:meth:`pkdyn.Robot.joint_coordinates`).
 
     """
 
@@ -222,6 +228,7 @@ class ActuatorSpec:
     coulomb: float = 0.0
     stiffness: float | None = None
     encoder_gain: float = 1.0
+    encoder_offset: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
@@ -359,6 +366,9 @@ class MaterialSpec:
         E: Young's modulus [Pa] (``None``: the preset's).
         G: Shear modulus [Pa] (``None``: the preset's).
         density: Density [kg/m^3] (``None``: the preset's).
+        mass_from_material: ``mass="from-material"``: the links read as beams of this material
+            weigh what their section and density say (mass and inertia replace the URDF's
+            ``<inertial>`` in the precision models), instead of what the URDF says.
 
     """
 
@@ -366,6 +376,7 @@ class MaterialSpec:
     E: float | None = None
     G: float | None = None
     density: float | None = None
+    mass_from_material: bool = False
 
 
 @dataclass(frozen=True, eq=False)  # SE3 field: no boolean ==
@@ -381,6 +392,8 @@ class ComplianceSpec:
             respect to its root, in the frame ``frame`` (given instead of a beam), or ``None``.
         frame: Placement of that frame in the link frame.
         rigid: The link does not deform (no beam even with a material).
+        mass_from_material: ``mass="from-material"``: the link's beam weighs what its section
+            and material's density say (``None``: as the robot's ``<pkdyn:material>`` says).
 
     """
 
@@ -390,6 +403,7 @@ class ComplianceSpec:
     compliance: tuple[float, ...] | None = None
     frame: pin.SE3 = field(default_factory=pin.SE3.Identity)
     rigid: bool = False
+    mass_from_material: bool | None = None
 
 
 @dataclass(frozen=True, eq=False)  # numpy / SE3 fields: no boolean ==
@@ -406,7 +420,7 @@ class Description:
     passive: tuple[PassiveSpec, ...] = ()
     springs: tuple[SpringSpec, ...] = ()
     family: FamilySpec | None = None
-    couplings: tuple[CouplingSpec, ...] = ()
+    couplings: tuple[CouplingSpec | LinearCouplingSpec, ...] = ()
     home: tuple[float, ...] | None = None
     material: MaterialSpec | None = None
     compliance: tuple[ComplianceSpec, ...] = ()
@@ -526,7 +540,7 @@ def _joint(source: str, el: ET.Element) -> JointSpec:
 
 
 def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[ActuatorSpec]:
-    """Actuators of the ``SimpleTransmission`` elements (other transmission types are ignored).
+    """Actuators of the ``SimpleTransmission`` elements (other types are left out, one warning).
 
     With ``strict=False`` (a plain URDF, without pkdyn elements), ros_control transmissions
     pkdyn cannot use (no joint, a joint absent from the URDF or not revolute / prismatic) are
@@ -543,14 +557,17 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
                 _float(source, lim, "velocity", math.inf),
             )
     out = []
+    other: list[str] = []
     for t in root.findall("transmission"):
         tname = t.get("name", "?")
         ttype = t.findtext("type") or t.get("type") or "SimpleTransmission"
         if not ttype.strip().endswith("SimpleTransmission"):
+            other.append(f"'{tname}' ({ttype.strip().rsplit('/', 1)[-1]})")
             continue
         joint = t.find("joint")
         if not strict and (
-            joint is None or kinds.get(joint.get("name", "")) not in ("revolute", "prismatic")
+            joint is None
+            or kinds.get(joint.get("name", "")) not in ("revolute", "prismatic", "continuous")
         ):
             continue
         if joint is None or not joint.get("name"):
@@ -581,6 +598,13 @@ def _actuators(source: str, root: ET.Element, strict: bool = True) -> list[Actua
         out.append(
             ActuatorSpec(aname, jname, reduction, effort, velocity, **drive, stiffness=stiffness)
         )
+    if other:
+        from pkdyn.model.warn import warn
+
+        warn(
+            f"{source}: transmission(s) {', '.join(other[:3])}{' ...' if len(other) > 3 else ''} "
+            "not read: pkdyn reads SimpleTransmission (one actuator on one joint)"
+        )
     return out
 
 
@@ -594,6 +618,7 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
         ("motor_friction", "viscous", "viscous", 0.0, math.inf),
         ("motor_friction", "coulomb", "coulomb", 0.0, math.inf),
         ("encoder", "gain", "encoder_gain", 0.0, math.inf),
+        ("encoder", "offset", "encoder_offset", -math.inf, math.inf),
     )
     for tag, attr, key, lo, hi in fields:
         child = el.find(_NS + tag)
@@ -606,9 +631,11 @@ def _drive(source: str, where: str, el: ET.Element) -> dict[str, float]:
             raise DescriptionError(source, f"{where} {err.culprit}", msg) from None
         positive = key.endswith("efficiency") or key == "encoder_gain"
         ok = lo < value <= hi if positive else lo <= value < hi
+        ok = ok and math.isfinite(value) if key == "encoder_offset" else ok
         if not ok:
             interval = "(0, 1]" if key.endswith("efficiency") else "[0, inf)"
             interval = "(0, inf)" if key == "encoder_gain" else interval
+            interval = "(-inf, inf)" if key == "encoder_offset" else interval
             raise DescriptionError(
                 source,
                 f"{where} <pkdyn:{tag}> {attr}='{child.get(attr)}'",
@@ -653,12 +680,28 @@ def _positive(source: str, el: ET.Element, attr: str, zero: bool = False) -> flo
     return value
 
 
+_MASS_MODES = ("from-material", "as-described")
+"""Values of the ``mass`` attribute of ``<pkdyn:material>`` and ``<pkdyn:compliance>``."""
+
+
+def _mass_mode(source: str, el: ET.Element) -> bool | None:
+    """``mass="from-material"`` (True), ``"as-described"`` (False) or absent (None)."""
+    text = el.get("mass")
+    if text is None:
+        return None
+    if text.strip() not in _MASS_MODES:
+        raise DescriptionError(
+            source, f"<{_tag(el)}> mass='{text}'", f"expected one of {', '.join(_MASS_MODES)}"
+        )
+    return text.strip() == "from-material"
+
+
 def _material(source: str, el: ET.Element, name: str | None) -> MaterialSpec | None:
     """The material an element names (``name`` attribute) and its optional constants."""
     E, G, rho = (_positive(source, el, a) for a in ("E", "G", "density"))
     if name is None and E is None and G is None and rho is None:
         return None
-    return MaterialSpec(name or "custom", E, G, rho)
+    return MaterialSpec(name or "custom", E, G, rho, bool(_mass_mode(source, el)))
 
 
 def _material_element(source: str, root: ET.Element) -> MaterialSpec | None:
@@ -705,7 +748,12 @@ def _compliance(source: str, el: ET.Element, links: set[str]) -> ComplianceSpec:
             "give one of: rigid, compliance (with xyz / rpy), or a beam's material / inner_radius",
         )
     frame = _frame(source, el, links) if el.get("link") else pin.SE3.Identity()
-    return ComplianceSpec(link, material, bore, compliance, frame.placement, rigid)
+    mass = _mass_mode(source, el)
+    if mass and (rigid or compliance is not None):
+        raise DescriptionError(
+            source, f"{where} mass", "from-material needs a beam (a material or inner_radius)"
+        )
+    return ComplianceSpec(link, material, bore, compliance, frame.placement, rigid, mass)
 
 
 _PASSIVE_FIELDS = ("stiffness", "rest", "damping", "friction")
@@ -774,15 +822,29 @@ def _number(source: str, culprit: str, text: str) -> float:
     return value
 
 
-def _coupling(source: str, el: ET.Element) -> CouplingSpec:
-    """A ``<pkdyn:coupling>`` element."""
+def _coupling(source: str, el: ET.Element) -> CouplingSpec | LinearCouplingSpec:
+    """A ``<pkdyn:coupling>`` element: polynomial (``joint``, ``source``...) or linear (terms)."""
     name = el.get("name")
     if not name:
         raise DescriptionError(source, "<pkdyn:coupling>", "missing attribute 'name'")
     what = f"coupling '{name}'"
+    terms = el.findall(_NS + "term")
+    other = [c.tag for c in el if c.tag != _NS + "term"]
+    if other:
+        tag = str(other[0]).replace(_NS, "pkdyn:")
+        raise DescriptionError(
+            source, what, f"unknown child <{tag}>; a coupling holds <pkdyn:term> children only"
+        )
+    if terms:
+        return _linear_coupling(source, el, name, terms)
     joint = el.get("joint")
     if not joint:
-        raise DescriptionError(source, what, "missing attribute 'joint' (the driven joint)")
+        raise DescriptionError(
+            source,
+            what,
+            "missing attribute 'joint' (the driven joint), or <pkdyn:term joint coefficient> "
+            "children (a linear coupling)",
+        )
     src = el.get("source") or None
     poly = el.get("polycoef")
     if poly is not None and (el.get("multiplier") is not None or el.get("offset") is not None):
@@ -807,19 +869,55 @@ def _coupling(source: str, el: ET.Element) -> CouplingSpec:
     return CouplingSpec(name, joint, src, coef, refs[0], refs[1])
 
 
+def _linear_coupling(
+    source: str, el: ET.Element, name: str, terms: list[ET.Element]
+) -> LinearCouplingSpec:
+    """``<pkdyn:coupling name offset>`` with ``<pkdyn:term joint coefficient>`` children."""
+    what = f"coupling '{name}'"
+    extra = [a for a in ("joint", "source", "polycoef", "multiplier") if el.get(a) is not None]
+    if extra:
+        raise DescriptionError(
+            source,
+            what,
+            f"attribute '{extra[0]}' with <pkdyn:term> children: a linear coupling is its "
+            "terms and its offset only",
+        )
+    out: list[tuple[str, float]] = []
+    for t in terms:
+        joint = t.get("joint")
+        if not joint:
+            raise DescriptionError(source, f"{what} <pkdyn:term>", "missing attribute 'joint'")
+        if any(j == joint for j, _ in out):
+            raise DescriptionError(
+                source, what, f"joint '{joint}' appears in two terms; give each joint once"
+            )
+        text = t.get("coefficient")
+        if text is None:
+            raise DescriptionError(
+                source, f"{what} term of '{joint}'", "missing attribute 'coefficient'"
+            )
+        coef = _number(source, f"{what} coefficient of '{joint}'", text)
+        if coef == 0.0:
+            raise DescriptionError(
+                source, f"{what} coefficient of '{joint}'", "is zero: leave the term out"
+            )
+        out.append((joint, coef))
+    offset = _number(source, f"{what} offset", el.get("offset", "0"))
+    return LinearCouplingSpec(name, tuple(out), offset)
+
+
 _ONE_DOF = ("revolute", "continuous", "prismatic")
 
 
-def _mimics(source: str, root: ET.Element, strict: bool) -> list[CouplingSpec]:
+def _mimics(source: str, root: ET.Element) -> list[CouplingSpec]:
     """Couplings of the URDF ``<mimic joint multiplier offset>`` elements.
 
-    A mimic between joints that are not both moving 1-DoF joints of the file is an error in a
-    pkdyn description (``strict``) and, in a plain URDF, left out with one warning (Pinocchio
-    and most URDF tools load such files: the joint then moves freely).
+    A mimic between joints that are not both moving 1-DoF joints of the file (a joint that does
+    not exist, a fixed joint...) is an error (``ignore_elements=("mimic",)`` leaves the file's
+    mimics out): the joint would otherwise move freely, a coupling silently lost.
     """
     kinds = {j.get("name", ""): j.get("type", "") for j in root.findall("joint")}
     out = []
-    skipped: list[str] = []
     for j in root.findall("joint"):
         m = j.find("mimic")
         if m is None:
@@ -839,17 +937,10 @@ def _mimics(source: str, root: ET.Element, strict: bool) -> list[CouplingSpec]:
                 else f"joint '{bad}' is {kinds[bad] or 'untyped'}, not a revolute, continuous "
                 "or prismatic joint"
             )
-            if strict:
-                raise DescriptionError(source, what, why)
-            skipped.append(f"{what} {why}")
-            continue
+            raise DescriptionError(
+                source, what, f"{why} (ignore_elements=('mimic',) leaves the mimics out)"
+            )
         out.append(CouplingSpec(f"{jname}_mimic", jname, src, (offset, multiplier)))
-    if skipped:
-        warn(
-            f"{source}: {len(skipped)} <mimic> element(s) left out (the joints move freely): "
-            + "; ".join(skipped[:3])
-            + (" ..." if len(skipped) > 3 else "")
-        )
     return out
 
 
@@ -906,7 +997,7 @@ def _check_namespace(source: str, root: ET.Element) -> None:
                     f"unknown pkdyn element; the elements are {', '.join(ELEMENTS)}",
                 )
             continue
-        if "pkdyn" in uri.lower() or local in ELEMENTS + ("frame", "cone", "pyramid"):
+        if "pkdyn" in uri.lower() or local in ELEMENTS + ("frame", "cone", "pyramid", "term"):
             raise DescriptionError(
                 source,
                 f"namespace '{uri}' of <{local}>",
@@ -976,7 +1067,7 @@ def parse_description(xml_text: str, source: str) -> Description:
     for n in spring_names:
         if spring_names.count(n) > 1:
             raise DescriptionError(source, f"spring '{n}'", "spring names must be unique")
-    couplings = tuple(_mimics(source, root, extended)) + tuple(
+    couplings = tuple(_mimics(source, root)) + tuple(
         _coupling(source, el) for el in root.findall(_NS + "coupling")
     )
     _unique(source, "coupling", [c.name for c in couplings])

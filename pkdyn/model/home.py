@@ -41,10 +41,10 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, LoopClosureError
-from pkdyn.model.description import ClosureSpec, CouplingSpec, FrameRef
+from pkdyn.model.description import ClosureSpec, CouplingSpec, FrameRef, LinearCouplingSpec
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn
-from solvers import ClosureSet, SolveResult, numerics, solve_lm
+from solvers import SolveResult, numerics, solve_lm
 
 __all__ = [
     "ASSEMBLY_TOL",
@@ -97,11 +97,11 @@ class HomeResult:
     closures: list[ClosureSpec]
     moved: dict[str, float]
     searched: bool
-    couplings: list[CouplingSpec] | None = None
+    couplings: list[CouplingSpec | LinearCouplingSpec] | None = None
 
 
 def _solve(robot: Robot, q0: np.ndarray, free: np.ndarray | None, max_iter: int) -> SolveResult:
-    cs, data = robot.closure_set, robot.data
+    cs, data = robot.constraints, robot.data
     return solve_lm(
         robot.model,
         q0,
@@ -114,15 +114,12 @@ def _solve(robot: Robot, q0: np.ndarray, free: np.ndarray | None, max_iter: int)
 
 
 def _per_closure(robot: Robot, residual: np.ndarray) -> dict[str, float]:
-    """Largest residual component per closure (a hinge's two point constraints together)."""
-    out: dict[str, float] = {}
-    cs = robot.closure_set
-    for name, owner, a, b in zip(
-        cs.names, robot.row_owners, cs.offsets[:-1], cs.offsets[1:], strict=True
-    ):
-        del name
-        out[owner] = max(out.get(owner, 0.0), float(np.max(np.abs(residual[a:b]), initial=0.0)))
-    return out
+    """Largest residual component per closure and per coupling."""
+    cs = robot.constraints
+    return {
+        name: float(np.max(np.abs(residual[a:b]), initial=0.0))
+        for name, a, b in zip(cs.names, cs.offsets[:-1], cs.offsets[1:], strict=True)
+    }
 
 
 def singular(robot: Robot, q: np.ndarray, rng: np.random.Generator | None = None) -> bool:
@@ -138,8 +135,8 @@ def singular(robot: Robot, q: np.ndarray, rng: np.random.Generator | None = None
         ``True`` when singular.
 
     """
-    cs, data = robot.closure_set, robot.data
-    if cs.nc == 0:
+    cs, data = robot.constraints, robot.data
+    if cs.n == 0:
         return False
     J = cs.jacobian(data, q)
     r = rank(J)
@@ -209,16 +206,19 @@ def _moved_closures(
 
 def _moved_couplings(
     robot: Robot, residual: np.ndarray, tol: float
-) -> tuple[list[CouplingSpec], dict[str, float]]:
+) -> tuple[list[CouplingSpec | LinearCouplingSpec], dict[str, float]]:
     """Couplings whose constant term absorbs a residual between ``EXACT_TOL`` and ``tol``."""
-    cs = robot.closure_set
-    out: list[CouplingSpec] = []
+    cs = robot.constraints
+    out: list[CouplingSpec | LinearCouplingSpec] = []
     adjusted: dict[str, float] = {}
     for k, c in enumerate(robot.couplings):
-        r = float(residual[cs.n_rigid + k])
+        r = float(residual[cs.nc + k])
         if EXACT_TOL < abs(r) <= tol:
-            coef = (c.coefficients[0] + r, *c.coefficients[1:])
-            c = dataclasses.replace(c, coefficients=coef)
+            if isinstance(c, LinearCouplingSpec):  # sum a_i x_i - b = r: b absorbs r
+                c = dataclasses.replace(c, offset=c.offset + r)
+            else:  # x_j - x_j0 - p(u) = r: c_0 absorbs r
+                coef = (c.coefficients[0] + r, *c.coefficients[1:])
+                c = dataclasses.replace(c, coefficients=coef)
             adjusted[c.name] = abs(r)
         out.append(c)
     return out, adjusted
@@ -233,8 +233,8 @@ def _contradicting_coupling(robot: Robot, best: SolveResult, per: dict[str, floa
     if not robot.couplings:
         return None
     names = [c.name for c in robot.couplings]
-    if robot.closure_set.n_rigid:
-        rigid = ClosureSet(robot.model, list(robot.constraint_models))
+    if robot.constraints.nc:
+        rigid = robot.constraints.closures
         data = robot.model.createData()
         sol = solve_lm(
             robot.model,
@@ -285,9 +285,9 @@ def find_home(
     if qa is not None:
         q[robot.actuated_q] = qa
         free = robot.passive_v
-    if robot.closure_set.nc == 0:
+    if robot.constraints.n == 0:
         return HomeResult(q, closures, {}, False)
-    r_file = _per_closure(robot, robot.closure_set.residual(robot.data, q))
+    r_file = _per_closure(robot, robot.constraints.residual(robot.data, q))
     sol = _solve(robot, q, free, 100)
     if sol.converged and (not singular(robot, sol.q) or (user and free is not None)):
         _warn_file_pose(robot, r_file, sol.q, q, tol)
@@ -331,12 +331,16 @@ def find_home(
     coupling = _contradicting_coupling(robot, best, per)
     if coupling is not None:
         c = next(c for c in robot.couplings if c.name == coupling)
+        relation = (
+            "of joints " + ", ".join(repr(j) for j, _ in c.terms)
+            if isinstance(c, LinearCouplingSpec)
+            else f"joint '{c.joint}' " + (f"from {c.source!r}" if c.source else "locked")
+        )
         raise LoopClosureError(
             robot.source,
             coupling,
             per[coupling],
-            f"{robot.source}: coupling '{coupling}' (joint '{c.joint}' "
-            f"{'from ' + repr(c.source) if c.source else 'locked'}) contradicts the closures: "
+            f"{robot.source}: coupling '{coupling}' ({relation}) contradicts the closures: "
             f"the mechanism cannot be assembled with it (residual {per[coupling]:.3g} at best, "
             "while the closures alone assemble); check its coefficients and reference "
             "positions",
@@ -381,9 +385,9 @@ def dead_centre_distance(robot: Robot, q: np.ndarray) -> tuple[float, str, str] 
         redundantly actuated robot, whose actuators cannot move one at a time).
 
     """
-    if not robot.closure_set.nc or not robot.actuated_v.size:
+    if not robot.constraints.n or not robot.actuated_v.size:
         return None
-    _, J = robot.closure_set.residual_and_jacobian(robot.data, q)
+    _, J = robot.constraints.residual_and_jacobian(robot.data, q)
     N = numerics.null_space(J, scale=1.0)
     if rank(N[robot.actuated_v]) < robot.actuated_v.size:
         # redundant actuation (a four-arm Delta, the four-branch walker): one actuator cannot
@@ -424,7 +428,7 @@ def _regular(robot: Robot, start: np.ndarray, iq: int, value: float) -> np.ndarr
     sol = _solve(robot, qs, robot.passive_v, 40)
     if not sol.converged:
         return None
-    J = robot.closure_set.jacobian(robot.data, sol.q)
+    J = robot.constraints.jacobian(robot.data, sol.q)
     return sol.q if rank(J[:, robot.passive_v]) == rank(J) else None
 
 

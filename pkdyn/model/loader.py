@@ -32,8 +32,8 @@ from pkdyn.model.build import (
     build_tree,
     check_model_size,
     constraint_models,
+    constraint_set,
     geometry_models,
-    joint_couplings,
     resolve_frame,
 )
 from pkdyn.model.description import (
@@ -48,10 +48,10 @@ from pkdyn.model.home import ASSEMBLY_TOL, find_home
 from pkdyn.model.passive import passive_forces
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn, warn_missing_meshes
-from solvers import ClosureSet
 
 if TYPE_CHECKING:
     from pkdyn.model.formats.gepetto import Sidecar
+    from pkdyn.model.formats.xmldoc import XmlDoc
 
 # The readers of other formats (MJCF, SDFormat, sidecars: yaml, Drake, onshape) are imported
 # where they are used: a library robot or a URDF loads without them (the CLI starts quicker).
@@ -130,6 +130,8 @@ def load(
     home: Sequence[float] | np.ndarray | None = None,
     tol: float = ASSEMBLY_TOL,
     xacro_args: dict[str, Any] | None = None,
+    ignore_elements: Sequence[str] = (),
+    repair_inertias: bool = False,
     **params: Any,
 ) -> Robot:
     """Load a robot: a library family name (``delta``, ``gough_stewart``...) or a file.
@@ -148,6 +150,13 @@ def load(
             (CAD rounding) are closed with a warning; beyond it, an error.
         xacro_args: Arguments of a ``.xacro`` file (``<xacro:arg>`` name -> value); the file
             is expanded by the ``xacro`` package (``pip install "pkdyn[xacro]"``).
+        ignore_elements: Names of elements to leave out of the file (``"loop"``,
+            ``"drake:ball_constraint"``...), wherever they are: an element pkdyn does not
+            read whose name says it closes a loop or couples joints is otherwise an error
+            (:mod:`~pkdyn.model.formats.unread`).
+        repair_inertias: Replace the physically invalid inertia tensors of the file by the
+            nearest valid ones (:mod:`~pkdyn.model.inertia`), with a warning naming the links;
+            without it they are reported (plain URDF) or refused (pkdyn, MJCF, SDFormat).
         **params: Builder parameters of a library family (SI units).
 
     Returns:
@@ -171,6 +180,9 @@ def load(
     name = str(name_or_path)
     if name in FAMILIES and xacro_args:
         raise ParameterError(name, "xacro_args", "apply to .xacro files only")
+    if name in FAMILIES and (ignore_elements or repair_inertias):
+        what = "ignore_elements" if ignore_elements else "repair_inertias"
+        raise ParameterError(name, what, "applies to description files only")
     if name in FAMILIES:
         fam = FAMILIES[name]
         p = fam.make_params(params)
@@ -216,6 +228,8 @@ def load(
         home=home,
         tol=tol,
         path=path,
+        ignore_elements=ignore_elements,
+        repair_inertias=repair_inertias,
     )
 
 
@@ -234,6 +248,14 @@ def _directories(value: Any) -> list[str]:
     return dirs
 
 
+@dataclasses.dataclass(frozen=True)
+class _Options:
+    """What the user asked of an import: elements to leave out, inertias to repair."""
+
+    ignore: frozenset[str] = frozenset()
+    repair_inertias: bool = False
+
+
 @dataclasses.dataclass(eq=False)
 class _Parts:
     """A description turned into Pinocchio objects, before assembly."""
@@ -245,6 +267,8 @@ class _Parts:
     q_ref: np.ndarray
     missing_meshes: tuple[str, ...] = ()
     preload: bool = False  # spring rests outside the joint limits accepted (MJCF springref)
+    declared: dict[str, bool] | None = None  # URDF+ independent flags the actuators came from
+    dropped: tuple[str, ...] = ()  # collision elements left out (malformed)
 
 
 @public
@@ -259,6 +283,8 @@ def load_string(
     tol: float = ASSEMBLY_TOL,
     path: Path | None = None,
     user_home: bool | None = None,
+    ignore_elements: Sequence[str] = (),
+    repair_inertias: bool = False,
 ) -> Robot:
     """Load a robot from the text of its description (URDF, MJCF or SDFormat).
 
@@ -273,12 +299,15 @@ def load_string(
         tol: Assembly tolerance [m or rad] (see :func:`load`).
         path: File the text came from (relative includes and meshes).
         user_home: ``home`` came from the user (default: whenever it is given).
+        ignore_elements: Element names to leave out (see :func:`load`).
+        repair_inertias: Repair invalid inertia tensors (see :func:`load`).
 
     Returns:
         The loaded robot.
 
     """
     from pkdyn.inputs import instance
+    from pkdyn.model.formats.unread import ignored_names
     from pkdyn.model.formats.xmldoc import lenient
 
     instance("xml", xml, str, "the text of a description (str)")
@@ -287,6 +316,8 @@ def load_string(
         instance("sidecar", sidecar, str | os.PathLike, "a YAML file name")
         sidecar = Path(sidecar)
     package_dirs = _directories(package_dirs)
+    opts = _Options(ignored_names(ignore_elements), bool(repair_inertias))
+
     xml = lenient(xml)  # Drake's and Gazebo's leniencies: comments with --, drake: undeclared
     fmt = detect_format(xml, source)
     side = None
@@ -296,14 +327,21 @@ def load_string(
         side = read_sidecar(sidecar)
     dirs = list(package_dirs or [])
     if fmt == "urdf":
-        parts = _urdf(xml, source, geometry, dirs, side)
+        parts = _urdf(xml, source, geometry, dirs, side, opts)
     else:
         from pkdyn.model.formats.graph import build
         from pkdyn.model.formats.mjcf_import import read_mjcf
         from pkdyn.model.formats.sdf import read_sdf
 
         reader = read_mjcf if fmt == "mjcf" else read_sdf
-        mech = reader(xml, source, path, geometry=geometry)
+        mech = reader(
+            xml,
+            source,
+            path,
+            geometry=geometry,
+            ignore=opts.ignore,
+            repair_inertias=opts.repair_inertias,
+        )
         if side is not None and side.joint_types:
             raise DescriptionError(
                 str(sidecar), "joint_name", "joint upgrades apply to URDF descriptions only"
@@ -332,6 +370,7 @@ def load_string(
             q_ref,
             tuple(mech.missing_meshes),
             preload=fmt == "mjcf",
+            dropped=tuple(mech.dropped_collisions),
         )
         if not geometry:
             parts.visual, parts.collision = pin.GeometryModel(), pin.GeometryModel()
@@ -344,24 +383,158 @@ def load_string(
     if parts.desc.home is not None and home is None:  # <pkdyn:home>: the described home
         home, user_home = parts.desc.home, False
     robot = _robot(parts, source, params)
-    return _assembled(
-        robot, parts, home, tol, user_home if user_home is not None else home is not None
+    if parts.declared is not None and home is None:  # assembled, with or without actuators
+        robot = _independent_actuation(robot, parts, params, tol)
+    else:
+        robot = _assembled(
+            robot, parts, home, tol, user_home if user_home is not None else home is not None
+        )
+    _check_massless(robot)
+    return robot
+
+
+def _check_massless(robot: Robot) -> None:
+    """Warn when massless bodies leave motions without inertia (undefined accelerations).
+
+    A body with neither mass nor rotational inertia moves nothing when its joint turns, unless
+    bodies with mass hang below it or a coupling ties its joint to one. The mass matrix reduced
+    to the motions the constraints allow (``N^T M N``) is then singular, and forward dynamics
+    cannot give those accelerations: the load names the joints (rotors with inertia and no
+    mass, and massless links carrying others, are fine).
+    """
+    from solvers.numerics import null_space
+
+    model = robot.model
+    if not any(model.inertias[j].mass == 0.0 for j in range(1, model.njoints)):
+        return
+    data = model.createData()
+    M = pin.crba(model, data, robot.q_home)
+    M = np.triu(M) + np.triu(M, 1).T
+    N = np.eye(robot.nv)
+    if robot.constraints.n:
+        N = null_space(robot.constraints.jacobian(model.createData(), robot.q_home))
+    Mr = N.T @ M @ N
+    if Mr.size == 0:
+        return
+    w, V = np.linalg.eigh(Mr)
+    scale = max(float(np.abs(w).max()), 1e-300)
+    dead = V[:, w <= 1e-12 * scale]
+    if dead.shape[1] == 0:
+        return
+    motion = np.abs(N @ dead).max(axis=1)
+    joints = [
+        model.names[j]
+        for j in range(1, model.njoints)
+        for iv in range(model.joints[j].idx_v, model.joints[j].idx_v + model.joints[j].nv)
+        if motion[iv] > 1e-6 * float(motion.max())
+    ]
+    names = ", ".join(f"'{n}'" for n in dict.fromkeys(joints))
+    warn(
+        f"{robot.source}: {dead.shape[1]} motion(s) of joint(s) {names} move no mass or "
+        "inertia (massless links): their accelerations are undefined and forward dynamics "
+        "cannot run; give the links an <inertial> or make the joints fixed"
+    )
+
+
+def _independent_ranks(
+    robot: Robot, declared: dict[str, bool], actuated: list[str]
+) -> tuple[int, int, int, int]:
+    """Ranks of a declared independent set at the robot's (assembled) home.
+
+    Returns ``(chosen, r, r_others, others)``: ``chosen`` the coordinates of the ``actuated``
+    joints and of the multi-DoF joints (a floating base) not declared dependent; ``r`` the rank
+    of the constraint Jacobian; ``r_others`` its rank on the other coordinates (``others`` of
+    them).
+    """
+    from solvers.numerics import rank
+
+    model = robot.model
+    ids = [model.getJointId(n) for n in actuated]
+    free = [
+        jid
+        for jid in range(1, model.njoints)
+        if model.joints[jid].nv > 1 and declared.get(model.names[jid], True)
+    ]
+    chosen = np.array(
+        sorted(
+            iv
+            for jid in ids + free
+            for iv in range(model.joints[jid].idx_v, model.joints[jid].idx_v + model.joints[jid].nv)
+        ),
+        dtype=int,
+    )
+    others = np.setdiff1d(np.arange(robot.nv), chosen)
+    r = r_others = 0
+    if robot.constraints.n:  # closures and couplings
+        _, J = robot.constraints.residual_and_jacobian(robot.data, robot.q_home)
+        r = rank(J, 1e-9, scale=1.0)
+        r_others = rank(J[:, others], 1e-9, scale=1.0) if others.size else 0
+    return chosen.size, r, r_others, others.size
+
+
+def _independent_actuation(robot: Robot, parts: _Parts, params: Any, tol: float) -> Robot:
+    """The robot with URDF+'s independent joints as actuators, or without when they conflict.
+
+    The mechanism is assembled without actuators first; at that home, the independent
+    coordinates are consistent when the constraints leave them free (the Jacobian has the same
+    rank on the other coordinates as on all: no relation among them); the other coordinates
+    are then determined when that rank is their number, else the mechanism has motions no
+    declared coordinate drives (said; the file's choice is kept). Independent coordinates the
+    constraints relate cannot all be driven: the actuators are left out, with a warning, rather
+    than assembled in conflict. The home is the one assembled without them: consistent
+    actuators do not make it singular (the test :func:`~pkdyn.model.home.find_home` would
+    make is the one above), so it is not searched again.
+
+    Returns:
+        The robot, assembled.
+
+    """
+    assert parts.declared is not None
+    actuators = parts.desc.actuators
+    parts.desc = dataclasses.replace(parts.desc, actuators=())
+    bare = _assembled(_robot(parts, robot.source, params), parts, None, tol, False)
+    parts.q_ref = bare.q_home
+    names = [a.joint for a in actuators]
+    chosen, r, r_others, n_others = _independent_ranks(bare, parts.declared, names)
+    shown = ", ".join(names[:4]) + (" ..." if len(names) > 4 else "")
+    what = f"{robot.source}: the joints URDF+ declares independent (the actuators {shown})"
+    if r_others < r:
+        warn(
+            f"{what} are related by the file's loops and couplings: {chosen} coordinates for a "
+            f"mobility of {robot.nv - r}; they are not made actuators (give the actuators "
+            "<transmission> elements, or correct the independent attributes)"
+        )
+        return bare
+    if r_others < n_others:
+        warn(
+            f"{what} leave {n_others - r_others} mobility(ies) undriven: {chosen} coordinates "
+            f"for a mobility of {robot.nv - r}"
+        )
+    parts.desc = dataclasses.replace(parts.desc, actuators=actuators)
+    jids, iq, iv = _actuation(bare.model, list(actuators), robot.source)
+    passive = np.ones(bare.nv, dtype=bool)
+    passive[iv] = False
+    return dataclasses.replace(  # the same model and constraints: no second Pinocchio data
+        bare,
+        description=parts.desc,
+        actuators=tuple(actuators),
+        actuated_joints=jids,
+        actuated_q=iq,
+        actuated_v=iv,
+        passive_v=np.flatnonzero(passive),
     )
 
 
 _URDF_JOINTS = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 
 
-def _check_urdf_joints(xml: str, source: str, root: ET.Element | None = None) -> None:
-    """Name the joint and its line when its type is not a URDF joint type."""
-    if root is not None and all(
-        el.get("type") is None or el.get("type") in _URDF_JOINTS for el in root.iter("joint")
-    ):
-        return  # the common case, without parsing again for line numbers
-    from pkdyn.model.formats.xmldoc import parse_xml
+def _check_urdf_joints(doc: XmlDoc) -> None:
+    """Name the joint and its line when its type is not a URDF joint type.
 
-    doc = parse_xml(xml, source)
-    for el in doc.root.iter("joint"):
+    Only the URDF's own joints: a ``<gazebo><joint>`` is SDFormat (``ball``...), read by
+    :mod:`~pkdyn.model.formats.gazebo`.
+    """
+    for el in doc.root.findall("joint"):
         if el.get("type") is not None and el.get("type") not in _URDF_JOINTS:
             raise doc.error(
                 el,
@@ -371,18 +544,57 @@ def _check_urdf_joints(xml: str, source: str, root: ET.Element | None = None) ->
             )
 
 
-def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar | None) -> _Parts:
-    from pkdyn.model.formats import drake
+def _drop_malformed_geometry(doc: XmlDoc) -> tuple[int, list[str]]:
+    """Remove the visual and collision elements with malformed numbers, one warning each.
 
-    root = None
-    if "<!DOCTYPE" not in xml and "<!ENTITY" not in xml:  # else: xmldoc's guarded parser first
-        try:
-            root = ET.fromstring(xml)
-        except ET.ParseError:
-            root = None  # parse_description names the problem
-    _check_urdf_joints(xml, source, root)
-    if root is not None:
-        xml = drake.implicit_world(xml, root)  # Drake's implicit world link
+    A typo in a shape (a radius written ``0.1"``) costs that shape, not the robot: the element
+    is left out, as a missing mesh is. Returns how many were removed, and how the dropped
+    collision elements are named (collision checks refuse to run without them).
+    """
+    from pkdyn.model.validate import geometry_problems
+
+    found = geometry_problems(doc.source, doc.root)
+    dropped = []
+    for link, el, problem in found:
+        link.remove(el)
+        what = f"link '{link.get('name', '?')}' {doc.where(el)}"
+        warn(f"{doc.source}: {what}: {problem}; this {el.tag} shape is left out")
+        if el.tag == "collision":
+            dropped.append(what)
+    return len(found), dropped
+
+
+def _urdf(
+    xml: str,
+    source: str,
+    geometry: bool,
+    dirs: list[str],
+    side: Sidecar | None,
+    opts: _Options | None = None,
+) -> _Parts:
+    from pkdyn.model.formats import drake, unread, urdfplus
+    from pkdyn.model.formats.xmldoc import parse_xml
+    from pkdyn.model.inertia import report
+    from pkdyn.model.validate import repair_inertias
+
+    opts = opts or _Options()
+    doc = parse_xml(xml, source)  # lines for messages; entities refused
+    if doc.root.tag != "robot":
+        raise DescriptionError(source, f"<{doc.root.tag}>", "the root element must be <robot>")
+    _check_urdf_joints(doc)
+    unread.check(doc, "urdf", opts.ignore)
+    changed = unread.prune(doc, opts.ignore) > 0
+    n_dropped, dropped = _drop_malformed_geometry(doc)
+    changed = changed or n_dropped > 0
+    if opts.repair_inertias:
+        repaired = repair_inertias(source, doc.root)
+        report(source, [], repaired, [])
+        changed = changed or bool(repaired)
+    plus = urdfplus.read_urdfplus(doc)
+    if changed:  # what Pinocchio's parser and the description reader read
+        xml = ET.tostring(doc.root, encoding="unicode")
+    root = ET.fromstring(xml)
+    xml = drake.implicit_world(xml, root)  # Drake's implicit world link
     desc = parse_description(xml, source)
     root = ET.fromstring(xml)
     extra = drake.urdf_constraints(root, source)
@@ -398,6 +610,7 @@ def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar 
         model = apply_joint_types(model, side, source)
     if side is not None and side.free_flyer:
         model = _with_free_flyer(model)
+    extra += list(plus.closures)
     if side is None and not desc.closures and not extra:
         from pkdyn.model.formats.gepetto import loop_frames
 
@@ -408,6 +621,9 @@ def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar 
                 "look like Gepetto loop frames, but there is no robot.yaml sidecar: the "
                 "loops are left open"
             )
+    actuators = urdfplus.independent_actuators(root, plus, desc.actuators)
+    from_independent = bool(actuators) and not desc.actuators
+    model = _one_coordinate(model, [a.joint for a in actuators])
     missing: list[str] = []
     if geometry:
         visual, collision, missing = geometry_models(model, xml, dirs, source)
@@ -415,8 +631,63 @@ def _urdf(xml: str, source: str, geometry: bool, dirs: list[str], side: Sidecar 
             warn_missing_meshes(source, missing)
     else:
         visual, collision = pin.GeometryModel(), pin.GeometryModel()
-    desc = dataclasses.replace(desc, closures=desc.closures + tuple(extra))
-    return _Parts(model, desc, visual, collision, _guess(model), tuple(missing))
+    desc = dataclasses.replace(
+        desc,
+        closures=desc.closures + tuple(extra),
+        couplings=desc.couplings + plus.couplings,
+        actuators=actuators,
+    )
+    parts = _Parts(model, desc, visual, collision, _guess(model), tuple(missing))
+    parts.dropped = tuple(dropped)
+    if from_independent:
+        parts.declared = plus.independent
+    return parts
+
+
+def _revolute_axis(jm: pin.JointModel) -> np.ndarray:
+    """Axis (3,) of a 1-DoF revolute joint model, in its own frame (motion subspace)."""
+    single = pin.Model()
+    single.addJoint(0, jm, pin.SE3.Identity(), "j")
+    data = single.createData()
+    pin.computeJointJacobians(single, data, pin.neutral(single))
+    J = pin.getJointJacobian(single, data, 1, pin.ReferenceFrame.LOCAL)
+    return np.reshape(np.asarray(J, dtype=float), (6, -1))[3:, 0]  # a (6,) array when nv = 1
+
+
+def _one_coordinate(model: pin.Model, joints: list[str]) -> pin.Model:
+    """Actuated ``continuous`` joints as revolute joints of one coordinate (no cos/sin pair).
+
+    An actuator drives one coordinate: Pinocchio's unbounded revolute joint has two
+    (``cos, sin``). The joint keeps its axis, placement, effort and velocity limits; its
+    position is unbounded. The model is unchanged when no actuated joint is unbounded.
+    """
+    from pkdyn.model.build import replace_joints
+
+    new: dict[str, pin.JointModel | None] = {}
+    for name in joints:
+        if not model.existJointName(name):
+            continue  # _actuation names it
+        jm = model.joints[model.getJointId(name)]
+        kind = jm.shortname()
+        if jm.nq == 2 and jm.nv == 1 and ("RUB" in kind or "Unbounded" in kind):
+            if kind[-1] in "XYZ" and kind.startswith("JointModelRUB"):
+                new[name] = getattr(pin, f"JointModelR{kind[-1]}")()
+            else:
+                new[name] = pin.JointModelRevoluteUnaligned(_revolute_axis(jm))
+    if not new:
+        return model
+    out = replace_joints(model, new)
+    out.inertias[0] = model.inertias[0]  # the links welded to the world (no dynamics)
+    for name in new:
+        old, jid = model.joints[model.getJointId(name)], out.getJointId(name)
+        iq, iv = out.joints[jid].idx_q, out.joints[jid].idx_v
+        out.lowerPositionLimit[iq] = -np.inf
+        out.upperPositionLimit[iq] = np.inf
+        out.effortLimit[iv] = model.effortLimit[old.idx_v]
+        out.velocityLimit[iv] = model.velocityLimit[old.idx_v]
+        for attr in ("damping", "friction", "armature"):
+            getattr(out, attr)[iv] = getattr(model, attr)[old.idx_v]
+    return out
 
 
 def _with_free_flyer(model: pin.Model) -> pin.Model:
@@ -529,12 +800,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         if names.count(n) > 1:
             raise DescriptionError(source, f"closure '{n}'", "closure names must be unique")
     cms, owner = constraint_models(model, desc.closures, source)
-    couplings = joint_couplings(model, desc.couplings, source)
-    clash = {c.name for c in desc.couplings} & set(names)
-    if clash:
-        raise DescriptionError(
-            source, f"coupling '{sorted(clash)[0]}'", "a closure has the same name"
-        )
+    constraints = constraint_set(model, desc.closures, desc.couplings, source)
     actuated_joints, actuated_q, actuated_v = _actuation(model, list(desc.actuators), source)
     desc = dataclasses.replace(desc, actuators=_reflected(model, desc.actuators, actuated_v))
     platform_frame = None
@@ -569,7 +835,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         description=desc,
         constraint_models=vec,
         constraint_owner=owner,
-        closure_set=ClosureSet(model, cms, couplings),
+        constraints=constraints,
         actuators=tuple(desc.actuators),
         actuated_joints=actuated_joints,
         actuated_q=actuated_q,
@@ -581,6 +847,7 @@ def _robot(parts: _Parts, source: str, params: Any) -> Robot:
         params=params,
         passive=elements,
         missing_meshes=parts.missing_meshes,
+        dropped_collisions=parts.dropped,
     )
 
 

@@ -9,10 +9,16 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import PkdynError
-from pkdyn.model.description import ActuatorSpec, ClosureSpec, CouplingSpec, Description
+from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.description import (
+    ActuatorSpec,
+    ClosureSpec,
+    CouplingSpec,
+    Description,
+    LinearCouplingSpec,
+)
 from pkdyn.model.families import FAMILIES
-from solvers import ClosureSet, PassiveForces
+from solvers import ConstraintSet, PassiveForces
 from solvers.numerics import rank
 
 __all__ = ["PLATFORM_HINT", "MODELLING_JOINTS", "Robot"]
@@ -39,10 +45,11 @@ class Robot:
         visual_model: Visual geometry (coal shapes).
         collision_model: Collision geometry (coal shapes).
         description: The parsed extension elements.
-        constraint_models: Pinocchio rigid constraint models (a ``hinge`` gives two).
+        constraint_models: Pinocchio rigid constraint models (a ``hinge`` gives two points).
         constraint_owner: Closure name of each constraint model.
-        closure_set: Residual / Jacobian evaluator of the closures, then the joint couplings
-            (one row each, see :mod:`solvers.coupling`).
+        constraints: The constraint layer (:class:`solvers.ConstraintSet`): the closures' rows
+            (reduced to their independent rows), then one row per joint coupling; views
+            ``constraints.closures`` and ``constraints.couplings``.
         actuators: Actuators in actuator order.
         actuated_joints: Joint id of each actuator.
         actuated_q: Configuration index of each actuator (nq indexing).
@@ -57,6 +64,8 @@ class Robot:
         missing_meshes: Mesh files of the description that were not found: their shapes are
             left out of ``visual_model`` and ``collision_model`` (collision checks refuse to
             run, the viewer warns, both naming them).
+        dropped_collisions: Collision elements of the description left out because their
+            numbers were malformed (collision checks refuse to run, naming them).
 
     """
 
@@ -69,7 +78,7 @@ class Robot:
     description: Description
     constraint_models: pin.StdVec_RigidConstraintModel
     constraint_owner: list[str]
-    closure_set: ClosureSet
+    constraints: ConstraintSet
     actuators: tuple[ActuatorSpec, ...]
     actuated_joints: np.ndarray
     actuated_q: np.ndarray
@@ -81,6 +90,7 @@ class Robot:
     params: Any = None
     passive: PassiveForces | None = None
     missing_meshes: tuple[str, ...] = ()
+    dropped_collisions: tuple[str, ...] = ()
 
     @functools.cached_property
     def length_scale(self) -> float:
@@ -128,14 +138,19 @@ class Robot:
         return self.description.closures
 
     @property
-    def couplings(self) -> tuple[CouplingSpec, ...]:
-        """Joint couplings of the description (gears, mimic joints, locked joints)."""
+    def couplings(self) -> tuple[CouplingSpec | LinearCouplingSpec, ...]:
+        """Joint couplings of the description (sums, gears, mimic joints, locked joints)."""
         return self.description.couplings
 
     @property
+    def closure_set(self) -> ConstraintSet:
+        """The former name of :attr:`constraints` (kept for one release)."""
+        return self.constraints
+
+    @property
     def row_owners(self) -> list[str]:
-        """Closure or coupling name of each entry of ``closure_set`` (its ``names`` order)."""
-        return list(self.constraint_owner) + [c.name for c in self.closure_set.couplings]
+        """Closure or coupling name of each constraint of ``constraints`` (its ``names``)."""
+        return list(self.constraints.names)
 
     @property
     def actuator_prismatic(self) -> np.ndarray:
@@ -171,6 +186,73 @@ class Robot:
     def actuated_joint_names(self) -> list[str]:
         """Names of the actuated joints (e.g. ``arm1``), in actuator order."""
         return [a.joint for a in self.actuators]
+
+    @property
+    def encoder_gains(self) -> np.ndarray:
+        """Joint coordinate per unit of each actuator's reading (n_a,) (``pkdyn:encoder gain``)."""
+        return np.array([float(a.encoder_gain) for a in self.actuators])
+
+    @property
+    def encoder_offsets(self) -> np.ndarray:
+        """Joint coordinate at a zero reading, per actuator (n_a,) [rad or m]."""
+        return np.array([float(a.encoder_offset) for a in self.actuators])
+
+    def joint_coordinates(self, readings: Any, rates: bool = False) -> np.ndarray:
+        """Actuated joint coordinates of actuator readings: **the one readings rule**.
+
+        ``qa = encoder_gain * reading + encoder_offset`` per actuator (the description's
+        ``<pkdyn:encoder gain offset>``; 1 and 0 unless a calibration wrote them). Every
+        feature that reads actuator readings (``qa_<actuator>`` columns of measurement,
+        motion and trajectory files; ``--readings``) turns them into joint coordinates here;
+        the joints coupled to the actuated ones (``robot.couplings``) then follow by assembly.
+
+        Args:
+            readings: Readings (..., n_a) [rad or m], or their rates / accelerations with
+                ``rates`` (the offset drops out: ``qa_dot = gain * reading_dot``).
+            rates: The values are time derivatives of readings.
+
+        Returns:
+            Joint coordinates (or their derivatives), same shape.
+
+        Raises:
+            InvalidInputError: Not numbers, or not ``n_a`` per row.
+
+        """
+        r = self._readings_array("readings", readings)
+        g = self.encoder_gains
+        return r * g if rates else r * g + self.encoder_offsets
+
+    def readings(self, qa: Any, rates: bool = False) -> np.ndarray:
+        """Actuator readings of actuated joint coordinates (the inverse of joint_coordinates).
+
+        Args:
+            qa: Joint coordinates (..., n_a) [rad or m] (their derivatives with ``rates``).
+            rates: The values are time derivatives.
+
+        Returns:
+            Readings, same shape.
+
+        Raises:
+            InvalidInputError: Not numbers, or not ``n_a`` per row.
+
+        """
+        q = self._readings_array("qa", qa)
+        g = self.encoder_gains
+        return q / g if rates else (q - self.encoder_offsets) / g
+
+    def _readings_array(self, name: str, value: Any) -> np.ndarray:
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidInputError(name, f"expected numbers, got {value!r:.60}") from None
+        n_a = len(self.actuators)
+        if arr.ndim == 0 or arr.shape[-1] != n_a:
+            raise InvalidInputError(
+                name,
+                f"expected {n_a} values per row ({', '.join(self.actuator_names)}), got shape "
+                f"{arr.shape}",
+            )
+        return arr
 
     def components(self) -> list[int]:
         """Connected component of each joint's body over physical edges (union-find).
@@ -244,7 +326,7 @@ class Robot:
     def mobility(self, q: np.ndarray | None = None, tol: float = 1e-9) -> int:
         """Mobility at ``q`` (default ``q_home``): nv minus the rank of the closure Jacobian.
 
-        The closure Jacobian includes the joint couplings' rows.
+        The constraint Jacobian includes the joint couplings' rows.
 
         Args:
             q: Configuration (nq,).
@@ -257,9 +339,9 @@ class Robot:
 
         """
         qq, tol = self._q_tol(q, tol)
-        if self.closure_set.nc == 0:
+        if self.constraints.n == 0:
             return self.nv
-        _, J = self.closure_set.residual_and_jacobian(self.data, qq)
+        _, J = self.constraints.residual_and_jacobian(self.data, qq)
         return self.nv - rank(J, tol, scale=1.0)
 
     def mobility_split(self, q: np.ndarray | None = None, tol: float = 1e-9) -> tuple[int, int]:
@@ -281,8 +363,8 @@ class Robot:
         """
         qq, tol = self._q_tol(q, tol)
         nv = self.nv
-        if self.closure_set.nc:
-            _, Jc = self.closure_set.residual_and_jacobian(self.data, qq)
+        if self.constraints.n:
+            _, Jc = self.constraints.residual_and_jacobian(self.data, qq)
             _, s, Vt = np.linalg.svd(Jc)
             rank = int(np.sum(s > tol * max(1.0, float(s[0]) if s.size else 0.0)))
             N = Vt[rank:].T
@@ -291,14 +373,9 @@ class Robot:
         total = N.shape[1]
         if self.platform_frame is None or total == 0:
             return total, 0
-        model, data = self.model, self.data
-        pin.computeJointJacobians(model, data, qq)
-        pin.updateFramePlacements(model, data)
-        lin = pin.getFrameJacobian(
-            model, data, self.platform_frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        )[:3]
-        ang = pin.getFrameJacobian(model, data, self.platform_frame, pin.ReferenceFrame.LOCAL)[3:]
-        Jx = np.vstack([lin, ang])[self.task_rows] @ N
+        from pkdyn.model.platform_jacobian import platform_jacobian
+
+        Jx = platform_jacobian(self, qq, angular="platform")[self.task_rows] @ N
         sx = np.linalg.svd(Jx, compute_uv=False)
         useful = int(np.sum(sx > tol * max(1.0, float(sx[0]) if sx.size else 0.0)))
         return useful, total - useful

@@ -9,12 +9,14 @@ the link, joint or element at fault:
 - every number of links and joints: a number (not text), finite; vectors of the right length
   (``<dynamics>`` is read, and checked, with the passive elements: :mod:`pkdyn.model.passive`);
 - inertials (:func:`inertia_problem`, the rule every importer uses): mass > 0 (a massless link
-  has no ``<inertial>``; a plain URDF may give 0, as ROS descriptions do for frames), inertia
-  tensor positive semi-definite (no negative principal moment; a thin rod's zero moment is a
-  limit of real bodies) and satisfying the triangle inequality of its principal moments
+  has no ``<inertial>``; a plain URDF may give 0, as ROS descriptions do for frames; a rotor
+  may have rotational inertia without mass, as legged-robot descriptions model their motors),
+  inertia tensor positive semi-definite (no negative principal moment; a thin rod's zero moment
+  is a limit of real bodies) and satisfying the triangle inequality of its principal moments
   (``I1 + I2 >= I3``), not all zero with a positive mass (pkdyn descriptions; plain URDFs keep
-  point masses); plain URDFs only warn for the inertia tensor, as many published descriptions
-  break it slightly;
+  point masses); plain URDFs only warn for the inertia tensor (one warning naming the links),
+  as many published descriptions break it; :func:`repair_inertias` (``repair_inertias=True``)
+  replaces them by the nearest valid tensors (:mod:`pkdyn.model.inertia`);
 - geometry: box, cylinder, sphere and capsule sizes > 0, mesh scales finite and non-zero;
 - joints: a moving joint's axis is non-zero; ``lower <= upper``; effort and velocity limits
   >= 0;
@@ -26,7 +28,6 @@ the link, joint or element at fault:
 from __future__ import annotations
 
 import math
-import warnings
 import xml.etree.ElementTree as ET
 from typing import Any
 
@@ -39,7 +40,9 @@ __all__ = [
     "MAX_TREE_DEPTH",
     "check_data_size",
     "check_urdf",
+    "geometry_problems",
     "inertia_problem",
+    "repair_inertias",
     "unit_vector",
 ]
 
@@ -176,33 +179,84 @@ def _count(tag: str, attr: str) -> int | None | bool:
     return False
 
 
+def _check_element(source: str, kind: str, owner: ET.Element, el: ET.Element) -> None:
+    """The numbers of one element's attributes (see :func:`_check_numbers`)."""
+    tag = str(el.tag)
+    for attr in el.attrib:
+        n = _count(tag, attr)
+        if n is False:
+            continue
+        values = _numbers(source, kind, owner, el, attr, n or None)
+        if (tag, attr) in _POSITIVE and not all(v > 0.0 for v in values):
+            raise DescriptionError(
+                source,
+                _where(kind, owner, el, attr, el.get(attr, "")),
+                "sizes must be > 0 [m] (the body would vanish)",
+            )
+        if n is None and (len(values) not in (1, 3) or 0.0 in values):
+            raise DescriptionError(
+                source,
+                _where(kind, owner, el, attr, el.get(attr, "")),
+                "a mesh scale is 1 or 3 non-zero numbers",
+            )
+
+
 def _check_numbers(source: str, root: ET.Element) -> None:
     """Every number of every link and joint: parseable, finite, the right count, sizes > 0."""
     for kind in ("link", "joint"):
         for owner in root.findall(kind):
             for el in owner.iter():
-                tag = str(el.tag)
-                for attr in el.attrib:
-                    n = _count(tag, attr)
-                    if n is False:
-                        continue
-                    values = _numbers(source, kind, owner, el, attr, n or None)
-                    if (tag, attr) in _POSITIVE and not all(v > 0.0 for v in values):
-                        raise DescriptionError(
-                            source,
-                            _where(kind, owner, el, attr, el.get(attr, "")),
-                            "sizes must be > 0 [m] (the body would vanish)",
-                        )
-                    if n is None and (len(values) not in (1, 3) or 0.0 in values):
-                        raise DescriptionError(
-                            source,
-                            _where(kind, owner, el, attr, el.get(attr, "")),
-                            "a mesh scale is 1 or 3 non-zero numbers",
-                        )
+                _check_element(source, kind, owner, el)
+
+
+def geometry_problems(source: str, root: ET.Element) -> list[tuple[ET.Element, ET.Element, str]]:
+    """The visual and collision elements of a URDF whose numbers are malformed.
+
+    Args:
+        source: File or robot name, for messages.
+        root: The ``<robot>`` element.
+
+    Returns:
+        ``(link, element, problem)`` of each ``<visual>`` or ``<collision>`` that
+        :func:`check_urdf` would refuse (a size that is no number, not finite, not > 0...).
+
+    """
+    out = []
+    for link in root.findall("link"):
+        for shape in link:
+            if shape.tag not in ("visual", "collision"):
+                continue
+            try:
+                for el in shape.iter():
+                    _check_element(source, "link", link, el)
+            except DescriptionError as err:
+                out.append((link, shape, str(err).split(": ", 1)[-1]))
+    return out
+
+
+def _tensor(inertial: ET.Element) -> Any:
+    """Rotational inertia (3, 3) of an ``<inertial>`` (zero without ``<inertia>``)."""
+    import numpy as np
+
+    el = inertial.find("inertia")
+    if el is None:
+        return np.zeros((3, 3))
+    i = {k: float(el.get(k, "0")) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+    return np.array(
+        [
+            [i["ixx"], i["ixy"], i["ixz"]],
+            [i["ixy"], i["iyy"], i["iyz"]],
+            [i["ixz"], i["iyz"], i["izz"]],
+        ]
+    )
 
 
 def _check_inertials(source: str, root: ET.Element, strict: bool) -> None:
-    odd: list[str] = []
+    """Masses and inertia tensors (numbers already checked); see the module docstring."""
+    from pkdyn.model.inertia import massless_rotor, report
+
+    odd: list[tuple[str, str]] = []
+    rotors: list[str] = []
     for link in root.findall("link"):
         inertial = link.find("inertial")
         if inertial is None:
@@ -211,39 +265,71 @@ def _check_inertials(source: str, root: ET.Element, strict: bool) -> None:
         mass_el = inertial.find("mass")
         text = mass_el.get("value", "0") if mass_el is not None else "0"
         mass = float(text)
-        if mass < 0.0 or (strict and mass == 0.0):
+        I = _tensor(inertial)
+        if mass < 0.0 or (strict and mass == 0.0 and not massless_rotor(mass, I)):
             raise DescriptionError(
                 source,
                 f"link '{name}' <mass value='{text}'>",
-                "a mass must be > 0 [kg] (a link without mass has no <inertial>)",
+                "a mass must be > 0 [kg] (a link without mass has no <inertial>; a rotor "
+                "without mass has its rotational inertia)",
             )
-        el = inertial.find("inertia")
-        if el is None:
+        if inertial.find("inertia") is None:
             continue
-        tensor = {k: float(el.get(k, "0")) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
-        problem = _inertia_problem(tensor, mass, strict)
+        problem = inertia_problem(mass, I, point_mass=not strict)
         if problem is None:
+            if massless_rotor(mass, I):
+                rotors.append(name)
             continue
         if strict:
-            raise DescriptionError(source, f"link '{name}' <inertia>", problem)
-        odd.append(f"link '{name}': {problem}")
-    if odd:
-        more = f" (and {len(odd) - 1} more)" if len(odd) > 1 else ""
-        warnings.warn(
-            f"{source}: inertia tensors no rigid body has, dynamics will not be physical: "
-            f"{odd[0]}{more}",
-            UserWarning,
-            stacklevel=4,
-        )
+            raise DescriptionError(
+                source,
+                f"link '{name}' <inertia>",
+                f"{problem} (or load with repair_inertias=True for the nearest valid tensor)",
+            )
+        odd.append((name, problem))
+    report(source, odd, [], rotors)
 
 
-def _inertia_problem(i: dict[str, float], mass: float, strict: bool) -> str | None:
-    M = [
-        [i["ixx"], i["ixy"], i["ixz"]],
-        [i["ixy"], i["iyy"], i["iyz"]],
-        [i["ixz"], i["iyz"], i["izz"]],
-    ]
-    return inertia_problem(mass, M, point_mass=not strict)
+def repair_inertias(source: str, root: ET.Element) -> list[tuple[str, Any, Any]]:
+    """Replace the invalid inertia tensors of a URDF by the nearest valid ones, in place.
+
+    Args:
+        source: File or robot name, for messages.
+        root: The ``<robot>`` element (its ``<inertia>`` attributes are rewritten).
+
+    Returns:
+        ``(link, before, after)`` (tensors (3, 3)) of every tensor changed.
+
+    Raises:
+        DescriptionError: Malformed numbers (as :func:`check_urdf`), or a negative mass.
+
+    """
+    from pkdyn.model.inertia import nearest_valid_inertia
+
+    _check_numbers(source, root)
+    out = []
+    for link in root.findall("link"):
+        inertial = link.find("inertial")
+        el = inertial.find("inertia") if inertial is not None else None
+        if inertial is None or el is None:
+            continue
+        mass_el = inertial.find("mass")
+        mass = float(mass_el.get("value", "0")) if mass_el is not None else 0.0
+        I = _tensor(inertial)
+        if mass < 0.0 or inertia_problem(mass, I) is None:
+            continue  # a negative mass stays an error (check_urdf says so)
+        fixed = nearest_valid_inertia(I)
+        for k, (a, b) in {
+            "ixx": (0, 0),
+            "ixy": (0, 1),
+            "ixz": (0, 2),
+            "iyy": (1, 1),
+            "iyz": (1, 2),
+            "izz": (2, 2),
+        }.items():
+            el.set(k, repr(float(fixed[a, b])))
+        out.append((link.get("name", "?"), I, fixed))
+    return out
 
 
 def inertia_problem(mass: float, inertia: Any, point_mass: bool = True) -> str | None:

@@ -9,12 +9,13 @@ import numpy as np
 
 from pkdyn.design.result import StudyResult
 from pkdyn.plotting._save import save_figure
+from pkdyn.results import register_plot
 
 __all__ = ["plot_pareto"]
 
 
 def _axis(result: StudyResult, name: str) -> str:
-    unit = result.table.units.get(name, "")
+    unit = result.designs.units.get(name, "")
     sense = {o.metric: o.sense for o in result.study.objective_list}.get(name)
     return (
         f"{name}"
@@ -23,6 +24,7 @@ def _axis(result: StudyResult, name: str) -> str:
     )
 
 
+@register_plot(StudyResult)
 def plot_pareto(
     result: StudyResult,
     x: str | None = None,
@@ -55,7 +57,7 @@ def plot_pareto(
     """
     from matplotlib.figure import Figure
 
-    s, t = result.study, result.table
+    s, t = result.study, result.designs
     objs = [o.metric for o in s.objective_list]
     names = s.metric_names
     x = x or (objs[0] if objs else names[0])

@@ -8,12 +8,15 @@ from typing import Any
 
 import numpy as np
 
+from pkdyn.dynamics.simulation_result import SimulationResult
 from pkdyn.dynamics.sizing import SizingResult
 from pkdyn.plotting._save import save_figure
+from pkdyn.results import register_plot
 
 __all__ = ["plot_efforts", "plot_simulation"]
 
 
+@register_plot(SizingResult)
 def plot_efforts(
     result: SizingResult,
     path: str | Path | None = None,
@@ -67,13 +70,21 @@ def plot_efforts(
     return fig
 
 
+@register_plot(SimulationResult)
+def _plot_simulation_result(
+    result: SimulationResult, path: str | Path | None = None, title: str | None = None
+) -> Any:
+    """:func:`plot_simulation` of a result that names its actuators (``result.plot()``)."""
+    return plot_simulation(result.layout, result, path=path, title=title)
+
+
 def plot_simulation(
     robot: Any, result: Any, path: str | Path | None = None, title: str | None = None
 ) -> Any:
     """Actuator positions and speeds, energies and closure residual of a simulation.
 
     Args:
-        robot: The simulated robot.
+        robot: The simulated robot (or ``result.layout``: its names and indices).
         result: Its :func:`pkdyn.dynamics.simulate` result.
         path: Save the figure there (format from the suffix, e.g. ``.png``).
         title: Figure title (default: robot and duration).

@@ -15,6 +15,7 @@ from pkdyn.analysis.maps import ConditioningMap
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.arguments import public
 from pkdyn.plotting._save import save_figure
+from pkdyn.results import register_plot
 
 __all__ = ["plot_conditioning_map"]
 
@@ -27,6 +28,7 @@ _LABELS = {
 }
 
 
+@register_plot(ConditioningMap)
 @public
 def plot_conditioning_map(
     cmap: ConditioningMap,

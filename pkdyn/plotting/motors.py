@@ -11,6 +11,7 @@ import numpy as np
 
 from pkdyn.dynamics.selection import Candidate, Selection
 from pkdyn.files import atomic_path
+from pkdyn.results import register_plot
 
 __all__ = ["plot_operating_points"]
 
@@ -27,6 +28,7 @@ def _chosen(selection: Selection) -> list[Candidate]:
     return out
 
 
+@register_plot(Selection)
 def plot_operating_points(
     selection: Selection | Sequence[Candidate],
     path: str | Path | None = None,

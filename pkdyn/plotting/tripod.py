@@ -15,6 +15,9 @@ from typing import Any
 import numpy as np
 
 from pkdyn.plotting._save import save_figure
+from pkdyn.results import register_plot
+from pkdyn.tripod.analysis import ScenarioReport
+from pkdyn.tripod.compare import Comparison
 
 __all__ = ["plot_comparison", "plot_scenario"]
 
@@ -37,6 +40,7 @@ def _shade(ax: Any, report: Any) -> None:
             )
 
 
+@register_plot(ScenarioReport)
 def plot_scenario(report: Any, path: str | Path | None = None, title: str | None = None) -> Any:
     """Four panels summarising the scenario and its checks.
 
@@ -123,6 +127,7 @@ _METRICS = (
 )
 
 
+@register_plot(Comparison)
 def plot_comparison(
     comparison: Any, path: str | Path | None = None, title: str | None = None
 ) -> Any:

@@ -10,11 +10,15 @@ from typing import Any
 import numpy as np
 
 from pkdyn.plotting._save import save_figure
+from pkdyn.results import register_plot
+from pkdyn.units import quantity, vector
+from pkdyn.workspace.clavel import ClavelComparison
 from pkdyn.workspace.limits import LIMIT_KINDS
-from pkdyn.workspace.orientation import OrientationWorkspace
+from pkdyn.workspace.orientation import MelStudy, OrientationWorkspace
 from pkdyn.workspace.translation import AXES, TranslationWorkspace
 
 __all__ = [
+    "plot_clavel",
     "plot_translation_workspace",
     "plot_orientation_workspace",
     "plot_mel_study",
@@ -69,6 +73,7 @@ def _slice(ax: Any, ws: TranslationWorkspace, axis: str, value: float) -> None:
     ax.set_title(f"{axis} = {value:.3f} m", fontsize=9)
 
 
+@register_plot(TranslationWorkspace)
 def plot_translation_workspace(
     ws: TranslationWorkspace,
     path: str | Path | None = None,
@@ -113,11 +118,13 @@ def plot_translation_workspace(
             if k == 0:
                 _legend(ax, ws.kinds)
     unit = "m^3" if len(ws.dims) == 3 else "m^2"
+    if title is None and ws.kind == "dextrous":
+        title = f"{ws.robot}: dextrous workspace, {quantity(ws.volume, unit)}"
     fig.suptitle(
         title
         if title is not None
-        else f"{ws.robot}: volume {ws.volume:.4g} {unit} "
-        f"(rpy {np.array2string(ws.rpy, precision=3)}, {ws.method})",
+        else f"{ws.robot}: volume {quantity(ws.volume, unit)} "
+        f"(rpy {vector(ws.rpy, 'rad')}, {ws.method})",
         fontsize=10,
     )
     fig.tight_layout()
@@ -154,6 +161,7 @@ def _sphere(ax: Any, ow: OrientationWorkspace, half: int, colour: str) -> None:
     ax.set_title(f"theta1 in [{lo}, {hi}) deg: {ow.solid_angle(half):.3g} sr", fontsize=9)
 
 
+@register_plot(OrientationWorkspace)
 def plot_orientation_workspace(
     ow: OrientationWorkspace,
     path: str | Path | None = None,
@@ -216,6 +224,7 @@ def plot_orientation_workspace(
     return fig
 
 
+@register_plot(MelStudy)
 def plot_mel_study(
     study: Mapping[str, OrientationWorkspace], path: str | Path | None = None
 ) -> Any:
@@ -238,4 +247,65 @@ def plot_mel_study(
     fig.tight_layout(rect=(0.02, 0, 1, 1))
     if path is not None:
         save_figure(fig, path, dpi=100)
+    return fig
+
+
+@register_plot(ClavelComparison)
+def plot_clavel(comparison: ClavelComparison, path: str | Path | None = None) -> Any:
+    """Clavel's complete prism, closed form beside numeric: top view and side view.
+
+    The top view draws the inscribed cylinder's circle (diameter ``D``) and a hexagon of the
+    area ``S``; the side view the prism from ``zb`` to ``zh`` and the lowest reachable point
+    ``zh - Hmax`` on the axis.
+
+    Args:
+        comparison: From :func:`pkdyn.workspace.clavel.clavel_comparison`.
+        path: Save the figure there.
+
+    Returns:
+        The matplotlib Figure.
+
+    """
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10.0, 4.6))
+    top, side = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    styles = (("closed form", "#1565c0", "-"), ("numeric", "#c62828", "--"))
+    for figs, (label, colour, line) in zip(
+        (comparison.closed_form, comparison.numeric), styles, strict=True
+    ):
+        t = np.linspace(0.0, 2.0 * np.pi, 181)
+        r = 0.5 * figs.D
+        top.plot(r * np.cos(t), r * np.sin(t), line, color=colour, label=f"{label}: D")
+        a = math.sqrt(2.0 * figs.S / (3.0 * math.sqrt(3.0)))  # regular hexagon of area S
+        h = np.linspace(0.0, 2.0 * np.pi, 7)
+        top.plot(a * np.cos(h), a * np.sin(h), line, color=colour, alpha=0.5, label=f"{label}: S")
+        side.plot(
+            [-r, r, r, -r, -r],
+            [figs.zb, figs.zb, figs.zh, figs.zh, figs.zb],
+            line,
+            color=colour,
+            label=f"{label}: prism (D x H)",
+        )
+        side.plot([0.0], [figs.zh - figs.Hmax], "v", color=colour, label=f"{label}: lowest point")
+    top.set_aspect("equal")
+    top.set_xlabel("x [m]")
+    top.set_ylabel("y [m]")
+    top.set_title("top view: inscribed cylinder, hexagon of area S", fontsize=9)
+    top.legend(fontsize=7)
+    side.set_aspect("equal")
+    side.set_xlabel("radius [m]")
+    side.set_ylabel("z [m]")
+    side.set_title("side view: the complete prism", fontsize=9)
+    side.legend(fontsize=7)
+    gamma, ab = math.degrees(comparison.gamma_max), math.degrees(comparison.ab_min)
+    fig.suptitle(
+        f"Clavel's workspace figures: gamma_max {quantity(gamma, 'deg')}, "
+        f"(alpha+beta)_min {quantity(ab, 'deg')}; whole workspace "
+        f"{quantity(comparison.V_workspace, 'm^3')}",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    if path is not None:
+        save_figure(fig, path, dpi=110)
     return fig

@@ -8,34 +8,78 @@
   6-DOF virtual spring per compliant link);
 - :mod:`~pkdyn.precision.condensation`, :mod:`~pkdyn.precision.equilibrium`: condensation onto
   the platform, the loaded equilibrium and its tangent stiffness;
+- :mod:`~pkdyn.precision.validity`: the scale-aware rule that says where a figure is defined
+  (unbounded, undefined, near a singularity), behind every result;
 - :mod:`~pkdyn.precision.stiffness`: :func:`stiffness` (``K``, compliance, principal
   stiffnesses, deflection);
 - :mod:`~pkdyn.precision.modes`: natural frequencies and mode shapes;
+- :mod:`~pkdyn.precision.grid`: the one map convention (plane, centre, extent, samples; values
+  ``[i_u, i_v]``) and the map result;
 - :mod:`~pkdyn.precision.vectorised`, :mod:`~pkdyn.precision.maps`: closed forms of the library
   Gough-Stewart and Delta, figures over many poses and maps over workspace slices (the design
   metrics ``stiffness_min`` and ``f1_min`` use them).
-- :mod:`~pkdyn.precision.parameters`: the placements manufacturing errors move, and parameter
-  models of them (every placement, family shortcuts, family dimensions);
+- :mod:`~pkdyn.precision.placements` and the parameter models (:mod:`~pkdyn.precision.
+  parameters`: placement parameters, family shortcuts, family parameters);
 - :mod:`~pkdyn.precision.perturbation`: robots with those errors, built exactly;
 - :mod:`~pkdyn.precision.sensitivity`: first-order sensitivity of the platform pose to actuator
   and geometric errors through the loops (shared with :mod:`pkdyn.calibration`);
-- :mod:`~pkdyn.precision.accuracy`: error budgets (worst case, RMS, Monte Carlo, ranking of the
-  tolerances) and pose-error maps.
+- :mod:`~pkdyn.precision.budgets`, :mod:`~pkdyn.precision.monte_carlo`,
+  :mod:`~pkdyn.precision.accuracy_maps`: error budgets (worst case, RMS, ranking of the
+  tolerances), their Monte Carlo check and pose-error maps; :mod:`~pkdyn.precision.accuracy`
+  puts them in one report;
+- :mod:`~pkdyn.precision.vibration`: :func:`vibration`, the tool's deviation from its rigid
+  motion along a motion and its settling (the command: ``vibration_command``; the damping:
+  ``vibration_damping``; the modal and multibody methods: ``vibration_modal``,
+  ``vibration_multibody``; the figures: ``vibration_figures``; the result:
+  ``vibration_result``; input shaping: ``vibration_shaping``; the fastest settling cycle:
+  ``vibration_fastest``; the MJCF export with servos: ``vibration_mjcf``).
+
+Every result derives from :class:`pkdyn.results.Result` (``table()``, ``to_json()``, ``plot()``
+where a picture helps) and carries ``valid`` and ``warnings``.
 
 Layering: may import :mod:`pkdyn.model`, :mod:`pkdyn.analysis`, :mod:`pkdyn.workspace` and
 below; never design, calibration, viewer, plotting or the CLI.
 """
 
+from pkdyn.precision.accuracy import Accuracy, accuracy_budget
+from pkdyn.precision.accuracy_maps import AccuracyMap, accuracy_map
 from pkdyn.precision.beam import Section, centre_compliance, tip_compliance
+from pkdyn.precision.budgets import (
+    ActuatorAccuracy,
+    GeometricAccuracy,
+    ToleranceRanking,
+    actuator_errors,
+    geometric_errors,
+)
 from pkdyn.precision.elastic import ElasticModel, actuator_stiffness, elastic_model
+from pkdyn.precision.grid import GridMap, PlaneGrid
 from pkdyn.precision.links import LinkCompliance, link_compliances
 from pkdyn.precision.maps import PoseFigures, PrecisionMap, pose_figures, precision_map
 from pkdyn.precision.material import ALUMINIUM, CARBON, MATERIALS, STEEL, Material, as_material
 from pkdyn.precision.modes import Modes, mode_trajectory, modes
+from pkdyn.precision.monte_carlo import MonteCarlo, monte_carlo
 from pkdyn.precision.stiffness import Principal, Stiffness, stiffness, stiffness_json, transport
+from pkdyn.precision.validity import PrecisionWarning, Validity
+from pkdyn.precision.vibration import vibration
+from pkdyn.precision.vibration_result import VibrationResult
 
 __all__ = [
     "ALUMINIUM",
+    "Accuracy",
+    "AccuracyMap",
+    "ActuatorAccuracy",
+    "GeometricAccuracy",
+    "GridMap",
+    "MonteCarlo",
+    "PlaneGrid",
+    "PrecisionWarning",
+    "ToleranceRanking",
+    "Validity",
+    "accuracy_budget",
+    "accuracy_map",
+    "actuator_errors",
+    "geometric_errors",
+    "monte_carlo",
     "CARBON",
     "MATERIALS",
     "STEEL",
@@ -48,6 +92,7 @@ __all__ = [
     "Principal",
     "Section",
     "Stiffness",
+    "VibrationResult",
     "actuator_stiffness",
     "as_material",
     "centre_compliance",
@@ -61,4 +106,5 @@ __all__ = [
     "stiffness_json",
     "tip_compliance",
     "transport",
+    "vibration",
 ]

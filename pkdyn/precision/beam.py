@@ -16,8 +16,10 @@ bending, Timoshenko shear, Saint-Venant torsion, circular section: ``I_x = I_y =
       0 & 0 & 0 & 0 & 0 & \frac{L}{GJ}
     \end{bmatrix}
 
-(``kappa``: Cowper's shear coefficient of a circular tube, 0 with ``shear=False``: the
-Euler-Bernoulli beam). Expressed at the beam's **elastic centre** (its mid-point, the tip body's
+(``kappa``: Cowper's shear coefficient of a circular tube, with the material's Poisson ratio
+when it is isotropic, else from the section alone: :meth:`Section.shear_coefficient`; no shear
+term with ``shear=False``: the Euler-Bernoulli beam). Expressed at the beam's **elastic
+centre** (its mid-point, the tip body's
 motion taken there) the coupling terms vanish: the compliance is diagonal,
 ``diag(L^3/(12EI) + L/(kappa G A), same, L/(EA), L/(EI), L/(EI), L/(GJ))``. pkdyn's virtual-joint
 model (:mod:`pkdyn.precision.elastic`) puts each link's 6-DOF virtual spring there.
@@ -79,16 +81,29 @@ class Section:
         """Torsion constant ``J = 2 I`` of a circular section [m^4]."""
         return 2.0 * self.second_moment
 
-    def shear_coefficient(self, poisson: float) -> float:
-        """Cowper's shear coefficient ``kappa`` of a circular tube (0.886 for a solid rod).
+    def shear_coefficient(self, poisson: float | None = None) -> float:
+        """Cowper's shear coefficient ``kappa`` of a circular tube.
 
         ``6 (1 + nu) (1 + m^2)^2 / ((7 + 6 nu) (1 + m^2)^2 + (20 + 12 nu) m^2)`` with
-        ``m = inner_radius / radius``.
+        ``m = inner_radius / radius`` (0.886 for a solid steel rod, ``nu = 0.3``). Without a
+        Poisson ratio (a material that is not isotropic, e.g. a carbon-fibre tube, whose
+        ``E / (2 G) - 1`` is no Poisson ratio), the coefficient of the section alone,
+        ``nu = 0``: ``6 (1 + m^2)^2 / (7 (1 + m^2)^2 + 20 m^2)`` (6/7 for a solid rod, 1/2 for
+        a thin tube), with the shear modulus ``G`` as given.
+
+        Args:
+            poisson: Poisson's ratio of an isotropic material, in ``[0, 0.5]``; ``None``: the
+                section alone.
+
+        Returns:
+            ``kappa`` [-].
+
         """
         from pkdyn.inputs import real
 
         nu = real("poisson", poisson)  # (an equivalent isotropic laminate's may exceed 0.5)
         m2 = (self.inner_radius / self.radius) ** 2
+        nu = 0.0 if poisson is None else float(poisson)
         return 6 * (1 + nu) * (1 + m2) ** 2 / ((7 + 6 * nu) * (1 + m2) ** 2 + (20 + 12 * nu) * m2)
 
     def mass(self, length: float, material: Material) -> float:
@@ -98,6 +113,17 @@ class Section:
         _check_length(length)
         instance("material", material, Material, "a Material (pkdyn.precision.STEEL...)")
         return material.density * self.area * float(length)
+
+    def inertia(self, length: float, material: Material) -> pin.Inertia:
+        """Inertia of a straight piece along ``z``, centred on the origin (a tube or a rod).
+
+        ``m = density A L``; ``I_xx = I_yy = m (3 (r^2 + r_i^2) + L^2) / 12``,
+        ``I_zz = m (r^2 + r_i^2) / 2`` [kg, kg m^2].
+        """
+        m = self.mass(length, material)
+        r2 = self.radius**2 + self.inner_radius**2
+        I_t = m * (3.0 * r2 + length**2) / 12.0
+        return pin.Inertia(m, np.zeros(3), np.diag([I_t, I_t, 0.5 * m * r2]))
 
 
 def _check_length(length: float) -> None:

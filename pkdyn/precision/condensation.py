@@ -26,13 +26,13 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import SingularConfigurationError
+from pkdyn.model.platform_jacobian import platform_jacobian
 from pkdyn.precision.elastic import ElasticModel
 from solvers import numerics
 
 __all__ = [
     "FREE_TOL",
     "FREE_TOL_LOADED",
-    "translational",
     "RANK_TOL",
     "Reduced",
     "compliance",
@@ -53,9 +53,10 @@ FREE_TOL_LOADED = 1e-8
 """The same for a loaded tangent stiffness (central differences: round-off about 1e-10)."""
 
 _MOVES_TOL = 1e-7
-"""A stiffness-free motion moves the platform when its (scale-aware) motion exceeds this."""
-
-_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+"""A stiffness-free motion moves the platform when its (scale-aware) motion exceeds this, times
+the largest motion any allowed direction gives the platform (at least 1: translations divided by
+the robot's size, unit allowed motions; a mechanism whose allowed motions all leave the platform
+still, every actuator held, is judged against that unit)."""
 
 
 @dataclass(eq=False)  # numpy fields
@@ -85,15 +86,11 @@ class Reduced:
     free_tol: float = FREE_TOL
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
 def constraint_rows(em: ElasticModel, q: np.ndarray) -> np.ndarray:
     """Closure Jacobian and rigid-actuator rows (r, nv) at ``q`` (runs the joint Jacobians)."""
     r = em.robot
-    if r.closure_set.nc:
-        Jc = r.closure_set.jacobian(r.data, q)
+    if r.constraints.n:
+        Jc = r.constraints.jacobian(r.data, q)
     else:
         pin.computeJointJacobians(r.model, r.data, q)
         Jc = np.zeros((0, r.nv))
@@ -108,6 +105,9 @@ def constraint_rows(em: ElasticModel, q: np.ndarray) -> np.ndarray:
 def platform_rows(em: ElasticModel, point: np.ndarray) -> tuple[np.ndarray, pin.SE3, np.ndarray]:
     """Platform Jacobian (6, nv) at the reference point (joint Jacobians already computed).
 
+    :func:`pkdyn.model.platform_jacobian.platform_jacobian` with world axes (the precision
+    convention).
+
     Args:
         em: The elastic model.
         point: Reference point in the platform frame [m].
@@ -117,15 +117,10 @@ def platform_rows(em: ElasticModel, point: np.ndarray) -> tuple[np.ndarray, pin.
 
     """
     r = em.robot
-    fid = r.platform_frame
-    assert fid is not None
-    oMf = pin.updateFramePlacement(r.model, r.data, fid)
-    J = pin.getFrameJacobian(r.model, r.data, fid, _LWA)
-    arm = oMf.rotation @ point
-    if np.any(arm):
-        J = J.copy()
-        J[:3] -= _skew(arm) @ J[3:]
-    return J, pin.SE3(oMf), oMf.translation + arm
+    J = platform_jacobian(r, None, point=point, angular="world")
+    assert r.platform_frame is not None
+    oMf = r.data.oMf[r.platform_frame]
+    return J, pin.SE3(oMf), oMf.act(np.asarray(point, dtype=float))
 
 
 def spring_force(em: ElasticModel, q: np.ndarray, qa_rest: np.ndarray) -> np.ndarray:
@@ -244,7 +239,7 @@ def compliance(em: ElasticModel, red: Reduced) -> tuple[np.ndarray, int]:
     zero = negligible(w, red.free_tol)
     moving = _scale(em)[:, None] * (red.Jz @ V[:, zero])
     reach = np.abs(_scale(em)[:, None] * red.Jz).max() if red.Jz.size else 0.0
-    if moving.size and float(np.abs(moving).max()) > _MOVES_TOL * max(reach, 1e-300):
+    if moving.size and float(np.abs(moving).max()) > _MOVES_TOL * max(reach, 1.0):
         raise SingularConfigurationError(
             "parallel",
             f"{em.base.name}: the platform can move without deforming any spring (parallel "
@@ -266,26 +261,3 @@ def compliance(em: ElasticModel, red: Reduced) -> tuple[np.ndarray, int]:
         JV = red.Jz @ Vk
         C = JV @ np.linalg.solve(Vk.T @ Kz @ Vk, JV.T)
     return C, int(zero.sum())
-
-
-def translational(
-    em: ElasticModel, q: np.ndarray, point: np.ndarray, w: np.ndarray | None
-) -> tuple[float, float]:
-    """Smallest translational stiffness [N/m] and deflection [m] at an assembled ``q``.
-
-    The smallest principal stiffness among the task's translation components, and the
-    translation of the point under ``w`` (``nan`` without ``w``). The lean path of the maps
-    (no input checks): :func:`reduce` and :func:`compliance`.
-
-    Raises:
-        SingularConfigurationError: As :func:`compliance`.
-
-    """
-    C, _ = compliance(em, reduce(em, em.embed(q), point))
-    t = [int(i) for i in em.base.task_rows if i < 3]
-    if not t:
-        return float("nan"), float("nan")
-    top = float(np.linalg.eigvalsh(C[np.ix_(t, t)])[-1])
-    kmin = 1.0 / top if top > 0.0 else float("nan")
-    defl = float(np.linalg.norm((C @ w)[:3])) if w is not None else float("nan")
-    return kmin, defl

@@ -11,13 +11,20 @@ Pashkevich, Chablat and Wenger's virtual-joint method (2009) on the whole tree:
 - each **compliant link** (:mod:`pkdyn.precision.links`) gets a 6-DOF virtual joint (Pinocchio's
   free-flyer) at its elastic centre, between its root (the body and its parent joint) and
   everything it carries, with a diagonal spring (the link's compliance inverted) about the
-  undeformed placement. A beam's mass is lumped on its two halves: the half next to the tip (a
-  uniform half rod or tube of half the link's mass) moves with the tip, the rest of the link's
-  inertia with the root (when the link's inertia does not contain such a half rod, all of it
-  stays on the root); a described compliance keeps the link's inertia on its root;
-- the loop closures (and any other rows of ``robot.closure_set``) stay rigid constraints,
-  re-made on the new tree; hinges built from two points, welds and redundant closures keep
-  their rank deficiency (the analyses use rank-revealing null spaces).
+  undeformed placement. A beam that springs attach to along its length is cut there: one
+  virtual joint per piece, in series, the springs on the section where they attach. A beam's
+  mass is lumped on its two halves: the half next to the tip (a uniform half rod or tube of half
+  the link's mass) moves with the tip, the rest of the link's inertia with the root (when the
+  link's inertia does not contain such a half rod, all of it stays on the root); a described
+  compliance keeps the link's inertia on its root. With ``mass="from-material"`` the link's own
+  inertia (not that of links merged into it by fixed joints) is its beam's (section, length,
+  density); otherwise the links weigh what the URDF says;
+- a **prismatic leg**'s rod deflects over its part outside its cylinder, whose length follows
+  the leg's stroke: the model is rebuilt at each configuration (:meth:`ElasticModel.at`);
+- the constraint layer (``robot.constraints``) stays rigid, re-made on the new tree: the loop
+  closures (their frames carried by the tips of compliant links) and the joint couplings (rigid
+  relations between the same tree joints, in the same condensation as the closures); redundant
+  closures keep their rank deficiency (the analyses use rank-revealing null spaces).
 
 :func:`elastic_model` returns this as an :class:`ElasticModel`: a :class:`pkdyn.Robot` of the
 extended tree (the robot itself when no link is compliant) whose ``passive`` holds the joint
@@ -30,19 +37,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.exceptions import InvalidInputError
 from pkdyn.inputs import is_complex
 from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.precision.links import LinkCompliance, link_compliances
-from pkdyn.precision.material import Material
-from solvers import ClosureSet, FrameSpring, PassiveForces
+from pkdyn.precision.material import Material, as_material
+from solvers import ConstraintSet, FrameSpring, PassiveForces
+from solvers.coupling import Coupling, LinearCoupling
 
 __all__ = ["DEFLECTION_SUFFIX", "ElasticModel", "actuator_stiffness", "elastic_model"]
 
@@ -69,6 +77,8 @@ class ElasticModel:
         v_index: Index in the extended ``v`` of each coordinate of the robot's ``v`` (nv,).
         deflection_v: Velocity indices of each link's virtual joint (n_links, 6): translation
             then rotation of the tip part, in the virtual joint's frame [m, rad].
+        material: The ``material`` argument it was built with (applies to undescribed links).
+        shear: Whether the beams include shear.
 
     """
 
@@ -79,6 +89,23 @@ class ElasticModel:
     q_index: np.ndarray
     v_index: np.ndarray
     deflection_v: np.ndarray
+    material: Material | None = None
+    shear: bool = True
+
+    @property
+    def material_links(self) -> tuple[str, ...]:
+        """Links whose material is the ``material`` argument (undescribed by the description)."""
+        return tuple(dict.fromkeys(lc.link for lc in self.links if lc.origin == "argument"))
+
+    def at(self, q: np.ndarray) -> ElasticModel:
+        """The model for configuration ``q`` (nq,) of the robot (itself, or rebuilt).
+
+        Rebuilt when a prismatic leg's rod is compliant: its free length follows the stroke.
+        """
+        if not any(lc.sliding for lc in self.links):
+            return self
+        found = link_compliances(self.base, self.material, self.shear, np.asarray(q, float))
+        return _build(self.base, self.actuator_stiffness, found, self.material, self.shear)
 
     @property
     def nv(self) -> int:
@@ -207,12 +234,21 @@ def elastic_model(
 
     Raises:
         InvalidInputError: A bad stiffness or material (the value is named).
-        PkdynError: Compliant links on a robot whose closure set has rows other than point and
-            weld closures (not supported yet).
 
     """
     k_a = _actuator_stiffness(robot, actuator_stiffness)
-    found = link_compliances(robot, material, shear) if links else []
+    mat = as_material(material) if material is not None else None
+    found = link_compliances(robot, mat, shear) if links else []
+    return _build(robot, k_a, found, mat, shear)
+
+
+def _build(
+    robot: Robot,
+    k_a: np.ndarray,
+    found: Sequence[LinkCompliance],
+    material: Material | None,
+    shear: bool,
+) -> ElasticModel:
     if not found:
         return ElasticModel(
             robot,
@@ -222,15 +258,31 @@ def elastic_model(
             np.arange(robot.nq),
             np.arange(robot.nv),
             np.zeros((0, 6), dtype=int),
+            material,
+            shear,
         )
-    cs = robot.closure_set
-    if cs.nc != sum(3 if item[0] else 6 for item in cs.items):
-        raise PkdynError(
-            f"{robot.name}: compliant links need a closure set of point and weld closures only "
-            "(this one has other rows); analyse it with rigid links (links=False)"
-        )
+    robot = _with_beam_masses(robot, found)  # (the robot as the precision models weigh it)
     ext, q_index, v_index, defl = _extended(robot, found)
-    return ElasticModel(ext, robot, k_a, tuple(found), q_index, v_index, defl)
+    return ElasticModel(ext, robot, k_a, tuple(found), q_index, v_index, defl, material, shear)
+
+
+def _with_beam_masses(robot: Robot, found: Sequence[LinkCompliance]) -> Robot:
+    """The robot whose links asking ``mass="from-material"`` weigh what their beam says.
+
+    A body's own inertia (not that of the links merged into it by fixed joints) is replaced by
+    its beam's (:attr:`LinkCompliance.inertia`).
+    """
+    heavy = {lc.joint: lc.inertia for lc in found if lc.segment == 0 and lc.inertia is not None}
+    if not heavy:
+        return robot
+    model = pin.Model(robot.model)
+    for j, beam in heavy.items():
+        merged = pin.Inertia.Zero()
+        for f in model.frames:
+            if f.parentJoint == j and f.type == pin.FrameType.FIXED_JOINT and f.inertia.mass > 0:
+                merged = merged + f.placement.act(f.inertia)
+        model.inertias[j] = beam + merged
+    return dataclasses.replace(robot, model=model, data=model.createData())
 
 
 _actuator_stiffness = actuator_stiffness
@@ -239,15 +291,24 @@ _actuator_stiffness = actuator_stiffness
 def _extended(
     robot: Robot, links: Sequence[LinkCompliance]
 ) -> tuple[Robot, np.ndarray, np.ndarray, np.ndarray]:
-    """The robot with a free-flyer virtual joint at each compliant link's elastic centre."""
+    """The robot with a free-flyer virtual joint at each compliant link's elastic centre.
+
+    A beam cut in pieces gets one virtual joint per piece, in series (root to tip); the body
+    after piece ``k`` is the beam's section at its far end, where the springs attached there
+    hang (``pieces``).
+    """
     model = robot.model
-    comp = {lc.joint: lc for lc in links}
+    comp: dict[int, list[LinkCompliance]] = {}
+    for lc in links:
+        comp.setdefault(lc.joint, []).append(lc)
     new = pin.Model()
     new.name = model.name
     new.gravity = model.gravity
     jmap = {0: 0}
     carrier: dict[int, tuple[int, pin.SE3]] = {0: (0, pin.SE3.Identity())}
     virtual: dict[int, int] = {}
+    pieces: dict[int, list[tuple[LinkCompliance, int]]] = {}
+    vids: dict[int, int] = {}  # id(link compliance) -> its virtual joint
     for j in range(1, model.njoints):
         jm = model.joints[j]
         pj, off = carrier[model.parents[j]]
@@ -263,28 +324,34 @@ def _extended(
             model.lowerPositionLimit[sq],
             model.upperPositionLimit[sq],
         )
-        lc = comp.get(j)
-        tip, root = _split(model, j, lc) if lc is not None else (None, model.inertias[j])
+        chain = comp.get(j, [])
+        whole = _whole(chain[-1]) if chain else None
+        tip, root = _split(model, j, whole) if whole is not None else (None, model.inertias[j])
         new.appendBodyToJoint(nid, root, pin.SE3.Identity())
         jmap[j] = nid
         carrier[j] = (nid, pin.SE3.Identity())
-        if lc is not None:
+        prev, prev_at = nid, pin.SE3.Identity()  # the body before the piece, its frame in j's
+        for k, lc in enumerate(chain):
             big = np.full(6, 1e3)
             lo = np.concatenate([np.full(3, -1e3), np.full(4, -1.0)])
             vid = new.addJoint(
-                nid,
+                prev,
                 pin.JointModelFreeFlyer(),
-                lc.placement,
-                f"{model.names[j]}{DEFLECTION_SUFFIX}",
+                prev_at.actInv(lc.placement),
+                f"{model.names[j]}{DEFLECTION_SUFFIX}" + (f"{k}" if len(chain) > 1 else ""),
                 big,
                 big,
                 lo,
                 -lo,
             )
-            if tip is not None:
-                new.appendBodyToJoint(vid, tip, pin.SE3.Identity())
-            virtual[j] = vid
-            carrier[j] = (vid, lc.placement.inverse())
+            if k == len(chain) - 1 and tip is not None and whole is not None:
+                new.appendBodyToJoint(vid, tip, lc.placement.actInv(whole.placement))
+            pieces.setdefault(j, []).append((lc, vid))
+            vids[id(lc)] = vid
+            prev, prev_at = vid, lc.placement
+        if chain:
+            virtual[j] = prev
+            carrier[j] = (prev, chain[-1].placement.inverse())
     q_index = np.zeros(model.nq, dtype=int)
     v_index = np.zeros(model.nv, dtype=int)
     for j in range(1, model.njoints):
@@ -315,7 +382,7 @@ def _extended(
         c.name = cm.name
         cms.append(c)
     defl = np.array(
-        [np.arange(new.joints[virtual[lc.joint]].idx_v, new.joints[virtual[lc.joint]].idx_v + 6)
+        [np.arange(new.joints[vids[id(lc)]].idx_v, new.joints[vids[id(lc)]].idx_v + 6)
          for lc in links]
     )  # fmt: skip
     q_home = pin.neutral(new)
@@ -327,16 +394,82 @@ def _extended(
         visual_model=_geometry(robot.visual_model, jmap),
         collision_model=_geometry(robot.collision_model, jmap),
         constraint_models=cms,
-        closure_set=ClosureSet(new, list(cms)),
+        constraints=_constraints(robot.constraints, new, jmap, carrier),
         actuated_joints=np.array([jmap[int(j)] for j in robot.actuated_joints], dtype=int),
         actuated_q=q_index[np.asarray(robot.actuated_q, dtype=int)],
         actuated_v=v_index[np.asarray(robot.actuated_v, dtype=int)],
         passive_v=np.setdiff1d(np.arange(new.nv), v_index[np.asarray(robot.actuated_v)]),
         q_home=q_home,
         params=None,
-        passive=_passive(robot, new, q_index, v_index, carrier, links, defl),
+        passive=_passive(
+            robot, new, q_index, v_index, _spring_carrier(carrier, pieces), links, defl
+        ),
     )
     return ext, q_index, v_index, defl
+
+
+def _whole(lc: LinkCompliance) -> LinkCompliance:
+    """The whole beam a piece belongs to (for the split of its mass)."""
+    if lc.beam is None or lc.segment == 0 and lc.end == lc.beam_length:
+        return lc
+    return dataclasses.replace(lc, placement=lc.beam_placement, length=lc.beam_length)
+
+
+def _spring_carrier(
+    carrier: dict[int, tuple[int, pin.SE3]],
+    pieces: dict[int, list[tuple[LinkCompliance, int]]],
+) -> Callable[[int, pin.SE3], tuple[int, pin.SE3]]:
+    """Where a spring end at ``placement`` on joint ``j``'s body hangs on the extended tree.
+
+    On a beam cut in pieces, the section nearest the point along the beam (the springs are
+    where the cuts are); elsewhere what carries the body's tip (or the body itself).
+    """
+
+    def place(j: int, placement: pin.SE3) -> tuple[int, pin.SE3]:
+        chain = pieces.get(j)
+        if not chain or len(chain) == 1:
+            return carrier[j]
+        lc0 = chain[0][0]
+        assert lc0.beam is not None
+        root, tip = lc0.beam
+        z = (tip - root) / np.linalg.norm(tip - root)
+        s = float((np.asarray(placement.translation) - root) @ z)
+        lc, vid = min(chain, key=lambda item: abs(item[0].end - s))
+        return vid, lc.placement.inverse()
+
+    return place
+
+
+def _constraints(
+    cs: ConstraintSet,
+    new: pin.Model,
+    jmap: dict[int, int],
+    carrier: dict[int, tuple[int, pin.SE3]],
+) -> ConstraintSet:
+    """The constraint layer on the extended tree: the same closures and couplings.
+
+    A closure's frames ride on what the link's tip carries (``carrier``); a coupling relates
+    the same tree joints (``jmap``). The virtual joints are spatial: a planar closure whose loop
+    holds a compliant link keeps its out-of-plane rows (the link deforms out of the plane).
+    """
+    closures = []
+    for c in cs.closure_specs:
+        j1, o1 = carrier[c.joint1]
+        j2, o2 = carrier[c.joint2]
+        closures.append(
+            dataclasses.replace(
+                c, joint1=j1, placement1=o1 * c.placement1, joint2=j2, placement2=o2 * c.placement2
+            )
+        )
+    couplings: list[Coupling] = []
+    for k in cs.coupling_specs:
+        if isinstance(k, LinearCoupling):
+            couplings.append(dataclasses.replace(k, terms=tuple((jmap[j], a) for j, a in k.terms)))
+        else:
+            src = None if k.source is None else jmap[k.source]
+            couplings.append(dataclasses.replace(k, joint=jmap[k.joint], source=src))
+    reduce = cs.closure_rows.reduce if cs.closure_rows is not None else True
+    return ConstraintSet(new, closures, couplings, reduce=reduce)
 
 
 def _split(
@@ -401,7 +534,7 @@ def _passive(
     new: pin.Model,
     q_index: np.ndarray,
     v_index: np.ndarray,
-    carrier: dict[int, tuple[int, pin.SE3]],
+    carrier: Callable[[int, pin.SE3], tuple[int, pin.SE3]],
     links: Sequence[LinkCompliance],
     defl: np.ndarray,
 ) -> PassiveForces:
@@ -418,8 +551,8 @@ def _passive(
         rest[q_index] = P.rest
         smoothing = P.smoothing
         for s in P.springs:
-            j1, o1 = carrier[s.joint1]
-            j2, o2 = carrier[s.joint2]
+            j1, o1 = carrier(s.joint1, s.placement1)
+            j2, o2 = carrier(s.joint2, s.placement2)
             springs.append(
                 dataclasses.replace(
                     s, joint1=j1, placement1=o1 * s.placement1, joint2=j2,

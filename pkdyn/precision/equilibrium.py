@@ -104,10 +104,10 @@ def tangent_along(
 
 def _project(em: ElasticModel, q: np.ndarray) -> np.ndarray:
     r = em.robot
-    if r.closure_set.nc == 0:
+    if r.constraints.n == 0:
         return q
     free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
-    cs, data = r.closure_set, r.data
+    cs, data = r.constraints, r.data
     sol = solve_lm(
         r.model,
         q,

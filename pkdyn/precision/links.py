@@ -2,16 +2,20 @@
 
 A link is modelled as a **beam** when its collision (else visual) geometry holds a slender
 cylinder or capsule (length at least twice its diameter) and a material is known for it: the
-robot's ``<pkdyn:material>``, the ``material`` argument, or the link's own
-``<pkdyn:compliance material>`` (with an optional ``inner_radius``: a tube). The longest such
-shape is the beam. Its **root** is the end at the link's parent joint (the end nearer that
+link's own ``<pkdyn:compliance material>`` (with an optional ``inner_radius``: a tube), else
+the robot's ``<pkdyn:material>``, else the ``material`` argument (``--material``), which thus
+applies only to the links the description leaves undescribed (:attr:`LinkCompliance.origin`
+says where each link's material came from). The longest such shape is the beam. Its **root**
+is the end at the link's parent joint (the end nearer that
 joint's origin; for a link hung on a prismatic, planar or floating joint, which has no location,
 the end farther from what the link carries); its **tip** the other end. Everything the link
 carries (child joints, closure frames, the platform frame, spring ends) is taken as attached at
 the tip: the beam's compliance is that of a cantilever clamped at the root, expressed at its
 elastic centre (the mid-point), where it is diagonal (:func:`pkdyn.precision.beam.
-centre_compliance`). A link's mass stays with its root (the lumped-mass convention of the
-virtual-joint method).
+centre_compliance`). A link weighs what the URDF's ``<inertial>`` says, unless the description
+asks ``mass="from-material"`` (on ``<pkdyn:material>`` or the link's ``<pkdyn:compliance>``):
+then its mass and inertia are those of its beam (section, length, density), replacing the URDF's
+in the precision models (:attr:`LinkCompliance.inertia`).
 
 A ``<pkdyn:compliance link compliance="c1 .. c6" xyz rpy>`` gives the diagonal compliance
 directly, in a frame of the link; ``rigid="true"`` keeps a link rigid.
@@ -55,6 +59,16 @@ class LinkCompliance:
         length: Beam length [m] (``None`` for a described compliance).
         section: Beam cross-section (``None`` for a described compliance).
         material: Beam material (``None`` for a described compliance).
+        origin: Where the material (or compliance) came from: ``description`` (the link's
+            element or the robot's ``<pkdyn:material>``) or ``argument`` (``material=``).
+        mass_from_material: The link weighs what its beam's section and density say.
+        segment: Index of this piece of the beam, from its root (a beam is cut where springs
+            attach to it: one virtual spring per piece, in series).
+        beam: The whole beam, ``(root, tip)`` in the joint frame [m] (``None`` for a described
+            compliance).
+        end: Distance from the beam's root to this piece's far end [m].
+        sliding: The beam is a rod sliding out of its parent's beam (a prismatic leg): its
+            length is that outside the parent, at the configuration the model was built for.
 
     """
 
@@ -66,6 +80,31 @@ class LinkCompliance:
     length: float | None = None
     section: Section | None = None
     material: Material | None = None
+    origin: str = "description"
+    mass_from_material: bool = False
+    segment: int = 0
+    beam: tuple[np.ndarray, np.ndarray] | None = None
+    end: float = 0.0
+    sliding: bool = False
+
+    @property
+    def beam_length(self) -> float | None:
+        """Length of the whole beam [m] (``None`` for a described compliance)."""
+        return None if self.beam is None else float(np.linalg.norm(self.beam[1] - self.beam[0]))
+
+    @property
+    def beam_placement(self) -> pin.SE3:
+        """Mid-point frame of the whole beam in the joint frame, ``z`` from root to tip."""
+        return self.placement if self.beam is None else _beam_frame(*self.beam)
+
+    @property
+    def inertia(self) -> pin.Inertia | None:
+        """The whole beam's inertia in the joint frame (``mass_from_material``), else ``None``."""
+        L = self.beam_length
+        if not (self.mass_from_material and self.section is not None and L):
+            return None
+        assert self.material is not None
+        return self.beam_placement.act(self.section.inertia(L, self.material))
 
     @property
     def stiffness(self) -> np.ndarray:
@@ -118,8 +157,12 @@ def _attachments(robot: Robot, joint: int) -> list[np.ndarray]:
         for c in range(1, model.njoints)
         if model.parents[c] == joint
     ]
-    for _, j1, M1, j2, M2 in robot.closure_set.items:
-        pts += [np.array(M.translation) for j, M in ((j1, M1), (j2, M2)) if j == joint]
+    for cm in robot.constraint_models:  # (a hinge's two points, as built)
+        pts += [
+            np.array(M.translation)
+            for j, M in ((cm.joint1_id, cm.joint1_placement), (cm.joint2_id, cm.joint2_placement))
+            if j == joint
+        ]
     if robot.platform_frame is not None:
         f = model.frames[robot.platform_frame]
         if f.parentJoint == joint:
@@ -166,28 +209,51 @@ def _body_joint(robot: Robot, link: str) -> int:
     raise InvalidInputError("link", f"{robot.name} has no link '{link}'")
 
 
+def _no_beam(robot: Robot, what: str) -> InvalidInputError:
+    """The error when a material is given but no link has a cylinder to read a beam from."""
+    if not robot.collision_model.ngeoms + robot.visual_model.ngeoms:
+        missing = (
+            "has no collision or visual geometry (loaded without it: pkdyn.load(..., "
+            "geometry=True) reads it, as the command line does)"
+        )
+    else:
+        missing = (
+            "has no link whose collision or visual geometry holds a slender cylinder or "
+            f"capsule (length at least {SLENDERNESS:g} diameters) to read a beam from"
+        )
+    return InvalidInputError(
+        what,
+        f"{robot.name} {missing}: give the links cylinders in the URDF, or describe their "
+        "compliance (<pkdyn:compliance link=... compliance=...>), or leave the material out "
+        "(no --material / material=, or --rigid-links: rigid links)",
+    )
+
+
 @public
 def link_compliances(
     robot: Robot,
     material: str | Material | None = None,
     shear: bool = True,
+    q: np.ndarray | None = None,
 ) -> list[LinkCompliance]:
     """The compliant links of a robot (see the module docstring).
 
     Args:
         robot: The robot, loaded with its geometry (``pkdyn.load(..., geometry=True)``, the
             default) for beams.
-        material: Material of every slender link not described otherwise (a preset name or a
-            :class:`~pkdyn.precision.material.Material`); ``None``: the description's
-            ``<pkdyn:material>``, if any.
+        material: Material of the slender links the description leaves undescribed (a preset
+            name or a :class:`~pkdyn.precision.material.Material`); ``None``: the description's
+            materials only.
         shear: Include Timoshenko's shear deflection in the beams.
+        q: Configuration (nq,) of the sliding rods' lengths (default: home).
 
     Returns:
-        One entry per compliant link, in joint order.
+        One entry per compliant link (per piece of a beam cut by springs), in joint order.
 
     Raises:
-        InvalidInputError: A material is named but the robot has no geometry to read beams
-            from, a described link is the base, or a bad material.
+        InvalidInputError: A material is given but the robot has no slender cylinder to read a
+            beam from (the message says what is missing and how to fix it), a described link
+            is the base, or a bad material.
 
     """
     desc = robot.description
@@ -199,19 +265,17 @@ def link_compliances(
                 f"pkdyn:compliance link '{given.link}'", "the base does not move: it cannot deform"
             )
         specs[j] = given
-    default = as_material(material) if material is not None else None
-    if default is None and desc.material is not None:
-        default = as_material(desc.material)
-    beams_wanted = default is not None or any(
-        s.material is not None or s.inner_radius > 0.0 for s in specs.values()
+    argument = as_material(material) if material is not None else None
+    described = as_material(desc.material) if desc.material is not None else None
+    robot_mass = bool(desc.material is not None and desc.material.mass_from_material)
+    beams_wanted = (
+        argument is not None
+        or described is not None
+        or any(s.material is not None or s.inner_radius > 0.0 for s in specs.values())
     )
     rods = _rods(robot) if beams_wanted else {}
-    if beams_wanted and not rods and not robot.collision_model.ngeoms + robot.visual_model.ngeoms:
-        raise InvalidInputError(
-            "material",
-            f"{robot.name} was loaded without its geometry: beams are read from the links' "
-            "cylinders (load it with geometry=True)",
-        )
+    if beams_wanted and not rods:
+        raise _no_beam(robot, "material" if argument is not None else "pkdyn:material")
     out: list[LinkCompliance] = []
     for j in range(1, robot.model.njoints):
         spec = specs.get(j)
@@ -223,15 +287,19 @@ def link_compliances(
                 LinkCompliance(name, j, spec.frame, np.array(spec.compliance, float), "description")
             )
             continue
-        mat = default
+        mat, origin = (
+            (described, "description") if described is not None else (argument, "argument")
+        )
         if spec is not None and spec.material is not None:
-            mat = as_material(spec.material)
+            mat, origin = as_material(spec.material), "description"
+        elif spec is not None and spec.inner_radius > 0.0 and described is not None:
+            origin = "description"
         if mat is None:
             if spec is not None:
                 raise InvalidInputError(
                     f"pkdyn:compliance link '{spec.link}'",
-                    "no material for its beam: give material=, a <pkdyn:material> or the "
-                    "element's material attribute",
+                    "no material for its beam: give the element a material, the robot a "
+                    "<pkdyn:material>, or --material (material=)",
                 )
             continue
         rod = rods.get(j)
@@ -246,6 +314,12 @@ def link_compliances(
         ends = _root_tip(robot, rod)
         if ends is None:
             continue
+        sliding = False
+        mouth = _mouth(robot, rod, rods, robot.q_home if q is None else q)
+        if mouth is not None:  # a rod sliding out of its parent: the part outside deflects
+            ends, sliding = _outside(ends, mouth), True
+            if ends is None:
+                continue
         bore = spec.inner_radius if spec is not None else 0.0
         if bore >= rod.radius:
             raise InvalidInputError(
@@ -253,9 +327,97 @@ def link_compliances(
                 f"{bore:g} m is not smaller than the link's radius {rod.radius:g} m",
             )
         section = Section(rod.radius, bore)
-        c = centre_compliance(rod.length, section, mat, shear)
-        out.append(LinkCompliance(name, j, _beam_frame(*ends), c, "beam", rod.length, section, mat))
+        own_mass = spec.mass_from_material if spec is not None else None
+        mass = robot_mass if own_mass is None else bool(own_mass)
+        root, tip = ends
+        L = float(np.linalg.norm(tip - root))
+        z = (tip - root) / L
+        cuts = [0.0, *_cuts(robot, j, root, z, L), L]
+        for k in range(len(cuts) - 1):
+            a, b = cuts[k], cuts[k + 1]
+            out.append(
+                LinkCompliance(
+                    name,
+                    j,
+                    _beam_frame(root + a * z, root + b * z),
+                    centre_compliance(b - a, section, mat, shear),
+                    "beam",
+                    b - a,
+                    section,
+                    mat,
+                    origin,
+                    mass,
+                    k,
+                    (root, tip),
+                    b,
+                    sliding,
+                )
+            )
     return out
+
+
+_CUT_TOL = 1e-6
+"""Springs attached within this fraction of a beam's length of its ends act at the end."""
+
+
+def _cuts(robot: Robot, joint: int, root: np.ndarray, z: np.ndarray, L: float) -> list[float]:
+    """Distances from the root where springs attach along a beam (strictly inside it)."""
+    if robot.passive is None:
+        return []
+    found: list[float] = []
+    for sp in robot.passive.springs:
+        for j, M in ((sp.joint1, sp.placement1), (sp.joint2, sp.placement2)):
+            if j != joint:
+                continue
+            s = float((np.asarray(M.translation) - root) @ z)
+            if _CUT_TOL * L < s < (1.0 - _CUT_TOL) * L:
+                found.append(s)
+    out: list[float] = []
+    for s in sorted(found):
+        if not out or s - out[-1] > _CUT_TOL * L:
+            out.append(s)
+    return out
+
+
+def _mouth(robot: Robot, rod: _Rod, rods: dict[int, _Rod], q: np.ndarray) -> np.ndarray | None:
+    """Where a rod leaves its parent's beam (rod joint frame) at ``q``, for a prismatic leg.
+
+    A link hung on a prismatic joint, whose beam lies along the joint's axis and whose parent
+    has a beam along the same axis (a cylinder), slides out of it: the point is the parent
+    beam's tip (its mouth); ``None`` for any other link.
+    """
+    model = robot.model
+    jm = model.joints[rod.joint]
+    if not str(jm.shortname()).startswith("JointModelP"):
+        return None
+    parent = rods.get(int(model.parents[rod.joint]))
+    if parent is None:
+        return None
+    ends = _root_tip(robot, parent)
+    if ends is None:
+        return None
+    jd = jm.createData()
+    jm.calc(jd, np.asarray(q, dtype=float))
+    M = model.jointPlacements[rod.joint] * jd.M  # the rod's frame in the parent's
+    axis = np.asarray(jd.S, dtype=float).reshape(6)[:3]
+    d = (rod.ends[1] - rod.ends[0]) / rod.length
+    p = (parent.ends[1] - parent.ends[0]) / parent.length
+    if abs(abs(float(d @ axis)) - 1.0) > 1e-6 or abs(abs(float(p @ M.rotation @ d)) - 1.0) > 1e-6:
+        return None
+    return np.asarray(M.actInv(ends[1]))
+
+
+def _outside(
+    ends: tuple[np.ndarray, np.ndarray], mouth: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The part of a rod ``(root, tip)`` beyond ``mouth`` (projected on its axis), or ``None``."""
+    root, tip = ends
+    L = float(np.linalg.norm(tip - root))
+    z = (tip - root) / L
+    s = float((mouth - root) @ z)
+    if s >= (1.0 - _CUT_TOL) * L:
+        return None  # the rod is inside its parent: it does not bend or stretch alone
+    return (root + max(s, 0.0) * z, tip)
 
 
 def _link_name(robot: Robot, joint: int) -> str:

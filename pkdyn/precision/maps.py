@@ -6,17 +6,21 @@
   spring of their own): the closed forms of :mod:`pkdyn.precision.vectorised`, all poses at once
   (frequencies: the Delta);
 - any other robot, or compliant links: pose by pose, the general inverse geometric model (each
-  pose warm-started from the previous solution) then :func:`pkdyn.precision.stiffness` and
-  :func:`pkdyn.precision.modes.modes` on the virtual-joint model built once.
+  pose warm-started from the previous solution) then the condensation
+  (:func:`translational`) and :func:`pkdyn.precision.modes.modes` on the virtual-joint model
+  built once.
 
 The figures: ``stiffness_min``, the smallest principal translational stiffness [N/m] (forces
 only; the design metric ``stiffness_min``); ``deflection``, the translation of the reference
 point under a tool wrench [m]; ``f1``, the lowest natural frequency [Hz] (metric ``f1_min``).
-NaN marks poses not reached, or singular.
+Each pose is reached, or not; a reached pose where the figure is unbounded or undefined
+(:mod:`pkdyn.precision.validity`) is **singular**, its figures NaN; ``near`` flags poses near a
+serial singularity. Rigid actuators and nothing else compliant along a direction: ``inf``.
 
-:func:`precision_map` maps them over a slice of the translation workspace (a plane through the
-home pose at a fixed orientation), inside the robot's limits (:mod:`pkdyn.workspace`); plots:
-:func:`pkdyn.plotting.plot_precision_map`.
+:func:`precision_map` maps them over a plane of the translation workspace with the map
+convention of :mod:`pkdyn.precision.grid` (``plane``, ``center``, ``extent`` or ``bounds``,
+``samples``; values ``[i_u, i_v]``), inside the robot's limits (:mod:`pkdyn.workspace`); plots:
+:func:`pkdyn.plotting.plot_precision_map` (``result.plot()``).
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -32,20 +37,45 @@ from pkdyn.analysis.kinematics import NearSingularityWarning
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.inputs import is_complex
 from pkdyn.model.arguments import public
-from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
-from pkdyn.precision.condensation import translational
+from pkdyn.precision.condensation import compliance, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
+from pkdyn.precision.grid import (
+    OK,
+    PLANES,
+    SINGULAR,
+    UNREACHABLE,
+    GridMap,
+    map_validity,
+    plane_grid,
+    reach,
+)
 from pkdyn.precision.material import Material
 from pkdyn.precision.modes import modes
 from pkdyn.precision.stiffness import _point, _wrench
-from pkdyn.precision.vectorised import delta_figures, gough_stewart_figures, vectorised
+from pkdyn.precision.validity import PrecisionWarning, stiffness_check
+from pkdyn.precision.vectorised import (
+    VectorisedFigures,
+    delta_figures,
+    gough_stewart_figures,
+    vectorised,
+)
 from pkdyn.progress import progress as progress_bar
+from pkdyn.results import Result, jsonable
 from pkdyn.threads import one_blas_thread
+from pkdyn.units import quantity
 from pkdyn.workspace.limits import REACHABLE
 
-__all__ = ["FIELDS", "MAX_POSES", "PoseFigures", "PrecisionMap", "pose_figures", "precision_map"]
+__all__ = [
+    "FIELDS",
+    "MAX_POSES",
+    "PoseFigures",
+    "PrecisionMap",
+    "pose_figures",
+    "precision_map",
+    "translational",
+]
 
 FIELDS = {
     "stiffness_min": ("N/m", "smallest translational stiffness"),
@@ -63,7 +93,7 @@ MAX_POSES = 4_000_000
 
 
 @dataclass(eq=False)  # numpy fields
-class PoseFigures:
+class PoseFigures(Result):
     """Figures per pose (NaN where not reached or singular).
 
     Attributes:
@@ -72,6 +102,8 @@ class PoseFigures:
         deflection: Translation of the reference point under the wrench (N,) [m].
         f1: Lowest natural frequency (N,) [Hz].
         method: ``closed form`` or ``general``.
+        reached: Reached (N,): ``reached & ~valid`` are the singular poses.
+        near: Evaluated poses near a serial singularity (N,).
 
     """
 
@@ -80,6 +112,44 @@ class PoseFigures:
     deflection: np.ndarray
     f1: np.ndarray
     method: str
+    reached: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    near: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+
+    @property
+    def singular(self) -> np.ndarray:
+        """Reached poses where the figures are unbounded or undefined (N,)."""
+        return np.asarray(self.reached & ~self.valid)
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON values per pose (``null`` where not evaluated) and the counts."""
+        return {
+            "method": self.method,
+            "valid": jsonable(self.valid),
+            "reached": jsonable(self.reached),
+            "near": jsonable(self.near),
+            "stiffness_min": jsonable(self.stiffness_min),
+            "deflection": jsonable(self.deflection),
+            "f1": jsonable(self.f1),
+            "units": {"stiffness_min": "N/m", "deflection": "m", "f1": "Hz"},
+        }
+
+    def table(self) -> str:
+        """Counts and the worst figures over the evaluated poses."""
+        n = self.valid.size
+        lines = [
+            f"{int(self.valid.sum())} of {n} poses evaluated ({self.method}), "
+            f"{int((~self.reached).sum())} not reached, {int(self.singular.sum())} singular, "
+            f"{int(self.near.sum())} near a singularity"
+        ]
+        for name, unit, worst in (
+            ("stiffness_min", "N/m", np.nanmin),
+            ("deflection", "m", np.nanmax),
+            ("f1", "Hz", np.nanmin),
+        ):
+            x = getattr(self, name)
+            if np.isfinite(x).any() or np.isinf(x).any():
+                lines.append(f"  {FIELDS[name][1]}: worst {quantity(float(worst(x)), unit)}")
+        return "\n".join(lines)
 
 
 def _poses(P: np.ndarray, R: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
@@ -161,10 +231,10 @@ def pose_figures(
         k = em.actuator_stiffness
         if np.all(np.isfinite(k)):
             f = gough_stewart_figures(robot, P, R if R is not None else np.eye(3), k, p, w)
-            return PoseFigures(f.valid, f.stiffness_min, f.deflection, f.f1, "closed form")
+            return _closed(f)
     if method != "general" and kind == "delta" and np.all(np.isfinite(em.actuator_stiffness)):
         f = delta_figures(robot, P, em.actuator_stiffness, w, frequency)
-        return PoseFigures(f.valid, f.stiffness_min, f.deflection, f.f1, "closed form")
+        return _closed(f)
     if P.shape[0] > MAX_GENERAL_POSES:
         raise InvalidInputError(
             "P",
@@ -173,6 +243,43 @@ def pose_figures(
             f"most {MAX_GENERAL_POSES} (a coarser grid)",
         )
     return _general(em, P, Rs, p, w, frequency, progress)
+
+
+def _closed(f: VectorisedFigures) -> PoseFigures:
+    n = f.valid.size
+    reached = f.reached if f.reached is not None else np.ones(n, dtype=bool)
+    near = f.near if f.near is not None else np.zeros(n, dtype=bool)
+    return PoseFigures(f.valid, f.stiffness_min, f.deflection, f.f1, "closed form", reached, near)
+
+
+def translational(
+    em: ElasticModel, q: np.ndarray, point: np.ndarray, w: np.ndarray | None
+) -> tuple[float, float, bool]:
+    """Smallest translational stiffness [N/m], deflection [m] and the near flag at ``q``.
+
+    The smallest principal stiffness among the task's translation components (``inf``: rigid),
+    and the translation of the point under ``w`` (``nan`` without ``w``). The lean path of the
+    maps (no input checks): :func:`pkdyn.precision.condensation.reduce`,
+    :func:`~pkdyn.precision.condensation.compliance` and the rule of
+    :mod:`pkdyn.precision.validity`.
+
+    Raises:
+        SingularConfigurationError: The stiffness is undefined (parallel singularity) or
+            unbounded (serial) at ``q``.
+
+    """
+    em = em.at(q)
+    red = reduce(em, em.embed(q), point)
+    C, _ = compliance(em, red)
+    validity, _, _ = stiffness_check(em, red.q, point, C, q)
+    rows = [int(i) for i in em.base.task_rows]
+    t = [i for i in rows if i < 3]
+    if not t:
+        return float("nan"), float("nan"), bool(validity.warnings)
+    top = float(np.linalg.eigvalsh(C[np.ix_(t, t)])[-1])
+    kmin = 1.0 / top if top > 0.0 else float("inf")
+    defl = float(np.linalg.norm((C @ w)[:3])) if w is not None else float("nan")
+    return kmin, defl, bool(validity.warnings)
 
 
 def _general(
@@ -188,75 +295,38 @@ def _general(
     N = P.shape[0]
     kmin, defl, f1 = np.full(N, np.nan), np.full(N, np.nan), np.full(N, np.nan)
     valid = np.zeros(N, dtype=bool)
+    reached = np.zeros(N, dtype=bool)
+    near = np.zeros(N, dtype=bool)
     q_prev = robot.q_home
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NearSingularityWarning)
+        warnings.simplefilter("ignore", PrecisionWarning)
         for i in progress_bar(range(N), "precision", "pose", progress, min_items=200):
-            q = None
-            for start in (q_prev, robot.q_home):
-                try:
-                    target = pin.SE3(R[i], P[i])
-                    q = inverse_geometry(robot, target, q_init=start, check_limits=False).q
-                    break
-                except PkdynError:
-                    continue
+            q = reach(robot, pin.SE3(R[i], P[i]), (q_prev, robot.q_home), check_limits=False)
             if q is None:
                 continue
+            reached[i] = True
             q_prev = q
             try:
-                kmin[i], defl[i] = translational(em, q, point, w)
+                kmin[i], defl[i], near[i] = translational(em, q, point, w)
                 if frequency:
                     f1[i] = modes(em, q, point=point).f1
             except PkdynError:
                 kmin[i] = defl[i] = np.nan
+                near[i] = False
                 continue
             valid[i] = True
-    return PoseFigures(valid, kmin, defl, f1, "general")
+    return PoseFigures(valid, kmin, defl, f1, "general", reached, near)
 
 
 @dataclass(eq=False)  # numpy fields
-class PrecisionMap:
-    """Figures over a plane of the translation workspace.
+class PrecisionMap(GridMap):
+    """Stiffness, deflection and lowest frequency over a plane (:class:`GridMap`).
 
-    Attributes:
-        robot: Robot name.
-        axes: The two coordinates of the plane (``("x", "y")``...).
-        u: Grid values of the first axis (nu,) [m].
-        v: Grid values of the second axis (nv,) [m].
-        fixed: The third coordinate [m] and the orientation (roll, pitch, yaw) [rad].
-        reachable: Inside the robot's limits (nv, nu).
-        values: Field name -> values (nv, nu), NaN outside or where singular.
-        method: How the figures were evaluated.
-        options: The stiffness options (for titles and reports).
-
+    Values ``[i_u, i_v]`` (the map convention of :mod:`pkdyn.precision.grid`); fields
+    ``stiffness_min`` [N/m], ``deflection`` [m] (with a wrench), ``f1`` [Hz] (with
+    ``frequency``).
     """
-
-    robot: str
-    axes: tuple[str, str]
-    u: np.ndarray
-    v: np.ndarray
-    fixed: dict[str, float]
-    reachable: np.ndarray
-    values: dict[str, np.ndarray]
-    method: str
-    options: dict[str, object] = field(default_factory=dict)
-
-    def extreme(self, name: str) -> float:
-        """Worst value of a field over the map (``nan`` when nothing was evaluated).
-
-        The smallest stiffness or frequency, the largest deflection.
-        """
-        if not isinstance(name, str) or name not in self.values:
-            raise InvalidInputError(
-                "name", f"{name!r:.40} is not a field of the map ({', '.join(self.values)})"
-            )
-        x = self.values[name]
-        if not np.isfinite(x).any():
-            return float("nan")
-        return float(np.nanmax(x) if name == "deflection" else np.nanmin(x))
-
-
-_AXES = {"x": 0, "y": 1, "z": 2}
 
 
 @one_blas_thread
@@ -264,12 +334,13 @@ _AXES = {"x": 0, "y": 1, "z": 2}
 def precision_map(
     robot: Robot,
     plane: str = "xy",
-    value: float | None = None,
+    *,
+    center: Sequence[float] | np.ndarray | None = None,
+    extent: float | None = None,
     samples: int = 31,
     bounds: Sequence[float] | None = None,
     rpy: Sequence[float] = (0.0, 0.0, 0.0),
     actuator_stiffness: float | Sequence[float] | np.ndarray | None = None,
-    *,
     material: str | Material | None = None,
     links: bool = True,
     point: Sequence[float] | np.ndarray | None = None,
@@ -278,18 +349,21 @@ def precision_map(
     limits: Sequence[str] = ("stroke", "joint"),
     method: str = "auto",
     progress: bool | None = None,
+    value: float | None = None,
 ) -> PrecisionMap:
     """Stiffness (and deflection, lowest frequency) over a plane of the translation workspace.
 
     Args:
         robot: The robot.
-        plane: Two of ``x``, ``y``, ``z`` (``xy``: a horizontal slice).
-        value: The third coordinate of the plane [m] (default: the home pose's).
-        samples: Grid samples per axis.
-        bounds: ``(u_min, u_max, v_min, v_max)`` [m] (default: the workspace's box).
+        plane: ``xy``, ``xz`` or ``yz`` (:mod:`pkdyn.precision.grid`).
+        center: A position of the plane [m] (default: the home pose's).
+        extent: Half-width of the grid about ``center`` [m].
+        samples: Grid points per axis.
+        bounds: ``(u_min, u_max, v_min, v_max)`` [m] instead of ``extent`` (neither: the
+            workspace's box).
         rpy: Platform orientation [rad] (roll, pitch, yaw; ignored by a Delta).
         actuator_stiffness: Joint-side stiffness [N m/rad or N/m]; ``None``: described.
-        material: Material of the slender links.
+        material: Material of the undescribed slender links.
         links: Model the links' compliance.
         point: Reference point, platform frame [m].
         wrench: Tool wrench for the ``deflection`` field (6 values or the task components).
@@ -297,48 +371,39 @@ def precision_map(
         limits: Limit kinds a pose must respect to be mapped (``reach`` always).
         method: ``auto``, ``closed`` or ``general`` (:func:`pose_figures`).
         progress: Progress bar of the pose-by-pose path.
+        value: Deprecated: the third coordinate of the plane [m] (give ``center``).
 
     Returns:
         The map.
 
     Raises:
-        InvalidInputError: A bad plane, bounds, sample count or option.
+        InvalidInputError: A bad plane, centre, extent, bounds, sample count or option.
 
     """
+    from pkdyn.inputs import vector as checked_vector
     from pkdyn.workspace.translation import evaluator_for
 
-    if (
-        not isinstance(plane, str)
-        or len(plane) != 2
-        or any(c not in _AXES for c in plane)
-        or plane[0] == plane[1]
-    ):
-        raise InvalidInputError("plane", f"'{plane}': two of x, y, z, e.g. xy")
-    from pkdyn.inputs import count, vector
-
-    samples = count("samples", samples, 2, 2001)
-    if value is not None:
-        from pkdyn.inputs import real
-
-        value = real("value", value, "m", bound=100.0 * robot.length_scale)
     R = pin.rpy.rpyToMatrix(*as_finite("rpy", rpy, 3))
-    iu, iv = _AXES[plane[0]], _AXES[plane[1]]
-    iw = 3 - iu - iv
-    home = robot.platform_placement(robot.q_home).translation
+    if value is not None:
+        warnings.warn(
+            "precision_map(value=...) is deprecated: give center=[x, y, z] (the map convention "
+            "of pkdyn.precision.grid)",
+            DeprecationWarning,
+            stacklevel=3,
+        )
+        v = float(checked_vector("value", value, 1, "m", bound=100.0 * robot.length_scale)[0])
+        c = (
+            robot.platform_placement(robot.q_home).translation.copy()
+            if center is None
+            else np.array(checked_vector("center", center, 3, "m"), dtype=float)
+        )
+        if isinstance(plane, str) and plane in PLANES:
+            c[next(i for i, a in enumerate("xyz") if a not in plane)] = v
+        center = c
     ev = evaluator_for(robot, progress=progress)
-    if bounds is None:
-        box = ev.default_bounds(R)
-        b = np.array([box[iu, 0], box[iu, 1], box[iv, 0], box[iv, 1]])
-    else:
-        b = vector("bounds", bounds, 4, "m", bound=100.0 * robot.length_scale)
-        if not (b[0] < b[1] and b[2] < b[3]):
-            raise InvalidInputError("bounds", f"{b.tolist()}: need u_min < u_max, v_min < v_max")
-    u = np.linspace(b[0], b[1], samples)
-    v = np.linspace(b[2], b[3], samples)
-    U, V = np.meshgrid(u, v)
-    P = np.zeros((U.size, 3))
-    P[:, iu], P[:, iv] = U.ravel(), V.ravel()
-    P[:, iw] = home[iw] if value is None else float(value)
+    box = ev.default_bounds(R) if extent is None and bounds is None else None
+    grid = plane_grid(robot, plane, center, extent, samples, bounds, box)
+    P = grid.positions()
     from pkdyn.workspace.limits import check_kinds
 
     codes = ev.violations(P, R, check_kinds(limits), 0.0)
@@ -356,28 +421,40 @@ def precision_map(
         method=method,
         progress=progress,
     )
+    shape = grid.shape
+    status = np.full(P.shape[0], UNREACHABLE, dtype=np.int8)
+    status[np.flatnonzero(inside)[fig.reached]] = SINGULAR
+    status[np.flatnonzero(inside)[fig.valid]] = OK
+    near = np.zeros(P.shape[0], dtype=bool)
+    near[inside] = fig.near & fig.valid
     values = {}
     for name in ("stiffness_min", "deflection", "f1"):
         if name == "deflection" and wrench is None or name == "f1" and not frequency:
             continue
-        full = np.full(U.size, np.nan)
-        full[inside] = getattr(fig, name)
-        values[name] = full.reshape(U.shape)
-    return PrecisionMap(
+        full = np.full(P.shape[0], np.nan)
+        full[inside] = np.where(fig.valid, getattr(fig, name), np.nan)
+        values[name] = full.reshape(shape)
+    out = PrecisionMap(
         robot=robot.name,
-        axes=(plane[0], plane[1]),
-        u=u,
-        v=v,
-        fixed={"xyz"[iw]: float(P[0, iw]), "roll": rpy[0], "pitch": rpy[1], "yaw": rpy[2]},
-        reachable=inside.reshape(U.shape),
+        grid=grid,
         values=values,
+        status=status.reshape(shape),
+        near=near.reshape(shape),
+        units={k: FIELDS[k][0] for k in values},
+        labels={k: FIELDS[k][1] for k in values},
+        worst={k: ("max" if k == "deflection" else "min") for k in values},
+        orientation=(float(rpy[0]), float(rpy[1]), float(rpy[2])),
         method=fig.method,
         options={
             "actuator_stiffness": None
             if actuator_stiffness is None
-            else np.atleast_1d(actuator_stiffness).tolist(),
+            else np.atleast_1d(np.asarray(actuator_stiffness, dtype=float)).tolist(),
             "material": None if material is None else str(getattr(material, "name", material)),
             "point": None if point is None else list(np.asarray(point, float)),
             "wrench": None if wrench is None else list(np.asarray(wrench, float)),
         },
     )
+    out.validity = map_validity(
+        out, "the figure is unbounded or undefined there", "their figures are steep there"
+    )
+    return out

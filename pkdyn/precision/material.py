@@ -3,6 +3,16 @@
 Presets (:data:`MATERIALS`) are typical handbook values; a description names one
 (``<pkdyn:material name="carbon"/>``) or gives its own constants (``E``, ``G``, ``density``),
 and every function that takes a material accepts a preset name or a :class:`Material`.
+
+``E`` and ``G`` are used as given: ``E`` in traction and bending, ``G`` in torsion and shear.
+A material is **isotropic** when they are tied by a Poisson ratio ``nu = E / (2 G) - 1`` in
+``[0, 0.5]`` (steel 0.30, aluminium 0.35); a fibre tube is not (carbon: ``E / (2 G) - 1 = 11``),
+and no Poisson ratio is derived for it: the beams' shear coefficient then comes from the section
+alone (:meth:`pkdyn.precision.beam.Section.shear_coefficient`).
+
+The density sets a link's mass only where the description asks for it
+(``mass="from-material"``); otherwise a material changes the stiffness only, and the links weigh
+what the URDF's ``<inertial>`` says.
 """
 
 from __future__ import annotations
@@ -47,9 +57,14 @@ class Material:
                 )
 
     @property
-    def poisson(self) -> float:
-        """Poisson's ratio ``E / (2 G) - 1`` of an isotropic material [-]."""
-        return self.E / (2.0 * self.G) - 1.0
+    def isotropic(self) -> bool:
+        """``E / (2 G) - 1`` is a Poisson ratio (in ``[0, 0.5]``): an isotropic material."""
+        return 0.0 <= self.E / (2.0 * self.G) - 1.0 <= 0.5
+
+    @property
+    def poisson(self) -> float | None:
+        """Poisson's ratio ``E / (2 G) - 1`` of an isotropic material [-] (``None``: not one)."""
+        return self.E / (2.0 * self.G) - 1.0 if self.isotropic else None
 
 
 STEEL = Material("steel", E=210e9, G=81e9, density=7850.0)

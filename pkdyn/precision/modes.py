@@ -23,22 +23,25 @@ motions (reference point and rotation, world axes).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 import scipy.linalg
 
-from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.exceptions import InvalidInputError, PkdynError, SingularConfigurationError
 from pkdyn.model.arguments import public
-from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.precision._format import chop
 from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
-from pkdyn.precision.elastic import ElasticModel, elastic_model
+from pkdyn.precision.elastic import ElasticModel
 from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
-from pkdyn.precision.stiffness import _check_assembled, _point, _wrench, check_compliant
+from pkdyn.precision.stiffness import nothing_compliant, prepared
+from pkdyn.precision.validity import Flagged, Validity, stiffness_check
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity
 from solvers import numerics, solve_lm
 
 __all__ = ["Modes", "mass_matrix", "mode_trajectory", "modes", "modes_json"]
@@ -50,13 +53,13 @@ _ZERO_FREQ = 1e-10
 
 
 @dataclass(eq=False)  # numpy fields
-class Modes:
+class Modes(Flagged, Result):
     """Natural frequencies and mode shapes (see the module docstring).
 
     Attributes:
         q: Configuration (nq,) of the equilibrium (link deflections dropped).
         q_elastic: Extended configuration of the equilibrium (the elastic model's robot).
-        frequencies: Natural frequencies (n,) [Hz], ascending.
+        frequencies: Natural frequencies (n,) [Hz], ascending (none when the robot is rigid).
         shapes: Mode shapes in the extended velocity coordinates (n, nv_ext), mass-normalised.
         joints: Joint motions of each mode (n, nv) (the robot's velocity coordinates).
         deflections: Each compliant link's deflection per mode (n, n_links, 6) [m, rad].
@@ -64,6 +67,12 @@ class Modes:
         internal: Internal mobilities without stiffness (not modes).
         condensed: Directions without mass condensed out statically.
         point: Reference point, platform frame [m].
+        rigid: Every actuator rigid and nothing else compliant: no mode (infinite frequencies).
+        validity: ``valid`` and ``warnings`` (:mod:`pkdyn.precision.validity`).
+        robot: The robot's name.
+        links: Names of the compliant links.
+        count: Modes :meth:`to_json` and :meth:`table` report (``None``: all).
+        elastic: The elastic model the modes were computed on (at their configuration).
 
     """
 
@@ -77,36 +86,75 @@ class Modes:
     internal: int
     condensed: int
     point: np.ndarray
+    rigid: bool = False
+    validity: Validity = field(default_factory=Validity)
+    robot: str = ""
+    links: tuple[str, ...] = ()
+    count: int | None = None
+    elastic: ElasticModel | None = field(default=None, repr=False)
 
     @property
     def f1(self) -> float:
-        """Lowest natural frequency [Hz]."""
-        return float(self.frequencies[0])
+        """Lowest natural frequency [Hz] (``inf`` for a rigid robot)."""
+        return float(self.frequencies[0]) if self.frequencies.size else float("inf")
+
+    def _shown(self, count: int | None) -> int:
+        n = self.frequencies.size
+        c = self.count if count is None else count
+        return n if c is None else min(int(c), n)
 
     def to_json(self, count: int | None = None) -> dict[str, Any]:
-        """JSON-ready dict: ``frequencies`` [Hz], ``platform`` motions, ``internal_mobilities``.
+        """JSON values: ``frequencies`` [Hz], ``platform`` motions, ``internal_mobilities``...
 
         Args:
-            count: Report the lowest ``count`` modes (default: all).
+            count: Report the lowest ``count`` modes (default: :attr:`count`, else all).
 
         """
-        from pkdyn.inputs import count as count_
-
-        n = self.frequencies.size
         if count is not None:
-            n = min(count_("count", count, 1), n)
+            from pkdyn.inputs import count as count_
+
+            count = count_("count", count, 1)
+        n = self._shown(count)
         unit = np.linalg.norm(self.platform[:n], axis=1, keepdims=True)
         return {
-            "frequencies": [float(f) for f in self.frequencies[:n]],
-            "platform": [
-                [float(x) for x in row] for row in self.platform[:n] / np.maximum(unit, 1e-300)
-            ],
+            "robot": self.robot,
+            "frequencies": jsonable(self.frequencies[:n]),
+            "platform": jsonable(self.platform[:n] / np.maximum(unit, 1e-300)),
             "internal_mobilities": self.internal,
             "modes": int(self.frequencies.size),
-            "point": [float(x) for x in self.point],
+            "point": jsonable(self.point),
+            "rigid": self.rigid,
+            **self.validity.to_json(),
+            "links": list(self.links),
             "convention": "frequencies ascending [Hz]; platform: direction of each mode's "
             "platform motion [translation of the point, rotation], world axes, unit norm",
         }
+
+    def table(self, count: int | None = None) -> str:
+        """The frequencies with their units, what each mode moves, the flags."""
+        n = self._shown(count)
+        lines = [f"natural frequencies of {self.robot or 'the robot'}"]
+        if self.rigid:
+            lines.append(
+                "rigid: every actuator is held rigidly (inf) and nothing else is compliant: "
+                "no vibration mode (infinite frequencies)"
+            )
+        L = self.elastic.base.length_scale if self.elastic is not None else 1.0
+        for k in range(n):
+            P = chop(self.platform[k], float(np.abs(self.platform[k]).max()) / L)
+            lines.append(
+                f"  mode {k + 1}: {quantity(self.frequencies[k], 'Hz')}, platform moves "
+                f"{quantity(float(np.linalg.norm(P[:3])), 'm')} and turns "
+                f"{quantity(float(np.linalg.norm(P[3:])), 'rad')} per unit modal amplitude"
+            )
+        if n < self.frequencies.size:
+            lines.append(f"  ({self.frequencies.size - n} more modes up to "
+                         f"{quantity(self.frequencies[-1], 'Hz')})")  # fmt: skip
+        if self.internal:
+            lines.append(f"internal mobilities without stiffness (not modes): {self.internal}")
+        if self.links:
+            lines.append(f"compliant links: {', '.join(self.links)}")
+        return "\n".join(lines + self.validity.lines())
 
 
 def mass_matrix(robot: Robot, q: np.ndarray) -> np.ndarray:
@@ -146,6 +194,7 @@ def modes(
     point: Sequence[float] | np.ndarray | None = None,
     wrench: Sequence[float] | np.ndarray | None = None,
     gravity: bool = False,
+    shear: bool = True,
 ) -> Modes:
     """Natural frequencies [Hz] and mode shapes of a robot about an equilibrium.
 
@@ -162,6 +211,7 @@ def modes(
         wrench: A static wrench on the platform (6, world axes, moment about the point): the
             vibrations are about the loaded equilibrium, geometric terms included.
         gravity: The weight is part of the load (equilibrium and geometric terms).
+        shear: Include the beams' shear deflection (Timoshenko; ``False``: Euler-Bernoulli).
 
     Returns:
         The modes.
@@ -172,24 +222,14 @@ def modes(
         PkdynError: No elastic mode at all.
 
     """
-    from pkdyn.inputs import flag, instance
+    from pkdyn.inputs import flag
 
-    instance("robot", robot, (Robot, ElasticModel), "a Robot (pkdyn.load) or an ElasticModel")
-    gravity, links = flag("gravity", gravity), flag("links", links)
-    base = robot.base if isinstance(robot, ElasticModel) else robot
-    if base.platform_frame is None:
-        raise InvalidInputError("robot", f"{base.name} declares no platform frame")
-    qq = as_finite("q", q, base.nq)
-    _check_assembled(base, qq)
-    p = _point(point, base)
-    w = _wrench(base, wrench)
-    em = (
-        robot
-        if isinstance(robot, ElasticModel)
-        else elastic_model(robot, actuator_stiffness, material, links)
-    )
-    check_compliant(em)
+    gravity = flag("gravity", gravity)
+    em, qq, p, w = prepared(robot, q, actuator_stiffness, material, links, shear, point, wrench)
+    base = em.base
     q_ext = em.embed(qq)
+    if nothing_compliant(em):
+        return _rigid_modes(em, qq, q_ext, p)
     if w is None and not gravity:
         red = reduce(em, q_ext, p)
     else:
@@ -202,7 +242,8 @@ def modes(
             return tangent_along(em, eq.q, eq.lambdas, qa_rest, p, load, gravity, N)
 
         red = reduce(em, q_ext, p, tangent)
-    _, internal = compliance(em, red)  # raises when the platform moves without stiffness
+    C6, internal = compliance(em, red)  # raises when the platform moves without stiffness
+    validity = _validity(em, red, C6, qq, p)
     lam, X, condensed = _eigen(red, mass_matrix(em.robot, q_ext))
     elastic = ~negligible(lam, max(_ZERO_FREQ, red.free_tol)) & (lam > 0.0)
     if not elastic.any():
@@ -210,6 +251,7 @@ def modes(
     lam, X = lam[elastic], X[:, elastic]
     free = int((~elastic).sum())
     U = (red.N @ X).T  # (n, nv_ext)
+    validity.warn(stacklevel=3)
     return Modes(
         q=em.restrict(q_ext),
         q_elastic=q_ext,
@@ -221,11 +263,53 @@ def modes(
         internal=max(internal, free),
         condensed=condensed,
         point=p,
+        validity=validity,
+        robot=base.name,
+        links=tuple(dict.fromkeys(lc.link for lc in em.links)),
+        elastic=em,
+    )
+
+
+def _validity(
+    em: ElasticModel, red: Reduced, C6: np.ndarray, q: np.ndarray, point: np.ndarray
+) -> Validity:
+    """Not valid where the stiffness is unbounded: the platform does not move in the modes."""
+    try:
+        validity, _, _ = stiffness_check(em, red.q, point, C6, q)
+    except SingularConfigurationError as err:
+        return Validity(
+            False,
+            (
+                f"{err}; the modes are the mechanism's own, the platform does not move in them "
+                "to first order",
+            ),
+        )
+    return validity
+
+
+def _rigid_modes(em: ElasticModel, q: np.ndarray, q_ext: np.ndarray, point: np.ndarray) -> Modes:
+    """No mode: every actuator rigid and nothing compliant (the platform must not move)."""
+    compliance(em, reduce(em, q_ext, point))  # (a parallel singularity is still refused)
+    nv = em.robot.nv
+    return Modes(
+        q=q,
+        q_elastic=q_ext,
+        frequencies=np.zeros(0),
+        shapes=np.zeros((0, nv)),
+        joints=np.zeros((0, em.base.nv)),
+        deflections=np.zeros((0, len(em.links), 6)),
+        platform=np.zeros((0, 6)),
+        internal=0,
+        condensed=0,
+        point=point,
+        rigid=True,
+        robot=em.base.name,
+        elastic=em,
     )
 
 
 def modes_json(robot: Robot, q: np.ndarray, count: int | None = None, **kwargs: Any) -> dict:
-    """JSON-ready :func:`modes` for the CLI (keys of :meth:`Modes.to_json`)."""
+    """JSON-ready :func:`modes` (keys of :meth:`Modes.to_json`)."""
     return modes(robot, q, **kwargs).to_json(count)
 
 
@@ -270,6 +354,8 @@ def mode_trajectory(
     samples = count("samples", samples, 2, 10_000)
     if amplitude is not None:
         amplitude = positive("amplitude", amplitude, "m")
+    if result.elastic is not None and result.elastic.robot.nq == em.robot.nq:
+        em = result.elastic  # (the model at the modes' configuration)
     r = em.robot
     q0 = result.q_elastic
     u = result.shapes[index]
@@ -280,10 +366,10 @@ def mode_trajectory(
     t = np.linspace(0.0, cycles * period, int(cycles * samples) + 1)
     Q = np.empty((t.size, r.nq))
     free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
-    cs, data = r.closure_set, r.data
+    cs, data = r.constraints, r.data
     for i, ti in enumerate(t):
         qi = pin.integrate(r.model, q0, a * np.sin(2.0 * np.pi * ti / period) * u)
-        if cs.nc:
+        if cs.n:
             qi = solve_lm(
                 r.model,
                 qi,

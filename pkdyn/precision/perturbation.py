@@ -19,10 +19,10 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.model.assembly import forward_geometry
+from pkdyn.model.build import constraint_set
 from pkdyn.model.description import FrameRef
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel, Placement, local_placement
-from solvers import ClosureSet
 
 __all__ = ["Perturbed", "perturbed", "with_placements"]
 
@@ -131,16 +131,15 @@ def _rebuilt(
             ref.append(fr)
         new_closures.append(dataclasses.replace(c, frame1=ref[0], frame2=ref[1]))
     desc = dataclasses.replace(desc, closures=tuple(new_closures), platform=platform)
-    # the constraint layer's other rows (joint couplings) depend on no placement: kept
-    extra = tuple(getattr(robot.closure_set, "couplings", ()))
-    closure_set = ClosureSet(model, list(cms), *((extra,) if extra else ()))
+    # the constraint layer of the perturbed description (couplings depend on no placement)
+    constraints = constraint_set(model, desc.closures, desc.couplings, robot.name)
     out = dataclasses.replace(
         robot,
         model=model,
         data=model.createData(),
         description=desc,
         constraint_models=cms,
-        closure_set=closure_set,
+        constraints=constraints,
         params=None,
     )
     out.q_home = forward_geometry(

@@ -10,9 +10,11 @@ of the platform in its own frame [rad] (``log3(R0^T R)``).
 
 **Placement errors act as twists.** An error ``xi`` of a placement ``M`` (``M exp(xi)``) moves
 every body downstream of it (a joint's subtree; for a closure frame or the platform, that frame
-alone) by the world twist ``V = Ad(oF) xi``, ``oF`` the world placement of the placed frame. A
-point ``p`` on a moved body moves by ``v + w x p``, a frame ``R`` turns by ``R^T w`` in its axes.
-The closure residuals ``c(q, p)`` (:class:`solvers.ClosureSet`: points ``p1 - p2``, welds
+alone) by the world twist ``V = Ad(oF) xi``, ``oF`` the world placement of the placed frame
+(for the joint placements, Pinocchio's kinematic regressor ``pin.computeJointKinematicRegressor``
+gives these twists for every joint at once). A point ``p`` on a moved body moves by
+``v + w x p``, a frame ``R`` turns by ``R^T w`` in its axes.
+The closure residuals ``c(q, p)`` (:class:`solvers.ConstraintSet`: points ``p1 - p2``, welds
 ``log6(c1Mc2)``) and the platform pose ``x(q, p)`` then change at fixed ``q`` by ``C dp`` and
 ``X dp``. Gains change the actuated coordinates, ``dqa = diag(qa) G dp``.
 
@@ -22,13 +24,17 @@ mobilities, like the spin of a Delta's bars, stay still), so that
 
     dx = J dqa + K dp,   J = Jx_a - Jx_p Jc_p^+ Jc_a,   K = X + J diag(qa) G - Jx_p Jc_p^+ C
 
-with ``Jc`` the closure Jacobian of the robot's constraint layer (``robot.closure_set``: any
-scalar rows it holds besides the rigid closures, e.g. joint couplings, take part in the
-elimination; they depend on no placement) and ``Jx`` the platform Jacobian. ``J`` is the direct
+with ``Jc`` the Jacobian of the robot's constraint layer (``robot.constraints``: the closures'
+rows, then the joint couplings', which take part in the elimination and depend on no
+placement) and ``Jx`` the platform Jacobian; the elimination is
+:func:`pkdyn.analysis.kinematics.passive_map` (:func:`solvers.numerics.passive_elimination`, with
+the structural rank of ``Jc_p`` found at the robot's home). ``J`` is the direct
 kinematic Jacobian of :func:`pkdyn.analysis.kinematics.kinematic_models` (all six pose rows).
 Placement errors the passive joints cannot absorb (an over-constrained mechanism: the
 out-of-plane errors of a planar five-bar) leave a closure residual at first order, reported in
-:attr:`PoseSensitivity.closure_gap`: the mechanism would not assemble without deforming.
+:attr:`PoseSensitivity.closure_gap` (and, where the passive motion that absorbs a closure
+residual would break a coupling, :attr:`PoseSensitivity.coupling_gap`): the mechanism would not
+assemble without deforming.
 
 The derivative is with respect to the parameters ``p`` of a :class:`ParameterModel` at a robot
 already perturbed by ``at`` (the placement ``M0 exp(xi(at))`` moves by ``exp(Jexp6(xi) dxi)``),
@@ -39,26 +45,21 @@ from __future__ import annotations
 
 import weakref
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
+import scipy.sparse
 
+from pkdyn.analysis.kinematics import passive_map
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel, placement_frames
 from solvers import numerics
 
-__all__ = ["PARALLEL_TOL", "PoseSensitivity", "pose_sensitivity"]
-
-PARALLEL_TOL = 1e-8
-"""Relative singular value of the passive closure Jacobian below which a configuration is
-treated as a parallel singularity (the platform is not determined by the actuators)."""
-
-_RANK_TOL = 1e-10
-"""Relative cut-off of the passive closure Jacobian's structural rank (redundant rows, e.g. the
-out-of-plane rows of a planar hinge, fall to ~1e-16)."""
+__all__ = ["PoseSensitivity", "pose_sensitivity"]
 
 
 @dataclass
@@ -76,6 +77,8 @@ class PoseSensitivity:
             the loops (and couplings) move every joint when a parameter changes at fixed
             actuator readings (the actuated rows: the gains' effect); what encoders on
             passive joints see.
+        coupling_gap: Coupling residual per parameter that no passive motion absorbs (nk,
+            n_par) [rad or m per unit] (``None``: no couplings).
 
     """
 
@@ -85,6 +88,18 @@ class PoseSensitivity:
     K: np.ndarray
     closure_gap: np.ndarray
     joints: np.ndarray | None = None
+    coupling_gap: np.ndarray | None = None
+
+    @property
+    def gap(self) -> np.ndarray:
+        """Every constraint row's unabsorbed residual (n, n_par).
+
+        The closure rows (m or rad), then the coupling rows (rad or m); zero columns for
+        parameters the mechanism accommodates.
+        """
+        if self.coupling_gap is None or not self.coupling_gap.size:
+            return self.closure_gap
+        return np.vstack([self.closure_gap, self.coupling_gap])
 
     @property
     def position(self) -> np.ndarray:
@@ -105,16 +120,20 @@ def _skew(p: np.ndarray) -> np.ndarray:
 class _Plan:
     """What a parameter model moves on a robot structure (indices only, no placements).
 
-    Entities are the two sides of every constraint model, then the platform; ``mask[e, k]``
-    says whether used placement ``k`` moves entity ``e``.
+    Entities are the two sides of every constraint model, then the platform, each on the body
+    of a joint (``joints``); ``own[e]`` is the block of the entity's own placement (its
+    closure's frame, the platform frame) among the used placements, or -1.
     """
 
-    used: np.ndarray  # placement indices with non-zero rows in E or the gains
+    used: np.ndarray  # placement indices with non-zero rows in E
     rows: np.ndarray  # their E rows (6 per placement)
-    mask: np.ndarray  # (n_entities, n_used) float
+    joint_cols: np.ndarray  # (n_used,) regressor column block of each used joint placement
+    own: np.ndarray  # (n_entities,) own placement's block among the used ones, or -1
+    joints: np.ndarray  # (n_entities,) joint carrying each entity
     points: np.ndarray  # (n_points, 2): constraint index, row offset
     welds: np.ndarray  # (n_welds, 2)
     platform: int  # entity index of the platform (-1: none)
+    fixed: dict[str, Any] = field(default_factory=dict)  # filled on first use
 
 
 def _plan(robot: Robot, model: ParameterModel) -> _Plan:
@@ -124,43 +143,45 @@ def _plan(robot: Robot, model: ParameterModel) -> _Plan:
         return plan
     n_pl = len(model.placements)
     used = np.flatnonzero(np.any(model.E.reshape(n_pl, 6, -1) != 0.0, axis=(1, 2)))
-    own: dict[tuple[str, int], int] = {}
+    block = {int(k): i for i, k in enumerate(used)}
+    own_k: dict[tuple[str, int], int] = {}
     platform_k = -1
     for k, pl in enumerate(model.placements):
         if pl.kind == "closure":
-            own[(pl.closure, pl.side)] = k
+            own_k[(pl.closure, pl.side)] = k
         elif pl.kind == "platform":
             platform_k = k
-
-    def moves(joint: int, mine: int) -> np.ndarray:
-        support = set(int(j) for j in robot.model.supports[joint]) if joint > 0 else set()
-        return np.array(
-            [
-                (model.placements[k].kind == "joint" and model.placements[k].joint in support)
-                or k == mine
-                for k in used
-            ],
-            dtype=float,
-        )
-
-    masks: list[np.ndarray] = []
+    joint_cols = np.array(
+        [
+            model.placements[k].joint - 1 if model.placements[k].kind == "joint" else -1
+            for k in used
+        ],
+        dtype=np.int64,
+    )
+    own: list[int] = []
+    joints: list[int] = []
     points: list[tuple[int, int]] = []
     welds: list[tuple[int, int]] = []
-    offsets = robot.closure_set.offsets
+    cr = robot.constraints.closure_rows
+    offsets = cr.base_offsets if cr is not None else np.zeros(1, dtype=int)
     for i, (cm, owner) in enumerate(
         zip(robot.constraint_models, robot.constraint_owner, strict=True)
     ):
-        masks.append(moves(int(cm.joint1_id), own.get((owner, 1), -1)))
-        masks.append(moves(int(cm.joint2_id), own.get((owner, 2), -1)))
+        own.append(block.get(own_k.get((owner, 1), -1), -1))
+        own.append(block.get(own_k.get((owner, 2), -1), -1))
+        joints += [int(cm.joint1_id), int(cm.joint2_id)]
         (points if cm.type == pin.ContactType.CONTACT_3D else welds).append((i, int(offsets[i])))
     platform = -1
     if robot.platform_frame is not None:
-        platform = len(masks)
-        masks.append(moves(int(robot.model.frames[robot.platform_frame].parentJoint), platform_k))
+        platform = len(own)
+        own.append(block.get(platform_k, -1))
+        joints.append(int(robot.model.frames[robot.platform_frame].parentJoint))
     plan = _Plan(
         used,
         (6 * used[:, None] + np.arange(6)[None, :]).reshape(-1),
-        np.array(masks).reshape(len(masks), used.size),
+        joint_cols,
+        np.asarray(own, dtype=np.int64),
+        np.asarray(joints, dtype=np.int64),
         np.asarray(points, dtype=np.int64).reshape(-1, 2),
         np.asarray(welds, dtype=np.int64).reshape(-1, 2),
         platform,
@@ -172,26 +193,63 @@ def _plan(robot: Robot, model: ParameterModel) -> _Plan:
 
 _PLANS: dict[int, _Plan] = {}
 
+_WORLD = pin.ReferenceFrame.WORLD
+
 
 def _rigid_jacobians(
     robot: Robot, model: ParameterModel, data: pin.Data, at: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``C`` (nc, n_par) and ``X`` (6, n_par): closures and platform per parameter, fixed ``q``."""
+    """``C`` (nc, n_par) and ``X`` (6, n_par): closures and platform per parameter, fixed ``q``.
+
+    The world twist of each entity per placement twist: Pinocchio's kinematic regressor of its
+    body (``pin.computeJointKinematicRegressor``, world axes: the spatial twist per right
+    perturbation of every joint placement, the same for every frame of the body) for the joint
+    placements, ``Ad(oF)`` for the entity's own placement (a closure frame, the platform).
+    """
     plan = _plan(robot, model)
     n_par = model.size
-    C = np.zeros((robot.closure_set.nc, n_par))
+    C = np.zeros((robot.constraints.n, n_par))
     X = np.zeros((6, n_par))
     if plan.used.size == 0:
         return C, X
-    where = [model.placements[k] for k in plan.used]
-    frames = placement_frames(robot, data, tuple(where))
-    T = np.array([F.toActionMatrix() for F in frames])  # world twist per placement twist
+    n_used = plan.used.size
+    fixed = plan.fixed
+    if not fixed:  # (per model: what does not depend on the configuration)
+        E0 = model.E[plan.rows].reshape(n_used, 6, n_par)
+        is_joint = plan.joint_cols >= 0
+        carriers = np.unique(plan.joints[plan.joints > 0])
+        mine = np.unique(plan.own[plan.own >= 0])
+        fixed.update(
+            E=E0,
+            is_joint=is_joint,
+            cols=(6 * plan.joint_cols[is_joint][:, None] + np.arange(6)[None, :]).reshape(-1),
+            EjT=scipy.sparse.csr_array(E0[is_joint].reshape(-1, n_par).T),
+            carriers=carriers,
+            on=plan.joints > 0,
+            carrier=np.searchsorted(carriers, plan.joints[plan.joints > 0]),
+            mine=mine,
+            mine_at=tuple(model.placements[plan.used[k]] for k in mine),
+            own=np.searchsorted(mine, plan.own[plan.own >= 0]),
+        )
+    E, EjT = fixed["E"], fixed["EjT"]
     if at is not None:
         xi = model.twists(at)[plan.used]
-        T = np.einsum("kij,kjl->kil", T, np.array([pin.Jexp6(pin.Motion(x)) for x in xi]))
-    E = model.E[plan.rows].reshape(plan.used.size, 6, n_par)
-    Y = np.einsum("kij,kjn->kin", T, E)  # world twist per parameter, each used placement
-    S = np.einsum("ek,kin->ein", plan.mask, Y)  # world twist of each entity per parameter
+        E = np.einsum("kij,kjn->kin", np.array([pin.Jexp6(pin.Motion(x)) for x in xi]), E)
+        EjT = scipy.sparse.csr_array(E[fixed["is_joint"]].reshape(-1, n_par).T)
+    # world twists are those of the bodies: one regressor per joint carrying an entity
+    S = np.zeros((plan.own.size, 6, n_par))  # world twist of each entity per parameter
+    carriers, cols = fixed["carriers"], fixed["cols"]
+    if cols.size and carriers.size:
+        m = robot.model
+        reg = np.vstack(
+            [pin.computeJointKinematicRegressor(m, data, int(j), _WORLD)[:, cols] for j in carriers]
+        )
+        S[fixed["on"]] = (EjT @ reg.T).T.reshape(carriers.size, 6, n_par)[fixed["carrier"]]
+    mine = fixed["mine"]
+    if mine.size:  # the frame of a closure (a hinge's arms are offsets of it) or the platform
+        ad = np.array([F.toActionMatrix() for F in placement_frames(robot, data, fixed["mine_at"])])
+        own = fixed["own"]
+        S[plan.own >= 0] += np.einsum("eij,ejn->ein", ad[own], E[mine[own]])
     cms = robot.constraint_models
     if plan.points.size:
         idx = plan.points[:, 0]
@@ -218,25 +276,13 @@ def _rigid_jacobians(
     return C, X
 
 
-def _platform_jacobian(robot: Robot, data: pin.Data) -> np.ndarray:
-    """(6, nv): linear velocity (world) and angular velocity (platform frame) of the platform."""
-    assert robot.platform_frame is not None
-    lin = pin.getFrameJacobian(
-        robot.model, data, robot.platform_frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-    )[:3]
-    ang = pin.getFrameJacobian(robot.model, data, robot.platform_frame, pin.ReferenceFrame.LOCAL)[
-        3:
-    ]
-    return np.vstack([lin, ang])
-
-
 def _structural_rank(robot: Robot) -> int:
-    """Rank of the passive closure Jacobian at home (cached on the robot's model object)."""
+    """Rank of the passive closure columns at home, by the elimination's rule (cached)."""
     key = id(robot.model)
     rank = _RANKS.get(key)
     if rank is None:
-        Jc = robot.closure_set.jacobian(robot.data, robot.q_home)[:, robot.passive_v]
-        rank = numerics.rank(Jc, _RANK_TOL, 1.0)
+        Jc = robot.constraints.jacobian(robot.data, robot.q_home)[:, robot.passive_v]
+        rank = int(numerics.passive_elimination(Jc).rank)
         _RANKS[key] = rank
         weakref.finalize(robot.model, _RANKS.pop, key, None)
     return rank
@@ -271,44 +317,20 @@ def pose_sensitivity(
     if robot.platform_frame is None:
         raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
     qq = as_finite("q", q, robot.nq)
-    m, data = robot.model, robot.data
-    cs = robot.closure_set
-    r = _structural_rank(robot) if cs.nc else 0  # (at home: before the kinematics at q)
-    if cs.nc:  # (runs the kinematics and joint Jacobians at q; coupling rows need q)
-        Jc = cs.jacobian(data, qq)
-    else:
-        Jc = np.zeros((0, robot.nv))
-        pin.computeJointJacobians(m, data, qq)
-    pin.updateFramePlacements(m, data)
-    Jx = _platform_jacobian(robot, data)
-    a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)
+    data = robot.data
+    cs = robot.constraints
+    r = _structural_rank(robot) if cs.n else 0  # (at home: before q)
+    pm = passive_map(robot, qq, angular="platform", rank=r)
+    if pm.elimination.singular:
+        raise SingularConfigurationError(
+            "parallel",
+            f"parallel singularity: the passive joints of {robot.name} are not determined by "
+            f"the actuators (closure Jacobian margin {pm.elimination.margin:.3g}); "
+            "sensitivities are unbounded here",
+        )
+    Jc, a = pm.Jc, pm.actuated_v
     qa = qq[robot.actuated_q]
-    # passive elimination: Jc_p^+ by SVD, structural rank from home
-    Jcp = Jc[:, p]
-    if Jcp.size:
-        U, s, Vt = np.linalg.svd(Jcp, full_matrices=True)
-        if r and s[r - 1] <= PARALLEL_TOL * s[0]:
-            raise SingularConfigurationError(
-                "parallel",
-                f"parallel singularity: the passive joints of {robot.name} are not determined by "
-                f"the actuators (closure Jacobian margin {s[r - 1] / s[0]:.3g}); sensitivities "
-                "are unbounded here",
-            )
-        Ur, sr, Vr = U[:, :r], s[:r], Vt[:r].T
-        U0 = U[:, r:]
-    else:
-        Ur, sr, Vr = np.zeros((Jc.shape[0], 0)), np.zeros(0), np.zeros((p.size, 0))
-        U0 = np.eye(Jc.shape[0])
-
-    def passive(rhs: np.ndarray) -> np.ndarray:
-        """Passive joint rates absorbing closure residual rates ``rhs``."""
-        return -(Vr @ ((Ur.T @ rhs) / sr[:, None]))
-
-    def eliminate(rhs: np.ndarray) -> np.ndarray:
-        """Platform motion of closure residual rates ``rhs`` absorbed by the passive joints."""
-        return Jx[:, p] @ passive(rhs)
-
-    J = Jx[:, a] + eliminate(Jc[:, a])
+    J = pm.J
     V = None
     if model is None:
         K = np.zeros((6, 0))
@@ -319,9 +341,17 @@ def pose_sensitivity(
         C, X = _rigid_jacobians(robot, model, data, p_at)
         Dg = reading[:, None] * model.G  # actuated coordinate per parameter (gains)
         rhs = C + Jc[:, a] @ Dg
-        K = X + Jx[:, a] @ Dg + eliminate(rhs)
-        gap = U0 @ (U0.T @ rhs)
+        K = X + pm.Jx[:, a] @ Dg + pm.platform(rhs)
+        gap = pm.elimination.gap(rhs)
         V = np.zeros((robot.nv, model.size))
         V[a] = Dg
-        V[p] = passive(rhs)
-    return PoseSensitivity(qq, pin.SE3(data.oMf[robot.platform_frame]), J, K, gap, V)
+        V[pm.passive_v] = pm.passive(rhs)
+    return PoseSensitivity(
+        qq,
+        pin.SE3(data.oMf[robot.platform_frame]),
+        J,
+        K,
+        gap[: cs.nc],
+        V,
+        gap[cs.nc :] if cs.nk else None,
+    )

@@ -36,27 +36,35 @@ stiffness is unbounded) raise :class:`pkdyn.exceptions.SingularConfigurationErro
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from pkdyn.analysis.kinematics import ASSEMBLY_TOL, TASK_NAMES
-from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
+from pkdyn.exceptions import InvalidInputError
 from pkdyn.inputs import is_complex
 from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.precision._format import chop
 from pkdyn.precision.condensation import Reduced, compliance, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
+from pkdyn.precision.validity import (
+    UNBOUNDED_COMPLIANCE,
+    Flagged,
+    Validity,
+    stiffness_check,
+)
+from pkdyn.results import Result, jsonable
+from pkdyn.units import quantity, vector
 from solvers import numerics
 
 __all__ = [
     "COND_MAX",
-    "SERIAL_TOL",
     "Principal",
     "Stiffness",
     "stiffness",
@@ -67,10 +75,6 @@ __all__ = [
 COND_MAX = 1e12
 """Largest condition number of the (scale-aware) 6x6 compliance for a finite ``K6``: beyond, a
 platform direction is held rigidly (``K6`` is then ``None``)."""
-
-SERIAL_TOL = 1e-9
-"""Smallest relative singular value of the (scale-aware) platform motions the springs allow
-along the task: below, the platform cannot move along a task direction (serial singularity)."""
 
 
 @dataclass(frozen=True, eq=False)  # numpy fields
@@ -88,7 +92,7 @@ class Principal:
 
 
 @dataclass(eq=False)  # numpy fields
-class Stiffness:
+class Stiffness(Flagged, Result):
     """Stiffness of a robot at one configuration (see the module docstring).
 
     Attributes:
@@ -97,7 +101,8 @@ class Stiffness:
         point: Reference point, platform frame [m].
         point_world: Reference point, world coordinates [m].
         compliance6: Compliance ``C`` (6, 6) [m/N, m/(N m), rad/N, rad/(N m)].
-        K: Task stiffness (m, m) [N/m, N/rad, N m/m, N m/rad].
+        K: Task stiffness (m, m) [N/m, N/rad, N m/m, N m/rad]; ``inf`` along the directions
+            held rigidly by rigid actuators (:attr:`rigid_directions`).
         K6: Full stiffness (6, 6), or ``None`` when a direction is held rigidly.
         translation: Principal translational stiffnesses (forces only), or ``None`` (no
             translation among the task components).
@@ -106,6 +111,13 @@ class Stiffness:
         wrench: Applied wrench (6,) [N, N m], or ``None``.
         deflection: Platform displacement under ``wrench`` (6,) [m, rad], or ``None``.
         loaded: Whether the load's geometric terms are included.
+        rigid_directions: Unit task directions (k, m) held rigidly by rigid (``inf``) actuators:
+            infinite stiffness, zero compliance along them.
+        validity: ``valid`` and ``warnings`` (:mod:`pkdyn.precision.validity`).
+        robot: The robot's name.
+        links: Names of the compliant links.
+        actuator_stiffness: Each actuator's stiffness (n_a,) [N m/rad or N/m] (``inf``: rigid).
+        length: The robot's size [m] (rotations and moments judged through it in tables).
 
     """
 
@@ -122,6 +134,17 @@ class Stiffness:
     wrench: np.ndarray | None = None
     deflection: np.ndarray | None = None
     loaded: bool = False
+    rigid_directions: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    validity: Validity = field(default_factory=Validity)
+    robot: str = ""
+    links: tuple[str, ...] = ()
+    actuator_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    length: float = 1.0
+
+    @property
+    def rigid(self) -> bool:
+        """Every task direction is held rigidly (rigid actuators, nothing else compliant)."""
+        return bool(self.rigid_directions.shape[0] == len(self.task) and len(self.task) > 0)
 
     @property
     def compliance(self) -> np.ndarray:
@@ -135,37 +158,117 @@ class Stiffness:
         return float(self.translation.stiffness[0]) if self.translation is not None else np.nan
 
     def to_json(self) -> dict[str, Any]:
-        """JSON-ready dict: ``K``, ``compliance``, ``principal``, ``deflection`` (with a wrench)."""
+        """JSON values: ``K``, ``compliance``, ``principal``, ``deflection``, ``valid``...
 
-        def mat(M: np.ndarray | None) -> list[list[float]] | None:
-            return None if M is None else [[float(x) for x in row] for row in np.atleast_2d(M)]
+        Infinite stiffnesses (rigid directions) are ``null``, with ``rigid`` and
+        ``rigid_directions`` saying which.
+        """
 
         def principal(p: Principal | None) -> dict[str, Any] | None:
             if p is None:
                 return None
-            return {"stiffness": [float(x) for x in p.stiffness], "directions": mat(p.directions)}
+            return {"stiffness": jsonable(p.stiffness), "directions": jsonable(p.directions)}
 
         out: dict[str, Any] = {
+            "robot": self.robot,
             "task": list(self.task),
-            "point": [float(x) for x in self.point],
-            "point_world": [float(x) for x in self.point_world],
-            "K": mat(self.K),
-            "compliance": mat(self.compliance),
-            "K6": mat(self.K6),
-            "compliance6": mat(self.compliance6),
+            "point": jsonable(self.point),
+            "point_world": jsonable(self.point_world),
+            "K": jsonable(self.K),
+            "compliance": jsonable(self.compliance),
+            "K6": jsonable(self.K6),
+            "compliance6": jsonable(self.compliance6),
             "principal": {
                 "translation": principal(self.translation),
                 "rotation": principal(self.rotation),
             },
             "internal_mobilities": self.internal,
             "loaded": self.loaded,
+            "rigid": self.rigid,
+            "rigid_directions": jsonable(self.rigid_directions),
+            **self.validity.to_json(),
+            "links": list(self.links),
+            "actuator_stiffness": jsonable(self.actuator_stiffness),
             "convention": "w = -K d; d: [translation of the point, rotation vector], w: [force, "
-            "moment about the point], world axes; K in N/m, N/rad, N m/m, N m/rad",
+            "moment about the point], world axes; K in N/m, N/rad, N m/m, N m/rad; null: "
+            "infinite (rigid)",
         }
         if self.deflection is not None and self.wrench is not None:
-            out["wrench"] = [float(x) for x in self.wrench]
-            out["deflection"] = [float(x) for x in self.deflection]
+            out["wrench"] = jsonable(self.wrench)
+            out["deflection"] = jsonable(self.deflection)
         return out
+
+    def table(self) -> str:
+        """``K`` with its units, the principal stiffnesses, the deflection, the flags."""
+        head = f"stiffness of {self.robot or 'the robot'}"
+        head += f" at the point {vector(self.point, 'm')} of the platform frame"
+        if self.loaded:
+            head += " (loaded: tangent stiffness at the equilibrium under the load)"
+        lines = [head]
+        if self.rigid:
+            lines.append(
+                "rigid: every actuator is held rigidly (inf) and nothing else is compliant: "
+                "infinite stiffness, zero compliance, no deflection"
+            )
+        else:
+            lines.append(f"K ({' '.join(self.task)}), rows and columns in that order:")
+            lines += _matrix_lines(self.K, self.task, self.length)
+        for name, p, unit in (
+            ("translational", self.translation, "N/m"),
+            ("rotational", self.rotation, "N m/rad"),
+        ):
+            if p is None or self.rigid:
+                continue
+            parts = [
+                f"{quantity(k, unit)} along {vector(chop(d, 1.0), '', 3)}"
+                for k, d in zip(p.stiffness, p.directions, strict=True)
+            ]
+            lines.append(f"principal {name} stiffness (world axes): " + "; ".join(parts))
+        if self.rigid_directions.shape[0] and not self.rigid:
+            for d in self.rigid_directions:
+                lines.append(f"rigid along {vector(chop(d, 1.0), '', 3)} ({' '.join(self.task)}): "
+                             "held by rigid actuators")  # fmt: skip
+        if self.internal:
+            lines.append(f"internal mobilities without stiffness: {self.internal}")
+        if self.deflection is not None:
+            scale = float(np.abs(self.deflection[:3]).max()) / self.length
+            d = chop(self.deflection, max(scale, float(np.abs(self.deflection[3:]).max())))
+            lines.append(
+                f"deflection: {', '.join(quantity(x, 'm') for x in d[:3])} (translation); "
+                f"{', '.join(quantity(x, 'rad') for x in d[3:])} (rotation)"
+            )
+        if self.links:
+            lines.append(f"compliant links: {', '.join(self.links)}")
+        return "\n".join(lines + self.validity.lines())
+
+
+_UNITS = {
+    (True, True): "N/m",
+    (True, False): "N/rad",
+    (False, True): "N m/m",
+    (False, False): "N m/rad",
+}
+
+
+def _matrix_lines(K: np.ndarray, task: Sequence[str], length: float) -> list[str]:
+    """Rows of a stiffness matrix, each entry with its unit (force/moment per length/angle).
+
+    Entries are judged in the robot's scale (moments and rotations through its size
+    ``length``): round-off below it prints as zero.
+    """
+    S = np.array([1.0 if not t.startswith("r") else 1.0 / length for t in task])
+    finite = np.isfinite(K)
+    Ks = np.where(finite, K, 0.0) * np.outer(S, S)
+    scale = float(np.abs(Ks).max()) if Ks.size else 0.0
+    K = np.where(finite & (np.abs(Ks) < 1e-12 * scale), 0.0, K)
+    out = []
+    for i, ti in enumerate(task):
+        cells = []
+        for j, tj in enumerate(task):
+            unit = _UNITS[(not ti.startswith("r"), not tj.startswith("r"))]
+            cells.append(quantity(float(K[i, j]), unit))
+        out.append(f"  {ti}: " + ", ".join(cells))
+    return out
 
 
 def _rows(task: Sequence[str]) -> list[int]:
@@ -230,11 +333,15 @@ def _wrench(robot: Robot, wrench: Sequence[float] | np.ndarray | None) -> np.nda
     return out
 
 
-def _principal(C6: np.ndarray, rows: list[int], block: tuple[int, int, int]) -> Principal | None:
+def _principal(
+    C6: np.ndarray, rows: list[int], block: tuple[int, int, int], cut: float = 0.0
+) -> Principal | None:
+    """Principal stiffnesses of a block; compliances at or below ``cut``: rigid (``inf``)."""
     idx = [i for i in rows if i in block]
     if not idx:
         return None
     w, V = np.linalg.eigh(C6[np.ix_(idx, idx)])
+    w = np.where(w <= cut, 0.0, w)
     order = np.argsort(w)[::-1]  # largest compliance: smallest stiffness first
     D = np.zeros((len(idx), 3))
     for k, i in enumerate(idx):
@@ -248,23 +355,10 @@ def _scaled(C: np.ndarray, rows: list[int], L: float) -> np.ndarray:
     return np.asarray(W[:, None] * C * W[None, :])
 
 
-def _check_serial(red: Reduced, rows: list[int], L: float, name: str) -> None:
-    """Raise when the allowed motions cannot move the platform along a task direction."""
-    S = np.array([1.0 / L if i < 3 else 1.0 for i in rows])
-    Jt = S[:, None] * red.Jz[rows]
-    if numerics.rank(Jt, SERIAL_TOL) < len(rows):
-        raise SingularConfigurationError(
-            "serial",
-            f"{name}: the platform cannot move along a task direction even when the springs "
-            "deform (serial singularity, or nothing compliant along it): the stiffness is "
-            "unbounded here",
-        )
-
-
 def _check_assembled(robot: Robot, q: np.ndarray) -> None:
-    if robot.closure_set.nc == 0:
+    if robot.constraints.n == 0:
         return
-    res = float(np.max(np.abs(robot.closure_set.residual(robot.data, q))))
+    res = float(np.max(np.abs(robot.constraints.residual(robot.data, q))))
     if res > ASSEMBLY_TOL:
         raise InvalidInputError(
             "q",
@@ -273,20 +367,9 @@ def _check_assembled(robot: Robot, q: np.ndarray) -> None:
         )
 
 
-def check_compliant(em: ElasticModel) -> None:
-    """Refuse a model with nothing compliant (every actuator rigid, no spring, rigid links).
-
-    Raises:
-        InvalidInputError: Nothing deforms: the stiffness is infinite, not undefined.
-
-    """
-    if not em.links and not np.any(em.spring_stiffness() > 0.0):
-        raise InvalidInputError(
-            "actuator_stiffness",
-            f"{em.base.name}: every actuator is rigid (inf) and nothing else is compliant (no "
-            "joint spring, rigid links): the stiffness is infinite; give finite actuator "
-            "stiffnesses or a material for the links",
-        )
+def nothing_compliant(em: ElasticModel) -> bool:
+    """Every actuator rigid (``inf``), no spring, rigid links: the robot is rigid."""
+    return not em.links and not np.any(em.spring_stiffness() > 0.0)
 
 
 def _point(point: Sequence[float] | np.ndarray | None, robot: Robot | None = None) -> np.ndarray:
@@ -297,6 +380,27 @@ def _point(point: Sequence[float] | np.ndarray | None, robot: Robot | None = Non
 
     reach = 100.0 * robot.length_scale if robot is not None else 1e9
     return vector("point", point, 3, "m", bound=reach)
+
+
+def _with_rigid(
+    Ct: np.ndarray, rows: list[int], L: float, k_ref: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(K, rigid directions)``: the inverse of ``Ct`` with ``inf`` along held directions.
+
+    In the scaled compliance ``C' = k_ref S C S`` (:mod:`pkdyn.precision.validity`), the
+    directions at the cut-off are held rigidly; ``K`` is the inverse on the others, ``inf``
+    (with the sign of the rigid projector) where a held direction enters.
+    """
+    S = np.array([1.0 / L if i < 3 else 1.0 for i in rows])
+    w, V = np.linalg.eigh(0.5 * k_ref * np.outer(S, S) * (Ct + Ct.T))
+    held = w <= UNBOUNDED_COMPLIANCE * max(float(w[-1]), 1.0)
+    Ks = k_ref * (V[:, ~held] / w[~held]) @ V[:, ~held].T  # the inverse of C' times k_ref
+    P = V[:, held] @ V[:, held].T
+    Ks = np.where(np.abs(P) > 1e-9, np.where(P > 0.0, np.inf, -np.inf), Ks)
+    K = Ks * np.outer(S, S)
+    D = V[:, held].T / S[None, :]
+    D /= np.maximum(np.linalg.norm(D, axis=1, keepdims=True), 1e-300)
+    return K, D
 
 
 def _result(
@@ -312,19 +416,20 @@ def _result(
     C6, internal = compliance(em, red)
     rows = [int(i) for i in base.task_rows]
     L = base.length_scale
-    _check_serial(red, rows, L, base.name)
+    validity, rigid, k_ref = stiffness_check(em, red.q, point, C6, q)
     Ct = C6[np.ix_(rows, rows)]
-    if numerics.rank(_scaled(Ct, rows, L), 1e-15) < len(rows):
-        raise SingularConfigurationError(
-            "parallel",
-            f"{base.name}: the compliance is numerically singular here: a singular "
-            "configuration, the stiffness is not defined",
-        )
-    K = np.linalg.inv(Ct)
-    full = numerics.rank(_scaled(C6, list(range(6)), L), 1.0 / COND_MAX) == 6
-    K6 = np.linalg.inv(C6) if full else None
+    cut = 0.0  # compliance [rad/(N m)] at or below which a direction is rigid
+    if rigid.shape[0]:
+        cut = UNBOUNDED_COMPLIANCE * max(float(np.abs(C6).max()) / L**2, 1.0 / max(k_ref, 1e-300))
+        K, rigid = _with_rigid(Ct, rows, L, k_ref)
+        K6 = None
+    else:
+        K = np.linalg.inv(Ct)
+        full = numerics.rank(_scaled(C6, list(range(6)), L), 1.0 / COND_MAX) == 6
+        K6 = np.linalg.inv(C6) if full else None
     if wrench is not None and deflection is None:
         deflection = C6 @ wrench
+    validity.warn(stacklevel=4)
     return Stiffness(
         q=q,
         task=tuple(TASK_NAMES[i] for i in rows),
@@ -333,13 +438,59 @@ def _result(
         compliance6=C6,
         K=K,
         K6=K6,
-        translation=_principal(C6, rows, (0, 1, 2)),
-        rotation=_principal(C6, rows, (3, 4, 5)),
+        translation=_principal(C6, rows, (0, 1, 2), cut * L**2),
+        rotation=_principal(C6, rows, (3, 4, 5), cut),
         internal=internal,
         wrench=wrench,
         deflection=deflection,
         loaded=loaded,
+        rigid_directions=rigid,
+        validity=validity,
+        robot=base.name,
+        links=tuple(dict.fromkeys(lc.link for lc in em.links)),
+        actuator_stiffness=np.array(em.actuator_stiffness, dtype=float),
+        length=L,
     )
+
+
+def prepared(
+    robot: Robot | ElasticModel,
+    q: Sequence[float] | np.ndarray,
+    actuator_stiffness: float | Sequence[float] | np.ndarray | None,
+    material: str | Material | None,
+    links: bool,
+    shear: bool,
+    point: Sequence[float] | np.ndarray | None,
+    wrench: Sequence[float] | np.ndarray | None,
+) -> tuple[ElasticModel, np.ndarray, np.ndarray, np.ndarray | None]:
+    """The inputs of :func:`stiffness` and :func:`pkdyn.precision.modes.modes`, checked.
+
+    Returns:
+        ``(em, q, point, wrench)``: the elastic model at ``q`` (rebuilt for a prismatic leg's
+        stroke), the configuration, the reference point (3,), the wrench (6,) or ``None``.
+
+    Raises:
+        InvalidInputError: Not a robot, no platform, a malformed or unassembled ``q``, a bad
+            point, wrench, stiffness or material (named).
+
+    """
+    from pkdyn.inputs import flag, instance
+
+    instance("robot", robot, (Robot, ElasticModel), "a Robot (pkdyn.load) or an ElasticModel")
+    links = flag("links", links)
+    base = robot.base if isinstance(robot, ElasticModel) else robot
+    if base.platform_frame is None:
+        raise InvalidInputError("robot", f"{base.name} declares no platform frame")
+    qq = as_finite("q", q, base.nq)
+    _check_assembled(base, qq)
+    p = _point(point, base)
+    w = _wrench(base, wrench)
+    em = (
+        robot
+        if isinstance(robot, ElasticModel)
+        else elastic_model(robot, actuator_stiffness, material, links, shear)
+    ).at(qq)
+    return em, qq, p, w
 
 
 @public
@@ -354,6 +505,7 @@ def stiffness(
     wrench: Sequence[float] | np.ndarray | None = None,
     loaded: bool = False,
     gravity: bool = False,
+    shear: bool = True,
 ) -> Stiffness:
     """Stiffness, compliance, principal stiffnesses and deflection at a configuration.
 
@@ -373,6 +525,7 @@ def stiffness(
         loaded: Solve the equilibrium under ``wrench`` (and the weight with ``gravity``) and
             include the load's geometric terms.
         gravity: With ``loaded``, the robot's weight is part of the load.
+        shear: Include the beams' shear deflection (Timoshenko; ``False``: Euler-Bernoulli).
 
     Returns:
         The stiffness.
@@ -384,25 +537,12 @@ def stiffness(
             one (stiffness unbounded).
 
     """
-    from pkdyn.inputs import flag, instance
+    from pkdyn.inputs import flag
 
-    instance("robot", robot, (Robot, ElasticModel), "a Robot (pkdyn.load) or an ElasticModel")
-    loaded, gravity, links = flag("loaded", loaded), flag("gravity", gravity), flag("links", links)
-    base = robot.base if isinstance(robot, ElasticModel) else robot
-    if base.platform_frame is None:
-        raise InvalidInputError("robot", f"{base.name} declares no platform frame")
-    qq = as_finite("q", q, base.nq)
-    _check_assembled(base, qq)
-    p = _point(point, base)
-    w = _wrench(base, wrench)
+    loaded, gravity = flag("loaded", loaded), flag("gravity", gravity)
+    em, qq, p, w = prepared(robot, q, actuator_stiffness, material, links, shear, point, wrench)
     if loaded and w is None and not gravity:
         raise InvalidInputError("loaded", "the loaded mode needs a wrench (or gravity=True)")
-    em = (
-        robot
-        if isinstance(robot, ElasticModel)
-        else elastic_model(robot, actuator_stiffness, material, links)
-    )
-    check_compliant(em)
     q_ext = em.embed(qq)
     if not loaded:
         return _result(em, reduce(em, q_ext, p), qq, p, w, None, False)

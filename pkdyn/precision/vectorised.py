@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkdyn.analysis.kinematics import SINGULAR_TOL
+from pkdyn.analysis.kinematics import NEAR_SERIAL_TOL, SINGULAR_TOL
 from pkdyn.closed_form import delta as delta_cf
 from pkdyn.dynamics.delta import DeltaDynamics, has_delta_dynamics
 from pkdyn.model.robot import Robot
@@ -52,6 +52,9 @@ class VectorisedFigures:
         stiffness_min: Smallest principal translational stiffness (N,) [N/m].
         deflection: Translation of the reference point under the wrench (N,) [m] (NaN without).
         f1: Lowest natural frequency (N,) [Hz] (NaN when not computed).
+        reached: Pose reached (N,) (``reached & ~valid``: singular).
+        near: Valid pose near a serial singularity (N,) (the margin of
+            :data:`pkdyn.analysis.kinematics.NEAR_SERIAL_TOL`).
 
     """
 
@@ -59,6 +62,8 @@ class VectorisedFigures:
     stiffness_min: np.ndarray
     deflection: np.ndarray
     f1: np.ndarray
+    reached: np.ndarray | None = None
+    near: np.ndarray | None = None
 
 
 def sym3_min_eig(A: np.ndarray) -> np.ndarray:
@@ -199,14 +204,21 @@ def gough_stewart_figures(
         w = np.asarray(wrench, dtype=float)
         F = w[:3][None] - _mv(G, np.broadcast_to(w[3:], (N, 3)))
         defl = np.where(ok, np.linalg.norm(_mv(S_inv, F), axis=-1), np.nan)
-    return VectorisedFigures(ok, kmin, defl, np.full(N, np.nan))
+    # (a Gough-Stewart has no serial singularity: each leg's rate is u_i . v, |u_i| = 1)
+    return VectorisedFigures(ok, kmin, defl, np.full(N, np.nan), np.ones(N, dtype=bool))
 
 
 def _delta_jacobian(
     dd: DeltaDynamics, P: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(ok, J_inv, E', d)`` with the arm data of :class:`DeltaDynamics` (N poses)."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(ok, J_inv, E', d, reached, margin)`` with the arm data of :class:`DeltaDynamics`.
+
+    ``margin`` is the smallest ``|d . E'| / (|d| |E'|)`` of the arms (N,): the sine of the
+    angle between an arm's bars and its elbow's path, the scale-aware serial margin of the
+    arm (0: stretched or folded along its bars), judged with the singularity thresholds.
+    """
     alpha, ok = delta_cf.inverse(dd.params, P - dd.f_off)
+    reached = np.array(ok, dtype=bool)
     alpha = np.where(np.isfinite(alpha), alpha, 0.0)
     c, s = np.cos(alpha), np.sin(alpha)
     E = dd.O[None] + dd._in_world(c, s, dd.elbow)
@@ -214,9 +226,10 @@ def _delta_jacobian(
     E1 = _cross(dd.axis[None], E - dd.O[None])
     g = np.sum(d * E1, axis=-1)
     scale = np.sqrt(np.sum(d * d, axis=-1) * np.sum(E1 * E1, axis=-1))
-    ok = ok & np.all(np.abs(g) > SINGULAR_TOL * scale, axis=1)
+    margin = np.min(np.abs(g) / np.where(scale > 0.0, scale, 1.0), axis=1)
+    ok = ok & (margin > SINGULAR_TOL)
     g = np.where(ok[:, None], g, 1.0)
-    return ok, d / g[..., None], E1, d
+    return ok, d / g[..., None], E1, d, reached, margin
 
 
 def _outer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -281,7 +294,7 @@ def delta_figures(
     dd = DeltaDynamics(robot)
     P = np.atleast_2d(np.asarray(P, dtype=float))
     N = P.shape[0]
-    ok, Jinv, E1, d = _delta_jacobian(dd, P)
+    ok, Jinv, E1, d, reached, margin = _delta_jacobian(dd, P)
     k = np.asarray(k, dtype=float)
     K = _gram(Jinv, k, slice(0, 3), slice(0, 3))
     kmin = sym3_min_eig(K)
@@ -299,7 +312,7 @@ def delta_figures(
         A = np.matmul(np.matmul(L_inv, K[ok]), np.swapaxes(L_inv, 1, 2))
         A = 0.5 * (A + np.swapaxes(A, 1, 2))
         f1[ok] = np.sqrt(np.maximum(sym3_min_eig(A), 0.0)) / (2.0 * np.pi)
-    return VectorisedFigures(ok, kmin, defl, f1)
+    return VectorisedFigures(ok, kmin, defl, f1, reached, ok & (margin < NEAR_SERIAL_TOL))
 
 
 def vectorised(robot: Robot, frequency: bool = False) -> str | None:

@@ -44,9 +44,11 @@ from pkdyn.dynamics.inverse import EffortTrajectory
 from pkdyn.exceptions import InfeasibleEffortError
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
+from pkdyn.results import Result, deprecated_alias, jsonable
 from pkdyn.tripod.modes import branch_numbers, foot_placement
 from pkdyn.tripod.scenario import Phase, WalkPlan, plan_scenario
-from solvers import ClosureSet, numerics
+from pkdyn.units import columns, quantity
+from solvers import numerics
 
 __all__ = [
     "LEGS",
@@ -79,7 +81,7 @@ def leg_pairs(branches: int = 3) -> tuple[list[tuple[str, str]], list[tuple[str,
 
 
 @dataclass
-class PhaseReport:
+class PhaseReport(Result):
     """Checks of one phase (worst values over its samples).
 
     Attributes:
@@ -139,36 +141,51 @@ class PhaseReport:
     lock_plan_error: float | None
     redundancy: dict[str, Any] | None = None
 
-    def as_json(self) -> dict[str, Any]:
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def table(self) -> str:
+        """The phase's worst figures on one line, in units."""
+        return (
+            f"{self.name} ({self.mode}{'' if self.branch is None else f', branch {self.branch}'}"
+            f", {quantity(self.duration, 's')}): closure {self.max_closure_residual:.1e} m or "
+            f"rad, force {quantity(self.max_actuator_force, 'N')}, legs "
+            f"{quantity(self.min_leg_distance, 'm')} apart, stroke left "
+            f"{quantity(self.min_stroke_margin, 'm')}, 1/cond "
+            f"{quantity(self.min_singularity_distance, '', 3)}"
+        )
+
+    def to_json(self) -> dict[str, Any]:
         """Plain-JSON form (the CLI's ``phases`` entries)."""
-        return {
-            "name": self.name,
-            "mode": self.mode,
-            "branch": self.branch,
-            "locked": list(self.locked),
-            "t0": self.t0,
-            "duration": self.duration,
-            "samples": self.samples,
-            "max_closure_residual": self.max_closure_residual,
-            "max_lock_drift": self.max_lock_drift,
-            "max_support_drift": self.max_support_drift,
-            "max_actuator_force": self.max_actuator_force,
-            "max_actuator_speed": self.max_actuator_speed,
-            "min_stroke_margin": self.min_stroke_margin,
-            "min_leg_distance": self.min_leg_distance,
-            "min_leg_to_leg": self.min_leg_to_leg,
-            "min_leg_to_nacelle": self.min_leg_to_nacelle,
-            "closest_pair": list(self.closest_pair),
-            "min_singularity_distance": self.min_singularity_distance,
-            "max_dynamics_residual": self.max_dynamics_residual,
-            "end_error": self.end_error,
-            "lock_plan_error": self.lock_plan_error,
-            "redundancy": self.redundancy,
-        }
+        return jsonable(
+            {
+                "name": self.name,
+                "mode": self.mode,
+                "branch": self.branch,
+                "locked": list(self.locked),
+                "t0": self.t0,
+                "duration": self.duration,
+                "samples": self.samples,
+                "max_closure_residual": self.max_closure_residual,
+                "max_lock_drift": self.max_lock_drift,
+                "max_support_drift": self.max_support_drift,
+                "max_actuator_force": self.max_actuator_force,
+                "max_actuator_speed": self.max_actuator_speed,
+                "min_stroke_margin": self.min_stroke_margin,
+                "min_leg_distance": self.min_leg_distance,
+                "min_leg_to_leg": self.min_leg_to_leg,
+                "min_leg_to_nacelle": self.min_leg_to_nacelle,
+                "closest_pair": list(self.closest_pair),
+                "min_singularity_distance": self.min_singularity_distance,
+                "max_dynamics_residual": self.max_dynamics_residual,
+                "end_error": self.end_error,
+                "lock_plan_error": self.lock_plan_error,
+                "redundancy": self.redundancy,
+            }
+        )
 
 
 @dataclass
-class ScenarioReport:
+class ScenarioReport(Result):
     """The scenario, its checks and the sampled series (samples of all phases in order).
 
     Attributes:
@@ -226,11 +243,53 @@ class ScenarioReport:
                 )
         return out
 
-    def as_json(self) -> dict[str, Any]:
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def table(self) -> str:
+        """One line per phase (worst values), then the whole run and its violations."""
+        out = self.to_json()
+        walker = out["summary"].get("branches", 3) != 3
+        rows = [
+            ["#", "phase", "mode", "br", "closure", "force", "legs apart", "stroke left", "1/cond"]
+            + (["objective: baseline -> chosen"] if walker else [])
+        ]
+        for k, ph in enumerate(out["phases"]):
+            red = ph.get("redundancy")
+            rows.append(
+                [
+                    str(k),
+                    ph["name"],
+                    ph["mode"],
+                    str(ph["branch"] or "-"),
+                    f"{ph['max_closure_residual']:.1e}",
+                    quantity(ph["max_actuator_force"], "N"),
+                    quantity(ph["min_leg_distance"], "m"),
+                    quantity(ph["min_stroke_margin"], "m"),
+                    quantity(ph["min_singularity_distance"], "", 3),
+                ]
+                + (
+                    [
+                        f"{quantity(red['objective_baseline'], 'm')} -> "
+                        f"{quantity(red['objective'], 'm')}"
+                    ]
+                    if walker and red is not None
+                    else []
+                )
+            )
+        s = out["summary"]
+        return (
+            columns(rows)
+            + "\n(closure: largest hinge or clamp residual, m or rad)\n"
+            + f"{quantity(s['duration'], 's')}, {s['samples']} samples; locks held to "
+            f"{s['max_lock_drift']:.1e} rad, feet to {s['max_support_drift']:.1e} m; "
+            + ("no violation" if not s["violations"] else "; ".join(s["violations"]))
+        )
+
+    def to_json(self) -> dict[str, Any]:
         """``{"phases": [...], "summary": {...}}`` (see :class:`PhaseReport`)."""
         reps = self.reports
         return {
-            "phases": [r.as_json() for r in reps],
+            "phases": [r.to_json() for r in reps],
             "summary": {
                 "duration": float(self.t[-1]),
                 "samples": int(self.t.size),
@@ -280,7 +339,7 @@ def redundant_singularity_distance(robot: Robot, q: np.ndarray) -> float:
         The distance in ``[0, 1]``.
 
     """
-    Jc = robot.closure_set.jacobian(robot.data, q)
+    Jc = robot.constraints.jacobian(robot.data, q)
     rows = np.asarray(robot.task_rows, dtype=int)
     Jx = platform_jacobian(robot, q)[rows]
     a, p = np.asarray(robot.actuated_v), np.asarray(robot.passive_v)
@@ -322,14 +381,8 @@ def _analyse_phase(
     jt = phase.trajectory
     N = jt.t.size
     lock_names = {lk.name for lk in phase.mode.locks}
-    closures = ClosureSet(
-        r.model,
-        [
-            cm
-            for cm, o in zip(r.constraint_models, r.constraint_owner, strict=True)
-            if o not in lock_names
-        ],
-        r.closure_set.couplings,
+    closures = r.constraints.rebuilt(
+        closures=[c for c in r.constraints.closure_specs if c.name not in lock_names]
     )
     data = r.model.createData()
     lo = r.model.lowerPositionLimit[r.actuated_q]
@@ -406,7 +459,7 @@ def _analyse_phase(
         max_dynamics_residual=float(np.max(effort.residual)),
         end_error=end_error,
         lock_plan_error=lock_plan_error,
-        redundancy=None if phase.redundancy is None else phase.redundancy.as_json(),
+        redundancy=None if phase.redundancy is None else phase.redundancy.to_json(),
     )
     series = {
         "tau": effort.tau,

@@ -53,6 +53,8 @@ import numpy as np
 from pkdyn.analysis.collisions import segment_distance
 from pkdyn.closed_form import tripod as tripod_cf
 from pkdyn.library.tripod import MOUNT_CLEARANCE
+from pkdyn.results import Result, deprecated_alias
+from pkdyn.units import quantity
 
 __all__ = ["LEG_NAMES", "RIM_POINTS", "Clearances", "clearances", "leg_segments"]
 
@@ -67,7 +69,7 @@ RIM_POINTS = 24
 
 
 @dataclass(frozen=True)
-class Clearances:
+class Clearances(Result):
     """Clearances of a sequence of poses (one row per sample).
 
     Attributes:
@@ -95,7 +97,20 @@ class Clearances:
         """Smallest leg-to-leg or leg-to-nacelle distance (N,) [m]."""
         return np.minimum(self.leg_to_leg, self.leg_to_nacelle)
 
-    def summary(self) -> dict[str, Any]:
+    summary = deprecated_alias("summary", "to_json")
+
+    def table(self) -> str:
+        """The smallest clearances over the samples, and where the legs come closest."""
+        s = self.to_json()
+        return (
+            f"legs to legs {quantity(s['min_leg_to_leg'], 'm')}, legs to nacelle "
+            f"{quantity(s['min_leg_to_nacelle'], 'm')}, stroke left "
+            f"{quantity(s['min_stroke_margin'], 'm')}, support 1/cond "
+            f"{quantity(s['min_support_conditioning'], '', 3)}; closest: "
+            f"{' - '.join(s['closest_pair'])}"
+        )
+
+    def to_json(self) -> dict[str, Any]:
         """Smallest value of each quantity over the samples, and where the legs come closest."""
         k = int(np.argmin(self.distance))
         return {

@@ -21,6 +21,7 @@ import numpy as np
 
 from pkdyn.exceptions import TrajectoryError
 from pkdyn.model.robot import Robot
+from pkdyn.results import Result, deprecated_alias, jsonable
 from pkdyn.tripod.analysis import ScenarioReport, run_scenario
 from pkdyn.tripod.modes import branch_numbers
 from pkdyn.tripod.scenario import WalkPlan
@@ -128,7 +129,7 @@ def _work(rep: ScenarioReport) -> float:
 
 
 @dataclass
-class Comparison:
+class Comparison(Result):
     """Tripod against walker on the cases.
 
     Attributes:
@@ -171,9 +172,11 @@ class Comparison:
             )
         return "\n".join(lines)
 
-    def as_json(self) -> dict[str, Any]:
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def to_json(self) -> dict[str, Any]:
         """``{"rows": [...]}`` (see :meth:`ComparisonRow.values`)."""
-        return {"rows": [r.values() for r in self.rows]}
+        return jsonable({"rows": [r.values() for r in self.rows]})
 
 
 def _mass(robot: Robot) -> tuple[float, float]:

@@ -2,7 +2,7 @@
 
 A lock holds some coordinates of a tree joint at fixed values. It is written as one more
 Pinocchio rigid constraint model between the joint's child body and its parent body, so every
-tool built on constraint models (:class:`solvers.ClosureSet`, :func:`solvers.solve_lm`,
+tool built on constraint models (:class:`solvers.ConstraintSet`, :func:`solvers.solve_lm`,
 :class:`solvers.InverseDynamics`, :class:`solvers.ForwardDynamics`, the kinematic models and
 singularity analysis of :mod:`pkdyn.analysis.kinematics`) handles locked joints without change; the
 lock's multiplier is the force or torque the locking device carries.

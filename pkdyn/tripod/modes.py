@@ -48,7 +48,7 @@ from pkdyn.library import tripod
 from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.tripod.locks import Lock, lock_constraint, lock_values
-from solvers import ClosureSet
+from solvers import Closure
 
 __all__ = [
     "BRANCHES",
@@ -373,9 +373,19 @@ def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = 
             cm.name = name
         cms.append(cm)
         owner.append(name)
+    closures: list[Closure] = []
+    for c in robot.constraints.closure_specs:
+        if c.name.endswith("_foothold"):
+            b = int(c.name[len("branch")])
+            if mode.kind == "BE" and b == mode.branch:
+                continue
+            M2 = stance.footholds[b - 1] * default[b - 1].inverse() * c.placement2
+            c = dataclasses.replace(c, placement2=M2)
+        closures.append(c)
     for lk in mode.locks:
         cms.append(lock_constraint(model, lk))
         owner.append(lk.name)
+        closures.append(Closure.of(cms[-1]))
     vec = pin.StdVec_RigidConstraintModel()
     for cm in cms:
         vec.append(cm)
@@ -389,7 +399,7 @@ def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = 
         name=f"{robot.name}[{mode.kind}{'' if mode.branch is None else mode.branch}]",
         constraint_models=vec,
         constraint_owner=owner,
-        closure_set=ClosureSet(model, cms, robot.closure_set.couplings),
+        constraints=robot.constraints.rebuilt(closures=closures),
         platform_frame=platform,
         task_rows=np.arange(6),
         q_home=np.array(robot.q_home if q is None else q, dtype=float),

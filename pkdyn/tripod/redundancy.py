@@ -67,9 +67,11 @@ from scipy.optimize import minimize
 from pkdyn.dynamics.profiles import motion_law
 from pkdyn.dynamics.trajectory import TaskTrajectory
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.results import Result, deprecated_alias
 from pkdyn.tripod.clearance import Clearances, clearances
 from pkdyn.tripod.locked_branch import LockedBranch, foot_frames
 from pkdyn.tripod.modes import Stance
+from pkdyn.units import quantity
 
 __all__ = [
     "RedundancySettings",
@@ -174,7 +176,7 @@ def bumps(tau: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 
 @dataclass
-class SwingSolution:
+class SwingSolution(Result):
     """The walker's swing: redundancy coordinates, nacelle path and objective.
 
     Attributes:
@@ -255,7 +257,19 @@ class SwingSolution:
         """Nacelle placement at the end of the swing."""
         return pin.SE3(self.nacelle_R[-1], self.nacelle_p[-1])
 
-    def as_json(self) -> dict[str, Any]:
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def table(self) -> str:
+        """The objective, baseline against chosen path, and both paths' clearances."""
+        how = "optimised" if self.optimised else "baseline kept"
+        return (
+            f"branch {self.branch} swing: objective {quantity(self.objective_baseline, 'm')} -> "
+            f"{quantity(self.objective, 'm')} ({how}, {self.iterations} iterations, scale "
+            f"{self.scale:.3g})\n  baseline: {self.baseline.table()}\n  chosen:   "
+            f"{self.clearances.table()}"
+        )
+
+    def to_json(self) -> dict[str, Any]:
         """The objective's values, baseline and chosen path (the CLI's ``redundancy`` entry)."""
         return {
             "objective": self.objective,
@@ -263,8 +277,8 @@ class SwingSolution:
             "optimised": self.optimised,
             "scale": self.scale,
             "iterations": self.iterations,
-            "baseline": self.baseline.summary(),
-            "chosen": self.clearances.summary(),
+            "baseline": self.baseline.to_json(),
+            "chosen": self.clearances.to_json(),
             "stroke_keep": self.settings.stroke_keep,
             "singularity_keep": self.settings.singularity_keep,
         }

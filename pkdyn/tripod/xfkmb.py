@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -32,7 +33,9 @@ from pkdyn.closed_form import tripod as tripod_cf
 from pkdyn.exceptions import InvalidInputError, JointLimitError, UnreachablePoseError
 from pkdyn.library import tripod
 from pkdyn.model.pose import pose_from_vector
+from pkdyn.results import Result, jsonable
 from pkdyn.tripod.modes import Stance, support_branches
+from pkdyn.units import vector
 
 __all__ = [
     "XfkmbResult",
@@ -131,7 +134,7 @@ def actuator_lengths(
 
 
 @dataclass
-class XfkmbResult:
+class XfkmbResult(Result):
     """Solution of ``XFKMB_i``.
 
     Attributes:
@@ -146,6 +149,27 @@ class XfkmbResult:
     lengths: np.ndarray
     residual: float
     evaluations: int
+
+    def to_json(self) -> dict[str, Any]:
+        """``position`` [m], ``rotation`` (3x3), ``lengths`` [m], ``residual`` [rad]."""
+        return jsonable(
+            {
+                "position": self.placement.translation,
+                "rotation": self.placement.rotation,
+                "lengths": self.lengths,
+                "residual": self.residual,
+                "evaluations": self.evaluations,
+            }
+        )
+
+    def table(self) -> str:
+        """The nacelle pose, the actuator lengths and the residual of the locked joints."""
+        rpy = pin.rpy.matrixToRpy(self.placement.rotation)
+        return (
+            f"nacelle: position {vector(self.placement.translation, 'm', roundoff=1e-12)}, rpy "
+            f"{vector(rpy, 'rad', roundoff=1e-12)}\nactuator lengths: {vector(self.lengths, 'm')}"
+            f"\nlocked joints held to {self.residual:.2g} rad ({self.evaluations} evaluations)"
+        )
 
 
 def _pose(x0: pin.SE3, z: np.ndarray) -> pin.SE3:

@@ -9,6 +9,7 @@ The core never imports this package. Entry points take plain arrays::
     scene.save_html("delta.html")                 # opens without a server or network
 
     scene = animate_mode(model, modes(model, q), index=0)   # a natural mode, slowed down
+    scene = animate_vibration(pkdyn.precision.vibration(robot, "adept", ...))  # exaggerated
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from pkdyn.viewer.highlight import closest_pair, singularity_labels
 from pkdyn.viewer.html import static_html
 from pkdyn.viewer.modes import animate_mode
 from pkdyn.viewer.scene import Scene
+from pkdyn.viewer.vibration import animate_vibration
 from pkdyn.viewer.window import OfflineWindow
 
 __all__ = [
@@ -33,6 +35,7 @@ __all__ = [
     "Scene",
     "animate",
     "animate_mode",
+    "animate_vibration",
     "bounding_box",
     "chain",
     "closest_pair",

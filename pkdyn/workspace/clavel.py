@@ -38,8 +38,12 @@ from pkdyn.closed_form.delta import THETA, DeltaGeometry, elbow_points, inverse
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.arguments import public
 from pkdyn.progress import progress_steps
+from pkdyn.results import Result, deprecated_alias, jsonable
+from pkdyn.units import columns, quantity
 
 __all__ = [
+    "ClavelComparison",
+    "clavel_comparison",
     "GAMMA_MAX",
     "AB_MIN",
     "ClavelFigures",
@@ -56,7 +60,7 @@ AB_MIN = math.radians(30.0)
 
 
 @dataclass(frozen=True)
-class ClavelFigures:
+class ClavelFigures(Result):
     """Clavel's workspace figures (SI) and their dimensionless forms (divided by ``la``).
 
     Attributes:
@@ -93,11 +97,114 @@ class ClavelFigures:
             "z_b": self.zb / la,
         }
 
-    def as_json(self) -> dict[str, Any]:
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def to_json(self) -> dict[str, Any]:
         """SI figures plus a ``dimensionless`` sub-dictionary."""
         out: dict[str, Any] = {k: float(v) for k, v in asdict(self).items() if k != "la"}
         out["dimensionless"] = self.dimensionless()
-        return out
+        return jsonable(out)
+
+    def table(self) -> str:
+        """Each figure with its unit and its dimensionless form (divided by ``la``)."""
+        dl = self.dimensionless()
+        rows = [["", "SI", "/ la^k"]]
+        rows += [
+            [name, quantity(getattr(self, name), unit, 6), quantity(dl[key], "", 6)]
+            for name, unit, key in _FIGURES
+        ]
+        return columns(rows)
+
+
+_FIGURES = (
+    ("D", "m", "d"),
+    ("S", "m^2", "s"),
+    ("H", "m", "h"),
+    ("Hmax", "m", "hmax"),
+    ("V", "m^3", "v"),
+    ("zh", "m", "z_h"),
+    ("zb", "m", "z_b"),
+)
+"""Clavel's figures: name, unit, key of the dimensionless form."""
+
+
+@dataclass(frozen=True)
+class ClavelComparison(Result):
+    """Clavel's closed-form figures beside the ones measured on the mechanism.
+
+    Attributes:
+        closed_form: :func:`clavel_closed_form`.
+        numeric: :func:`clavel_numeric`'s figures.
+        V_workspace: Volume of the whole workspace [m^3] (the prism, the dome above and the
+            cap below).
+        gamma_max: Limit 1 [rad].
+        ab_min: Limit 2, (alpha + beta)_min [rad].
+
+    """
+
+    closed_form: ClavelFigures
+    numeric: ClavelFigures
+    V_workspace: float
+    gamma_max: float
+    ab_min: float
+
+    def to_json(self) -> dict[str, Any]:
+        """``closed_form``, ``numeric`` (with ``V_workspace``), ``limits``, ``difference``."""
+        cf, nu = self.closed_form.to_json(), self.numeric.to_json()
+        nu["V_workspace"] = self.V_workspace
+        return jsonable(
+            {
+                "closed_form": cf,
+                "numeric": nu,
+                "limits": {"gamma_max": self.gamma_max, "ab_min": self.ab_min, "ab_max": math.pi},
+                "difference": {k: nu[k] - cf[k] for k, _, _ in _FIGURES if k != "zb"},
+            }
+        )
+
+    def table(self) -> str:
+        """The figures side by side with their difference, and the whole volume."""
+        rows = [["", "closed form", "numeric", "difference"]]
+        for name, unit, _ in _FIGURES:
+            a, b = getattr(self.closed_form, name), getattr(self.numeric, name)
+            rows.append(
+                [name, quantity(a, unit, 7), quantity(b, unit, 7), quantity(b - a, unit, 2)]
+            )
+        V = self.closed_form.V
+        ratio = f" = {self.V_workspace / V:.3f} V" if V > 0 else ""
+        return (
+            columns(rows)
+            + f"\nwhole workspace volume (numeric): {quantity(self.V_workspace, 'm^3')}{ratio} "
+            "(the prism misses the dome above and the cap below)"
+        )
+
+
+def clavel_comparison(
+    g: DeltaGeometry,
+    gamma_max: float = GAMMA_MAX,
+    ab_min: float = AB_MIN,
+    rays: int = 72,
+    progress: bool | None = None,
+) -> ClavelComparison:
+    """Clavel's closed-form figures and the same measured on the mechanism (``workspace --clavel``).
+
+    Args:
+        g: Delta geometry (ra, rb, la, lb) [m].
+        gamma_max: Limit 1 [rad].
+        ab_min: Limit 2 [rad].
+        rays: Directions sampled by :func:`clavel_numeric`.
+        progress: Progress bar (``None``: when stderr is a terminal).
+
+    Returns:
+        Both sets of figures.
+
+    Raises:
+        InvalidInputError: Limits out of range or too few rays.
+        PkdynError: No complete prism, or no valid position on the axis.
+
+    """
+    cf = clavel_closed_form(g, gamma_max, ab_min)
+    nu, v_ws = clavel_numeric(g, gamma_max, ab_min, rays=rays, progress=progress)
+    return ClavelComparison(cf, nu, v_ws, gamma_max, ab_min)
 
 
 def _check_geometry(g: Any) -> None:

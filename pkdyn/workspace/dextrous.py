@@ -138,8 +138,5 @@ def dextrous_workspace(
 
 
 def dextrous_json(ws: TranslationWorkspace) -> dict[str, Any]:
-    """JSON of a dextrous workspace: :meth:`TranslationWorkspace.as_json` with ``kind``."""
-    out = ws.as_json()
-    out["kind"] = "dextrous"
-    out.pop("rpy", None)
-    return out
+    """JSON of a dextrous workspace: :meth:`TranslationWorkspace.to_json` (``kind`` dextrous)."""
+    return ws.to_json()

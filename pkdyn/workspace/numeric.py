@@ -313,7 +313,7 @@ class NumericEvaluator(PoseEvaluator):
             return None
         rows, cols = J.shape
         E = np.zeros((rows, 3))
-        nc = self.robot.closure_set.nc
+        nc = self.robot.constraints.n
         for i, axis in enumerate(self._task.rows.tolist()):
             if axis < 3:
                 E[nc + i, axis] = 1.0  # d(p - p_target) = J dq - dp_target = 0
@@ -579,8 +579,8 @@ def _free_components_fixed(robot: Robot) -> bool:
     model = robot.model
     Jx = platform_jacobian(robot, robot.q_home)
     free = np.setdiff1d(np.arange(6), robot.task_rows)
-    if robot.closure_set.nc:
-        J = robot.closure_set.jacobian(model.createData(), robot.q_home)
+    if robot.constraints.n:
+        J = robot.constraints.jacobian(model.createData(), robot.q_home)
         _, sv, Vt = np.linalg.svd(J)
         Z = Vt[int(np.sum(sv > 1e-9 * max(float(sv[0]), 1e-300))) :].T
     else:

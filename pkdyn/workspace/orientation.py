@@ -35,11 +35,14 @@ from pkdyn.model.arguments import public
 from pkdyn.model.description import PyramidLimit
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
+from pkdyn.results import Result, deprecated_alias, jsonable
+from pkdyn.units import columns, quantity
 from pkdyn.workspace.legs import HexapodLegs, leg_interference, leg_placements
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, check_kinds, pyramid_normals
 from pkdyn.workspace.placed_interference import PlacedInterference
 
 __all__ = [
+    "MelStudy",
     "OrientationWorkspace",
     "orientation_workspace",
     "stroke_roots",
@@ -82,7 +85,7 @@ def rotations(
 
 
 @dataclass
-class OrientationWorkspace:
+class OrientationWorkspace(Result):
     """Allowed rotations at a fixed point, as arcs on Merlet's circles.
 
     Attributes:
@@ -217,26 +220,69 @@ class OrientationWorkspace:
         d = self.direction(T1[m], T2[m])
         return float(np.max(np.arccos(np.clip(d @ (self.R0 @ self.N), -1.0, 1.0))))
 
-    def as_json(self) -> dict[str, Any]:
+    def table(self) -> str:
+        """Allowed solid angle, its halves, full circles, largest tilt, rejections."""
+        tilt = self.tilt_max()
+        return "\n".join(
+            [
+                f"orientation workspace: {quantity(self.solid_angle(), 'sr')} allowed "
+                f"({quantity(100 * self.allowed_fraction(), '%')} of the directions; halves "
+                f"{quantity(self.solid_angle(0), 'sr')} and {quantity(self.solid_angle(1), 'sr')})",
+                f"full circles: {int(self.full_circles().sum())}, largest tilt "
+                + ("n/a" if not np.isfinite(tilt) else quantity(tilt, "rad"))
+                + f" ({quantity(np.degrees(tilt), 'deg')})" * bool(np.isfinite(tilt)),
+                f"samples: {int(self.codes.size)}, rejected by: "
+                + ", ".join(f"{k} {v}" for k, v in self.limits_hit.items()),
+            ]
+        )
+
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def to_json(self) -> dict[str, Any]:
         """``volume`` (solid angle [sr]), ``bounds``, ``samples``, ``limits_hit`` and more."""
         b = self.bounds()
-        return {
-            "kind": "orientation",
-            "volume": self.solid_angle(),
-            "volume_unit": "sr",
-            "solid_angle_halves": [self.solid_angle(0), self.solid_angle(1)],
-            "allowed_fraction": self.allowed_fraction(),
-            "full_circles": int(self.full_circles().sum()),
-            "bounds": None if b is None else b.tolist(),
-            "tilt_max": self.tilt_max(),
-            "samples": int(self.codes.size),
-            "limits_hit": self.limits_hit,
-            "center": self.center.tolist(),
-            "N": self.N.tolist(),
-            "X1": self.X1.tolist(),
-            "X2": self.X2.tolist(),
-            "margin": self.margin,
-        }
+        return jsonable(
+            {
+                "kind": "orientation",
+                "volume": self.solid_angle(),
+                "volume_unit": "sr",
+                "solid_angle_halves": [self.solid_angle(0), self.solid_angle(1)],
+                "allowed_fraction": self.allowed_fraction(),
+                "full_circles": int(self.full_circles().sum()),
+                "bounds": None if b is None else b.tolist(),
+                "tilt_max": self.tilt_max(),
+                "samples": int(self.codes.size),
+                "limits_hit": self.limits_hit,
+                "center": self.center.tolist(),
+                "N": self.N.tolist(),
+                "X1": self.X1.tolist(),
+                "X2": self.X2.tolist(),
+                "margin": self.margin,
+            }
+        )
+
+
+class MelStudy(dict[str, OrientationWorkspace], Result):
+    """Merlet's MEL study (:func:`mel_study`): name of the set of limits -> workspace."""
+
+    def to_json(self) -> dict[str, Any]:
+        """The last (most limited) case's figures, and every case under ``cases``."""
+        cases = {name: ow.to_json() for name, ow in self.items()}
+        out = dict(list(cases.values())[-1]) if cases else {}
+        out["cases"] = cases
+        return out
+
+    def table(self) -> str:
+        """The allowed solid angle of each set of limits."""
+        rows = [
+            [
+                f"  {name}",
+                quantity(ow.solid_angle(), "sr"),
+                f"full circles {int(ow.full_circles().sum())}",
+            ]
+            for name, ow in self.items()
+        ]
+        return "MEL prototype study (Merlet ch. 3), allowed solid angle:\n" + columns(rows)
 
 
 def _codes(
@@ -518,7 +564,7 @@ def mel_study(
     n1: int = 90,
     n2: int = 360,
     progress: bool | None = None,
-) -> dict[str, OrientationWorkspace]:
+) -> MelStudy:
     """Merlet's MEL prototype study: the platform normal under rotations about x then z.
 
     Three maps at the same point: leg strokes only, plus the base joints' square-hole
@@ -538,17 +584,19 @@ def mel_study(
         Case name -> orientation workspace, in the order of :data:`MEL_CASES`.
 
     """
-    return {
-        name: orientation_workspace(
-            robot,
-            center,
-            N,
-            (1.0, 0.0, 0.0),
-            (0.0, 0.0, 1.0),
-            n1=n1,
-            n2=n2,
-            limits=kinds,
-            progress=progress,
-        )
-        for name, kinds in MEL_CASES.items()
-    }
+    return MelStudy(
+        {
+            name: orientation_workspace(
+                robot,
+                center,
+                N,
+                (1.0, 0.0, 0.0),
+                (0.0, 0.0, 1.0),
+                n1=n1,
+                n2=n2,
+                limits=kinds,
+                progress=progress,
+            )
+            for name, kinds in MEL_CASES.items()
+        }
+    )

@@ -25,6 +25,8 @@ from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.inputs import count, positive
 from pkdyn.model.arguments import public
 from pkdyn.model.robot import PLATFORM_HINT, Robot
+from pkdyn.results import Result, deprecated_alias, jsonable
+from pkdyn.units import quantity
 from pkdyn.workspace.limits import LIMIT_KINDS, REACHABLE, PoseEvaluator, check_kinds
 
 __all__ = [
@@ -38,7 +40,7 @@ AXES = ("x", "y", "z")
 
 
 @dataclass
-class TranslationWorkspace:
+class TranslationWorkspace(Result):
     """A sampled constant-orientation workspace.
 
     Attributes:
@@ -159,11 +161,39 @@ class TranslationWorkspace:
         others = [i for i in range(3) if i != d]
         return self.axes[others[0]], self.axes[others[1]], np.take(self.codes, k, axis=d)
 
-    def as_json(self) -> dict[str, Any]:
+    @property
+    def kind(self) -> str:
+        """``translation`` or ``dextrous`` (every orientation: :mod:`pkdyn.workspace.dextrous`)."""
+        return "dextrous" if self.method.startswith("dextrous") else "translation"
+
+    def table(self) -> str:
+        """Volume, bounds of the reachable samples, samples and what rejected them."""
+        unit = "m^3" if len(self.dims) == 3 else "m^2"
+        lines = [f"{self.kind} workspace: volume {quantity(self.volume, unit)}"]
+        b = self.bounds
+        if b is not None:
+            lines.append(
+                "bounds: "
+                + ", ".join(
+                    f"{ax} [{quantity(lo, 'm')}, {quantity(hi, 'm')}]"
+                    for ax, (lo, hi) in zip(AXES, b, strict=True)
+                )
+            )
+        lines.append(
+            f"samples: {self.samples} ({int(np.count_nonzero(self.reachable))} reachable), "
+            "rejected by: " + ", ".join(f"{k} {v}" for k, v in self.limits_hit.items())
+        )
+        if self.touches_box:
+            lines.append("note: reachable samples touch the sampled box; widen --bounds")
+        return "\n".join(lines)
+
+    as_json = deprecated_alias("as_json", "to_json")
+
+    def to_json(self) -> dict[str, Any]:
         """``volume``, ``bounds``, ``samples``, ``limits_hit`` and the sampling description."""
         b = self.bounds
-        return {
-            "kind": "translation",
+        out = {
+            "kind": self.kind,
             "volume": self.volume,
             "volume_unit": "m^3" if len(self.dims) == 3 else "m^2",
             "bounds": None if b is None else b.tolist(),
@@ -177,6 +207,9 @@ class TranslationWorkspace:
             "margin": self.margin,
             "method": self.method,
         }
+        if self.kind == "dextrous":
+            out.pop("rpy")
+        return jsonable(out)
 
 
 def _delta_evaluator(robot: Robot) -> PoseEvaluator | None:

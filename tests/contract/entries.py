@@ -59,6 +59,8 @@ class Api:
         timeout: Time limit of one call [s].
         nan_ok: NaN is a documented value of the result (an undefined figure).
         slow: Drive it only in the slow run.
+        baseline: The entry has a valid baseline call (``False``: only the classes that need
+            no valid arguments around them are driven, a wrong type of each argument).
 
     """
 
@@ -72,6 +74,7 @@ class Api:
     timeout: float = 10.0
     nan_ok: bool = False
     slow: bool = False
+    baseline: bool = True
 
 
 @dataclass(frozen=True)

@@ -87,6 +87,9 @@ reason (``xfail(strict=True)``: the lead removes the mark when the branches meet
 # the command line
 
 CLAVEL = ("--clavel",)
+SETTLE = ("--settle", "1e-4", "--actuator-stiffness", "2e4", "--dwell", "0.1")
+STIFFNESS_MAP = ("--map", "xy", "--grid", "3")
+VIBRATION_METRIC = ("--metric", "settling_time", "--actuator-stiffness", "2e4", "--dt", "0.004")
 ORIENTATION = ("ROBOT=gough_stewart", "--kind", "orientation", "--n1", "6", "--n2", "12")
 MAP = ("--map", "xy", "--grid", "3")
 MONTE_CARLO = ("--samples", "4")
@@ -107,6 +110,8 @@ def _robot_options(family: str, param: str) -> dict[str, Arg]:
         "--home": Arg(Vector("n_a"), names=("home",)),
         "--tol": Arg(Real(sign="positive"), names=("tol",)),
         "--xacro-arg": Arg(Assign(), names=("xacro",)),
+        "--ignore-element": Arg(Names(), names=("ignore", "element", "no_such_name")),
+        "--repair-inertias": Arg(Flag()),
     }
 
 
@@ -165,6 +170,22 @@ class RangeSpec(Kind):
         }
 
 
+def _map_options() -> dict[str, Arg]:
+    """The map options of ``stiffness`` and ``modes`` (``--map PLANE`` and its grid)."""
+    return {
+        "--map": Arg(Choice(("xy", "xz", "yz")), names=("map",)),
+        "--center": Arg(Vector(3), names=("center",), context=STIFFNESS_MAP),
+        "--extent": Arg(Real(sign="positive"), names=("extent",), context=STIFFNESS_MAP),
+        "--grid": Arg(Count(minimum=2), names=("grid",), context=STIFFNESS_MAP),
+        "--plot": Arg(PathOut(".png", onto=("robot.urdf",)), names=("plot",),
+                      context=STIFFNESS_MAP),
+        "--csv": Arg(PathOut(".csv", onto=("robot.urdf",)), names=("csv",), context=STIFFNESS_MAP),
+        "--field": Arg(Choice(("stiffness_min", "deflection")), names=("field",),
+                       context=STIFFNESS_MAP),
+        "--shear": Arg(Choice(("on", "off")), names=("shear",)),
+    }  # fmt: skip
+
+
 def _robot_cmd(
     words: tuple[str, ...],
     family: str,
@@ -189,7 +210,7 @@ CLI: list[Cli] = [
         "five_bar",
         "l1",
         ["-o", "{out.urdf}"],
-        {"--output": Arg(PathOut(".urdf", onto=("robot.urdf",)), names=("-o", "output"))},
+        {"--out": Arg(PathOut(".urdf", onto=("robot.urdf",)), names=("-o", "output"))},
     ),
     _robot_cmd(
         ("forward-geometry",),
@@ -223,6 +244,8 @@ CLI: list[Cli] = [
             "--dt": Arg(Real(sign="positive"), names=("dt",)),
             "--integrator": Arg(Choice(("dopri5", "rk4", "euler")), names=("integrator",)),
             "--step": Arg(Real(sign="positive"), names=("step",)),
+            "--v0": Arg(Vector("n_a"), names=("v0", "velocit")),
+            "--torque": Arg(Vector("n_a"), names=("torque", "effort")),
             "--csv": Arg(PathOut(".csv", onto=("robot.urdf",)), names=("csv",)),
             "--plot": Arg(PathOut(".png", onto=("robot.urdf",)), names=("plot", "figure")),
             "--html": Arg(PathOut(".html", onto=("robot.urdf",)), names=("html",)),
@@ -255,6 +278,20 @@ CLI: list[Cli] = [
                 Choice(("rated_torque", "mass", "price")), names=("criterion",), context=CATALOG
             ),
             "--show": Arg(Count(minimum=0), names=("show",), context=CATALOG),
+            "--settle": Arg(Real(sign="positive"), names=("settle", "band")),
+            "--dwell": Arg(Real(sign="positive"), names=("dwell",), context=SETTLE),
+            "--actuator-stiffness": Arg(
+                Vector((1, 3), inf_ok=True),
+                names=("actuator-stiffness", "actuator_stiffness"),
+                context=SETTLE,
+            ),
+            "--damping-ratio": Arg(
+                Real(sign="positive"), names=("damping-ratio", "damping_ratio"), context=SETTLE
+            ),
+            "--material": Arg(
+                Choice(("steel", "aluminium", "carbon")), names=("material",), context=SETTLE
+            ),
+            "--shaper": Arg(Choice(("zv", "zvd", "none")), names=("shaper",), context=SETTLE),
             "--operating-points": Arg(
                 PathOut(".png", onto=("robot.urdf", "catalog.yaml")),
                 names=("operating", "catalog"),
@@ -322,6 +359,7 @@ CLI: list[Cli] = [
             "--point": Arg(Vector(3), names=("point",)),
             "--wrench": Arg(Vector((3, 6)), names=("wrench",)),
             "--loaded": Arg(Flag()),
+            **_map_options(),
         },
         posed=True,
     ),
@@ -341,6 +379,7 @@ CLI: list[Cli] = [
             "--gravity": Arg(Flag()),
             "--html": Arg(PathOut(".html", onto=("robot.urdf",)), names=("html",)),
             "--mode": Arg(Count(), names=("mode",), context=("--html", "{out.html}")),
+            **_map_options(),
         },
         posed=True,
     ),
@@ -407,6 +446,13 @@ CLI: list[Cli] = [
             "--verify": Arg(Count(minimum=2), names=("verify", "require"), context=REQUIRE),
             "--clavel-chart": Arg(Flag()),
             "--json": Arg(Flag()),
+            "--band": Arg(Real(sign="positive"), names=("band",), context=VIBRATION_METRIC),
+            "--dwell": Arg(Real(sign="positive"), names=("dwell",), context=VIBRATION_METRIC),
+            "--damping-ratio": Arg(
+                Real(sign="positive"),
+                names=("damping-ratio", "damping_ratio"),
+                context=VIBRATION_METRIC,
+            ),
         },
         robot="delta",
         inputs={"study.yaml": fx.study_yaml, "plugin.py": fx.plugin_py},
@@ -435,10 +481,54 @@ CLI: list[Cli] = [
         "l1",
         ["-o", "{out.xml}"],
         {
-            "--output": Arg(PathOut(".xml", onto=("robot.urdf",)), names=("-o", "output")),
+            "--out": Arg(PathOut(".xml", onto=("robot.urdf",)), names=("-o", "output")),
             "--timestep": Arg(Real(sign="positive"), names=("timestep",)),
             "--no-contacts": Arg(Flag()),
         },
+    ),
+    _robot_cmd(
+        ("vibration",),
+        "delta",
+        "la",
+        ["--actuator-stiffness", "2e4", "--dt", "0.004", "--dwell", "0.1"],
+        {
+            "--trajectory": Arg(
+                PathIn(key="trajectory.csv"), names=("trajectory", "trajectory.csv", "t,x")
+            ),
+            "--cycle-time": Arg(Real(sign="positive"), names=("cycle", "cycle_time")),
+            "--payload": Arg(Real(sign="non_negative"), names=("payload",)),
+            "--actuator-stiffness": Arg(
+                Vector((1, 3), inf_ok=True), names=("actuator-stiffness", "actuator_stiffness")
+            ),
+            "--damping-ratio": Arg(Real(sign="positive"), names=("damping-ratio", "damping_ratio")),
+            "--actuator-damping": Arg(
+                Vector((1, 3)), names=("actuator-damping", "actuator_damping")
+            ),
+            "--feedforward": Arg(Choice(("none", "gravity", "rigid")), names=("feedforward",)),
+            "--material": Arg(Choice(("steel", "aluminium", "carbon")), names=("material",)),
+            "--rigid-links": Arg(Flag()),
+            "--band": Arg(Real(sign="positive"), names=("band",)),
+            "--dwell": Arg(Real(sign="positive"), names=("dwell",)),
+            "--method": Arg(Choice(("modal", "multibody")), names=("method",)),
+            "--shaper": Arg(Choice(("zv", "zvd")), names=("shaper",)),
+            "--shaper-modes": Arg(
+                Count(), names=("shaper-modes", "shaper_modes"), context=("--shaper", "zv")
+            ),
+            "--modes": Arg(Count(), names=("modes",)),
+            "--poses": Arg(Count(minimum=2), names=("poses",)),
+            "--point": Arg(Vector(3), names=("point",)),
+            "--profile": Arg(Choice(("quintic", "jerk")), names=("profile",)),
+            "--dt": Arg(Real(sign="positive"), names=("dt",)),
+            "--csv": Arg(PathOut(".csv", onto=("robot.urdf", "trajectory.csv")), names=("csv",)),
+            "--plot": Arg(PathOut(".png", onto=("robot.urdf",)), names=("plot", "figure")),
+            "--html": Arg(PathOut(".html", onto=("robot.urdf",)), names=("html",)),
+            "--scale": Arg(Real(sign="positive"), names=("scale",), context=("--html", "{v.html}")),
+            "--slow": Arg(Real(sign="positive"), names=("slow",), context=("--html", "{v.html}")),
+            "--json": Arg(Flag()),
+        },
+        inputs={"trajectory.csv": fx.trajectory_csv},
+        timeout=60,
+        slow=True,
     ),
     _robot_cmd(
         ("identify",),
@@ -447,7 +537,7 @@ CLI: list[Cli] = [
         ["--data", "{data.csv}", "-o", "{out.urdf}"],
         {
             "--data": Arg(PathIn(key="data.csv"), names=("data", "data.csv")),
-            "--output": Arg(
+            "--out": Arg(
                 PathOut(".urdf", onto=("robot.urdf", "data.csv", "other.csv")),
                 names=("-o", "output"),
             ),
@@ -461,6 +551,7 @@ CLI: list[Cli] = [
                 names=("csv",),
                 context=("--predict", "{other.csv}"),
             ),
+            "--plot": Arg(PathOut(".png", onto=("robot.urdf", "data.csv")), names=("plot",)),
             "--json": Arg(Flag()),
         },
         inputs={
@@ -518,6 +609,7 @@ CLI: list[Cli] = [
             "--grid": Arg(Count(minimum=2), names=("grid",), context=MAP),
             "--field": Arg(Choice(), names=("field",), context=MAP),
             "--plot": Arg(PathOut(".png", onto=("robot.urdf",)), names=("plot", "figure")),
+            "--csv": Arg(PathOut(".csv", onto=("robot.urdf",)), names=("csv",), context=MAP),
         },
         posed=True,
     ),
@@ -530,7 +622,7 @@ CLI: list[Cli] = [
             "--measurements": Arg(
                 PathIn(key="measurements.csv"), names=("measurements", "measurements.csv")
             ),
-            "--output": Arg(
+            "--out": Arg(
                 PathOut(".urdf", onto=("robot.urdf", "measurements.csv")), names=("-o", "output")
             ),
             "--model": Arg(Choice(("auto", "placements", "shortcuts", "family")), names=("model",)),
@@ -541,6 +633,16 @@ CLI: list[Cli] = [
             "--implicit": Arg(Choice(("point", "plane")), names=("implicit", "group")),
             "--seed": Arg(Count(minimum=0), names=("seed",)),
             "--json": Arg(Flag()),
+            "--validation": Arg(
+                PathIn(key="measurements.csv"), names=("validation", "measurements.csv")
+            ),
+            "--tolerance": Arg(Vector((1, 2, 3)), names=("tolerance",)),
+            "--residual-limit": Arg(Real(sign="positive"), names=("residual",)),
+            "--correction-limit": Arg(Real(sign="positive"), names=("correction",)),
+            "--accept": Arg(Flag()),
+            "--plot": Arg(
+                PathOut(".png", onto=("robot.urdf", "measurements.csv")), names=("plot",)
+            ),
         },
         inputs={"measurements.csv": fx.calibration_csv},
         timeout=30,

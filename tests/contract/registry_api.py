@@ -208,6 +208,38 @@ def _conditioning_map() -> Any:
     return delta_map(fx.robot("delta").params, u, u, -0.4)
 
 
+@functools.cache
+def _vibration() -> Any:
+    import warnings
+
+    from pkdyn.precision import vibration
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return vibration(fx.robot("delta"), "adept", actuator_stiffness=2e4, dt=0.004, dwell=0.1)
+
+
+@functools.cache
+def _delta_model() -> Any:
+    from pkdyn.precision.parameters import parameter_model
+
+    return parameter_model(fx.robot("delta"), "auto")
+
+
+@functools.cache
+def _geometric() -> Any:
+    from pkdyn.precision import geometric_errors
+
+    return geometric_errors(fx.robot("delta"), fx.q_at("delta", DELTA_POSE), _delta_model(), 1e-5)
+
+
+@functools.cache
+def _calibrated() -> Any:
+    from pkdyn.calibration import calibrate
+
+    return calibrate(fx.robot("delta"), _cal_measurements(), noise=1e-5)
+
+
 def _scene(s: Scratch) -> Any:
     from pkdyn.viewer import Scene
 
@@ -308,6 +340,37 @@ EXEMPT: list[Exempt] = [
          "pkdyn.library.Family.build_urdf", "pkdyn.library.Family.home",
          "pkdyn.library.Family.forward_position", "pkdyn.library.Family.configuration",
          "pkdyn.library.Family.inverse_actuators"),
+    *_ex(VIEW, *[f"{c}.{m}" for c in (
+        "pkdyn.GeometryResult", "pkdyn.analysis.CollisionReport", "pkdyn.analysis.KinematicModels",
+        "pkdyn.analysis.MapSamples", "pkdyn.analysis.MobilityResult",
+        "pkdyn.calibration.CalibrationResult", "pkdyn.calibration.ErrorStats",
+        "pkdyn.calibration.Identifiability", "pkdyn.design.StudyResult",
+        "pkdyn.dynamics.EffortTrajectory", "pkdyn.identification.IdentificationResult",
+        "pkdyn.precision.Accuracy", "pkdyn.precision.ActuatorAccuracy",
+        "pkdyn.precision.GeometricAccuracy", "pkdyn.precision.GridMap",
+        "pkdyn.precision.MonteCarlo", "pkdyn.precision.PoseFigures",
+        "pkdyn.precision.ToleranceRanking", "pkdyn.precision.Validity",
+        "pkdyn.precision.VibrationResult", "pkdyn.workspace.ClavelFigures",
+        "pkdyn.workspace.OrientationWorkspace", "pkdyn.workspace.TranslationWorkspace",
+    ) for m in ("table", "to_json")
+      if (c, m) not in {("pkdyn.analysis.CollisionReport", "table"),
+                        ("pkdyn.design.StudyResult", "table"),
+                        ("pkdyn.identification.IdentificationResult", "table"),
+                        ("pkdyn.calibration.ErrorStats", "table")}
+      and not (c.endswith(("ErrorStats", "Validity")) and m == "table")],
+      "pkdyn.analysis.SingularityReport.table", "pkdyn.analysis.StaticsResult.table",
+      "pkdyn.precision.Stiffness.table", "pkdyn.calibration.ErrorStats.table",
+      "pkdyn.calibration.Identifiability.formulas",
+      "pkdyn.calibration.Identifiability.indices_line",
+      "pkdyn.precision.ActuatorAccuracy.headline", "pkdyn.precision.GeometricAccuracy.headline",
+      "pkdyn.precision.GridMap.counts", "pkdyn.precision.Validity.lines",
+      "pkdyn.precision.PlaneGrid.positions"),
+    *_ex(RECORD, "pkdyn.precision.Accuracy", "pkdyn.precision.AccuracyMap",
+         "pkdyn.precision.ActuatorAccuracy", "pkdyn.precision.GeometricAccuracy",
+         "pkdyn.precision.GridMap", "pkdyn.precision.MonteCarlo", "pkdyn.precision.PlaneGrid",
+         "pkdyn.precision.ToleranceRanking", "pkdyn.precision.Validity",
+         "pkdyn.precision.VibrationResult"),
+    *_ex(INTERNAL, "solvers.Closure", "solvers.LinearCoupling", methods=True),
     *_ex("the command line itself: driven by test_contract_cli.py", "pkdyn.cli.main",
          "pkdyn.cli.run", "pkdyn.cli.commands"),
     *_ex("the viewer's message sink (meshcat's protocol), no user input",
@@ -1197,4 +1260,128 @@ API: list[Api] = [
         robot=None, obj=lambda s: _study_result()),
     Api("pkdyn.design.StudyResult.summary", {"top": Arg(Count(), 5, names=("top",))},
         robot=None, obj=lambda s: _study_result()),
+    # ---- merged from main: readings, accuracy, vibration, result methods with arguments
+    Api("pkdyn.Robot.joint_coordinates",
+        {"readings": Arg(Vector("n_a"), Lazy(lambda s: s.robot.q_home[s.robot.actuated_q].copy()),
+                         names=("readings", "reading")),
+         "rates": Arg(Flag(), False, names=("rates",))}, obj=lambda s: s.robot),
+    Api("pkdyn.Robot.readings",
+        {"qa": Arg(Vector("n_a"), Lazy(lambda s: s.robot.q_home[s.robot.actuated_q].copy()),
+                   names=("qa", "actuat")),
+         "rates": Arg(Flag(), False, names=("rates",))}, obj=lambda s: s.robot),
+    Api("pkdyn.calibration.Measurements.where", {"i": Arg(Count(minimum=0), 0, names=("i", "row"))},
+        obj=lambda s: _cal_measurements()),
+    Api("pkdyn.calibration.Measurements.with_readings",
+        {"qa": Arg(Matrix(30, "n_a"), Lazy(lambda s: _cal_measurements().qa.copy()),
+                   names=("qa",))}, obj=lambda s: _cal_measurements()),
+    Api("pkdyn.identification.Measurements.where",
+        {"k": Arg(Count(minimum=0), 0, names=("k", "sample", "row"))}, robot="five_bar",
+        obj=lambda s: _id_measurements()),
+    Api("pkdyn.calibration.CalibrationResult.urdf",
+        {"xml": Arg(Text(optional=True), None, names=("xml",))},
+        obj=lambda s: _calibrated(), nan_ok=True, timeout=30),
+    Api("pkdyn.calibration.CalibrationResult.write_urdf",
+        {"path": Arg(PathOut(".urdf"), Lazy(lambda s: s.dir / "cal.urdf"), names=("path",)),
+         "xml": Arg(Text(optional=True), None, names=("xml",))},
+        obj=lambda s: _calibrated(), nan_ok=True, timeout=30),
+    Api("pkdyn.analysis.CollisionReport.table", {"top": Arg(Count(minimum=0), 10, names=("top",))},
+        robot="five_bar", geometry=True,
+        obj=lambda s: pkdyn.analysis.distance_report(s.robot, s.robot.q_home)),
+    Api("pkdyn.design.StudyResult.report", {"top": Arg(Count(), 5, names=("top",))}, robot=None,
+        obj=lambda s: _study_result()),
+    Api("pkdyn.precision.Modes.table", {"count": Arg(Count(optional=True), 3, names=("count",))},
+        obj=lambda s: _modes()),
+    Api("pkdyn.precision.ElasticModel.at", {"q": POSED_Q}, obj=lambda s: _elastic()),
+    Api("pkdyn.precision.Section.inertia",
+        {"length": Arg(Real("m", sign="positive"), 0.3, names=("length",)),
+         "material": Arg(Obj("Material"), Lazy(lambda s: pkdyn.precision.STEEL),
+                         names=("material",))},
+        robot=None, obj=lambda s: pkdyn.precision.Section(0.01)),
+    Api("pkdyn.precision.GridMap.extreme",
+        {"name": Arg(Choice(), "stiffness_min", names=("name",))},
+        robot="five_bar", obj=lambda s: _precision_map()),
+    Api("pkdyn.precision.GridMap.where",
+        {"name": Arg(Choice(), "stiffness_min", names=("name",))},
+        robot="five_bar", obj=lambda s: _precision_map()),
+    Api("pkdyn.precision.GridMap.write_csv",
+        {"path": Arg(PathOut(".csv"), Lazy(lambda s: s.dir / "map.csv"), names=("path",))},
+        robot="five_bar", obj=lambda s: _precision_map()),
+    Api("pkdyn.precision.AccuracyMap.field",
+        {"name": Arg(Choice(), "actuator_worst", names=("name", "field"))},
+        robot="five_bar", obj=lambda s: _accuracy_map()),
+    Api("pkdyn.precision.GeometricAccuracy.ranked",
+        {"top": Arg(Count(optional=True), 5, names=("top",))}, obj=lambda s: _geometric()),
+    Api("pkdyn.precision.GeometricAccuracy.ranking",
+        {"top": Arg(Count(optional=True), 5, names=("top",))}, obj=lambda s: _geometric()),
+    Api("pkdyn.precision.Validity.warn", {"stacklevel": Arg(Count(), 3, names=("stacklevel",))},
+        robot=None, obj=lambda s: pkdyn.precision.Validity()),
+    Api("pkdyn.precision.VibrationResult.write_csv",
+        {"path": Arg(PathOut(".csv"), Lazy(lambda s: s.dir / "vib.csv"), names=("path",))},
+        obj=lambda s: _vibration()),
+    Api("pkdyn.precision.actuator_errors",
+        {"robot": ROBOT_R, "q": POSED_Q,
+         "resolution": Arg(Vector((1, 3)), 1e-4, names=("resolution",)),
+         "backlash": Arg(Vector((1, 3)), 0.0, names=("backlash",))}),
+    Api("pkdyn.precision.geometric_errors",
+        {"robot": ROBOT_R, "q": POSED_Q,
+         "model": Arg(Obj("ParameterModel"), Lazy(lambda s: _delta_model()), names=("model",)),
+         "tolerance": Arg(Vector(None), 1e-5, names=("tolerance",)),
+         "distribution": Arg(Choice(("uniform", "normal")), "uniform", names=("distribution",))}),
+    Api("pkdyn.precision.monte_carlo",
+        {"robot": ROBOT_R, "q": POSED_Q,
+         "model": Arg(Obj("ParameterModel"), Lazy(lambda s: _delta_model()), names=("model",)),
+         "tolerance": Arg(Vector(None), 1e-5, names=("tolerance",)),
+         "samples": Arg(Count(minimum=2), 5, names=("samples",)),
+         "distribution": Arg(Choice(("uniform", "normal")), "uniform", names=("distribution",)),
+         "seed": Arg(Count(minimum=0), 0, names=("seed",)),
+         "progress_bar": Arg(Flag(optional=True), False, names=("progress",))}),
+    Api("pkdyn.precision.accuracy_budget",
+        {"robot": ROBOT_R, "q": POSED_Q,
+         "model": Arg(Obj("ParameterModel"), Lazy(lambda s: _delta_model()), names=("model",)),
+         "resolution": Arg(Vector((1, 3), optional=True), 1e-4, names=("resolution",)),
+         "backlash": Arg(Vector((1, 3), optional=True), None, names=("backlash",)),
+         "tolerance": Arg(Vector(None, optional=True), 1e-5, names=("tolerance",)),
+         "samples": Arg(Count(minimum=0), 0, names=("samples",)),
+         "top": Arg(Count(optional=True), 10, names=("top",))}),
+    Api("pkdyn.precision.accuracy_map",
+        {"robot": ROBOT_R, "plane": Arg(Choice(("xy", "xz", "yz")), "xy", names=("plane",)),
+         "extent": Arg(Real("m", sign="positive", optional=True), None, names=("extent",)),
+         "samples": Arg(Count(minimum=2), 3, names=("samples",)),
+         "resolution": Arg(Vector((1, 2)), 1e-4, names=("resolution",)),
+         "backlash": Arg(Vector((1, 2)), 0.0, names=("backlash",)),
+         "progress_bar": Arg(Flag(optional=True), False, names=("progress",))},
+        robot="five_bar"),
+    Api("pkdyn.precision.vibration",
+        {"robot": ROBOT_R,
+         "cycle_time": Arg(Real("s", sign="positive", optional=True), None, names=("cycle",)),
+         "payload": Arg(Real("kg", sign="non_negative"), 0.0, names=("payload",)),
+         "actuator_stiffness": Arg(Vector((1, 3), inf_ok=True), 2e4,
+                                   names=("actuator_stiffness",)),
+         "band": Arg(Real("m", sign="positive"), 1e-4, names=("band",)),
+         "dwell": Arg(Real("s", sign="positive"), 0.1, names=("dwell",)),
+         "method": Arg(Choice(("modal", "multibody")), "modal", names=("method",)),
+         "dt": Arg(Real("s", sign="positive"), 0.004, names=("dt",)),
+         "progress": PROGRESS()},
+        timeout=60, slow=True),
+    Api("pkdyn.viewer.animate_vibration",
+        {"result": Arg(Obj("VibrationResult"), Lazy(lambda s: _vibration()), names=("result",)),
+         "scale": Arg(Real(sign="positive", optional=True), None, names=("scale",)),
+         "slow": Arg(Real(sign="positive"), 20.0, names=("slow",))},
+        timeout=60, slow=True),
+    *[Api(f"pkdyn.plotting.{fn}", {arg: Arg(Obj("a result"), None, names=(arg, "result"))},
+          robot=None, baseline=False)
+      for fn, arg in (
+          ("plot_calibration", "result"), ("plot_calibration_plan", "plan"),
+          ("plot_clavel", "comparison"), ("plot_comparison", "comparison"),
+          ("plot_efforts", "result"), ("plot_grid_map", "result"),
+          ("plot_identification", "result"), ("plot_mel_study", "study"),
+          ("plot_monte_carlo", "result"), ("plot_operating_points", "selection"),
+          ("plot_orientation_workspace", "ow"), ("plot_pareto", "result"),
+          ("plot_ranking", "result"), ("plot_scenario", "report"),
+          ("plot_translation_workspace", "ws"), ("plot_vibration", "result"),
+      )],
+    Api("pkdyn.plotting.plot_simulation",
+        {"robot": Arg(RobotArg(), None, names=("robot",)),
+         "result": Arg(Obj("a simulation"), None, names=("result",))},
+        robot=None, baseline=False),
 ]  # fmt: skip

@@ -12,6 +12,11 @@ default classes), :mod:`~pkdyn.model.formats.sdf` (SDFormat import),
 and Pinocchio model), :mod:`~pkdyn.model.formats.drake` (Drake's constraint elements),
 :mod:`~pkdyn.model.formats.onshape` (onshape-to-robot closing frames),
 :mod:`~pkdyn.model.formats.gazebo` (``<gazebo><joint>`` loop closures in URDF),
+:mod:`~pkdyn.model.formats.urdfplus` (URDF+: ``<loop>``, ``<coupling>``, ``independent``) and
+:mod:`~pkdyn.model.formats.urdfplus_export` (a URDF+ file in pkdyn's elements),
+:mod:`~pkdyn.model.formats.unread` (elements no importer reads: named, loop-like ones refused,
+``ignore_elements``), :mod:`~pkdyn.model.formats.mjcf_inertia` (inertias as MuJoCo accepts
+them),
 :mod:`~pkdyn.model.formats.xacro_files` (xacro expansion),
 :mod:`~pkdyn.model.formats.xmldoc` (bounded regular-file reads, XML with line numbers and no
 entities).

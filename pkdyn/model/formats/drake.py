@@ -3,7 +3,8 @@
 - ``<drake:ball_constraint>`` (Drake's syntax): ``drake:ball_constraint_body_A``,
   ``drake:ball_constraint_p_AP``, ``drake:ball_constraint_body_B``,
   ``drake:ball_constraint_p_BQ`` -- in a URDF as ``name`` / ``value`` attributes, in SDFormat as
-  element text. Points P on A and Q on B coincide: a ``point`` closure.
+  element text, all four required (as Drake's parser requires them). Points P on A and Q on B
+  coincide: a ``point`` closure.
 - ``<drake:weld_constraint>``: in SDFormat, ``<parent>`` and ``<child>`` frames that coincide
   (the form of Drake's ``four_bar_weld.sdf``); in both formats, like the ball constraint,
   ``drake:weld_constraint_body_A`` / ``_X_AP`` / ``_body_B`` / ``_X_BQ`` with poses
@@ -90,13 +91,17 @@ def closure(
         if not name:
             raise DescriptionError(source, where, f"missing drake:{prefix}_{body}")
         o = children.get(f"{prefix}_{offset}")
+        if o is None:  # Drake's parser reports the missing tag: no default point
+            raise DescriptionError(
+                source,
+                where,
+                f"missing drake:{prefix}_{offset} (Drake requires both points of a constraint)",
+            )
         if kind == "ball_constraint":
-            p = _numbers(source, f"{where} {offset}", read(o) if o is not None else "0 0 0", 3)
+            p = _numbers(source, f"{where} {offset}", read(o), 3)
             M = pin.SE3(np.eye(3), p)
         else:
-            x = _numbers(
-                source, f"{where} {offset}", read(o) if o is not None else "0 0 0 0 0 0", 6
-            )
+            x = _numbers(source, f"{where} {offset}", read(o), 6)
             M = pin.SE3(pin.rpy.rpyToMatrix(x[3:]), x[:3])
         out.append(FrameRef(name, M))
     kind_ = "point" if kind == "ball_constraint" else "weld"

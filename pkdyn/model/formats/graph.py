@@ -40,6 +40,7 @@ from pkdyn.model.description import (
     ClosureSpec,
     CouplingSpec,
     FrameRef,
+    LinearCouplingSpec,
     PassiveSpec,
 )
 from pkdyn.model.validate import unit_vector
@@ -162,6 +163,7 @@ class Mechanism:
         home: Named configurations (joint name -> coordinates, Pinocchio convention).
         couplings: Joint couplings (joint names, coordinates in the file's convention).
         missing_meshes: Mesh files that were not found (their shapes are left out).
+        dropped_collisions: Collision shapes left out because they were malformed.
 
     """
 
@@ -171,10 +173,11 @@ class Mechanism:
     joints: list[Joint] = field(default_factory=list)
     closures: list[ClosureSpec] = field(default_factory=list)
     actuators: list[ActuatorSpec] = field(default_factory=list)
-    couplings: list[CouplingSpec] = field(default_factory=list)
+    couplings: list[CouplingSpec | LinearCouplingSpec] = field(default_factory=list)
     gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
     home: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
     missing_meshes: list[str] = field(default_factory=list)
+    dropped_collisions: list[str] = field(default_factory=list)
 
     def add_body(self, body: Body, where: str = "") -> Body:
         """Add a body; its name must be new."""
@@ -210,7 +213,7 @@ class Built:
     joint_ids: dict[str, int]
     cut: list[str]
     passive: list[PassiveSpec] = field(default_factory=list)
-    couplings: list[CouplingSpec] = field(default_factory=list)
+    couplings: list[CouplingSpec | LinearCouplingSpec] = field(default_factory=list)
 
     def configuration(self, values: dict[str, np.ndarray], base: np.ndarray) -> np.ndarray:
         """A configuration with some joints set (joint name -> coordinates).
@@ -503,7 +506,10 @@ def build(mech: Mechanism) -> Built:
                 gm.addGeometryObject(go)
     cut_names = {j.name for j in cut}
     for c in mech.couplings:
-        for jname in (c.joint, c.source):
+        coupled = [j for j, _ in c.terms] if isinstance(c, LinearCouplingSpec) else [c.joint]
+        if isinstance(c, CouplingSpec):
+            coupled.append(c.source)  # type: ignore[arg-type]
+        for jname in coupled:
             if jname in cut_names:
                 raise DescriptionError(
                     mech.source,

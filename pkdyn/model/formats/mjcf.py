@@ -16,13 +16,20 @@ geoms). Visual geoms are in group 2 without contacts, collision geoms in group 3
 between bodies linked by a joint or a closure are excluded. Closures become equality constraints
 between two sites placed at the Pinocchio contact frames (``<name>_1`` on ``joint1``'s body,
 ``<name>_2`` on ``joint2``'s): a ``point`` closure a ``connect``, a ``weld`` a ``weld``, a
-``hinge`` the same two ``connect`` as its two Pinocchio point constraints. Joint couplings
-become ``joint`` equalities named after the coupling (``joint1`` the driven joint, ``joint2``
-the source, ``polycoef`` the polynomial re-expanded about ``qpos0 = 0``: MuJoCo's
-``qpos - qpos0`` convention with the exported joints' zero ``ref``). Each actuator is a
-``motor`` on its joint with ``gear`` = the transmission reduction, so its control is the
-motor-side effort; ``ctrlrange`` and ``forcerange`` are the URDF (joint-side) effort limit
+``hinge`` the same two ``connect`` as its two Pinocchio point constraints. Polynomial joint
+couplings become ``joint`` equalities named after the coupling (``joint1`` the driven joint,
+``joint2`` the source, ``polycoef`` the polynomial re-expanded about ``qpos0 = 0``: MuJoCo's
+``qpos - qpos0`` convention with the exported joints' zero ``ref``); a linear coupling of one
+joint to one (a URDF+ rotor transmission) a joint equality too (its last term driven); a linear
+coupling ``sum a_i q_i = b`` of more joints a fixed tendon ``<name>/sum`` of length
+``sum a_i q_i`` and a ``tendon`` equality named after the coupling holding it at ``b``. Each
+actuator is a ``motor`` on its joint with ``gear`` = the transmission reduction, so its control
+is the motor-side effort; ``ctrlrange`` and ``forcerange`` are the URDF (joint-side) effort limit
 divided by the reduction. A keyframe ``home`` holds the assembled home configuration.
+
+Inertias MuJoCo refuses (:mod:`~pkdyn.model.formats.mjcf_inertia`): a massless rotor borrows a
+tiny mass from the body it turns in, at a point of its axis (the dynamics unchanged); a tensor
+breaking the triangle inequality is refused with the remedy (``repair_inertias=True``).
 
 Passive elements: joint damping, friction (``frictionloss``: MuJoCo's dry friction is a
 constraint, pkdyn's a smooth ``tanh`` law) and armature; joint springs as ``stiffness`` and
@@ -59,11 +66,12 @@ import pinocchio as pin
 from pkdyn.exceptions import OutputError
 from pkdyn.files import atomic_write
 from pkdyn.inputs import positive
+from pkdyn.model.formats.mjcf_inertia import mujoco_inertias
 from pkdyn.model.formats.mjcf_mujoco import actuator_efforts, mujoco_model
 from pkdyn.model.formats.mjcf_state import JointMap, StateMap
 from pkdyn.model.formats.mjcf_state import quat_wxyz as _quat_wxyz
 from pkdyn.model.robot import Robot
-from solvers.coupling import MAX_COEFFICIENTS, JointCoupling
+from solvers.coupling import MAX_COEFFICIENTS, JointCoupling, LinearCoupling
 
 __all__ = [
     "JointMap",
@@ -183,6 +191,27 @@ def _spring_attrs(robot: Robot, jid: int, kind: str, k: int) -> dict[str, str]:
     return {}
 
 
+COUPLING_TENDON = "/sum"
+"""Name suffix of the fixed tendon a linear coupling is exported as (``ankle_rotor/sum``)."""
+
+
+def _coupling_tendons(root: ET.Element, model: pin.Model, sums: list[LinearCoupling]) -> None:
+    """Linear couplings ``sum a_i q_i = b`` as fixed tendons ``L = sum a_i q_i``.
+
+    MuJoCo's tendon equality without ``tendon2`` holds ``L - L0 = polycoef[0]``, ``L0`` the
+    length at ``qpos0`` (zero here: no joint has a ``ref``), so ``polycoef[0] = b``.
+    """
+    if not sums:
+        return
+    tendon = root.find("tendon")
+    if tendon is None:
+        tendon = _sub(root, "tendon")
+    for c in sums:
+        el = _sub(tendon, "fixed", name=f"{c.name}{COUPLING_TENDON}")
+        for j, a in c.terms:
+            _sub(el, "joint", joint=model.names[j], coef=_num(a))
+
+
 def _tendons(root: ET.Element, robot: Robot, elements: dict[int, ET.Element]) -> None:
     """Two-frame springs as spatial tendons between two sites."""
     springs = [] if robot.passive is None else list(robot.passive.springs)
@@ -269,6 +298,7 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
     opt = options or MjcfOptions()
     positive("timestep", opt.timestep, "s")
     model = robot.model
+    inertias = mujoco_inertias(robot)
     smap = StateMap(robot)
     names = smap.body_names
     root = ET.Element("mujoco", model=robot.name)
@@ -295,7 +325,7 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
         body = _sub(elements[model.parents[j]], "body", name=names[j])
         body.attrib.update(_pose_attrs(model.jointPlacements[j]))
         elements[j] = body
-        _inertial(body, model.inertias[j])
+        _inertial(body, inertias[j])
         jm = model.joints[j]
         for k, e in enumerate(smap.elements[j]):
             attrs = {"name": e.name, "type": e.type}
@@ -325,7 +355,16 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
         _sub(elements[cm.joint2_id], "site", name=s2, **_pose_attrs(cm.joint2_placement))
         tag = "connect" if cm.type == pin.ContactType.CONTACT_3D else "weld"
         _sub(equality, tag, name=cm.name, site1=s1, site2=s2)
-    for c in robot.closure_set.couplings:
+    sums: list[LinearCoupling] = []
+    for c in robot.constraints.coupling_specs:
+        if isinstance(c, LinearCoupling) and len(c.terms) <= 2:  # one joint to one: a joint
+            _linear_joint_equality(equality, model, c)  # equality, as MuJoCo writes a gear
+            continue
+        if isinstance(c, LinearCoupling):  # a fixed tendon held at its length
+            sums.append(c)
+            _sub(equality, "tendon", name=c.name, tendon1=f"{c.name}{COUPLING_TENDON}",
+                 polycoef=_fmt([c.offset, 0.0, 0.0, 0.0, 0.0]))  # fmt: skip
+            continue
         attrs = {"name": c.name, "joint1": model.names[c.joint]}
         if c.source is not None:
             attrs["joint2"] = model.names[c.source]
@@ -333,6 +372,7 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
     if len(equality) == 0:
         root.remove(equality)
     _tendons(root, robot, elements)
+    _coupling_tendons(root, model, sums)
     if opt.contacts and opt.collision and len(robot.collision_model.geometryObjects):
         contact = _sub(root, "contact")
         for a, b in _excluded_pairs(robot):
@@ -346,6 +386,23 @@ def to_mjcf(robot: Robot, options: MjcfOptions | None = None) -> str:
     _sub(keyframe, "key", name="home", qpos=_fmt(smap.qpos(robot.q_home)))
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _linear_joint_equality(equality: ET.Element, model: pin.Model, c: LinearCoupling) -> None:
+    """``a_1 q_1 + a_2 q_2 = b`` as the joint equality ``q_2 = b / a_2 - (a_1 / a_2) q_1``.
+
+    The last term is the driven joint (``joint1``; a URDF+ coupling's successor, the rotor),
+    the first its source; one term alone locks its joint at ``b / a``. The exported joints
+    have no ``ref``: ``qpos0 = 0``, so the polynomial is MuJoCo's as written.
+    """
+    (driven, a_d) = c.terms[-1]
+    attrs = {"name": c.name, "joint1": model.names[driven]}
+    coef = [c.offset / a_d + 0.0, 0.0, 0.0, 0.0, 0.0]  # + 0.0: no "-0"
+    if len(c.terms) == 2:
+        source, a_s = c.terms[0]
+        attrs["joint2"] = model.names[source]
+        coef[1] = -a_s / a_d + 0.0
+    _sub(equality, "joint", polycoef=_fmt(coef), **attrs)
 
 
 def _polycoef(c: JointCoupling) -> np.ndarray:

@@ -17,13 +17,14 @@ What is read (attributes with their default classes, see :mod:`~pkdyn.model.form
   with MuJoCo's formulas for primitive shapes (mesh volumes from the mesh file, exact);
 - geoms: primitives and meshes (``contype = conaffinity = 0`` ones are visual, the others
   collision); a mesh file that cannot be found is left out with one warning naming the files;
-- ``<equality>``: ``connect`` -> ``point`` closure, ``weld`` -> ``weld`` closure, by bodies
-  (the second anchor / relative pose taken at ``qpos0``, as MuJoCo does) or by sites; named
-  after the equality (unnamed ones ``connect1``, ``weld2``...). ``joint`` -> a joint coupling
-  (:class:`~pkdyn.model.description.CouplingSpec`: ``joint1 - qpos0 = polycoef(joint2 -
-  qpos0)``, up to 5 coefficients, on hinge and slide joints; ``joint1`` alone is locked at
-  ``qpos0 + polycoef[0]``). ``tendon``, ``distance`` and ``flex`` equalities are refused with a
-  message naming them;
+- ``<equality>``: ``connect`` -> ``point`` closure (a pair ``N``, ``N/axis`` on the same two
+  bodies, as pkdyn exports a hinge, -> the ``hinge`` closure ``N``), ``weld`` -> ``weld``
+  closure, by bodies (the second anchor / relative pose taken at ``qpos0``, as MuJoCo does)
+  or by sites; named after the equality (unnamed ones ``connect1``, ``weld2``...).
+  ``joint`` -> a joint coupling (:class:`~pkdyn.model.description.CouplingSpec`:
+  ``joint1 - qpos0 = polycoef(joint2 - qpos0)``, up to 5 coefficients, on hinge and slide
+  joints; ``joint1`` alone is locked at ``qpos0 + polycoef[0]``). ``tendon``, ``distance``
+  and ``flex`` equalities are refused with a message naming them;
 - ``<actuator>`` on joints: ``gear`` -> reduction, joint-side effort limit from ``forcerange``
   x gear (motors and proportional ``general`` actuators also from ``ctrlrange`` x gain x gear);
   actuators on tendons, sites or bodies are left out with a warning;
@@ -47,10 +48,19 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.model.description import ActuatorSpec, ClosureSpec, CouplingSpec, FrameRef
+from pkdyn.exceptions import DescriptionError
+from pkdyn.model.description import (
+    ActuatorSpec,
+    ClosureSpec,
+    CouplingSpec,
+    FrameRef,
+    LinearCouplingSpec,
+)
 from pkdyn.model.formats import mjcf_spec as spec
+from pkdyn.model.formats import unread
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
 from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml, read_text
+from pkdyn.model.inertia import report
 from pkdyn.model.validate import unit_vector
 from pkdyn.model.warn import warn, warn_missing_meshes
 
@@ -86,6 +96,11 @@ class _Reader:
     joint_refs: dict[str, float] = field(default_factory=dict)
     sites: dict[str, tuple[str, pin.SE3]] = field(default_factory=dict)
     geometry: bool = True
+    repair: bool = False  # repair_inertias
+    repaired: list[tuple[str, np.ndarray, np.ndarray]] = field(default_factory=list)
+    rotors: list[str] = field(default_factory=list)  # bodies with inertia and no mass
+    mass_from_geoms: dict[str, bool] = field(default_factory=dict)  # inertiafromgeom, by body
+    tendons: dict[str, list[tuple[str, float]]] = field(default_factory=dict)  # fixed tendons
 
 
 def _includes(doc: XmlDoc, root: ET.Element, base: Path | None) -> None:
@@ -176,7 +191,14 @@ def _sections(root: ET.Element, tag: str) -> list[ET.Element]:
     return [el for el in root if el.tag == tag]
 
 
-def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool = True) -> Mechanism:
+def read_mjcf(
+    text: str,
+    source: str,
+    path: Path | None = None,
+    geometry: bool = True,
+    ignore: frozenset[str] = frozenset(),
+    repair_inertias: bool = False,
+) -> Mechanism:
     """Read an MJCF document into a mechanism (see the module docstring).
 
     Args:
@@ -184,6 +206,8 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
         source: File or name, for messages.
         path: The file, for includes and mesh paths relative to it.
         geometry: Read the geometry (mesh files); without it, only inertias use the geoms.
+        ignore: Element names to leave out (:mod:`~pkdyn.model.formats.unread`).
+        repair_inertias: Replace invalid ``<inertial>`` tensors by the nearest valid ones.
 
     Returns:
         The mechanism: bodies, joints, closures, actuators, ``home`` configurations
@@ -200,10 +224,12 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
     base = path.parent if path is not None else None
     _includes(doc, root, base)
     _check_size(doc, root)
+    unread.check(doc, "mjcf", ignore)
+    unread.prune(doc, ignore)
     comp = spec.Compiler.read(doc, _sections(root, "compiler"))
     defs = spec.Defaults(doc, _sections(root, "default"))
     mech = Mechanism(root.get("model", "mujoco"), source)
-    r = _Reader(doc, comp, defs, mech, geometry=geometry)
+    r = _Reader(doc, comp, defs, mech, geometry=geometry, repair=repair_inertias)
     for opt in _sections(root, "option"):
         if "gravity" in opt.attrib:
             mech.gravity = spec.vector(doc, opt, "gravity", opt.attrib["gravity"], 3)
@@ -218,18 +244,12 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
         mech.bodies["worldbody"].frames
     ):
         del mech.bodies["worldbody"]
+    for tendon in _sections(root, "tendon"):
+        _fixed_tendons(r, tendon)
     for eq in _sections(root, "equality"):
         _equalities(r, eq)
     for act in _sections(root, "actuator"):
         _actuators(r, act)
-    for tendon in _sections(root, "tendon"):
-        limited = [t for t in tendon if "range" in t.attrib or t.get("limited") == "true"]
-        if limited:
-            warn(
-                f"{source}: tendon limits are not modelled ({doc.where(limited[0])}"
-                + (f" and {len(limited) - 1} more" if len(limited) > 1 else "")
-                + ")"
-            )
     mech.home["qpos0"] = {}
     for keys in _sections(root, "keyframe"):
         for key in keys:
@@ -238,6 +258,7 @@ def read_mjcf(text: str, source: str, path: Path | None = None, geometry: bool =
     if r.missing:
         mech.missing_meshes = sorted(set(r.missing))
         warn_missing_meshes(source, mech.missing_meshes, r.lost_inertia)
+    report(source, [], r.repaired, r.rotors, "body")
     return mech
 
 
@@ -350,20 +371,26 @@ def _body(r: _Reader, el: ET.Element, parent: str, oMp: pin.SE3, cls: str) -> No
             Joint(f"{name}_fixed", "fixed", parent, name, oMb, where=doc.where(el, name))
         )
     body = mech.add_body(Body(name, oMb), doc.where(el, name))
-    _children(r, el, name, name, oMb, pin.SE3.Identity(), sub)
     inertial = [c for c in el if c.tag == "inertial"]
     if len(inertial) > 1:
         raise doc.error(inertial[1], "a body has at most one <inertial>")
     use_geoms = r.comp.inertiafromgeom == "true" or (
         r.comp.inertiafromgeom == "auto" and not inertial
     )
+    r.mass_from_geoms[name] = use_geoms
+    _children(r, el, name, name, oMb, pin.SE3.Identity(), sub)
     if use_geoms:
         body.inertia = _geom_inertia(r, el, sub)
         I = body.inertia
         if not (math.isfinite(I.mass) and np.all(np.isfinite(I.inertia))):
             raise doc.error(el, "the inertia inferred from the geoms is not finite", name)
     elif inertial:
-        body.inertia = spec.inertial_props(doc, inertial[0], r.comp).inertia
+        iprops = spec.inertial_props(doc, inertial[0], r.comp, r.repair)
+        body.inertia = iprops.inertia
+        if iprops.repaired is not None:
+            r.repaired.append((name, *iprops.repaired))
+        elif iprops.mass == 0.0 and np.any(iprops.inertia.inertia):
+            r.rotors.append(name)
 
 
 def _joint(
@@ -453,10 +480,26 @@ def _shape(r: _Reader, el: ET.Element, g: spec.GeomProps) -> tuple[Any, str, np.
 
 
 def _geom(r: _Reader, el: ET.Element, owner: str, bMf: pin.SE3, cls: str) -> None:
-    g = spec.geom_props(r.doc, el, cls, r.defs, r.comp)
-    if not r.geometry:
+    """A geom of body ``owner``.
+
+    A malformed one is left out with a warning when its body's inertia does not come from its
+    geoms (else it is an error, as in MuJoCo).
+    """
+    try:
+        g = spec.geom_props(r.doc, el, cls, r.defs, r.comp)
+        if not r.geometry:
+            return
+        shape = _shape(r, el, g)
+    except DescriptionError as err:
+        if r.mass_from_geoms.get(owner, False):
+            raise
+        attrs = {**r.defs.classes.get(cls, {}).get("geom", {}), **el.attrib}
+        visual = attrs.get("contype", "1").strip() == attrs.get("conaffinity", "1").strip() == "0"
+        kind = "visual" if visual else "collision"
+        warn(f"{err}; this {kind} geom is left out (its body's inertia does not come from it)")
+        if not visual:
+            r.mech.dropped_collisions.append(f"body '{owner}' {r.doc.where(el)}")
         return
-    shape = _shape(r, el, g)
     if shape is None:
         return
     body = r.mech.bodies[owner]
@@ -574,14 +617,10 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
     for el in eq:
         tag = el.tag
         counts[tag] = counts.get(tag, 0) + 1
-        if tag in ("tendon", "distance", "flex"):
-            what = {
-                "tendon": "tendon couplings",
-                "distance": "distance constraints",
-                "flex": "flex constraints",
-            }[tag]
+        if tag in ("distance", "flex"):
+            what = {"distance": "distance constraints", "flex": "flex constraints"}[tag]
             raise doc.error(el, f"{what} are not supported; remove this equality to load the model")
-        if tag not in ("connect", "weld", "joint"):
+        if tag not in ("connect", "weld", "joint", "tendon"):
             raise doc.error(el, f"unknown equality <{tag}>")
         a = r.defs.attrs(el, "main")
         if a.get("active", "true") == "false":
@@ -590,6 +629,9 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
         name = _unique(mech, a.get("name") or f"{tag}{counts[tag]}")
         if tag == "joint":
             mech.couplings.append(_coupling(r, el, a, name))
+            continue
+        if tag == "tendon":
+            mech.couplings.append(_tendon_coupling(r, el, a, name))
             continue
         torquescale = 1.0
         if tag == "weld" and "torquescale" in a:
@@ -602,6 +644,50 @@ def _equalities(r: _Reader, eq: ET.Element) -> None:
             raise doc.error(el, "both sides are on the same body; nothing to close")
         kind = "point" if tag == "connect" or torquescale == 0.0 else "weld"
         mech.closures.append(ClosureSpec(name, kind, f1, f2))
+    mech.closures[:] = _hinges(mech.closures)
+
+
+def _hinges(closures: list[ClosureSpec]) -> list[ClosureSpec]:
+    """Pairs of connects ``N`` and ``N/axis`` (pkdyn's MJCF export of a hinge) as one hinge.
+
+    The pair holds two points of the axis together, which is a hinge about that axis: it
+    becomes the ``hinge`` closure ``N`` when both connects join the same two bodies and the
+    second points lie at one distance from the first ones on both bodies.
+    """
+    by_name = {c.name: c for c in closures}
+    merged: dict[str, ClosureSpec] = {}
+    for c in closures:
+        a = by_name.get(c.name + "/axis")
+        if c.kind != "point" or a is None or a.kind != "point":
+            continue
+        if (a.frame1.link, a.frame2.link) != (c.frame1.link, c.frame2.link):
+            continue
+        d1 = a.frame1.placement.translation - c.frame1.placement.translation
+        d2 = a.frame2.placement.translation - c.frame2.placement.translation
+        n1, n2 = float(np.linalg.norm(d1)), float(np.linalg.norm(d2))
+        if not (n1 > 0.0 and abs(n1 - n2) <= 1e-12 * max(1.0, n1)):
+            continue
+        u, w = d1 / n1, d2 / n2
+        R2 = _rotation_between(u, w)  # frame 2's axes: the axis u maps onto w in body 2
+        f1 = FrameRef(c.frame1.link, pin.SE3(np.eye(3), c.frame1.placement.translation))
+        f2 = FrameRef(c.frame2.link, pin.SE3(R2, c.frame2.placement.translation))
+        merged[c.name] = ClosureSpec(c.name, "hinge", f1, f2, u)
+    drop = {n + "/axis" for n in merged}
+    return [merged.get(c.name, c) for c in closures if c.name not in drop]
+
+
+def _rotation_between(u: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """The smallest rotation taking the unit vector ``u`` to the unit vector ``w``."""
+    axis = np.cross(u, w)
+    s, c = float(np.linalg.norm(axis)), float(np.clip(u @ w, -1.0, 1.0))
+    if s < 1e-15:
+        if c > 0.0:
+            return np.eye(3)
+        t = np.eye(3)[int(np.argmin(np.abs(u)))]  # half a turn about any normal of u
+        n = np.cross(u, t)
+        n /= np.linalg.norm(n)
+        return 2.0 * np.outer(n, n) - np.eye(3)
+    return np.asarray(pin.exp3(axis / s * np.arctan2(s, c)))
 
 
 def _coupling(r: _Reader, el: ET.Element, a: dict[str, str], name: str) -> CouplingSpec:
@@ -626,7 +712,7 @@ def _coupling(r: _Reader, el: ET.Element, a: dict[str, str], name: str) -> Coupl
     j1, j2 = joints
     if j1 is None:
         raise doc.error(el, "missing attribute 'joint1'", name)
-    text = a.get("polycoef", "0 1 0 0 0")
+    text = spec.complete(a.get("polycoef", spec.POLYCOEF), spec.POLYCOEF)  # as MuJoCo pads it
     try:
         coef = tuple(float(t) for t in text.split())
     except ValueError:
@@ -639,8 +725,100 @@ def _coupling(r: _Reader, el: ET.Element, a: dict[str, str], name: str) -> Coupl
         raise doc.error(el, f"joint1 and joint2 are both '{j1}'", name)
     if j2 is None:
         coef = coef[:1]
+    given = len(a.get("polycoef", spec.POLYCOEF).split())
+    coef = coef[: max(given, 2)]  # beyond the linear term MuJoCo's completion adds zeros only
     ref2 = r.joint_refs[j2] if j2 is not None else 0.0
     return CouplingSpec(name, j1, j2, coef, r.joint_refs[j1], ref2)
+
+
+def _fixed_tendons(r: _Reader, section: ET.Element) -> None:
+    """The ``<fixed>`` tendons: lengths ``L = sum coef_i qpos_i`` (couplings read them).
+
+    Spatial tendons are not read (:mod:`~pkdyn.model.formats.unread` names them); a fixed
+    tendon's stiffness, damping, friction and limits are not modelled (one warning).
+    """
+    doc = r.doc
+    unmodelled = []
+    for k, t in enumerate(e for e in section if e.tag == "fixed"):
+        name = t.get("name") or f"tendon{k + 1}"
+        terms: list[tuple[str, float]] = []
+        for j in t:
+            if j.tag != "joint":
+                raise doc.error(j, f"<{j.tag}> in a fixed tendon: a fixed tendon holds joints")
+            jname = j.get("joint", "")
+            if r.joint_types.get(jname) not in ("hinge", "slide"):
+                why = (
+                    "is not a joint of this model"
+                    if jname not in r.joint_types
+                    else f"is a {r.joint_types[jname]} joint; fixed tendons sum hinge and slide "
+                    "joints"
+                )
+                raise doc.error(j, f"joint='{jname}' {why}")
+            if "coef" not in j.attrib:
+                raise doc.error(j, "missing attribute 'coef'")
+            coef = float(spec.vector(doc, j, "coef", j.attrib["coef"], 1)[0])
+            terms.append((jname, coef))
+        if not terms:
+            raise doc.error(t, "a fixed tendon needs at least one <joint>")
+        r.tendons[name] = terms
+        a = dict(t.attrib)
+        if any(
+            float(a.get(key, "0") or 0) != 0.0 for key in ("stiffness", "damping", "frictionloss")
+        ):
+            unmodelled.append(t)
+        elif "range" in a or a.get("limited") == "true":
+            unmodelled.append(t)
+    if unmodelled:
+        warn(
+            f"{doc.source}: the stiffness, damping, friction and limits of fixed tendons are not "
+            f"modelled ({doc.where(unmodelled[0])}"
+            + (f" and {len(unmodelled) - 1} more" if len(unmodelled) > 1 else "")
+            + ")"
+        )
+
+
+def _tendon_coupling(
+    r: _Reader, el: ET.Element, a: dict[str, str], name: str
+) -> LinearCouplingSpec:
+    """A ``<tendon>`` equality of fixed tendons: a linear coupling of their joints.
+
+    MuJoCo holds ``L1 - L1_0 = p(L2 - L2_0)`` (``L_0`` the length at ``qpos0``; without
+    ``tendon2``, ``L1 - L1_0 = polycoef[0]``): with a linear ``p`` this is ``sum_i a_i q_i -
+    p1 sum_k b_k q_k = L1_0 + p0 - p1 L2_0``, one linear relation of the joints (a joint in both
+    tendons adds its coefficients). A polynomial of a tendon length is refused.
+    """
+    doc = r.doc
+    names = [a.get("tendon1"), a.get("tendon2")]
+    if not names[0]:
+        raise doc.error(el, "missing attribute 'tendon1'", name)
+    for n in names:
+        if n is not None and n not in r.tendons:
+            raise doc.error(el, f"tendon '{n}' is not a fixed tendon of this model", name)
+    text = spec.complete(a.get("polycoef", spec.POLYCOEF), spec.POLYCOEF)
+    p = spec.vector(doc, el, "polycoef", text, 5)
+    if names[1] is not None and np.any(p[2:]):
+        raise doc.error(
+            el,
+            f"polycoef='{a.get('polycoef')}': a polynomial of a tendon's length is not modelled "
+            "(a linear one is: polycoef='p0 p1')",
+            name,
+        )
+
+    def length0(tendon: str) -> float:
+        return sum(c * r.joint_refs[j] for j, c in r.tendons[tendon])
+
+    coefs: dict[str, float] = {}
+    for j, c in r.tendons[str(names[0])]:
+        coefs[j] = coefs.get(j, 0.0) + c
+    offset = length0(str(names[0])) + float(p[0])
+    if names[1] is not None:
+        for j, c in r.tendons[names[1]]:
+            coefs[j] = coefs.get(j, 0.0) - float(p[1]) * c
+        offset -= float(p[1]) * length0(names[1])
+    terms = tuple((j, c) for j, c in coefs.items() if c != 0.0)
+    if not terms:
+        raise doc.error(el, "the tendons' terms cancel: no relation left", name)
+    return LinearCouplingSpec(name, terms, offset)
 
 
 def _equality_frames(

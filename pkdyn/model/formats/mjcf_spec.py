@@ -10,7 +10,10 @@ radians; orientations (``quat``, ``axisangle``, ``euler`` with ``eulerseq``, ``x
 Default classes: the top-level ``<default>`` is class ``main``; nested ``<default class>``
 elements inherit from their parent. An element uses its ``class`` attribute, else the nearest
 enclosing ``childclass``, else ``main``. All actuator shortcuts (``motor``, ``position``,
-``general``...) share one set of defaults per class, as in MuJoCo.
+``general``...) share one set of defaults per class, as in MuJoCo. An attribute MuJoCo reads
+with fewer values than its full form (:data:`PARTIAL`: a geom's ``size``, an actuator's
+``gear``...; an equality's ``polycoef``, :data:`POLYCOEF`) keeps the default class's (or
+MuJoCo's built-in) values for the ones not given, as MuJoCo does.
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ from pkdyn.model.validate import unit_vector
 __all__ = [
     "ACTUATOR_TAGS",
     "MAX_DEFAULT_DEPTH",
+    "PARTIAL",
+    "POLYCOEF",
     "ActuatorProps",
     "Compiler",
     "Defaults",
@@ -35,6 +40,7 @@ __all__ = [
     "InertialProps",
     "JointProps",
     "actuator_props",
+    "complete",
     "geom_props",
     "inertial_props",
     "joint_props",
@@ -58,6 +64,43 @@ ACTUATOR_TAGS = (
 
 MAX_DEFAULT_DEPTH = 100
 """Deepest nesting of ``<default>`` classes."""
+
+PARTIAL = {
+    ("geom", "size"): "0 0 0",
+    ("site", "size"): "0.005 0.005 0.005",
+    ("joint", "stiffness"): "0 0 0",
+    ("joint", "damping"): "0 0 0",
+    ("actuator", "gear"): "1 0 0 0 0 0",
+    ("actuator", "gainprm"): "1 0 0 0 0 0 0 0 0 0",
+    ("actuator", "biasprm"): "0 0 0 0 0 0 0 0 0 0",
+    ("actuator", "dynprm"): "1 0 0 0 0 0 0 0 0 0",
+}
+"""MJCF attributes MuJoCo reads with fewer values than their full form (its reader's
+``exact = false``), and MuJoCo's built-in values: given ``k`` values, the others keep those of
+the default class (or these built-in ones), as :func:`complete` fills them. Every other
+attribute needs its full count (``axis="0 1"`` is refused, as MuJoCo refuses it)."""
+
+POLYCOEF = "0 1 0 0 0"
+"""MuJoCo's default ``polycoef`` of a joint or tendon equality (``polycoef="0.3"`` reads
+``0.3 1 0 0 0``: an offset, not a lock)."""
+
+
+def complete(given: str, base: str) -> str:
+    """An attribute value with fewer numbers than ``base``, completed from ``base``.
+
+    Args:
+        given: The value as written (``"0.05"``).
+        base: The full value it overrides (the default class's, or MuJoCo's built-in one).
+
+    Returns:
+        ``given``'s numbers followed by ``base``'s remaining ones (``"0.05 0.2 0.3"``);
+        ``given`` unchanged when it has as many numbers as ``base`` or more.
+
+    """
+    tokens, full = given.split(), base.split()
+    if len(tokens) >= len(full):
+        return given
+    return " ".join(tokens + full[len(tokens) :])
 
 
 def vector(doc: XmlDoc, el: ET.Element, attr: str, text: str, n: int | None) -> np.ndarray:
@@ -202,7 +245,11 @@ class Defaults:
                 nested.append(child)
             else:
                 tag = "actuator" if child.tag in ACTUATOR_TAGS else child.tag
-                own.setdefault(tag, {}).update(child.attrib)
+                values = own.setdefault(tag, {})
+                for key, value in child.attrib.items():
+                    if (tag, key) in PARTIAL:  # the parent class's values complete it
+                        value = complete(value, values.get(key, PARTIAL[tag, key]))
+                    values[key] = value
                 if child.tag in ACTUATOR_TAGS:
                     own["actuator"]["_shortcut"] = child.tag
         return nested
@@ -224,7 +271,10 @@ class Defaults:
             # shortcut-specific gains do not carry over from another shortcut's defaults
             for k in ("kp", "kv", "gainprm", "biasprm", "gaintype", "biastype", "dyntype"):
                 out.pop(k, None)
-        out.update(el.attrib)
+        for key, value in el.attrib.items():
+            if (tag, key) in PARTIAL:  # fewer values: the class's (or MuJoCo's) complete them
+                value = complete(value, out.get(key, PARTIAL[tag, key]))
+            out[key] = value
         return out
 
 
@@ -362,6 +412,25 @@ def _number(doc: XmlDoc, el: ET.Element, attrs: dict[str, str], key: str, defaul
     return float(vector(doc, el, key, attrs[key], 1)[0]) if key in attrs else default
 
 
+def _linear(doc: XmlDoc, el: ET.Element, attrs: dict[str, str], key: str) -> float:
+    """A joint's ``stiffness`` or ``damping``, which must be linear (the law pkdyn models).
+
+    MuJoCo reads a polynomial of up to 3 coefficients, completed from the default class.
+    """
+    if key not in attrs:
+        return 0.0
+    v = vector(doc, el, key, attrs[key], None)
+    if v.size == 0 or v.size > 3:
+        raise doc.error(el, f"{key}='{attrs[key]}': expected 1 to 3 numbers")
+    if np.any(v[1:]):
+        raise doc.error(
+            el,
+            f"{key}='{attrs[key]}' (with its default class): a polynomial {key} (MuJoCo's "
+            "higher coefficients) is not modelled by pkdyn; give a linear one (one value)",
+        )
+    return float(v[0])
+
+
 def joint_props(
     doc: XmlDoc, el: ET.Element, cls: str, defs: Defaults, comp: Compiler
 ) -> JointProps:
@@ -393,8 +462,10 @@ def joint_props(
         if rng[0] > rng[1]:
             raise doc.error(el, f"range='{a.get('range')}': lower bound above the upper bound")
     for key in ("armature", "damping", "frictionloss", "stiffness"):
-        if key in a and _number(doc, el, a, key, 0.0) < 0.0:
-            raise doc.error(el, f"{key}='{a[key]}' is negative (a negative {key} is not physical)")
+        first = _linear(doc, el, a, key) if key in ("damping", "stiffness") else None
+        if key in a and (first if first is not None else _number(doc, el, a, key, 0.0)) < 0.0:
+            text = el.get(key, a[key])  # as written (the class's completion not shown)
+            raise doc.error(el, f"{key}='{text}' is negative (a negative {key} is not physical)")
     return JointProps(
         name=a.get("name", ""),
         type=jtype,
@@ -402,10 +473,10 @@ def joint_props(
         axis=unit_vector(axis) if np.any(axis) else np.array([0.0, 0.0, 1.0]),
         ref=ang(_number(doc, el, a, "ref", 0.0)),
         range=rng,
-        damping=_number(doc, el, a, "damping", 0.0),
+        damping=_linear(doc, el, a, "damping"),
         frictionloss=_number(doc, el, a, "frictionloss", 0.0),
         armature=_number(doc, el, a, "armature", 0.0),
-        stiffness=_number(doc, el, a, "stiffness", 0.0),
+        stiffness=_linear(doc, el, a, "stiffness"),
         springref=ang(_number(doc, el, a, "springref", 0.0)),
     )
 
@@ -556,19 +627,38 @@ def geom_props(doc: XmlDoc, el: ET.Element, cls: str, defs: Defaults, comp: Comp
     )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: no boolean ==
 class InertialProps:
-    """An ``<inertial>``: mass and rotational inertia at the centre of mass, in the body frame."""
+    """An ``<inertial>``: mass and rotational inertia at the centre of mass, in the body frame.
+
+    Attributes:
+        mass: Mass [kg].
+        inertia: Spatial inertia in the body frame.
+        repaired: ``(before, after)`` principal-frame tensors (3, 3) when the file's tensor was
+            replaced by the nearest valid one (``repair=True``), else ``None``.
+
+    """
 
     mass: float
     inertia: pin.Inertia
+    repaired: tuple[np.ndarray, np.ndarray] | None = None
 
 
-def inertial_props(doc: XmlDoc, el: ET.Element, comp: Compiler) -> InertialProps:
+def inertial_props(
+    doc: XmlDoc, el: ET.Element, comp: Compiler, repair: bool = False
+) -> InertialProps:
     """Read an ``<inertial>`` element.
 
+    Args:
+        doc: The document.
+        el: The element.
+        comp: Compiler settings.
+        repair: Replace a tensor no rigid body has by the nearest valid one
+            (:mod:`pkdyn.model.inertia`) instead of refusing it.
+
     Raises:
-        DescriptionError: Missing or negative mass, missing inertia, malformed numbers.
+        DescriptionError: Missing or negative mass, missing inertia, malformed numbers, an
+            invalid tensor (without ``repair``).
 
     """
     a = dict(el.attrib)
@@ -583,10 +673,16 @@ def inertial_props(doc: XmlDoc, el: ET.Element, comp: Compiler) -> InertialProps
         I_local = np.diag(vector(doc, el, "diaginertia", a["diaginertia"], 3))
     else:
         raise doc.error(el, "needs diaginertia or fullinertia")
+    from pkdyn.model.inertia import nearest_valid_inertia
     from pkdyn.model.validate import inertia_problem
 
     problem = inertia_problem(mass, I_local, point_mass=False)
+    repaired = None
     if problem is not None:
-        raise doc.error(el, problem)
+        if not repair or mass < 0.0 or not np.all(np.isfinite(I_local)) or not np.any(I_local):
+            hint = "" if repair else " (or load with repair_inertias=True)"
+            raise doc.error(el, problem + hint)
+        fixed = nearest_valid_inertia(I_local)
+        repaired, I_local = (I_local, fixed), fixed
     R = M.rotation
-    return InertialProps(mass, pin.Inertia(mass, M.translation, R @ I_local @ R.T))
+    return InertialProps(mass, pin.Inertia(mass, M.translation, R @ I_local @ R.T), repaired)

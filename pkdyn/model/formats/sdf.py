@@ -12,7 +12,8 @@ One ``<model>`` per file (directly under ``<sdf>`` or in a ``<world>``). What is
   ``use_parent_model_frame``), limits and dynamics (damping, friction, ``spring_stiffness``
   about ``spring_reference``: ``robot.passive``; a universal joint takes its first axis's);
 - ``revolute2`` joints (Gazebo's two-axis hinge: ``<axis>`` fixed in the parent, ``<axis2>``
-  carried by the first rotation, not necessarily orthogonal) as two revolute joints
+  carried by the first rotation, not necessarily orthogonal, but not parallel: that is a
+  revolute joint, refused naming it) as two revolute joints
   ``<name>_1``, ``<name>_2`` through a massless intermediate body, each axis with its own limits
   and dynamics; as a loop's cut joint, the second axis becomes a hinge closure;
 - the model's ``<pose>`` and ``<static>``;
@@ -44,9 +45,10 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.description import FrameRef
-from pkdyn.model.formats import drake
+from pkdyn.model.formats import drake, unread
 from pkdyn.model.formats.graph import WORLD, Body, Geometry, Joint, Mechanism
 from pkdyn.model.formats.xmldoc import XmlDoc, parse_xml
+from pkdyn.model.inertia import massless_rotor, nearest_valid_inertia, report
 from pkdyn.model.validate import inertia_problem, unit_vector
 from pkdyn.model.warn import warn, warn_missing_meshes
 
@@ -77,6 +79,10 @@ class _Reader:
     missing: list[str] = field(default_factory=list)
     search: list[Path] = field(default_factory=list)
     geometry: bool = True
+    repair: bool = False  # repair_inertias
+    repaired: list[tuple[str, np.ndarray, np.ndarray]] = field(default_factory=list)
+    rotors: list[str] = field(default_factory=list)  # links with inertia and no mass
+    dropped: list[str] = field(default_factory=list)  # malformed collision shapes left out
 
 
 def _text(el: ET.Element | None, default: str = "") -> str:
@@ -175,7 +181,14 @@ def _frame_ref(r: _Reader, name: str) -> FrameRef:
     return FrameRef(link if link != WORLD else "universe", M)
 
 
-def read_sdf(text: str, source: str, path: Path | None = None, geometry: bool = True) -> Mechanism:
+def read_sdf(
+    text: str,
+    source: str,
+    path: Path | None = None,
+    geometry: bool = True,
+    ignore: frozenset[str] = frozenset(),
+    repair_inertias: bool = False,
+) -> Mechanism:
     """Read an SDFormat document into a mechanism (see the module docstring).
 
     Args:
@@ -183,6 +196,8 @@ def read_sdf(text: str, source: str, path: Path | None = None, geometry: bool = 
         source: File or name, for messages.
         path: The file (mesh look-up).
         geometry: Read the visual and collision geometry (mesh files).
+        ignore: Element names to leave out (:mod:`~pkdyn.model.formats.unread`).
+        repair_inertias: Replace invalid inertia tensors by the nearest valid ones.
 
     Returns:
         The mechanism; its ``home`` holds the pose the file describes.
@@ -195,6 +210,8 @@ def read_sdf(text: str, source: str, path: Path | None = None, geometry: bool = 
     root = doc.root
     if root.tag != "sdf":
         raise doc.error(root, "the root element of an SDFormat file must be <sdf>")
+    unread.check(doc, "sdf", ignore)
+    unread.prune(doc, ignore)
     try:
         version = float(root.get("version", "1.6"))
     except ValueError:
@@ -211,7 +228,7 @@ def read_sdf(text: str, source: str, path: Path | None = None, geometry: bool = 
             source, "<model>", f"found {len(models)} models; pkdyn loads one model per file"
         )
     model_el = models[0]
-    r = _Reader(doc, version, geometry=geometry)
+    r = _Reader(doc, version, geometry=geometry, repair=repair_inertias)
     if path is not None:
         p = path.resolve().parent
         for _ in range(7):
@@ -300,6 +317,8 @@ def _model(r: _Reader, m: ET.Element) -> Mechanism:
     if r.missing:
         mech.missing_meshes = sorted(set(r.missing))
         warn_missing_meshes(doc.source, mech.missing_meshes)
+    report(doc.source, [], r.repaired, r.rotors)
+    mech.dropped_collisions = list(r.dropped)
     return mech
 
 
@@ -313,7 +332,14 @@ def _link(r: _Reader, el: ET.Element) -> Body:
     if r.geometry:
         for tag, out in (("visual", body.visuals), ("collision", body.collisions)):
             for k, g in enumerate(e for e in el if e.tag == tag):
-                geom = _geometry(r, g, name, oMl, f"{name}_{tag}_{k}")
+                try:
+                    geom = _geometry(r, g, name, oMl, f"{name}_{tag}_{k}")
+                except DescriptionError as err:  # a typo costs the shape, not the robot
+                    what = f"link '{name}' {r.doc.where(g)}"
+                    warn(f"{err}; this {tag} shape is left out")
+                    if tag == "collision":
+                        r.dropped.append(what)
+                    continue
                 if geom is not None:
                     out.append(geom)
     return body
@@ -332,7 +358,14 @@ def _inertia(r: _Reader, el: ET.Element, link: str) -> pin.Inertia:
         I = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
     problem = inertia_problem(mass, I)  # the rule of every importer (point masses kept)
     if problem is not None:
-        raise r.doc.error(el, f"link '{link}': {problem}")
+        if not r.repair or mass < 0.0 or not np.all(np.isfinite(I)):
+            hint = "" if r.repair else " (or load with repair_inertias=True)"
+            raise r.doc.error(el, f"link '{link}': {problem}{hint}")
+        fixed = nearest_valid_inertia(I)
+        r.repaired.append((link, I, fixed))
+        I = fixed
+    elif massless_rotor(mass, I):
+        r.rotors.append(link)
     R = M.rotation
     return pin.Inertia(mass, M.translation, R @ I @ R.T)
 
@@ -555,6 +588,13 @@ def _revolute2(
     a2 = _axis(r, el.find("axis2"), oMj)
     if a2 is None:
         raise r.doc.error(el, "a revolute2 joint needs <axis2>")
+    if float(np.linalg.norm(np.cross(a1 if a1 is not None else z, a2))) < 1e-9:
+        raise r.doc.error(
+            el,
+            "the two axes of this revolute2 joint are parallel: it turns about one axis (one "
+            "degree of freedom, not two); make it a revolute joint, or give axis2 another "
+            "direction",
+        )
     mid = f"{name}#1"
     mech.add_body(Body(mid, oMj, virtual=True), where)
     out = []

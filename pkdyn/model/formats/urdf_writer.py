@@ -402,6 +402,22 @@ class UrdfWriter:
             attrs += f' source_ref="{_f(source_ref)}"'
         self._ext.append(f"  <pkdyn:coupling {attrs}/>")
 
+    def linear_coupling(
+        self, name: str, terms: Sequence[tuple[str, float]], offset: float = 0.0
+    ) -> None:
+        """Add a linear coupling ``sum_i coefficient_i joint_i = offset`` (see urdf/README.md).
+
+        Args:
+            name: Coupling name.
+            terms: ``(joint, coefficient)`` pairs.
+            offset: Right-hand side [rad or m].
+
+        """
+        body = "".join(f'<pkdyn:term joint="{j}" coefficient="{_f(float(a))}"/>' for j, a in terms)
+        self._ext.append(
+            f'  <pkdyn:coupling name="{name}" offset="{_f(float(offset))}">{body}</pkdyn:coupling>'
+        )
+
     def transmission(
         self,
         joint: str,

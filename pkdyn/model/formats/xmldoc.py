@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import os
 import re
-import stat
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -127,31 +126,17 @@ def read_text(path: str | os.PathLike[str], what: str = "file") -> str:
             :data:`MAX_FILE_BYTES`, unreadable or not UTF-8 text.
 
     """
+    from pkdyn import files
+
     name = str(path)
-    try:
-        st = os.stat(path)
-    except OSError as err:
-        raise DescriptionError(name, what, f"cannot be read ({err.strerror or err})") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise DescriptionError(
-            name, what, "is not a regular file (a device, FIFO or directory is not read)"
-        )
-    if st.st_size > MAX_FILE_BYTES:
-        raise DescriptionError(
-            name,
-            what,
-            f"is {st.st_size / 2**20:.0f} MiB; pkdyn reads descriptions of at most "
-            f"{MAX_FILE_BYTES // 2**20} MiB",
-        )
-    try:
-        with open(path, "rb") as f:  # re-check: the file may have been swapped since stat
-            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
-                raise DescriptionError(name, what, "is not a regular file")
-            data = f.read(MAX_FILE_BYTES + 1)
-    except OSError as err:
-        raise DescriptionError(name, what, f"cannot be read ({err.strerror or err})") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise DescriptionError(name, what, f"is larger than {MAX_FILE_BYTES // 2**20} MiB")
+    mib = MAX_FILE_BYTES // 2**20
+
+    def error(msg: str) -> DescriptionError:
+        if "MB" in msg:  # (the limit in the unit descriptions are known by)
+            msg = f"is larger than {mib} MiB; pkdyn reads descriptions of at most {mib} MiB"
+        return DescriptionError(name, what, msg)
+
+    data = files.read_bytes(path, MAX_FILE_BYTES, error)
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as err:

@@ -1,0 +1,93 @@
+"""A vibrating robot along its motion, the deviation exaggerated and the time slowed down."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from pkdyn.exceptions import InvalidInputError
+from pkdyn.precision.vibration_result import VibrationResult
+from pkdyn.viewer.scene import Scene
+from solvers import solve_lm
+
+__all__ = ["animate_vibration", "exaggerated"]
+
+
+def exaggerated(
+    result: VibrationResult, scale: float | None = None
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The commanded motion with the deformation multiplied by ``scale``, assembled.
+
+    Args:
+        result: A vibration result (it keeps its elastic model, command and deformation).
+        scale: Exaggeration factor (default: the peak deviation shown as 5 % of the robot's
+            size).
+
+    Returns:
+        ``(t, Q, scale)``: times (K,) [s], configurations of the elastic model's robot
+        (K, nq_ext) and the factor used.
+
+    Raises:
+        InvalidInputError: A result without its deformation, or a non-positive scale.
+
+    """
+    em = result.elastic
+    if em is None or result.command is None or result.deformation is None:
+        raise InvalidInputError("result", "this result keeps no deformation to animate")
+    r = em.robot
+    if scale is None:
+        top = max(float(result.peak_deviation), float(np.max(result.deviation_norm)), 1e-300)
+        scale = 0.05 * r.length_scale / top
+    from pkdyn.inputs import positive
+
+    scale = positive("scale", scale, bound=1e12)
+    free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
+    cs, data = r.constraints, r.data
+    Q = np.empty_like(result.command)
+    q = result.command[0]
+    for k, (qc, u) in enumerate(zip(result.command, result.deformation, strict=True)):
+        q = pin.integrate(r.model, qc, scale * u)
+        if cs.nc:
+            q = solve_lm(
+                r.model,
+                q,
+                lambda x: cs.local_residual(data, x),
+                lambda x: cs.local_jacobian_after_residual(data, x),
+                free=free,
+                tol=1e-10,
+            ).q
+        Q[k] = q
+    assert result.t_coarse is not None
+    return np.asarray(result.t_coarse), Q, float(scale)
+
+
+def animate_vibration(
+    result: VibrationResult,
+    *,
+    scale: float | None = None,
+    slow: float = 20.0,
+    collision: bool = False,
+    serve: bool = False,
+) -> Scene:
+    """A scene of the robot moving along the command, its deformation exaggerated.
+
+    Args:
+        result: A vibration result (from a robot loaded with its geometry).
+        scale: Exaggeration of the deformation (default: the peak deviation shown as 5 % of
+            the robot's size).
+        slow: Slow-motion factor of the playback (a 100 Hz vibration slowed 20 times is seen).
+        collision: Draw the collision geometry.
+        serve: Start a live meshcat server (else: save the scene with ``save_html``).
+
+    Returns:
+        The scene, playing in a loop.
+
+    """
+    from pkdyn.inputs import positive
+
+    slow = positive("slow", slow, bound=1e6)
+    t, Q, _ = exaggerated(result, scale)
+    assert result.elastic is not None
+    scene = Scene(result.elastic.robot, Q[0], collision=collision, serve=serve)
+    scene.animate(t * slow, Q)
+    return scene
