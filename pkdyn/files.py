@@ -263,6 +263,8 @@ def input_file(
         PkdynError: From ``error``: missing, unreadable, not a regular file, or too large.
 
     """
+    if not isinstance(path, str | os.PathLike):  # (an int would be a file descriptor)
+        raise error(f"path: expected a file name (str or Path), got {type(path).__name__}")
     try:
         st = os.stat(path)
     except OSError as err:
@@ -333,8 +335,6 @@ def read_text(
             text in ``encoding``.
 
     """
-    if not isinstance(path, str | os.PathLike):  # (an int would be a file descriptor)
-        raise error(f"expected a file name (str or Path), got {type(path).__name__}")
     data = read_bytes(path, limit, error, record)
     try:
         return data.decode(encoding)

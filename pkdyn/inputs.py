@@ -192,6 +192,11 @@ def instance(name: str, value: Any, kind: Any, what: str) -> Any:
     return value
 
 
+def _nonfinite(x: float) -> str:
+    """``nan (NaN: not a number)``, ``inf`` or ``-inf``, for messages."""
+    return "nan (NaN: not a number)" if math.isnan(x) else f"{x}"
+
+
 def is_complex(value: Any) -> bool:
     """``value`` holds complex numbers.
 
@@ -244,7 +249,9 @@ def vector(
     ok = np.isfinite(arr) | (infinite & (arr == np.inf))
     if not ok.all():
         k = int(np.flatnonzero(~ok)[0])
-        raise InvalidInputError(name, f"value #{k + 1} is {arr[k]}; give finite numbers")
+        raise InvalidInputError(
+            name, f"value #{k + 1} is {_nonfinite(arr[k])}; give finite numbers"
+        )
     big = np.isfinite(arr) & (np.abs(arr) > bound)
     if big.any():
         k = int(np.flatnonzero(big)[0])
@@ -303,7 +310,7 @@ def matrix(
     if bad.any():
         i, j = (int(k) for k in np.argwhere(bad)[0])
         raise InvalidInputError(
-            name, f"row {i + 1}, value #{j + 1} is {arr[i, j]}; give finite numbers"
+            name, f"row {i + 1}, value #{j + 1} is {_nonfinite(arr[i, j])}; give finite numbers"
         )
     big = np.abs(arr) > bound
     if big.any():

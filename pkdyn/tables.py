@@ -338,8 +338,9 @@ def write_table(
         InvalidInputError: ``data`` does not have one value per column in each row.
 
     """
-    from pkdyn.files import atomic_path, atomic_write
+    from pkdyn.files import atomic_path, atomic_write, output_target
 
+    output_target(path, "path")  # refused before any work: not a file name, a directory, ...
     values = np.asarray(data, dtype=float)
     if values.ndim != 2 or values.shape[1] != len(columns):
         raise InvalidInputError(

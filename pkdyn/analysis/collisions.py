@@ -129,6 +129,9 @@ class CollisionReport(Result):
 
     def table(self, top: int = 10) -> str:
         """The smallest distance, the verdict, and the ``top`` closest pairs (0: all)."""
+        from pkdyn.inputs import count
+
+        top = count("top", top, 0)
         state = "IN COLLISION" if self.in_collision else "clear"
         lines = [
             f"min distance {quantity(self.min_distance, 'm')} ({state}, margin "

@@ -94,6 +94,9 @@ class Measurements:
 
     def where(self, i: int) -> str:
         """``line L`` of its file (``row R`` of a Parquet file, or of the measurements given)."""
+        from pkdyn.inputs import count
+
+        i = count("i", i, 0, len(self.qa) - 1)
         if self.lines is not None:
             return f"{self.line_word} {int(self.lines[int(i)])}"
         if self._rows is not None:
@@ -220,6 +223,10 @@ class Measurements:
 
     def with_readings(self, qa: np.ndarray) -> Measurements:
         """The same measurements with other actuator values (N, n_a) (e.g. joint coordinates)."""
+        from pkdyn.inputs import matrix
+
+        rows, cols = self.qa.shape
+        qa = matrix("qa", qa, rows, cols, "rad or m", bound=np.inf)  # (the reach: the caller's)
         return Measurements(
             self.kind,
             qa,

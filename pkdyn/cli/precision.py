@@ -249,6 +249,10 @@ def _cmd_modes(args: argparse.Namespace) -> None:
     check_map_options(args)
     if args.count is not None and args.count < 1:
         raise InvalidInputError("--count", f"{args.count}: give 1 or more")
+    if args.mode < 1:
+        raise InvalidInputError(
+            "--mode", f"{args.mode} is not a mode number: they count from 1 (the lowest)"
+        )
     if args.map is not None:
         for option, value in (("--html", args.html), ("--gravity", args.gravity or None)):
             if value is not None:

@@ -182,7 +182,7 @@ class StudyResult(Result):
         if i is not None:
             from pkdyn.design import fields
 
-            i = fields.integer("design (row position)", i, 0, len(self.table) - 1)
+            i = fields.integer("design (row position)", i, 0, len(self.designs) - 1)
         i = self.best() if i is None else i
         if i is None:
             raise StudyError(

@@ -60,6 +60,9 @@ class Measurements:
 
     def where(self, k: int) -> str:
         """``line L`` of sample ``k`` in its file (``row R``: Parquet), or ``sample k`` (from 0)."""
+        from pkdyn.inputs import count
+
+        k = count("k", k, 0, self.t.size - 1)
         if self.lines is None:
             return f"sample {k}"
         return f"{self.line_word} {int(self.lines[k])}"

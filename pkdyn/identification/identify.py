@@ -230,12 +230,6 @@ def _identify(
     n_a = len(robot.actuators)
     if data.tau is None:
         raise InvalidInputError(data.source, "no tau_* columns: the efforts to identify from")
-    if not np.any(data.tau):
-        raise InvalidInputError(
-            data.source,
-            "every tau_* value is 0: the efforts carry nothing to identify from (check the "
-            "tau_* columns: joint-side efforts [N m or N])",
-        )
     if data.qa.shape[1] != n_a:
         raise InvalidInputError(data.source, f"{data.qa.shape[1]} actuators for {n_a}")
     N = data.t.size
@@ -279,6 +273,12 @@ def _identify(
         shares = fork_map(_worker, work, jobs)
     else:
         shares = [_accumulate(work, jobs[0], progress)]
+    if not np.any(data.tau):
+        raise InvalidInputError(
+            data.source,
+            "every tau_* value is 0: the efforts carry nothing to identify from (check the "
+            "tau_* columns: joint-side efforts [N m or N])",
+        )
     acc = Accumulator(n_a, base.size)
     colsq = np.zeros(int(ps.identified.sum()))
     for share in shares:

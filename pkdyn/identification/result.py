@@ -186,7 +186,15 @@ class IdentificationResult(Result):
             qa_ddot: Their accelerations (N, n_a).
 
         """
+        from pkdyn.inputs import matrix, vector
+
         r = self.robot
+        t = vector("t", t, unit="s")
+        n_a = len(r.actuators)
+        qa, qa_dot, qa_ddot = (
+            matrix(name, x, t.size, n_a, "rad or m")
+            for name, x in (("qa", qa), ("qa_dot", qa_dot), ("qa_ddot", qa_ddot))
+        )
         return predict_efforts(
             r,
             self.parameters,

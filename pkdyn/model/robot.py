@@ -215,10 +215,10 @@ class Robot:
             Joint coordinates (or their derivatives), same shape.
 
         Raises:
-            InvalidInputError: Not numbers, or not ``n_a`` per row.
+            InvalidInputError: Not finite numbers, or not ``n_a`` per row.
 
         """
-        r = self._readings_array("readings", readings)
+        r = self._readings_array("readings", readings, rates)
         g = self.encoder_gains
         return r * g if rates else r * g + self.encoder_offsets
 
@@ -233,14 +233,16 @@ class Robot:
             Readings, same shape.
 
         Raises:
-            InvalidInputError: Not numbers, or not ``n_a`` per row.
+            InvalidInputError: Not finite numbers, or not ``n_a`` per row.
 
         """
-        q = self._readings_array("qa", qa)
+        q = self._readings_array("qa", qa, rates)
         g = self.encoder_gains
         return q / g if rates else (q - self.encoder_offsets) / g
 
-    def _readings_array(self, name: str, value: Any) -> np.ndarray:
+    def _readings_array(self, name: str, value: Any, rates: Any = False) -> np.ndarray:
+        if not isinstance(rates, bool | np.bool_):
+            raise InvalidInputError("rates", f"expected True or False, got {rates!r:.40}")
         try:
             arr = np.asarray(value, dtype=float)
         except (TypeError, ValueError):
@@ -252,6 +254,8 @@ class Robot:
                 f"expected {n_a} values per row ({', '.join(self.actuator_names)}), got shape "
                 f"{arr.shape}",
             )
+        if not np.all(np.isfinite(arr)):
+            raise InvalidInputError(name, "expected finite numbers, got NaN or infinity")
         return arr
 
     def components(self) -> list[int]:

@@ -99,7 +99,7 @@ def plot_grid_map(
     from matplotlib.colors import ListedColormap
 
     name = field if field is not None else next(iter(result.values), None)
-    if name is None or name not in result.values:
+    if not isinstance(name, str) or name not in result.values:
         raise InvalidInputError(
             "field", f"'{name}': this map holds {', '.join(result.values) or 'nothing'}"
         )

@@ -101,9 +101,9 @@ class Section:
         """
         from pkdyn.inputs import real
 
-        nu = real("poisson", poisson)  # (an equivalent isotropic laminate's may exceed 0.5)
+        # (an equivalent isotropic laminate's may exceed 0.5)
+        nu = 0.0 if poisson is None else real("poisson", poisson)
         m2 = (self.inner_radius / self.radius) ** 2
-        nu = 0.0 if poisson is None else float(poisson)
         return 6 * (1 + nu) * (1 + m2) ** 2 / ((7 + 6 * nu) * (1 + m2) ** 2 + (20 + 12 * nu) * m2)
 
     def mass(self, length: float, material: Material) -> float:

@@ -101,10 +101,17 @@ class ElasticModel:
         """The model for configuration ``q`` (nq,) of the robot (itself, or rebuilt).
 
         Rebuilt when a prismatic leg's rod is compliant: its free length follows the stroke.
+
+        Raises:
+            InvalidInputError: ``q`` is not nq finite numbers.
+
         """
+        from pkdyn.model.arguments import configuration
+
+        q = configuration(self.base, q)
         if not any(lc.sliding for lc in self.links):
             return self
-        found = link_compliances(self.base, self.material, self.shear, np.asarray(q, float))
+        found = link_compliances(self.base, self.material, self.shear, q)
         return _build(self.base, self.actuator_stiffness, found, self.material, self.shear)
 
     @property

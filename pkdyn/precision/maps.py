@@ -391,7 +391,9 @@ def precision_map(
             DeprecationWarning,
             stacklevel=3,
         )
-        v = float(checked_vector("value", value, 1, "m", bound=100.0 * robot.length_scale)[0])
+        from pkdyn.inputs import real
+
+        v = real("value", value, "m", bound=100.0 * robot.length_scale)
         c = (
             robot.platform_placement(robot.q_home).translation.copy()
             if center is None

@@ -99,8 +99,10 @@ class Modes(Flagged, Result):
         return float(self.frequencies[0]) if self.frequencies.size else float("inf")
 
     def _shown(self, count: int | None) -> int:
+        from pkdyn.inputs import count as whole
+
         n = self.frequencies.size
-        c = self.count if count is None else count
+        c = self.count if count is None else whole("count", count, 1)
         return n if c is None else min(int(c), n)
 
     def to_json(self, count: int | None = None) -> dict[str, Any]:
@@ -110,10 +112,6 @@ class Modes(Flagged, Result):
             count: Report the lowest ``count`` modes (default: :attr:`count`, else all).
 
         """
-        if count is not None:
-            from pkdyn.inputs import count as count_
-
-            count = count_("count", count, 1)
         n = self._shown(count)
         unit = np.linalg.norm(self.platform[:n], axis=1, keepdims=True)
         return {

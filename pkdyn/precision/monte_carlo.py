@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.arguments import public
 from pkdyn.model.assembly import forward_geometry
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
@@ -116,6 +117,7 @@ def _draw(rng: np.random.Generator, t: np.ndarray, distribution: str) -> np.ndar
     return rng.normal(0.0, 1.0, t.size) * (t / 3.0)
 
 
+@public
 @one_blas_thread
 def monte_carlo(
     robot: Robot,

@@ -46,6 +46,7 @@ import numpy as np
 from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import TRAJECTORIES, TaskTrajectory, named_task
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.material import Material
@@ -229,6 +230,7 @@ def _dominant(
     ]
 
 
+@public
 def vibration(
     robot: Robot,
     trajectory: str | Path | TaskTrajectory = "adept",

@@ -142,6 +142,10 @@ def animate_mode(
         The scene, playing.
 
     """
+    from pkdyn.inputs import instance
+
+    instance("model", model, ElasticModel, "an ElasticModel (pkdyn.precision.elastic_model)")
+    instance("result", result, Modes, "Modes (pkdyn.precision.modes)")
     em = result.elastic if result.elastic is not None else model
     t, Q = mode_trajectory(em, result, index, amplitude, period, cycles)
     scene = Scene(display_robot(em), Q[0], collision=collision, serve=serve)

@@ -6,6 +6,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.precision.vibration_result import VibrationResult
 from pkdyn.viewer.scene import Scene
 from solvers import solve_lm
@@ -31,6 +32,9 @@ def exaggerated(
         InvalidInputError: A result without its deformation, or a non-positive scale.
 
     """
+    from pkdyn.inputs import instance
+
+    instance("result", result, VibrationResult, "a VibrationResult (pkdyn.precision.vibration)")
     em = result.elastic
     if em is None or result.command is None or result.deformation is None:
         raise InvalidInputError("result", "this result keeps no deformation to animate")
@@ -61,6 +65,7 @@ def exaggerated(
     return np.asarray(result.t_coarse), Q, float(scale)
 
 
+@public
 def animate_vibration(
     result: VibrationResult,
     *,

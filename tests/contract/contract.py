@@ -46,7 +46,12 @@ __all__ = [
 
 
 class CaseTimeout(BaseException):
-    """A case ran past its time limit (raised by SIGALRM in the main thread)."""
+    """A case ran past its time limit (raised by SIGPROF or SIGALRM in the main thread)."""
+
+
+WALL_FACTOR = 4.0
+"""A case's wall-clock limit, in multiples of its time limit (which bounds its CPU time): the
+machine running the suite may be shared, a case blocked on a read spends no CPU."""
 
 
 MEMORY_HEADROOM = 2 << 30
@@ -64,8 +69,9 @@ def _address_space() -> int:
 
 @contextlib.contextmanager
 def time_limit(seconds: float, memory: int = MEMORY_HEADROOM) -> Iterator[None]:
-    """Raise :class:`CaseTimeout` in the main thread after ``seconds`` (elsewhere: no limit),
-    and cap the address space at its present size plus ``memory`` meanwhile."""
+    """Raise :class:`CaseTimeout` in the main thread after ``seconds`` of the process's CPU
+    time or ``WALL_FACTOR * seconds`` of wall-clock time (elsewhere: no limit), and cap the
+    address space at its present size plus ``memory`` meanwhile."""
     import resource
 
     if threading.current_thread() is not threading.main_thread():
@@ -73,7 +79,9 @@ def time_limit(seconds: float, memory: int = MEMORY_HEADROOM) -> Iterator[None]:
         return
 
     def on_alarm(signum: int, frame: Any) -> None:
-        raise CaseTimeout(f"no answer within {seconds:g} s")
+        if signum == signal.SIGPROF:
+            raise CaseTimeout(f"no answer within {seconds:g} s of CPU time")
+        raise CaseTimeout(f"no answer within {WALL_FACTOR * seconds:g} s")
 
     soft, hard = resource.getrlimit(resource.RLIMIT_AS)
     used = _address_space()
@@ -83,13 +91,16 @@ def time_limit(seconds: float, memory: int = MEMORY_HEADROOM) -> Iterator[None]:
         if hard == resource.RLIM_INFINITY or cap < hard:
             resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
             capped = True
-    previous = signal.signal(signal.SIGALRM, on_alarm)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    previous = signal.signal(signal.SIGALRM, on_alarm), signal.signal(signal.SIGPROF, on_alarm)
+    signal.setitimer(signal.ITIMER_PROF, seconds)
+    signal.setitimer(signal.ITIMER_REAL, WALL_FACTOR * seconds)
     try:
         yield
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
-        signal.signal(signal.SIGALRM, previous)
+        signal.setitimer(signal.ITIMER_PROF, 0.0)
+        signal.signal(signal.SIGALRM, previous[0])
+        signal.signal(signal.SIGPROF, previous[1])
         if capped:
             resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
 

@@ -209,14 +209,16 @@ def _conditioning_map() -> Any:
 
 
 @functools.cache
-def _vibration() -> Any:
+def _vibration(geometry: bool = False) -> Any:
     import warnings
 
     from pkdyn.precision import vibration
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return vibration(fx.robot("delta"), "adept", actuator_stiffness=2e4, dt=0.004, dwell=0.1)
+        return vibration(
+            fx.robot("delta", geometry), "adept", actuator_stiffness=2e4, dt=0.004, dwell=0.1
+        )
 
 
 @functools.cache
@@ -623,11 +625,10 @@ API: list[Api] = [
                      None, names=("kind",))},
         inputs={"measurements.csv": fx.calibration_csv}),
     Api("pkdyn.calibration.write_csv",
-        {"path": Arg(PathOut(".csv", onto=("measurements.csv",)),
-                     Lazy(lambda s: s.dir / "out.csv"), names=("path",)),
+        # (it reads no file: the measurements are given)
+        {"path": Arg(PathOut(".csv"), Lazy(lambda s: s.dir / "out.csv"), names=("path",)),
          "robot": ROBOT_R,
-         "m": Arg(Obj("Measurements"), Lazy(lambda s: _cal_measurements()), names=("m",))},
-        inputs={"measurements.csv": fx.calibration_csv}),
+         "m": Arg(Obj("Measurements"), Lazy(lambda s: _cal_measurements()), names=("m",))}),
     # ---- identification
     Api("pkdyn.identification.Measurements",
         {"t": Arg(Vector(None), Lazy(lambda s: _id_measurements().t[:50].copy()), names=("t",)),
@@ -683,9 +684,8 @@ API: list[Api] = [
         {"limit": Arg(Count(), 40, names=("limit",))}, robot="five_bar",
         obj=lambda s: _identified()),
     Api("pkdyn.identification.IdentificationResult.write_urdf",
-        {"path": Arg(PathOut(".urdf", onto=("data.csv",)), Lazy(lambda s: s.dir / "out.urdf"),
-                     names=("path",))},
-        robot="five_bar", obj=lambda s: _identified(), inputs={"data.csv": fx.identification_csv}),
+        {"path": Arg(PathOut(".urdf"), Lazy(lambda s: s.dir / "out.urdf"), names=("path",))},
+        robot="five_bar", obj=lambda s: _identified()),  # (it reads no file)
     # ---- library
     Api("pkdyn.library.family", {"name": Arg(Choice(), "delta", names=("name", "family", "robot"))},
         robot=None),
@@ -733,7 +733,7 @@ API: list[Api] = [
          "inner_radius": Arg(Real("m", sign="non_negative"), 0.005, names=("inner_radius",))},
         robot=None),
     Api("pkdyn.precision.Section.shear_coefficient",
-        {"poisson": Arg(Real(), 0.3, names=("poisson",))}, robot=None,
+        {"poisson": Arg(Real(optional=True), 0.3, names=("poisson",))}, robot=None,
         obj=lambda s: pkdyn.precision.Section(0.01)),
     Api("pkdyn.precision.Section.mass",
         {"length": Arg(Real("m", sign="positive"), 0.3, names=("length",)),
@@ -1344,13 +1344,15 @@ API: list[Api] = [
          "samples": Arg(Count(minimum=0), 0, names=("samples",)),
          "top": Arg(Count(optional=True), 10, names=("top",))}),
     Api("pkdyn.precision.accuracy_map",
-        {"robot": ROBOT_R, "plane": Arg(Choice(("xy", "xz", "yz")), "xy", names=("plane",)),
+        {"robot": ROBOT_R,
+         # (a plane name, or the (N, 3) positions themselves: a wrong type names either)
+         "plane": Arg(Choice(("xy", "xz", "yz")), "xy", names=("plane", "positions")),
          "extent": Arg(Real("m", sign="positive", optional=True), None, names=("extent",)),
          "samples": Arg(Count(minimum=2), 3, names=("samples",)),
          "resolution": Arg(Vector((1, 2)), 1e-4, names=("resolution",)),
          "backlash": Arg(Vector((1, 2)), 0.0, names=("backlash",)),
          "progress_bar": Arg(Flag(optional=True), False, names=("progress",))},
-        robot="five_bar"),
+        robot="five_bar", nan_ok=True),  # (NaN where a cell is not evaluated: its status)
     Api("pkdyn.precision.vibration",
         {"robot": ROBOT_R,
          "cycle_time": Arg(Real("s", sign="positive", optional=True), None, names=("cycle",)),
@@ -1361,10 +1363,13 @@ API: list[Api] = [
          "dwell": Arg(Real("s", sign="positive"), 0.1, names=("dwell",)),
          "method": Arg(Choice(("modal", "multibody")), "modal", names=("method",)),
          "dt": Arg(Real("s", sign="positive"), 0.004, names=("dt",)),
+         "damping_ratio": Arg(Real(sign="non_negative", optional=True), None,
+                              names=("damping_ratio",)),
          "progress": PROGRESS()},
         timeout=60, slow=True),
     Api("pkdyn.viewer.animate_vibration",
-        {"result": Arg(Obj("VibrationResult"), Lazy(lambda s: _vibration()), names=("result",)),
+        {"result": Arg(Obj("VibrationResult"), Lazy(lambda s: _vibration(True)),
+                       names=("result",)),
          "scale": Arg(Real(sign="positive", optional=True), None, names=("scale",)),
          "slow": Arg(Real(sign="positive"), 20.0, names=("slow",))},
         timeout=60, slow=True),
@@ -1381,7 +1386,7 @@ API: list[Api] = [
           ("plot_translation_workspace", "ws"), ("plot_vibration", "result"),
       )],
     Api("pkdyn.plotting.plot_simulation",
-        {"robot": Arg(RobotArg(), None, names=("robot",)),
-         "result": Arg(Obj("a simulation"), None, names=("result",))},
+        {"robot": Arg(RobotArg(), 3, names=("robot", "result")),
+         "result": Arg(Obj("a simulation"), 3, names=("result", "robot"))},
         robot=None, baseline=False),
 ]  # fmt: skip

@@ -20,6 +20,7 @@ from hypothesis import given, settings
 
 from contract.contract import check_api, file_changes, snapshot, temporaries
 from contract.drive import PENDING_SETTINGS, scratch
+from contract.kinds import PathIn, PathOut
 from contract.registry import API, pending
 
 settings.load_profile("contract")
@@ -94,6 +95,8 @@ def _run(entry, arg_name, case):
         names = (arg.names or (arg_name,)) if arg else ()
         if arg_name and hasattr(replaced[arg_name], "__fspath__"):
             names = (*names, str(replaced[arg_name]), replaced[arg_name].name)
+        elif arg_name and isinstance(arg.kind if arg else None, PathOut | PathIn):
+            names = (*names, str(replaced[arg_name]))  # (a path given as a str)
         call = bound_call(entry, s, replaced)
         before = snapshot(s.dir)
         with warnings.catch_warnings():

@@ -80,7 +80,14 @@ def test_contract_signals_during_work(tmp_path, command, sig, code, word):
     assert lines == [f"pkdyn: {word}"], err[-2000:]
     assert "Traceback" not in err
     assert target.read_text() == "previous results\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == [target.name]  # no temporary left
+    left = sorted(p.name for p in tmp_path.iterdir())
+    if command == "design":  # the designs finished before the signal: the documented resume file
+        partial = tmp_path / ".out.partial.csv"
+        if partial.exists():
+            left.remove(partial.name)
+            head = partial.read_text()[:200]
+            assert head.startswith("# pkdyn design study "), head
+    assert left == [target.name]  # no temporary left
 
 
 MEMORY = 3 << 30  # [bytes]: far more than any refused case needs, far less than the machine
@@ -108,14 +115,9 @@ UNBOUNDED = {
     "trajectory_zero": ["size", "delta", "--trajectory", "/dev/zero"],
 }  # fmt: skip
 
-PENDING_CLI = {"points_zero", "trajectory_zero"}
-"""Reads of ``/dev/zero`` bounded by the one input reader of branch cli."""
-
 
 @pytest.mark.parametrize("case", list(UNBOUNDED))
 def test_contract_unbounded_work_is_refused_under_limits(tmp_path, case):
-    if case in PENDING_CLI:
-        pytest.xfail("fixed on branch cli (inputs read through one bounded reader)")
     argv = [a.replace("{tmp}", str(tmp_path)) for a in UNBOUNDED[case]]
     proc = _spawn(argv, limits=_limits)
     try:

@@ -20,7 +20,6 @@ from contract.contract import check_api, check_cli, run_cli
 
 DELTA_POSE = [0.0, 0.0, -0.4]
 DEP1 = "fixed on branch dep1 (ForwardDynamics.step refuses dt zero, negative, NaN, inf)"
-CLI_BRANCH = "fixed on branch cli"
 
 
 def refused(call, *names: str) -> str:
@@ -105,7 +104,6 @@ def test_contract_negative_values_where_none_is_meaningful(five_bar):
     one_line(["size", "delta", "--payload", "-1"], "payload")
 
 
-@pytest.mark.xfail(strict=True, reason=f"{CLI_BRANCH} (negative numbers in any notation)")
 @pytest.mark.parametrize(
     "argv",
     [
@@ -313,8 +311,6 @@ def test_contract_huge_cell_beyond_the_csv_field_limit(tmp_path, which):
 @pytest.mark.parametrize("which", ["trajectory", "data", "measurements"])
 @pytest.mark.parametrize("kind", ["fifo", "device", "link"])
 def test_contract_fifo_device_link_inputs_are_refused_before_reading(tmp_path, which, kind):
-    if which == "trajectory":
-        pytest.xfail(f"{CLI_BRANCH} (one reader that refuses FIFOs and devices)")
     _, argv = _tables(tmp_path)[which]
     if kind == "fifo":
         path = tmp_path / "pipe.csv"
@@ -330,7 +326,6 @@ def test_contract_fifo_device_link_inputs_are_refused_before_reading(tmp_path, w
 # ------------------------------------------------------------------------------ onto_input
 
 
-@pytest.mark.xfail(strict=True, reason=f"{CLI_BRANCH} (inputs are never outputs)")
 def test_contract_onto_input_predicted_efforts_onto_the_motion(tmp_path):
     """``identify --predict other.csv --csv other.csv`` overwrote the measured motion."""
     data, other = tmp_path / "d.csv", tmp_path / "o.csv"
@@ -402,3 +397,50 @@ def test_contract_zero_efforts_and_tiny_cutoff_in_identify(tmp_path):
         one_line(["identify", "five_bar", "--data", str(p), "-o", out, "--cutoff", cutoff],
                  "cutoff")  # fmt: skip
     assert not Path(out).exists()
+
+
+# ------------------------------------------------------------------------------ after the merge
+
+
+def test_contract_wrong_type_path_is_not_a_file_descriptor(tmp_path, delta):
+    """An int path was opened as a file descriptor (``3``: whatever the process had open)."""
+    from pkdyn.calibration import Measurements, read_csv, write_csv
+
+    refused(lambda: read_csv(3, delta), "path")
+    m = Measurements("position", np.zeros((2, 3)), np.zeros((2, 3)))
+    refused(lambda: write_csv(3, delta, m), "path")
+
+
+def test_contract_trailing_slash_on_a_figure_writes_nothing(tmp_path):
+    """``fig.png/`` was written as ``fig.png``: pathlib drops the slash the user typed."""
+    from pkdyn.plotting._save import save_figure
+
+    matplotlib = pytest.importorskip("matplotlib.figure")
+    target = f"{tmp_path}/fig.png/"
+    refused(lambda: save_figure(matplotlib.Figure(), target, 50), target, "fig.png")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_contract_non_finite_readings_are_refused(delta):
+    """NaN readings turned into NaN joint coordinates, and ``rates="no"`` counted as true."""
+    refused(lambda: delta.joint_coordinates([0.0, math.nan, 0.0]), "readings")
+    refused(lambda: delta.readings([0.0, 0.0, math.inf]), "qa")
+    refused(lambda: delta.joint_coordinates([0.0, 0.0, 0.0], rates="no"), "rates")
+
+
+@pytest.mark.parametrize("i", [-1, 2.5, math.nan, 10**12, "0"])
+def test_contract_fraction_negative_huge_row_index(i):
+    """``where(i)`` answered for a negative row, and raised IndexError or ValueError else."""
+    from pkdyn.calibration import Measurements
+
+    m = Measurements("position", np.zeros((2, 3)), np.zeros((2, 3)))
+    refused(lambda: m.where(i), "i")
+
+
+def test_contract_wrong_type_result_given_to_a_plot():
+    """A plotter given something else than its result raised AttributeError or TypeError."""
+    from pkdyn.plotting import plot_grid_map, plot_mel_study, plot_vibration
+
+    refused(lambda: plot_grid_map(3), "result")
+    refused(lambda: plot_vibration("result.csv"), "result")
+    refused(lambda: plot_mel_study({}), "study")
