@@ -253,9 +253,9 @@ def coupled_rows(n: int = 1000) -> list[Row]:
     """A robot with a joint coupling: Pinocchio's call on the closures plus the couplings' forces.
 
     The UFACTORY xArm7 gripper (two point closures and the drivers' coupling): one evaluation
-    (three ``pin.constraintDynamics`` calls, see :mod:`solvers.forward_dynamics`) against the raw
-    call on its two closures alone (the same robot without the coupling, which Pinocchio cannot
-    take).
+    (one ``pin.constraintDynamics`` call and the couplings' response from its factorization, see
+    :mod:`solvers.coupled_dynamics`) against the raw call on its two closures alone (the same
+    robot without the coupling, which Pinocchio cannot take).
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # its tendon actuator is left out
@@ -273,9 +273,9 @@ def coupled_rows(n: int = 1000) -> list[Row]:
     t, t_raw, r = paired(lambda: fd._accel(q, v, zero), raw, n)
     return [
         (
-            "xArm7 gripper (2 closures + 1 coupling, nv = 6): forward evaluation (3 calls: "
-            "closures, probe, coupling force) vs one raw `pin.constraintDynamics` call on the 2 "
-            "closures without the coupling",
+            "xArm7 gripper (2 closures + 1 coupling, nv = 6): forward evaluation (one call and "
+            "the coupling's response from its factorization) vs one raw `pin.constraintDynamics` "
+            "call on the 2 closures without the coupling",
             f"{us(t)} vs {us(t_raw)}: {r:.2f}x",
             "- (robots without couplings keep the raw call)",
         )

@@ -3,18 +3,18 @@
 Runs every benchmark module of this directory that exists (each exposes ``rows()`` returning
 ``(benchmark, figure, target-or-comment)`` rows): ``public`` (the public functions as users
 call them against the raw-Pinocchio floor: inverse dynamics, simulation, assembly, numeric
-workspace), ``geometry`` (closed forms, assembly / FK and
-IK against raw Pinocchio), ``dynamics`` (forward step and inverse dynamics against raw
-Pinocchio), ``vs_mujoco`` (forward step and inverse dynamics against MuJoCo, agreement),
-``workspace`` (workspace throughput, when present), ``actuation_map`` (closed-loop legs, loading
-public models), ``cli_latency`` (command start-up against the bare imports), ``identification``
-(a Delta identified from 1e5 samples) and ``design``
-(design-study throughput and a 10,000-design study: several minutes; ``PKDYN_BENCH_DESIGNS``
-makes it smaller), ``calibration`` (geometric calibration of a Gough-Stewart from 100 poses, a
-Delta from 40, pose sensitivities), ``vibration`` (the modal method's cycles per second, the
-multibody simulation, the settling search). Figures are medians of repeated runs; ratios are
-medians of ratios measured on alternating batches (CPU time of the process), so that they hold
-under a varying load.
+workspace), ``geometry`` (closed forms, assembly / FK and IK against raw Pinocchio),
+``dynamics`` (forward step and inverse dynamics against raw Pinocchio), ``constraints`` (a
+planar loop closed by hinges against the same loop by points), ``vs_mujoco`` (forward step and
+inverse dynamics against MuJoCo, agreement), ``workspace`` (workspace throughput, when
+present), ``actuation_map`` (closed-loop legs, loading public models), ``cli_latency`` (command
+start-up against the bare imports), ``identification`` (a Delta identified from 1e5 samples)
+and ``design`` (design-study throughput and a 10,000-design study: several minutes;
+``PKDYN_BENCH_DESIGNS`` makes it smaller), ``calibration`` (geometric calibration of a
+Gough-Stewart from 100 poses, a Delta from 40, pose sensitivities), ``vibration`` (the modal
+method's cycles per second, the multibody simulation, the settling search). Figures are medians
+of repeated runs; ratios are medians of ratios measured on alternating batches (CPU time of the
+process), so that they hold under a varying load.
 """
 
 from __future__ import annotations
@@ -35,6 +35,10 @@ MODULES = (
     ("public", "Public functions as users call them, beside the core and the floor (issue 14)"),
     ("geometry", "Geometric models: closed forms, assembly / FK, IK (pkdyn vs raw Pinocchio)"),
     ("dynamics", "Dynamics: forward step and inverse dynamics (pkdyn vs raw Pinocchio)"),
+    (
+        "constraints",
+        "The constraint layer: hinge-closed against point-closed planar loops (issue 37)",
+    ),
     ("vs_mujoco", "pkdyn vs MuJoCo (exported models): speed and agreement"),
     ("passive", "Passive elements: springs, dampers, friction in the dynamics"),
     ("workspace", "Workspace throughput"),

@@ -12,9 +12,12 @@ angular Jacobian of body ``k``):
   ``J1, J2`` the local Jacobians of the frames.
 - **hinge** (revolute joint about the axis ``a``, the same unit vector in both frames), its 5
   independent rows: the point rows of the origins, then two axis rows
-  ``r_k = f_k . a2`` with ``a2 = R_c2 a`` and ``f_1 = -R_c1 e_2``, ``f_2 = R_c1 e_1`` (``e_1, e_2,
-  a`` a right-handed orthonormal frame in ``c1``): about the relative rotation of ``c2`` from
-  ``c1`` about ``R_c1 e_k``; ``J_k = w_k^T (J_ang,2 - J_ang,1)``, ``w_k = a2 x f_k``.
+  ``r_k = f_k . a2`` [m] with ``a2 = R_c2 a`` and ``f_1 = -L R_c1 e_2``, ``f_2 = L R_c1 e_1``
+  (``e_1, e_2, a`` a right-handed orthonormal frame in ``c1``, ``L`` = :data:`HINGE_ARM`): the
+  displacement, normal to the axis, of the axis point at ``L`` from the origin, about ``L``
+  times the relative rotation of ``c2`` from ``c1`` about ``R_c1 e_k`` (the units and scale of
+  the former hinge of two points, whose tolerances and reports they keep);
+  ``J_k = w_k^T (J_ang,2 - J_ang,1)``, ``w_k = a2 x f_k``.
 - **planar closures**: where every joint moving either body turns about axes parallel to one
   world-fixed normal ``n`` or slides normal to it (:mod:`solvers.planar`), the rows out of the
   plane are zero by construction and dropped: a point keeps ``E (p1 - p2)`` (``E`` (2, 3) an
@@ -42,6 +45,8 @@ one moment on ``joint1``'s body at ``p1``, world axes.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -56,8 +61,9 @@ CLOSURE_KINDS = ("point", "hinge", "weld")
 """The kinds of closure."""
 
 HINGE_ARM = 0.1
-"""Distance [m] along the axis of the second point of a hinge built from two points (the
-unreduced hinge, 6 rows of rank 5: ``reduce=False``)."""
+"""Distance [m] along a hinge's axis of the point whose displacement its axis rows measure (and
+of the second point of a hinge built from two points: the unreduced hinge, 6 rows of rank 5,
+``reduce=False``)."""
 
 _GAP_TOL = 1e-10
 """Largest out-of-plane gap (relative to the robot's size) [m or rad] of a planar closure whose
@@ -114,6 +120,18 @@ def support_mask(model: pin.Model, j: int) -> np.ndarray:
         mask[jm.idx_v : jm.idx_v + jm.nv] = 1.0
         j = model.parents[j]
     return mask
+
+
+def _turn(R1: np.ndarray, R2: np.ndarray, n: np.ndarray) -> float:
+    """The angle [rad] of ``c1Rc2 = R1^T R2`` about ``m = R1^T n``.
+
+    ``atan2(m . vee(R - R^T) / 2, (tr R - 1) / 2)``: ``m . log3(R)`` for a rotation about
+    ``m``, defined on a whole turn.
+    """
+    R = R1.T @ R2
+    m = R1.T @ n
+    s = 0.5 * (m[0] * (R[2, 1] - R[1, 2]) + m[1] * (R[0, 2] - R[2, 0]) + m[2] * (R[1, 0] - R[0, 1]))
+    return math.atan2(s, 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0))
 
 
 def _perpendicular(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -218,7 +236,7 @@ class ClosureRows:
         out: list[np.ndarray | None] = []
         for c in self.closures:
             cols = np.flatnonzero(self.mask(c.joint1) + self.mask(c.joint2))
-            n = plane_normal(np.asarray(data.J)[:, cols])
+            n = plane_normal(np.reshape(data.J, (6, model.nv))[:, cols])
             if n is not None:
                 o1 = data.oMi[c.joint1] * c.placement1
                 o2 = data.oMi[c.joint2] * c.placement2
@@ -304,6 +322,18 @@ class ClosureRows:
             )
         ]
         self._welds = [(int(o), cd) for is_point, o, _, cd in self._entries if not is_point]
+        # the point rows' drift: per side, the joint and the point (translation only: the
+        # classical acceleration in the joint frame, turned to world axes by the joint's rotation)
+        self._pt_sides = [
+            (
+                int(self.base_offsets[k]),
+                [(int(j), pin.SE3(np.eye(3), M.translation)) for j, M in ((j1, M1), (j2, M2)) if j],
+                bool(j1),
+            )
+            for k, (is_point, j1, M1, j2, M2) in enumerate(self._base)
+            if is_point
+        ]
+        self._other = [k for k, it in enumerate(self._base) if not it[0]]
 
     def _build_maps(self) -> None:
         """Index maps from the base rows to the rows (module docstring)."""
@@ -333,7 +363,7 @@ class ClosureRows:
                 a = np.asarray(c.axis, dtype=float)
                 a = a / np.linalg.norm(a)
                 e1, e2 = _perpendicular(a)
-                F = np.column_stack([-e2, e1])  # f_1, f_2 in c1
+                F = HINGE_ARM * np.column_stack([-e2, e1])  # L f_1, L f_2 in c1
                 self._axes.append((b.offset + 3, b0, F, a, c.joint1, c.joint2))
         self._dst = np.array(dst, dtype=int)
         self._src = np.array(src, dtype=int)
@@ -366,6 +396,43 @@ class ClosureRows:
             out.append(cm)
         return out
 
+    def pin_closures(self) -> list[Closure]:
+        """The fewest points and welds with the same constraints, for Pinocchio's dynamics.
+
+        Pinocchio's ``constraintDynamics`` takes 3D points and 6D welds: a point or a weld as it
+        is; a planar hinge about the normal as the point of its origins (its other rows vanish
+        by construction: half a hinge of two points' work); a planar weld, or a planar hinge
+        across the plane, as a weld (nothing turns about the hinge's axis in the plane); a
+        spatial hinge as two points on its axis, :data:`HINGE_ARM` apart (6 rows of rank 5,
+        which the proximal solver settles).
+
+        Returns:
+            Point and weld closures (a spatial hinge ``N`` gives ``N`` and ``N/axis``).
+
+        """
+        out: list[Closure] = []
+        for b in self.blocks:
+            c = b.closure
+            if b.normal is not None:
+                out.append(dataclasses.replace(c, kind="weld" if b.size == 3 else "point"))
+            elif c.kind == "hinge":
+                a = np.asarray(c.axis, dtype=float)
+                off = pin.SE3(np.eye(3), HINGE_ARM * a / np.linalg.norm(a))
+                out.append(dataclasses.replace(c, kind="point"))
+                out.append(
+                    Closure(
+                        c.name + "/axis",
+                        "point",
+                        c.joint1,
+                        c.placement1 * off,
+                        c.joint2,
+                        c.placement2 * off,
+                    )
+                )
+            else:
+                out.append(c)
+        return out
+
     def _blocks_of_base(self) -> list[str]:
         names = [""] * len(self._base)
         for b in self.blocks:
@@ -393,13 +460,17 @@ class ClosureRows:
 
     def residual(self, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
         """Residual (n,) [m, rad] from the joint placements of ``data`` (updates the datas)."""
-        self.calc(data)
-        rb = self._base_residual()
+        model = self.model
+        rb = np.empty(self.nb) if not self.identity or out is None else out
+        for is_point, o, cm, cd in self._entries:  # (one loop: the datas and the base rows)
+            cm.calc(model, data, cd)
+            if is_point:
+                rb[o : o + 3] = cd.oMc1.translation
+                rb[o : o + 3] -= cd.oMc2.translation
+            else:
+                rb[o : o + 6] = pin.log6(cd.c1Mc2).vector
         if self.identity:
-            if out is None:
-                return rb
-            out[:] = rb
-            return out
+            return rb
         r = np.empty(self.n) if out is None else out
         r[self._dst] = rb[self._src]
         if self._planes:
@@ -411,9 +482,18 @@ class ClosureRows:
             r[o : o + 2] = (cd.oMc1.rotation @ F).T @ a2
         for o, b, n, _, _ in self._turns:
             cd = cds[b]
-            R1 = cd.oMc1.rotation
-            r[o] = (R1.T @ n) @ pin.log3(R1.T @ cd.oMc2.rotation)
+            r[o] = _turn(cd.oMc1.rotation, cd.oMc2.rotation, n)
         return r
+
+    def jacobian_at(self, data: pin.Data) -> np.ndarray:
+        """Jacobian (n, nv) from ``data`` after the joint Jacobians (updates the datas)."""
+        model = self.model
+        for _, _, cm, cd in self._entries:
+            cm.calc(model, data, cd)
+        if self.identity and not self._welds:  # (points alone: Pinocchio's rows as they are)
+            J = pin.getConstraintsJacobian(model, data, self._cms, self._cds)
+            return np.reshape(J, (self.nb, model.nv))
+        return self.jacobian(data)
 
     def jacobian(self, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
         """Jacobian (n, nv) from ``data`` after the joint Jacobians and :meth:`calc`."""
@@ -435,7 +515,7 @@ class ClosureRows:
         if self._planes:
             J[self._pl_dst] = np.einsum("mij,mjv->miv", self._pl_E, Jb[self._pl_src])
         if self._axes or self._turns:
-            Jang = np.asarray(data.J)[3:]
+            Jang = np.reshape(data.J, (6, nv))[3:]
             cds = self._cds
             for o, b, F, a, j1, j2 in self._axes:
                 cd = cds[b]
@@ -469,18 +549,18 @@ class ClosureRows:
     def drift(self, data: pin.Data) -> np.ndarray:
         """Acceleration drift ``gamma`` (n,) from ``data`` after ``forwardKinematics(q, v, 0)``."""
         g = np.zeros(self.nb)
+        classic, oMi, vel, acc = pin.classicAcceleration, data.oMi, data.v, data.a
+        for o, sides, first in self._pt_sides:  # classical accelerations of the points, world
+            for i, (j, M) in enumerate(sides):
+                lin = oMi[j].rotation.dot(classic(vel[j], acc[j], M))
+                if i == 0 and first:
+                    g[o : o + 3] = lin
+                else:
+                    g[o : o + 3] -= lin
         zero = pin.Motion.Zero()
-        classic = pin.classicAcceleration
-        for k, (is_point, j1, M1, j2, M2) in enumerate(self._base):
+        for k in self._other:  # welds: the relative spatial acceleration at a = 0
+            _, j1, M1, j2, M2 = self._base[k]
             o = self.base_offsets[k]
-            if is_point:  # classical accelerations of the two contact points, world axes
-                if j1:
-                    lin = classic(data.v[j1], data.a[j1], M1)
-                    g[o : o + 3] = (data.oMi[j1] * M1).rotation.dot(lin)
-                if j2:
-                    lin = classic(data.v[j2], data.a[j2], M2)
-                    g[o : o + 3] -= (data.oMi[j2] * M2).rotation.dot(lin)
-                continue
             c1Mc2 = (data.oMi[j1] * M1).actInv(data.oMi[j2] * M2)
             v1 = c1Mc2.actInv(M1.actInv(data.v[j1])) if j1 else zero
             a1 = c1Mc2.actInv(M1.actInv(data.a[j1])) if j1 else zero
@@ -565,7 +645,7 @@ class ClosureRows:
                 e1, e2 = _perpendicular(a)
                 a2 = cd.oMc2.rotation @ a
                 for k, f in enumerate((-e2, e1)):
-                    moment -= lb[3 + k] * np.cross(a2, cd.oMc1.rotation @ f)
+                    moment -= lb[3 + k] * np.cross(a2, cd.oMc1.rotation @ (HINGE_ARM * f))
             out.append((force, moment, p))
         return out
 

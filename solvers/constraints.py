@@ -48,7 +48,9 @@ class ConstraintSet:
             :class:`solvers.coupling.JointCoupling`), or a set whose couplings to take.
         reduce: Reduce the closures to their independent rows (hinges to 5 rows, planar
             closures to their in-plane rows); ``False``: a hinge is two points (6 rows of
-            rank 5) and no row is dropped.
+            rank 5) and no row is dropped. Default: reduce, unless a closure is given as a
+            Pinocchio constraint model (then every model keeps its rows, as the former closure
+            set did).
 
     Attributes:
         model: The kinematic tree.
@@ -72,11 +74,13 @@ class ConstraintSet:
         closures: Sequence[Closure | pin.RigidConstraintModel] = (),
         couplings: Sequence[Coupling] | ConstraintSet = (),
         *,
-        reduce: bool = False,
+        reduce: bool | None = None,
     ) -> None:
         self.model = model
         if isinstance(couplings, ConstraintSet):  # (a set's couplings view, as the former API)
             couplings = couplings.coupling_specs
+        if reduce is None:  # Pinocchio's models are taken row for row
+            reduce = all(isinstance(c, Closure) for c in closures)
         self._closure: ClosureRows | None = ClosureRows(model, closures, reduce)
         self._coupling: CouplingRows | None = (
             CouplingRows(model, couplings) if len(couplings) else None
@@ -121,6 +125,18 @@ class ConstraintSet:
             return self
         return ConstraintSet._view(self.model, None, self._coupling)
 
+    @functools.cached_property
+    def unreduced(self) -> ConstraintSet:
+        """The same constraints with every row (hinges as two points, planar closures whole).
+
+        For what depends on rows that vanish only by construction of the nominal geometry: the
+        sensitivity of the closures to the description's placements (an out-of-plane error
+        opens a planar loop out of its plane), Pinocchio's own constraint models.
+        """
+        if not self.reduce or self._closure is None or self._closure.identity:
+            return self  # (nothing was reduced)
+        return ConstraintSet(self.model, self.closure_specs, self.coupling_specs, reduce=False)
+
     @property
     def closure_rows(self) -> ClosureRows | None:
         """The closures' row evaluator (``None`` in the couplings view)."""
@@ -156,6 +172,7 @@ class ConstraintSet:
         closures: Sequence[Closure | pin.RigidConstraintModel] | None = None,
         couplings: Sequence[Coupling] | None = None,
         model: pin.Model | None = None,
+        reduce: bool | None = None,
     ) -> ConstraintSet:
         """A set of the same kind with other closures, couplings or model (default: these).
 
@@ -163,26 +180,29 @@ class ConstraintSet:
             closures: The closures (default: this set's).
             couplings: The couplings (default: this set's).
             model: The model (default: this set's), e.g. a copy with other joint placements.
+            reduce: Reduce the closures (default: as this set).
 
         Returns:
-            The new set (reduced as this one).
+            The new set.
 
         """
         return ConstraintSet(
             self.model if model is None else model,
             self.closure_specs if closures is None else closures,
             self.coupling_specs if couplings is None else couplings,
-            reduce=self.reduce,
+            reduce=self.reduce if reduce is None else reduce,
         )
 
     @property
     def items(self) -> list[tuple[bool, int, pin.SE3, int, pin.SE3]]:
-        """Per base constraint model of the closures: ``(is_point, joint1, placement1, ...)``.
+        """Per constraint model of the closures, unreduced: ``(is_point, joint1, placement1, ...)``.
 
-        ``(is_point, joint1, placement1, joint2, placement2)`` of the points and welds the
-        closures' rows come from (a hinge built from two points has two).
+        ``(is_point, joint1, placement1, joint2, placement2)`` of the 3D points and 6D welds of
+        :attr:`unreduced` (a hinge is two points), one per Pinocchio constraint model of the
+        closures as the description builds them (the former closure set's items).
         """
-        return self._closure.base_items if self._closure is not None else []
+        rows = self.unreduced.closure_rows
+        return rows.base_items if rows is not None else []
 
     # ------------------------------------------------------------------ evaluation
 
@@ -266,8 +286,12 @@ class ConstraintSet:
             Jacobian (n, nv).
 
         """
-        if self._closure is not None and self.nc:
-            self._closure.calc(data)
+        cl = self._closure
+        if self._only_closures:
+            assert cl is not None
+            return cl.jacobian_at(data)
+        if cl is not None and self.nc:
+            cl.calc(data)
         return self._jacobian(data, q)
 
     def jacobian_after_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
@@ -288,27 +312,34 @@ class ConstraintSet:
         pin.computeJointJacobians(self.model, data)
         return self._jacobian(data, q)
 
-    def local_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
-        """Residual in the contact frame of ``joint1`` (runs the forward kinematics).
+    @property
+    def n_local(self) -> int:
+        """Rows of :meth:`local_residual`: every closure row, then the couplings'."""
+        return self.unreduced.n
 
-        For the solvers: a point's residual is ``R_c1^T (p1 - p2)`` (the world residual
-        rotated, same norm), a weld's ``log6(c2Mc1)``; with :meth:`local_jacobian_after_residual`
+    def local_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
+        """The residual the Newton solvers work on (runs the forward kinematics).
+
+        Every closure row (:attr:`unreduced`: a hinge as two points, a planar loop whole, the
+        same constraints as the reduced rows, redundant ones included), in the contact frame of
+        ``joint1``: a point's residual is ``R_c1^T (p1 - p2)`` (the world residual rotated,
+        same norm), a weld's ``log6(c2Mc1)``; with :meth:`local_jacobian_after_residual`
         (Pinocchio's ``LOCAL`` constraint Jacobian) it is exact at closure, where Newton's
         method needs it (its error is of the order of the residual: convergence stays
-        quadratic). Cheaper than :meth:`residual`: one copy per closure. Sets with reduced
-        rows (hinges, planar closures) use :meth:`residual` instead. Coupling rows are
-        :meth:`residual`'s.
+        quadratic, and the Levenberg-Marquardt solver settles the redundant rows). Cheaper than
+        :meth:`residual`: Pinocchio's C++ and one copy per constraint model. Then the coupling
+        rows (:meth:`residual`'s). Size :attr:`n_local`.
 
         Args:
             data: Pinocchio data of ``model``.
             q: Configuration (nq,).
 
         Returns:
-            Residual (n,) [m, rad].
+            Residual (n_local,) [m, rad].
 
         """
         if not self._local:
-            return self.residual(data, q)
+            return self.unreduced.local_residual(data, q)
         pin.forwardKinematics(self.model, data, q)
         r = np.empty(self.n)
         if self._closure is not None and self.nc:
@@ -318,18 +349,18 @@ class ConstraintSet:
         return r
 
     def local_jacobian_after_residual(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
-        """Jacobian (n, nv) of :meth:`local_residual` at ``q``, exact at closure.
+        """Jacobian (n_local, nv) of :meth:`local_residual` at ``q``, exact at closure.
 
         Args:
             data: The data the last :meth:`local_residual` call at ``q`` used, untouched since.
             q: That configuration (nq,).
 
         Returns:
-            Jacobian (n, nv).
+            Jacobian (n_local, nv).
 
         """
         if not self._local:
-            return self.jacobian_after_residual(data, q)
+            return self.unreduced.local_jacobian_after_residual(data, q)
         pin.computeJointJacobians(self.model, data)
         cl, cp = self._closure, self._coupling
         if cp is None:
@@ -365,6 +396,35 @@ class ConstraintSet:
         if self._coupling is not None:
             g[self.nc :] = self._coupling.drift(np.asarray(q), np.asarray(v))
         return g
+
+    def dynamics_terms(
+        self, data: pin.Data, q: np.ndarray, v: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Residual, Jacobian and drift at ``(q, v)`` from one forward kinematics.
+
+        For the dynamics, which need the three at every evaluation: ``forwardKinematics(q, v,
+        0)`` then the joint Jacobians from its placements.
+
+        Args:
+            data: Pinocchio data of ``model`` (its kinematics are overwritten).
+            q: Configuration (nq,).
+            v: Velocity (nv,).
+
+        Returns:
+            Residual (n,), Jacobian (n, nv) and drift (n,).
+
+        """
+        model = self.model
+        pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
+        pin.computeJointJacobians(model, data)
+        r = self._residual(data, q)
+        J = self._jacobian(data, q)
+        g = np.empty(self.n)
+        if self._closure is not None and self.nc:
+            g[: self.nc] = self._closure.drift(data)
+        if self._coupling is not None:
+            g[self.nc :] = self._coupling.drift(np.asarray(q), np.asarray(v))
+        return r, J, g
 
     # ------------------------------------------------------------------ reports
 

@@ -34,6 +34,12 @@ once every :data:`CALIBRATION_PERIOD` steps, which raises ``curvature`` to twice
 seen. After :data:`MAX_CORRECTIONS` corrections, or a correction above 1e-2, the state goes
 through the full projection.
 
+Joint couplings (:mod:`solvers.coupling`) are corrected with the closures: their forces come
+from the factorization of the one Pinocchio call (:mod:`solvers.coupled_dynamics`), and the
+Newton correction and the force-change response made to move them as their residual requires
+(``x + G mu`` with ``C (x + G mu) = -r_c``, ``G`` the hard-closure response to the couplings'
+forces): the mass-metric correction of closures and couplings together, with no other solve.
+
 The velocity is not projected: the Baumgarte gains of the dynamics hold ``J v`` (what a
 semi-implicit Euler step leaves is ``O(h^2)``), and a projection would cost as much again;
 the energy behaves as with the full projection (``tests/test_control_step.py``).
@@ -48,6 +54,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+
+from solvers.coupled_dynamics import CoupledDynamics
 
 if TYPE_CHECKING:
     from solvers.forward_dynamics import ForwardDynamics, TorqueFn
@@ -90,7 +98,19 @@ class ProjectedEulerStep:
         self.datas = pin.StdVec_RigidConstraintData()
         for cm in fd.constraint_models:
             self.datas.append(cm.createData())
-        pin.initConstraintDynamics(model, self.data, fd.constraint_models, self.datas)
+        if fd.n_pin:
+            pin.initConstraintDynamics(model, self.data, fd.constraint_models, self.datas)
+        rows = fd.constraints.coupling_rows
+        self._rows = rows
+        # with couplings: their forces from the factorization of the one Pinocchio call
+        self._cd = (
+            None
+            if rows is None
+            else CoupledDynamics(
+                model, rows, fd.constraint_models, self.datas, self.data, fd.prox, fd._pd
+            )
+        )
+        self._rk = np.zeros(0 if rows is None else rows.n)  # the couplings' residual
         self._points = all(cm.type == _POINT for cm in fd.constraint_models)
         # live numpy views on the constraint datas' members (Pinocchio returns the members by
         # reference): the residual is copied by one concatenate, not read closure by closure.
@@ -108,7 +128,7 @@ class ProjectedEulerStep:
             (cm.type == _POINT, cm, cd)
             for cm, cd in zip(list(fd.constraint_models), cds, strict=True)
         ]
-        nc, nv = fd.nc, model.nv
+        nc, nv = fd.n_pin, model.nv
         self._nc = nc
         # right-hand sides of the solves with K: [target; 0] (correction), [0; df] (forces)
         self._rhs = np.zeros(nc + nv)
@@ -146,7 +166,9 @@ class ProjectedEulerStep:
         pin.forwardKinematics(model, data, q)
         for _, cm, cd in self._pairs:
             cm.calc(model, data, cd)
-        if self._points:
+        if not self._nc:
+            pass
+        elif self._points:
             np.concatenate(self._trans, out=head)
         else:
             o = 0
@@ -155,7 +177,47 @@ class ProjectedEulerStep:
                 head[o : o + n] = p if point else pin.log6(M).vector
                 o += n
         self.measured += 1
-        return math.sqrt(float(head @ head))
+        if self._rows is None:
+            return math.sqrt(float(head @ head))
+        self._rk = self._rows.residual(q)
+        return math.sqrt(float(head @ head) + float(self._rk @ self._rk))
+
+    def _dynamics(self, q: np.ndarray, v: np.ndarray, f: np.ndarray) -> np.ndarray:
+        """The dynamics at ``(q, v)`` under ``f``; their factorization stays in ``data``."""
+        if self._cd is not None:
+            self._cd.gains = self.fd._pd
+            a = self._cd.acceleration(q, v, f)
+            self._rk = self._rows.residual(q) if self._rows is not None else self._rk
+            return a
+        fd = self.fd
+        return pin.constraintDynamics(
+            fd.model, self.data, q, v, f, fd.constraint_models, self.datas, fd.prox
+        )
+
+    def _correct(self) -> np.ndarray:
+        """The Newton correction (nv,) of the residual in the head (and of the couplings').
+
+        ``K^-1 [target; 0]`` for the closures (the factorization of the last dynamics
+        evaluation); with couplings, made to undo their residual too, in the mass metric.
+        """
+        nc = self._nc
+        x = self.data.constraint_chol.solve(self._rhs)[nc:] if nc else np.zeros(self.fd.model.nv)
+        if self._cd is None:
+            return x
+        return self._cd.couple(x, -self._rk)
+
+    def _force_response(self, df: np.ndarray) -> np.ndarray:
+        """The change (nv,) of the last evaluation's acceleration under a force change ``df``."""
+        nc = self._nc
+        if nc:
+            self._tail_f[:] = df
+            x = self.data.constraint_chol.solve(self._rhs_f)[nc:]
+        else:
+            assert self._cd is not None and self._cd.Minv is not None
+            x = self._cd.Minv.dot(df)
+        if self._cd is None:
+            return x
+        return self._cd.couple(x, np.zeros(self._rk.size))
 
     def _reach(self, q: np.ndarray) -> None:
         data = self.data
@@ -183,47 +245,60 @@ class ProjectedEulerStep:
 
         """
         fd = self.fd
-        model, data, datas, cms, prox = (
+        model, data, datas, cms, prox, cd = (
             fd.model,
             self.data,
             self.datas,
             fd.constraint_models,
             fd.prox,
+            self._cd,
         )
         if fd._auto_gains and dt != fd._gains_step:
             fd._euler_gains(dt)
             self._key = None
         if self._key is None:
-            self._kp = float(fd.constraint_models[0].m_baumgarte_parameters.Kp) if self._nc else 0.0
+            self._kp = float(fd._pd[0])
         f = None if tau is None else fd._generalized(t, q, v, tau)[1]
         if fd.passive is not None:
             f = fd.passive.force(q, v) if f is None else f + fd.passive.force(q, v)
+        ff = self._zero if f is None else f
         key = self._key
         if key is None or key[2] != dt or key[0] != q.tobytes() or key[1] != v.tobytes():
             q = np.asarray(q, dtype=float)
             v = np.asarray(v, dtype=float)
-            a = pin.constraintDynamics(
-                model, data, q, v, self._zero if f is None else f, cms, datas, prox
-            )
+            if cd is None:
+                a = pin.constraintDynamics(model, data, q, v, ff, cms, datas, prox)
+            else:
+                a = self._dynamics(q, v, ff)
             if not self.curvature:
                 self._reach(q)
         elif f is None:
             a = self._a
         else:
             f0 = self._f
-            self._tail_f[:] = f if f0 is None else f - f0
-            a = self._a + data.constraint_chol.solve(self._rhs_f)[self._nc :]
+            df = f if f0 is None else f - f0
+            if cd is None:
+                self._tail_f[:] = df
+                a = self._a + data.constraint_chol.solve(self._rhs_f)[self._nc :]
+            else:
+                a = self._a + self._force_response(df)
         v = v + dt * a
         q = pin.integrate(model, q, dt * v)
         # first same as last: the dynamics at the new state, under the same force
         # (a view on data.ddq, used before the next evaluation overwrites it)
-        self._a = pin.constraintDynamics(
-            model, data, q, v, self._zero if f is None else f, cms, datas, prox
-        )
+        if cd is None:
+            self._a = pin.constraintDynamics(model, data, q, v, ff, cms, datas, prox)
+        else:
+            self._a = self._dynamics(q, v, ff)
         self._f = f
         # one Newton correction with the factorization at the new state
-        self._target()
-        dq = data.constraint_chol.solve(self._rhs)[self._nc :]
+        if cd is None:
+            self._target()
+            dq = data.constraint_chol.solve(self._rhs)[self._nc :]
+        else:
+            if self._nc:
+                self._target()
+            dq = self._correct()
         q = pin.integrate(model, q, dq)
         # that evaluation pulled the closures by the Baumgarte term -Kp e, which the
         # correction removed: K^-1 [-Kp e; 0] = Kp dq (the same solve), taken out of it
@@ -234,7 +309,7 @@ class ProjectedEulerStep:
         if self.curvature * dq2 > 0.25 * fd.project_tol or self.steps % CALIBRATION_PERIOD == 1:
             q, restored = self._restore(q, dq2)
             if not restored:
-                q, v = fd.project_state(q, v)
+                q, v = fd._project_state(q, v)
                 self.projections += 1
                 self._key = None
                 return q, v
@@ -254,8 +329,7 @@ class ProjectedEulerStep:
 
         """
         tol = self.fd.project_tol
-        rhs, nc, model = self._rhs, self._nc, self.fd.model
-        chol = self.data.constraint_chol
+        model = self.fd.model
         if not dq2 <= _FALLBACK * _FALLBACK:  # (NaN included)
             return q, False
         r = self._measure(q)
@@ -264,7 +338,7 @@ class ProjectedEulerStep:
         for _ in range(MAX_CORRECTIONS - 1):
             if r <= tol:
                 return q, True
-            dq = chol.solve(rhs)[nc:]
+            dq = self._correct()
             q = pin.integrate(model, q, dq)
             self.corrections += 1
             if not float(dq @ dq) <= _FALLBACK * _FALLBACK:

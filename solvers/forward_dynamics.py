@@ -39,20 +39,21 @@ of a hinge closure. On top of it:
 - actuation: efforts ``tau(t, q, v) -> (n_a,)`` mapped to generalized forces by an
   :class:`Actuation` selection.
 
-Joint couplings (:mod:`solvers.coupling`: gears, mimic joints), which ``pin.constraintDynamics``
-cannot take (it accepts 3D / 6D rigid constraints only and rejects mimic joints): the rigid
-closures stay Pinocchio's, the couplings' forces ``C^T mu`` are added to the generalized forces.
-The constrained acceleration is affine in the force, ``a(tau + C^T mu) = a(tau) + G mu``; ``G``
-is read from ``k`` more calls with probe forces (``k`` couplings), ``mu`` solves the couplings'
-acceleration equations ``C a = -gamma_c - Kd C v - Kp r_c`` (the same Baumgarte gains, minimum
-norm when couplings are redundant with the closures) and a last call at ``tau + C^T mu`` gives
-the acceleration and the rigid forces; ``k + 2`` calls per evaluation (``aba`` when there are no
-rigid closures). Without couplings nothing changes: one call.
+The constraints are a :class:`~solvers.constraints.ConstraintSet`. Without couplings the
+accelerations are Pinocchio's ``pin.constraintDynamics`` on the fewest 3D points and 6D welds
+with the set's closures (:meth:`solvers.closure.ClosureRows.pin_closures`: a planar hinge is one
+point, a spatial hinge two): one call per evaluation. Joint couplings (:mod:`solvers.coupling`),
+which ``pin.constraintDynamics`` cannot take (it accepts 3D / 6D rigid constraints only and
+rejects mimic joints), act through their forces, found with the factorization of that one call
+(:class:`solvers.coupled_dynamics.CoupledDynamics`: one Pinocchio call and a few
+back-substitutions, the same Baumgarte gains and proximal treatment of redundant rows),
+whatever the number of couplings.
 
 Units: SI. Pinocchio's constraint forces (``data.lambda_c``, for ``J =
 pin.getConstraintsJacobian``) are, per constraint model, the force (3D) or wrench (6D) on
 ``joint1``'s body at its contact frame, expressed in that frame. The recorded
-``constraint_forces`` are converted to the convention of :mod:`solvers.closure`
+``constraint_forces`` are the multipliers of the set's rows, converted to the convention of
+:mod:`solvers.closure`
 and of the inverse dynamics (:func:`ForwardDynamics.closure_forces`): 3D, the world-frame force
 [N] on ``joint1``'s body; 6D, the wrench [N, N m] on ``joint2``'s body in its contact frame.
 """
@@ -60,6 +61,7 @@ and of the inverse dynamics (:func:`ForwardDynamics.closure_forces`): 3D, the wo
 from __future__ import annotations
 
 import math
+from array import array
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -67,9 +69,19 @@ import pinocchio as pin
 
 from solvers import numerics
 from solvers.actuation import Actuation
-from solvers.closure import Closure
+from solvers.closure import Closure, ClosureRows
+from solvers.conditioning import (
+    LEAVE,
+    NEAR_SINGULAR,
+    THROUGH,
+    Conditioning,
+    Passages,
+    SingularityEvent,
+    reach,
+)
 from solvers.constraints import ConstraintSet, constraint_set
 from solvers.control_step import ProjectedEulerStep
+from solvers.coupled_dynamics import CoupledDynamics
 from solvers.coupling import Coupling
 from solvers.energy import KineticEnergy
 from solvers.integrators import COMMUTATIVE_JOINTS, DOPRI5, RK4, Tableau
@@ -82,6 +94,7 @@ __all__ = [
     "ForwardResult",
     "ForwardDynamics",
     "IntegrationError",
+    "SingularityEvent",
     "TorqueFn",
     "simulate",
 ]
@@ -90,7 +103,24 @@ TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 """Actuator efforts ``tau(t [s], q (nq,), v (nv,)) -> (n_a,)`` [N m or N]."""
 
 _ARG1 = pin.ArgumentPosition.ARG1
+_NO_Q = np.zeros(0)  # (closure rows need no configuration beyond the kinematics in the data)
 _POINT = pin.ContactType.CONTACT_3D
+
+COLLAPSE = 0.25
+"""A ``dopri5`` substep over which the conditioning ``kappa`` falls below this fraction of its
+value at the start is rejected and shortened (see :meth:`ForwardDynamics.simulate`)."""
+
+CHECK_PERIOD = 8
+"""Largest number of steps (``dopri5`` substeps, output steps of ``euler`` and ``rk4``)
+between two checks of the conditioning of the closure forces in :meth:`ForwardDynamics.simulate`;
+fewer while it falls, every step near a singularity (:meth:`ForwardDynamics._observe`)."""
+
+STEP_CHECK_PERIOD = 32
+"""The same for the fixed steps of :meth:`ForwardDynamics.step` (a control loop, where a check,
+about one dynamics evaluation, must not double the cost of a step)."""
+
+WATCH = 10.0 * LEAVE * NEAR_SINGULAR
+"""Below this conditioning it is checked at every step."""
 
 
 class IntegrationError(RuntimeError):
@@ -144,6 +174,16 @@ class ForwardDynamics:
         couplings: Joint couplings (:mod:`solvers.coupling`) when ``constraints`` are closures;
             with any, the evaluation adds their forces to the closures' (see the module
             docstring).
+        length_scale: The robot's length [m], the weight of the welds' angular rows in the
+            conditioning figure (:mod:`solvers.conditioning`; default: the largest distance of
+            a joint from the origin at the neutral configuration, at least 0.1 m).
+        closure_rank: Generic rank of the rigid closures (default: their rank at the first
+            state evaluated, by the cut-off rule at :data:`solvers.conditioning.SINGULAR`).
+
+    Attributes:
+        conditioning: The conditioning ``kappa`` at the last check (1 without rigid closures);
+            the passages near or through singularities since the last :meth:`simulate` (or
+            since construction, for :meth:`step`) are :attr:`events`.
 
     Raises:
         ValueError: Unknown integrator or inconsistent sizes.
@@ -170,6 +210,8 @@ class ForwardDynamics:
         max_substeps: int = 100_000,
         max_speed: float = 1e4,
         couplings: Sequence[Coupling] | ConstraintSet = (),
+        length_scale: float | None = None,
+        closure_rank: int | None = None,
     ) -> None:
         if integrator not in ("rk4", "dopri5", "euler"):
             raise ValueError(f"unknown integrator {integrator!r} (rk4, dopri5 or euler)")
@@ -202,31 +244,49 @@ class ForwardDynamics:
         cs = self.constraints
         self.constraint_models = pin.StdVec_RigidConstraintModel()
         self.constraint_datas = pin.StdVec_RigidConstraintData()
-        base = cs.closure_rows.base_models() if cs.closure_rows is not None else []
+        # Pinocchio's constraint models: the fewest points and welds with the set's closures
+        cr = cs.closure_rows
+        pin_rows = ClosureRows(model, cr.pin_closures() if cr is not None else [], reduce=False)
+        self._pin_rows = pin_rows
+        base = pin_rows.base_models()
         for c in base:
             c.setBaumgarteCorrectorParameters(corrector)
             self.constraint_models.append(c)
             self.constraint_datas.append(c.createData())
         self.nc = cs.n  # constraint rows: closures, then couplings
+        self.n_pin = pin_rows.n  # Pinocchio's constraint rows
+        # (the set's closures are those points and welds: Pinocchio's forces as they are)
+        self._same_rows = cr is None or (cr.identity and pin_rows.n == cr.n)
         self._coupled = cs.nk > 0
-        self._pd = (float(gains[0]), float(gains[1]))  # Baumgarte gains of the couplings
-        n_k = cs.nk
-        self._C = np.zeros((n_k, model.nv))  # the couplings' Jacobian rows
-        self._mu = np.zeros(n_k)  # the couplings' forces at the last evaluation
-        self._probe = 1.0  # probe force [N m or N]: of the order of the couplings' forces
+        self._pd = (float(gains[0]), float(gains[1]))
         # conversion of Pinocchio's multipliers to the rows' convention (see the module doc)
         pts = [k for k, cm in enumerate(self.constraint_models) if cm.type == _POINT]
-        offsets = cs.closure_rows.base_offsets if cs.closure_rows is not None else [0]
+        offsets = pin_rows.base_offsets
         self._pt_rows = np.array([offsets[k] for k in pts], dtype=int)
         self._pt_joint1 = [self.constraint_models[k].joint1_id for k in pts]
         self._pt_rot1 = np.array(
             [self.constraint_models[k].joint1_placement.rotation for k in pts]
         ).reshape(-1, 3, 3)
         self.prox = pin.ProximalSettings(prox_accuracy, prox_accuracy, prox_mu, prox_max_iter)
+        self._max_iter = int(prox_max_iter)
         if cs.nc:
             pin.initConstraintDynamics(
                 model, self.data, self.constraint_models, self.constraint_datas
             )
+        # with couplings: their forces from the factorization of one Pinocchio call
+        self._schur = (
+            CoupledDynamics(
+                model,
+                cs.coupling_rows,
+                self.constraint_models,
+                self.constraint_datas,
+                self.data,
+                self.prox,
+                self._pd,
+            )
+            if cs.coupling_rows is not None
+            else None
+        )
         self._chart = any(
             model.joints[j].shortname() not in COMMUTATIVE_JOINTS for j in range(1, model.njoints)
         )
@@ -238,6 +298,22 @@ class ForwardDynamics:
         self._h_max = 0.0  # largest dopri5 substep of the current run
         self._substeps = 1  # fixed steps per output step (euler, rk4)
         self._control: ProjectedEulerStep | None = None  # the Euler control-loop step
+        # conditioning of the closure forces (solvers.conditioning) and the singular passages
+        if length_scale is None:
+            length_scale = reach(model, self._kin, pin.neutral(model))
+        self.conditioner = Conditioning(list(self.constraint_models), length_scale, closure_rank)
+        self.passages = Passages()
+        self.conditioning = 1.0  # kappa at the last check
+        self._watch = len(self.constraint_models) > 0
+        self._cond_t = math.nan  # time of the last check [s]
+        self._cond_rate = 0.0  # d kappa / dt between the last two checks [1/s]
+        self._h_cond = math.inf  # dopri5 substep limit from the conditioning [s]
+        self._cond_due = -math.inf  # time from which the next check is due [s]
+        self._since_check = 0  # steps since the last check
+        self._cond_log: tuple[array, array] | None = None  # (t, kappa) of simulate's checks
+        self._eval_id = 0  # dynamics evaluations made (their factorization in self.data)
+        self._eig_id = -1  # the evaluation whose kappa a refinement computed
+        self._eig_kappa = 1.0
 
     @property
     def closure_set(self) -> ConstraintSet:
@@ -253,6 +329,8 @@ class ForwardDynamics:
         for cm in self.constraint_models:
             cm.setBaumgarteCorrectorParameters(corrector)
         self._pd = (w * w, 2.0 * w)
+        if self._schur is not None:
+            self._schur.gains = self._pd
         self._gains_step = h
 
     # ------------------------------------------------------------------ dynamics
@@ -275,62 +353,184 @@ class ForwardDynamics:
 
     def _accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Acceleration as a view on ``data.ddq`` (overwritten by the next call)."""
-        if self._coupled:
-            return self._coupled_accel(q, v, tau)
+        if self._schur is not None:
+            return self._schur.acceleration(q, v, tau)
         if self.nc:
-            return pin.constraintDynamics(
-                self.model,
-                self.data,
-                q,
-                v,
-                tau,
-                self.constraint_models,
-                self.constraint_datas,
-                self.prox,
-            )
+            return self._solve(q, v, tau)
         return pin.aba(self.model, self.data, q, v, tau)
 
-    def _rigid(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """Acceleration under the rigid closures alone (a copy); forces in ``data.lambda_c``."""
-        if self.constraints.nc:
-            return np.array(
-                pin.constraintDynamics(
-                    self.model,
-                    self.data,
-                    q,
-                    v,
-                    tau,
-                    self.constraint_models,
-                    self.constraint_datas,
-                    self.prox,
-                )
-            )
-        return np.array(pin.aba(self.model, self.data, q, v, tau))
+    def _solve(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """``pin.constraintDynamics``, made exact where its proximal iterations stop short.
 
-    def _coupled_accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """Acceleration with the couplings' forces added (see the module docstring).
-
-        The couplings' forces are left in ``self._mu``, the rigid ones in ``data.lambda_c``.
+        The proximal solver's iterations converge like ``(mu / (mu + g_min))^k`` (``g_min``: the
+        smallest eigenvalue of the Delassus matrix): near a singularity of the closures
+        ``g_min`` falls below ``mu`` and the iteration cap leaves the closures' acceleration
+        equations unsolved (a closure acceleration error of up to 1e2 m/s^2 on the falling
+        Delta), which the error control cannot see. Such an evaluation is finished by
+        :meth:`_refine`.
         """
-        rows = self.constraints.coupling_rows
-        assert rows is not None
-        C = rows.jacobian(q, self._C)
-        kp, kd = self._pd
-        c = -rows.drift(q, v) - kd * C.dot(v) - kp * rows.residual(q)
-        a0 = self._rigid(q, v, tau)
-        s = self._probe
-        G = np.empty((C.shape[1], C.shape[0]))
-        for i in range(C.shape[0]):
-            G[:, i] = (self._rigid(q, v, tau + s * C[i]) - a0) / s
-        CG = C.dot(G)
-        b = c - C.dot(a0)
-        if CG.shape == (1, 1):  # one coupling: numerics.lstsq's rule, without its SVD
-            mu = b / CG[0] if CG[0, 0] != 0.0 else np.zeros(1)
+        a = pin.constraintDynamics(
+            self.model,
+            self.data,
+            q,
+            v,
+            tau,
+            self.constraint_models,
+            self.constraint_datas,
+            self.prox,
+        )
+        self._eval_id += 1
+        if self.prox.iter >= self._max_iter:
+            return self._refine(a)
+        return a
+
+    def _refine(self, a: np.ndarray) -> np.ndarray:
+        """Finish an evaluation whose proximal iterations hit their cap (exact least squares).
+
+        With ``b`` the closures' desired acceleration (``data.primal_rhs_contact``) and
+        ``r = J a - b`` what the iterations left, the exact forces are ``lambda + delta`` with
+        ``G delta = -r`` (``G = J M^-1 J^T``), solved in the eigenbasis of ``S G S``
+        (:class:`~solvers.conditioning.Conditioning`, eigenvalues ``g_i``) with the gains
+        ``g_i / (g_i^2 + g_c^2)`` instead of ``1 / g_i``, ``g_c = THROUGH^2 g_max``
+        (:data:`~solvers.conditioning.THROUGH`): exact to ``(THROUGH / kappa)^4`` relative
+        (1e-4 at the threshold of near passages, ``kappa`` = 1e-4), and a force along a
+        direction the closures lose (below ``THROUGH``) is let go smoothly instead of growing
+        like ``1 / kappa^2`` beyond what an error control can follow (a cut-off would make the
+        acceleration jump). The acceleration changes by ``M^-1 J^T delta``, one solve with the
+        factorization: ``K^-1 [(G + mu I) delta; 0]``. Also sets the conditioning of this
+        evaluation.
+
+        Nothing is done when ``r`` is within the proximal solver's accuracy (absolute, plus
+        relative to ``|J a| + |b|``): redundant closures make it hit its cap while their
+        forces drift in the null space of ``J``, the acceleration solved.
+
+        Args:
+            a: The acceleration the proximal iterations returned (nv,).
+
+        Returns:
+            The acceleration (nv,); ``data.lambda_c`` updated.
+
+        """
+        data, cond, prox = self.data, self.conditioner, self.prox
+        nc = cond.nc  # the rows of Pinocchio's constraint models (the KKT system)
+        J = pin.getConstraintsJacobian(
+            self.model, data, self.constraint_models, self.constraint_datas
+        )
+        Ja, b = J.dot(a), data.primal_rhs_contact
+        r = Ja - b
+        scale = float(np.max(np.abs(Ja), initial=0.0) + np.max(np.abs(b), initial=0.0))
+        if float(np.max(np.abs(r), initial=0.0)) <= (
+            prox.absolute_accuracy + prox.relative_accuracy * scale
+        ):
+            # solved after all: the cap was hit by the forces of redundant closures (the two
+            # points of a hinge), which drift in the closures' null space without effect
+            return a
+        G_mu, G = cond.delassus(data, prox.mu)
+        g, V = np.linalg.eigh(G)
+        self._eig_id, self._eig_kappa = self._eval_id, cond.kappa(g)
+        if not (np.all(np.isfinite(r)) and g[-1] > 0.0):
+            return a
+        g_c = THROUGH * THROUGH * g[-1]
+        gain = g / (g * g + g_c * g_c)  # 1 / g, filtered smoothly below g_c
+        delta = cond.scale * V.dot(gain * V.T.dot(-cond.scale * r))
+        rhs = np.zeros(nc + self.model.nv)
+        rhs[:nc] = G_mu.dot(delta)
+        da = data.constraint_chol.solve(rhs)[nc:]
+        lam = data.lambda_c
+        lam += delta
+        return a + da
+
+    # ------------------------------------------------------------------ conditioning
+
+    def reference_rank(self, q: np.ndarray) -> int:
+        """Take the rank of the rigid closures at ``q`` as their generic rank.
+
+        The conditioning (:mod:`solvers.conditioning`) is judged on the closures' ``r``-th
+        singular value, ``r`` their generic rank: by default the rank at the first state
+        evaluated, which is too low for a motion that starts at a singularity. A regular
+        configuration of the mechanism (its home) gives it.
+
+        Args:
+            q: A regular configuration (nq,), assembled.
+
+        Returns:
+            The rank (0 without rigid closures).
+
+        """
+        if not self._watch:
+            return 0
+        zero = self._zero_nv
+        self.conditioner.rank = None
+        self._solve(np.asarray(q, dtype=float), zero, zero)
+        self.conditioner(self.data, self.prox.mu)  # sets the rank
+        return int(self.conditioner.rank or 0)
+
+    @property
+    def events(self) -> list[SingularityEvent]:
+        """Passages near or through singularities of the closures, in time order.
+
+        (:class:`~solvers.conditioning.SingularityEvent`; since the last :meth:`simulate`, or
+        since construction for :meth:`step`.)
+        """
+        return self.passages.events
+
+    def _kappa(self, data: pin.Data | None = None) -> float:
+        """The conditioning of the last evaluation made with ``data`` (default ``self.data``)."""
+        if data is None:
+            if self._eig_id == self._eval_id:
+                return self._eig_kappa
+            data = self.data
+        return self.conditioner(data, self.prox.mu)
+
+    def _observe(self, t: float, kappa: float) -> None:
+        """Record the conditioning ``kappa`` of the state at ``t`` [s] and plan the next check.
+
+        Updates the passages, the rate of ``kappa`` since the last check, and the time the
+        next check is due: at once near a singularity (``kappa`` below :data:`WATCH`); while
+        ``kappa`` falls, after a quarter of the time its rate would take to bring it to
+        :data:`~solvers.conditioning.NEAR_SINGULAR`; else after :data:`CHECK_PERIOD` steps.
+        """
+        if t > self._cond_t:
+            self._cond_rate = (kappa - self.conditioning) / (t - self._cond_t)
+        elif not t == self._cond_t:  # the first check, or a caller stepping back in time
+            self._cond_rate = 0.0
+        self._cond_t = t
+        self.conditioning = kappa
+        self.passages.observe(t, kappa)
+        if self._cond_log is not None:
+            self._cond_log[0].append(t)
+            self._cond_log[1].append(kappa)
+        self._since_check = 0
+        rate = self._cond_rate
+        if kappa < WATCH:
+            self._cond_due = t
+        elif rate < 0.0:
+            self._cond_due = t + 0.25 * (kappa - NEAR_SINGULAR) / -rate
         else:
-            mu = numerics.lstsq(CG, b, 1e-12)
-        self._mu = mu
-        self._probe = max(float(np.abs(mu).max()), 1e-6)
-        return self._rigid(q, v, tau + C.T.dot(mu))
+            self._cond_due = math.inf
+
+    def _due(self, t: float, period: int = CHECK_PERIOD) -> bool:
+        """Whether a conditioning check is due at ``t`` [s] (counts the steps since the last)."""
+        self._since_check += 1
+        return t >= self._cond_due or self._since_check >= period
+
+    def _reset_conditioning(self) -> None:
+        self.passages.reset()
+        self.conditioning = 1.0
+        self._cond_t = math.nan
+        self._cond_rate = 0.0
+        self._cond_due = -math.inf
+        self._since_check = 0
+        self._h_cond = math.inf
+
+    def _scheduled_check(self, t: float, data: pin.Data) -> None:
+        """The conditioning check of a fixed step of :meth:`step` at ``t`` [s], when due.
+
+        As :meth:`_observe` plans it, at most :data:`STEP_CHECK_PERIOD` steps apart.
+        """
+        self._since_check += 1
+        if t >= self._cond_due or self._since_check >= STEP_CHECK_PERIOD:
+            self._observe(t, self._kappa(data))
 
     def _generalized(
         self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
@@ -492,9 +692,13 @@ class ForwardDynamics:
             # the bare loop
             data, prox = self.data, self.prox
             cms, cds = self.constraint_models, self.constraint_datas
-            dynamics, zero = pin.constraintDynamics, self._zero_nv
+            dynamics, zero, cap = pin.constraintDynamics, self._zero_nv, self._max_iter
             for _ in range(n - 1):
-                v = v + h * dynamics(model, data, q, v, zero, cms, cds, prox)
+                a = dynamics(model, data, q, v, zero, cms, cds, prox)
+                if prox.iter >= cap:  # (see _solve)
+                    self._eval_id += 1
+                    a = self._refine(a)
+                v = v + h * a
                 q = integrate(model, q, h * v)
             return q, v, w_act, w_fric, None
         accel, forces = self._accel, self._forces
@@ -515,12 +719,27 @@ class ForwardDynamics:
         tau_fn: TorqueFn | None,
         first: Evaluation,
     ) -> tuple[np.ndarray, np.ndarray, float, float, Evaluation]:
-        """Dormand-Prince 5(4) substeps with error control from ``t`` to ``t + dt``."""
+        """Dormand-Prince 5(4) substeps with error control from ``t`` to ``t + dt``.
+
+        With rigid closures, the conditioning ``kappa`` of the closure forces
+        (:mod:`solvers.conditioning`) is checked at the end of every substep the error control
+        accepts, where the last stage left its factorization: a substep over which ``kappa``
+        falls below :data:`COLLAPSE` times its value at the start is rejected and shortened
+        (to where the chord through the two values halves it), and while ``kappa`` falls the
+        next substep goes at most half the way its current rate would take to bring it to
+        zero. Approaching a singularity the substeps thus shrink with ``kappa`` and sample the
+        bottom of the passage, where the closure forces peak like ``1 / kappa^2``, instead of
+        stepping over it; below :data:`~solvers.conditioning.THROUGH` (through the
+        singularity, where the force along the lost direction is dropped) only the error
+        control decides.
+        """
         model = self.model
         tab = DOPRI5
         t_end = t + dt
         w_act = w_fric = 0.0
         tries = 0
+        watch = self._watch
+        kappa = 1.0
         while t_end - t > 1e-12 * dt:
             tries += 1
             if tries > self.max_substeps:
@@ -530,7 +749,7 @@ class ForwardDynamics:
                     "check the model and the efforts, or use a shorter dt",
                     t,
                 )
-            h = min(self._h, self._h_max, t_end - t)
+            h = min(self._h, self._h_max, t_end - t, self._h_cond)
             K, A, P, q_new, tau_new = self._stages(t, q, v, h, tab, tau_fn, first)
             # first same as last: the last stage is the new state (its evaluation is reused)
             v_new = v + A.T.dot(h * tab.b)
@@ -542,7 +761,15 @@ class ForwardDynamics:
             if not np.isfinite(err):
                 err = 1e10
             fac = min(5.0, 0.9 * err**-0.2) if err > 0.0 else 5.0
-            if err <= 1.0:
+            accept = err <= 1.0
+            check = accept and watch and self._due(t + h)
+            if check:
+                kappa = self._kappa()  # at q_new: the last stage's evaluation
+                k0 = self.conditioning
+                if kappa < COLLAPSE * k0 and k0 > THROUGH and self._cond_t == t:
+                    accept = False  # kappa collapsed within the step: resolve the passage
+                    fac = 0.5 * k0 / (k0 - kappa)
+            if accept:
                 w = P.T.dot(h * tab.b)
                 w_act += float(w[0])
                 w_fric += float(w[1])
@@ -552,6 +779,11 @@ class ForwardDynamics:
                 self.steps += 1
                 # a step shortened to land on t_end says nothing about the next one
                 self._h = max(self._h, h * fac) if h < self._h else h * fac
+                if check:
+                    self._observe(t, kappa)
+                    rate = self._cond_rate
+                    falling = rate < 0.0 and kappa > THROUGH
+                    self._h_cond = 0.5 * kappa / -rate if falling else math.inf
             else:
                 self.rejected += 1
                 self._h = h * max(0.1, fac)
@@ -575,8 +807,8 @@ class ForwardDynamics:
         every step on the closures (residual within ``project_tol``) by one Newton correction
         with the factorization of the dynamics evaluated at the new state, which the next call
         reuses when given the state this one returned; it costs less than twice a raw Euler
-        step (``bench/dynamics.py``). With joint couplings the step is the general one. The
-        other integrators check the residual after the step
+        step (``bench/dynamics.py``); joint couplings are corrected with the closures, with the
+        same factorization. The other integrators check the residual after the step
         and project above ``project_tol``.
 
         Args:
@@ -589,36 +821,54 @@ class ForwardDynamics:
         Returns:
             The state ``(q, v)`` at ``t + dt``.
 
+        Each call checks the conditioning of the closure forces (:mod:`solvers.conditioning`)
+        and records the passages near or through singularities in :attr:`events`: ``dopri5``
+        at every substep (and it shortens its substeps through a passage, see
+        :meth:`simulate`); ``euler`` and ``rk4`` at the state the step starts from (the
+        control-loop step: the state it ends at), every :data:`STEP_CHECK_PERIOD` calls, sooner
+        when the conditioning falls, every call near a singularity
+        (a passage shorter than ``dt`` is estimated from the samples around it: these steps
+        have a fixed size).
+
         Raises:
+            ValueError: ``dt`` not a finite positive number.
             IntegrationError: The closures could not be restored, or the step size of
                 ``dopri5`` underflowed.
 
         """
-        if self.integrator == "euler" and self.project and self.nc and not self._coupled:
-            # (the couplings' forces are not in pin.constraintDynamics' factorization: a coupled
-            # robot takes the general step below, projected when its residual exceeds the
-            # tolerance)
+        if not 0.0 < dt < math.inf:
+            raise ValueError(f"dt must be a finite positive number of seconds, got {dt!r}")
+        if self.integrator == "euler" and self.project and self.nc:
             if self._control is None:
                 self._control = ProjectedEulerStep(self)
-            return self._control.step(t, q, v, dt, tau)
+            q, v = self._control.step(t, q, v, dt, tau)
+            if self._watch:
+                self._scheduled_check(t + dt, self._control.data)
+            return q, v
         if self.integrator == "euler":
             if self._auto_gains and dt != self._gains_step:
                 self._euler_gains(dt)
             g = self._generalized(t, q, v, tau)[1]
             f = self.passive_forces(q, v)
-            v = v + dt * self._accel(q, v, g if f is None else g + f)
+            a = self._accel(q, v, g if f is None else g + f)
+            if self._watch:
+                self._scheduled_check(t, self.data)
+            v = v + dt * a
             q = pin.integrate(self.model, q, dt * v)
         else:
             self._substeps = 1
             if self._h <= 0.0:
                 self._h = dt
             self._h_max = dt
-            q, v, _, _, _ = self._advance(t, q, v, dt, tau, self._evaluate(t, q, v, tau))
+            first = self._evaluate(t, q, v, tau)
+            if self._watch:
+                self._scheduled_check(t, self.data)
+            q, v, _, _, _ = self._advance(t, q, v, dt, tau, first)
         if self.project and self.nc:
             r = self.constraints.residual(self._kin, q)
             if float(np.max(np.abs(r))) > self.project_tol:
                 try:
-                    q, v = self.project_state(q, v)
+                    q, v = self._project_state(q, v)
                 except IntegrationError as err:
                     raise IntegrationError(f"t = {t + dt:.6g} s: {err}", t + dt) from None
         return q, v
@@ -629,20 +879,33 @@ class ForwardDynamics:
         3D point: ``R_c1 lambda`` (world-frame force on ``joint1``'s body); 6D weld:
         ``-lambda`` (wrench on ``joint2``'s body in its contact frame, exact at closure).
 
+        Pinocchio's constraint models hold every row of the closures (a hinge is two points);
+        where the constraint set reduces them (hinges, planar closures), the multipliers of its
+        rows are those that apply the same generalized force, ``J_red^T mu = J^T lambda``
+        (minimum norm).
+
         Args:
             kin: Data whose joint placements are those of the current configuration.
-            lambda_c: ``data.lambda_c`` (nc,) of ``pin.constraintDynamics``.
+            lambda_c: ``data.lambda_c`` (n_pin,) of ``pin.constraintDynamics``.
 
         Returns:
-            The multipliers (nc,) [N, N m], as returned by the inverse dynamics (with couplings,
-            their forces at the last evaluation follow the rigid closures').
+            The multipliers (n,) [N, N m] of the constraint rows, as returned by the inverse
+            dynamics (with couplings, their forces at the last evaluation follow the closures').
 
         """
-        if self._coupled:
-            n = self.constraints.nc
-            rigid = self._rigid_forces(kin, np.asarray(lambda_c, dtype=float)[:n])
-            return np.concatenate([rigid, self._mu])
-        return self._rigid_forces(kin, lambda_c)
+        lam = np.asarray(lambda_c, dtype=float)[: self.n_pin]
+        if self._schur is not None:  # the closures' response to the couplings included
+            lam = self._schur.lam
+        rigid = self._rigid_forces(kin, lam) if self.n_pin else lam
+        if not self._same_rows and self.n_pin:
+            pin.computeJointJacobians(self.model, kin)  # (from the placements in kin)
+            self._pin_rows.calc(kin)
+            J_pin = self._pin_rows.jacobian(kin)
+            J_red = self.constraints.closures.jacobian_at(kin, _NO_Q)
+            rigid = numerics.lstsq(J_red.T, J_pin.T @ rigid, 1e-10)
+        if self._schur is not None:
+            return np.concatenate([rigid, self._schur.mu])
+        return rigid
 
     def _rigid_forces(self, kin: pin.Data, lambda_c: np.ndarray) -> np.ndarray:
         out = -np.asarray(lambda_c, dtype=float)
@@ -670,6 +933,12 @@ class ForwardDynamics:
             IntegrationError: The closures cannot be restored.
 
         """
+        return self._project_state(q, v, tol)
+
+    def _project_state(
+        self, q: np.ndarray, v: np.ndarray, tol: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`project_state` as the stepping calls it (a subclass may check the public one)."""
         if not self.nc:
             return q, v
         aim = self.project_tol * 1e-2 if tol is None else tol
@@ -708,14 +977,24 @@ class ForwardDynamics:
                 ``dopri5`` (default: ``dt``).
 
         Returns:
-            The recorded time series.
+            The recorded time series, with the conditioning of the closure forces at each
+            sample and the passages near or through singularities (``events``).
 
         Raises:
             ValueError: Non-positive ``dt``, ``duration``, ``step`` or ``record_every``.
             IntegrationError: The state became non-finite or the closures could not be restored.
 
+        Singular passages: the conditioning ``kappa`` of the closure forces
+        (:mod:`solvers.conditioning`) is checked at every ``dopri5`` substep, whose size
+        follows it through a passage (:meth:`_advance_adaptive`), and at every output step of
+        ``euler`` and ``rk4`` (fixed steps: a passage shorter than ``dt`` can go unseen, and
+        the closure forces at its bottom be stepped over). Each passage below
+        :data:`~solvers.conditioning.NEAR_SINGULAR` is an event of the result; one below
+        :data:`~solvers.conditioning.THROUGH` went through the singularity, and the motion
+        after it is not the exact rigid one (``ForwardResult.valid_until``).
+
         """
-        if not (dt > 0.0 and duration > 0.0 and record_every >= 1):
+        if not (0.0 < dt < math.inf and 0.0 < duration < math.inf and record_every >= 1):
             raise ValueError("dt, duration and record_every must be positive")
         h = dt if step is None else float(step)
         if not h > 0.0:
@@ -731,9 +1010,41 @@ class ForwardDynamics:
         q = np.array(q0, dtype=float)
         v = np.array(v0, dtype=float)
         if self.project:
-            q, v = self.project_state(q, v)
+            q, v = self._project_state(q, v)
         self._h = self._h_max
         self.steps = self.rejected = 0
+        self._reset_conditioning()
+        log = (array("d"), array("d"))
+        self._cond_log = log if self._watch else None
+        try:
+            projections = self._run(q, v, t0, dt, n_steps, record_every, tau, rec)
+        finally:
+            self._cond_log = None
+        out = rec.result()
+        out.events = list(self.passages.events)
+        if self._watch:
+            times, kappas = (np.frombuffer(x, dtype=float) for x in log)
+            out.conditioning = np.interp(out.t, times, kappas)
+        out.projections = projections
+        out.extras["substeps"] = float(
+            self.steps if self.integrator == "dopri5" else n_steps * self._substeps
+        )
+        out.extras["rejected"] = float(self.rejected)
+        return out
+
+    def _run(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        t0: float,
+        dt: float,
+        n_steps: int,
+        record_every: int,
+        tau: TorqueFn | None,
+        rec: Recorder,
+    ) -> int:
+        """The output steps of :meth:`simulate`, recorded in ``rec``; returns the projections."""
+        watch = self._watch
         w_act = w_fric = 0.0
         projections = 0
         t = t0
@@ -742,6 +1053,8 @@ class ForwardDynamics:
         for k in range(n_steps + 1):
             if ev is None:
                 ev = self._evaluate(t, q, v, tau)
+                if watch and (k == 0 or self._due(t)):
+                    self._observe(t, self._kappa())
             if not math.isfinite(float(ev.a @ ev.a)):
                 raise IntegrationError(f"non-finite acceleration at t = {t:.6g} s", t)
             speed = float(np.max(np.abs(v), initial=0.0))
@@ -766,18 +1079,12 @@ class ForwardDynamics:
                 residual = float(np.max(np.abs(self.constraints.residual(self._kin, q))))
                 if residual > self.project_tol:
                     try:
-                        q, v = self.project_state(q, v)
+                        q, v = self._project_state(q, v)
                     except IntegrationError as err:
                         raise IntegrationError(f"t = {t:.6g} s: {err}", t) from None
                     projections += 1
                     ev = residual = None
-        out = rec.result()
-        out.projections = projections
-        out.extras["substeps"] = float(
-            self.steps if self.integrator == "dopri5" else n_steps * self._substeps
-        )
-        out.extras["rejected"] = float(self.rejected)
-        return out
+        return projections
 
 
 def simulate(

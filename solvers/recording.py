@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
+
+from solvers.conditioning import SingularityEvent
 
 __all__ = ["Evaluation", "ForwardResult", "Recorder"]
 
@@ -47,6 +50,12 @@ class ForwardResult:
             floor of :meth:`energy_drift`'s scale (0: none).
         coupling_residual: Largest coupling residual component (N,) [rad or m] (zeros
             without couplings).
+        conditioning: Conditioning ``kappa`` of the closure forces (N,) at the recorded times
+            (:mod:`solvers.conditioning`; 1 without rigid closures): checked every step near a
+            singularity and at most ``CHECK_PERIOD`` steps apart elsewhere, interpolated
+            linearly in time between the checks.
+        events: Passages near or through singularities of the closures
+            (:class:`~solvers.conditioning.SingularityEvent`), in time order.
 
     """
 
@@ -66,12 +75,31 @@ class ForwardResult:
     elastic: np.ndarray | None = None
     energy_scale: float = 0.0
     coupling_residual: np.ndarray | None = None
+    conditioning: np.ndarray | None = None
+    events: list[SingularityEvent] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if self.elastic is None:
             self.elastic = np.zeros_like(self.kinetic)
         if self.coupling_residual is None:
             self.coupling_residual = np.zeros_like(self.kinetic)
+        if self.conditioning is None:
+            self.conditioning = np.ones_like(self.kinetic)
+
+    @property
+    def valid_until(self) -> float:
+        """Time up to which the motion is the exact rigid one [s].
+
+        The start of the first passage through a singularity (``through`` event): past it the
+        closure force along the lost direction was let go, and the motion is the model's
+        minimum-norm continuation (where the closures really lost rank, one of the branches
+        the mechanism allows, the one rounding chose). The last recorded time when there is
+        none.
+        """
+        for ev in self.events:
+            if ev.through:
+                return ev.start
+        return float(self.t[-1]) if self.t.size else math.nan
 
     @property
     def energy(self) -> np.ndarray:
@@ -79,7 +107,7 @@ class ForwardResult:
         assert self.elastic is not None
         return self.kinetic + self.potential + self.elastic
 
-    def energy_drift(self) -> float:
+    def energy_drift(self, until: float | None = None) -> float:
         """Largest violation of the energy balance, relative to the energy exchanged.
 
         ``max |E(t) - E(0) - work(t) + dissipated(t)|`` divided by the largest of the kinetic
@@ -87,17 +115,23 @@ class ForwardResult:
         undamped run, the relative drift of the mechanical energy (springs included). The
         potential energies are not used as the scale because their origin is arbitrary.
 
+        Args:
+            until: Only the samples up to this time [s] (e.g. :attr:`valid_until`; default:
+                all of them).
+
         Returns:
             The relative drift (0 when nothing moves). Below ``1e-9 energy_scale`` of energy
             exchanged (a mechanism at rest), the scale is that floor: the round-off of a run
             that moves nothing is not reported as a drift of order one.
 
         """
-        e = self.energy - self.energy[0] - self.work + self.dissipated
+        n = self.t.size if until is None else int(np.searchsorted(self.t, until, side="right"))
+        n = max(n, 1)
+        e = (self.energy - self.energy[0] - self.work + self.dissipated)[:n]
         scale = max(
-            float(np.max(self.kinetic)),
-            float(np.max(np.abs(self.work))),
-            float(np.max(self.dissipated)),
+            float(np.max(self.kinetic[:n])),
+            float(np.max(np.abs(self.work[:n]))),
+            float(np.max(self.dissipated[:n])),
             1e-9 * self.energy_scale,  # a run that exchanges no energy: round-off, not 100 %
         )
         return float(np.max(np.abs(e)) / scale) if scale > 0.0 else 0.0

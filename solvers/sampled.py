@@ -48,6 +48,17 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
+def _turn(R: np.ndarray, R1: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Angle (n,) of rotations ``R = c1Rc2`` (n, 3, 3) about ``R1^T n`` (``R1 = R_c1``).
+
+    ``atan2(s, c)`` with ``s = (R1^T n) . vee(R - R^T) / 2`` and ``c = (tr R - 1) / 2``: the
+    angle of a rotation about that axis, as :class:`~solvers.closure.ClosureRows` computes it.
+    """
+    m = np.einsum("nji,j->ni", R1, n)
+    vee = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], -1)
+    return np.arctan2(0.5 * np.sum(m * vee, axis=-1), 0.5 * (np.trace(R, axis1=1, axis2=2) - 1.0))
+
+
 def _relative_motion(d: np.ndarray, oMc2: np.ndarray) -> np.ndarray:
     """Spatial motions (n, 6), world axes at the origin, in contact frames ``oMc2`` (n, 4, 4)."""
     R2, p2 = oMc2[:, :3, :3], oMc2[:, :3, 3]
@@ -155,6 +166,7 @@ class SampledKinematics:
         items = cr.base_items if cr is not None else []
         base_offsets = cr.base_offsets if cr is not None else np.zeros(1, dtype=int)
         self.nb = int(base_offsets[-1])  # rows of the base constraint models
+        self._identity = cr is None or cr.identity
         used = {int(j) for it in items for j in (it[1], it[3])}
         used |= {int(model.frames[f].parentJoint) for f in frames}
         used.discard(0)
@@ -295,7 +307,8 @@ class SampledKinematics:
             out[2][:, o:] = coupled.acceleration_error(qq, vv, aa)
         if o == 0:
             return out[0], out[1], out[2]
-        r, ev, ea = (np.empty((n, self.nb)) for _ in range(3))
+        direct = cs.nk == 0 and self._identity  # the base rows are the rows: no copy
+        r, ev, ea = out if direct else [np.empty((n, self.nb)) for _ in range(3)]
         V = self._velocities(n, v)
         A = self._accelerations(n)
         H = self.H[:n]
@@ -312,17 +325,92 @@ class SampledKinematics:
             c1Mc2 = np.linalg.solve(H[:, s1] @ M1, oMc2)
             for k in range(n):
                 r[k, o : o + 6] = pin.log6(c1Mc2[k]).vector
-        for x, b in zip(out, (r, ev, ea), strict=True):
-            x[:, : cs.nc] = self._rows(b)
+        if not direct:
+            self._reduce(H, out[0], r, out[1], ev, out[2], ea, V, A)
         return out[0], out[1], out[2]
 
-    def _rows(self, base: np.ndarray) -> np.ndarray:
-        """The closure rows (n, nc[, nv]) of base rows (n, nb[, nv])."""
+    def _reduce(
+        self,
+        H: np.ndarray,
+        r_out: np.ndarray | None = None,
+        r: np.ndarray | None = None,
+        ev_out: np.ndarray | None = None,
+        ev: np.ndarray | None = None,
+        ea_out: np.ndarray | None = None,
+        ea: np.ndarray | None = None,
+        V: np.ndarray | None = None,
+        A: np.ndarray | None = None,
+        J_out: np.ndarray | None = None,
+        J: np.ndarray | None = None,
+        Jw: np.ndarray | None = None,
+    ) -> None:
+        """The closure rows of the base rows: residuals, ``J v``, ``J a + gamma``, Jacobians.
+
+        Each ``*_out`` (n, n_all[, nv]) receives in its first ``nc`` columns the rows of the
+        base ones (n, nb[, nv]) (:mod:`solvers.closure`): copies, planar projections ``E`` of
+        point rows, and a hinge's axis rows and planar rotation rows from the placements ``H``,
+        the world velocities ``V`` and accelerations ``A`` of the captured bodies (n, nj, 6) and
+        the world Jacobian ``Jw`` (n, 6, nv).
+        """
         cr = self.closure_set.closure_rows
         assert cr is not None
+        nc = cr.n
+        pairs = [
+            (x, b)
+            for x, b in ((r_out, r), (ev_out, ev), (ea_out, ea), (J_out, J))
+            if x is not None and b is not None
+        ]
         if cr.identity:
-            return base
-        raise NotImplementedError("reduced closure rows in sampled kinematics")
+            for x, b in pairs:
+                x[:, :nc] = b
+            return
+        for x, b in pairs:
+            x[:, cr._dst] = b[:, cr._src]
+            if cr._planes:
+                sub = "mij,nmj->nmi" if b.ndim == 2 else "mij,nmjv->nmiv"
+                x[:, cr._pl_dst] = np.einsum(sub, cr._pl_E, b[:, cr._pl_src])
+        slot = {j: k for k, j in enumerate(self.joints)}
+        base = cr.base_items
+        for o, bi, F, a, j1, j2 in cr._axes:
+            _, _, M1, _, M2 = base[bi]
+            s1, s2 = slot[j1], slot[j2]
+            R1 = H[:, s1, :3, :3] @ M1.rotation
+            a2 = (H[:, s2, :3, :3] @ M2.rotation) @ a
+            for k in range(2):
+                f = R1 @ F[:, k]
+                w = _cross(a2, f)
+                if r_out is not None:
+                    r_out[:, o + k] = np.sum(f * a2, axis=-1)
+                if J_out is not None:
+                    assert Jw is not None
+                    J_out[:, o + k] = np.einsum("ni,niv->nv", w, Jw[:, 3:]) * cr._dmask[(j1, j2)]
+                if V is None:
+                    continue
+                w1, w2 = V[:, s1, 3:], V[:, s2, 3:]
+                if ev_out is not None:
+                    ev_out[:, o + k] = np.sum(w * (w2 - w1), axis=-1)
+                if ea_out is not None:
+                    assert A is not None
+                    dw = _cross(_cross(w2, a2), f) + _cross(a2, _cross(w1, f))
+                    ea_out[:, o + k] = np.sum(dw * (w2 - w1), axis=-1) + np.sum(
+                        w * (A[:, s2, 3:] - A[:, s1, 3:]), axis=-1
+                    )
+        for o, bi, nrm, j1, j2 in cr._turns:
+            _, _, M1, _, M2 = base[bi]
+            s1, s2 = slot[j1], slot[j2]
+            if r_out is not None:
+                R1 = H[:, s1, :3, :3] @ M1.rotation
+                R = np.swapaxes(R1, 1, 2) @ (H[:, s2, :3, :3] @ M2.rotation)
+                r_out[:, o] = _turn(R, R1, nrm)
+            if J_out is not None:
+                assert Jw is not None
+                J_out[:, o] = np.einsum("i,niv->nv", nrm, Jw[:, 3:]) * cr._dmask[(j1, j2)]
+            if ev_out is not None:
+                assert V is not None
+                ev_out[:, o] = (V[:, s2, 3:] - V[:, s1, 3:]) @ nrm
+            if ea_out is not None:
+                assert A is not None
+                ea_out[:, o] = (A[:, s2, 3:] - A[:, s1, 3:]) @ nrm
 
     def _point_sides(
         self, H: np.ndarray, V: np.ndarray, A: np.ndarray
@@ -363,7 +451,8 @@ class SampledKinematics:
             out[:, cs.nc :] = coupled.drift(self.Q[:n], v[:n])
         if cs.nc == 0:
             return out
-        ea = np.empty((n, self.nb))
+        direct = cs.nk == 0 and self._identity
+        ea = out if direct else np.empty((n, self.nb))
         V = self._velocities(n, v)
         if self._drift_from_dJ:  # world accelerations d/dt(J_w) S_j v (no gravity offset)
             A = np.swapaxes((self.dJw[:n] * v[:, None, :]) @ self.masks.T, 1, 2)
@@ -375,7 +464,8 @@ class SampledKinematics:
             ea[:, self._pt_rows] = (side[0][2] - side[1][2]).reshape(n, -1)
         for o, s1, _, s2, M2 in self._welds:
             ea[:, o : o + 6] = _relative_motion(A[:, s2] - A[:, s1], H[:, s2] @ M2)
-        out[:, : cs.nc] = self._rows(ea)
+        if not direct:
+            self._reduce(H, ea_out=out, ea=ea, V=V, A=A)
         return out
 
     def capture_configuration(self, k: int, q: np.ndarray) -> None:
@@ -499,8 +589,9 @@ class SampledKinematics:
         if o == 0:
             return r_out, J_out
         nc = self.nb
-        r = np.empty((m, nc))
-        J = np.empty((m, nc, nv))
+        direct = cs.nk == 0 and self._identity  # the base rows are the rows: no copy
+        r = r_out if direct else np.empty((m, nc))
+        J = J_out if direct else np.empty((m, nc, nv))
         self.update_placements(rows)
         H, Jw = self.H[rows], self.Jw[rows]
         if self._pt_offsets.size:
@@ -536,8 +627,8 @@ class SampledKinematics:
                 M = pin.SE3(c1Mc2[k])
                 r[k, o : o + 6] = pin.log6(M).vector
                 J[k, o : o + 6] = pin.Jlog6(M) @ twist[k]
-        r_out[:, : cs.nc] = self._rows(r)
-        J_out[:, : cs.nc] = self._rows(J)
+        if not direct:
+            self._reduce(H, r_out=r_out, r=r, J_out=J_out, J=J, Jw=Jw)
         return r_out, J_out
 
     def frame_force(self, n: int, frame: int, W: np.ndarray) -> np.ndarray:

@@ -81,3 +81,26 @@ def random_configs(
         except pkdyn.PkdynError:
             continue
     return out
+
+
+def parallelogram_normals_det(robot: pkdyn.Robot, q: np.ndarray) -> float:
+    """``det [n1 n2 n3]`` of the unit normals of the Delta's three parallelograms at ``q``.
+
+    Each parallelogram is spanned by its bars (direction ``u``) and its elbow axle (the segment
+    between the two bars' upper joints, ``d``): ``n = u x d``. Where the three normals are
+    coplanar the parallelograms no longer hold the nacelle's orientation (it may turn about the
+    line normal to all three): the closures lose rank whatever the arms do. A closed form,
+    independent of the dynamics and of the conditioning figure.
+    """
+    model, data = robot.model, robot.model.createData()
+    pin.forwardKinematics(model, data, q)
+    normals = []
+    for i in (1, 2, 3):
+        ja, jb = model.getJointId(f"bar{i}a_upper"), model.getJointId(f"bar{i}b_upper")
+        a, b = data.oMi[ja].translation, data.oMi[jb].translation
+        cm = next(c for c in robot.constraint_models if c.joint1_id == ja)
+        end = (data.oMi[ja] * cm.joint1_placement).translation
+        u, d = (end - a) / np.linalg.norm(end - a), (b - a) / np.linalg.norm(b - a)
+        n = np.cross(u, d)
+        normals.append(n / np.linalg.norm(n))
+    return float(np.linalg.det(np.array(normals)))

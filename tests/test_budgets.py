@@ -93,7 +93,7 @@ SAMPLES = "samples (each an inverse geometry and dynamics, ~1 ms); at most 2e+05
         (["--reconfiguration-time", "1e9"], SAMPLES),
         (["--lift", "1e9"], "lift: 1e+09 m is beyond any plausible value (at most 1)"),
         (["--tilt", "1e9"], "tilt: 1e+09 rad is beyond any plausible value (at most 1.5708)"),
-        (["--tilt", "nan"], "tilt: must be a finite number [rad], got nan"),
+        (["--tilt", "nan"], "--tilt: is nan (not a number)"),
     ],
 )
 def test_tripod_scenario_bounds(capsys, args, match):

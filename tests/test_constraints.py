@@ -177,9 +177,15 @@ def _check(cs: ConstraintSet, seed: int, spread: float = 0.4) -> None:
         np.testing.assert_allclose(cs.jacobian(data, q), J, rtol=0, atol=1e-15)
         cs.residual(data, q)
         np.testing.assert_allclose(cs.jacobian_after_residual(data, q), J, rtol=0, atol=1e-15)
-        cs.local_residual(data, q)
+        r_loc = cs.local_residual(data, q)  # every row (unreduced), contact frames, for solvers
         J_loc = cs.local_jacobian_after_residual(data, q)
-        assert J_loc.shape == J.shape
+        assert r_loc.shape == (cs.n_local,) and J_loc.shape == (cs.n_local, model.nv)
+        full = cs.unreduced
+        np.testing.assert_allclose(np.abs(r_loc[full.nc :]), np.abs(r[cs.nc :]), atol=1e-15)
+        for k in range(len(full.closures.names)):  # same norm per constraint model as the world
+            lo, hi = full.offsets[k], full.offsets[k + 1]
+            w = full.residual(data, q)[lo:hi]
+            assert np.linalg.norm(r_loc[lo:hi]) == pytest.approx(np.linalg.norm(w), rel=1e-12)
         welds = [k for k, kind in enumerate(cs.kinds) if kind == "weld" and cs.sizes[k] == 6]
         if welds:  # a weld's drift is exact on motions that keep its relative velocity zero
             v = numerics.null_space(J, 1e-9) @ rng.standard_normal(model.nv - numerics.rank(J))
@@ -295,3 +301,48 @@ def test_malformed_couplings_are_refused():
         ConstraintSet(model, (), [LinearCoupling("nan", ((1, 1.0),), math.nan)])
     with pytest.raises(ValueError, match="'empty'"):
         ConstraintSet(model, (), [LinearCoupling("empty", ())])
+
+
+@pytest.mark.parametrize("build", [spatial_model, planar_model])
+def test_sampled_rows_equal_the_set_state_by_state(build):
+    """The vectorised rows of many states (:class:`solvers.SampledKinematics`): residuals,
+    Jacobians, ``J v`` and ``J a + gamma`` (point-like rows; a full weld's errors are its
+    relative twist) and the drift at ``a = 0``, sample by sample."""
+    from solvers.sampled import SampledKinematics
+
+    model, closures = build()
+    cs = ConstraintSet(model, closures, couplings(model))
+    rng = np.random.default_rng(9)
+    n = 5
+    Q = np.array(
+        [pin.integrate(model, pin.neutral(model), 0.4 * rng.standard_normal(model.nv))
+         for _ in range(n)]
+    )  # fmt: skip
+    V, A = rng.standard_normal((n, model.nv)), rng.standard_normal((n, model.nv))
+    sk = SampledKinematics(model, cs, size=8)
+    data = model.createData()
+    for k in range(n):
+        pin.rnea(model, data, Q[k], V[k], A[k])
+        pin.computeJointJacobians(model, data, Q[k])
+        sk.capture(k, data)
+    r, ev, ea = sk.closure_errors(n, V, Q, A)
+    ref = SampledKinematics(model, cs, size=8)
+    for k in range(n):
+        ref.capture_configuration(k, Q[k])
+    rr, JJ = ref.residuals_and_jacobians(np.arange(n))
+    for k in range(n):
+        ref.capture_drift(k, Q[k], V[k])
+    gamma_batch = ref.acceleration_errors(n, V)
+    point_like = np.concatenate(
+        [np.arange(cs.offsets[i], cs.offsets[i + 1])
+         for i, kind in enumerate(cs.kinds) if kind != "weld" or cs.sizes[i] != 6]
+    )  # fmt: skip
+    for k in range(n):
+        r0, J0 = cs.residual_and_jacobian(data, Q[k])
+        gamma = cs.drift(data, Q[k], V[k])
+        np.testing.assert_allclose(r[k], r0, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(rr[k], r0, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(JJ[k], J0, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(ev[k, point_like], (J0 @ V[k])[point_like], atol=1e-12)
+        np.testing.assert_allclose(ea[k, point_like], (J0 @ A[k] + gamma)[point_like], atol=1e-11)
+        np.testing.assert_allclose(gamma_batch[k, point_like], gamma[point_like], atol=1e-11)

@@ -635,13 +635,8 @@ def test_gripper_falls_keeping_energy_closures_and_coupling(gripper):
     assert float(np.max(out.closure_residual)) < 1e-10
     assert float(np.ptp(out.q[:, 0])) > 1e-4  # it moves
     # the recorded closure and coupling forces are the inverse dynamics' (another solver) at
-    # the recorded state, with no actuator effort
-    inv = InverseDynamics(
-        robot.model,
-        list(robot.constraint_models),
-        actuation(robot),
-        couplings=robot.closure_set.couplings,
-    )
+    # the recorded state, with no actuator effort (both in the rows of robot.constraints)
+    inv = InverseDynamics(robot.model, robot.constraints, actuation(robot))
     res = inv.solve(out.q[-1], out.v[-1], out.a[-1])
     assert abs(res.tau[0]) < 1e-12
     np.testing.assert_allclose(res.constraint_forces, out.constraint_forces[-1], atol=1e-9)

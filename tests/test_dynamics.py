@@ -4,6 +4,7 @@ import csv
 import json
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pinocchio as pin
@@ -228,15 +229,26 @@ def test_simulate_wraps_errors(mapped):
 
 @pytest.mark.parametrize("name", ["delta", "gough_stewart"])
 def test_cli_simulate_ten_seconds_keeps_energy_and_closures(capsys, name):
-    """Passive run under gravity, 10 s at 1 kHz: energy drift < 1e-7, closures < 1e-9 m
-    (recorded: drift 9.6e-9 for the Delta, 1.2e-9 for the hexapod; closures 2.4e-11 m and
-    2.5e-10 m)."""
+    """Passive run under gravity, 10 s at 1 kHz: closures < 1e-9 m over the run, energy drift
+    < 1e-7 up to the first passage through a singularity (``valid_until``: the falling Delta
+    crosses the one of its parallelograms after 0.26 s, and past it the motion, the
+    minimum-norm continuation, depends on the BLAS kernel's rounding: its drift over the 10 s
+    was 9.6e-9 on one kernel, 3.4e-4 on another; the hexapod crosses none). Recorded: drift
+    4e-11 (Delta, to 0.26 s), 1.2e-9 (hexapod, 10 s); closures 2.4e-11 m and 2.5e-10 m."""
     assert main(["simulate", name, "--duration", "10", "--dt", "1e-3", "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    captured = capsys.readouterr()
+    out = json.loads(captured.out)
     assert out["steps"] == 10000
     assert out["max_closure_residual"] < 1e-9
-    assert out["energy_drift_rel"] < 1e-7
+    assert out["energy_drift_rel_valid"] < 1e-7
     assert out["max_kinetic_energy"] > 0.1  # it did fall
+    passages = out["singular_passages"]
+    if out["valid_until"] < 10.0:
+        first = next(p for p in passages if p["through"])
+        assert first["start"] == out["valid_until"] and first["conditioning"] < 1e-5
+    assert all(p["kind"] == "parallel_singularity" for p in passages)
+    # one warning line for the passages, none without
+    assert captured.err.count("parallel singularity") == (1 if passages else 0)
 
 
 # --------------------------------------------------------------------------- CLI size
@@ -355,9 +367,17 @@ def test_redundant_limits_are_respected_or_named(quattro):
 @pytest.mark.parametrize("params", [{"parallelogram": "hinge"}, {"arms": 4}])
 def test_overconstrained_closures_simulate(params):
     """Hinge parallelograms (redundant hinge equations, hyperstatic) and a fourth arm (the
-    closures over-determine the nacelle): the proximal solver copes; energy and closures kept."""
+    closures over-determine the nacelle): the proximal solver copes; energy kept up to the
+    first passage through a singularity, closures throughout. With hinges the parallelograms
+    hold the nacelle's orientation whatever their normals do: the fall crosses no singularity
+    (the ball-jointed arms cross one where the normals become coplanar, 0.22 s for four arms)."""
     robot = pkdyn.load("delta", geometry=False, **params)
-    res = simulate(robot, 1.0, 1e-3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # (the singular passages of the four arms)
+        res = simulate(robot, 1.0, 1e-3)
+    n = int(np.searchsorted(res.t, res.valid_until, side="right"))
     assert np.max(res.closure_residual) < 1e-8
-    assert res.energy_drift() < 1e-3
-    assert np.max(res.kinetic) > 0.1
+    assert res.energy_drift(res.valid_until) < 1e-7
+    assert np.max(res.kinetic[:n]) > 0.1
+    if "parallelogram" in params:
+        assert res.events == [] and res.valid_until == res.t[-1]

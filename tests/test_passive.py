@@ -443,9 +443,9 @@ def test_cli_info_lists_passive_elements(tmp_path, capsys):
     )
     assert main(["info", str(path)]) == 0
     out = capsys.readouterr().out
-    assert "joint arm1: stiffness 2 rest 0.3, friction 0.1" in out
-    assert "joint bar1a_upper: damping 0.01 0.01 0.01" in out
-    assert "spring balance1 (base - arm1): 150 N/m, free length 0.01 m" in out
+    assert "joint arm1: stiffness 2 N m/rad, rest 0.3 rad; friction 100 mN m" in out
+    assert "joint bar1a_upper: damping 10 mN m s/rad, 10 mN m s/rad, 10 mN m s/rad" in out
+    assert "spring balance1 (base - arm1): 150 N/m, free length 10 mm" in out
     assert main(["info", str(path), "--json"]) == 0
     passive = json.loads(capsys.readouterr().out)["passive"]
     assert passive["joints"][0] == {

@@ -127,8 +127,9 @@ def _action_matrix_columns(robot, model, q):
     def skew(p):
         return pin.skew(np.asarray(p))
 
-    C = np.zeros((robot.constraints.n, model.size))
-    offsets = robot.constraints.closure_rows.base_offsets
+    full = robot.constraints.unreduced  # (the sensitivities' rows: every constraint model's)
+    C = np.zeros((full.n, model.size))
+    offsets = full.closure_rows.base_offsets
     owners = robot.constraint_owner
     for i, cm in enumerate(robot.constraint_models):
         S1 = twist(int(cm.joint1_id), ("closure", f"{owners[i]}/1"))

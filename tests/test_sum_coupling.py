@@ -245,3 +245,20 @@ def test_bad_couplings_name_the_coupling(coupling, message, tmp_path, capsys):
     assert main(["info", str(path)]) == 1
     line = capsys.readouterr().err.strip()
     assert line.startswith("pkdyn: error:") and "\n" not in line and "coupling" in line
+
+
+def test_simulation_reports_the_coupling_apart(tmp_path, capsys):
+    """The closures' residual and the couplings' are reported apart (JSON, table, CSV)."""
+    import json
+
+    path = tmp_path / "leg.urdf"
+    path.write_text(leg_urdf())
+    csv = tmp_path / "run.csv"
+    argv = ["simulate", str(path), "--duration", "0.1", "--dt", "0.01", "--csv", str(csv)]
+    assert main([*argv, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["max_closure_residual"] == 0.0  # no closure
+    assert 0.0 <= out["max_coupling_residual"] < 1e-9
+    assert "coupling_residual" in csv.read_text().splitlines()[0]
+    assert main(argv[:-2]) == 0
+    assert "max coupling residual" in capsys.readouterr().out

@@ -149,7 +149,7 @@ def test_q6_lock_carries_the_swinging_branch_weight_moment(robot, swing):
         np.zeros(1), q[None], zero[None], zero[None], robot.actuated_q, robot.actuated_v
     )
     lam = inverse_dynamics(be, traj, progress=False).constraint_forces[0]
-    cs = be.closure_set
+    cs = be.constraints  # (the rows of the inverse dynamics' constraint forces)
     k = cs.names.index("lock:branch2_q6[0]")
     rows = np.arange(cs.offsets[k], cs.offsets[k + 1])
     j6 = model.getJointId("branch2_q6")

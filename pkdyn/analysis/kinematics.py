@@ -54,7 +54,7 @@ from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.results import Result, jsonable
 from pkdyn.units import matrix, quantity
-from solvers import numerics
+from solvers import ConstraintSet, numerics
 
 __all__ = [
     "TASK_NAMES",
@@ -235,6 +235,7 @@ def passive_map(
     angular: str = "platform",
     point: np.ndarray | None = None,
     rank: int | None = None,
+    constraints: ConstraintSet | None = None,
 ) -> PassiveMap:
     """Closure and platform Jacobians at ``q`` with the passive joints eliminated.
 
@@ -244,12 +245,15 @@ def passive_map(
         angular: Axes of the platform Jacobian's angular rows (``platform``: task convention).
         point: Reference point of the platform Jacobian, platform frame [m].
         rank: Structural rank of the passive closure columns (``None``: decided at ``q``).
+        constraints: The constraint rows (default ``robot.constraints``; the pose
+            sensitivities take ``robot.constraints.unreduced``, whose rows placement errors
+            can open).
 
     Returns:
         The map; the kinematics and joint Jacobians of ``robot.data`` are at ``q``.
 
     """
-    cs = robot.constraints
+    cs = robot.constraints if constraints is None else constraints
     if cs.n:  # (runs the kinematics and joint Jacobians at q; closures and couplings)
         Jc = cs.jacobian(robot.data, q)
         Jx = _platform_jacobian(robot, None, point=point, angular=angular)

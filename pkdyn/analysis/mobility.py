@@ -93,7 +93,8 @@ class MobilityResult(Result):
         equations: ``Ec = d * loops + couplings``, number of closure (and coupling) equations
             in Pasqui's sense.
         nv: Velocity coordinates of the model (modelling joints included).
-        closure_rows: Rows of the closure Jacobian of the model (a hinge gives 6 rows).
+        closure_rows: Rows of the constraint Jacobian of the model (``robot.constraints``: a
+            hinge gives 5 rows, a planar loop's closure its in-plane rows, a coupling 1).
         rank: Rank of the closure Jacobian ``J_c`` (closure_rows x nv) at ``q``; the platform's
             free-flyer or planar coordinates count in ``nv``, so ``mobility = nv - rank``.
         closure_rank: Pasqui's ``rc = Ic - m``, rank of the ``Ec`` closure equations.
@@ -291,7 +292,8 @@ def format_mobility(result: MobilityResult) -> str:
         f"{r.joint_mobility} - {r.d} * {r.loops}{coupled} = {r.grubler}",
         f"  rank (Pasqui): Ic = {r.joint_mobility}, Ec = {r.equations}, rc = {r.closure_rank}; "
         f"m = Ic - rc = {r.mobility}, h = Ec - rc = {r.hyperstatism}",
-        f"  closure Jacobian: {r.closure_rows} x {r.nv}, rank {r.rank}",
+        f"  {'constraint' if r.couplings else 'closure'} Jacobian: {r.closure_rows} x {r.nv}, "
+        f"rank {r.rank}",
     ]
     if r.floating:
         lines.append(

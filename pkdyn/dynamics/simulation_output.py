@@ -1,4 +1,4 @@
-"""A simulation's time series as a CSV file: actuators, energies, closure residual."""
+"""A simulation's time series as a CSV file: actuators, energies, closures, conditioning."""
 
 from __future__ import annotations
 
@@ -22,7 +22,9 @@ def simulation_columns(robot: Robot, result: ForwardResult) -> dict[str, np.ndar
     ``qa_dot_<a>`` [rad/s or m/s], ``tau_<a>`` (joint-side effort) [N m or N]; ``kinetic``,
     ``potential``, ``work`` (of the efforts), ``dissipated`` (dampers and friction) [J];
     ``energy_balance`` (``kinetic + potential - work + dissipated`` minus its start value: 0
-    for an exact integration) [J]; ``closure_residual`` [m or rad].
+    for an exact integration) [J]; ``closure_residual`` [m or rad]; with couplings,
+    ``coupling_residual`` [rad or m]; ``conditioning`` (of the closure forces,
+    :mod:`solvers.conditioning`: below 1e-4 near a singularity, below 1e-5 through one).
 
     Args:
         robot: The simulated robot.
@@ -46,6 +48,13 @@ def simulation_columns(robot: Robot, result: ForwardResult) -> dict[str, np.ndar
     balance = result.energy - result.work + result.dissipated
     out["energy_balance"] = balance - balance[0]
     out["closure_residual"] = result.closure_residual
+    constraints = getattr(robot, "constraints", None)  # (a result's layout has none)
+    coupled = bool(getattr(result, "couplings", ())) or bool(getattr(constraints, "nk", 0))
+    if coupled and result.coupling_residual is not None:
+        out["coupling_residual"] = result.coupling_residual
+    out["conditioning"] = (
+        result.conditioning if result.conditioning is not None else np.ones_like(result.t)
+    )
     return out
 
 

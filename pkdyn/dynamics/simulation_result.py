@@ -43,6 +43,7 @@ class SimulationResult(ForwardResult, Result):
     units: tuple[str, ...] = ()
     integrator: str = ""
     dt: float = 0.0
+    couplings: tuple[str, ...] = ()
 
     @classmethod
     def of(
@@ -59,6 +60,7 @@ class SimulationResult(ForwardResult, Result):
             units=tuple("m" if p else "rad" for p in robot.actuator_prismatic),
             integrator=integrator,
             dt=dt,
+            couplings=tuple(robot.constraints.couplings.names),
         )
 
     @property
@@ -89,14 +91,22 @@ class SimulationResult(ForwardResult, Result):
 
         Returns:
             ``robot, duration`` [s], ``dt`` [s], ``integrator``, ``steps``, ``substeps``,
-            ``max_closure_residual`` [m or rad], ``energy_drift_rel``, ``max_kinetic_energy``
-            [J], ``work`` [J] (of the actuator efforts), ``projections``, and ``actuators``:
-            per actuator ``name``, ``start``, ``end`` [rad or m], ``peak_rate`` [rad/s or m/s].
+            ``max_closure_residual`` [m or rad] (and ``max_coupling_residual`` [rad or m] when
+            the robot has couplings), ``energy_drift_rel``, ``max_kinetic_energy``
+            [J], ``work`` [J] (of the actuator efforts), ``projections``, ``actuators``:
+            per actuator ``name``, ``start``, ``end`` [rad or m], ``peak_rate`` [rad/s or m/s];
+            ``singular_passages`` (:meth:`solvers.conditioning.SingularityEvent.to_json`),
+            ``valid_until`` [s] (the start of the first passage through a singularity, or the
+            end) and ``energy_drift_rel_valid`` (the energy drift up to it).
 
         """
         qa, qd = self.qa, self.qa_dot
+        coupled = {}
+        if self.couplings and self.coupling_residual is not None:
+            coupled = {"max_coupling_residual": float(np.max(self.coupling_residual))}
         return jsonable(
             {
+                **coupled,
                 "robot": self.robot,
                 "duration": float(self.t[-1] - self.t[0]),
                 "dt": self.dt,
@@ -117,6 +127,9 @@ class SimulationResult(ForwardResult, Result):
                     }
                     for k, name in enumerate(self.actuators)
                 ],
+                "singular_passages": [ev.to_json() for ev in self.events],
+                "valid_until": float(self.valid_until),
+                "energy_drift_rel_valid": self.energy_drift(self.valid_until),
             }
         )
 
@@ -144,9 +157,22 @@ class SimulationResult(ForwardResult, Result):
             lines.append(columns(rows))
         lines += [
             f"max closure residual: {float(np.max(self.closure_residual)):.2g} m or rad",
+            *(
+                [f"max coupling residual: {float(np.max(self.coupling_residual)):.2g} rad or m"]
+                if self.couplings and self.coupling_residual is not None
+                else []
+            ),
             f"kinetic energy: {quantity(float(self.kinetic[0]), 'J')} at the start, "
             f"{quantity(float(np.max(self.kinetic)), 'J')} at most; work of the efforts "
             f"{quantity(float(self.work[-1]), 'J')}",
             f"energy drift: {quantity(100 * self.energy_drift(), '%', 3)} of the energy exchanged",
         ]
+        lines += [f"singular passage: {ev.describe()}" for ev in self.events]
+        if self.valid_until < float(self.t[-1]):
+            drift = self.energy_drift(self.valid_until)
+            lines.append(
+                f"exact rigid motion up to t = {quantity(self.valid_until, 's')} (the first "
+                "passage through a singularity); energy drift up to there: "
+                f"{quantity(100 * drift, '%', 3)}"
+            )
         return "\n".join(lines)

@@ -478,7 +478,7 @@ def inverse_geometry(
         _check_uncontrolled(robot, pose, target, sol.q)
     if check_limits:
         check_actuator_limits(robot, sol.q)
-    return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.n]), initial=0.0)))
+    return _result(robot, sol, float(np.max(np.abs(sol.residual[: cs.n_local]), initial=0.0)))
 
 
 FAR = 100.0
@@ -691,11 +691,12 @@ def solve_pose(
         stall: Early stop of :func:`solvers.solve_lm` on a stalling residual (0: never).
 
     Returns:
-        The solver's outcome: closure rows first, then the task rows.
+        The solver's outcome: the constraint rows first (``robot.constraints.n_local`` of
+        them: :meth:`solvers.ConstraintSet.local_residual`), then the task rows.
 
     """
     cs, data = robot.constraints, robot.data
-    nc = cs.n
+    nc = cs.n_local
 
     def residual(q: np.ndarray) -> np.ndarray:
         r_c = cs.local_residual(data, q)  # runs the kinematics

@@ -46,6 +46,8 @@ class RobotInfo(Result):
     closures: list[dict[str, str]]
     couplings: list[dict[str, Any]] = field(default_factory=list)
     passive: dict[str, Any] = field(default_factory=dict)
+    prismatic: frozenset[str] = frozenset()
+    """Names of the prismatic joints (their passive elements in N/m, m, N s/m, N)."""
 
     def to_json(self) -> dict[str, Any]:
         """The summary as JSON values (limits ``None`` where there is none)."""
@@ -77,7 +79,7 @@ class RobotInfo(Result):
         ]
         if self.couplings:
             lines.append("couplings: " + ", ".join(_coupling(c) for c in self.couplings))
-        lines.append("passive: " + (_passive(self.passive) or "none"))
+        lines.append("passive: " + (_passive(self.passive, self.prismatic) or "none"))
         return "\n".join(lines)
 
 
@@ -108,20 +110,21 @@ def _values(x: list[float], unit: str) -> str:
     return ", ".join(quantity(v, unit) for v in x)
 
 
-def _passive(passive: dict[str, Any]) -> str:
-    """One line per passive element, with units (per degree of freedom of revolute joints)."""
+def _passive(passive: dict[str, Any], prismatic: frozenset[str] = frozenset()) -> str:
+    """One line per passive element, with the units of its joint's kind (per degree of freedom)."""
     rows = []
     for e in passive.get("joints", []):
+        p = e["joint"] in prismatic
         parts = []
         if "stiffness" in e:
             parts.append(
-                f"stiffness {_values(e['stiffness'], 'N m/rad or N/m')}, "
-                f"rest {_values(e['rest'], 'rad or m')}"
+                f"stiffness {_values(e['stiffness'], 'N/m' if p else 'N m/rad')}, "
+                f"rest {_values(e['rest'], 'm' if p else 'rad')}"
             )
         for k, unit in (
-            ("damping", "N m s/rad or N s/m"),
-            ("friction", "N m or N"),
-            ("armature", "kg m^2 or kg"),
+            ("damping", "N s/m" if p else "N m s/rad"),
+            ("friction", "N" if p else "N m"),
+            ("armature", "kg" if p else "kg m^2"),
         ):
             if k in e:
                 parts.append(f"{k} {_values(e[k], unit)}")
@@ -195,4 +198,10 @@ def robot_info(robot: Robot) -> RobotInfo:
         closures=[{"name": c.name, "type": c.kind} for c in robot.closures],
         couplings=[_coupling_json(c) for c in robot.couplings],
         passive=passive_summary(robot),
+        prismatic=frozenset(
+            str(robot.model.names[j])
+            for j in range(1, robot.model.njoints)
+            if robot.model.joints[j].shortname().startswith(("JointModelP", "JointModelPrismatic"))
+            and not robot.model.joints[j].shortname().startswith("JointModelPlanar")
+        ),
     )

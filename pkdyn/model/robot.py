@@ -144,8 +144,13 @@ class Robot:
 
     @property
     def closure_set(self) -> ConstraintSet:
-        """The former name of :attr:`constraints` (kept for one release)."""
-        return self.constraints
+        """The former constraint layer (kept for one release): :attr:`constraints` with every row.
+
+        ``constraints.unreduced``: the rows of ``constraint_models`` (a hinge is two points,
+        planar loops keep their out-of-plane rows), then the couplings'; ``nc`` counts the
+        closure rows only.
+        """
+        return self.constraints.unreduced
 
     @property
     def row_owners(self) -> list[str]:

@@ -12,6 +12,7 @@ from pkdyn.dynamics.simulation_result import SimulationResult
 from pkdyn.dynamics.sizing import SizingResult
 from pkdyn.plotting._save import save_figure
 from pkdyn.results import register_plot
+from solvers.conditioning import NEAR_SINGULAR, THROUGH
 
 __all__ = ["plot_efforts", "plot_simulation"]
 
@@ -81,7 +82,11 @@ def _plot_simulation_result(
 def plot_simulation(
     robot: Any, result: Any, path: str | Path | None = None, title: str | None = None
 ) -> Any:
-    """Actuator positions and speeds, energies and closure residual of a simulation.
+    """Actuator positions and speeds, energies, closure residual and conditioning of a simulation.
+
+    The conditioning of the closure forces is drawn with the thresholds of a passage near
+    (1e-4) and through (1e-5) a singularity; each singular passage (``result.events``) is a
+    vertical line on every panel.
 
     Args:
         robot: The simulated robot (or ``result.layout``: its names and indices).
@@ -105,19 +110,26 @@ def plot_simulation(
         raise InvalidInputError("robot", f"expected the simulated Robot, got {robot!r:.40}")
     cols = simulation_columns(robot, result)
     t = cols["t"]
-    fig = Figure(figsize=(8.0, 9.0))
-    axes = fig.subplots(4, 1, sharex=True)
+    fig = Figure(figsize=(8.0, 11.0))
+    axes = fig.subplots(5, 1, sharex=True)
     for name in robot.actuator_names:
         (line,) = axes[0].plot(t, cols[f"qa_{name}"], label=name)
         axes[1].plot(t, cols[f"qa_dot_{name}"], color=line.get_color())
     for key in ("kinetic", "potential", "work", "dissipated", "energy_balance"):
         axes[2].plot(t, cols[key], label=key.replace("_", " "))
     axes[3].semilogy(t, np.maximum(cols["closure_residual"], 1e-17))
+    axes[4].semilogy(t, np.maximum(cols["conditioning"], 1e-17), color="black")
+    for level, what in ((NEAR_SINGULAR, "near"), (THROUGH, "through")):
+        axes[4].axhline(level, color="tab:red", lw=0.8, ls="--" if what == "near" else ":")
+    for ev in getattr(result, "events", []):
+        for ax in axes:
+            ax.axvline(ev.time, color="tab:red", lw=0.8, alpha=0.6)
     axes[0].set_ylabel("actuators [rad or m]")
     axes[1].set_ylabel("speeds [rad/s or m/s]")
     axes[2].set_ylabel("energy [J]")
     axes[3].set_ylabel("closure residual")
-    axes[3].set_xlabel("time [s]")
+    axes[4].set_ylabel("conditioning")
+    axes[4].set_xlabel("time [s]")
     for ax in axes:
         ax.grid(True, alpha=0.3)
     if robot.actuator_names:

@@ -24,9 +24,11 @@ mobilities, like the spin of a Delta's bars, stay still), so that
 
     dx = J dqa + K dp,   J = Jx_a - Jx_p Jc_p^+ Jc_a,   K = X + J diag(qa) G - Jx_p Jc_p^+ C
 
-with ``Jc`` the Jacobian of the robot's constraint layer (``robot.constraints``: the closures'
-rows, then the joint couplings', which take part in the elimination and depend on no
-placement) and ``Jx`` the platform Jacobian; the elimination is
+with ``Jc`` the Jacobian of the robot's constraint layer (``robot.constraints.unreduced``: the
+closures' rows, every one of them, then the joint couplings', which take part in the
+elimination and depend on no placement; the closures' rows that vanish only by construction of
+the nominal geometry, such as a planar loop's out-of-plane rows, are kept: placement errors
+open them) and ``Jx`` the platform Jacobian; the elimination is
 :func:`pkdyn.analysis.kinematics.passive_map` (:func:`solvers.numerics.passive_elimination`, with
 the structural rank of ``Jc_p`` found at the robot's home). ``J`` is the direct
 kinematic Jacobian of :func:`pkdyn.analysis.kinematics.kinematic_models` (all six pose rows).
@@ -72,7 +74,8 @@ class PoseSensitivity:
         J: Pose per actuator coordinate (6, n_a) [m or rad per rad or m].
         K: Pose per parameter (6, n_par) [m or rad per parameter unit].
         closure_gap: Closure residual per parameter that no passive motion absorbs (nc, n_par)
-            [m or rad per unit]: zero for parameters the mechanism accommodates.
+            [m or rad per unit], rows of ``robot.constraints.unreduced.closures``: zero for
+            parameters the mechanism accommodates.
         joints: Joint velocity coordinates per parameter (nv, n_par) [rad or m per unit]: how
             the loops (and couplings) move every joint when a parameter changes at fixed
             actuator readings (the actuated rows: the gains' effect); what encoders on
@@ -162,7 +165,7 @@ def _plan(robot: Robot, model: ParameterModel) -> _Plan:
     joints: list[int] = []
     points: list[tuple[int, int]] = []
     welds: list[tuple[int, int]] = []
-    cr = robot.constraints.closure_rows
+    cr = robot.constraints.unreduced.closure_rows  # (one base model per constraint model)
     offsets = cr.base_offsets if cr is not None else np.zeros(1, dtype=int)
     for i, (cm, owner) in enumerate(
         zip(robot.constraint_models, robot.constraint_owner, strict=True)
@@ -208,7 +211,7 @@ def _rigid_jacobians(
     """
     plan = _plan(robot, model)
     n_par = model.size
-    C = np.zeros((robot.constraints.n, n_par))
+    C = np.zeros((robot.constraints.unreduced.n, n_par))
     X = np.zeros((6, n_par))
     if plan.used.size == 0:
         return C, X
@@ -281,7 +284,8 @@ def _structural_rank(robot: Robot) -> int:
     key = id(robot.model)
     rank = _RANKS.get(key)
     if rank is None:
-        Jc = robot.constraints.jacobian(robot.data, robot.q_home)[:, robot.passive_v]
+        cs = robot.constraints.unreduced  # (the rows placement errors can open)
+        Jc = cs.jacobian(robot.data, robot.q_home)[:, robot.passive_v]
         rank = int(numerics.passive_elimination(Jc).rank)
         _RANKS[key] = rank
         weakref.finalize(robot.model, _RANKS.pop, key, None)
@@ -318,9 +322,9 @@ def pose_sensitivity(
         raise InvalidInputError("robot", f"{robot.name} declares no platform frame")
     qq = as_finite("q", q, robot.nq)
     data = robot.data
-    cs = robot.constraints
+    cs = robot.constraints.unreduced  # (the rows placement errors can open)
     r = _structural_rank(robot) if cs.n else 0  # (at home: before q)
-    pm = passive_map(robot, qq, angular="platform", rank=r)
+    pm = passive_map(robot, qq, angular="platform", rank=r, constraints=cs)
     if pm.elimination.singular:
         raise SingularConfigurationError(
             "parallel",

@@ -313,7 +313,7 @@ class NumericEvaluator(PoseEvaluator):
             return None
         rows, cols = J.shape
         E = np.zeros((rows, 3))
-        nc = self.robot.constraints.n
+        nc = self.robot.constraints.n_local  # (the solve's constraint rows)
         for i, axis in enumerate(self._task.rows.tolist()):
             if axis < 3:
                 E[nc + i, axis] = 1.0  # d(p - p_target) = J dq - dp_target = 0

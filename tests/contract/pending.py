@@ -2,7 +2,7 @@
 
 Each becomes ``xfail(strict=True)``: when the fix is merged the case passes, the strict mark
 fails the run, and the line is removed here. (The cli branch's paths, reads and negative
-numbers were merged: their lines are gone.)
+numbers, and dep1's checked control-loop step, were merged: their lines are gone.)
 """
 
 from __future__ import annotations
@@ -10,3 +10,4 @@ from __future__ import annotations
 __all__ = ["PENDING_CLI"]
 
 PENDING_CLI: dict[str, str] = {}
+"""Test id (or a prefix ending with ``|``) -> the branch that fixes it."""

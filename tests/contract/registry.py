@@ -36,20 +36,7 @@ from contract.pending import PENDING_CLI
 __all__ = ["API", "CLI", "EXEMPT", "PENDING", "Api", "Cli", "Exempt", "pending"]
 
 
-DEP1_STEP = "fixed on branch dep1 (ForwardDynamics.step's inputs are pkdyn errors)"
-
 PENDING: dict[str, str] = {
-    **{
-        f"solvers.ForwardDynamics.step|{arg}|{cls}": DEP1_STEP
-        for arg, classes in (
-            ("t", ("non_finite", "wrong_type")),
-            ("q", ("non_finite", "huge", "ragged", "empty", "wrong_type", "wrong_size")),
-            ("v", ("non_finite", "huge", "ragged", "empty", "wrong_type", "wrong_size")),
-            ("dt", ("non_finite", "tiny", "zero", "negative", "wrong_type")),
-            ("tau", ("not_callable", "raises", "exits", "returns_garbage")),
-        )
-        for cls in classes
-    },
     **PENDING_CLI,
 }
 

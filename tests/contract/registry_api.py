@@ -384,19 +384,17 @@ EXEMPT: list[Exempt] = [
          "solvers.SolveResult", "solvers.solve_lm", "solvers.ForwardDynamics.passive_forces",
          "solvers.ForwardDynamics.closure_forces",
          "solvers.ForwardDynamics.acceleration", methods=True),
-    *_ex(INTERNAL + " (pkdyn.dynamics.simulate is the user's entry point; ForwardDynamics.step, "
-         "the control loop's, is driven)", "solvers.ForwardDynamics",
-         "solvers.ForwardDynamics.simulate", "solvers.ForwardDynamics.project_state",
-         "solvers.simulate"),
+    *_ex(INTERNAL + " (its public boundary is pkdyn.dynamics.ForwardDynamics, driven)",
+         "solvers.ForwardDynamics", "solvers.ForwardDynamics.simulate",
+         "solvers.ForwardDynamics.project_state", "solvers.ForwardDynamics.step",
+         "solvers.ForwardDynamics.reference_rank", "solvers.simulate"),
 ]  # fmt: skip
 
 
 def _fd(s: Scratch) -> Any:
-    from pkdyn.dynamics import actuation
-    from solvers import ForwardDynamics
+    from pkdyn.dynamics import ForwardDynamics
 
-    r = s.robot
-    return ForwardDynamics(r.model, list(r.constraint_models), actuation(r), integrator="euler")
+    return ForwardDynamics(s.robot, "euler")
 
 
 ROBOT_R = ROBOT()
@@ -557,10 +555,31 @@ API: list[Api] = [
          "progress": PROGRESS(),
          "passive": Arg(Flag(), True, names=("passive",)),
          "allocation": Arg(Choice(("norm", "max")), "norm", names=("allocation",))}),
-    Api("solvers.ForwardDynamics.step",
+    Api("pkdyn.dynamics.ForwardDynamics",
+        {"robot": ROBOT_R,
+         "integrator": Arg(Choice(("dopri5", "rk4", "euler")), "euler", names=("integrator",)),
+         "passive": Arg(Flag(), True, names=("passive",)),
+         "viscous": Arg(Vector((1, 4)), 0.0, names=("viscous",)),
+         "coulomb": Arg(Vector((1, 4)), 0.0, names=("coulomb",)),
+         "warn_events": Arg(Flag(), True, names=("warn_events",))},
+        robot="five_bar"),
+    Api("pkdyn.dynamics.ForwardDynamics.step",
         {"t": Arg(Real("s"), 0.0, names=("t",)), "q": Q(), "v": V(),
          "dt": Arg(Real("s", sign="positive"), 1e-3, names=("dt",)),
          "tau": Arg(Callback(optional=True), None, names=("tau",))},
+        robot="five_bar", obj=_fd),
+    Api("pkdyn.dynamics.ForwardDynamics.simulate",
+        {"q0": Q("q0"), "v0": V("v0"),
+         "duration": Arg(Real("s", sign="positive"), 0.01, names=("duration",)),
+         "dt": Arg(Real("s", sign="positive"), 1e-3, names=("dt",)),
+         "tau": Arg(Callback(optional=True), None, names=("tau",)),
+         "record_every": Arg(Count(), 1, names=("record_every",)),
+         "t0": Arg(Real("s"), 0.0, names=("t0",)),
+         "step": Arg(Real("s", sign="positive", optional=True), None, names=("step",))},
+        robot="five_bar", obj=_fd),
+    Api("pkdyn.dynamics.ForwardDynamics.project_state",
+        {"q": Q(), "v": V(), "tol": Arg(Real(sign="positive", optional=True), None,
+                                        names=("tol",))},
         robot="five_bar", obj=_fd),
     # ---- calibration
     Api("pkdyn.calibration.Measurements",
