@@ -415,7 +415,7 @@ def test_cli_bad_input(tmp_path, capsys, args, match):
 
 def test_cli_study_with_plot_and_urdf(tmp_path, capsys):
     code = main(
-        ["design", "delta", "--range", "la=0.18:0.26", "lb=0.36:0.5", "--fix", "z_home=-0.35",
+        ["design", "delta", "--range", "la=0.18:0.26", "lb=0.36:0.5", "--param", "z_home=-0.35",
          "--require", CYL, "--payload", "0.5", "--cycle-time", "0.6", "--dt", "0.01",
          "--constraint", "inv_cond_min>=0.2", "--minimize", "peak_effort", "--maximize",
          "inv_cond_min", "--n", "6", "--workers", "1", "--out", str(tmp_path / "s.csv"),

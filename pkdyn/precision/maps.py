@@ -39,6 +39,7 @@ from pkdyn.inputs import is_complex
 from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.precision.batched import batchable, translational_batch
 from pkdyn.precision.condensation import compliance, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.grid import (
@@ -173,6 +174,7 @@ def _poses(P: np.ndarray, R: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]
     return P, np.broadcast_to(Rm, (P.shape[0], 3, 3)) if Rm.ndim == 2 else Rm
 
 
+@one_blas_thread
 @public
 def pose_figures(
     robot: Robot,
@@ -187,6 +189,10 @@ def pose_figures(
     frequency: bool = False,
     method: str = "auto",
     progress: bool | None = None,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    client: Any = None,
+    timeout: float = 10.0,
 ) -> PoseFigures:
     """Stiffness, deflection and lowest frequency at platform poses (module docstring).
 
@@ -204,6 +210,12 @@ def pose_figures(
         frequency: Compute the lowest natural frequency too.
         method: ``auto``, ``closed`` (refuse robots without a closed form) or ``general``.
         progress: Progress bar of the pose-by-pose path (``None``: when stderr is a terminal).
+        workers: Local worker processes for the general path (1: this process; ``None``: as
+            many as the machine justifies): chunks of :data:`CHUNK` poses, each starting its
+            inverse geometric model from home (:mod:`pkdyn.precision.parallel`).
+        scheduler: A Dask scheduler address for the general path.
+        client: A connected ``distributed.Client`` instead of ``scheduler``.
+        timeout: How long to wait for the scheduler or for a worker [s].
 
     Returns:
         The figures.
@@ -242,7 +254,37 @@ def pose_figures(
             f"{P.shape[0] / GENERAL_RATE / 60:.0f} min at ~{GENERAL_RATE:.0f} poses/s; give at "
             f"most {MAX_GENERAL_POSES} (a coarser grid)",
         )
+    if workers != 1 or scheduler or client is not None:
+        from pkdyn.precision.parallel import fingerprint, recipe, run_chunks
+
+        options = (actuator_stiffness, material, links, p, w, frequency)
+        payload = (recipe(robot), fingerprint(robot), bool(em.links), options)
+        items = [(P[k : k + CHUNK], Rs[k : k + CHUNK]) for k in range(0, P.shape[0], CHUNK)]
+        parts = run_chunks(_figures_chunk, payload, items, workers, scheduler, client, timeout, 1)
+        return PoseFigures(
+            np.concatenate([f.valid for f in parts]),
+            np.concatenate([f.stiffness_min for f in parts]),
+            np.concatenate([f.deflection for f in parts]),
+            np.concatenate([f.f1 for f in parts]),
+            "general",
+            np.concatenate([f.reached for f in parts]),
+            np.concatenate([f.near for f in parts]),
+        )
     return _general(em, P, Rs, p, w, frequency, progress)
+
+
+CHUNK = 64
+"""Poses per chunk of the general path on worker processes or a Dask cluster."""
+
+
+def _figures_chunk(payload: Any, items: list[tuple[np.ndarray, np.ndarray]]) -> list[PoseFigures]:
+    """The general path on chunks of poses, in a worker (:mod:`pkdyn.precision.parallel`)."""
+    from pkdyn.precision.parallel import worker_robot
+
+    how, digest, geometry, (k, material, links, point, w, frequency) = payload
+    robot = worker_robot(how, digest, geometry)
+    em = elastic_model(robot, k, material, links)
+    return [_general(em, P, R, point, w, frequency, False) for P, R in items]
 
 
 def _closed(f: VectorisedFigures) -> PoseFigures:
@@ -301,6 +343,27 @@ def _general(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NearSingularityWarning)
         warnings.simplefilter("ignore", PrecisionWarning)
+        if batchable(em):  # the poses first, then the stiffness of all at once (batched)
+            found, Q = [], []
+            for i in progress_bar(range(N), "precision", "pose", progress, min_items=200):
+                q = reach(robot, pin.SE3(R[i], P[i]), (q_prev, robot.q_home), check_limits=False)
+                if q is not None:
+                    found.append(i)
+                    Q.append(q)
+                    q_prev = q
+            at = np.array(found, dtype=int)
+            reached[at] = True
+            kmin[at], defl[at], near[at], valid[at] = translational_batch(em, np.array(Q), point, w)
+            if frequency:
+                for i, q in zip(found, Q, strict=True):
+                    if not valid[i]:
+                        continue
+                    try:
+                        f1[i] = modes(em, q, point=point).f1
+                    except PkdynError:
+                        kmin[i] = defl[i] = np.nan
+                        near[i] = valid[i] = False
+            return PoseFigures(valid, kmin, defl, f1, "general", reached, near)
         for i in progress_bar(range(N), "precision", "pose", progress, min_items=200):
             q = reach(robot, pin.SE3(R[i], P[i]), (q_prev, robot.q_home), check_limits=False)
             if q is None:
@@ -350,6 +413,10 @@ def precision_map(
     method: str = "auto",
     progress: bool | None = None,
     value: float | None = None,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    client: Any = None,
+    timeout: float = 10.0,
 ) -> PrecisionMap:
     """Stiffness (and deflection, lowest frequency) over a plane of the translation workspace.
 
@@ -372,6 +439,10 @@ def precision_map(
         method: ``auto``, ``closed`` or ``general`` (:func:`pose_figures`).
         progress: Progress bar of the pose-by-pose path.
         value: Deprecated: the third coordinate of the plane [m] (give ``center``).
+        workers: Local worker processes of the general path (:func:`pose_figures`).
+        scheduler: A Dask scheduler address of the general path.
+        client: A connected ``distributed.Client`` instead of ``scheduler``.
+        timeout: How long to wait for the scheduler or for a worker [s].
 
     Returns:
         The map.
@@ -422,6 +493,10 @@ def precision_map(
         frequency=frequency,
         method=method,
         progress=progress,
+        workers=workers,
+        scheduler=scheduler,
+        client=client,
+        timeout=timeout,
     )
     shape = grid.shape
     status = np.full(P.shape[0], UNREACHABLE, dtype=np.int8)

@@ -40,7 +40,8 @@ from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
 from pkdyn.precision.stiffness import nothing_compliant, prepared
 from pkdyn.precision.validity import Flagged, Validity, stiffness_check
-from pkdyn.results import Result, jsonable
+from pkdyn.results import Result, deprecated, jsonable, renamed_keyword
+from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
 from solvers import numerics, solve_lm
 
@@ -71,7 +72,8 @@ class Modes(Flagged, Result):
         validity: ``valid`` and ``warnings`` (:mod:`pkdyn.precision.validity`).
         robot: The robot's name.
         links: Names of the compliant links.
-        count: Modes :meth:`to_json` and :meth:`table` report (``None``: all).
+        top: Modes :meth:`to_json` and :meth:`table` report, the lowest first (``None``: all;
+            ``count`` is its former name, kept for one release).
         elastic: The elastic model the modes were computed on (at their configuration).
 
     """
@@ -90,7 +92,7 @@ class Modes(Flagged, Result):
     validity: Validity = field(default_factory=Validity)
     robot: str = ""
     links: tuple[str, ...] = ()
-    count: int | None = None
+    top: int | None = None
     elastic: ElasticModel | None = field(default=None, repr=False)
 
     @property
@@ -98,21 +100,34 @@ class Modes(Flagged, Result):
         """Lowest natural frequency [Hz] (``inf`` for a rigid robot)."""
         return float(self.frequencies[0]) if self.frequencies.size else float("inf")
 
-    def _shown(self, count: int | None) -> int:
+    @property
+    def count(self) -> int | None:
+        """Deprecated: :attr:`top` (kept for one release)."""
+        deprecated("Modes.count", "Modes.top")
+        return self.top
+
+    @count.setter
+    def count(self, value: int | None) -> None:
+        deprecated("Modes.count", "Modes.top")
+        self.top = value
+
+    def _shown(self, top: int | None) -> int:
         from pkdyn.inputs import count as whole
 
         n = self.frequencies.size
-        c = self.count if count is None else whole("count", count, 1)
+        c = self.top if top is None else whole("top", top, 1)
         return n if c is None else min(int(c), n)
 
-    def to_json(self, count: int | None = None) -> dict[str, Any]:
+    @renamed_keyword("count", "top")
+    def to_json(self, top: int | None = None) -> dict[str, Any]:
         """JSON values: ``frequencies`` [Hz], ``platform`` motions, ``internal_mobilities``...
 
         Args:
-            count: Report the lowest ``count`` modes (default: :attr:`count`, else all).
+            top: Report the lowest ``top`` modes (default: :attr:`top`, else all; ``count``:
+                its former name, kept for one release).
 
         """
-        n = self._shown(count)
+        n = self._shown(top)
         unit = np.linalg.norm(self.platform[:n], axis=1, keepdims=True)
         return {
             "robot": self.robot,
@@ -128,9 +143,16 @@ class Modes(Flagged, Result):
             "platform motion [translation of the point, rotation], world axes, unit norm",
         }
 
-    def table(self, count: int | None = None) -> str:
-        """The frequencies with their units, what each mode moves, the flags."""
-        n = self._shown(count)
+    @renamed_keyword("count", "top")
+    def table(self, top: int | None = None) -> str:
+        """The frequencies with their units, what each mode moves, the flags.
+
+        Args:
+            top: Report the lowest ``top`` modes (default: :attr:`top`, else all; ``count``:
+                its former name, kept for one release).
+
+        """
+        n = self._shown(top)
         lines = [f"natural frequencies of {self.robot or 'the robot'}"]
         if self.rigid:
             lines.append(
@@ -181,6 +203,7 @@ def _eigen(red: Reduced, M: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     return lam, X, int(massless.sum())
 
 
+@one_blas_thread
 @public
 def modes(
     robot: Robot | ElasticModel,
@@ -306,9 +329,10 @@ def _rigid_modes(em: ElasticModel, q: np.ndarray, q_ext: np.ndarray, point: np.n
     )
 
 
-def modes_json(robot: Robot, q: np.ndarray, count: int | None = None, **kwargs: Any) -> dict:
-    """JSON-ready :func:`modes` (keys of :meth:`Modes.to_json`)."""
-    return modes(robot, q, **kwargs).to_json(count)
+@renamed_keyword("count", "top")
+def modes_json(robot: Robot, q: np.ndarray, top: int | None = None, **kwargs: Any) -> dict:
+    """JSON-ready :func:`modes` (keys of :meth:`Modes.to_json`; ``top``: the lowest shown)."""
+    return modes(robot, q, **kwargs).to_json(top)
 
 
 def mode_trajectory(

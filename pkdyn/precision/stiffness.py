@@ -60,6 +60,7 @@ from pkdyn.precision.validity import (
     stiffness_check,
 )
 from pkdyn.results import Result, jsonable
+from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity, vector
 from solvers import numerics
 
@@ -493,6 +494,7 @@ def prepared(
     return em, qq, p, w
 
 
+@one_blas_thread
 @public
 def stiffness(
     robot: Robot | ElasticModel,
