@@ -110,8 +110,13 @@ class Robot:
         Returns:
             The tolerance [m or rad].
 
+        Raises:
+            InvalidInputError: ``rtol`` not a finite number > 0.
+
         """
-        return float(rtol) * min(1.0, self.length_scale)
+        from pkdyn.inputs import positive
+
+        return positive("rtol", rtol) * min(1.0, self.length_scale)
 
     @property
     def nq(self) -> int:

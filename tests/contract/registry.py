@@ -57,7 +57,7 @@ reason (``xfail(strict=True)``: the lead removes the mark when the branches meet
 # the command line
 
 CLAVEL = ("--clavel",)
-SETTLE = ("--fastest", "--settle", "1e-4", "--actuator-stiffness", "2e4", "--dwell", "0.1")
+SETTLE = ("--fastest", "--band", "1e-4", "--actuator-stiffness", "2e4", "--dwell", "0.1")
 STIFFNESS_MAP = ("--map", "xy", "--grid", "3")
 VIBRATION_METRIC = ("--metric", "settling_time", "--actuator-stiffness", "2e4", "--dt", "0.004")
 ORIENTATION = ("ROBOT=gough_stewart", "--kind", "orientation", "--n1", "6", "--n2", "12")
@@ -68,6 +68,8 @@ SIZING = ("--metric", "peak_effort", "--dt", "0.004")
 REQUIRE = ("--require", "box:dx=0.05,dy=0.05,dz=0.05,z=-0.35", "--samples", "2")
 PRECISION = ("--metric", "stiffness_min", *REQUIRE)
 NSGA2 = ("--optimize", "nsga2", "--minimize", "moving_mass", "--generations", "1")
+GENERAL_MAP = ("ROBOT=five_bar", "--map", "xy", "--grid", "3")
+"""A precision map on the general (pose-by-pose) path: the one the workers share."""
 
 
 def _robot_options(family: str, param: str) -> dict[str, Arg]:
@@ -138,6 +140,15 @@ class RangeSpec(Kind):
             "empty": _tokens("empty", [["la=0.3:0.2"], ["la=0.2:0.2"]], refuse=False),
             "unknown": _tokens("unknown", [["no_such_key=0.1:0.2"]]),
         }
+
+
+def _worker_options(context: tuple[str, ...]) -> dict[str, Arg]:
+    """``--workers``, ``--scheduler``, ``--timeout`` (``context``: where the work is shared)."""
+    return {
+        "--workers": Arg(Count(), names=("workers",), context=context),
+        "--scheduler": Arg(Choice(), names=("scheduler",), context=context),
+        "--timeout": Arg(Real(sign="positive"), names=("timeout",), context=context),
+    }
 
 
 def _map_options() -> dict[str, Arg]:
@@ -247,8 +258,8 @@ CLI: list[Cli] = [
             "--criterion": Arg(
                 Choice(("rated_torque", "mass", "price")), names=("criterion",), context=CATALOG
             ),
-            "--show": Arg(Count(minimum=0), names=("show",), context=CATALOG),
-            "--settle": Arg(Real(sign="positive"), names=("settle", "band")),
+            "--top": Arg(Count(minimum=0), names=("top", "show"), context=CATALOG),
+            "--band": Arg(Real(sign="positive"), names=("band", "settle")),
             "--dwell": Arg(Real(sign="positive"), names=("dwell",), context=SETTLE),
             "--actuator-stiffness": Arg(
                 Vector((1, 3), inf_ok=True),
@@ -272,7 +283,7 @@ CLI: list[Cli] = [
             "--json": Arg(Flag()),
         },
         inputs={"trajectory.csv": fx.trajectory_csv, "catalog.yaml": fx.catalog_yaml},
-        # (--cycles 1e1 is accepted: ten cycles to size; --damping-ratio 0 with --settle: the
+        # (--cycles 1e1 is accepted: ten cycles to size; --damping-ratio 0 with --band: the
         # motion stretched until an undamped vibration stays in the band, ~15 s of CPU)
         timeout=60,
     ),
@@ -335,6 +346,7 @@ CLI: list[Cli] = [
             "--wrench": Arg(Vector((3, 6)), names=("wrench",)),
             "--loaded": Arg(Flag()),
             **_map_options(),
+            **_worker_options(GENERAL_MAP),
         },
         posed=True,
     ),
@@ -342,7 +354,7 @@ CLI: list[Cli] = [
         ("modes",),
         "delta",
         "la",
-        ["--pose", "0", "0", "-0.4", "--actuator-stiffness", "2e4", "--count", "3"],
+        ["--pose", "0", "0", "-0.4", "--actuator-stiffness", "2e4", "--top", "3"],
         {
             "--actuator-stiffness": Arg(
                 Vector((1, 3), inf_ok=True), names=("actuator-stiffness", "actuator_stiffness")
@@ -350,11 +362,12 @@ CLI: list[Cli] = [
             "--material": Arg(Choice(("steel", "aluminium", "carbon")), names=("material",)),
             "--rigid-links": Arg(Flag()),
             "--point": Arg(Vector(3), names=("point",)),
-            "--count": Arg(Count(), names=("count",)),
+            "--top": Arg(Count(), names=("top", "count")),
             "--gravity": Arg(Flag()),
             "--html": Arg(PathOut(".html", onto=("robot.urdf",)), names=("html",)),
             "--mode": Arg(Count(), names=("mode",), context=("--html", "{out.html}")),
             **_map_options(),
+            **_worker_options(GENERAL_MAP),
         },
         posed=True,
     ),
@@ -380,7 +393,7 @@ CLI: list[Cli] = [
                 names=("save-study", "save_study"),
             ),
             "--range": Arg(RangeSpec(), names=("range", "la")),
-            "--fix": Arg(Mapping({"lb": 0.4}), names=("fix", "param", "lb", "no_such_key")),
+            "--param": Arg(Mapping({"lb": 0.4}), names=("param", "fix", "lb", "no_such_key")),
             "--parametrisation": Arg(Choice(), names=("parametrisation",)),
             "--metric": Arg(Names(), names=("metric",)),
             "--constraint": Arg(Names(), names=("constraint",)),
@@ -457,7 +470,7 @@ CLI: list[Cli] = [
         ["-o", "{out.xml}"],
         {
             "--out": Arg(PathOut(".xml", onto=("robot.urdf",)), names=("-o", "output")),
-            "--timestep": Arg(Real(sign="positive"), names=("timestep",)),
+            "--step": Arg(Real(sign="positive"), names=("step", "timestep")),
             "--no-contacts": Arg(Flag()),
         },
     ),
@@ -511,16 +524,18 @@ CLI: list[Cli] = [
         ("identify",),
         "five_bar",
         "l1",
-        ["--data", "{data.csv}", "-o", "{out.urdf}"],
+        ["--measurements", "{data.csv}", "-o", "{out.urdf}"],
         {
-            "--data": Arg(PathIn(key="data.csv"), names=("data", "data.csv")),
+            "--measurements": Arg(
+                PathIn(key="data.csv"), names=("measurements", "data", "data.csv")
+            ),
             "--out": Arg(
                 PathOut(".urdf", onto=("robot.urdf", "data.csv", "other.csv")),
                 names=("-o", "output"),
             ),
             "--parameters": Arg(Names(), names=("parameters", "group")),
             "--cutoff": Arg(
-                Real(sign="positive"), names=("cutoff",), context=("--data", "{positions.csv}")
+                Real(sign="positive"), names=("cutoff",), context=("--measurements", "{positions.csv}")
             ),
             "--predict": Arg(PathIn(key="other.csv"), names=("predict", "other.csv")),
             "--csv": Arg(
@@ -587,6 +602,7 @@ CLI: list[Cli] = [
             "--field": Arg(Choice(), names=("field",), context=MAP),
             "--plot": Arg(PathOut(".png", onto=("robot.urdf",)), names=("plot", "figure")),
             "--csv": Arg(PathOut(".csv", onto=("robot.urdf",)), names=("csv",), context=MAP),
+            **_worker_options(MONTE_CARLO),
         },
         posed=True,
     ),

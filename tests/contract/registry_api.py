@@ -197,7 +197,7 @@ def _accuracy_map() -> Any:
 
     r = fx.robot("five_bar")
     P, shape = slice_grid(r.platform_placement(r.q_home).translation, "xy", 0.02, 3)
-    return accuracy_map(r, P, resolution=1e-4, shape=shape, progress_bar=False)
+    return accuracy_map(r, P, resolution=1e-4, shape=shape, progress=False)
 
 
 @functools.cache
@@ -341,7 +341,9 @@ EXEMPT: list[Exempt] = [
          "pkdyn.workspace.TranslationWorkspace.as_json", "pkdyn.library.Family.make_params",
          "pkdyn.library.Family.build_urdf", "pkdyn.library.Family.home",
          "pkdyn.library.Family.forward_position", "pkdyn.library.Family.configuration",
-         "pkdyn.library.Family.inverse_actuators"),
+         "pkdyn.library.Family.inverse_actuators", "pkdyn.library.Family.layout",
+         "pkdyn.calibration.CalibrationResult.provenance",
+         "pkdyn.precision.VibrationResult.animation"),
     *_ex(VIEW, *[f"{c}.{m}" for c in (
         "pkdyn.GeometryResult", "pkdyn.analysis.CollisionReport", "pkdyn.analysis.KinematicModels",
         "pkdyn.analysis.MapSamples", "pkdyn.analysis.MobilityResult",
@@ -464,6 +466,8 @@ API: list[Api] = [
     Api("pkdyn.Robot.mobility", {"q": Q(optional=True),
                                  "tol": Arg(Real(sign="positive"), 1e-9, names=("tol",))},
         obj=lambda s: s.robot),
+    Api("pkdyn.Robot.closure_tolerance",
+        {"rtol": Arg(Real(sign="positive"), 1e-10, names=("rtol",))}, obj=lambda s: s.robot),
     Api("pkdyn.Robot.mobility_split", {"q": Q(optional=True),
                                        "tol": Arg(Real(sign="positive"), 1e-9, names=("tol",))},
         obj=lambda s: s.robot),
@@ -661,7 +665,8 @@ API: list[Api] = [
         robot="five_bar"),
     Api("pkdyn.identification.identify",
         {"robot": ROBOT_R,
-         "data": Arg(Obj("Measurements"), Lazy(lambda s: _id_measurements()), names=("data",)),
+         "measurements": Arg(Obj("Measurements"), Lazy(lambda s: _id_measurements()),
+                             names=("measurements",)),
          "parameters": Arg(Names(optional=True), None, names=("parameters", "group")),
          "cutoff": Arg(Real("Hz", sign="positive", optional=True), None, names=("cutoff",)),
          "progress": PROGRESS(),
@@ -821,7 +826,7 @@ API: list[Api] = [
          "links": Arg(Flag(), True, names=("links",)),
          "point": Arg(Vector(3, optional=True), None, names=("point",)),
          "gravity": Arg(Flag(), False, names=("gravity",))}),
-    Api("pkdyn.precision.Modes.to_json", {"count": Arg(Count(optional=True), 3, names=("count",))},
+    Api("pkdyn.precision.Modes.to_json", {"top": Arg(Count(optional=True), 3, names=("top",))},
         obj=lambda s: _modes()),
     Api("pkdyn.precision.mode_trajectory",
         {"em": Arg(Obj("ElasticModel"), Lazy(lambda s: _elastic()), names=("em",)),
@@ -1308,7 +1313,7 @@ API: list[Api] = [
         obj=lambda s: pkdyn.analysis.distance_report(s.robot, s.robot.q_home)),
     Api("pkdyn.design.StudyResult.report", {"top": Arg(Count(), 5, names=("top",))}, robot=None,
         obj=lambda s: _study_result()),
-    Api("pkdyn.precision.Modes.table", {"count": Arg(Count(optional=True), 3, names=("count",))},
+    Api("pkdyn.precision.Modes.table", {"top": Arg(Count(optional=True), 3, names=("top",))},
         obj=lambda s: _modes()),
     Api("pkdyn.precision.ElasticModel.at", {"q": POSED_Q}, obj=lambda s: _elastic()),
     Api("pkdyn.precision.Section.inertia",
@@ -1353,7 +1358,7 @@ API: list[Api] = [
          "samples": Arg(Count(minimum=2), 5, names=("samples",)),
          "distribution": Arg(Choice(("uniform", "normal")), "uniform", names=("distribution",)),
          "seed": Arg(Count(minimum=0), 0, names=("seed",)),
-         "progress_bar": Arg(Flag(optional=True), False, names=("progress",))}),
+         "progress": Arg(Flag(optional=True), False, names=("progress",))}),
     Api("pkdyn.precision.accuracy_budget",
         {"robot": ROBOT_R, "q": POSED_Q,
          "model": Arg(Obj("ParameterModel"), Lazy(lambda s: _delta_model()), names=("model",)),
@@ -1370,7 +1375,7 @@ API: list[Api] = [
          "samples": Arg(Count(minimum=2), 3, names=("samples",)),
          "resolution": Arg(Vector((1, 2)), 1e-4, names=("resolution",)),
          "backlash": Arg(Vector((1, 2)), 0.0, names=("backlash",)),
-         "progress_bar": Arg(Flag(optional=True), False, names=("progress",))},
+         "progress": Arg(Flag(optional=True), False, names=("progress",))},
         robot="five_bar", nan_ok=True),  # (NaN where a cell is not evaluated: its status)
     Api("pkdyn.precision.vibration",
         {"robot": ROBOT_R,

@@ -168,3 +168,23 @@ def test_every_alias_runs_its_command(entry, alias):
         other = run_cli([*words[:-1], alias, *base], entry.timeout)
     assert plain.code == other.code == 0, (plain.err, other.err)
     assert plain.out == other.out
+
+
+def _parameters(name: str) -> set[str] | None:
+    """The parameter names of a registered callable (``None``: it takes ``**kwargs``)."""
+    obj = resolve_public(name)
+    sig = inspect.signature(obj.__init__ if inspect.isclass(obj) else obj)
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in sig.parameters.values()):
+        return None
+    return set(sig.parameters)
+
+
+@pytest.mark.parametrize("entry", [e for e in API if e.call is None], ids=lambda e: e.name)
+def test_every_registered_argument_is_a_parameter(entry):
+    """An argument renamed (``progress_bar`` -> ``progress``) is driven under its new name: the
+    former one, kept for one release, would only test the deprecation's forwarding."""
+    params = _parameters(entry.name)
+    if params is None:
+        return
+    gone = sorted(set(entry.args) - params)
+    assert not gone, f"{entry.name}: registered arguments it no longer takes: {gone}"

@@ -153,8 +153,8 @@ def test_contract_wrong_type_identification_api(five_bar):
 
     refused(lambda: Measurements("abc", [[0.1, 0.2]]), "t")
     refused(lambda: Measurements([0.0, 0.1], [[0.1, 0.2], [0.3]]), "qa")
-    refused(lambda: identify(five_bar, [[0.0, 1.0]]), "data")
-    refused(lambda: identify(five_bar, None), "data")
+    refused(lambda: identify(five_bar, [[0.0, 1.0]]), "measurements")
+    refused(lambda: identify(five_bar, None), "measurements")
     refused(lambda: parameter_set(five_bar, 3), "groups", "parameters")
 
 
@@ -219,7 +219,7 @@ def test_contract_empty_lists_and_files(tmp_path, five_bar):
     empty = tmp_path / "empty.csv"
     empty.write_text("")
     one_line(["size", "delta", "--trajectory", str(empty)], "empty.csv", "trajectory")
-    one_line(["identify", "five_bar", "--data", str(empty), "-o", str(tmp_path / "x.urdf")],
+    one_line(["identify", "five_bar", "--measurements", str(empty), "-o", str(tmp_path / "x.urdf")],
              "empty.csv")  # fmt: skip
 
 
@@ -235,7 +235,7 @@ def _tables(tmp_path: Path) -> dict[str, tuple[Path, list[str]]]:
     out = str(tmp_path / "o.urdf")
     return {
         "trajectory": (traj, ["size", "delta", "--trajectory", "{}", "--json"]),
-        "data": (data, ["identify", "five_bar", "--data", "{}", "-o", out, "--json"]),
+        "data": (data, ["identify", "five_bar", "--measurements", "{}", "-o", out, "--json"]),
         "measurements": (meas, ["calibrate", "delta", "--measurements", "{}", "-o", out,
                                 "--json"]),
     }  # fmt: skip
@@ -327,7 +327,7 @@ def test_contract_onto_input_predicted_efforts_onto_the_motion(tmp_path):
     data.write_bytes(fx.identification_csv())
     other.write_bytes(fx.identification_csv(9, 1.0))
     before = other.read_bytes()
-    argv = ["identify", "five_bar", "--data", str(data), "-o", str(tmp_path / "x.urdf"),
+    argv = ["identify", "five_bar", "--measurements", str(data), "-o", str(tmp_path / "x.urdf"),
             "--predict", str(other), "--csv", str(other)]  # fmt: skip
     one_line(argv, "o.csv", "csv")
     assert other.read_bytes() == before
@@ -387,9 +387,9 @@ def test_contract_zero_efforts_and_tiny_cutoff_in_identify(tmp_path):
     z.write_text("\n".join(zero) + "\n")
     p.write_bytes(fx.positions_csv())
     out = str(tmp_path / "x.urdf")
-    one_line(["identify", "five_bar", "--data", str(z), "-o", out], "tau", "zero.csv")
+    one_line(["identify", "five_bar", "--measurements", str(z), "-o", out], "tau", "zero.csv")
     for cutoff in ("1e-300", "1e-6", "5e-324"):
-        one_line(["identify", "five_bar", "--data", str(p), "-o", out, "--cutoff", cutoff],
+        one_line(["identify", "five_bar", "--measurements", str(p), "-o", out, "--cutoff", cutoff],
                  "cutoff")  # fmt: skip
     assert not Path(out).exists()
 
