@@ -185,14 +185,11 @@ def run_study(
         raise InvalidInputError(
             "study", f"expected a pkdyn.design.Study, got {type(study).__name__}"
         )
-    from pkdyn.design.executors import check_timeout
+    from pkdyn.executors import check_scheduler, check_timeout
     from pkdyn.files import output_target
 
     scheduler_timeout = check_timeout(scheduler_timeout, "scheduler_timeout")
-    if scheduler is not None and (not isinstance(scheduler, str) or not scheduler.strip()):
-        raise InvalidInputError(
-            "scheduler", f"expected an address (tcp://host:8786), got {scheduler!r:.40}"
-        )
+    check_scheduler(scheduler)
     if out is not None:
         output_target(out, "out")
     t0 = time.perf_counter()

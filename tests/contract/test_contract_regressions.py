@@ -439,3 +439,32 @@ def test_contract_wrong_type_result_given_to_a_plot():
     refused(lambda: plot_grid_map(3), "result")
     refused(lambda: plot_vibration("result.csv"), "result")
     refused(lambda: plot_mel_study({}), "study")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["stiffness", "delta", "--pose", "0", "0", "-0.4", "--actuator-stiffness", "2e4"],
+        ["accuracy", "delta", "--pose", "0", "0", "-0.4", "--samples", "4"],
+        ["modes", "five_bar", "--map", "xy", "--grid", "3", "--actuator-stiffness", "2e4"],
+    ],
+    ids=["stiffness", "accuracy", "modes-map"],
+)
+@pytest.mark.parametrize("address", ["", " "], ids=["empty", "blank"])
+def test_contract_empty_scheduler_address_is_refused(argv, address):
+    """``--scheduler ''`` ran on local processes (an empty address counted as none) where the
+    work is shared, and was ignored where it is not (a closed form)."""
+    one_line([*argv, "--scheduler", address], "--scheduler")
+
+
+def test_contract_empty_scheduler_address_is_refused_by_the_api(delta):
+    from pkdyn.executors import make_executor
+    from pkdyn.precision import monte_carlo
+
+    refused(lambda: make_executor(scheduler=""), "scheduler")
+    refused(lambda: make_executor(scheduler=8786), "scheduler")
+    from pkdyn.precision.parameters import parameter_model
+
+    q = fx.q_at("delta", tuple(DELTA_POSE))
+    model = parameter_model(delta, "auto")
+    refused(lambda: monte_carlo(delta, q, model, 1e-5, 4, scheduler="  "), "scheduler")
