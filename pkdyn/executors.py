@@ -92,9 +92,7 @@ def check_scheduler(address: Any, name: str = "scheduler") -> str | None:
 
     """
     if address is not None and (not isinstance(address, str) or not address.strip()):
-        raise InvalidInputError(
-            name, f"expected an address (tcp://host:8786), got {address!r:.40}"
-        )
+        raise InvalidInputError(name, f"expected an address (tcp://host:8786), got {address!r:.40}")
     return address
 
 

@@ -237,7 +237,7 @@ class Count(Kind):
             "huge": _tokens("huge", [["1000000000000"], ["99999999999999999999"]], refuse=False),
             "zero": _tokens("zero", [["0"]], refuse=self.minimum > 0),
             "negative": _tokens("negative", [["-1"], ["-1000000"]], refuse=self.minimum >= 0),
-            "fraction": _tokens("fraction", [["2.5"], ["1e1"]], refuse=False),
+            "fraction": _tokens("fraction", [["2.5"], ["2e0"]], refuse=False),
             "wrong_type": _tokens("wrong_type", [["abc"], [""], ["3x"]]),
         }
 

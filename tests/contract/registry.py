@@ -283,7 +283,7 @@ CLI: list[Cli] = [
             "--json": Arg(Flag()),
         },
         inputs={"trajectory.csv": fx.trajectory_csv, "catalog.yaml": fx.catalog_yaml},
-        # (--cycles 1e1 is accepted: ten cycles to size; --damping-ratio 0 with --band: the
+        # (--cycles 2e0 is accepted: two cycles to size; --damping-ratio 0 with --band: the
         # motion stretched until an undamped vibration stays in the band, ~15 s of CPU)
         timeout=60,
     ),
@@ -535,7 +535,9 @@ CLI: list[Cli] = [
             ),
             "--parameters": Arg(Names(), names=("parameters", "group")),
             "--cutoff": Arg(
-                Real(sign="positive"), names=("cutoff",), context=("--measurements", "{positions.csv}")
+                Real(sign="positive"),
+                names=("cutoff",),
+                context=("--measurements", "{positions.csv}"),
             ),
             "--predict": Arg(PathIn(key="other.csv"), names=("predict", "other.csv")),
             "--csv": Arg(
