@@ -344,8 +344,9 @@ def write_table(
         OutputError: The file cannot be written.
 
     """
-    from pkdyn.files import atomic_path, atomic_write
+    from pkdyn.files import atomic_path, atomic_write, output_target
 
+    output_target(path, "path")  # refused before any work: not a file name, a directory, ...
     values = np.asarray(data, dtype=float)
     if values.ndim != 2 or values.shape[1] != len(columns):
         raise InvalidInputError(

@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
+from pkdyn.model.arguments import public
 from pkdyn.model.platform_jacobian import platform_jacobian as _platform_jacobian
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
@@ -151,6 +152,7 @@ def robot_scales(robot: Robot, task_rows: np.ndarray) -> tuple[np.ndarray, np.nd
     return a_scale, x_scale
 
 
+@public
 def platform_jacobian(
     robot: Robot,
     q: np.ndarray | None,
@@ -537,6 +539,7 @@ def _relation_count(robot: Robot, rows: np.ndarray) -> int:
     return count
 
 
+@public
 def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> KinematicModels:
     """Parallel matrix ``A``, serial matrix ``B`` and Jacobians of a robot at ``q``.
 

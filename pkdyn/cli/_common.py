@@ -448,9 +448,10 @@ def worker_options(
 
 
 def check_worker_options(args: argparse.Namespace) -> None:
-    """``--workers`` and ``--timeout`` checked before any work."""
-    from pkdyn.executors import check_timeout
+    """``--workers``, ``--scheduler`` and ``--timeout`` checked before any work."""
+    from pkdyn.executors import check_scheduler, check_timeout
 
     check_timeout(args.timeout, "--timeout")
+    check_scheduler(args.scheduler, "--scheduler")
     if args.workers is not None and args.workers < 1:
         raise InvalidInputError("--workers", f"must be >= 1, got {args.workers}")

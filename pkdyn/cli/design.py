@@ -53,7 +53,7 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
     objectives += [f"max:{m}" for m in _flat(args.maximize)]
     if objectives:
         d["objectives"] = objectives
-    if args.require:
+    if args.require is not None:  # ("" is refused, not ignored)
         from pkdyn.design.requirement import Requirement
 
         samples = 5 if args.samples is None else args.samples
@@ -85,7 +85,7 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
             d["n"] = args.n
     if args.seed is not None:
         d["seed"] = args.seed
-    if args.parametrisation:
+    if args.parametrisation is not None:  # ("" is refused by the study, not ignored)
         d["parametrisation"] = args.parametrisation
     settings = {
         k: v

@@ -272,6 +272,10 @@ def _cmd_modes(args: argparse.Namespace) -> None:
     check_map_options(args)
     if args.top is not None and args.top < 1:
         raise InvalidInputError("--top", f"{args.top}: give 1 or more")
+    if args.mode < 1:
+        raise InvalidInputError(
+            "--mode", f"{args.mode} is not a mode number: they count from 1 (the lowest)"
+        )
     if args.map is not None:
         for option, value in (("--html", args.html), ("--gravity", args.gravity or None)):
             if value is not None:

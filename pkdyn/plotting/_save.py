@@ -27,6 +27,8 @@ def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int) -> None:
         OutputError: No or unknown extension, missing directory, or the file cannot be written.
 
     """
+    if not isinstance(path, str | os.PathLike):
+        raise OutputError(repr(path)[:80], "expected a file name (str or Path)")
     target = Path(path)
     fmt = target.suffix.lower().lstrip(".")
     supported = fig.canvas.get_supported_filetypes()
@@ -34,7 +36,7 @@ def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int) -> None:
         known = ", ".join(f".{k}" for k in sorted(supported))
         what = f"unknown figure format '{target.suffix}'" if fmt else "no file extension"
         raise OutputError(str(path), f"{what}: name the file with one of {known}")
-    with atomic_path(target) as tmp:
+    with atomic_path(path) as tmp:  # (the name as given: a trailing slash is refused)
         try:
             fig.savefig(tmp, dpi=dpi, format=fmt)
         except (OSError, ValueError) as err:

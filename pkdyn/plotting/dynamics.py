@@ -100,7 +100,13 @@ def plot_simulation(
     from matplotlib.figure import Figure
 
     from pkdyn.dynamics.simulation_output import simulation_columns
+    from pkdyn.exceptions import InvalidInputError
+    from pkdyn.inputs import instance
+    from solvers import ForwardResult
 
+    instance("result", result, ForwardResult, "a simulation (pkdyn.dynamics.simulate)")
+    if not hasattr(robot, "actuator_names"):
+        raise InvalidInputError("robot", f"expected the simulated Robot, got {robot!r:.40}")
     cols = simulation_columns(robot, result, readings=False)  # (joint coordinates)
     t = cols["t"]
     fig = Figure(figsize=(8.0, 11.0))

@@ -13,6 +13,7 @@ import numpy as np
 
 from pkdyn.analysis.maps import ConditioningMap
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.plotting._save import finish_figure
 from pkdyn.results import register_plot
 
@@ -28,6 +29,7 @@ _LABELS = {
 
 
 @register_plot(ConditioningMap)
+@public
 def plot_conditioning_map(
     cmap: ConditioningMap,
     field: str = "lci",
@@ -58,7 +60,10 @@ def plot_conditioning_map(
     from matplotlib import colors
     from matplotlib.figure import Figure
 
-    if field not in _LABELS:
+    from pkdyn.inputs import instance
+
+    instance("cmap", cmap, ConditioningMap, "a ConditioningMap (pkdyn.analysis.maps)")
+    if not isinstance(field, str) or field not in _LABELS:
         raise InvalidInputError("field", f"must be one of {', '.join(_LABELS)}, got {field!r}")
     if cmap.data is None:
         raise InvalidInputError("cmap", "the map holds no data (no sample was computed)")

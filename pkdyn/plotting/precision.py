@@ -92,7 +92,7 @@ def plot_grid_map(
     from matplotlib.colors import ListedColormap
 
     name = field if field is not None else next(iter(result.values), None)
-    if name is None or name not in result.values:
+    if not isinstance(name, str) or name not in result.values:
         raise InvalidInputError(
             "field", f"'{name}': this map holds {', '.join(result.values) or 'nothing'}"
         )
@@ -167,6 +167,11 @@ def plot_precision_map(
         The matplotlib Figure.
 
     """
+    from pkdyn.inputs import instance, positive
+
+    instance("pmap", pmap, PrecisionMap, "a PrecisionMap (pkdyn.precision.precision_map)")
+    if reference is not None:
+        reference = positive("reference", reference)
     return plot_grid_map(pmap, field, path=path, ax=ax, title=title, reference=reference)
 
 
@@ -196,6 +201,12 @@ def plot_modes(
         InvalidInputError: A rigid robot (no mode to draw).
 
     """
+    from pkdyn.inputs import instance, positive, vector
+
+    instance("result", result, Modes, "Modes (pkdyn.precision.modes)")
+    length = positive("length", length, "m")
+    if band is not None:
+        band = tuple(vector("band", band, 2, "Hz"))
     if result.frequencies.size == 0:
         raise InvalidInputError("modes", "the robot is rigid: there is no mode to draw")
     fig, ax = _axes(ax, (7.0, 3.5))

@@ -237,6 +237,12 @@ def plot_mel_study(
     """
     from matplotlib.figure import Figure
 
+    if not study or not all(isinstance(ow, OrientationWorkspace) for ow in study.values()):
+        from pkdyn.exceptions import InvalidInputError
+
+        raise InvalidInputError(
+            "study", "expected a MEL study: limits name -> OrientationWorkspace (mel_study)"
+        )
     n = len(study)
     fig = Figure(figsize=(13.0, 4.4 * n))
     for i, (name, ow) in enumerate(study.items()):

@@ -31,6 +31,7 @@ import pinocchio as pin
 import scipy.linalg
 
 from pkdyn.exceptions import InvalidInputError, PkdynError, SingularConfigurationError
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.precision._format import chop
 from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
@@ -111,8 +112,10 @@ class Modes(Flagged, Result):
         self.top = value
 
     def _shown(self, top: int | None) -> int:
+        from pkdyn.inputs import count as whole
+
         n = self.frequencies.size
-        c = self.top if top is None else top
+        c = self.top if top is None else whole("top", top, 1)
         return n if c is None else min(int(c), n)
 
     @renamed_keyword("count", "top")
@@ -201,6 +204,7 @@ def _eigen(red: Reduced, M: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
 
 
 @one_blas_thread
+@public
 def modes(
     robot: Robot | ElasticModel,
     q: Sequence[float] | np.ndarray,
@@ -359,12 +363,19 @@ def mode_trajectory(
         InvalidInputError: No such mode, or a non-positive amplitude, period or count.
 
     """
+    from pkdyn.inputs import count, instance, positive
+
+    instance("em", em, ElasticModel, "an ElasticModel (pkdyn.precision.elastic_model)")
+    instance("result", result, Modes, "Modes (pkdyn.precision.modes)")
     n = result.frequencies.size
-    if not 0 <= index < n:
+    index = count("index", index, 0)
+    if not index < n:
         raise InvalidInputError("mode", f"{index + 1} is not a mode number: 1 to {n}")
-    for what, value in (("period", period), ("cycles", cycles), ("samples", samples)):
-        if not (np.isfinite(value) and value > 0):
-            raise InvalidInputError(what, f"must be > 0, got {value}")
+    period = positive("period", period, "s")
+    cycles = count("cycles", cycles, 1, 1000)
+    samples = count("samples", samples, 2, 10_000)
+    if amplitude is not None:
+        amplitude = positive("amplitude", amplitude, "m")
     if result.elastic is not None and result.elastic.robot.nq == em.robot.nq:
         em = result.elastic  # (the model at the modes' configuration)
     r = em.robot

@@ -44,6 +44,7 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import TASK_NAMES, check_assembled
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision._format import chop
@@ -286,7 +287,10 @@ def transport(K: np.ndarray, r: np.ndarray) -> np.ndarray:
         ``T d``).
 
     """
-    r = np.asarray(r, dtype=float)
+    from pkdyn.inputs import matrix, vector
+
+    K = matrix("K", K, 6, 6, bound=np.inf)
+    r = vector("r", r, 3, "m")
     T_inv = np.eye(6)
     T_inv[:3, 3:] = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
     return np.asarray(T_inv.T @ K @ T_inv)
@@ -471,6 +475,7 @@ def prepared(
 
 
 @one_blas_thread
+@public
 def stiffness(
     robot: Robot | ElasticModel,
     q: Sequence[float] | np.ndarray,
@@ -550,6 +555,7 @@ def _frame(em: ElasticModel, q: np.ndarray) -> tuple[int, pin.SE3]:
     return fid, pin.SE3(r.data.oMf[fid])
 
 
+@public
 def stiffness_json(robot: Robot, q: np.ndarray, **kwargs: Any) -> dict[str, Any]:
     """JSON-ready :func:`stiffness` for the CLI (keys of :meth:`Stiffness.to_json`)."""
     return stiffness(robot, q, **kwargs).to_json()

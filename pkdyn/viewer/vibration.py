@@ -6,6 +6,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.precision.equilibrium import reassembled
 from pkdyn.precision.vibration_result import VibrationResult
 from pkdyn.viewer.scene import Scene
@@ -31,6 +32,9 @@ def exaggerated(
         InvalidInputError: A result without its deformation, or a non-positive scale.
 
     """
+    from pkdyn.inputs import instance
+
+    instance("result", result, VibrationResult, "a VibrationResult (pkdyn.precision.vibration)")
     em = result.elastic
     shown = result.animation()
     if em is None or shown is None:
@@ -53,6 +57,7 @@ def exaggerated(
     return np.asarray(t_coarse), Q, float(scale)
 
 
+@public
 def animate_vibration(
     result: VibrationResult,
     *,
