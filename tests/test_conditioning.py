@@ -290,6 +290,49 @@ def test_refined_forces_are_the_exact_constrained_dynamics(robots):
     assert np.max(np.abs(J @ a + gamma)) < 1e-2 * np.max(np.abs(J @ a_prox + gamma))
 
 
+def test_capped_iterations_report_the_closures_acceleration_residual(robots):
+    """An evaluation whose proximal iterations hit their cap is left as it is only when
+    ``mu * relative_residual`` (what Pinocchio reports, an infinity norm in its contact
+    frames) is within the solver's accuracy (``ForwardDynamics._capped``): that figure is the
+    closures' acceleration residual ``J a + gamma`` of the acceleration returned, here measured
+    on the same points with the closure rows' own world-frame Jacobian and drift (no Baumgarte
+    gains): its largest point norm lies between the figure and sqrt(3) times it, to
+    round-off, near the Delta's crossing, where both are far above round-off, and where they
+    are not."""
+    robot = robots["delta"]
+    model = robot.model
+    J0 = robot.closure_set.jacobian(model.createData(), robot.q_home)
+    N = null_space(J0)
+    v0 = N @ (N.T @ np.random.default_rng(0).standard_normal(robot.nv))
+    v0 *= 0.5 / np.max(np.abs(v0))
+    path = SolverDynamics(model, robot.constraint_models).simulate(
+        robot.q_home, v0, 0.41, 1e-4, record_every=1
+    )
+    raw = SolverDynamics(model, robot.constraint_models, baumgarte=(0.0, 0.0))
+    rows = raw._pin_rows  # the points of Pinocchio's constraint models, world frame
+    assert all(cm.type == pin.ContactType.CONTACT_3D for cm in raw.constraint_models)
+    prox, data = raw.prox, model.createData()
+    zero = np.zeros(robot.nv)
+    seen = {"above": 0, "within": 0}
+    for q, v in zip(path.q[-60:], path.v[-60:], strict=True):
+        a = pin.constraintDynamics(
+            model, raw.data, q, v, zero, raw.constraint_models, raw.constraint_datas, prox
+        )
+        if prox.iter < prox.max_iter:
+            continue
+        pin.forwardKinematics(model, data, q, v, zero)
+        pin.computeJointJacobians(model, data, q)
+        rows.calc(data)
+        gamma = rows.drift(data)
+        r = (rows.jacobian(data) @ a + gamma).reshape(-1, 3)
+        largest = float(np.max(np.linalg.norm(r, axis=1)))
+        reported = prox.mu * prox.relative_residual
+        noise = 1e-12 * float(np.max(np.abs(gamma)))  # round-off of the solve
+        assert reported * (1 - 1e-3) - noise <= largest <= math.sqrt(3) * reported * 1.001 + noise
+        seen["above" if reported > prox.absolute_accuracy else "within"] += 1
+    assert seen["above"] and seen["within"]
+
+
 # --------------------------------------------------------------------------- public boundary
 
 
