@@ -5,16 +5,21 @@ Runs every benchmark module of this directory that exists (each exposes ``rows()
 call them against the raw-Pinocchio floor: inverse dynamics, simulation, assembly, numeric
 workspace), ``geometry`` (closed forms, assembly / FK and IK against raw Pinocchio),
 ``dynamics`` (forward step and inverse dynamics against raw Pinocchio), ``constraints`` (a
-planar loop closed by hinges against the same loop by points), ``vs_mujoco`` (forward step and
-inverse dynamics against MuJoCo, agreement), ``workspace`` (workspace throughput, when
+planar loop closed by hinges against the same loop by points), ``vs_mujoco`` (forward step
+and inverse dynamics against MuJoCo, agreement), ``workspace`` (workspace throughput, when
 present), ``actuation_map`` (closed-loop legs, loading public models), ``cli_latency`` (command
-start-up against the bare imports), ``identification`` (a Delta identified from 1e5 samples)
-and ``design`` (design-study throughput and a 10,000-design study: several minutes;
-``PKDYN_BENCH_DESIGNS`` makes it smaller), ``calibration`` (geometric calibration of a
-Gough-Stewart from 100 poses, a Delta from 40, pose sensitivities), ``vibration`` (the modal
-method's cycles per second, the multibody simulation, the settling search). Figures are medians
-of repeated runs; ratios are medians of ratios measured on alternating batches (CPU time of the
-process), so that they hold under a varying load.
+start-up against the bare imports), ``identification`` (a Delta identified from 1e5 samples),
+``design`` (design studies: per design against its arithmetic, 1 and 2 workers and a 2-worker
+Dask cluster, the user's 10,000-design study and a 100,000-design scaling study: long;
+``PKDYN_BENCH_DESIGNS`` and ``PKDYN_BENCH_SCALING_DESIGNS`` make them smaller), ``scaling``
+(the URDF+ ladder and legged robots: set-up, per-sample inverse dynamics, forward step),
+``precision_speed`` (Monte Carlo, compliant links, precision design metrics), ``calibration``
+(geometric calibration of a Gough-Stewart from 100 poses, a Delta from 40, pose
+sensitivities), ``vibration`` (the modal method's cycles per second, the multibody simulation,
+the settling search). Figures are medians of repeated runs; ratios are medians of ratios
+measured on alternating batches (CPU time of the process), so that they hold under a varying
+load. ``python bench/run.py MODULE ...`` runs the modules named and replaces their sections of
+``bench/results.md``, keeping the others.
 """
 
 from __future__ import annotations
@@ -44,8 +49,21 @@ MODULES = (
     ("workspace", "Workspace throughput"),
     ("actuation_map", "Closed-loop legs (actuation maps) and loading public models"),
     ("precision", "Precision: stiffness and frequency maps, closed forms and general path"),
+    (
+        "precision_speed",
+        "Precision at the speed of its arithmetic: Monte Carlo, compliant links, design metrics "
+        "(issue 37)",
+    ),
     ("vibration", "Vibration along a motion: the modal method against the multibody simulation"),
-    ("design", "Design studies: designs/s on 1 and 2 workers, a 10,000-design Delta study"),
+    (
+        "design",
+        "Design studies: per design against its arithmetic, 1 and 2 workers, Dask, the "
+        "10,000-design Delta study (issue 37)",
+    ),
+    (
+        "scaling",
+        "Cost that grows like the robot: the URDF+ ladder and legged robots (issue 36 item 5)",
+    ),
     ("sizing", "Sizing: fastest cycle (toppra) and motor selection"),
     (
         "identification",
@@ -111,13 +129,28 @@ def _cpu() -> str:
     return platform.processor() or "cpu"
 
 
+def _sections(text: str) -> dict[str, str]:
+    """The ``## title`` sections of a results file, by title (each with its lines)."""
+    out: dict[str, str] = {}
+    parts = text.split("\n## ")
+    for part in parts[1:]:
+        title, _, body = part.partition("\n")
+        out[title.strip()] = "## " + title + "\n" + body.rstrip("\n")
+    return out
+
+
 def main() -> None:
+    """Run every module (or those named on the command line: their sections are replaced)."""
     sys.path.insert(0, str(HERE))
+    only = set(sys.argv[1:])
+    unknown = only - {name for name, _ in MODULES}
+    if unknown:
+        raise SystemExit(f"unknown benchmark module(s): {', '.join(sorted(unknown))}")
     start = time.perf_counter()
     load0 = os.getloadavg()[0]
     sections = []
     for name, title in MODULES:
-        if not (HERE / f"{name}.py").is_file():
+        if not (HERE / f"{name}.py").is_file() or (only and name not in only):
             continue
         t0 = time.perf_counter()
         try:
@@ -126,6 +159,31 @@ def main() -> None:
             rows = [(f"`bench/{name}.py` failed", f"{type(err).__name__}: {err}", "-")]
         sections.append((title, rows, time.perf_counter() - t0))
         print(f"{name}: {time.perf_counter() - t0:.0f} s", file=sys.stderr)
+    if only and OUT.is_file():  # replace these modules' sections in the existing results
+        old = OUT.read_text()
+        head, sep, _ = old.partition("\n## ")
+        kept = _sections(old)
+        for title, rows, seconds in sections:
+            body = [f"## {title}", "", f"({seconds:.0f} s; load average {os.getloadavg()[0]:.1f})"]
+            body += ["", "| benchmark | figure | target |", "|---|---|---|"]
+            body += ["| " + " | ".join(r) + " |" for r in rows]
+            kept[title] = "\n".join(body)
+        order = [t for _, t in MODULES]
+        titles = sorted(kept, key=lambda t: order.index(t) if t in order else len(order))
+        notes = kept.pop("Notes", None)
+        stamp = (
+            f"Sections re-run on {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC (load average "
+            f"{load0:.1f} at the start): {', '.join(t for t, _, _ in sections)}."
+        )
+        head = "\n".join(
+            line for line in head.rstrip("\n").split("\n") if not line.startswith("Sections re-run")
+        )
+        text = head + "\n" + stamp + "\n\n" + "\n\n".join(kept[t] for t in titles if t != "Notes")
+        text += "\n\n" + (notes if notes else NOTES.rstrip("\n")) + "\n"
+        with atomic_write(OUT) as fh:
+            fh.write(text)
+        print(text)
+        return
     lines = [
         "# pkdyn benchmark results",
         "",

@@ -16,14 +16,27 @@ on first use (as an optional viewer would be), so the direction of imports stays
 
 from __future__ import annotations
 
+import functools
 import importlib
 import math
 import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
-__all__ = ["Result", "deprecated", "deprecated_alias", "jsonable", "plotter_for", "register_plot"]
+from pkdyn.exceptions import InvalidInputError
+
+__all__ = [
+    "Result",
+    "deprecated",
+    "deprecated_alias",
+    "jsonable",
+    "plotter_for",
+    "register_plot",
+    "renamed_keyword",
+]
+
+F = TypeVar("F", bound=Callable[..., Any])
 
 _PLOTTERS: dict[type, Callable[..., Any]] = {}
 
@@ -156,3 +169,45 @@ def deprecated_alias(old: str, new: str) -> Any:
     alias.__name__ = old
     alias.__doc__ = f"Deprecated alias of :meth:`{new}` (kept for one release)."
     return alias
+
+
+def renamed_keyword(old: str, new: str) -> Callable[[F], F]:
+    """A function's keyword ``old`` still accepted for one release, as ``new`` (the one spelling).
+
+    ``@renamed_keyword("progress_bar", "progress")`` on a function whose parameter is now
+    ``progress``: a call with ``progress_bar=`` warns (``DeprecationWarning``, naming the
+    function and the new spelling) and passes the value as ``progress``; positional calls are
+    unchanged (the parameter keeps its place).
+
+    Args:
+        old: The former keyword.
+        new: The parameter's name now.
+
+    Returns:
+        The decorator.
+
+    Raises:
+        InvalidInputError: (from the decorated function) both spellings given.
+
+    """
+
+    def deco(fn: F) -> F:
+        @functools.wraps(fn)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            if old in kwargs:
+                if new in kwargs:
+                    raise InvalidInputError(old, f"give {new} only ({old} is its former name)")
+                warnings.warn(
+                    f"{fn.__qualname__}({old}=...) is deprecated and will be removed in the next "
+                    f"release: use {new}=",
+                    DeprecationWarning,
+                    stacklevel=2,
+                )
+                kwargs[new] = kwargs.pop(old)
+            return fn(*args, **kwargs)
+
+        renamed = {**getattr(fn, "renamed_keywords", {}), old: new}
+        wrapper.renamed_keywords = renamed  # type: ignore[attr-defined]
+        return wrapper  # type: ignore[return-value]
+
+    return deco

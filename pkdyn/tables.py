@@ -1,7 +1,7 @@
 """Tables in: the one reader of the numeric tables pkdyn reads (CSV and Parquet).
 
 Trajectories (``size --trajectory``), calibration measurements (``calibrate --measurements``)
-and identification motions (``identify --data``) are tables of numbers with named columns.
+and identification motions (``identify --measurements``) are tables of numbers with named columns.
 :func:`read_table` reads them all, with the same rules and the same one-line messages, each
 naming the file, the line (CSV) or row (Parquet) and the column at fault:
 

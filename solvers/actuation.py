@@ -5,11 +5,14 @@ Joint friction, dampers and springs are :mod:`solvers.passive`.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
-__all__ = ["Actuation", "Drives"]
+__all__ = ["Actuation", "Drives", "TorqueFn"]
+
+TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+"""Actuator efforts ``tau(t [s], q (nq,), v (nv,)) -> (n_a,)`` [N m or N]."""
 
 
 class Actuation:

@@ -54,6 +54,7 @@ import numpy as np
 import pinocchio as pin
 
 from solvers.planar import PLANAR_TOL, plane_normal
+from solvers.scratch import scratch_data
 
 __all__ = ["CLOSURE_KINDS", "HINGE_ARM", "Closure", "ClosureRows", "support_mask"]
 
@@ -229,7 +230,7 @@ class ClosureRows:
     def _normals(self) -> list[np.ndarray | None]:
         """The plane normal of each closure whose out-of-plane rows vanish by construction."""
         model = self.model
-        data = model.createData()
+        data = scratch_data(model)
         q0 = pin.neutral(model)
         pin.computeJointJacobians(model, data, q0)
         scale = 1.0 + max((float(np.linalg.norm(M.translation)) for M in data.oMi), default=0.0)
@@ -287,7 +288,7 @@ class ClosureRows:
 
     def _along(self, c: Closure, axis: np.ndarray, n: np.ndarray) -> bool:
         """Whether a hinge's axis is parallel to the plane normal ``n`` (world, at neutral)."""
-        data = self.model.createData()
+        data = scratch_data(self.model)
         pin.forwardKinematics(self.model, data, pin.neutral(self.model))
         a = (data.oMi[c.joint1] * c.placement1).rotation @ axis
         return float(np.linalg.norm(np.cross(a, n))) <= PLANAR_TOL

@@ -50,17 +50,17 @@ residual per step; measured against the raw Euler step in ``bench/dynamics.py``.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
 
+from solvers.actuation import TorqueFn
+from solvers.constraints import ConstraintSet
 from solvers.coupled_dynamics import CoupledDynamics
+from solvers.passive import PassiveForces
 
-if TYPE_CHECKING:
-    from solvers.forward_dynamics import ForwardDynamics, TorqueFn
-
-__all__ = ["CALIBRATION_PERIOD", "MAX_CORRECTIONS", "ProjectedEulerStep"]
+__all__ = ["CALIBRATION_PERIOD", "MAX_CORRECTIONS", "ProjectedEulerStep", "SteppedDynamics"]
 
 MAX_CORRECTIONS = 4
 """Newton corrections of one step before the full projection takes over."""
@@ -71,6 +71,61 @@ CALIBRATION_PERIOD = 64
 _POINT = pin.ContactType.CONTACT_3D
 _FALLBACK = 1e-2
 """Correction [m or rad] above which Newton steps are not trusted: full projection."""
+
+
+class SteppedDynamics(Protocol):
+    """What the step reads of the dynamics it drives (a :class:`~solvers.ForwardDynamics`)."""
+
+    @property
+    def model(self) -> pin.Model:
+        """The kinematic tree."""
+
+    @property
+    def constraints(self) -> ConstraintSet:
+        """The constraint set (its coupling rows are corrected with the closures)."""
+
+    @property
+    def constraint_models(self) -> pin.StdVec_RigidConstraintModel:
+        """Pinocchio's constraint models of the closures, with their Baumgarte gains."""
+
+    @property
+    def n_pin(self) -> int:
+        """Rows of Pinocchio's constraint models."""
+
+    @property
+    def prox(self) -> pin.ProximalSettings:
+        """Settings of Pinocchio's proximal solver."""
+
+    @property
+    def passive(self) -> PassiveForces | None:
+        """Springs, dampers and friction (``None``: none)."""
+
+    @property
+    def project_tol(self) -> float:
+        """Closure residual the step ends within [m or rad]."""
+
+    @property
+    def _pd(self) -> tuple[float, float]:
+        """The Baumgarte gains ``(Kp [1/s^2], Kd [1/s])`` in force."""
+
+    @property
+    def _auto_gains(self) -> bool:
+        """The gains follow the step (:meth:`_euler_gains`)."""
+
+    @property
+    def _gains_step(self) -> float:
+        """The step [s] the automatic gains were set for."""
+
+    def _euler_gains(self, h: float) -> None:
+        """Set the automatic gains for the step ``h`` [s]."""
+
+    def _generalized(
+        self, t: float, q: np.ndarray, v: np.ndarray, tau_fn: TorqueFn | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Actuator efforts (n_a,) and their generalized force (nv,)."""
+
+    def _project_state(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(q, v)`` projected onto the closures (the full projection)."""
 
 
 class ProjectedEulerStep:
@@ -91,7 +146,7 @@ class ProjectedEulerStep:
 
     """
 
-    def __init__(self, fd: ForwardDynamics) -> None:
+    def __init__(self, fd: SteppedDynamics) -> None:
         model = fd.model
         self.fd = fd
         self.data = model.createData()

@@ -62,13 +62,13 @@ from __future__ import annotations
 
 import math
 from array import array
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
 
 from solvers import numerics
-from solvers.actuation import Actuation
+from solvers.actuation import Actuation, TorqueFn
 from solvers.closure import Closure, ClosureRows
 from solvers.conditioning import (
     LEAVE,
@@ -98,9 +98,6 @@ __all__ = [
     "TorqueFn",
     "simulate",
 ]
-
-TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
-"""Actuator efforts ``tau(t [s], q (nq,), v (nv,)) -> (n_a,)`` [N m or N]."""
 
 _ARG1 = pin.ArgumentPosition.ARG1
 _NO_Q = np.zeros(0)  # (closure rows need no configuration beyond the kinematics in the data)
@@ -179,6 +176,9 @@ class ForwardDynamics:
             a joint from the origin at the neutral configuration, at least 0.1 m).
         closure_rank: Generic rank of the rigid closures (default: their rank at the first
             state evaluated, by the cut-off rule at :data:`solvers.conditioning.SINGULAR`).
+        datas: Two Pinocchio datas of ``model`` to compute in (the dynamics', the
+            kinematics'), kept by the caller between runs (their size grows like nv^3);
+            default: new ones.
 
     Attributes:
         conditioning: The conditioning ``kappa`` at the last check (1 without rigid closures);
@@ -210,6 +210,7 @@ class ForwardDynamics:
         max_substeps: int = 100_000,
         max_speed: float = 1e4,
         couplings: Sequence[Coupling] | ConstraintSet = (),
+        datas: tuple[pin.Data, pin.Data] | None = None,
         length_scale: float | None = None,
         closure_rank: int | None = None,
     ) -> None:
@@ -223,8 +224,10 @@ class ForwardDynamics:
         self.steps = 0
         self.rejected = 0
         self.model = model
-        self.data = model.createData()
-        self._kin = model.createData()  # kinematics for residuals, energies, projections
+        if datas is None:
+            datas = (model.createData(), model.createData())
+        self.data = datas[0]
+        self._kin = datas[1]  # kinematics for residuals, energies, projections
         self.kinetic_energy = KineticEnergy(model)
         self.actuation = actuation if actuation is not None else Actuation([])
         if self.actuation.n and int(self.actuation.v_index.max()) >= model.nv:

@@ -262,6 +262,15 @@ class InverseDynamics:
         """The former name of :attr:`constraints` (kept for one release)."""
         return self.constraints
 
+    def reset(self) -> None:
+        """Forget the last solve: the next one starts as a new solver's (no QP warm start).
+
+        A solver kept for many trajectories (its Pinocchio datas and kinematic buffers made
+        once) gives, after :meth:`reset`, the efforts a new one gives.
+        """
+        self._qp = None
+        self._qp_rank = -1
+
     def passive_forces(self, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
         """Generalized forces (nv,) of everything but the actuators, closures and wrenches.
 

@@ -109,6 +109,15 @@ class PassiveForces:
 
     """
 
+    _data: pin.Data | None
+
+    @property
+    def data(self) -> pin.Data:
+        """The Pinocchio data of the two-frame springs' kinematics (made on first use)."""
+        if self._data is None:
+            self._data = self.model.createData()
+        return self._data
+
     def __init__(
         self,
         model: pin.Model,
@@ -121,7 +130,7 @@ class PassiveForces:
     ) -> None:
         nv = model.nv
         self.model = model
-        self.data = model.createData()
+        self._data = None  # made on first use (nv^3 in size)
         self.stiffness = _per_v(stiffness, nv, "stiffness")
         self.damping = _per_v(damping, nv, "damping")
         self.friction = _per_v(friction, nv, "friction")
@@ -151,9 +160,7 @@ class PassiveForces:
         self._fext = pin.StdVec_Force()
         for _ in range(model.njoints):
             self._fext.append(pin.Force.Zero())
-        self._free_model = pin.Model(model)  # gravity-free copy: rnea gives -J^T F
-        self._free_model.gravity = pin.Motion.Zero()
-        self._free_data = self._free_model.createData()
+        self._free: tuple[pin.Model, pin.Data] | None = None  # gravity-free copy, on first use
         # joint springs: vector-space coordinates (nq == nv: q - q_r) vectorised, the others
         # (spherical, free-flyer, planar, unbounded revolute) through pin.difference and
         # pin.dDifference of the whole model, restricted to their velocity coordinates
@@ -296,7 +303,11 @@ class PassiveForces:
         fext = self._fext
         for j, w in wrenches.items():
             fext[j] = pin.Force(np.array(w))
-        f -= pin.rnea(self._free_model, self._free_data, q, self._zero, self._zero, fext)
+        if self._free is None:  # gravity-free copy: rnea gives -J^T F
+            free = pin.Model(self.model)
+            free.gravity = pin.Motion.Zero()
+            self._free = (free, free.createData())
+        f -= pin.rnea(self._free[0], self._free[1], q, self._zero, self._zero, fext)
         for j in wrenches:
             fext[j] = self._force_zero
         return energy

@@ -41,7 +41,16 @@ def plane_normal(columns: np.ndarray, tol: float = PLANAR_TOL) -> np.ndarray | N
         return None
     k = int(np.argmax(big))
     n = ang[:, k] / np.linalg.norm(ang[:, k])
-    off_axis = np.linalg.norm(np.cross(ang.T, n), axis=1)
+    a = ang.T  # (np.cross's products and differences, without its overhead)
+    cross = np.stack(
+        [
+            a[:, 1] * n[2] - a[:, 2] * n[1],
+            a[:, 2] * n[0] - a[:, 0] * n[2],
+            a[:, 0] * n[1] - a[:, 1] * n[0],
+        ],
+        axis=1,
+    )
+    off_axis = np.linalg.norm(cross, axis=1)
     off_plane = np.abs(n @ columns[:3])
     if np.any(off_axis > tol * norms) or np.any(off_plane > tol * norms):
         return None

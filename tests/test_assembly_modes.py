@@ -92,7 +92,7 @@ def test_issue_example_fk_of_ik_at_055(capsys):
     """`pkdyn ik delta --pose 0 0 -0.55` then `fk` used to put the nacelle above the base."""
     assert main(["ik", "delta", "--pose", "0", "0", "-0.55", "--json"]) == 0
     qa = json.loads(capsys.readouterr().out)["qa"]
-    assert main(["fk", "delta", "--q", *map(str, qa), "--json"]) == 0
+    assert main(["fk", "delta", "--qa", *map(str, qa), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     np.testing.assert_allclose(out["position"], [0.0, 0.0, -0.55], atol=1e-9)
 

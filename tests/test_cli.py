@@ -31,7 +31,7 @@ def test_info_json_keys(capsys):
 
 @pytest.mark.parametrize(
     ("inverse", "forward", "option"),
-    [("inverse-geometry", "forward-geometry", "--qa"), ("ik", "fk", "--q")],
+    [("inverse-geometry", "forward-geometry", "--qa"), ("ik", "fk", "--qa")],
 )
 def test_ik_then_fk_round_trip(capsys, inverse, forward, option):
     code, out, _ = run(capsys, inverse, "delta", "--pose", "0.05", "-0.02", "-0.4", "--json")
@@ -68,9 +68,9 @@ def test_urdf_to_file_loads(tmp_path, capsys):
         (["info", "delta", "--param", "la=-0.2"], "la"),
         (["ik", "delta", "--pose", "1", "2", "3"], "out of reach"),
         (["ik", "delta", "--pose", "1", "2"], "pose"),
-        (["fk", "delta", "--q", "0.1", "nan", "0.2"], "nan"),
-        (["fk", "delta", "--q", "0.1", "0.2"], "3 values"),
-        (["fk", "gough_stewart", "--q", "0.4", "0.4", "0.4", "0.4", "0.4", "0.4"], "leg1"),
+        (["fk", "delta", "--qa", "0.1", "nan", "0.2"], "nan"),
+        (["fk", "delta", "--qa", "0.1", "0.2"], "3 values"),
+        (["fk", "gough_stewart", "--qa", "0.4", "0.4", "0.4", "0.4", "0.4", "0.4"], "leg1"),
         (["urdf", "delta", "-o", "/nonexistent/dir/x.urdf"], "x.urdf"),
     ],
 )
@@ -115,7 +115,7 @@ def test_jacobian_json_matches_fk_differences(capsys):
     """J from the CLI against central differences of the direct geometric model."""
     robot = pkdyn.load("delta", geometry=False)
     qa = pkdyn.inverse_geometry(robot, [0.03, -0.02, -0.38]).qa
-    code, out, _ = run(capsys, "jacobian", "delta", "--q", *map(str, qa.tolist()), "--json")
+    code, out, _ = run(capsys, "jacobian", "delta", "--qa", *map(str, qa.tolist()), "--json")
     assert code == 0
     J = np.array(json.loads(out)["J"])
     assert {"A", "B"} <= set(json.loads(out))

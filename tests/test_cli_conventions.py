@@ -70,7 +70,7 @@ def test_param_errors_are_one_line(argv, culprit, capsys):
     [
         ([], "see pkdyn --help"),
         (["info"], "see pkdyn info --help"),
-        (["fk", "delta", "--q", "x"], "see pkdyn forward-geometry --help"),
+        (["fk", "delta", "--qa", "x"], "see pkdyn forward-geometry --help"),
         (["nosuchcommand"], "see pkdyn --help"),
         (["tripod", "scenario", "--cycles", "x"], "see pkdyn tripod scenario --help"),
     ],

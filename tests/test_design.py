@@ -234,7 +234,7 @@ def test_executors_give_identical_tables(tmp_path):
         pooled = run_study(s, tmp_path / "pool.csv", executor=ex)
     a = (tmp_path / "serial.csv").read_text()
     assert a == (tmp_path / "pool.csv").read_text()
-    assert len(serial.table) == 8 and serial.best() == pooled.best()
+    assert len(serial.designs) == 8 and serial.best() == pooled.best()
     assert serial.designs.feasible.any()
 
 
@@ -323,7 +323,7 @@ def test_nsga2_is_reproducible_and_improves(tmp_path):
     a = run_study(s, tmp_path / "a.csv", workers=1)
     run_study(s, tmp_path / "b.csv", workers=1)
     assert (tmp_path / "a.csv").read_text() == (tmp_path / "b.csv").read_text()
-    assert len(a.table) == 24
+    assert len(a.designs) == 24
     assert len(a.pareto()) >= 1 and a.best() is not None
     # resume from a partial file made of the first generation
     text = (tmp_path / "a.csv").read_text().splitlines(keepends=True)
@@ -415,7 +415,7 @@ def test_cli_bad_input(tmp_path, capsys, args, match):
 
 def test_cli_study_with_plot_and_urdf(tmp_path, capsys):
     code = main(
-        ["design", "delta", "--range", "la=0.18:0.26", "lb=0.36:0.5", "--fix", "z_home=-0.35",
+        ["design", "delta", "--range", "la=0.18:0.26", "lb=0.36:0.5", "--param", "z_home=-0.35",
          "--require", CYL, "--payload", "0.5", "--cycle-time", "0.6", "--dt", "0.01",
          "--constraint", "inv_cond_min>=0.2", "--minimize", "peak_effort", "--maximize",
          "inv_cond_min", "--n", "6", "--workers", "1", "--out", str(tmp_path / "s.csv"),
@@ -449,7 +449,7 @@ def test_any_registered_family():
         field = next(f.name for f in dataclasses.fields(default) if "mass" in f.name)
         m0 = getattr(default, field)
         s = Study(name, {field: (m0, 2 * m0)}, metrics=["moving_mass"], sampler="grid", n=2)
-        t = run_study(s, workers=1).table
+        t = run_study(s, workers=1).designs
         assert t.feasible.all(), (name, [r.reason for r in t.rows])
         mass = t.column("moving_mass")
         assert mass[1] - mass[0] >= m0 - 1e-12, name  # at least one body carries it

@@ -306,7 +306,7 @@ def test_demo_prints_the_sizing_table():
     )
     out = proc.stdout
     assert "DELTA 580" in out and "motor1" in out and "power balance" in out
-    assert "0.50s" in out
+    assert "\n0.5 " in out and "peak effort [N m]" in out  # (the grid's row of 0.5 s)
 
 
 # --------------------------------------------------------------------------- redundant actuation

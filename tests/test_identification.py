@@ -174,7 +174,7 @@ def test_cli_identify_writes_a_description_that_loads_and_sizes(five_bar_run, tm
     tau2 = predict_efforts(robot, ps, ps.nominal, t2, qa2, qd2, qdd2)
     other = _csv(tmp_path / "other.csv", t2, robot, qa2, qd2, qdd2, tau2)
     out, pred = tmp_path / "identified.urdf", tmp_path / "pred.csv"
-    args = ["identify", "five_bar", "--data", str(data), "-o", str(out), "--json"]
+    args = ["identify", "five_bar", "--measurements", str(data), "-o", str(out), "--json"]
     assert main([*args, "--predict", str(other), "--csv", str(pred)]) == 0
     payload = json.loads(capsys.readouterr().out)
     assert payload["prediction"]["samples"] == t2.size
@@ -203,7 +203,7 @@ def _error(capsys, argv):
 def test_cli_refuses_bad_input(five_bar_run, tmp_path, capsys):
     robot, ps, (t, qa, qd, qdd), tau, meas, noise = five_bar_run
     out = str(tmp_path / "x.urdf")
-    run = ["identify", "five_bar", "-o", out, "--data"]
+    run = ["identify", "five_bar", "-o", out, "--measurements"]
     f = _csv(tmp_path / "a.csv", t, robot, qa, qd, qdd)
     assert "missing columns tau_motor1, tau_motor2" in _error(capsys, [*run, str(f)])
     f = _csv(tmp_path / "b.csv", t, robot, qa, qd, qdd, meas, extra="tau_motor3")

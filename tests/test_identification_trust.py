@@ -59,7 +59,9 @@ def test_positions_in_degrees_are_refused_naming_the_line(five_bar, tmp_path, ca
     cols = ["t", *(f"qa_{n}" for n in names), *(f"tau_{n}" for n in names)]
     path = tmp_path / "deg.csv"
     write_table(path, cols, np.column_stack([t, np.rad2deg(qa), tau]))
-    assert main(["identify", "five_bar", "--data", str(path), "-o", str(tmp_path / "x")]) == 1
+    assert (
+        main(["identify", "five_bar", "--measurements", str(path), "-o", str(tmp_path / "x")]) == 1
+    )
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "line 2, column qa_motor1" in err
     assert (
@@ -151,3 +153,26 @@ def test_fork_map_orders_results_and_raises_what_a_worker_raised():
         fork_map(_square, 3, [1, "boom"])
     with pytest.raises(RuntimeError, match="ended without a result"):
         fork_map(_square, 3, ["die"])
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
+def test_the_motion_is_assembled_relative_to_the_robots_size(scale):
+    """The closures of the recorded motion are solved to 1e-10 of the robot's size, whatever it.
+
+    A five-bar of millimetres, of decimetres and of a hundred metres follows the same actuator
+    motion; its closure residual, divided by ``min(1 m, its size)``, stays below 1e-10 (an
+    absolute 1e-10 m left the millimetre robot assembled to 2e-8 of its size).
+    """
+    from pkdyn.identification.motion import ASSEMBLY_RTOL, MotionSampler
+
+    sizes = {"d": 0.2, "l1": 0.2, "l2": 0.3, "link_radius": 0.01}
+    robot = pkdyn.load("five_bar", geometry=False, **{k: v * scale for k, v in sizes.items()})
+    t = np.linspace(0.0, 1.0, 101)
+    wave = np.column_stack([np.sin(2 * np.pi * t), np.sin(4 * np.pi * t)])
+    qa = robot.q_home[robot.actuated_q] + 0.2 * wave
+    Q, _ = MotionSampler(robot).configurations(qa, t, qd=np.gradient(qa, t, axis=0))
+    gap = max(float(np.abs(robot.constraints.residual(robot.data, q)).max()) for q in Q)
+    assert gap <= ASSEMBLY_RTOL * min(1.0, robot.length_scale)
+    # the same angles at every size (the mechanism is similar): the motion does not depend on it
+    reference = MotionSampler(pkdyn.load("five_bar", geometry=False)).configurations(qa, t)[0]
+    np.testing.assert_allclose(Q, reference, rtol=0.0, atol=1e-8)

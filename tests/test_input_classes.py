@@ -66,7 +66,7 @@ CLI_NUMBERS = {
     ),
     "walker tilt": (["tripod", "scenario", "--no-machining", "--tilt", "1e9"], "tilt"),
     "walker step": (["tripod", "scenario", "--no-machining", "--step", "1e308", "0"], "step dx"),
-    "mjcf infinite timestep": (["mjcf", "five_bar", "--timestep", "inf"], "timestep"),
+    "mjcf infinite step": (["mjcf", "five_bar", "--step", "inf"], "step"),
     "fastest dt": (["size", "delta", "--fastest", "--dt", "1e-300"], "dt"),
 }
 

@@ -14,6 +14,7 @@ ROOT = Path(__file__).resolve().parents[1]
 RANK = {
     "exceptions": 0,
     "workers": 1,
+    "executors": 2,
     "progress": 1,
     "files": 1,
     "inputs": 1,

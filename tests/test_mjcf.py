@@ -284,7 +284,7 @@ def test_unsupported_joint_names_it():
 
 def test_cli_writes_a_loadable_file(tmp_path, capsys):
     out = tmp_path / "five_bar.xml"
-    assert main(["mjcf", "five_bar", "-o", str(out), "--timestep", "0.0005"]) == 0
+    assert main(["mjcf", "five_bar", "-o", str(out), "--step", "0.0005"]) == 0
     model = mujoco.MjModel.from_xml_path(str(out))
     assert model.opt.timestep == 0.0005 and model.neq == 2
     assert main(["mjcf", "five_bar", "--no-contacts"]) == 0

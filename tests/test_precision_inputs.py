@@ -154,7 +154,7 @@ NUMBERS = {
         [*S[:2], "--qa", *["0.5"] * 3, *K, "--loaded", "--wrench", "0", "0", "1e9"],
         "unstable",
     ),
-    "modes count 0": ([*M, *K, "--count", "0"], "--count"),
+    "modes top 0": ([*M, *K, "--top", "0"], "--top"),
     "modes stiffness 1e308": ([*M, "--actuator-stiffness", "1e308"], "beyond any plausible"),
     "modes mode 99": ([*M, *K, "--mode", "99", "--html", "m.html"], "not a mode number"),
     "resolution negative": ([*A, "--resolution", "-1"], "negative"),
@@ -482,7 +482,7 @@ def test_measurement_files_are_refused_in_one_line(capsys, files, tmp_path, key,
 @pytest.mark.parametrize("key, needle", MOTION_FILES.values(), ids=list(MOTION_FILES))
 def test_motion_files_are_refused_in_one_line(capsys, files, tmp_path, key, needle):
     out = tmp_path / "id.urdf"
-    argv = ["identify", "five_bar", "--data", _path(files, key), "-o", str(out)]
+    argv = ["identify", "five_bar", "--measurements", _path(files, key), "-o", str(out)]
     assert needle in _one_line(capsys, argv)
     assert not out.exists()
 
@@ -509,7 +509,7 @@ def test_absurd_groups_and_identify_options(capsys, files, tmp_path):
     out = str(tmp_path / "x.urdf")
     argv = ["calibrate", "delta", "--measurements", files["group 1e300"], "-o", out]
     assert "group: line 2" in _one_line(capsys, [*argv, "--implicit", "point"])
-    run = ["identify", "five_bar", "--data", files["motion"], "-o", out]
+    run = ["identify", "five_bar", "--measurements", files["motion"], "-o", out]
     for extra, needle in (
         (["--cutoff", "-1"], "cutoff"),
         (["--cutoff", "nan"], "cutoff"),
@@ -552,11 +552,11 @@ def test_outputs_are_checked_before_the_work(capsys, files, target, needle, comm
     t = files["dir"] if target == "DIR" else target
     argv = {
         "calibrate -o": ["calibrate", "delta", "--measurements", files["two poses"], "-o", t],
-        "identify -o": ["identify", "five_bar", "--data", files["motion still"], "-o", t],
+        "identify -o": ["identify", "five_bar", "--measurements", files["motion still"], "-o", t],
         "identify --csv": [
             "identify",
             "five_bar",
-            "--data",
+            "--measurements",
             files["motion still"],
             "-o",
             os.path.join(files["dir"], "i.urdf"),
@@ -628,7 +628,7 @@ def test_ctrl_c_during_the_work_exits_130_without_traceback(
             "--model",
             "placements",
         ],
-        "identify": ["identify", "five_bar", "--data", motion, "-o", str(out)],
+        "identify": ["identify", "five_bar", "--measurements", motion, "-o", str(out)],
         "accuracy map": ["accuracy", "delta", "--map", "xy", "--grid", "201"],
         "monte carlo": ["accuracy", "delta", "--qa", "0", "0", "0", "--samples", "100000"],
     }[command]
@@ -666,7 +666,7 @@ def test_ctrl_c_stops_identification_workers(tmp_path, files):
     exe = str(Path(sys.executable).with_name("pkdyn"))
     out = tmp_path / "w.urdf"
     proc = subprocess.Popen(
-        [exe, "identify", "five_bar", "--data", str(motion), "-o", str(out)],
+        [exe, "identify", "five_bar", "--measurements", str(motion), "-o", str(out)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

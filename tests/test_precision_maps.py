@@ -116,7 +116,7 @@ def test_cli_stiffness_and_modes(capsys, tmp_path):
         list(S.translation.stiffness)
     )
     html = tmp_path / "mode.html"
-    assert main(["modes", *base, "--count", "2", "--json", "--html", str(html)]) == 0
+    assert main(["modes", *base, "--top", "2", "--json", "--html", str(html)]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["frequencies"] == pytest.approx(list(modes(robot, q, 2e4).frequencies[:2]))
     assert out["internal_mobilities"] == 6 and html.stat().st_size > 1e5

@@ -84,3 +84,40 @@ def test_identification_checks_the_joint_coordinates_of_the_readings(geared):
     r[:, 0] = 3.17  # ...but as a reading: 1.01 x 3.17 + 0.02 = 3.2217 beyond it
     with pytest.raises(InvalidInputError, match="sample 0, column qa_motor1: 3.2217 rad lies"):
         identify(robot, Measurements(t, r, 0 * r, 0 * r, 0 * r))
+
+
+@pytest.mark.parametrize("command", ["size", "simulate"])
+def test_csv_files_written_hold_readings(geared, tmp_path, capsys, command):
+    """``size --csv`` (and ``simulate --csv``) write readings: read back, the same motion."""
+    from pkdyn.cli import main
+    from pkdyn.tables import read_table
+
+    robot, text = geared
+    urdf = tmp_path / "geared.urdf"
+    urdf.write_text(text)
+    first, again = tmp_path / "first.csv", tmp_path / "again.csv"
+    if command == "size":
+        assert main(["size", str(urdf), "--trajectory", "sine", "--csv", str(first)]) == 0
+    else:
+        args = ["simulate", str(urdf), "--duration", "0.2", "--dt", "0.01", "--v0", "0.5", "-0.5"]
+        assert main([*args, "--csv", str(first)]) == 0
+    cols = [f"qa_{a}" for a in robot.actuator_names]
+    table = read_table(first, "sample")
+    r = table.select(cols)
+    q = robot.joint_coordinates(r)
+    # the readings are those of the motion's joint coordinates
+    if command == "size":
+        from pkdyn.dynamics.trajectory import named_trajectory
+
+        motion = named_trajectory(robot, "sine", check_speeds=False).qa
+        np.testing.assert_allclose(q, motion, rtol=0.0, atol=1e-9)
+    else:  # (the simulation starts at home)
+        np.testing.assert_allclose(q[0], robot.q_home[robot.actuated_q], rtol=0.0, atol=1e-9)
+    assert not np.allclose(r[0], q[0], atol=1e-3)  # (the gain and offset show)
+    assert main(["size", str(urdf), "--trajectory", str(first), "--csv", str(again)]) == 0
+    capsys.readouterr()
+    back = read_table(again, "sample").select(cols)
+    # the same motion: the readings read back are the readings written (to the inverse
+    # geometry's tolerance and the file's 10 digits), not off by the gain
+    np.testing.assert_allclose(back, r, rtol=0.0, atol=1e-8)
+    assert np.ptp(r[:, 0]) > 1e-3  # (a motion, not a pose held)

@@ -104,8 +104,8 @@ EVERY_DESIGN_FAILS = {
     "negative step": (["--dt", "-0.001"], "dt: sample period must be > 0 s"),
     "step longer than a move": (["--dt", "0.2"], "dt: 0.2 s samples the"),
     "NaN depth": (["--depth", "nan"], "--depth: is nan"),
-    "NaN fixed parameter": (["--fix", "lb=nan"], "parameter 'lb': fixed at nan"),
-    "infinite fixed parameter": (["--fix", "lb=inf"], "parameter 'lb': fixed at inf"),
+    "NaN fixed parameter": (["--param", "lb=nan"], "parameter 'lb': fixed at nan"),
+    "infinite fixed parameter": (["--param", "lb=inf"], "parameter 'lb': fixed at inf"),
     "parametrisation missing its variables": (
         ["--parametrisation", "clavel"],
         "parameter 'r': the parametrisation 'clavel' needs it",

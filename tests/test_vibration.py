@@ -6,8 +6,11 @@
 - the modal method against the multibody simulation of the elastic model on the DELTA 580's
   Adept cycle (realistic stiffness: 2e4 N m/rad servos, rigid links: 187 to 200 Hz at home,
   91 to 157 Hz with the 0.5 kg payload at the pick points), within 2 % in peak deviation,
-  residual amplitude and settling time, and the same motion in MuJoCo (the elastic model
-  exported to MJCF with position servos) within 2 %;
+  residual amplitude and settling time (the same motion in MuJoCo: ``test_vibration_mjcf.py``);
+- the Delta's closed forms (the nacelle's coordinates) against the general path: the same
+  modes along the path (1e-9), the same response as the general path at 101 poses (within
+  its interpolation: 0.5 %, 1 %, 0.2 %), the display's deformation closure-consistent and
+  moving the platform by the deviation;
 - the free vibration after a stop (undamped multibody run) against the frequency
   :func:`pkdyn.precision.modes` gives about the loaded equilibrium (FFT peak, 1e-4), and the
   run's energy balance;
@@ -113,7 +116,7 @@ def test_shaping_on_the_delta_removes_the_targeted_mode():
 @pytest.fixture(scope="module")
 def delta_adept():
     robot = pkdyn.load("delta")
-    opts = dict(cycle_time=0.5, payload=0.5, actuator_stiffness=2e4, band=2e-5, dwell=0.3)
+    opts = dict(cycle_time=0.5, payload=0.5, actuator_stiffness=2e4, band=2e-5, dwell=0.2)
     return robot, opts, vibration(robot, "adept", **opts)
 
 
@@ -129,31 +132,93 @@ def test_modal_agrees_with_the_multibody_simulation(delta_adept):
     assert [m.mode for m in modal.dominant_modes[:2]] == [m.mode for m in mb.dominant_modes[:2]]
 
 
-def test_mujoco_runs_the_exported_elastic_model_alike(delta_adept):
-    pytest.importorskip("mujoco")
+def test_closed_form_is_the_general_modal_method():
+    """The Delta's closed forms: the same modes as the general path, the same response."""
     import dataclasses
 
-    from pkdyn.dynamics.payload import with_payload
-    from pkdyn.dynamics.trajectory import named_task
+    from pkdyn.dynamics.trajectory import map_task_trajectory, named_task
+    from pkdyn.precision.condensation import constraint_rows
+    from pkdyn.precision.vibration import analyse, prepare
     from pkdyn.precision.vibration_command import command
-    from pkdyn.precision.vibration_figures import figures
-    from pkdyn.precision.vibration_mjcf import simulate_mujoco
-    from pkdyn.precision.vibration_multibody import equilibrium
+    from pkdyn.precision.vibration_modal import path_modes
 
-    robot, opts, modal = delta_adept
-    em = elastic_model(robot, 2e4)
+    robot = pkdyn.load("delta")
+    em = elastic_model(robot, [2e4, 3e4, 2.5e4])
     p = np.zeros(3)
-    emL = dataclasses.replace(em, robot=with_payload(em.robot, 0.5))
     cmd = command(em, named_task(robot, "adept", cycle_time=0.5), 0.5, p)
-    q0 = equilibrium(emL, cmd.q[0], cmd.tau_ff[0], p)
-    run = simulate_mujoco(emL, cmd, modal.damping.actuator, q0, p, 0.35, timestep=5e-5)
-    rate = np.gradient(run.deviation, run.t, axis=0)
-    fig = figures(
-        run.t, run.deviation, rate, modal.static_deflection, cmd.duration, 0.3, 2e-5, 0.35
-    )
-    assert fig.peak_deviation == pytest.approx(modal.peak_deviation, rel=0.02)
-    assert fig.residual_amplitude == pytest.approx(modal.residual_amplitude, rel=0.02)
-    assert fig.settling_time == pytest.approx(modal.settling_time, rel=0.02)
+    st = prepare(robot, em, cmd, p, 0.5, "none", None, None, 2e-5, 0.3, None, None)
+    closed = analyse(st, cmd, "modal")
+    assert st.arms is not None and cmd.mapped is None  # (no pose solved)
+    cmd.mapped = map_task_trajectory(robot, cmd.task, check_speeds=False)  # (the general path)
+    # its modes at poses along the path are the general ones (frequencies, platform motions)
+    samples = np.array([0, 77, 250, 401, 500])
+    poses = st.arms.poses(cmd.task.pose[samples, :3])
+    pm = st.arms.path_modes(poses, samples)
+    general = path_modes(st.elastic, cmd.joint.q, samples, p)
+    assert pm.frequencies == pytest.approx(general.frequencies, rel=1e-9)
+    for a, b in zip(pm.platform, general.platform, strict=True):  # (a mode's sign is arbitrary)
+        gap = np.minimum(np.abs(a - b).max(axis=1), np.abs(a + b).max(axis=1))
+        assert gap.max() <= 1e-9 * np.abs(a).max()
+    # the response: the general path's at many poses (in the tree's coordinates)
+    general = analyse(dataclasses.replace(st, arms=None, poses=101), cmd, "modal")
+    assert closed.peak_deviation == pytest.approx(general.peak_deviation, rel=5e-3)
+    assert closed.residual_amplitude == pytest.approx(general.residual_amplitude, rel=1e-2)
+    assert closed.settling_time == pytest.approx(general.settling_time, rel=2e-3)
+    assert closed.static_deflection == pytest.approx(general.static_deflection, rel=1e-9, abs=1e-15)
+    assert closed.internal == general.internal == 6
+    # the display's deformation, mapped on demand: closure-consistent, it moves the platform
+    # by the deviation
+    from pkdyn.model.platform_jacobian import platform_jacobian
+
+    t_c, Q, U = closed.animation()
+    for k in (0, 150, 300, 450, 700):
+        assert np.abs(constraint_rows(st.elastic, Q[k]) @ U[k]).max() <= 1e-9 * np.abs(U[k]).max()
+        d = platform_jacobian(st.elastic.robot, Q[k], point=p)[:3] @ U[k]
+        i = int(np.argmin(np.abs(closed.t - t_c[k])))
+        assert d == pytest.approx(closed.deviation[i], rel=1e-6, abs=1e-6 * closed.peak_deviation)
+
+
+def test_closed_form_joint_trajectory_is_the_mechanisms():
+    """The Delta's joints along a motion in closed form: assembled, on the path, no bar spin."""
+    import pinocchio as pin
+
+    from pkdyn.dynamics.delta import DeltaDynamics
+    from pkdyn.dynamics.inverse import inverse_dynamics
+    from pkdyn.dynamics.trajectory import named_task
+    from pkdyn.precision.vibration_closed_form import arm_motion, delta_joint_trajectory
+    from solvers import numerics
+
+    robot = pkdyn.load("delta", geometry=False)
+    task = named_task(robot, "adept", cycle_time=0.5)
+    dd = DeltaDynamics(robot)
+    arms = arm_motion(dd, task)
+    jt = delta_joint_trajectory(robot, dd, task, arms)
+    model, data, cs, fid = robot.model, robot.data, robot.constraints, robot.platform_frame
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    for k in range(0, task.t.size, 50):
+        q, v, a = jt.q[k], jt.v[k], jt.a[k]
+        assert np.abs(cs.residual(data, q)).max() < 1e-12  # closures [m]
+        Jc = cs.jacobian(data, q)
+        assert np.abs(Jc @ v).max() < 1e-12 and np.abs(Jc @ a + cs.drift(data, q, v)).max() < 1e-9
+        pin.forwardKinematics(model, data, q, v, a)
+        M = pin.updateFramePlacement(model, data, fid)
+        assert M.translation == pytest.approx(task.pose[k, :3], abs=1e-12)
+        assert pin.getFrameVelocity(model, data, fid, lwa).linear == pytest.approx(
+            task.pose_d[k, :3], abs=1e-12
+        )
+        acc = pin.getFrameClassicalAcceleration(model, data, fid, lwa).linear
+        assert acc == pytest.approx(task.pose_dd[k, :3], abs=1e-9)
+        # the internal mobilities (the bars' spins): zero momentum, their dynamics satisfied
+        S = np.zeros((3, model.nv))
+        S[np.arange(3), robot.actuated_v] = 1.0
+        N = numerics.null_space(np.vstack([Jc, S]), 1e-9, 1.0)
+        assert N.shape[1] == 6
+        Mq = pin.crba(model, data, q)
+        Mq = np.triu(Mq) + np.triu(Mq, 1).T
+        assert np.abs(N.T @ Mq @ v).max() < 1e-12
+        assert np.abs(N.T @ pin.rnea(model, data, q, v, a)).max() < 1e-9
+    # the rigid efforts along it are the closed form's
+    assert inverse_dynamics(robot, jt).tau == pytest.approx(arms.tau, abs=1e-9)
 
 
 def test_static_deflection_is_the_loaded_stiffness_deflection(delta_adept):

@@ -1,4 +1,4 @@
-"""``pkdyn vibration``, ``size --fastest --settle`` and the vibration design metrics, as a user
+"""``pkdyn vibration``, ``size --fastest --band`` and the vibration design metrics, as a user
 runs them: outputs, JSON keys and units, one-line errors naming the culprit."""
 
 from __future__ import annotations
@@ -138,7 +138,7 @@ def test_size_fastest_settle_compares_shaped_and_unshaped(tmp_path, capsys):
 
     robot = slider(tmp_path, effort=12.0)
     urdf = tmp_path / "slider.urdf"
-    argv = ["size", str(urdf), "--trajectory", "p2p", "--fastest", "--settle", "5e-4",
+    argv = ["size", str(urdf), "--trajectory", "p2p", "--fastest", "--band", "5e-4",
             "--dwell", "0.05", "--actuator-stiffness", str((2 * np.pi * 20) ** 2),
             "--damping-ratio", "0.05", "--json"]  # fmt: skip
     assert main(argv) == 0
@@ -171,10 +171,10 @@ def test_size_fastest_settle_compares_shaped_and_unshaped(tmp_path, capsys):
 
 
 def test_settle_options_need_fastest(capsys):
-    assert main(["size", "delta", "--settle", "1e-4"]) == 1
+    assert main(["size", "delta", "--band", "1e-4"]) == 1
     assert "--fastest" in capsys.readouterr().err
     assert main(["size", "delta", "--dwell", "0.2"]) == 1
-    assert "--settle" in capsys.readouterr().err
+    assert "--band" in capsys.readouterr().err
 
 
 def test_design_metrics_trade_stiffness_for_settling(tmp_path):

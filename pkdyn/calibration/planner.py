@@ -39,8 +39,8 @@ from pkdyn.model.assembly import forward_geometry
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel, parameter_model
 from pkdyn.precision.perturbation import perturbed
-from pkdyn.progress import progress
-from pkdyn.results import Result, deprecated
+from pkdyn.progress import progress as progress_bar
+from pkdyn.results import Result, deprecated, renamed_keyword
 from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
 
@@ -166,6 +166,7 @@ def _positions(
 
 
 @one_blas_thread
+@renamed_keyword("progress_bar", "progress")
 def plan_calibration(
     robot: Robot,
     target: float,
@@ -178,7 +179,7 @@ def plan_calibration(
     candidates: int = 150,
     validation: int = 40,
     seed: int = 0,
-    progress_bar: bool | None = None,
+    progress: bool | None = None,
 ) -> CalibrationPlan:
     """Simulate calibrations to find the pose count and measurement noise a target needs.
 
@@ -197,7 +198,8 @@ def plan_calibration(
         candidates: Candidate poses drawn in the workspace.
         validation: Candidates kept apart to validate (not measured).
         seed: Random seed.
-        progress_bar: Force the progress bar on or off.
+        progress: Force the progress bar on or off (``progress_bar``: its former name, kept
+            for one release).
 
     Returns:
         The plan.
@@ -242,7 +244,7 @@ def plan_calibration(
     t = pm.tolerances(float(tol[0]), float(tol[1])) if tol.size == 2 and pm.size != 2 else tol
     if t.shape != (pm.size,):
         raise InvalidInputError("tolerance", f"give (length, angle) or {pm.size} values")
-    qs = candidate_poses(robot, candidates + validation, seed=seed, progress_bar=progress_bar)
+    qs = candidate_poses(robot, candidates + validation, seed=seed, progress=progress)
     if len(qs) < validation + 4:
         raise InvalidInputError(
             "candidates", f"only {len(qs)} poses found inside the workspace; lower validation"
@@ -272,7 +274,7 @@ def plan_calibration(
     worst = np.zeros_like(rms)
     before = []
     done = 0
-    for _ in progress(range(trials), "calibration plan", "robot", progress_bar):
+    for _ in progress_bar(range(trials), "calibration plan", "robot", progress):
         p_true = rng.uniform(-1.0, 1.0, pm.size) * t
         try:
             truth = perturbed(robot, pm, p_true)

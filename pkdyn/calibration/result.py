@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from pkdyn.calibration.writer import calibrated_urdf
 from pkdyn.identifiability import Identifiability
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel
@@ -205,10 +206,20 @@ class CalibrationResult(Result):
 
     # -- output --------------------------------------------------------------------------
 
+    def provenance(self) -> str:
+        """One line: the calibration the calibrated description comes from (its comment)."""
+        return (
+            f"calibrated by pkdyn from {self.calibration_rows.size} poses: {self.model.kind} "
+            f"model, {self.estimated.size} parameters identified; RMS error "
+            + (
+                f"{self.before.position_rms:.3g} m -> {self.after.position_rms:.3g} m"
+                if self.before.joint_rms == 0.0
+                else f"(passive joints) {self.before.joint_rms:.3g} -> {self.after.joint_rms:.3g}"
+            )
+        )
+
     def urdf(self, xml: str | None = None) -> str:
         """The calibrated description (:func:`pkdyn.calibration.writer.calibrated_urdf`)."""
-        from pkdyn.calibration.writer import calibrated_urdf
-
         return calibrated_urdf(self, xml)
 
     def write_urdf(self, path: str | os.PathLike[str], xml: str | None = None) -> str:

@@ -33,7 +33,8 @@ from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel
 from pkdyn.precision.sensitivity import pose_sensitivity
-from pkdyn.progress import progress
+from pkdyn.progress import progress as progress_bar
+from pkdyn.results import renamed_keyword
 from pkdyn.threads import one_blas_thread
 from pkdyn.workspace.limits import REACHABLE
 from pkdyn.workspace.numeric import configuration_violation
@@ -41,13 +42,14 @@ from pkdyn.workspace.numeric import configuration_violation
 __all__ = ["Selection", "candidate_poses", "design_matrix", "select_poses"]
 
 
+@renamed_keyword("progress_bar", "progress")
 def candidate_poses(
     robot: Robot,
     count: int = 200,
     spread: float = 0.25,
     rotation: float = 0.2,
     seed: int = 0,
-    progress_bar: bool | None = None,
+    progress: bool | None = None,
 ) -> list[np.ndarray]:
     """Assembled configurations at random platform poses inside the workspace.
 
@@ -58,7 +60,8 @@ def candidate_poses(
             (:attr:`pkdyn.Robot.length_scale`).
         rotation: Half-width of each controlled rotation [rad].
         seed: Random seed.
-        progress_bar: Force the progress bar on or off.
+        progress: Force the progress bar on or off (``progress_bar``: its former name, kept
+            for one release).
 
     Returns:
         Configurations (nq,) each; fewer than ``count`` when 20 draws per wanted pose did not
@@ -86,8 +89,8 @@ def candidate_poses(
     half = spread * robot.length_scale
     out: list[np.ndarray] = []
     q_prev = robot.q_home
-    for _ in progress(
-        range(20 * int(count)), "candidate poses", "draw", progress_bar, min_items=500
+    for _ in progress_bar(
+        range(20 * int(count)), "candidate poses", "draw", progress, min_items=500
     ):
         if len(out) >= count:
             break

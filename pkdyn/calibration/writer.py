@@ -17,11 +17,11 @@ from __future__ import annotations
 import io
 import os
 import xml.etree.ElementTree as ET
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.calibration.result import CalibrationResult
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.identification.writer import source_urdf
 from pkdyn.model.description import NAMESPACE
@@ -29,9 +29,39 @@ from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel
 from pkdyn.results import deprecated
 
-__all__ = ["calibrated_urdf", "joint_coordinates", "source_urdf", "write_calibrated"]
+__all__ = ["Calibrated", "calibrated_urdf", "joint_coordinates", "source_urdf", "write_calibrated"]
 
 _NS = "{" + NAMESPACE + "}"
+
+
+class Calibrated(Protocol):
+    """What the writer reads of a calibration (a :class:`~.result.CalibrationResult`)."""
+
+    @property
+    def nominal(self) -> Robot:
+        """The nominal robot (its description is edited)."""
+
+    @property
+    def robot(self) -> Robot:
+        """The calibrated robot (its home configuration is recorded)."""
+
+    @property
+    def model(self) -> ParameterModel:
+        """The parameter model."""
+
+    @property
+    def p(self) -> np.ndarray:
+        """Identified parameter errors (n_par,) [m, rad, -]."""
+
+    @property
+    def gains(self) -> np.ndarray:
+        """Identified relative actuator gains (n_a,)."""
+
+    def provenance(self) -> str:
+        """One line: where the calibrated description comes from (a comment of the file)."""
+
+    def write_urdf(self, path: str | os.PathLike[str], xml: str | None = None) -> str:
+        """Write the calibrated description (:func:`calibrated_urdf`) to ``path``."""
 
 
 def _origin_of(el: ET.Element) -> tuple[ET.Element, pin.SE3]:
@@ -52,7 +82,7 @@ def _write(el: ET.Element, M: pin.SE3) -> None:
     el.set("rpy", " ".join(repr(float(v)) for v in pin.rpy.matrixToRpy(M.rotation)))
 
 
-def calibrated_urdf(result: CalibrationResult, xml: str | None = None) -> str:
+def calibrated_urdf(result: Calibrated, xml: str | None = None) -> str:
     """The calibrated pkdyn URDF (module docstring).
 
     Args:
@@ -114,16 +144,7 @@ def calibrated_urdf(result: CalibrationResult, xml: str | None = None) -> str:
         root.remove(el)
     home = ET.SubElement(root, _NS + "home")
     home.set("q", " ".join(repr(float(v)) for v in result.robot.q_home))
-    note = (
-        f" calibrated by pkdyn from {result.calibration_rows.size} poses: {model.kind} model, "
-        f"{result.estimated.size} parameters identified; RMS error "
-        + (
-            f"{result.before.position_rms:.3g} m -> {result.after.position_rms:.3g} m "
-            if result.before.joint_rms == 0.0
-            else f"(passive joints) {result.before.joint_rms:.3g} -> {result.after.joint_rms:.3g} "
-        )
-    )
-    root.insert(0, ET.Comment(note))
+    root.insert(0, ET.Comment(f" {result.provenance()} "))
     ET.indent(root, space="  ")
     buf = io.StringIO()
     ET.ElementTree(root).write(buf, encoding="unicode", xml_declaration=False)
@@ -148,7 +169,7 @@ def _set_encoder(root: ET.Element, actuator: str, joint: str, gain: float, offse
 
 
 def write_calibrated(
-    result: CalibrationResult, path: str | os.PathLike[str], xml: str | None = None
+    result: Calibrated, path: str | os.PathLike[str], xml: str | None = None
 ) -> str:
     """Deprecated: :meth:`CalibrationResult.write_urdf` (``result.write_urdf(path)``)."""
     deprecated("pkdyn.calibration.writer.write_calibrated", "CalibrationResult.write_urdf(path)")

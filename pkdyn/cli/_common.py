@@ -8,12 +8,13 @@ import math
 import os
 import re
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 
-from pkdyn.exceptions import InvalidInputError, OutputError, close_match
+from pkdyn.cli._paths import check_figure
+from pkdyn.cli._spelling import spelled_option
+from pkdyn.exceptions import InvalidInputError, close_match
 
 __all__ = [
     "NEGATIVE_NUMBER",
@@ -29,7 +30,6 @@ __all__ = [
     "load",
     "check_numbers",
     "number",
-    "output_path",
     "params",
     "posed_command",
     "qa_argument",
@@ -208,62 +208,6 @@ def add_param_option(sp: argparse.ArgumentParser) -> None:
     )
 
 
-def output_path(option: str, path: str | None, figure: bool = False) -> str | None:
-    """Check an output file name before any work is done (the file is written at the end).
-
-    The rules of :func:`pkdyn.files.output_target`: a regular file (a symbolic link to one is
-    followed, the link kept) or a new name in an existing, writable directory; never a FIFO,
-    a device or a directory; a name the file system accepts.
-
-    Args:
-        option: The option that names it, for messages (``--csv``).
-        path: The file, or ``None`` (no output).
-        figure: The file is a figure: its extension must name a matplotlib format.
-
-    Returns:
-        ``path``.
-
-    Raises:
-        OutputError: Not a regular file, a missing or read-only directory, a name too long, or
-            an unknown figure format.
-
-    """
-    if path is None:
-        return None
-    from pkdyn.files import output_target
-
-    output_target(path, option)
-    if figure:
-        check_figure(option, path)
-    from pkdyn.files import check_writable
-
-    try:
-        check_writable(path)  # (root passes os.access; /proc takes no new file)
-    except OutputError as err:
-        raise OutputError(path, f"{option}: {str(err).split(': ', 1)[1]}") from None
-    return path
-
-
-def check_figure(option: str, path: str) -> None:
-    """Refuse a figure file whose extension names no matplotlib format.
-
-    Raises:
-        OutputError: No extension, or an unknown one (the message lists the known ones).
-
-    """
-    from matplotlib.figure import Figure
-
-    from pkdyn.files import shown
-
-    p = Path(path)
-    supported = Figure().canvas.get_supported_filetypes()
-    fmt = p.suffix.lower().lstrip(".")
-    if fmt not in supported:
-        known = ", ".join(f".{k}" for k in sorted(supported))
-        what = f"unknown figure format '{p.suffix}'" if fmt else "no file extension"
-        raise OutputError(shown(path), f"{option}: {what}; name the file with one of {known}")
-
-
 def load(args: argparse.Namespace, geometry: bool = False) -> Any:
     import pkdyn
 
@@ -358,15 +302,16 @@ def configuration(args: argparse.Namespace, geometry: bool = False) -> tuple[Any
 def qa_argument(parser: Any, required: bool = False) -> None:
     """Add ``--qa QA...`` (joint coordinates) and ``--readings R...`` (encoder readings).
 
-    ``--qa`` (alias ``--q``): the actuated joint coordinates, in actuator order. ``--readings``:
+    ``--qa``: the actuated joint coordinates, in actuator order (``--q``, its former spelling,
+    kept for one release). ``--readings``:
     the actuators' encoder readings, the description's ``<pkdyn:encoder gain>`` applied (joint
     coordinate = gain x reading). One of them is required when ``required``.
     """
     where = parser.add_mutually_exclusive_group(required=True) if required else parser
-    where.add_argument(
+    spelled_option(
+        where,
         "--qa",
-        "--q",
-        dest="qa",
+        deprecated=("--q",),
         nargs="+",
         type=number,
         metavar="QA",

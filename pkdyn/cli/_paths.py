@@ -20,14 +20,18 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
+
+from pkdyn.cli._spelling import spelled_option
+from pkdyn.exceptions import OutputError
 
 __all__ = [
     "INPUT_LIMIT",
     "PathRole",
+    "check_figure",
     "check_paths",
     "chosen_parser",
     "input_option",
@@ -59,44 +63,27 @@ class PathRole:
     companions: Callable[[str], list[str]] | None = field(default=None, compare=False)
 
 
-class _DeprecatedSpelling(argparse.Action):
-    """Stores like ``store``; a deprecated option string prints a one-line warning."""
-
-    def __init__(self, *args: Any, deprecated: tuple[str, ...] = (), **kwargs: Any) -> None:
-        self.deprecated = deprecated
-        super().__init__(*args, **kwargs)
-
-    def __call__(
-        self,
-        parser: argparse.ArgumentParser,
-        namespace: argparse.Namespace,
-        values: Any,
-        option_string: str | None = None,
-    ) -> None:
-        if option_string in self.deprecated:
-            current = "/".join(s for s in self.option_strings if s not in self.deprecated)
-            print(
-                f"pkdyn: warning: {option_string} is deprecated and will be removed in the next "
-                f"release; use {current}",
-                file=sys.stderr,
-            )
-        setattr(namespace, self.dest, values)
-
-
-def input_option(parser: Any, *flags: str, or_name: bool = False, **kwargs: Any) -> Any:
+def input_option(
+    parser: Any,
+    *flags: str,
+    or_name: bool = False,
+    deprecated: tuple[str, ...] = (),
+    **kwargs: Any,
+) -> Any:
     """``parser.add_argument(*flags, **kwargs)`` for a file the command reads.
 
     Args:
         parser: The command's parser (or a group of it).
         *flags: Option strings, or the positional's name.
         or_name: The value may be a name instead (a file only when a file of that name exists).
+        deprecated: Old option strings still accepted for one release, with a warning.
         **kwargs: As for ``add_argument``.
 
     Returns:
         The argparse action.
 
     """
-    action = parser.add_argument(*flags, **kwargs)
+    action = spelled_option(parser, *flags, deprecated=deprecated, **kwargs)
     action.pkdyn_path = PathRole("input", or_name=or_name)
     return action
 
@@ -124,11 +111,7 @@ def output_option(
         The argparse action.
 
     """
-    if deprecated:
-        kwargs.setdefault("action", _DeprecatedSpelling)
-        kwargs["deprecated"] = deprecated
-        flags = (*flags, *deprecated)
-    action = parser.add_argument(*flags, **kwargs)
+    action = spelled_option(parser, *flags, deprecated=deprecated, **kwargs)
     action.pkdyn_path = PathRole("output", figure=figure, companions=companions)
     return action
 
@@ -175,6 +158,26 @@ def _name(action: argparse.Action) -> str:
     return str(action.metavar or action.dest).upper()
 
 
+def check_figure(option: str, path: str) -> None:
+    """Refuse a figure file whose extension names no matplotlib format.
+
+    Raises:
+        OutputError: No extension, or an unknown one (the message lists the known ones).
+
+    """
+    from matplotlib.figure import Figure
+
+    from pkdyn.files import shown
+
+    p = Path(path)
+    supported = Figure().canvas.get_supported_filetypes()
+    fmt = p.suffix.lower().lstrip(".")
+    if fmt not in supported:
+        known = ", ".join(f".{k}" for k in sorted(supported))
+        what = f"unknown figure format '{p.suffix}'" if fmt else "no file extension"
+        raise OutputError(shown(path), f"{option}: {what}; name the file with one of {known}")
+
+
 def check_paths(parser: Any, args: argparse.Namespace) -> None:
     """Check every path the command named on the command line, before it runs (module doc).
 
@@ -201,9 +204,6 @@ def check_paths(parser: Any, args: argparse.Namespace) -> None:
     if not inputs and not outputs:
         return
     resolve_paths(inputs, [o for o, _ in outputs], INPUT_LIMIT)
-    from pkdyn.cli._common import check_figure
-    from pkdyn.exceptions import OutputError
-
     for out, role in outputs:
         if role.figure:
             check_figure(out.option, out.path)

@@ -81,6 +81,9 @@ def _cmd_accuracy(args: argparse.Namespace) -> None:
         args.samples,
         args.seed,
         args.top,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        timeout=args.timeout,
     )
     emit(args, result.to_json(), result.table())
 

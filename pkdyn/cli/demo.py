@@ -40,7 +40,8 @@ def run_fastest_demo(
     The Adept path is traversed as fast as the joint-side limits allow (toppra on pkdyn's
     closed-loop inverse dynamics), once with the mechanism alone and once with motors whose
     rotor inertia ``rotor_inertia`` the arms see multiplied by the reduction squared; each
-    result is checked by an independent inverse-dynamics pass along it.
+    result is checked by an independent inverse-dynamics pass along it
+    (:class:`pkdyn.dynamics.fastest_grid.FastestGrid`'s table).
 
     Args:
         payloads: Payloads [kg].
@@ -51,55 +52,21 @@ def run_fastest_demo(
         ``{(payload, rotor_inertia): FastestResult}``.
 
     """
-    from pkdyn.dynamics.actuation import with_drives
-    from pkdyn.dynamics.fastest import fastest_trajectory, joint_path
-    from pkdyn.dynamics.sizing import sizing_from_efforts
+    from pkdyn.dynamics.fastest_grid import fastest_grid
     from pkdyn.dynamics.trajectory import named_task
     from pkdyn.model.loader import load
 
     robot = load("delta", geometry=False)
     p = robot.params
-    path = joint_path(
-        robot, named_task(robot, "adept", cycle_time=1.0, dt=1.0 / max(2, samples - 1))
-    )
-    reflected = p.reduction**2 * rotor_inertia
+    path = named_task(robot, "adept", cycle_time=1.0, dt=1.0 / max(2, samples - 1))
     print(
         f"Fastest Adept cycle of the DELTA 580 (toppra on the closed-loop inverse dynamics, "
-        f"{path.t.size} path samples; limits {p.effort:g} N m and {p.velocity:g} rad/s per arm):"
+        f"{path.t.size} path samples; limits {p.effort:g} N m and {p.velocity:g} rad/s per arm; "
+        f"rotor {rotor_inertia:g} kg m^2: {p.reduction**2 * rotor_inertia:.3g} kg m^2 at the arm):"
     )
-    print(
-        f"{'payload':>8} | {'no rotor inertia':^27} | "
-        f"{f'rotor {rotor_inertia:g} kg m^2 (arm: {reflected:.3g})':^40}"
-    )
-    print(
-        f"{'[kg]':>8} | {'cycle [s]':>9} {'rms [N m]':>9} {'active':>7} | "
-        f"{'cycle [s]':>9} {'slower':>7} {'rms [N m]':>9} {'rotor pk':>9} {'active':>3}"
-    )
-    geared = with_drives(robot, rotor_inertia=rotor_inertia)
-    out: dict[tuple[float, float], Any] = {}
-    worst = 0.0
-    for m in payloads:
-        row = []
-        for J, rob in ((0.0, robot), (rotor_inertia, geared)):
-            res = fastest_trajectory(rob, path, payload=m)
-            out[(m, J)] = res
-            worst = max(worst, float(np.max(res.torque_utilisation)))
-            rms = max(a.rms for a in sizing_from_efforts(rob, res.efforts, m).actuators)
-            qdd = res.trajectory.qa_ddot
-            rotor_peak = float(np.max(np.abs(reflected * qdd))) if J else 0.0
-            row.append((res.cycle_time, rms, res.active_fraction, rotor_peak))
-        (t0, r0, a0, _), (t1, r1, a1, rp) = row
-        print(
-            f"{m:8g} | {t0:9.4f} {r0:9.2f} {100 * a0:6.0f}% | {t1:9.4f} "
-            f"{100 * (t1 / t0 - 1):6.1f}% {r1:9.2f} {rp:9.2f} {100 * a1:3.0f}%"
-        )
-    print(
-        f"check: pkdyn's inverse dynamics along each fastest cycle stays within the torque limit "
-        f"({100 * worst:.4f} % at most); 'active': samples where a torque or speed limit is "
-        "reached; rms: time RMS torque of the most loaded arm; 'rotor pk': the peak torque that "
-        "accelerates the rotor, arm side"
-    )
-    return out
+    grid = fastest_grid(robot, path, payloads, (0.0, rotor_inertia))
+    print(grid.table())
+    return {(m, float(J or 0.0)): res for (m, J), res in grid.results.items()}
 
 
 def run_sizing_demo(
@@ -111,8 +78,9 @@ def run_sizing_demo(
     """Print the motor sizing of the default DELTA 580 on the Adept cycle.
 
     One detailed table (``cycle_time``, ``payload``), a peak-torque / margin grid over
-    ``cycle_times`` x ``payloads``, and the physical checks of the computation (closure
-    residual along the trajectory, power balance of the efforts against the energy).
+    ``cycle_times`` x ``payloads`` (:class:`pkdyn.dynamics.sizing_grid.SizingGrid`), and the
+    physical checks of the computation (closure residual along the trajectory, power balance
+    of the efforts against the energy).
 
     Args:
         cycle_time: Cycle time of the detailed table [s].
@@ -125,7 +93,8 @@ def run_sizing_demo(
 
     """
     from pkdyn.dynamics.sizing import size
-    from pkdyn.dynamics.trajectory import map_task_trajectory, named_task, named_trajectory
+    from pkdyn.dynamics.sizing_grid import sizing_grid
+    from pkdyn.dynamics.trajectory import named_trajectory
     from pkdyn.model.assembly import closure_residual
     from pkdyn.model.loader import load
 
@@ -152,33 +121,9 @@ def run_sizing_demo(
         f"|integral(tau.qd) - dE| = {balance / scale:.1e} of the energy exchanged"
     )
     print()
-    print("peak joint torque [N m] (torque margin, speed margin) by cycle time and payload:")
-    head = f"{'cycle':>7} |" + "".join(f"{f'{m:g} kg':>24}" for m in payloads)
-    print(head)
-    print("-" * len(head))
-    grid = {}
-    for T in cycle_times:
-        task = named_task(robot, "adept", cycle_time=T)
-        jt = map_task_trajectory(robot, task, check_limits=False)
-        cells = []
-        for m in payloads:
-            res = size(robot, jt, payload=m)
-            grid[(T, m)] = res
-            pk = max(a.peak for a in res.actuators)
-            mg = float(np.nanmin([a.margin for a in res.actuators] + [np.inf]))
-            sm = float(np.nanmin([a.speed_margin for a in res.actuators] + [np.inf]))
-            flag = " " if res.feasible else "!"
-            cells.append(f"{pk:8.2f} ({_pct(mg)},{_pct(sm)}){flag}")
-        print(f"{T:6.2f}s |" + "".join(f"{c:>24}" for c in cells))
-    print("! = a limit is exceeded (negative margin).")
-    return {"detail": detail, "grid": grid}
-
-
-def _pct(margin: float) -> str:
-    """A margin in whole percent (``-`` without a limit), never ``-0%``."""
-    from pkdyn.dynamics.sizing import percent
-
-    return percent(margin if np.isfinite(margin) else np.nan, 4, 0).rstrip()
+    grid = sizing_grid(robot, cycle_times, payloads)
+    print(grid.table())
+    return {"detail": detail, "grid": grid.results}
 
 
 def run_geometry_demo(samples: int = 200, seed: int = 0) -> list[dict[str, float]]:
@@ -201,13 +146,23 @@ def run_geometry_demo(samples: int = 200, seed: int = 0) -> list[dict[str, float
     from pkdyn import library
     from pkdyn.model.assembly import closure_residual, forward_geometry, inverse_geometry
     from pkdyn.model.loader import load
+    from pkdyn.units import columns
 
     rng = np.random.default_rng(seed)
     rows = []
-    header = f"{'robot':<14}{'nq':>4}{'nv':>4}{'dof':>5}{'loops':>6}{'act':>5}"
-    header += f"{'max closure':>14}{'max FK(IK) err':>16}{'ms/solve':>10}"
-    print(header)
-    print("-" * len(header))
+    table = [
+        [
+            "robot",
+            "nq",
+            "nv",
+            "dof",
+            "loops",
+            "act",
+            "max closure [m or rad]",
+            "max FK(IK) err [m or rad]",
+            "ms/solve",
+        ]
+    ]
     for name in library.FAMILIES:
         robot = load(name, geometry=False)
         home = robot.platform_placement(robot.q_home)
@@ -250,10 +205,16 @@ def run_geometry_demo(samples: int = 200, seed: int = 0) -> list[dict[str, float
             "ms": ms,
         }
         rows.append(row)
-        print(
-            f"{name:<14}{robot.nq:>4}{robot.nv:>4}{row['dof']:>5}{row['loops']:>6}"
-            f"{row['actuators']:>5}{worst_c:>14.2e}{worst_p:>16.2e}{ms:>10.2f}"
+        table.append(
+            [
+                name,
+                *(str(row[k]) for k in ("nq", "nv", "dof", "loops", "actuators")),
+                f"{worst_c:.2e}",
+                f"{worst_p:.2e}",
+                f"{ms:.2f}",
+            ]
         )
+    print(columns(table))
     print(f"\n{samples} random poses per robot: inverse then direct geometric model.")
     return rows
 

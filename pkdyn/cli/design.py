@@ -2,7 +2,7 @@
 
 Examples (one line each)::
 
-    pkdyn design delta --range la=0.15:0.35 lb=0.3:0.6 --fix z_home=-0.35
+    pkdyn design delta --range la=0.15:0.35 lb=0.3:0.6 --param z_home=-0.35
       --require cylinder:D=0.4,H=0.1,z=-0.35 --trajectory adept --payload 1 --cycle-time 0.5
       --constraint "inv_cond_min>=0.2" --minimize peak_effort --maximize inv_cond_min
       --n 512 --out study.csv --plot pareto.png --urdf chosen.urdf
@@ -18,6 +18,7 @@ from typing import Any
 
 from pkdyn.cli._common import integer, number, params
 from pkdyn.cli._paths import input_option, output_option
+from pkdyn.cli._spelling import spelled_option
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["register"]
@@ -41,7 +42,7 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
                 raise InvalidInputError("--range", f"'{r.name}' is given twice")
             ranges[r.name] = [r.low, r.high]
         d["ranges"] = ranges
-    fixed = params(_flat(args.fix))
+    fixed = params(_flat(args.param))
     if fixed:
         d["fixed"] = fixed
     if args.metric:
@@ -151,7 +152,7 @@ def _clavel_chart(args: argparse.Namespace) -> None:
         given.add(r.name)
         spans[r.name] = (r.low, r.high)
     study = clavel_chart_study(
-        spans["r"], spans["b"], grid=args.grid or 4, **params(_flat(args.fix))
+        spans["r"], spans["b"], grid=args.grid or 4, **params(_flat(args.param))
     )
     result = _run(study, args)
     if args.json:
@@ -259,13 +260,14 @@ def register(sub: Any) -> None:
     )
     output_option(sp, "--save-study", metavar="FILE.yaml", help="write the study file and run it")
     sp.add_argument("--range", action="append", nargs="+", metavar="NAME=LOW:HIGH")
-    sp.add_argument(
-        "--fix",
+    spelled_option(
+        sp,
         "--param",
+        deprecated=("--fix",),
         action="append",
         nargs="+",
         metavar="NAME=VALUE",
-        help="fixed builder parameter",
+        help="builder parameter held fixed (SI units), e.g. --param z_home=-0.35",
     )
     sp.add_argument(
         "--parametrisation",

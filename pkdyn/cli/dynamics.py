@@ -9,6 +9,7 @@ import numpy as np
 
 from pkdyn.cli._common import emit, integer, load, number, robot_command
 from pkdyn.cli._paths import input_option, output_option
+from pkdyn.cli._spelling import spelled_option
 from pkdyn.exceptions import InvalidInputError, LimitsExceededError
 from pkdyn.inputs import non_negative
 
@@ -141,8 +142,8 @@ def _fastest_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _check_settle(args: argparse.Namespace) -> None:
-    """The settling options of ``size --fastest --settle``, refused where they do not apply."""
-    if args.settle is None:
+    """The settling options of ``size --fastest --band``, refused where they do not apply."""
+    if args.band is None:
         for option, given in (
             ("--dwell", args.dwell is not None),
             ("--actuator-stiffness", args.actuator_stiffness is not None),
@@ -151,12 +152,12 @@ def _check_settle(args: argparse.Namespace) -> None:
             ("--shaper", args.shaper is not None),
         ):
             if given:
-                raise InvalidInputError(option, "applies with --fastest --settle BAND")
+                raise InvalidInputError(option, "applies with --fastest --band BAND")
         return
     if not args.fastest:
-        raise InvalidInputError("--settle", "needs --fastest (the fastest cycle that settles)")
-    if not args.settle > 0.0:
-        raise InvalidInputError("--settle", f"a band must be > 0 m, got {args.settle:g}")
+        raise InvalidInputError("--band", "needs --fastest (the fastest cycle that settles)")
+    if not args.band > 0.0:
+        raise InvalidInputError("--band", f"a band must be > 0 m, got {args.band:g}")
     if args.dwell is not None and not args.dwell > 0.0:
         raise InvalidInputError("--dwell", f"must be > 0 s, got {args.dwell:g}")
 
@@ -177,8 +178,8 @@ def _cmd_size(args: argparse.Namespace) -> None:
     _check_settle(args)
     robot = load(args, geometry=args.material is not None)
     non_negative("--payload", args.payload, "kg")
-    if args.show < 0:
-        raise InvalidInputError("--show", f"must be >= 0, got {args.show}")
+    if args.top < 0:
+        raise InvalidInputError("--top", f"must be >= 0, got {args.top}")
     if args.operating_points and not args.catalog:
         raise InvalidInputError("--operating-points", "needs --catalog (the motors to plot)")
     fast = None
@@ -191,13 +192,13 @@ def _cmd_size(args: argparse.Namespace) -> None:
         fast = fastest_trajectory(robot, task, payload=args.payload)
         traj = fast.trajectory
         result = sizing_from_efforts(robot, fast.efforts, args.payload)
-        if args.settle is not None:
+        if args.band is not None:
             from pkdyn.precision.vibration_fastest import fastest_settling
 
             settled = fastest_settling(
                 robot,
                 task,
-                args.settle,
+                args.band,
                 0.5 if args.dwell is None else args.dwell,
                 payload=args.payload,
                 actuator_stiffness=args.actuator_stiffness,
@@ -255,7 +256,7 @@ def _cmd_size(args: argparse.Namespace) -> None:
         text.insert(1, settled.table())
     if selection is not None:
         payload["selection"] = selection.to_json()
-        text.append(selection.table(show=args.show))
+        text.append(selection.table(top=args.top))
     emit(args, payload, "\n".join(text))
     if not result.feasible:  # the report stands; the exit status and one line say no
         raise LimitsExceededError(
@@ -352,11 +353,13 @@ def register(sub: Any) -> None:
         "settling (with --fastest): the fastest cycle whose tool settles, with and without "
         "input shaping (the elastic model: pkdyn vibration)"
     )
-    settle.add_argument(
-        "--settle",
+    spelled_option(
+        settle,
+        "--band",
+        deprecated=("--settle",),
         type=number,
         metavar="BAND",
-        help="settling band on the tool's deviation [m]",
+        help="settling band on the tool's deviation [m]: the fastest cycle that settles in it",
     )
     settle.add_argument(
         "--dwell", type=number, help="time after the motion within which to settle [s] (0.5)"
@@ -397,7 +400,14 @@ def register(sub: Any) -> None:
         default="rated_torque",
         help="ranking of the feasible motor x gearbox pairs (smallest first)",
     )
-    sp.add_argument("--show", type=integer, default=5, help="pairs listed per actuator")
+    spelled_option(
+        sp,
+        "--top",
+        deprecated=("--show",),
+        type=integer,
+        default=5,
+        help="pairs listed per actuator (5)",
+    )
     output_option(
         sp,
         "--operating-points",

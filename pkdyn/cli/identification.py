@@ -29,7 +29,7 @@ def _cmd_identify(args: argparse.Namespace) -> None:
         raise InvalidInputError("--csv", "needs --predict (the motion to predict)")
     robot = load(args)
     names = robot.actuator_names
-    data = read_measurements(args.data, names, need_tau=True)
+    data = read_measurements(args.measurements, names, need_tau=True)
     other = read_measurements(args.predict, names, need_tau=False) if args.predict else None
     res = identify(robot, data, parameters=args.parameters, cutoff=args.cutoff)
     payload: dict[str, Any] = res.to_json()
@@ -76,7 +76,8 @@ def register(sub: Any) -> None:
     )
     input_option(
         sp,
-        "--data",
+        "--measurements",
+        deprecated=("--data",),
         required=True,
         metavar="FILE",
         help="measured motion (CSV or Parquet): columns t, qa_<actuator> (readings), optional "

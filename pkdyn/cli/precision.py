@@ -16,9 +16,18 @@ import numpy as np
 
 from pkdyn.cli._common import emit, integer, load, number, qa_argument, robot_command
 from pkdyn.cli._paths import output_option
+from pkdyn.cli._spelling import spelled_option
 from pkdyn.exceptions import InvalidInputError
 
-__all__ = ["check_map_options", "map_options", "posed_or_map", "register", "write_map"]
+__all__ = [
+    "check_map_options",
+    "check_worker_options",
+    "map_options",
+    "posed_or_map",
+    "register",
+    "worker_options",
+    "write_map",
+]
 
 
 def _options(sp: argparse.ArgumentParser) -> None:
@@ -86,6 +95,39 @@ def map_options(sp: argparse.ArgumentParser, grid: int, fields: tuple[str, ...])
         default=None,
         help=f"field plotted (default: {fields[0]})",
     )
+    worker_options(sp, "the general path's poses and the Monte Carlo's robots")
+
+
+def worker_options(sp: argparse.ArgumentParser, what: str) -> None:
+    """``--workers``, ``--scheduler``, ``--timeout``, as ``pkdyn design`` has them.
+
+    Args:
+        sp: The sub-command's parser.
+        what: What the workers evaluate (the help).
+
+    """
+    sp.add_argument(
+        "--workers",
+        type=integer,
+        help=f"local worker processes for {what} (default: the usable cores, at most one per "
+        "chunk of work)",
+    )
+    sp.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786")
+    sp.add_argument(
+        "--timeout",
+        type=number,
+        default=10.0,
+        help="seconds to wait for the scheduler to answer, or for a worker (10; at most 3600)",
+    )
+
+
+def check_worker_options(args: argparse.Namespace) -> None:
+    """``--workers`` and ``--timeout`` checked before any work."""
+    from pkdyn.executors import check_timeout
+
+    check_timeout(args.timeout, "--timeout")
+    if args.workers is not None and args.workers < 1:
+        raise InvalidInputError("--workers", f"must be >= 1, got {args.workers}")
 
 
 def posed_or_map(
@@ -121,6 +163,7 @@ def posed_or_map(
 
 def check_map_options(args: argparse.Namespace) -> None:
     """Options of ``--map`` checked before any work (one line each; the paths: the CLI's)."""
+    check_worker_options(args)
     if args.map is None:
         for option, value in (
             ("--plot", args.plot),
@@ -208,6 +251,9 @@ def _map(args: argparse.Namespace, frequency: bool) -> None:
         point=args.point,
         wrench=getattr(args, "wrench", None),
         frequency=frequency,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        timeout=args.timeout,
     )
     write_map(args, result, "f1" if frequency else "stiffness_min")
 
@@ -247,8 +293,8 @@ def _cmd_modes(args: argparse.Namespace) -> None:
     from pkdyn.precision.modes import modes
 
     check_map_options(args)
-    if args.count is not None and args.count < 1:
-        raise InvalidInputError("--count", f"{args.count}: give 1 or more")
+    if args.top is not None and args.top < 1:
+        raise InvalidInputError("--top", f"{args.top}: give 1 or more")
     if args.map is not None:
         for option, value in (("--html", args.html), ("--gravity", args.gravity or None)):
             if value is not None:
@@ -258,7 +304,7 @@ def _cmd_modes(args: argparse.Namespace) -> None:
     robot, em = _elastic(args)
     q = _configuration(args, robot)
     result = modes(em, q, point=args.point, gravity=args.gravity)
-    result.count = args.count
+    result.top = args.top
     out = result.to_json()
     text = result.table()
     if args.html is not None:
@@ -311,7 +357,15 @@ def register(sub: Any) -> None:
         "the lowest frequency",
     )
     _options(sp)
-    sp.add_argument("--count", type=integer, default=None, help="report the lowest COUNT modes")
+    spelled_option(
+        sp,
+        "--top",
+        deprecated=("--count",),
+        type=integer,
+        default=None,
+        metavar="N",
+        help="report the lowest N modes",
+    )
     sp.add_argument("--gravity", action="store_true", help="about the equilibrium under gravity")
     output_option(sp, "--html", metavar="FILE", help="write an animation of a mode (meshcat HTML)")
     sp.add_argument("--mode", type=integer, default=1, help="mode to animate, 1 = lowest (--html)")

@@ -175,7 +175,8 @@ def register(sub: Any) -> None:
         default=None,
         metavar="N",
         help="poses along the motion where the modes are computed (modal method; 33, or 65 "
-        "with compliant links)",
+        "with compliant links; every sample on the library Delta with rigid links, in closed "
+        "form)",
     )
     sp.add_argument(
         "--point",

@@ -1,32 +1,34 @@
 """Evaluating designs: build, measure, judge; never raise for a bad design.
 
-:func:`evaluate_design` builds one design of a study with its family's builder, computes every
-metric and checks the constraints. A design that cannot be built, assembled or evaluated (a
-parameter combination the builder refuses, a cycle out of reach, a singularity...) or that
-breaks a constraint comes back infeasible with its reason: it never stops the study.
+:func:`evaluate_design` builds one design of a study, computes every metric and checks the
+constraints. The design is built the way ``pkdyn.load(family, **params)`` builds it, but once
+per process and structure: each next design's numbers are written into the same Pinocchio
+model, geometry and constraint models (:class:`pkdyn.model.candidate.CandidateBuilder`, one per
+study and process), which gives the same robot, bit for bit, without its URDF text. A design
+that cannot be built, assembled or evaluated (a parameter combination the builder refuses, a
+cycle out of reach, a singularity...) or that breaks a constraint comes back infeasible with
+its reason: it never stops the study.
 :func:`evaluate_designs` does a batch in a worker process (local or Dask); the study travels
 as a cloudpickle payload (user metrics may be lambdas) and is unpickled once per worker.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import warnings
+import weakref
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from pkdyn.design.context import DesignContext
 from pkdyn.design.study import Study
 from pkdyn.exceptions import PkdynError, StudyError
-from pkdyn.model.build import build_geometry
-from pkdyn.model.loader import load_string
+from pkdyn.model.candidate import CandidateBuilder
 from pkdyn.model.robot import Robot
 
-__all__ = ["Row", "build", "evaluate_design", "evaluate_designs", "pack"]
+__all__ = ["Row", "build", "candidates", "evaluate_design", "evaluate_designs", "pack"]
 
 _REASON_LENGTH = 300
 """Longest reason kept in the table [characters]."""
@@ -57,20 +59,31 @@ def _reason(err: BaseException, where: str = "") -> str:
     return text if len(text) <= _REASON_LENGTH else text[: _REASON_LENGTH - 3] + "..."
 
 
+_BUILDERS: dict[int, CandidateBuilder] = {}
+"""The candidate builder of each study in this process, by ``id(study)`` (dropped with it)."""
+
+
+def candidates(study: Study) -> CandidateBuilder:
+    """The study's candidate builder in this process (made on first use)."""
+    key = id(study)
+    builder = _BUILDERS.get(key)
+    if builder is None:
+        builder = CandidateBuilder(study.space.family, collision=study.geometry)
+        _BUILDERS[key] = builder
+        weakref.finalize(study, _BUILDERS.pop, key, None)
+    return builder
+
+
 def build(study: Study, x: Any) -> Robot:
     """The robot of design ``x``, as ``pkdyn.load(family, **overrides)`` builds it.
 
     With collision geometry when a metric needs it, without the visual geometry (no metric
-    looks at it).
+    looks at it). Written into the study's candidate in this process (:func:`candidates`): the
+    robot is valid until the next design is built.
     """
     fam = study.space.family_obj
     params = fam.make_params(study.space.overrides(x))
-    xml = fam.build_urdf(params)
-    robot = load_string(xml, fam.name, geometry=False, params=params, home=fam.home(params))
-    if study.geometry:
-        collision = build_geometry(robot.model, xml, pin.GeometryType.COLLISION, [], fam.name)
-        robot = dataclasses.replace(robot, collision_model=collision)
-    return robot
+    return candidates(study).robot(params)
 
 
 def evaluate_design(study: Study, index: int, x: Any) -> Row:

@@ -496,7 +496,7 @@ def _error_max(robot: Robot, ctx: DesignContext) -> float:
     ok = chk.reached
     if not ok.any():
         raise InvalidInputError("error_max", "no required pose reached")
-    return largest_position_error(robot, chk.P[ok], chk.R[ok])
+    return largest_position_error(robot, chk.P[ok], chk.R[ok], reached=True)
 
 
 @metric("base_radius", "m", "largest distance from the z axis of a joint on the base")

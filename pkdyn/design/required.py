@@ -109,9 +109,14 @@ class _DeltaCheck(RequiredCheck):
         return DeltaEvaluator(self.robot)
 
     @cached_property
+    def _solved(self) -> tuple[np.ndarray, np.ndarray]:
+        """Clavel's inverse model at the poses, shared by the checks."""
+        return delta_cf.inverse(self.robot.params, self.P)
+
+    @cached_property
     def codes(self) -> np.ndarray:
         P = self.P
-        return self._evaluator.violations(P, np.eye(3), self.kinds, 0.0)
+        return self._evaluator.violations(P, np.eye(3), self.kinds, 0.0, self._solved)
 
     @cached_property
     def inv_cond(self) -> np.ndarray:
@@ -120,7 +125,7 @@ class _DeltaCheck(RequiredCheck):
         out = np.full(ok.size, np.nan)
         if ok.any():
             P = self.P[ok]
-            alpha, _ = delta_cf.inverse(self.robot.params, P)
+            alpha = self._solved[0][ok]
             A, B = delta_AB(self.robot.params, P, alpha)
             with np.errstate(divide="ignore", invalid="ignore"):
                 Jinv = A / np.einsum("nii->ni", B)[..., None]
@@ -134,7 +139,7 @@ class _DeltaCheck(RequiredCheck):
         ok = self.reached
         out = np.full(ok.size, np.nan)
         if ok.any():
-            out[ok] = self._evaluator.clearance(self.P[ok])
+            out[ok] = self._evaluator.clearance(self.P[ok], self._solved[0][ok])
         return out
 
 

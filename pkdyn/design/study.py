@@ -209,11 +209,13 @@ class Study:
         """Refuse precision options no design could turn into a metric (on the middle design)."""
         if not any(m.name in PRECISION_METRICS for m in self.metric_list):
             return
-        from pkdyn.design.evaluate import build
         from pkdyn.exceptions import PkdynError
+        from pkdyn.model.candidate import CandidateBuilder
 
+        middle = self.space.values(np.full((1, self.space.dimension), 0.5))[0]
         try:
-            robot = build(self, self.space.values(np.full((1, self.space.dimension), 0.5))[0])
+            params = self.space.family_obj.make_params(self.space.overrides(middle))
+            robot = CandidateBuilder(self.space.family, collision=self.geometry).robot(params)
         except PkdynError:
             return  # (the middle design does not build: each design says why)
         check_precision(self.metric_list, self.conditions, robot)

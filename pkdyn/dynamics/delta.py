@@ -125,6 +125,13 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross`` of two 3-vectors: its products and differences, without its overhead."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("...i,...i->...", a, b)
 
@@ -177,7 +184,7 @@ class DeltaDynamics:
             np.array(
                 [
                     float(i.inertia[1, 1])
-                    + float(i.mass) * float(np.sum(np.cross(y, i.lever) ** 2))
+                    + float(i.mass) * float(np.sum(_cross3(y, np.asarray(i.lever)) ** 2))
                     for i in arm_I
                 ]
             )
@@ -207,7 +214,7 @@ class DeltaDynamics:
             It = float(Ic.trace() - z @ Ic @ z) / 2.0
             Ia = float(z @ Ic @ z)
             sym = It * (np.eye(3) - np.outer(z, z)) + Ia * np.outer(z, z)
-            if np.linalg.norm(np.cross(lever, z)) > 1e-12 or np.max(np.abs(Ic - sym)) > 1e-12 * (
+            if np.linalg.norm(_cross3(lever, z)) > 1e-12 or np.max(np.abs(Ic - sym)) > 1e-12 * (
                 1.0 + abs(It)
             ):
                 raise PkdynError(
@@ -261,7 +268,9 @@ class DeltaDynamics:
         R0 = self.R0
         return x[..., None] * R0[:, :, 0] + e[:, 1, None] * R0[:, :, 1] + z[..., None] * R0[:, :, 2]
 
-    def solve(self, task: TaskTrajectory, check_limits: bool = True) -> ActuatorTrajectory:
+    def solve(
+        self, task: TaskTrajectory, check_limits: bool = True, check_speeds: bool = True
+    ) -> ActuatorTrajectory:
         """Actuator motion and efforts along a platform trajectory (see the module docstring).
 
         Args:
@@ -269,6 +278,8 @@ class DeltaDynamics:
                 frame; the orientation columns are ignored: the nacelle keeps its own).
             check_limits: Raise if an arm leaves its angle or speed limits (as
                 :func:`pkdyn.dynamics.trajectory.map_task_trajectory` does).
+            check_speeds: With ``check_limits``, also raise beyond a speed limit (``False``:
+                the angle limits only, as ``map_task_trajectory(..., check_speeds=False)``).
 
         Returns:
             Arm angles, rates, accelerations and joint-side torques.
@@ -297,7 +308,7 @@ class DeltaDynamics:
         alpha_d = _dot(d, Pd[:, None, :]) / g
         dd = Pd[:, None, :] - E1 * alpha_d[..., None]
         alpha_dd = (_dot(d, Pdd[:, None, :]) - alpha_d**2 * _dot(d, E2) + _dot(dd, dd)) / g
-        if check_limits:
+        if check_limits and check_speeds:
             self._check_speeds(t, alpha_d)
         Edd = E1 * alpha_dd[..., None] + E2 * (alpha_d**2)[..., None]  # elbow accelerations
         Jinv = d / g[..., None]  # (N, 3 arms, 3)

@@ -32,6 +32,7 @@ from pkdyn.exceptions import InvalidInputError, SimulationError
 from pkdyn.inputs import callable_input, count, instance, positive, real
 from pkdyn.model.passive import FRICTION_SMOOTHING
 from pkdyn.model.pose import as_configuration, as_finite
+from pkdyn.model.reuse import kept_data
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn
 from pkdyn.threads import one_blas_thread
@@ -133,7 +134,15 @@ def simulate(
     v = np.zeros(robot.nv) if v0 is None else as_finite("v0", v0, robot.nv)
     if torque is not None and motor_torque is not None:
         raise InvalidInputError("motor_torque", "give either torque or motor_torque, not both")
-    fd = ForwardDynamics(robot, integrator, passive=passive, viscous=viscous, coulomb=coulomb)
+    fd = ForwardDynamics(
+        robot,
+        integrator,
+        passive=passive,
+        viscous=viscous,
+        coulomb=coulomb,
+        # (a run's datas kept by the robot: nv^3 in size, made once, pkdyn.model.reuse)
+        datas=(kept_data(robot, "forward"), kept_data(robot, "forward kinematics")),
+    )
     drv = drives(robot)
     tau_fn = None
     if torque is not None:

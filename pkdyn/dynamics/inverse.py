@@ -21,6 +21,7 @@ from pkdyn.dynamics.actuation import actuation
 from pkdyn.dynamics.series import series_table
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
+from pkdyn.model.reuse import kept
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.progress import progress as progress_bar
 from pkdyn.results import Result, jsonable
@@ -139,6 +140,35 @@ _CHUNK = 2048
 """Samples per call of the solver (one step of the progress bar)."""
 
 
+def _solver(
+    robot: Robot,
+    allocation: str,
+    lower: np.ndarray | None,
+    upper: np.ndarray | None,
+    weights: Sequence[float] | np.ndarray | None,
+) -> InverseDynamics:
+    """The robot's inverse-dynamics solver for these options, made once (:mod:`pkdyn.model.reuse`).
+
+    Its Pinocchio datas and kinematic buffers (nv^3 in size) are made on the first call on the
+    robot only; :meth:`solvers.InverseDynamics.reset` makes each call start as a new solver's.
+    """
+    cls = MinMaxInverseDynamics if allocation == "max" else InverseDynamics
+
+    def key(x: Any) -> bytes | None:
+        return None if x is None else np.asarray(x, dtype=float).tobytes()
+
+    model, constraints, act = robot.model, robot.constraints, actuation(robot)
+
+    def make() -> InverseDynamics:
+        return cls(model, constraints, act, lower=lower, upper=upper, weights=weights)
+
+    solver = kept(
+        robot, ("inverse_dynamics", cls.__name__, key(lower), key(upper), key(weights)), make
+    )
+    solver.reset()
+    return solver
+
+
 def inverse_dynamics(
     robot: Robot,
     trajectory: JointTrajectory,
@@ -205,14 +235,11 @@ def inverse_dynamics(
     upper = effort if limits else None
     if weights is None and np.all(np.isfinite(effort)) and np.all(effort > 0.0):
         weights = 1.0 / effort**2
-    solver = (MinMaxInverseDynamics if allocation == "max" else InverseDynamics)(
-        robot.model,
-        robot.constraints,
-        actuation(robot),
-        lower=lower,
-        upper=upper,
-        weights=weights,
-    )
+    if not robot.actuators:
+        raise InvalidInputError(
+            "robot", f"{robot.name} has no actuators: inverse dynamics gives actuator efforts"
+        )
+    solver = _solver(robot, allocation, lower, upper, weights)
     elements = robot.passive if passive else None
     F_passive = None if elements is None else elements.forces(traj.q, traj.v)  # vectorised
     frame = robot.platform_frame

@@ -26,14 +26,18 @@ import pinocchio as pin
 
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InvalidInputError, TrajectoryError
+from pkdyn.model.reuse import kept_data
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
 from solvers import numerics, solve_lm
 
-__all__ = ["ASSEMBLY_TOL", "actuator_trajectory"]
+__all__ = ["ASSEMBLY_RTOL", "ASSEMBLY_TOL", "actuator_trajectory"]
 
-ASSEMBLY_TOL = 1e-10
-"""Closure residual [m or rad] each sample is assembled to (round-off of a large model's
-closures is ~1e-12)."""
+ASSEMBLY_RTOL = 1e-10
+"""Closure residual each sample is assembled to, relative to the robot's size
+(:meth:`pkdyn.Robot.closure_tolerance`; round-off of a large model's closures is ~1e-12 of it)."""
+
+ASSEMBLY_TOL = ASSEMBLY_RTOL
+"""The former name of :data:`ASSEMBLY_RTOL` (kept for one release)."""
 
 
 def _samples(
@@ -81,7 +85,7 @@ def actuator_trajectory(
     QA = _samples(qa, (N, n_a), "qa")
     QD = _samples(qa_dot, (N, n_a), "qa_dot")
     QDD = _samples(qa_ddot, (N, n_a), "qa_ddot")
-    model, data = robot.model, robot.model.createData()
+    model, data = robot.model, kept_data(robot, "joint_motion")
     cs = robot.constraints
     held = [
         i
@@ -95,6 +99,7 @@ def actuator_trajectory(
     S[np.arange(fixed.size), fixed] = 1.0
     act_rows = np.searchsorted(fixed, robot.actuated_v)
     q = np.array(robot.q_home if q_init is None else q_init, dtype=float)
+    tol = robot.closure_tolerance(ASSEMBLY_RTOL)
     Q = np.empty((N, model.nq))
     V = np.empty((N, model.nv))
     A = np.empty((N, model.nv))
@@ -107,7 +112,7 @@ def actuator_trajectory(
                 lambda x: cs.residual(data, x),
                 lambda x: cs.jacobian(data, x),
                 free,
-                ASSEMBLY_TOL,
+                tol,
             )
             if not sol.converged:
                 raise TrajectoryError(

@@ -49,7 +49,7 @@ from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InvalidInputError, NoFeasibleDriveError
 from pkdyn.model.robot import Robot
-from pkdyn.results import Result, deprecated_alias
+from pkdyn.results import Result, deprecated_alias, renamed_keyword
 from pkdyn.units import quantity
 from solvers import Drives
 from solvers.numerics import lstsq, null_space
@@ -419,11 +419,13 @@ class Selection(Result):
             ],
         }
 
-    def table(self, show: int = 5) -> str:
+    @renamed_keyword("show", "top")
+    def table(self, top: int = 5) -> str:
         """A readable report: the best pairs, the closest rejected ones, the optimal ratios.
 
         Args:
-            show: Pairs listed per actuator in each group.
+            top: Pairs listed per actuator in each group (``show``: its former name, kept for
+                one release).
 
         Returns:
             The text.
@@ -444,7 +446,7 @@ class Selection(Result):
                     f"  {'#':>2} {'motor + gearbox':<24} {'N':>5} {'peak/avail':>12} "
                     f"{'rms/rated':>11} {'rpm/max':>11} {'J ratio':>7} {'kg':>5}"
                 )
-            for k, c in enumerate(a.feasible[:show], start=1):
+            for k, c in enumerate(a.feasible[:top], start=1):
                 pk = next(x for x in c.checks if x.name == "peak torque")
                 rm = next(x for x in c.checks if x.name == "RMS torque")
                 lines.append(
@@ -454,12 +456,12 @@ class Selection(Result):
                     f"{c.peak_speed * _RPM:5.0f}/{c.motor.max_speed * _RPM:<5.0f} "
                     f"{c.inertia_ratio:7.2f} {c.mass:5.2f}"
                 )
-            if len(a.feasible) > show:
-                lines.append(f"     ... {len(a.feasible) - show} more feasible")
+            if len(a.feasible) > top:
+                lines.append(f"     ... {len(a.feasible) - top} more feasible")
             if a.rejected:
                 head = "closest rejected" if a.feasible else "NO FEASIBLE PAIR; closest"
                 lines.append(f"  {head} ({len(a.rejected)} rejected):")
-                for c in a.rejected[:show]:
+                for c in a.rejected[:top]:
                     lines.append(f"    {c.name}: {c.why()}")
             opt = ", ".join(
                 f"{r.motor} {r.optimal:.3g}"

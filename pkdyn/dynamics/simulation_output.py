@@ -15,11 +15,16 @@ from solvers import ForwardResult
 __all__ = ["simulation_columns", "write_simulation_csv"]
 
 
-def simulation_columns(robot: Robot, result: ForwardResult) -> dict[str, np.ndarray]:
+def simulation_columns(
+    robot: Robot, result: ForwardResult, readings: bool = True
+) -> dict[str, np.ndarray]:
     """The recorded series by column name.
 
-    ``t`` [s]; per actuator ``<a>`` (``robot.actuator_names``): ``qa_<a>`` [rad or m],
-    ``qa_dot_<a>`` [rad/s or m/s], ``tau_<a>`` (joint-side effort) [N m or N]; ``kinetic``,
+    ``t`` [s]; per actuator ``<a>`` (``robot.actuator_names``): ``qa_<a>`` and ``qa_dot_<a>``,
+    its reading and the reading's rate (:meth:`pkdyn.Robot.readings`: the joint coordinate
+    [rad or m] and rate [rad/s or m/s] unless the description has encoder gains or offsets;
+    a file read back as a trajectory gives the same motion), ``tau_<a>`` (joint-side effort)
+    [N m or N]; ``kinetic``,
     ``potential``, ``work`` (of the efforts), ``dissipated`` (dampers and friction) [J];
     ``energy_balance`` (``kinetic + potential - work + dissipated`` minus its start value: 0
     for an exact integration) [J]; ``closure_residual`` [m or rad]; with couplings,
@@ -29,6 +34,7 @@ def simulation_columns(robot: Robot, result: ForwardResult) -> dict[str, np.ndar
     Args:
         robot: The simulated robot.
         result: Its :func:`pkdyn.dynamics.simulate` result.
+        readings: ``qa_`` columns of readings (``False``: of joint coordinates, as plotted).
 
     Returns:
         ``{name: (N,) array}`` in column order.
@@ -38,6 +44,8 @@ def simulation_columns(robot: Robot, result: ForwardResult) -> dict[str, np.ndar
     names = robot.actuator_names
     qa = result.q[:, robot.actuated_q]
     qd = result.v[:, robot.actuated_v]
+    if readings and isinstance(robot, Robot):  # (a result's layout has no encoders)
+        qa, qd = robot.readings(qa), robot.readings(qd, rates=True)
     for prefix, data in (("qa", qa), ("qa_dot", qd), ("tau", result.tau)):
         for k, name in enumerate(names):
             out[f"{prefix}_{name}"] = data[:, k]

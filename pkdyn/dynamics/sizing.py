@@ -136,6 +136,10 @@ class SizingResult(Result):
         actuators: Per-actuator figures.
         efforts: The underlying efforts, energies and trajectory.
         motor_tau: Motor torques (N, n_a) [N m] (drive model; ``None``: not computed).
+        readings: The actuators' readings along the trajectory (N, n_a)
+            (:meth:`pkdyn.Robot.readings`; ``None``: the joint coordinates, a robot without
+            encoder gains or offsets).
+        reading_rates: Their rates (N, n_a) (``None``: the joint rates).
 
     """
 
@@ -146,6 +150,8 @@ class SizingResult(Result):
     actuators: list[ActuatorSizing]
     efforts: EffortTrajectory
     motor_tau: np.ndarray | None = None
+    readings: np.ndarray | None = None
+    reading_rates: np.ndarray | None = None
 
     @property
     def feasible(self) -> bool:
@@ -219,7 +225,10 @@ class SizingResult(Result):
     def write_csv(self, path: str | Path) -> None:
         """Time series: ``t``, ``qa_<a>``, ``qa_dot_<a>``, ``tau_<a>`` per actuator, ``energy``.
 
-        ``<a>`` is the actuator's name (``robot.actuator_names``).
+        ``<a>`` is the actuator's name (``robot.actuator_names``). ``qa_<a>`` and ``qa_dot_<a>``
+        are the actuators' **readings** and their rates (the readings rule of
+        :meth:`pkdyn.Robot.readings`: what ``--trajectory FILE`` reads back as the same
+        motion), ``tau_<a>`` the joint-side efforts [N m or N], ``energy`` [J].
 
         Args:
             path: Output file.
@@ -238,7 +247,9 @@ class SizingResult(Result):
             + [f"tau_{n}" for n in names]
             + ["energy"]
         )
-        table = np.column_stack([traj.t, traj.qa, traj.qa_dot, ef.tau, ef.energy])
+        readings = traj.qa if self.readings is None else self.readings
+        rates = traj.qa_dot if self.reading_rates is None else self.reading_rates
+        table = np.column_stack([traj.t, readings, rates, ef.tau, ef.energy])
         try:
             with atomic_write(path, newline="") as fh:
                 w = csv.writer(fh)
@@ -372,6 +383,8 @@ def sizing_from_efforts(robot: Robot, ef: EffortTrajectory, payload: float = 0.0
         actuators=out,
         efforts=ef,
         motor_tau=tau_m,
+        readings=robot.readings(trajectory.qa),
+        reading_rates=robot.readings(trajectory.qa_dot, rates=True),
     )
 
 

@@ -10,8 +10,9 @@ before fitting anything to it, each with one line naming the line of the file an
   millimetres for prismatic ones), when converting them explains them.
 
 The closures are checked on a coarse pass along the motion (:func:`pkdyn.identification.
-identify.identify`): readings the robot cannot be assembled at are named with their residual
-relative to the robot's size.
+identify.identify`), each sample assembled to :data:`~pkdyn.identification.motion.ASSEMBLY_RTOL`
+of the robot's size (:meth:`pkdyn.Robot.closure_tolerance`): readings the robot cannot be
+assembled at are named with their residual and the robot's size.
 """
 
 from __future__ import annotations

@@ -43,6 +43,7 @@ from pkdyn.identification.result import Fit, IdentificationResult
 from pkdyn.identification.structure import check_identifiable, structural_base
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
+from pkdyn.results import renamed_keyword
 from pkdyn.threads import single_blas_thread
 from pkdyn.units import vector
 
@@ -166,9 +167,10 @@ def _coarse_pass(
     return [Q[int(np.searchsorted(idx, k))] for k in splits]
 
 
+@renamed_keyword("data", "measurements")
 def identify(
     robot: Robot,
-    data: Measurements,
+    measurements: Measurements,
     parameters: Sequence[str] | str | None = None,
     cutoff: float | None = None,
     progress: bool | None = None,
@@ -178,8 +180,9 @@ def identify(
 
     Args:
         robot: The robot (its values are the nominal ones, and the ones held).
-        data: The measured motion, with efforts; its ``qa`` are actuator readings (the robot's
-            readings rule applies, :meth:`pkdyn.Robot.joint_coordinates`).
+        measurements: The measured motion, with efforts; its ``qa`` are actuator readings (the
+            robot's readings rule applies, :meth:`pkdyn.Robot.joint_coordinates`; ``data``: its
+            former name, kept for one release).
         parameters: Groups to identify (:data:`~pkdyn.identification.parameters.GROUPS`;
             default inertia, friction, rotor).
         cutoff: Cut-off frequency [Hz] of the position filter when the rates are not given.
@@ -201,7 +204,7 @@ def identify(
 
     """
     with single_blas_thread():
-        return _identify(robot, data, parameters, cutoff, progress, workers)
+        return _identify(robot, measurements, parameters, cutoff, progress, workers)
 
 
 def _identify(
@@ -217,7 +220,8 @@ def _identify(
     from pkdyn.workers import can_fork, fork_map
 
     instance("robot", robot, Robot, "a Robot (pkdyn.load)")
-    instance("data", data, Measurements, "Measurements (pkdyn.identification.read_measurements)")
+    what = "Measurements (pkdyn.identification.read_measurements)"
+    instance("measurements", data, Measurements, what)
     check_identifiable(robot)
     n_a = len(robot.actuators)
     if data.tau is None:

@@ -41,6 +41,7 @@ from solvers import SampledKinematics, numerics, solve_lm
 
 __all__ = [
     "ANCHOR_SPACING",
+    "ASSEMBLY_RTOL",
     "ASSEMBLY_TOL",
     "BATCH",
     "MAX_STRIDE",
@@ -50,8 +51,12 @@ __all__ = [
     "passive_solve",
 ]
 
-ASSEMBLY_TOL = 1e-10
-"""Closure residual [m or rad] each sample is assembled to."""
+ASSEMBLY_RTOL = 1e-10
+"""Closure residual each sample is assembled to, relative to the robot's size
+(:meth:`pkdyn.Robot.closure_tolerance`: a millimetre robot as closely as a metre one)."""
+
+ASSEMBLY_TOL = ASSEMBLY_RTOL
+"""The former name of :data:`ASSEMBLY_RTOL` (kept for one release)."""
 
 BATCH = 256
 """Samples per batch."""
@@ -138,6 +143,7 @@ class MotionSampler:
         self.va = np.asarray(robot.actuated_v, dtype=int)
         self.aq = np.asarray(robot.actuated_q, dtype=int)
         self.vp = np.setdiff1d(np.arange(robot.nv), self.va)
+        self.tol = robot.closure_tolerance(ASSEMBLY_RTOL)  # [m or rad]
         q0 = robot.q_home if q_init is None else q_init
         self.restart(q0)
 
@@ -174,7 +180,7 @@ class MotionSampler:
         for _ in range(_NEWTON_STEPS):
             r, J = cs.residual_and_jacobian(data, q)
             err_new = float(np.abs(r).max(initial=0.0))
-            if err_new <= ASSEMBLY_TOL:
+            if err_new <= self.tol:
                 return q, J, err_new
             if err_new > 0.9 * err:  # not converging: let Levenberg-Marquardt take over
                 return q, None, err_new
@@ -205,7 +211,7 @@ class MotionSampler:
                 start,
                 residual_and_jacobian=lambda x: cs.residual_and_jacobian(self.data, x),
                 free=self.vp,
-                tol=ASSEMBLY_TOL,
+                tol=self.tol,
             )
             if not sol.converged:
                 raise TrajectoryError(
@@ -267,7 +273,7 @@ class MotionSampler:
                 self.kin.capture_configuration(int(i), Q[i])
             r, Jb = self.kin.residuals_and_jacobians(active)
             err = np.abs(r).max(axis=1, initial=0.0)
-            ok = err <= ASSEMBLY_TOL
+            ok = err <= self.tol
             J[active[ok]] = Jb[ok]
             go = ~ok & (err <= 0.9 * prev)
             failed.append(active[~ok & ~go])

@@ -2,15 +2,22 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Iterable
+from typing import Any
 
 import numpy as np
 
 from pkdyn.exceptions import ParameterError
 from pkdyn.inputs import MAX_MAGNITUDE
 
-__all__ = ["finite", "in_range", "middle_of_reach", "positive", "within_limits"]
+__all__ = ["finite", "in_range", "middle_of_reach", "param_items", "positive", "within_limits"]
+
+
+def param_items(params: object) -> list[tuple[str, Any]]:
+    """``(name, value)`` of a parameter dataclass's fields (``asdict`` without its deep copy)."""
+    return [(f.name, getattr(params, f.name)) for f in dataclasses.fields(params)]  # type: ignore[arg-type]
 
 
 def positive(family: str, **values: float) -> None:

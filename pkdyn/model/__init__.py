@@ -7,6 +7,8 @@ Modules: :mod:`~pkdyn.model.description` (parsing pkdyn's URDF extension element
 :mod:`~pkdyn.model.assembly` (closure residuals, direct and inverse geometric models,
 projection), :mod:`~pkdyn.model.home` (the home search and the assembly tolerance),
 :mod:`~pkdyn.model.families` (the registry the robot library fills),
+:mod:`~pkdyn.model.candidate` (a family's robots built once, each candidate written in place),
+:mod:`~pkdyn.model.reuse` (Pinocchio datas and solvers a robot's computations keep),
 :mod:`~pkdyn.model.loader` (``load``: URDF, MJCF, SDFormat) and :mod:`~pkdyn.model.formats`
 (URDF writer, MJCF export and import, SDFormat, Gepetto YAML, Drake elements, onshape-to-robot
 frames).

@@ -53,6 +53,17 @@ class Family:
         """URDF text of the robot with these parameters."""
         return str(self._module().build_urdf(params))
 
+    def layout(self, params: Any) -> Any:
+        """The builder's elements with these parameters, before any text, or ``None``.
+
+        A :class:`~pkdyn.model.formats.urdf_writer.UrdfWriter` holding the
+        :class:`~pkdyn.model.formats.urdf_writer.Record` s that :meth:`build_urdf` renders
+        (the module's optional ``layout(params)``); :mod:`pkdyn.model.candidate` writes their
+        numbers into an existing model. ``None``: the family writes text only.
+        """
+        fn = getattr(self._module(), "layout", None)
+        return None if fn is None else fn(params)
+
     def home(self, params: Any) -> list[float]:
         """Actuated coordinates of the home configuration."""
         return list(self._module().home(params))

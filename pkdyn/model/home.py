@@ -142,6 +142,8 @@ def singular(robot: Robot, q: np.ndarray, rng: np.random.Generator | None = None
     r = rank(J)
     if robot.actuated_v.size and rank(J[:, robot.passive_v]) < r:
         return True
+    if r == J.shape[0]:  # full row rank: no configuration has a higher one (nothing to probe)
+        return False
     Z = numerics.null_space(J, RANK_RTOL, 1.0)
     if Z.shape[1] == 0:
         return False

@@ -43,7 +43,7 @@ from pkdyn.model.description import (
     parse_description,
 )
 from pkdyn.model.families import FAMILIES, from_description
-from pkdyn.model.home import ASSEMBLY_TOL, find_home
+from pkdyn.model.home import ASSEMBLY_TOL, HomeResult, find_home
 from pkdyn.model.passive import passive_forces
 from pkdyn.model.robot import Robot
 from pkdyn.model.warn import warn, warn_missing_meshes
@@ -55,7 +55,7 @@ if TYPE_CHECKING:
 # The readers of other formats (MJCF, SDFormat, sidecars: yaml, Drake, onshape) are imported
 # where they are used: a library robot or a URDF loads without them (the CLI starts quicker).
 
-__all__ = ["FORMATS", "detect_format", "load", "load_string"]
+__all__ = ["FORMATS", "detect_format", "home_result", "load", "load_string"]
 
 FORMATS = {"robot": "urdf", "mujoco": "mjcf", "sdf": "sdf"}
 """Root element -> description format."""
@@ -847,7 +847,42 @@ def _assembled(
     tol: float,
     user: bool,
 ) -> Robot:
-    q0 = np.array(parts.q_ref, dtype=float)
+    res = home_result(robot, parts.q_ref, home, tol, user)
+    if res.moved:
+        parts.desc = dataclasses.replace(parts.desc, closures=tuple(res.closures))
+        if res.couplings is not None:
+            parts.desc = dataclasses.replace(parts.desc, couplings=tuple(res.couplings))
+        robot = _robot(parts, robot.source, robot.params)
+    robot.q_home = res.q
+    return robot
+
+
+def home_result(
+    robot: Robot,
+    q_ref: np.ndarray,
+    home: Sequence[float] | np.ndarray | None,
+    tol: float,
+    user: bool,
+) -> HomeResult:
+    """The home :func:`load` assembles: ``home`` checked, then :func:`find_home` from it.
+
+    Args:
+        robot: The robot before assembly.
+        q_ref: The description's own configuration (nq,).
+        home: Actuator coordinates (n_a,), a full configuration (nq,), or ``None``.
+        tol: Assembly tolerance [m or rad].
+        user: ``home`` came from the user (its actuator limits are checked).
+
+    Returns:
+        :func:`find_home`'s result.
+
+    Raises:
+        InvalidInputError: A malformed ``home``.
+        JointLimitError: A user's home outside the actuator limits.
+        LoopClosureError: No assembled configuration.
+
+    """
+    q0 = np.array(q_ref, dtype=float)
     qa = None
     if home is not None:
         try:
@@ -875,14 +910,7 @@ def _assembled(
                 f"({', '.join(a.name for a in robot.actuators) or 'none'}) or a full "
                 f"configuration of {robot.nq} values",
             )
-    res = find_home(robot, q0, qa, tol, user=user)
-    if res.moved:
-        parts.desc = dataclasses.replace(parts.desc, closures=tuple(res.closures))
-        if res.couplings is not None:
-            parts.desc = dataclasses.replace(parts.desc, couplings=tuple(res.couplings))
-        robot = _robot(parts, robot.source, robot.params)
-    robot.q_home = res.q
-    return robot
+    return find_home(robot, q0, qa, tol, user=user)
 
 
 def _check_quaternions(model: pin.Model, q: np.ndarray) -> None:

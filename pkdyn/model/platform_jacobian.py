@@ -20,17 +20,20 @@ from it by :func:`solvers.numerics.passive_elimination`.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
 
-if TYPE_CHECKING:
-    from pkdyn.model.robot import Robot
+__all__ = ["ANGULAR_AXES", "PLATFORM_HINT", "PlatformRobot", "platform_jacobian"]
 
-__all__ = ["ANGULAR_AXES", "platform_jacobian"]
+PLATFORM_HINT = (
+    'declare one: <pkdyn:platform link="LINK" task="x y z"/> in the URDF (urdf/README.md), '
+    "or 'platform: {frame: LINK}' in its YAML sidecar"
+)
+"""How to declare a platform, for the messages of the commands that need one."""
 
 ANGULAR_AXES = ("world", "platform")
 """Axes of the angular rows: world (precision) or the platform frame (task convention)."""
@@ -38,12 +41,32 @@ ANGULAR_AXES = ("world", "platform")
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
+class PlatformRobot(Protocol):
+    """What the platform Jacobian reads of a robot (a :class:`~pkdyn.model.robot.Robot`)."""
+
+    @property
+    def name(self) -> str:
+        """The robot's name (for messages)."""
+
+    @property
+    def model(self) -> pin.Model:
+        """Pinocchio model of the spanning tree."""
+
+    @property
+    def data(self) -> pin.Data:
+        """Pinocchio data of ``model`` (the joint Jacobians are computed in it)."""
+
+    @property
+    def platform_frame(self) -> int | None:
+        """Frame id of the platform, or ``None``."""
+
+
 def _skew(v: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def platform_jacobian(
-    robot: Robot,
+    robot: PlatformRobot,
     q: np.ndarray | None = None,
     *,
     point: np.ndarray | None = None,
@@ -52,7 +75,8 @@ def platform_jacobian(
     """The platform Jacobian (6, nv) (module docstring).
 
     Args:
-        robot: The robot (it must declare a platform frame).
+        robot: The robot (a :class:`~pkdyn.model.robot.Robot`; it must declare a platform
+            frame).
         q: Configuration (nq,): the joint Jacobians are computed at it (in ``robot.data``);
             ``None``: ``robot.data`` already holds them (``pin.computeJointJacobians``, e.g.
             after the closure Jacobian at the same configuration).
@@ -68,8 +92,6 @@ def platform_jacobian(
     """
     fid = robot.platform_frame
     if fid is None:
-        from pkdyn.model.robot import PLATFORM_HINT
-
         raise InvalidInputError(
             "robot", f"{robot.name} declares no platform frame; {PLATFORM_HINT}"
         )

@@ -18,16 +18,11 @@ from pkdyn.model.description import (
     LinearCouplingSpec,
 )
 from pkdyn.model.families import FAMILIES
+from pkdyn.model.platform_jacobian import PLATFORM_HINT, platform_jacobian
 from solvers import ConstraintSet, PassiveForces
-from solvers.numerics import rank
+from solvers.numerics import null_space, rank
 
-__all__ = ["PLATFORM_HINT", "MODELLING_JOINTS", "Robot"]
-
-PLATFORM_HINT = (
-    'declare one: <pkdyn:platform link="LINK" task="x y z"/> in the URDF (urdf/README.md), '
-    "or 'platform: {frame: LINK}' in its YAML sidecar"
-)
-"""How to declare a platform, for the messages of the commands that need one."""
+__all__ = ["PLATFORM_HINT", "MODELLING_JOINTS", "Robot", "length_scale_at"]
 
 MODELLING_JOINTS = ("JointModelFreeFlyer", "JointModelPlanar")
 """Joint models that place a platform or floating base: modelling devices, not hardware."""
@@ -99,10 +94,24 @@ class Robot:
         Makes translations and rotations commensurate where a test compares them (singularity
         margins, continuation steps), so that results do not depend on the robot's size.
         """
-        data = self.model.createData()
-        pin.forwardKinematics(self.model, data, self.q_home)
-        P = np.array([M.translation for M in data.oMi])
-        return max(float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))), 1e-9)
+        return length_scale_at(self.model, self.model.createData(), self.q_home)
+
+    def closure_tolerance(self, rtol: float) -> float:
+        """The closure residual [m or rad] that is ``rtol`` of the robot's size.
+
+        ``rtol * min(1, length_scale)``: a gap in metres judged against the robot's length, a
+        gap in radians (a weld's rotation, a coupling) against one radian, whichever is the
+        stricter, so that a millimetre robot is assembled as closely, relative to its size, as
+        a metre one.
+
+        Args:
+            rtol: Relative tolerance (e.g. 1e-10).
+
+        Returns:
+            The tolerance [m or rad].
+
+        """
+        return float(rtol) * min(1.0, self.length_scale)
 
     @property
     def nq(self) -> int:
@@ -360,29 +369,24 @@ class Robot:
 
         Args:
             q: Configuration (nq,).
-            tol: Relative singular-value threshold of the ranks.
+            tol: Relative tolerance of the ranks (:mod:`solvers.numerics` rule, scale 1, as
+                :meth:`mobility`).
 
         Returns:
             ``(dof, internal)``.
 
         """
         qq = self.q_home if q is None else q
-        nv = self.nv
         if self.constraints.n:
             _, Jc = self.constraints.residual_and_jacobian(self.data, qq)
-            _, s, Vt = np.linalg.svd(Jc)
-            rank = int(np.sum(s > tol * max(1.0, float(s[0]) if s.size else 0.0)))
-            N = Vt[rank:].T
+            N = null_space(Jc, tol, scale=1.0)
         else:
-            N = np.eye(nv)
+            N = np.eye(self.nv)
         total = N.shape[1]
         if self.platform_frame is None or total == 0:
             return total, 0
-        from pkdyn.model.platform_jacobian import platform_jacobian
-
         Jx = platform_jacobian(self, qq, angular="platform")[self.task_rows] @ N
-        sx = np.linalg.svd(Jx, compute_uv=False)
-        useful = int(np.sum(sx > tol * max(1.0, float(sx[0]) if sx.size else 0.0)))
+        useful = rank(Jx, tol, scale=1.0)
         return useful, total - useful
 
     def __repr__(self) -> str:
@@ -415,3 +419,10 @@ def _prismatic(jm: pin.JointModel) -> bool:
     """A 1-DOF prismatic joint model (``JointModelP{X,Y,Z}``, ``JointModelPrismaticUnaligned``)."""
     name = str(jm.shortname())
     return name.startswith("JointModelP") and not name.startswith("JointModelPlanar")
+
+
+def length_scale_at(model: pin.Model, data: pin.Data, q: np.ndarray) -> float:
+    """:attr:`Robot.length_scale` of a model at ``q`` (nq,), computed in ``data`` [m]."""
+    pin.forwardKinematics(model, data, q)
+    P = np.array([M.translation for M in data.oMi])
+    return max(float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))), 1e-9)

@@ -8,13 +8,15 @@ from typing import Any
 
 import numpy as np
 
+from pkdyn.dynamics.fastest_grid import FastestGrid
 from pkdyn.dynamics.simulation_result import SimulationResult
 from pkdyn.dynamics.sizing import SizingResult
+from pkdyn.dynamics.sizing_grid import SizingGrid
 from pkdyn.plotting._save import save_figure
 from pkdyn.results import register_plot
 from solvers.conditioning import NEAR_SINGULAR, THROUGH
 
-__all__ = ["plot_efforts", "plot_simulation"]
+__all__ = ["plot_efforts", "plot_fastest_grid", "plot_simulation", "plot_sizing_grid"]
 
 
 @register_plot(SizingResult)
@@ -102,7 +104,7 @@ def plot_simulation(
 
     from pkdyn.dynamics.simulation_output import simulation_columns
 
-    cols = simulation_columns(robot, result)
+    cols = simulation_columns(robot, result, readings=False)  # (joint coordinates)
     t = cols["t"]
     fig = Figure(figsize=(8.0, 11.0))
     axes = fig.subplots(5, 1, sharex=True)
@@ -132,6 +134,98 @@ def plot_simulation(
     fig.suptitle(
         title if title is not None else f"{robot.name}: {float(t[-1] - t[0]):g} s simulated"
     )
+    fig.tight_layout()
+    if path is not None:
+        save_figure(fig, path, dpi=120)
+    return fig
+
+
+@register_plot(SizingGrid)
+def plot_sizing_grid(
+    result: SizingGrid, path: str | Path | None = None, title: str | None = None
+) -> Any:
+    """The peak effort of each cell of a sizing grid, cells beyond a limit hatched.
+
+    Args:
+        result: A sizing grid (:func:`pkdyn.dynamics.sizing_grid.sizing_grid`).
+        path: Save the figure there (format from the suffix, e.g. ``.png``).
+        title: Figure title (default: robot and motion).
+
+    Returns:
+        The matplotlib Figure.
+
+    """
+    from matplotlib.figure import Figure
+
+    peak = result.peak
+    feasible = result.feasible
+    fig = Figure(figsize=(1.6 + 1.3 * len(result.payloads), 1.4 + 0.7 * len(result.cycle_times)))
+    ax = fig.subplots()
+    image = ax.imshow(peak, cmap="viridis", aspect="auto")
+    for i in range(peak.shape[0]):
+        for j in range(peak.shape[1]):
+            mark = "" if feasible[i, j] else "\nlimit!"
+            ax.text(
+                j,
+                i,
+                f"{peak[i, j]:.3g}{mark}",
+                ha="center",
+                va="center",
+                bbox={"facecolor": "white", "alpha": 0.7, "linewidth": 0},
+            )
+            if not feasible[i, j]:
+                ax.add_patch(_hatch(i, j))
+    ax.set_xticks(range(len(result.payloads)), [f"{m:g}" for m in result.payloads])
+    ax.set_yticks(range(len(result.cycle_times)), [f"{T:g}" for T in result.cycle_times])
+    ax.set_xlabel("payload [kg]")
+    ax.set_ylabel("cycle time [s]")
+    fig.colorbar(image, ax=ax, label=f"peak effort [{result.effort_unit}]")
+    ax.set_title(title if title is not None else f"{result.robot}: {result.trajectory}")
+    fig.tight_layout()
+    if path is not None:
+        save_figure(fig, path, dpi=120)
+    return fig
+
+
+def _hatch(i: int, j: int) -> Any:
+    """A hatched square over cell ``(i, j)``: a limit is exceeded there."""
+    from matplotlib.patches import Rectangle
+
+    return Rectangle((j - 0.5, i - 0.5), 1.0, 1.0, fill=False, hatch="//", edgecolor="red")
+
+
+@register_plot(FastestGrid)
+def plot_fastest_grid(
+    result: FastestGrid, path: str | Path | None = None, title: str | None = None
+) -> Any:
+    """Cycle time and RMS effort of the fastest cycles against the payload, per rotor inertia.
+
+    Args:
+        result: A grid of fastest cycles (:func:`pkdyn.dynamics.fastest_grid.fastest_grid`).
+        path: Save the figure there (format from the suffix, e.g. ``.png``).
+        title: Figure title (default: robot and path).
+
+    Returns:
+        The matplotlib Figure.
+
+    """
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(8.0, 6.0))
+    axes = fig.subplots(2, 1, sharex=True)
+    m = np.asarray(result.payloads)
+    T, rms = result.cycle_time, result.rms
+    for k, J in enumerate(result.rotor_inertias):
+        label = "the robot's drives" if J is None else f"rotor {J:g} kg m^2"
+        axes[0].plot(m, T[:, k], "o-", label=label)
+        axes[1].plot(m, rms[:, k], "o-")
+    axes[0].set_ylabel("cycle time [s]")
+    axes[1].set_ylabel(f"RMS effort [{result.effort_unit}]")
+    axes[1].set_xlabel("payload [kg]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize="small")
+    fig.suptitle(title if title is not None else f"{result.robot}: fastest {result.path}")
     fig.tight_layout()
     if path is not None:
         save_figure(fig, path, dpi=120)

@@ -17,7 +17,8 @@
   ``[i_u, i_v]``) and the map result;
 - :mod:`~pkdyn.precision.vectorised`, :mod:`~pkdyn.precision.maps`: closed forms of the library
   Gough-Stewart and Delta, figures over many poses and maps over workspace slices (the design
-  metrics ``stiffness_min`` and ``f1_min`` use them).
+  metrics ``stiffness_min`` and ``f1_min`` use them); :mod:`~pkdyn.precision.batched`: the
+  general path's condensation over many configurations at once.
 - :mod:`~pkdyn.precision.placements` and the parameter models (:mod:`~pkdyn.precision.
   parameters`: placement parameters, family shortcuts, family parameters);
 - :mod:`~pkdyn.precision.perturbation`: robots with those errors, built exactly;
@@ -30,9 +31,10 @@
 - :mod:`~pkdyn.precision.vibration`: :func:`vibration`, the tool's deviation from its rigid
   motion along a motion and its settling (the command: ``vibration_command``; the damping:
   ``vibration_damping``; the modal and multibody methods: ``vibration_modal``,
-  ``vibration_multibody``; the figures: ``vibration_figures``; the result:
-  ``vibration_result``; input shaping: ``vibration_shaping``; the fastest settling cycle:
-  ``vibration_fastest``; the MJCF export with servos: ``vibration_mjcf``).
+  ``vibration_multibody``; the library Delta's closed forms: ``vibration_closed_form``; the
+  figures: ``vibration_figures``; the result: ``vibration_result``; input shaping:
+  ``vibration_shaping``; the fastest settling cycle: ``vibration_fastest``; the MJCF export
+  with servos and compliant links, and MuJoCo's run: ``vibration_mjcf``).
 
 Every result derives from :class:`pkdyn.results.Result` (``table()``, ``to_json()``, ``plot()``
 where a picture helps) and carries ``valid`` and ``warnings``.

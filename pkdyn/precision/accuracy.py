@@ -46,7 +46,7 @@ from pkdyn.precision.budgets import (
 from pkdyn.precision.monte_carlo import MonteCarlo, monte_carlo
 from pkdyn.precision.parameters import ParameterModel
 from pkdyn.precision.validity import PrecisionWarning
-from pkdyn.results import Result
+from pkdyn.results import Result, renamed_keyword
 
 __all__ = [
     "DEFAULT_RESOLUTION",
@@ -129,6 +129,7 @@ class Accuracy(Result):
         return "\n".join(lines + [f"warning: {w}" for w in self.warnings])
 
 
+@renamed_keyword("progress_bar", "progress")
 def accuracy_budget(
     robot: Robot,
     q: Sequence[float] | np.ndarray,
@@ -140,7 +141,11 @@ def accuracy_budget(
     samples: int = 0,
     seed: int = 0,
     top: int | None = 10,
-    progress_bar: bool | None = None,
+    progress: bool | None = None,
+    *,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    timeout: float = 10.0,
 ) -> Accuracy:
     """Actuator and geometric budgets at ``q`` (and a Monte Carlo check), in one result.
 
@@ -156,7 +161,11 @@ def accuracy_budget(
         samples: Monte Carlo robots (0: none).
         seed: Random seed of the Monte Carlo.
         top: Tolerances ranked in the table and JSON (``None``: all).
-        progress_bar: Progress bar of the Monte Carlo.
+        progress: Progress bar of the Monte Carlo (``progress_bar``: its former name, kept
+            for one release).
+        workers: Worker processes of the Monte Carlo (:func:`pkdyn.precision.monte_carlo`).
+        scheduler: A Dask scheduler address for the Monte Carlo.
+        timeout: How long to wait for the scheduler or for a worker [s].
 
     Returns:
         The report.
@@ -188,6 +197,18 @@ def accuracy_budget(
     geo.top = top
     mc = None
     if samples:
-        mc = monte_carlo(robot, q, model, tolerance, samples, distribution, seed, progress_bar)
+        mc = monte_carlo(
+            robot,
+            q,
+            model,
+            tolerance,
+            samples,
+            distribution,
+            seed,
+            progress,
+            workers=workers,
+            scheduler=scheduler,
+            timeout=timeout,
+        )
         mc.first_order_rms = geo.position_rms
     return Accuracy(act, geo, mc, tuple(assumed))

@@ -49,7 +49,8 @@ from pkdyn.precision.grid import (
 from pkdyn.precision.parameters import ParameterModel
 from pkdyn.precision.sensitivity import pose_sensitivity
 from pkdyn.precision.validity import PrecisionWarning, budget_validity
-from pkdyn.progress import progress
+from pkdyn.progress import progress as progress_bar
+from pkdyn.results import renamed_keyword
 from pkdyn.threads import one_blas_thread
 
 __all__ = ["FIELDS", "AccuracyMap", "accuracy_map", "slice_grid"]
@@ -177,6 +178,7 @@ def _legacy_grid(P: np.ndarray, shape: tuple[int, ...] | None, axes: tuple[str, 
 
 
 @one_blas_thread
+@renamed_keyword("progress_bar", "progress")
 def accuracy_map(
     robot: Robot,
     plane: str | np.ndarray = "xy",
@@ -192,7 +194,7 @@ def accuracy_map(
     distribution: str = "uniform",
     rpy: Sequence[float] | None = None,
     limits: Sequence[str] = ("stroke", "joint"),
-    progress_bar: bool | None = None,
+    progress: bool | None = None,
     positions: np.ndarray | None = None,
     rotation: np.ndarray | None = None,
     shape: tuple[int, ...] | None = None,
@@ -216,7 +218,8 @@ def accuracy_map(
         distribution: ``uniform`` or ``normal`` (the tolerances' RMS).
         rpy: Platform orientation (roll, pitch, yaw) [rad] (default: the home orientation).
         limits: Limit kinds a cell must respect besides the reach (``stroke``, ``joint``).
-        progress_bar: Force the progress bar on or off.
+        progress: Force the progress bar on or off (``progress_bar``: its former name, kept
+            for one release).
         positions: Deprecated (the old call): platform positions (N, 3) [m].
         rotation: Deprecated: the platform orientation (3, 3) (give ``rpy``).
         shape: Deprecated: the grid shape of ``positions``.
@@ -231,7 +234,7 @@ def accuracy_map(
     """
     if not isinstance(plane, str) or positions is not None or (legacy and plane not in PLANES):
         names = ("resolution", "backlash", "model", "tolerance", "rotation", "shape", "axes",
-                 "progress_bar")  # fmt: skip
+                 "progress")  # fmt: skip
         if len(legacy) > len(names):
             raise InvalidInputError("accuracy_map", f"{len(legacy) + 2} positional arguments")
         old = dict(zip(names, legacy, strict=False))
@@ -251,7 +254,7 @@ def accuracy_map(
             old.get("rotation", rotation),
             old.get("shape", shape),
             old.get("axes", axes) or ("x", "y"),
-            old.get("progress_bar", progress_bar),
+            old.get("progress", progress),
         )
     if legacy:
         raise InvalidInputError(
@@ -272,7 +275,7 @@ def accuracy_map(
     if len(P) > MAX_CELLS:
         raise InvalidInputError("samples", f"{len(P)} cells: at most {MAX_CELLS}")
     inside = ev.violations(P, R, ("reach", *limits), 0.0) < 0
-    return _map(robot, grid, P, R, inside, errors, progress_bar, None)
+    return _map(robot, grid, P, R, inside, errors, progress, None)
 
 
 def _errors(
@@ -301,7 +304,7 @@ def _legacy(
     rotation: np.ndarray | None,
     shape: tuple[int, ...] | None,
     axes: tuple[str, str],
-    progress_bar: bool | None,
+    progress: bool | None,
 ) -> AccuracyMap:
     if isinstance(positions, str | bytes | dict):
         raise InvalidInputError("positions", "expected finite (N, 3) positions [m]")
@@ -321,7 +324,7 @@ def _legacy(
     errors = _errors(robot, resolution, backlash, model, tolerance, "uniform")
     grid = _legacy_grid(P, shape, axes)
     inside = np.ones(len(P), dtype=bool)
-    return _map(robot, grid, P, R, inside, errors, progress_bar, shape or (len(P),))
+    return _map(robot, grid, P, R, inside, errors, progress, shape or (len(P),))
 
 
 def _map(
@@ -331,7 +334,7 @@ def _map(
     R: np.ndarray,
     inside: np.ndarray,
     errors: tuple[np.ndarray, np.ndarray, ParameterModel | None, np.ndarray, np.ndarray, str],
-    progress_bar: bool | None,
+    progress: bool | None,
     legacy_shape: tuple[int, ...] | None,
 ) -> AccuracyMap:
     r, b, model, t, std, distribution = errors
@@ -343,7 +346,7 @@ def _map(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NearSingularityWarning)
         warnings.simplefilter("ignore", PrecisionWarning)
-        for k in progress(range(n), "accuracy map", "pose", progress_bar, min_items=200):
+        for k in progress_bar(range(n), "accuracy map", "pose", progress, min_items=200):
             if not inside[k]:
                 continue
             q = reach(robot, pin.SE3(R, P[k]), (q_prev, robot.q_home))

@@ -44,6 +44,7 @@ from pkdyn.precision.parameters import ParameterModel
 from pkdyn.precision.sensitivity import pose_sensitivity
 from pkdyn.precision.validity import Flagged, PrecisionWarning, Validity, budget_validity
 from pkdyn.results import Result, jsonable
+from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
 
 __all__ = [
@@ -51,11 +52,15 @@ __all__ = [
     "DEFAULT_TOLERANCE",
     "DISTRIBUTIONS",
     "MAX_ERROR",
+    "VERTEX_COLUMNS",
     "ActuatorAccuracy",
     "Budget",
     "GeometricAccuracy",
     "ToleranceRanking",
     "actuator_errors",
+    "box_worst",
+    "closed_form_position_worst",
+    "closed_form_sensitivity",
     "default_resolution",
     "geometric_errors",
     "largest_position_error",
@@ -101,12 +106,42 @@ def pose_error(reference: pin.SE3, M: pin.SE3) -> np.ndarray:
     )
 
 
+VERTEX_COLUMNS = 12
+"""Up to this many columns, :func:`worst_norm` evaluates every vertex of the box (2^(n-1))."""
+
+
+def _signs(n: int) -> np.ndarray:
+    """The sign vectors of half the box's vertices (2^(n-1), n): the others are their opposites."""
+    k = np.arange(2 ** max(n - 1, 0))
+    bits = (k[:, None] >> np.arange(n - 1)[None, :]) & 1
+    return np.concatenate([1.0 - 2.0 * bits, np.ones((k.size, 1))], axis=1)[:, :n]
+
+
+def box_worst(A: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """Largest ``|A_i e|`` over the box ``|e_k| <= half_k``, every vertex evaluated.
+
+    Args:
+        A: Matrices (..., d, n), n <= :data:`VERTEX_COLUMNS`.
+        half: Half-widths (n,) >= 0.
+
+    Returns:
+        The worst-case norms (...).
+
+    """
+    A = np.asarray(A, dtype=float)
+    E = _signs(A.shape[-1]) * np.asarray(half, dtype=float)[None, :]  # (m, n) vertices
+    V = np.matmul(A, E.T)  # (..., d, m)
+    return np.sqrt(np.max(np.sum(V * V, axis=-2), axis=-1))
+
+
 def worst_norm(A: np.ndarray, half: np.ndarray, directions: int = 2000) -> float:
     """Largest ``|A e|`` over the box ``|e_k| <= half_k`` (A with 2 or 3 rows).
 
-    The maximum of a convex function over a box is at a vertex; ``max |A e| = max_u sum_k half_k
-    |u . a_k|`` over unit vectors ``u``, searched on a Fibonacci sphere and refined by the
-    fixed-point ascent ``u <- A e(u) / |A e(u)|`` (each step moves to a better vertex).
+    The maximum of a convex function over a box is at a vertex: up to
+    :data:`VERTEX_COLUMNS` columns every vertex is evaluated (:func:`box_worst`). Beyond,
+    ``max |A e| = max_u sum_k half_k |u . a_k|`` over unit vectors ``u`` is searched on a
+    Fibonacci sphere and refined by the fixed-point ascent ``u <- A e(u) / |A e(u)|`` (each
+    step moves to a better vertex).
 
     Args:
         A: Matrix (d, n), d <= 3.
@@ -120,6 +155,8 @@ def worst_norm(A: np.ndarray, half: np.ndarray, directions: int = 2000) -> float
     A = np.asarray(A, dtype=float)
     if A.size == 0:
         return 0.0
+    if A.shape[1] <= VERTEX_COLUMNS:
+        return float(box_worst(A, half))
     d = A.shape[0]
     k = np.arange(directions) + 0.5
     if d == 3:
@@ -300,6 +337,7 @@ class ActuatorAccuracy(Budget):
         return "\n".join([self.headline(), self._components(), *self.validity.lines()])
 
 
+@one_blas_thread
 def actuator_errors(
     robot: Robot,
     q: Sequence[float] | np.ndarray,
@@ -512,6 +550,7 @@ class GeometricAccuracy(Budget):
         return "\n".join(lines + self._left_out() + self.validity.lines())
 
 
+@one_blas_thread
 def geometric_errors(
     robot: Robot,
     q: Sequence[float] | np.ndarray,
@@ -580,18 +619,22 @@ def default_resolution(robot: Robot) -> np.ndarray:
     return np.where(robot.actuator_prismatic, DEFAULT_RESOLUTION[1], DEFAULT_RESOLUTION[0])
 
 
+@one_blas_thread
 def largest_position_error(
     robot: Robot,
     positions: np.ndarray,
     rotations: np.ndarray | None = None,
     resolution: float | Sequence[float] | np.ndarray | None = None,
     backlash: float | Sequence[float] | np.ndarray = 0.0,
+    reached: bool = False,
 ) -> float:
     """Largest worst-case position error of actuator errors over platform poses [m].
 
     The ``error_max`` design metric: each pose reached by the inverse geometric model (the
     family's closed form when it has one, else from the previous pose), then
-    :func:`actuator_errors`' worst-case position error.
+    :func:`actuator_errors`' worst-case position error. The library Delta and Gough-Stewart
+    take their first-order sensitivity in closed form, every pose at once
+    (:func:`closed_form_position_worst`; the general path where it declines).
 
     Args:
         robot: The robot.
@@ -599,6 +642,8 @@ def largest_position_error(
         rotations: Platform orientations (N, 3, 3) (default: identity).
         resolution: Actuator resolution (default :func:`default_resolution`).
         backlash: Actuator backlash [rad or m].
+        reached: The poses are known to be reached within the limits (a required workspace's
+            check): the closed forms need not check the limits again.
 
     Returns:
         The largest error [m] over the poses reached.
@@ -610,17 +655,111 @@ def largest_position_error(
     P = np.atleast_2d(np.asarray(positions, dtype=float))
     R = np.broadcast_to(np.eye(3), (len(P), 3, 3)) if rotations is None else rotations
     res = default_resolution(robot) if resolution is None else resolution
-    worst, reached = 0.0, 0
+    r = _per_actuator(robot, "resolution", res)
+    b = _per_actuator(robot, "backlash", backlash)
+    if P.shape[0]:
+        fast = closed_form_position_worst(robot, P, np.asarray(R), 0.5 * (r + b), reached)
+        if fast is not None:
+            return float(np.max(fast))
+    worst, reached_n = 0.0, 0
     q_prev = None
     for p, rot in zip(P, R, strict=True):
         q = reach(robot, pin.SE3(np.asarray(rot), p), (None, q_prev))
         if q is None:
             continue
         q_prev = q
-        reached += 1
+        reached_n += 1
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", PrecisionWarning)
             worst = max(worst, actuator_errors(robot, q, res, backlash).position_worst)
-    if reached == 0:
+    if reached_n == 0:
         raise InvalidInputError("positions", "no pose was reached: no position error to report")
     return worst
+
+
+def closed_form_position_worst(
+    robot: Robot, P: np.ndarray, R: np.ndarray, half: np.ndarray, reached: bool = False
+) -> np.ndarray | None:
+    """Worst-case position error per pose (N,) [m] from the families' closed-form Jacobians.
+
+    The position rows of :func:`closed_form_sensitivity` over the box of half-widths ``half``
+    (:func:`box_worst`). ``None`` where the closed forms decline (the general path decides).
+
+    Args:
+        robot: The robot.
+        P: Platform positions (N, 3) [m].
+        R: Platform orientations (N, 3, 3) or (3, 3).
+        half: Actuator error half-widths (n_a,) [rad or m].
+        reached: The poses are known to be reached within the limits.
+
+    Returns:
+        The worst-case position errors, or ``None``.
+
+    """
+    J = closed_form_sensitivity(robot, P, R, reached)
+    return None if J is None else box_worst(J, half)
+
+
+def closed_form_sensitivity(
+    robot: Robot, P: np.ndarray, R: np.ndarray, reached: bool = False
+) -> np.ndarray | None:
+    """Platform position per actuator coordinate (N, 3, n_a) of the library families, closed form.
+
+    The first-order map of actuator errors to the platform position is the inverse of the
+    closed form's inverse Jacobian (:mod:`pkdyn.precision.vectorised`: the Delta's Clavel rows
+    read from the loaded model, the Gough-Stewart's leg rows), every pose at once: the position
+    rows of :func:`pkdyn.precision.sensitivity.pose_sensitivity`'s ``J``. ``None`` (the general
+    path decides, naming what is wrong) for other robots, and where a pose is out of reach or
+    within a margin of the closed forms' singularities.
+
+    Args:
+        robot: The robot.
+        P: Platform positions (N, 3) [m].
+        R: Platform orientations (N, 3, 3) or (3, 3).
+        reached: The poses are known to be reached within the limits (else the Delta's are
+            checked; the Gough-Stewart's are left to the general path).
+
+    Returns:
+        The sensitivities [m/rad or m/m], or ``None``.
+
+    """
+    from pkdyn.precision.vectorised import _delta_jacobian, _gs_rows, inv3, vectorised
+
+    P = np.atleast_2d(np.asarray(P, dtype=float))
+    kind = vectorised(robot)
+    if kind == "delta":
+        from pkdyn.dynamics.delta import DeltaDynamics
+
+        if not np.allclose(R, np.eye(3)):
+            return None
+        dd = DeltaDynamics(robot)
+        ok, Jinv, _, _, _, margin = _delta_jacobian(dd, P)
+        if not (ok.all() and np.all(margin > 10.0 * _NEAR_MARGIN)):
+            return None
+        if not reached:
+            from pkdyn.closed_form.delta import inverse
+
+            alpha, inside = inverse(dd.params, P - dd.f_off)
+            lim = np.all((alpha >= dd.lo) & (alpha <= dd.hi), axis=1)
+            if not np.all(inside & lim & _delta_mode(dd.params, P - dd.f_off)):
+                return None
+        J, _ = inv3(Jinv)
+        return np.asarray(J)
+    if kind == "gough_stewart" and reached:
+        rows = _gs_rows(robot.params.a, robot.params.b, P, R, None)
+        s = np.linalg.svd(rows, compute_uv=False)
+        if not np.all(s[:, -1] > 10.0 * _NEAR_MARGIN * s[:, 0]):
+            return None
+        return np.asarray(np.linalg.inv(rows)[:, :3, :])
+    return None
+
+
+_NEAR_MARGIN = 1e-3
+"""Relative margin to a singularity below which the closed forms leave a pose to the general
+path (which flags or refuses it by the rule of :mod:`pkdyn.precision.validity`)."""
+
+
+def _delta_mode(params: Any, P: np.ndarray) -> np.ndarray:
+    from pkdyn.model.families import FAMILIES
+
+    return np.asarray(FAMILIES["delta"]._module().in_working_mode(params, P))

@@ -44,7 +44,8 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
-from pkdyn.model.robot import Robot
+from pkdyn.model.reuse import kept
+from pkdyn.model.robot import Robot, length_scale_at
 from pkdyn.precision.links import LinkCompliance, link_compliances
 from pkdyn.precision.material import Material, as_material
 from solvers import ConstraintSet, FrameSpring, PassiveForces
@@ -229,8 +230,23 @@ def elastic_model(
     """
     k_a = _actuator_stiffness(robot, actuator_stiffness)
     mat = as_material(material) if material is not None else None
-    found = link_compliances(robot, mat, shear) if links else []
-    return _build(robot, k_a, found, mat, shear)
+    key = ("elastic model", k_a.tobytes(), repr(mat), bool(links), bool(shear))
+
+    def make() -> ElasticModel:  # kept without references to the robot (module reuse)
+        found = link_compliances(robot, mat, shear) if links else []
+        em = _build(robot, k_a, found, mat, shear)
+        return dataclasses.replace(
+            em,
+            robot=None if em.robot is robot else em.robot,  # type: ignore[arg-type]
+            base=None if em.base is robot else em.base,  # type: ignore[arg-type]
+        )
+
+    kept_em = kept(robot, key, make)
+    return dataclasses.replace(
+        kept_em,
+        robot=robot if kept_em.robot is None else kept_em.robot,
+        base=robot if kept_em.base is None else kept_em.base,
+    )
 
 
 def _build(
@@ -378,10 +394,16 @@ def _extended(
     )  # fmt: skip
     q_home = pin.neutral(new)
     q_home[q_index] = robot.q_home
+    # the extended tree's structure is the same at every pose of a sliding leg: its data (nv^3
+    # in size) is made once per robot and structure (pkdyn.model.reuse)
+    structure = tuple(
+        (str(new.joints[j].shortname()), int(new.parents[j])) for j in range(new.njoints)
+    )
+    data = kept(robot, ("elastic extension", structure), new.createData)
     ext = dataclasses.replace(
         robot,
         model=new,
-        data=new.createData(),
+        data=data,
         visual_model=_geometry(robot.visual_model, jmap),
         collision_model=_geometry(robot.collision_model, jmap),
         constraint_models=cms,
@@ -396,6 +418,7 @@ def _extended(
             robot, new, q_index, v_index, _spring_carrier(carrier, pieces), links, defl
         ),
     )
+    ext.__dict__["length_scale"] = length_scale_at(new, data, q_home)  # (in the kept data)
     return ext, q_index, v_index, defl
 
 

@@ -17,8 +17,10 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.build import build_tree, constraint_models, resolve_frame
+from pkdyn.model.candidate import CandidateBuilder
 from pkdyn.model.description import parse_description
 from pkdyn.model.families import FAMILIES
+from pkdyn.model.reuse import kept
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameter_model import ParameterModel, with_gains
 from pkdyn.precision.placements import Placement, placements
@@ -102,8 +104,34 @@ def built_placements(robot: Robot, params: Any) -> list[pin.SE3]:
         One placement per :func:`placements` entry (same order).
 
     """
-    fam = FAMILIES[_family_name(robot)]
-    return _built_placements(robot, fam.build_urdf(params), placements(robot))
+    return _written_placements(robot, params, placements(robot))
+
+
+def _written_placements(robot: Robot, params: Any, where: tuple[Placement, ...]) -> list[pin.SE3]:
+    """The placements of the family's robot with ``params``, written in place.
+
+    The family's candidate builder (:class:`pkdyn.model.candidate.CandidateBuilder`, one per
+    robot and thread) writes the builder's numbers into one model: the placements the URDF
+    path gives, bit for bit, without its text.
+    """
+    name = _family_name(robot)
+    builder = kept(robot, ("family candidates", name), lambda: CandidateBuilder(name))
+    model_robot = builder.unassembled(params)
+    model = model_robot.model
+    first: dict[str, int] = {}
+    for k, o in enumerate(model_robot.constraint_owner):
+        first.setdefault(o, k)
+    out = []
+    for pl in where:
+        if pl.kind == "joint":
+            out.append(pin.SE3(model.jointPlacements[model.getJointId(pl.name)]))
+        elif pl.kind == "closure":
+            cm = model_robot.constraint_models[first[pl.closure]]
+            out.append(pin.SE3(cm.joint1_placement if pl.side == 1 else cm.joint2_placement))
+        else:
+            assert model_robot.platform_frame is not None
+            out.append(pin.SE3(model.frames[model_robot.platform_frame].placement))
+    return out
 
 
 def _family_name(robot: Robot) -> str:
@@ -139,10 +167,9 @@ def family_parameters(robot: Robot, step: float = 1e-6, gains: bool = False) -> 
         InvalidInputError: The robot is of no library family.
 
     """
-    fam = FAMILIES[_family_name(robot)]
     p = _resolved(robot)
     where = placements(robot)
-    base = _built_placements(robot, fam.build_urdf(p), where)
+    base = _written_placements(robot, p, where)
     units_of = _units_of(type(p))
     cols, names, units, nominal = [], [], [], []
     for field_name, idx, value in _scalar_fields(p):
@@ -151,7 +178,7 @@ def family_parameters(robot: Robot, step: float = 1e-6, gains: bool = False) -> 
         try:
             for sgn in (1.0, -1.0):
                 q = _with_value(p, field_name, idx, value + sgn * h)
-                built = _built_placements(robot, fam.build_urdf(q), where)
+                built = _written_placements(robot, q, where)
                 twists.append(
                     np.concatenate(
                         [pin.log6(b0.actInv(b)).vector for b0, b in zip(base, built, strict=True)]
@@ -177,8 +204,13 @@ def family_parameters(robot: Robot, step: float = 1e-6, gains: bool = False) -> 
 
 
 def _resolved(robot: Robot) -> Any:
-    module = FAMILIES[_family_name(robot)]._module()
-    return module.resolved(robot.params) if hasattr(module, "resolved") else robot.params
+    """The robot's family parameters with the derived ones computed (once per robot)."""
+
+    def make() -> Any:
+        module = FAMILIES[_family_name(robot)]._module()
+        return module.resolved(robot.params) if hasattr(module, "resolved") else robot.params
+
+    return kept(robot, "resolved family parameters", make)
 
 
 def family_values(robot: Robot, model: ParameterModel, values: np.ndarray) -> Any:
@@ -195,11 +227,20 @@ def family_values(robot: Robot, model: ParameterModel, values: np.ndarray) -> An
     """
     p = _resolved(robot)
     where = {_param_name(f, idx, p): (f, idx) for f, idx, _ in _scalar_fields(p)}
+    changes: dict[str, Any] = {}  # field -> new value (arrays for tuple fields)
     for name, value in zip(model.names, np.asarray(values, dtype=float), strict=True):
         if name in where:
             f, idx = where[name]
-            p = _with_value(p, f, idx, float(value))
-    return p
+            if not idx:
+                changes[f] = float(value)
+                continue
+            arr = changes.setdefault(f, np.array(getattr(p, f), dtype=float))
+            arr[idx] = float(value)
+    for f, v in list(changes.items()):
+        if isinstance(v, np.ndarray):
+            nested = v.tolist()
+            changes[f] = tuple(tuple(r) for r in nested) if v.ndim == 2 else tuple(nested)
+    return dataclasses.replace(p, **changes) if changes else p  # (validated once)
 
 
 def _param_name(name: str, idx: tuple[int, ...], p: Any) -> str:

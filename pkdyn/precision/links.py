@@ -124,7 +124,17 @@ class _Rod:
 
 
 def _rods(robot: Robot) -> dict[int, _Rod]:
-    """The longest slender cylinder or capsule of each body (collision geometry first)."""
+    """The longest slender cylinder or capsule of each body (collision geometry first).
+
+    Read once per robot (:mod:`pkdyn.model.reuse`): a sliding leg's elastic model is rebuilt at
+    every pose from the same shapes.
+    """
+    from pkdyn.model.reuse import kept
+
+    return dict(kept(robot, "slender rods", lambda: _read_rods(robot)))
+
+
+def _read_rods(robot: Robot) -> dict[int, _Rod]:
     model = robot.model
     out: dict[int, _Rod] = {}
     for gm in (robot.collision_model, robot.visual_model):

@@ -37,6 +37,7 @@ from pkdyn.analysis.kinematics import NearSingularityWarning
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
+from pkdyn.precision.batched import batchable, translational_batch
 from pkdyn.precision.condensation import compliance, reduce
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.grid import (
@@ -171,6 +172,7 @@ def _poses(P: np.ndarray, R: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]
     return P, np.broadcast_to(Rm, (P.shape[0], 3, 3)) if Rm.ndim == 2 else Rm
 
 
+@one_blas_thread
 def pose_figures(
     robot: Robot,
     P: np.ndarray,
@@ -184,6 +186,10 @@ def pose_figures(
     frequency: bool = False,
     method: str = "auto",
     progress: bool | None = None,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    client: Any = None,
+    timeout: float = 10.0,
 ) -> PoseFigures:
     """Stiffness, deflection and lowest frequency at platform poses (module docstring).
 
@@ -201,6 +207,12 @@ def pose_figures(
         frequency: Compute the lowest natural frequency too.
         method: ``auto``, ``closed`` (refuse robots without a closed form) or ``general``.
         progress: Progress bar of the pose-by-pose path (``None``: when stderr is a terminal).
+        workers: Local worker processes for the general path (1: this process; ``None``: as
+            many as the machine justifies): chunks of :data:`CHUNK` poses, each starting its
+            inverse geometric model from home (:mod:`pkdyn.precision.parallel`).
+        scheduler: A Dask scheduler address for the general path.
+        client: A connected ``distributed.Client`` instead of ``scheduler``.
+        timeout: How long to wait for the scheduler or for a worker [s].
 
     Returns:
         The figures.
@@ -239,7 +251,37 @@ def pose_figures(
             f"{P.shape[0] / GENERAL_RATE / 60:.0f} min at ~{GENERAL_RATE:.0f} poses/s; give at "
             f"most {MAX_GENERAL_POSES} (a coarser grid)",
         )
+    if workers != 1 or scheduler or client is not None:
+        from pkdyn.precision.parallel import fingerprint, recipe, run_chunks
+
+        options = (actuator_stiffness, material, links, p, w, frequency)
+        payload = (recipe(robot), fingerprint(robot), bool(em.links), options)
+        items = [(P[k : k + CHUNK], Rs[k : k + CHUNK]) for k in range(0, P.shape[0], CHUNK)]
+        parts = run_chunks(_figures_chunk, payload, items, workers, scheduler, client, timeout, 1)
+        return PoseFigures(
+            np.concatenate([f.valid for f in parts]),
+            np.concatenate([f.stiffness_min for f in parts]),
+            np.concatenate([f.deflection for f in parts]),
+            np.concatenate([f.f1 for f in parts]),
+            "general",
+            np.concatenate([f.reached for f in parts]),
+            np.concatenate([f.near for f in parts]),
+        )
     return _general(em, P, Rs, p, w, frequency, progress)
+
+
+CHUNK = 64
+"""Poses per chunk of the general path on worker processes or a Dask cluster."""
+
+
+def _figures_chunk(payload: Any, items: list[tuple[np.ndarray, np.ndarray]]) -> list[PoseFigures]:
+    """The general path on chunks of poses, in a worker (:mod:`pkdyn.precision.parallel`)."""
+    from pkdyn.precision.parallel import worker_robot
+
+    how, digest, geometry, (k, material, links, point, w, frequency) = payload
+    robot = worker_robot(how, digest, geometry)
+    em = elastic_model(robot, k, material, links)
+    return [_general(em, P, R, point, w, frequency, False) for P, R in items]
 
 
 def _closed(f: VectorisedFigures) -> PoseFigures:
@@ -298,6 +340,27 @@ def _general(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NearSingularityWarning)
         warnings.simplefilter("ignore", PrecisionWarning)
+        if batchable(em):  # the poses first, then the stiffness of all at once (batched)
+            found, Q = [], []
+            for i in progress_bar(range(N), "precision", "pose", progress, min_items=200):
+                q = reach(robot, pin.SE3(R[i], P[i]), (q_prev, robot.q_home), check_limits=False)
+                if q is not None:
+                    found.append(i)
+                    Q.append(q)
+                    q_prev = q
+            at = np.array(found, dtype=int)
+            reached[at] = True
+            kmin[at], defl[at], near[at], valid[at] = translational_batch(em, np.array(Q), point, w)
+            if frequency:
+                for i, q in zip(found, Q, strict=True):
+                    if not valid[i]:
+                        continue
+                    try:
+                        f1[i] = modes(em, q, point=point).f1
+                    except PkdynError:
+                        kmin[i] = defl[i] = np.nan
+                        near[i] = valid[i] = False
+            return PoseFigures(valid, kmin, defl, f1, "general", reached, near)
         for i in progress_bar(range(N), "precision", "pose", progress, min_items=200):
             q = reach(robot, pin.SE3(R[i], P[i]), (q_prev, robot.q_home), check_limits=False)
             if q is None:
@@ -346,6 +409,10 @@ def precision_map(
     method: str = "auto",
     progress: bool | None = None,
     value: float | None = None,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    client: Any = None,
+    timeout: float = 10.0,
 ) -> PrecisionMap:
     """Stiffness (and deflection, lowest frequency) over a plane of the translation workspace.
 
@@ -368,6 +435,10 @@ def precision_map(
         method: ``auto``, ``closed`` or ``general`` (:func:`pose_figures`).
         progress: Progress bar of the pose-by-pose path.
         value: Deprecated: the third coordinate of the plane [m] (give ``center``).
+        workers: Local worker processes of the general path (:func:`pose_figures`).
+        scheduler: A Dask scheduler address of the general path.
+        client: A connected ``distributed.Client`` instead of ``scheduler``.
+        timeout: How long to wait for the scheduler or for a worker [s].
 
     Returns:
         The map.
@@ -414,6 +485,10 @@ def precision_map(
         frequency=frequency,
         method=method,
         progress=progress,
+        workers=workers,
+        scheduler=scheduler,
+        client=client,
+        timeout=timeout,
     )
     shape = grid.shape
     status = np.full(P.shape[0], UNREACHABLE, dtype=np.int8)

@@ -39,7 +39,8 @@ from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
 from pkdyn.precision.material import Material
 from pkdyn.precision.stiffness import nothing_compliant, prepared
 from pkdyn.precision.validity import Flagged, Validity, stiffness_check
-from pkdyn.results import Result, jsonable
+from pkdyn.results import Result, deprecated, jsonable, renamed_keyword
+from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
 from solvers import numerics, solve_lm
 
@@ -70,7 +71,8 @@ class Modes(Flagged, Result):
         validity: ``valid`` and ``warnings`` (:mod:`pkdyn.precision.validity`).
         robot: The robot's name.
         links: Names of the compliant links.
-        count: Modes :meth:`to_json` and :meth:`table` report (``None``: all).
+        top: Modes :meth:`to_json` and :meth:`table` report, the lowest first (``None``: all;
+            ``count`` is its former name, kept for one release).
         elastic: The elastic model the modes were computed on (at their configuration).
 
     """
@@ -89,7 +91,7 @@ class Modes(Flagged, Result):
     validity: Validity = field(default_factory=Validity)
     robot: str = ""
     links: tuple[str, ...] = ()
-    count: int | None = None
+    top: int | None = None
     elastic: ElasticModel | None = field(default=None, repr=False)
 
     @property
@@ -97,19 +99,32 @@ class Modes(Flagged, Result):
         """Lowest natural frequency [Hz] (``inf`` for a rigid robot)."""
         return float(self.frequencies[0]) if self.frequencies.size else float("inf")
 
-    def _shown(self, count: int | None) -> int:
+    @property
+    def count(self) -> int | None:
+        """Deprecated: :attr:`top` (kept for one release)."""
+        deprecated("Modes.count", "Modes.top")
+        return self.top
+
+    @count.setter
+    def count(self, value: int | None) -> None:
+        deprecated("Modes.count", "Modes.top")
+        self.top = value
+
+    def _shown(self, top: int | None) -> int:
         n = self.frequencies.size
-        c = self.count if count is None else count
+        c = self.top if top is None else top
         return n if c is None else min(int(c), n)
 
-    def to_json(self, count: int | None = None) -> dict[str, Any]:
+    @renamed_keyword("count", "top")
+    def to_json(self, top: int | None = None) -> dict[str, Any]:
         """JSON values: ``frequencies`` [Hz], ``platform`` motions, ``internal_mobilities``...
 
         Args:
-            count: Report the lowest ``count`` modes (default: :attr:`count`, else all).
+            top: Report the lowest ``top`` modes (default: :attr:`top`, else all; ``count``:
+                its former name, kept for one release).
 
         """
-        n = self._shown(count)
+        n = self._shown(top)
         unit = np.linalg.norm(self.platform[:n], axis=1, keepdims=True)
         return {
             "robot": self.robot,
@@ -125,9 +140,16 @@ class Modes(Flagged, Result):
             "platform motion [translation of the point, rotation], world axes, unit norm",
         }
 
-    def table(self, count: int | None = None) -> str:
-        """The frequencies with their units, what each mode moves, the flags."""
-        n = self._shown(count)
+    @renamed_keyword("count", "top")
+    def table(self, top: int | None = None) -> str:
+        """The frequencies with their units, what each mode moves, the flags.
+
+        Args:
+            top: Report the lowest ``top`` modes (default: :attr:`top`, else all; ``count``:
+                its former name, kept for one release).
+
+        """
+        n = self._shown(top)
         lines = [f"natural frequencies of {self.robot or 'the robot'}"]
         if self.rigid:
             lines.append(
@@ -178,6 +200,7 @@ def _eigen(red: Reduced, M: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     return lam, X, int(massless.sum())
 
 
+@one_blas_thread
 def modes(
     robot: Robot | ElasticModel,
     q: Sequence[float] | np.ndarray,
@@ -302,9 +325,10 @@ def _rigid_modes(em: ElasticModel, q: np.ndarray, q_ext: np.ndarray, point: np.n
     )
 
 
-def modes_json(robot: Robot, q: np.ndarray, count: int | None = None, **kwargs: Any) -> dict:
-    """JSON-ready :func:`modes` (keys of :meth:`Modes.to_json`)."""
-    return modes(robot, q, **kwargs).to_json(count)
+@renamed_keyword("count", "top")
+def modes_json(robot: Robot, q: np.ndarray, top: int | None = None, **kwargs: Any) -> dict:
+    """JSON-ready :func:`modes` (keys of :meth:`Modes.to_json`; ``top``: the lowest shown)."""
+    return modes(robot, q, **kwargs).to_json(top)
 
 
 def mode_trajectory(

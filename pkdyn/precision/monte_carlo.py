@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.model.assembly import forward_geometry
@@ -28,8 +29,8 @@ from pkdyn.precision.parameters import (
 )
 from pkdyn.precision.perturbation import perturbed, with_placements
 from pkdyn.precision.sensitivity import pose_sensitivity
-from pkdyn.progress import progress
-from pkdyn.results import Result, jsonable
+from pkdyn.progress import progress as progress_bar
+from pkdyn.results import Result, jsonable, renamed_keyword
 from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
 
@@ -116,6 +117,7 @@ def _draw(rng: np.random.Generator, t: np.ndarray, distribution: str) -> np.ndar
     return rng.normal(0.0, 1.0, t.size) * (t / 3.0)
 
 
+@renamed_keyword("progress_bar", "progress")
 @one_blas_thread
 def monte_carlo(
     robot: Robot,
@@ -125,7 +127,12 @@ def monte_carlo(
     samples: int = 200,
     distribution: str = "uniform",
     seed: int = 0,
-    progress_bar: bool | None = None,
+    progress: bool | None = None,
+    *,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    client: Any = None,
+    timeout: float = 10.0,
 ) -> MonteCarlo:
     """Pose errors of ``samples`` robots with random geometric errors, solved exactly.
 
@@ -142,13 +149,21 @@ def monte_carlo(
         samples: Number of robots (at most 100,000).
         distribution: ``uniform`` or ``normal``.
         seed: Random seed.
-        progress_bar: Force the progress bar on or off (default: on a terminal).
+        progress: Force the progress bar on or off (default: on a terminal;
+            ``progress_bar``, its former name, is kept for one release).
+        workers: Local worker processes (1: this process; ``None``: as many as the machine
+            justifies); the samples are drawn here, so the robots do not depend on it.
+        scheduler: A Dask scheduler address (``tcp://host:8786``) to run the robots on.
+        client: A connected ``distributed.Client`` instead of ``scheduler``.
+        timeout: How long to wait for the scheduler or for a worker [s].
 
     Returns:
         The sampled pose errors.
 
     Raises:
-        InvalidInputError: Malformed tolerances, distribution or sample count.
+        InvalidInputError: Malformed tolerances, distribution, sample count or workers.
+        StudyError: A worker died, the scheduler cannot be reached, or the robot cannot be
+            rebuilt in the workers (:mod:`pkdyn.precision.parallel`).
 
     """
     from pkdyn.inputs import count
@@ -168,27 +183,142 @@ def monte_carlo(
     nominal = robot.platform_placement(qq)
     readings = qq[robot.actuated_q]
     rng = np.random.default_rng(seed)
-    errors, failed = [], 0
     family = model.kind == "family parameters"
-    for _ in progress(range(int(samples)), "Monte Carlo", "robot", progress_bar, min_items=50):
-        dp = _draw(rng, t, distribution)
-        try:
-            if family:
-                sample = _family_sample(robot, model, dp)
-                qa = readings * (1.0 + model.gains(dp))
-            else:
-                pert = perturbed(robot, model, dp)
-                sample, qa = pert.robot, pert.joint_coordinates(readings)
-            res = forward_geometry(sample, qa, q_init=qq, check_limits=False)
-        except PkdynError:
+    if family and _delta_closed_form(robot, model):
+        # every sample at once: the same draws (one stream, sample after sample)
+        dp_all = _draw_all(rng, t, distribution, int(samples))
+        errors_all, ok = _delta_family_errors(robot, model, dp_all, readings, nominal)
+        return MonteCarlo(errors_all[ok], int(np.sum(~ok)), distribution=distribution, seed=seed)
+    if workers != 1 or scheduler or client is not None:
+        from pkdyn.precision.parallel import fingerprint, recipe, run_chunks
+
+        dp_all = _draw_all(rng, t, distribution, int(samples))
+        payload = (recipe(robot), fingerprint(robot), model, qq, family)
+        found = run_chunks(
+            _chunk, payload, list(dp_all), workers, scheduler, client, timeout, chunk=64
+        )
+        kept_rows = [e for e in found if e is not None]
+        return MonteCarlo(
+            np.array(kept_rows).reshape(-1, 6),
+            sum(e is None for e in found),
+            distribution=distribution,
+            seed=seed,
+        )
+    errors, failed = [], 0
+    for _ in progress_bar(range(int(samples)), "Monte Carlo", "robot", progress, min_items=50):
+        e = _sample_error(robot, model, _draw(rng, t, distribution), qq, family, nominal)
+        if e is None:
             failed += 1
-            continue
-        assert res.placement is not None
-        errors.append(pose_error(nominal, res.placement))
+        else:
+            errors.append(e)
     return MonteCarlo(np.array(errors).reshape(-1, 6), failed, distribution=distribution, seed=seed)
+
+
+def _sample_error(
+    robot: Robot,
+    model: ParameterModel,
+    dp: np.ndarray,
+    q: np.ndarray,
+    family: bool,
+    nominal: pin.SE3,
+) -> np.ndarray | None:
+    """The pose error (6,) of one robot drawn with parameters ``dp``, or ``None`` (no assembly)."""
+    readings = q[robot.actuated_q]
+    try:
+        if family:
+            sample = _family_sample(robot, model, dp)
+            qa = readings * (1.0 + model.gains(dp))
+        else:
+            pert = perturbed(robot, model, dp, assemble=False, shared=True)
+            sample, qa = pert.robot, pert.joint_coordinates(readings)
+        res = forward_geometry(sample, qa, q_init=q, check_limits=False)
+    except PkdynError:
+        return None
+    assert res.placement is not None
+    return pose_error(nominal, res.placement)
+
+
+def _chunk(payload: Any, chunk: list[np.ndarray]) -> list[np.ndarray | None]:
+    """Pose errors of a chunk of draws, in a worker (:mod:`pkdyn.precision.parallel`)."""
+    from pkdyn.precision.parallel import worker_robot
+
+    how, digest, model, q, family = payload
+    robot = worker_robot(how, digest, geometry=False)
+    nominal = robot.platform_placement(q)
+    return [_sample_error(robot, model, dp, q, family, nominal) for dp in chunk]
+
+
+def _draw_all(rng: np.random.Generator, t: np.ndarray, distribution: str, n: int) -> np.ndarray:
+    """``n`` draws of :func:`_draw` at once (n, len(t)): the same numbers, in the same order."""
+    if distribution == "uniform":
+        return rng.uniform(-1.0, 1.0, (n, t.size)) * t
+    return rng.normal(0.0, 1.0, (n, t.size)) * (t / 3.0)
+
+
+_DELTA_GEOMETRY = ("ra", "rb", "la", "lb")
+"""The library Delta's parameters its platform position depends on (Clavel's closed form)."""
+
+
+def _delta_closed_form(robot: Robot, model: ParameterModel) -> bool:
+    """Whether the samples of a family model of the Delta have Clavel's closed form.
+
+    A library Delta with three ball-jointed arms and its platform frame at the nacelle's
+    centre: every sample is a Delta of the family whose nacelle keeps its orientation and sits
+    where Clavel's direct model puts it (the other parameters of the model, the bars' spacing,
+    move no nacelle position).
+    """
+    from pkdyn.dynamics.delta import has_delta_dynamics
+
+    if robot.family != "delta" or not has_delta_dynamics(robot):
+        return False
+    assert robot.platform_frame is not None
+    offset = robot.model.frames[robot.platform_frame].placement.translation
+    return bool(np.all(np.asarray(offset) == 0.0))
 
 
 def _family_sample(robot: Robot, model: ParameterModel, dp: np.ndarray) -> Robot:
     """The robot its family builder gives with the model's parameters moved by ``dp``."""
     params = family_values(robot, model, model.nominal + dp)
-    return with_placements(robot, placements(robot), built_placements(robot, params))
+    return with_placements(
+        robot, placements(robot), built_placements(robot, params), assemble=False
+    )
+
+
+class _Arrays:
+    """Clavel's four lengths as (n, 1) arrays: :func:`pkdyn.closed_form.delta.forward` on all."""
+
+    def __init__(self, values: dict[str, np.ndarray]) -> None:
+        for k, v in values.items():
+            setattr(self, k, v[:, None])
+
+
+def _delta_family_errors(
+    robot: Robot,
+    model: ParameterModel,
+    dp: np.ndarray,
+    readings: np.ndarray,
+    nominal: pin.SE3,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pose errors (n, 6) and which samples assemble (n,) of family samples of the Delta.
+
+    Per sample, the lengths ``ra, rb, la, lb`` of the family's parameters moved by ``dp`` and
+    the actuators at the readings with the samples' gains, Clavel's direct model; the nacelle
+    keeps the nominal orientation (a zero rotation error).
+    """
+    from pkdyn.closed_form.delta import forward
+    from pkdyn.precision.family_parameters import _resolved
+
+    p0 = _resolved(robot)
+    values = model.nominal[None, :] + dp
+    names = list(model.names)
+    lengths = {
+        k: values[:, names.index(k)] if k in names else np.full(len(dp), float(getattr(p0, k)))
+        for k in _DELTA_GEOMETRY
+    }
+    gains = np.array([model.gains(d) for d in dp]) if model.G.size else np.zeros((len(dp), 3))
+    qa = readings[None, :3] * (1.0 + gains[:, :3])
+    geometry: Any = _Arrays(lengths)
+    P, ok = forward(geometry, qa)
+    errors = np.zeros((len(dp), 6))
+    errors[:, :3] = P - np.asarray(nominal.translation)[None, :]
+    return errors, ok

@@ -21,7 +21,8 @@ import pinocchio as pin
 from pkdyn.model.assembly import forward_geometry
 from pkdyn.model.build import constraint_set
 from pkdyn.model.description import FrameRef
-from pkdyn.model.robot import Robot
+from pkdyn.model.reuse import kept, kept_data
+from pkdyn.model.robot import Robot, length_scale_at
 from pkdyn.precision.parameters import ParameterModel, Placement, local_placement
 
 __all__ = ["Perturbed", "perturbed", "with_placements"]
@@ -45,13 +46,25 @@ class Perturbed:
         return (1.0 + self.gains) * np.asarray(readings, dtype=float)
 
 
-def perturbed(robot: Robot, model: ParameterModel, p: Sequence[float] | np.ndarray) -> Perturbed:
+def perturbed(
+    robot: Robot,
+    model: ParameterModel,
+    p: Sequence[float] | np.ndarray,
+    assemble: bool = True,
+    *,
+    shared: bool = False,
+) -> Perturbed:
     """The robot with parameters ``p`` of ``model`` applied (nonlinear: ``M exp(E p)``).
 
     Args:
         robot: The nominal robot (the model's).
         model: The parameter model.
         p: Parameter values (n_par,) [m, rad, -]: errors from the nominal robot.
+
+        assemble: Assemble its home near the original's (``False``: ``q_home`` is the
+            original's, for a caller that solves its own configurations, as the Monte Carlo).
+        shared: Write into one working copy of the model kept for ``robot`` (the Monte
+            Carlo's robots, one at a time): the robot returned is valid until the next call.
 
     Returns:
         The perturbed robot and its actuator gains.
@@ -64,11 +77,13 @@ def perturbed(robot: Robot, model: ParameterModel, p: Sequence[float] | np.ndarr
         for pl, x in zip(model.placements, xi, strict=True)
     ]
     moved = [bool(np.any(x != 0.0)) for x in xi]
-    out = _rebuilt(robot, model.placements, new, moved)
+    out = _rebuilt(robot, model.placements, new, moved, assemble, shared)
     return Perturbed(out, model.gains(p))
 
 
-def with_placements(robot: Robot, where: Sequence[Placement], values: Sequence[pin.SE3]) -> Robot:
+def with_placements(
+    robot: Robot, where: Sequence[Placement], values: Sequence[pin.SE3], assemble: bool = True
+) -> Robot:
     """The robot with the given placements replaced.
 
     Args:
@@ -76,6 +91,7 @@ def with_placements(robot: Robot, where: Sequence[Placement], values: Sequence[p
         where: Placements (:func:`pkdyn.precision.parameters.placements`).
         values: Their new values (in the parent joint frame for joints, in the joint frame of
             the placed frame for closure frames and the platform).
+        assemble: Assemble its home near ``robot``'s (see :func:`perturbed`).
 
     Returns:
         The new robot, assembled near ``robot``'s home.
@@ -84,13 +100,28 @@ def with_placements(robot: Robot, where: Sequence[Placement], values: Sequence[p
     moved = [
         not local_placement(robot, pl).isApprox(M, 0.0) for pl, M in zip(where, values, strict=True)
     ]
-    return _rebuilt(robot, list(where), list(values), moved)
+    return _rebuilt(robot, list(where), list(values), moved, assemble)
 
 
 def _rebuilt(
-    robot: Robot, where: Sequence[Placement], values: Sequence[pin.SE3], moved: Sequence[bool]
+    robot: Robot,
+    where: Sequence[Placement],
+    values: Sequence[pin.SE3],
+    moved: Sequence[bool],
+    assemble: bool = True,
+    shared: bool = False,
 ) -> Robot:
-    model = pin.Model(robot.model)
+    if shared:  # one working copy per robot, every placement written (Monte Carlo, in turn)
+        model = kept(robot, "perturbed model", lambda: pin.Model(robot.model))
+        nominal = robot.model
+        for pl in where:
+            if pl.kind == "joint":
+                model.jointPlacements[pl.joint] = nominal.jointPlacements[pl.joint]
+        if robot.platform_frame is not None:
+            pf = robot.platform_frame
+            model.frames[pf].placement = nominal.frames[pf].placement
+    else:
+        model = pin.Model(robot.model)
     desc = robot.description
     platform = desc.platform
     frames: dict[tuple[str, int], pin.SE3] = {}
@@ -136,15 +167,18 @@ def _rebuilt(
     out = dataclasses.replace(
         robot,
         model=model,
-        data=model.createData(),
+        data=model.createData() if assemble else kept_data(robot, "perturbed robots"),
         description=desc,
         constraint_models=cms,
         constraints=constraints,
         params=None,
     )
-    out.q_home = forward_geometry(
-        out, robot.q_home[robot.actuated_q], q_init=robot.q_home, check_limits=False
-    ).q
+    if assemble:
+        out.q_home = forward_geometry(
+            out, robot.q_home[robot.actuated_q], q_init=robot.q_home, check_limits=False
+        ).q
+    else:  # (its length scale computed in the kept data, not a new one)
+        out.__dict__["length_scale"] = length_scale_at(model, out.data, out.q_home)
     return out
 
 

@@ -58,6 +58,7 @@ from pkdyn.precision.validity import (
     stiffness_check,
 )
 from pkdyn.results import Result, jsonable
+from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity, vector
 from solvers import numerics
 
@@ -488,6 +489,7 @@ def prepared(
     return em, qq, p, w
 
 
+@one_blas_thread
 def stiffness(
     robot: Robot | ElasticModel,
     q: Sequence[float] | np.ndarray,

@@ -27,8 +27,10 @@ that the figures compare with other tools):
   (:mod:`pkdyn.precision.vibration_figures`).
 
 Two methods: ``modal`` (:mod:`pkdyn.precision.vibration_modal`: the pose-dependent modes along
-the path, superposed; fast) and ``multibody`` (:mod:`pkdyn.precision.vibration_multibody`: the
-elastic model simulated, nothing linearised; the reference). An input shaper
+the path, superposed; fast; in closed form on the library Delta with rigid links,
+:mod:`pkdyn.precision.vibration_closed_form`, where no pose is solved) and ``multibody``
+(:mod:`pkdyn.precision.vibration_multibody`: the elastic model simulated, nothing linearised;
+the reference). An input shaper
 (:mod:`pkdyn.precision.vibration_shaping`, ``zv`` or ``zvd``) can be applied to the command.
 """
 
@@ -36,13 +38,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from pkdyn.dynamics.delta import DeltaDynamics
 from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import TRAJECTORIES, TaskTrajectory, named_task
 from pkdyn.exceptions import InvalidInputError
@@ -52,6 +55,12 @@ from pkdyn.precision.material import Material
 from pkdyn.precision.modes import Modes
 from pkdyn.precision.modes import modes as modes_at
 from pkdyn.precision.stiffness import nothing_compliant
+from pkdyn.precision.vibration_closed_form import (
+    DeltaModes,
+    DeltaPoses,
+    applies,
+    joint_deformation,
+)
 from pkdyn.precision.vibration_command import FEEDFORWARDS, Command, command
 from pkdyn.precision.vibration_damping import Damping, actuator_damping_values, damping
 from pkdyn.precision.vibration_damping import damping_ratio as check_ratio
@@ -66,8 +75,9 @@ from pkdyn.precision.vibration_modal import (
     pose_samples,
 )
 from pkdyn.precision.vibration_multibody import multibody_response
-from pkdyn.precision.vibration_result import DominantMode, VibrationResult
+from pkdyn.precision.vibration_result import Display, DominantMode, VibrationResult
 from pkdyn.precision.vibration_shaping import SHAPERS, Shaper, shape, shaper_modes, tracked
+from pkdyn.threads import one_blas_thread
 
 __all__ = [
     "DEFAULT_BAND",
@@ -174,6 +184,13 @@ def _with_payload(em: ElasticModel, payload: float, point: np.ndarray) -> Elasti
     return dataclasses.replace(em, robot=with_payload(em.robot, payload, offset=tuple(point)))
 
 
+def _carries(cmd: Command, payload: float, point: np.ndarray) -> bool:
+    """Whether the command's loaded robot carries this payload at this point."""
+    return cmd.payload == payload and (
+        payload == 0.0 or (cmd.point is not None and np.array_equal(cmd.point, point))
+    )
+
+
 def _damping_c(em: ElasticModel, dmp: Damping) -> np.ndarray:
     """All the viscous coefficients per extended coordinate: servos, links, the robot's own."""
     c = dmp.coefficients(em)
@@ -182,22 +199,42 @@ def _damping_c(em: ElasticModel, dmp: Damping) -> np.ndarray:
     return c
 
 
-def _shaper(
-    kind: str,
-    count: int,
-    em: ElasticModel,
-    cmd: Command,
-    point: np.ndarray,
-    poses: int,
-    c: np.ndarray,
-) -> Shaper:
+def _shaper(kind: str, count: int, st: Setup, cmd: Command) -> Shaper:
     """The shaper of the lowest ``count`` modes, their frequencies tracked along ``cmd``."""
-    pm = path_modes(em, cmd.joint.q, pose_samples(cmd.t.size, min(poses, 17)), point)
+    pm, c, _ = _path_modes(st, cmd, 17)
     n = shaper_modes(count, pm.count)
     w = 2.0 * np.pi * pm.frequencies[:, :n]
     U = pm.shapes[:, :n]
-    z = np.einsum("pmv,v,pmv->pm", U, c, U) / (2.0 * w)
+    if c.ndim == 1:
+        z = np.einsum("pmv,v,pmv->pm", U, c, U) / (2.0 * w)
+    else:
+        z = np.einsum("pmv,pvw,pmw->pm", U, c, U) / (2.0 * w)
     return tracked(kind, cmd.t[pm.samples], pm.frequencies[:, :n], z)
+
+
+def _path_modes(
+    st: Setup, cmd: Command, most: int | None = None
+) -> tuple[PathModes, np.ndarray, DeltaPoses | None]:
+    """The modes along ``cmd`` (at most ``most`` poses) and the damping in their coordinates.
+
+    In closed form (:mod:`pkdyn.precision.vibration_closed_form`: the nacelle's coordinates)
+    at every sample (or ``st.poses``) when it applies, with the arm geometry at every sample;
+    else at ``st.poses`` poses (default :data:`~pkdyn.precision.vibration_modal.DEFAULT_POSES`,
+    :data:`~pkdyn.precision.vibration_modal.DEFAULT_POSES_LINKS` with compliant links), with
+    the damping per extended coordinate.
+    """
+    n = cmd.t.size
+    if st.arms is not None:
+        count = n if st.poses is None else st.poses
+        samples = pose_samples(n, count if most is None else min(count, most))
+        poses = st.arms.poses(cmd.task.pose[:, :3])
+        at = poses.take(samples)
+        c_a = st.c[np.asarray(st.elastic.robot.actuated_v)]
+        return st.arms.path_modes(at, samples), st.arms.damping(at, c_a), poses
+    default = DEFAULT_POSES_LINKS if st.em.links else DEFAULT_POSES
+    count = default if st.poses is None else st.poses
+    samples = pose_samples(n, count if most is None else min(count, most))
+    return path_modes(st.elastic, cmd.joint.q, samples, st.point, st.progress), st.c, None
 
 
 def _dominant(
@@ -229,6 +266,7 @@ def _dominant(
     ]
 
 
+@one_blas_thread
 def vibration(
     robot: Robot,
     trajectory: str | Path | TaskTrajectory = "adept",
@@ -280,7 +318,8 @@ def vibration(
             methods (the lowest; the others respond quasi-statically in the modal method);
             ``None``: those up to 8 times the first frequency at the middle pose.
         poses: Poses along the motion where the modes are computed (modal method; default 33
-            with rigid links, 65 with compliant ones).
+            with rigid links, 65 with compliant ones; every sample where the closed form
+            applies: :mod:`pkdyn.precision.vibration_closed_form`).
         point: Reference point (tool), platform frame [m] (default: the platform origin).
         dt: Sample period of a named trajectory [s].
         profile: Motion law of a named trajectory (``quintic`` or ``jerk``).
@@ -336,17 +375,16 @@ def vibration(
             "the multibody method simulates each actuator as a servo of finite stiffness; "
             "give finite stiffnesses (or use the modal method)",
         )
-    if poses is None:
-        poses = DEFAULT_POSES_LINKS if em.links else DEFAULT_POSES
     cmd = command(em, task, payload, p, feedforward, progress)
-    em = em.at(cmd.joint.q[0])  # (a compliant prismatic rod: its length at the start)
+    if any(lc.sliding for lc in em.links):
+        em = em.at(cmd.joint.q[0])  # (a compliant prismatic rod: its length at the start)
     setup = prepare(
         robot, em, cmd, p, payload, feedforward, damping_ratio, actuator_damping, band, dwell,
         modes, poses, progress,
     )  # fmt: skip
     shaped: Shaper | None = None
     if shaper is not None:
-        shaped = _shaper(shaper, shaper_n, setup.elastic, cmd, p, poses, setup.c)
+        shaped = _shaper(shaper, shaper_n, setup, cmd)
         cmd = command(em, shape(cmd.task, shaped), payload, p, feedforward, progress)
     return analyse(setup, cmd, method, shaped)
 
@@ -369,8 +407,10 @@ class Setup:
         f_top: Highest of their frequencies at the middle pose [Hz].
         band: Settling band [m].
         dwell: Settling dwell [s].
-        poses: Poses along a motion for the modal method.
+        poses: Poses along a motion for the modal method (``None``: its default).
         progress: Progress bars.
+        arms: The closed-form modes of the arms, when they apply
+            (:mod:`pkdyn.precision.vibration_closed_form`).
 
     """
 
@@ -387,8 +427,9 @@ class Setup:
     f_top: float
     band: float
     dwell: float
-    poses: int
+    poses: int | None
     progress: bool | None
+    arms: DeltaModes | None = None
 
     @property
     def rest(self) -> float:
@@ -419,6 +460,7 @@ class Setup:
         return sub
 
 
+@one_blas_thread
 def prepare(
     robot: Robot,
     em: ElasticModel,
@@ -431,28 +473,41 @@ def prepare(
     band: float,
     dwell: float,
     modes: int | None,
-    poses: int,
+    poses: int | None,
     progress: bool | None = None,
 ) -> Setup:
     """The shared part of the analyses of ``cmd``'s path: damping from its middle pose, modes kept.
 
     Arguments as :func:`vibration` (checked already), the command built.
     """
-    emL = _with_payload(em, payload, point)
     mid = (cmd.t.size - 1) // 2
-    m_mid = modes_at(emL, cmd.joint.q[mid], point=point)
-    dmp = damping(emL, m_mid.f1, float(cmd.t[mid]), damping_ratio, actuator_damping)
-    f_mid = m_mid.frequencies
+    arms = None
+    if applies(em):
+        if cmd.delta is not None and _carries(cmd, payload, point):  # (its closed forms read)
+            emL = dataclasses.replace(em, robot=cmd.loaded)
+            arms = DeltaModes(cmd.delta, em.actuator_stiffness)
+        else:
+            emL = _with_payload(em, payload, point)
+            arms = DeltaModes(DeltaDynamics(emL.robot), em.actuator_stiffness)
+    else:
+        emL = _with_payload(em, payload, point)
+    if arms is not None:
+        at = arms.poses(cmd.task.pose[mid : mid + 1, :3])
+        f_mid = arms.path_modes(at, np.array([mid])).frequencies[0]
+    else:
+        f_mid = modes_at(emL, cmd.joint.q[mid], point=point).frequencies
+    dmp = damping(emL, float(f_mid[0]), float(cmd.t[mid]), damping_ratio, actuator_damping)
     if modes is None:
         kept = int(np.searchsorted(f_mid, MODE_CUTOFF * f_mid[0], side="right"))
     else:
         kept = min(modes, f_mid.size)
     return Setup(
         robot, em, emL, point, payload, feedforward, dmp, _damping_c(emL, dmp), kept,
-        float(f_mid[0]), float(f_mid[kept - 1]), band, dwell, poses, progress,
+        float(f_mid[0]), float(f_mid[kept - 1]), band, dwell, poses, progress, arms,
     )  # fmt: skip
 
 
+@one_blas_thread
 def analyse(st: Setup, cmd: Command, method: str, shaped: Shaper | None = None) -> VibrationResult:
     """The analysis of one command by one method (see :func:`vibration`)."""
     emL, p = st.elastic, st.point
@@ -460,10 +515,15 @@ def analyse(st: Setup, cmd: Command, method: str, shaped: Shaper | None = None) 
     sub = st.sub(h, T)
     n_kept = st.kept
     pm: PathModes | None = None
+    poses: DeltaPoses | None = None
     if method == "modal":
-        pm = path_modes(emL, cmd.joint.q, pose_samples(cmd.t.size, st.poses), p, st.progress)
-        F = loads(emL, cmd.q, cmd.v, cmd.a, cmd.tau_ff)
-        r = modal_response(pm, cmd.t[pm.samples], cmd.t, F, st.c, n_kept, sub, st.rest)
+        pm, c, poses = _path_modes(st, cmd)
+        if poses is not None:  # the arms' unbalanced efforts seen by the nacelle
+            assert cmd.arms is not None
+            F = np.einsum("nki,nk->ni", poses.Jinv, cmd.tau_ff - cmd.arms.tau)
+        else:
+            F = loads(emL, cmd.q, cmd.v, cmd.a, cmd.tau_ff)
+        r = modal_response(pm, cmd.t[pm.samples], cmd.t, F, c, n_kept, sub, st.rest)
         static = static_deflection(pm, F[-1])
         f_start, f_end = pm.frequencies[0, :n_kept], pm.frequencies[-1, :n_kept]
         dominant = _dominant(
@@ -489,7 +549,16 @@ def analyse(st: Setup, cmd: Command, method: str, shaped: Shaper | None = None) 
         drift = mb.energy_drift
         internal = mE.internal
     n_c = min(t_c.size, u.shape[0])
-    Qc = np.vstack([cmd.q, np.tile(cmd.q[-1], (max(n_c - cmd.q.shape[0], 0), 1))])[:n_c]
+
+    def shown() -> Display:
+        Qc = np.vstack([cmd.q, np.tile(cmd.q[-1], (max(n_c - cmd.q.shape[0], 0), 1))])[:n_c]
+        if poses is not None:  # (the nacelle's deviations: the arms' through J_inv)
+            Jinv = poses.Jinv[np.minimum(np.arange(n_c), poses.Jinv.shape[0] - 1)]
+            E = np.einsum("nki,ni->nk", Jinv, u[:n_c])
+            return t_c[:n_c], Qc, joint_deformation(emL, Qc, E)
+        return t_c[:n_c], Qc, u[:n_c]
+
+    closed = poses is not None
     return result(
         st,
         cmd.task.name,
@@ -506,7 +575,7 @@ def analyse(st: Setup, cmd: Command, method: str, shaped: Shaper | None = None) 
         None if pm is None else int(pm.samples.size),
         None if shaped is None else shaped.describe(),
         drift,
-        (t_c[:n_c], Qc, u[:n_c]),
+        shown if closed else shown(),  # (closed form: the joints mapped for a display only)
     )
 
 
@@ -532,9 +601,13 @@ def result(
     poses: int | None,
     shaper: dict[str, Any] | None,
     drift: float | None,
-    display: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+    display: Display | Callable[[], Display] | None,
 ) -> VibrationResult:
-    """The figures of a deviation and the result holding them."""
+    """The figures of a deviation and the result holding them.
+
+    ``display``: the commanded configurations and the deformation for displays
+    (:meth:`VibrationResult.animation`), or what computes them when first asked for.
+    """
     from pkdyn.analysis.kinematics import TASK_NAMES
 
     rows = np.asarray(st.robot.task_rows, dtype=int)
@@ -543,7 +616,7 @@ def result(
         t_out, d[:, rows][:, tr], dd[:, rows][:, tr], static[rows][tr], T, st.dwell, st.band,
         st.rest,
     )  # fmt: skip
-    t_c, Qc, u = display if display is not None else (None, None, None)
+    t_c, Qc, u = display if isinstance(display, tuple) else (None, None, None)
     return VibrationResult(
         robot=st.robot.name,
         trajectory=name,
@@ -576,6 +649,7 @@ def result(
         shaper=shaper,
         energy_drift=drift,
         elastic=st.elastic,
+        animate=display if callable(display) else None,
         t_coarse=t_c,
         command=Qc,
         deformation=u,

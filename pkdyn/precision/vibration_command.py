@@ -5,8 +5,10 @@ It is put on a uniform time grid (resampled by quintic Hermite interpolation whe
 are not evenly spaced: exact for the quintic and polynomial motion laws within a move), mapped
 to the joints (:func:`pkdyn.dynamics.trajectory.map_task_trajectory`: closure-consistent ``q``,
 ``v``, ``a``) and embedded in the elastic model (links undeformed, actuators at their commanded
-positions). The command must start and end at rest: the residual vibration and the settling
-are defined after a stop.
+positions). On the library Delta the actuators' motion and the rigid efforts are closed forms
+(:mod:`pkdyn.precision.vibration_closed_form`) and the joints are mapped only when an analysis
+asks for them (:attr:`Command.joint`). The command must start and end at rest: the residual
+vibration and the settling are defined after a stop.
 
 The actuators' feedforward ``tau_ff`` (the servo law's last term, see
 :mod:`pkdyn.precision.vibration`) is computed here: ``none`` (zero), ``gravity`` (the rigid
@@ -20,19 +22,35 @@ position, rate and acceleration at both ends (:class:`Hermite5`).
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
+from pkdyn.dynamics.delta import DeltaDynamics
 from pkdyn.dynamics.inverse import inverse_dynamics
 from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import JointTrajectory, TaskTrajectory, map_task_trajectory
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.robot import Robot
 from pkdyn.precision.elastic import ElasticModel
+from pkdyn.precision.vibration_closed_form import (
+    ActuatorMotion,
+    arm_motion,
+    closed_form,
+    delta_joint_trajectory,
+    gravity_efforts,
+)
 
-__all__ = ["FEEDFORWARDS", "REST_TOL", "Command", "Hermite5", "command", "uniform"]
+__all__ = [
+    "FEEDFORWARDS",
+    "REST_TOL",
+    "Command",
+    "Hermite5",
+    "command",
+    "extended_motion",
+    "uniform",
+]
 
 FEEDFORWARDS = ("none", "gravity", "rigid")
 """The servo feedforward terms (see :mod:`pkdyn.precision.vibration`)."""
@@ -145,12 +163,24 @@ class Hermite5:
             k = min(int(np.searchsorted(T, t, side="right")) - 1, T.size - 2)
         h = self.h[k]
         s = (t - T[k]) / h
-        c = self.c[k]
-        c0, c1, c2, c3, c4, c5 = c[0], c[1], c[2], c[3], c[4], c[5]
-        x = c0 + s * (c1 + s * (c2 + s * (c3 + s * (c4 + s * c5))))
-        xd = (c1 + s * (2 * c2 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))) / h
-        xdd = (2 * c2 + s * (6 * c3 + s * (12 * c4 + s * 20 * c5))) / (h * h)
-        return x, xd, xdd
+        s2 = s * s
+        s3 = s2 * s
+        basis = np.array(
+            [
+                [1.0, s, s2, s3, s2 * s2, s3 * s2],
+                [0.0, 1.0 / h, 2.0 * s / h, 3.0 * s2 / h, 4.0 * s3 / h, 5.0 * s2 * s2 / h],
+                [
+                    0.0,
+                    0.0,
+                    2.0 / (h * h),
+                    6.0 * s / (h * h),
+                    12.0 * s2 / (h * h),
+                    20.0 * s3 / (h * h),
+                ],
+            ]
+        )
+        out = basis @ self.c[k]  # (3, n): value, rate, acceleration
+        return out[0], out[1], out[2]
 
 
 def uniform(task: TaskTrajectory) -> TaskTrajectory:
@@ -189,26 +219,78 @@ def _check_rest(task: TaskTrajectory) -> None:
 class Command:
     """The commanded motion on a uniform grid and its feedforward (see the module docstring).
 
+    The joint trajectory of the whole mechanism is mapped when first asked for
+    (:attr:`joint`): a closed-form analysis (:mod:`pkdyn.precision.vibration_closed_form`)
+    needs the actuators' motion only.
+
     Attributes:
         task: The commanded platform trajectory (uniform samples, ``t[0] = 0``).
-        joint: Its joint trajectory on the robot as loaded.
-        q: Commanded configurations of the elastic model (N, nq_ext), links undeformed.
-        v: Commanded velocities (N, nv_ext).
-        a: Commanded accelerations (N, nv_ext).
         tau_ff: Actuator feedforward (N, n_a) [N m or N], joint side.
         feedforward: ``none``, ``gravity`` or ``rigid``.
         loaded: The robot as loaded, with the payload (the rigid model of the feedforward).
+        em: The elastic model the command is embedded in (its ``base`` is the robot as loaded).
+        arms: The actuators' motion and rigid efforts in closed form, when the robot has one.
+        progress: Progress bar of the mapping.
+        payload: The payload ``loaded`` carries [kg].
+        point: Where, platform frame [m].
+        delta: The closed forms of the Delta read from ``loaded``
+            (:class:`pkdyn.dynamics.delta.DeltaDynamics`), when they apply.
+        mapped: The joint trajectory, once mapped.
 
     """
 
     task: TaskTrajectory
-    joint: JointTrajectory
-    q: np.ndarray
-    v: np.ndarray
-    a: np.ndarray
     tau_ff: np.ndarray
     feedforward: str
     loaded: Robot
+    em: ElasticModel
+    arms: ActuatorMotion | None = None
+    progress: bool | None = None
+    payload: float = 0.0
+    point: np.ndarray | None = None
+    delta: DeltaDynamics | None = field(default=None, repr=False)
+    mapped: JointTrajectory | None = field(default=None, repr=False)
+    _extended: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+
+    @property
+    def joint(self) -> JointTrajectory:
+        """Its joint trajectory on the robot as loaded, mapped on first use.
+
+        In closed form on the library Delta
+        (:func:`~pkdyn.precision.vibration_closed_form.delta_joint_trajectory`), else by
+        :func:`~pkdyn.dynamics.trajectory.map_task_trajectory`.
+
+        Raises:
+            TrajectoryError: The motion leaves the workspace or meets a singularity.
+
+        """
+        if self.mapped is None and self.delta is not None and self.arms is not None:
+            self.mapped = delta_joint_trajectory(self.em.base, self.delta, self.task, self.arms)
+        if self.mapped is None:
+            self.mapped = map_task_trajectory(
+                self.em.base, self.task, check_speeds=False, progress=self.progress
+            )
+        return self.mapped
+
+    def _ext(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if self._extended is None:
+            self._extended = extended_motion(self.em, self.joint)
+        return self._extended
+
+    @property
+    def q(self) -> np.ndarray:
+        """Commanded configurations of the elastic model (N, nq_ext), links undeformed."""
+        return self._ext()[0]
+
+    @property
+    def v(self) -> np.ndarray:
+        """Commanded velocities (N, nv_ext)."""
+        return self._ext()[1]
+
+    @property
+    def a(self) -> np.ndarray:
+        """Commanded accelerations (N, nv_ext)."""
+        return self._ext()[2]
 
     @property
     def t(self) -> np.ndarray:
@@ -227,6 +309,9 @@ class Command:
 
     def actuators(self) -> Hermite5:
         """Interpolation of the actuators' commanded positions, rates and accelerations."""
+        if self.arms is not None:
+            m = self.arms
+            return Hermite5(self.t, m.qa, m.qa_dot, m.qa_ddot)
         jt = self.joint
         return Hermite5(jt.t, jt.qa, jt.qa_dot, jt.qa_ddot)
 
@@ -281,16 +366,26 @@ def command(
     task = uniform(task)
     _check_rest(task)
     robot = em.base
-    joint = map_task_trajectory(robot, task, check_speeds=False, progress=progress)
-    q, v, a = extended_motion(em, joint)
     loaded = with_payload(robot, payload, offset=tuple(point)) if payload > 0.0 else robot
     n_a = len(robot.actuators)
-    if feedforward == "none":
-        tau = np.zeros((task.t.size, n_a))
-    else:
-        jt = joint
+    cmd = Command(
+        task, np.zeros((task.t.size, n_a)), feedforward, loaded, em, None, progress, payload,
+        np.array(point, dtype=float),
+    )  # fmt: skip
+    if closed_form(robot):
+        cmd.delta = DeltaDynamics(loaded)
+        arms = arm_motion(cmd.delta, task)
+        cmd.arms = arms
         if feedforward == "gravity":
-            zero = np.zeros_like(joint.v)
-            jt = dataclasses.replace(joint, v=zero, a=zero)
-        tau = inverse_dynamics(loaded, jt).tau
-    return Command(task, joint, q, v, a, np.asarray(tau, dtype=float), feedforward, loaded)
+            cmd.tau_ff = gravity_efforts(cmd.delta, task)
+        elif feedforward == "rigid":
+            cmd.tau_ff = arms.tau.copy()
+    else:
+        joint = cmd.joint  # (mapped here: its errors before any other work)
+        if feedforward != "none":
+            jt = joint
+            if feedforward == "gravity":
+                zero = np.zeros_like(joint.v)
+                jt = dataclasses.replace(joint, v=zero, a=zero)
+            cmd.tau_ff = np.asarray(inverse_dynamics(loaded, jt).tau, dtype=float)
+    return cmd

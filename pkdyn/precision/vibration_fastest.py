@@ -62,6 +62,7 @@ from pkdyn.precision.vibration_modal import (
 from pkdyn.precision.vibration_result import VibrationResult
 from pkdyn.precision.vibration_shaping import SHAPERS, Shaper, shape, tracked
 from pkdyn.results import Result, jsonable
+from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
 from solvers import numerics
 
@@ -302,6 +303,7 @@ def _settled(kind: str | None, scale: float | None, v: VibrationResult, count: i
     return Settled(kind, scale, v.duration, v.settling_time, v.duration + v.dwell, count, v)
 
 
+@one_blas_thread
 def fastest_settling(
     robot: Robot,
     path: TaskTrajectory,
@@ -390,10 +392,7 @@ def fastest_settling(
         )
     p = np.zeros(3)
     joint1, task1 = fast.scaled(1.0)
-    cmd1 = Command(
-        task1, joint1, *extended_motion(em, joint1), np.asarray(fast.efforts.tau), feedforward,
-        robot,
-    )  # fmt: skip
+    cmd1 = Command(task1, np.asarray(fast.efforts.tau), feedforward, robot, em, mapped=joint1)
     st = prepare(
         robot, em, cmd1, p, payload, feedforward, damping_ratio, actuator_damping, band, dwell,
         modes, poses, progress,

@@ -89,6 +89,10 @@ class PathModes:
         platform: Platform motion per mode (P, n, 6): reference point [m], rotation [rad].
         mass: Mass matrix of the elastic model at each pose (P, nv_ext, nv_ext).
         internal: Internal mobilities without stiffness (not modes).
+        coordinates: ``extended`` (the extended tree's velocity coordinates) or ``platform``
+            (the platform's translation, world axes: the Delta's closed form,
+            :mod:`pkdyn.precision.vibration_closed_form`); the shapes, mass, forces and damping
+            of a response share them.
 
     """
 
@@ -98,6 +102,7 @@ class PathModes:
     platform: np.ndarray
     mass: np.ndarray
     internal: int
+    coordinates: str = "extended"
 
     @property
     def count(self) -> int:
@@ -256,7 +261,7 @@ class ModalResponse:
         d: Platform deviation at ``t`` (M, 6): reference point [m], rotation [rad], world axes.
         d_dot: Its rate (M, 6) [m/s, rad/s].
         t_coarse: Times of ``u`` (K,) [s]: the command's samples, then the same step at rest.
-        u: Deformation at ``t_coarse`` (K, nv_ext) (extended velocity coordinates).
+        u: Deformation at ``t_coarse`` (K, nv_ext) (in the coordinates of the modes).
         eta_end: Modal coordinates at the end of the motion (n_kept,), end-pose modes.
         eta_dot_end: Their rates (n_kept,).
         eta_static_end: Their static equilibrium at the end pose (n_kept,).
@@ -300,7 +305,7 @@ def modal_response(
     pose_t: np.ndarray,
     t: np.ndarray,
     F: np.ndarray,
-    c_diag: np.ndarray,
+    damping: np.ndarray,
     count: int | None,
     sub: int,
     rest: float,
@@ -313,7 +318,8 @@ def modal_response(
         pose_t: Time of each of its poses (P,) [s] (the first at 0, the last at the end).
         t: Command sample times (N,) [s], ``t[0] = 0``.
         F: Unbalanced generalized force at the samples (N, nv_ext).
-        c_diag: Viscous damping per extended velocity coordinate (nv_ext,).
+        damping: Viscous damping per extended velocity coordinate (nv_ext,), or a damping
+            matrix per pose (P, nv_ext, nv_ext) (``pm``'s coordinates).
         count: Modes integrated (the lowest; ``None``: all), the others quasi-static.
         sub: Output steps per sample interval.
         rest: Time simulated after the motion [s].
@@ -337,7 +343,10 @@ def modal_response(
     B = pm.shapes[:, :m]  # (P, m, nv): the basis of each segment
     PL = pm.platform[:, :m]  # (P, m, 6)
     BT = np.swapaxes(B, 1, 2)
-    Cb = (B * c_diag) @ BT  # damping in each basis (constant)
+    if damping.ndim == 1:
+        Cb = (B * damping) @ BT  # damping in each basis (constant)
+    else:
+        Cb = B @ damping @ BT
     # the next pose's matrices in this pose's basis
     # (the next pose's integrated modes seen from this basis: B^T ~ U'^T T, T = U' M' B^T)
     T_all = B[1:] @ (pm.mass[1:] @ BT[:-1])  # (P-1, m, m)
@@ -374,14 +383,11 @@ def modal_response(
         Fd = spline(t, 1) if spline is not None else np.gradient(F, t, axis=0)
         ends = (F[:-1], F[1:], Fd[:-1], Fd[1:])
     FL, FR, FdL, FdR = ends
-    BF = np.empty((K, 4, m))
-    for j in np.unique(seg):
-        ks = np.flatnonzero(seg == j)
-        Bj = B[j].T
-        BF[ks, 0] = FL[ks] @ Bj
-        BF[ks, 1] = FR[ks] @ Bj
-        BF[ks, 2] = FdL[ks] @ Bj
-        BF[ks, 3] = FdR[ks] @ Bj
+    BF = np.stack([FL, FR, FdL, FdR], axis=1)  # (K, 4, nv)
+    if P < K:  # (by segment: fewer bases than intervals)
+        BF = np.concatenate([BF[seg == j] @ B[j].T for j in range(P - 1)])
+    else:
+        BF = BF @ BT[seg]
     pF = BF @ V
     pL, pR, dL, dR = pF[:, 0], pF[:, 1], pF[:, 2], pF[:, 3]
     h = dt[:, None]
@@ -396,21 +402,8 @@ def modal_response(
     switch = np.flatnonzero(seg[1:] != seg[:-1])
     S[switch] = T_all[seg[switch]]
     G = VT[1:] @ (Mk[1:] @ (S @ V[:-1]))
-    X = np.empty((K + 1, m))
-    Vv = np.empty((K + 1, m))
-    x = pL[0] / w2[0]
-    v = np.zeros(m)
+    X, Vv, x, v = _march(pL[0] / w2[0], np.zeros(m), Pp, x_h, v_h, EC, ES, sig, w2, G)
     p0, p1 = Pp[0], Pp[1]
-    for k in range(K):
-        X[k] = x
-        Vv[k] = v
-        e = x - p0[k]
-        ed = v - p1[k]
-        x = x_h[k] + EC[k] * e + ES[k] * (ed + sig[k] * e)
-        v = v_h[k] + EC[k] * ed - ES[k] * (w2[k] * e + sig[k] * ed)
-        if k < K - 1:
-            x = G[k] @ x
-            v = G[k] @ v
     # at the end of the motion: into the end pose's modes
     jL = int(seg[-1])
     to_end = T_all[jL] @ V[-1]
@@ -436,19 +429,17 @@ def modal_response(
         inv = 1.0 / W2[:, m:]
         Rp = np.swapaxes(pm.platform[:, m:] * inv[:, :, None], 1, 2) @ Uq
         Ru = np.swapaxes(Uq * inv[:, :, None], 1, 2) @ Uq
-        Fin = _hermite3(t, ends, sub)
-        Fdin = _hermite3(t, ends, sub, derivative=True)
-        segs, lams = np.repeat(seg, sub), np.repeat(lam, sub)[:, None]
-        d += (1.0 - lams) * np.einsum("icv,iv->ic", Rp[segs], Fin) + lams * np.einsum(
-            "icv,iv->ic", Rp[segs + 1], Fin
-        )
-        dd += (1.0 - lams) * np.einsum("icv,iv->ic", Rp[segs], Fdin) + lams * np.einsum(
-            "icv,iv->ic", Rp[segs + 1], Fdin
-        )
+        # per interval, the two poses' maps blended at its middle, applied to the forcing's
+        # end values and rates (the cubic interpolant is linear in them)
+        lk = lam[:, None, None]
+        Rk = (1.0 - lk) * Rp[seg] + lk * Rp[seg + 1]  # (K, 6, nv)
+        projected = tuple(np.einsum("kcv,kv->kc", Rk, X) for X in ends)
+        d += _hermite3(t, projected, sub)
+        dd += _hermite3(t, projected, sub, derivative=True)
     # at rest after the motion: constant coefficients at the end pose
     jE = P - 1
     wE = omega_all[jE, :m]
-    zE = np.einsum("mv,v,mv->m", B[jE], c_diag, B[jE]) / (2.0 * wE)
+    zE = np.diagonal(Cb[jE]) / (2.0 * wE)
     FE = F[-1]
     xsE = (B[jE] @ FE) / (wE * wE)
     h0 = float(dt[-1])
@@ -472,9 +463,11 @@ def modal_response(
     if Ru is not None:
         segc = np.append(np.minimum(seg + np.rint(lam).astype(int), P - 1), [jE] * (n_rest + 1))
         Fc = np.vstack([F, np.tile(FE, (n_rest, 1))])
-        u += np.einsum("kwv,kv->kw", Ru[segc], Fc)
+        for j in np.unique(segc):  # (by pose: no copy of a map per sample)
+            at = segc == j
+            u[at] += Fc[at] @ Ru[j].T
     jM = int(np.argmin(np.abs(np.asarray(pose_t) - 0.5 * t[-1])))
-    zM = np.einsum("mv,v,mv->m", B[jM], c_diag, B[jM]) / (2.0 * omega_all[jM, :m])
+    zM = np.diagonal(Cb[jM]) / (2.0 * omega_all[jM, :m])
     return ModalResponse(
         t=np.concatenate([t_in, t_rest]),
         d=np.vstack([d, dr]),
@@ -487,6 +480,68 @@ def modal_response(
         zeta_end=zE,
         zeta_middle=zM,
     )
+
+
+_PHI_ENTRIES = 2_000_000
+"""Most entries of the stacked transition matrices of :func:`_march` (else a block loop)."""
+
+
+def _march(
+    x: np.ndarray,
+    v: np.ndarray,
+    Pp: tuple[np.ndarray, ...],
+    x_h: np.ndarray,
+    v_h: np.ndarray,
+    EC: np.ndarray,
+    ES: np.ndarray,
+    sig: np.ndarray,
+    w2: np.ndarray,
+    G: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Modal coordinates and rates at the start of each interval, and at the end.
+
+    Over interval ``k`` (its own modes, exact solution): with ``e = x - p0``, ``e' = v - p1``
+    (the particular solution's value and rate at its start), ``x <- x_h + EC e + ES (e' +
+    sigma e)`` and ``v <- v_h + EC e' - ES (w^2 e + sigma e')``, then into the next interval's
+    modes by ``G``. Affine in ``(x, v)``: the maps are built for every interval at once
+    (numpy) and applied in sequence.
+
+    Returns:
+        ``(X, V, x_end, v_end)``: (K + 1, m) each (the last row unset) and the state at the
+        end of the last interval, in its modes.
+
+    """
+    K, m = EC.shape
+    p0, p1 = Pp[0], Pp[1]
+    a, b = EC + ES * sig, ES  # x' = a x + b v + ox
+    c, d = -ES * w2, EC - ES * sig  # v' = c x + d v + ov
+    ox = x_h - a * p0 - b * p1
+    ov = v_h - c * p0 - d * p1
+    X = np.empty((K + 1, m))
+    Vv = np.empty((K + 1, m))
+    if K * 4 * m * m <= _PHI_ENTRIES:
+        Gf = np.concatenate([G, np.eye(m)[None]])  # (the last interval stays in its modes)
+        Phi = np.empty((K, 2 * m, 2 * m))
+        Phi[:, :m, :m] = Gf * a[:, None, :]
+        Phi[:, :m, m:] = Gf * b[:, None, :]
+        Phi[:, m:, :m] = Gf * c[:, None, :]
+        Phi[:, m:, m:] = Gf * d[:, None, :]
+        off = np.concatenate([Gf @ ox[:, :, None], Gf @ ov[:, :, None]], axis=1)[:, :, 0]
+        S = np.empty((K + 1, 2 * m))
+        s = np.concatenate([x, v])
+        for k in range(K):
+            S[k] = s
+            s = Phi[k] @ s + off[k]
+        X[:K], Vv[:K] = S[:K, :m], S[:K, m:]
+        return X, Vv, s[:m], s[m:]
+    for k in range(K):
+        X[k] = x
+        Vv[k] = v
+        x, v = a[k] * x + b[k] * v + ox[k], c[k] * x + d[k] * v + ov[k]
+        if k < K - 1:
+            x = G[k] @ x
+            v = G[k] @ v
+    return X, Vv, x, v
 
 
 def _hermite3(

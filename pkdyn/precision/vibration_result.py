@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -17,7 +18,10 @@ from pkdyn.precision.vibration_figures import RESIDUAL_WINDOW
 from pkdyn.results import Result, jsonable
 from pkdyn.units import quantity, vector
 
-__all__ = ["DominantMode", "VibrationResult"]
+__all__ = ["Display", "DominantMode", "VibrationResult"]
+
+Display = tuple[np.ndarray, np.ndarray, np.ndarray]
+"""``(t_coarse, command, deformation)`` of a result, for displays."""
 
 
 @dataclass(frozen=True)
@@ -81,6 +85,9 @@ class VibrationResult(Result):
         shaper: The input shaper applied to the command (its description), or ``None``.
         energy_drift: Relative violation of the energy balance (multibody method), or ``None``.
         elastic: The elastic model (for displays; not serialised).
+        animate: What computes ``t_coarse``, ``command`` and ``deformation`` when they are
+            first asked for (:meth:`animation`; a closed-form analysis maps the joints for a
+            display only).
         t_coarse: Times of ``deformation`` (K,) [s].
         command: Commanded extended configurations at ``t_coarse`` (K, nq_ext).
         deformation: Deformation from the command at ``t_coarse`` (K, nv_ext).
@@ -119,10 +126,25 @@ class VibrationResult(Result):
     shaper: dict[str, Any] | None = None
     energy_drift: float | None = None
     elastic: ElasticModel | None = field(default=None, repr=False)
+    animate: Callable[[], Display] | None = field(default=None, repr=False)
     t_coarse: np.ndarray | None = field(default=None, repr=False)
     command: np.ndarray | None = field(default=None, repr=False)
     deformation: np.ndarray | None = field(default=None, repr=False)
     prismatic: tuple[bool, ...] = ()
+
+    def animation(self) -> Display | None:
+        """``(t_coarse, command, deformation)`` for displays, ``None`` when not kept.
+
+        Times (K,) [s], commanded configurations of the elastic model's robot (K, nq_ext) and
+        the deformation from them (K, nv_ext); computed on first use when the analysis did
+        not need them (``animate``).
+        """
+        if self.deformation is None and self.animate is not None:
+            self.t_coarse, self.command, self.deformation = self.animate()
+            self.animate = None
+        if self.t_coarse is None or self.command is None or self.deformation is None:
+            return None
+        return self.t_coarse, self.command, self.deformation
 
     @property
     def translation(self) -> np.ndarray:

@@ -32,8 +32,10 @@ def exaggerated(
 
     """
     em = result.elastic
-    if em is None or result.command is None or result.deformation is None:
+    shown = result.animation()
+    if em is None or shown is None:
         raise InvalidInputError("result", "this result keeps no deformation to animate")
+    t_coarse, command, deformation = shown
     r = em.robot
     if scale is None:
         top = max(float(result.peak_deviation), float(np.max(result.deviation_norm)), 1e-300)
@@ -43,9 +45,9 @@ def exaggerated(
     scale = positive("scale", scale, bound=1e12)
     free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
     cs, data = r.constraints, r.data
-    Q = np.empty_like(result.command)
-    q = result.command[0]
-    for k, (qc, u) in enumerate(zip(result.command, result.deformation, strict=True)):
+    Q = np.empty_like(command)
+    q = command[0]
+    for k, (qc, u) in enumerate(zip(command, deformation, strict=True)):
         q = pin.integrate(r.model, qc, scale * u)
         if cs.nc:
             q = solve_lm(
@@ -57,8 +59,7 @@ def exaggerated(
                 tol=1e-10,
             ).q
         Q[k] = q
-    assert result.t_coarse is not None
-    return np.asarray(result.t_coarse), Q, float(scale)
+    return np.asarray(t_coarse), Q, float(scale)
 
 
 def animate_vibration(

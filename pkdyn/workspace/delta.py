@@ -135,11 +135,20 @@ class DeltaEvaluator(PoseEvaluator):
         return R_arm, E, tip
 
     def violations(
-        self, P: np.ndarray, R: np.ndarray, kinds: tuple[str, ...], margin: float
+        self,
+        P: np.ndarray,
+        R: np.ndarray,
+        kinds: tuple[str, ...],
+        margin: float,
+        solved: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> np.ndarray:
-        """See :meth:`PoseEvaluator.violations`; the nacelle keeps its orientation (R ignored)."""
+        """See :meth:`PoseEvaluator.violations`; the nacelle keeps its orientation (R ignored).
+
+        ``solved``: Clavel's inverse model at ``P`` (``inverse(params, P)``) when the caller
+        has it.
+        """
         P = np.atleast_2d(np.asarray(P, dtype=float))
-        alpha, ok = inverse(self.robot.params, P)
+        alpha, ok = inverse(self.robot.params, P) if solved is None else solved
         out = np.full(P.shape[0], REACHABLE, dtype=np.int8)
         out[~ok] = LIMIT_KINDS.index("reach")
         todo = np.flatnonzero(ok)
@@ -231,7 +240,7 @@ class DeltaEvaluator(PoseEvaluator):
         d, _, _ = segment_distance(np.stack(p1), np.stack(q1), np.stack(p2), np.stack(q2))
         return np.min(d - np.array(radii)[:, None], axis=0)
 
-    def clearance(self, P: np.ndarray) -> np.ndarray:
+    def clearance(self, P: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
         """Smallest distance between the bars and the arms, as axis distances minus radii [m].
 
         Bars of different arms against each other and bars against the other arms, as
@@ -240,13 +249,18 @@ class DeltaEvaluator(PoseEvaluator):
 
         Args:
             P: Nacelle positions (N, 3) [m].
+            alpha: Their arm angles (N, 3) [rad] (Clavel's inverse model) when the caller has
+                them.
 
         Returns:
             (N,) clearances [m]; NaN where the position is out of reach.
 
         """
         P = np.atleast_2d(np.asarray(P, dtype=float))
-        alpha, ok = inverse(self.robot.params, P)
+        if alpha is None:
+            alpha, ok = inverse(self.robot.params, P)
+        else:
+            ok = np.all(np.isfinite(alpha), axis=1)
         out = np.full(P.shape[0], np.nan)
         if ok.any():
             _, E, tip = self._elbows(alpha[ok])

@@ -2,10 +2,10 @@
 
 Modules: :mod:`~pkdyn.model.formats.urdf_writer` (the URDF + pkdyn-extension writer the library
 builders use), :mod:`~pkdyn.model.formats.gepetto` (Gepetto example-parallel-robots YAML
-sidecars), :mod:`~pkdyn.model.formats.mjcf` (MJCF export),
+sidecars), :mod:`~pkdyn.model.formats.mjcf` (MJCF export, and compiled by MuJoCo),
 :mod:`~pkdyn.model.formats.mjcf_state` (joints and states mapped between Pinocchio and MuJoCo),
-:mod:`~pkdyn.model.formats.mjcf_mujoco` (the compiled export and MuJoCo's actuator efforts, for
-cross-checks), :mod:`~pkdyn.model.formats.mjcf_import` and
+:mod:`~pkdyn.model.formats.mjcf_mujoco` (MuJoCo's actuator efforts, for cross-checks),
+:mod:`~pkdyn.model.formats.mjcf_import` and
 :mod:`~pkdyn.model.formats.mjcf_spec` (MJCF import: structure, and attributes with their
 default classes), :mod:`~pkdyn.model.formats.sdf` (SDFormat import),
 :mod:`~pkdyn.model.formats.graph` (the mechanism graph both importers fill, its spanning tree

@@ -46,9 +46,10 @@ equality constraints are soft (``solref``, ``solimp``); the defaults below make 
 the chosen time step.
 
 The export's joints and state vectors are mapped by :class:`~pkdyn.model.formats.mjcf_state.
-StateMap` (:mod:`~pkdyn.model.formats.mjcf_state`); the compiled MuJoCo model and the actuator
-efforts of MuJoCo's inverse dynamics are in :mod:`~pkdyn.model.formats.mjcf_mujoco`. Their public
-names are importable from here too (``from pkdyn.model.formats.mjcf import StateMap``).
+StateMap` (:mod:`~pkdyn.model.formats.mjcf_state`); the actuator efforts of MuJoCo's inverse
+dynamics are in :mod:`~pkdyn.model.formats.mjcf_mujoco`. Their public names are importable from
+here too (``from pkdyn.model.formats.mjcf import StateMap``); :func:`mujoco_model` compiles the
+export.
 """
 
 from __future__ import annotations
@@ -59,6 +60,7 @@ import warnings
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -67,7 +69,7 @@ from pkdyn.exceptions import OutputError
 from pkdyn.files import atomic_write
 from pkdyn.inputs import positive
 from pkdyn.model.formats.mjcf_inertia import mujoco_inertias
-from pkdyn.model.formats.mjcf_mujoco import actuator_efforts, mujoco_model
+from pkdyn.model.formats.mjcf_mujoco import actuator_efforts
 from pkdyn.model.formats.mjcf_state import JointMap, StateMap
 from pkdyn.model.formats.mjcf_state import quat_wxyz as _quat_wxyz
 from pkdyn.model.robot import Robot
@@ -457,6 +459,27 @@ def _actuators(root: ET.Element, robot: Robot) -> None:
             lim = abs(a.effort / a.reduction)
             attrs.update(ctrlrange=_fmt([-lim, lim]), forcerange=_fmt([-lim, lim]))
         _sub(act, "motor", **attrs)
+
+
+def mujoco_model(robot: Robot, options: MjcfOptions | None = None) -> Any:
+    """The export of ``robot`` compiled by MuJoCo.
+
+    Args:
+        robot: A loaded robot.
+        options: Simulation options.
+
+    Returns:
+        The ``mujoco.MjModel``.
+
+    Raises:
+        ImportError: MuJoCo is not installed (``pip install mujoco``).
+
+    """
+    try:
+        import mujoco
+    except ImportError as err:  # an optional dependency of the core
+        raise ImportError("MuJoCo is not installed: pip install mujoco") from err
+    return mujoco.MjModel.from_xml_string(to_mjcf(robot, options))
 
 
 def write_mjcf(

@@ -1,6 +1,7 @@
-"""MuJoCo on pkdyn's robots: the compiled export, and actuator efforts from its inverse dynamics.
+"""Actuator efforts from MuJoCo's inverse dynamics of an exported robot.
 
-MuJoCo is an optional dependency (the ``dev`` extra): the functions import it when called.
+MuJoCo is an optional dependency (the ``dev`` extra): the function imports it when called. The
+compiled export itself is :func:`pkdyn.model.formats.mjcf.mujoco_model`.
 """
 
 from __future__ import annotations
@@ -9,33 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.model.robot import Robot
 from solvers.numerics import lstsq, machine_rtol
 
-__all__ = ["actuator_efforts", "mujoco_model"]
-
-
-def mujoco_model(robot: Robot, options: Any = None) -> Any:
-    """The export of ``robot`` compiled by MuJoCo.
-
-    Args:
-        robot: A loaded robot.
-        options: Simulation options (:class:`~pkdyn.model.formats.mjcf.MjcfOptions`).
-
-    Returns:
-        The ``mujoco.MjModel``.
-
-    Raises:
-        ImportError: MuJoCo is not installed (``pip install mujoco``).
-
-    """
-    try:
-        import mujoco
-    except ImportError as err:  # an optional dependency of the core
-        raise ImportError("MuJoCo is not installed: pip install mujoco") from err
-    from pkdyn.model.formats.mjcf import to_mjcf
-
-    return mujoco.MjModel.from_xml_string(to_mjcf(robot, options))
+__all__ = ["actuator_efforts"]
 
 
 def actuator_efforts(model: Any, data: Any) -> np.ndarray:

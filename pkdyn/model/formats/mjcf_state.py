@@ -8,7 +8,11 @@ Each Pinocchio joint becomes MuJoCo joints as follows (MuJoCo names in brackets)
 - universal(axis1, axis2) -> two hinges in one body [name_1, name_2] (MuJoCo applies the joints
   of a body in order, each axis in the frame moved by the previous ones, as Pinocchio does);
 - planar -> slide x, slide y, hinge z [name_x, name_y, name_rz]; translation -> three slides;
-  spherical ZYX -> three hinges z, y, x.
+  spherical ZYX -> three hinges z, y, x;
+- composite of revolute and prismatic joints without placements between them -> their hinges
+  and slides in one body, in order [name_tx, name_ry... along a frame axis, else name_1,
+  name_2...] (e.g. the six joints of a compliant link's virtual spring in the elastic model's
+  export, :mod:`pkdyn.precision.vibration_mjcf`).
 
 :class:`StateMap` converts states: Pinocchio stores quaternions ``(x, y, z, w)``, MuJoCo
 ``(w, x, y, z)``; a free-flyer's Pinocchio velocity is the body's spatial velocity in its own
@@ -142,6 +146,8 @@ def _joint_elements(model: pin.Model, jid: int, source: str) -> tuple[str, list[
         return "multi", [
             MjJoint(f"{name}_{c}", "slide", e[k], limits(jm.idx_q + k)) for k, c in enumerate("xyz")
         ]
+    if short == "JointModelComposite":
+        return "multi", _composite_elements(jm, name, source)
     if short == "JointModelSphericalZYX":
         e = np.eye(3)
         return "multi", [
@@ -151,6 +157,38 @@ def _joint_elements(model: pin.Model, jid: int, source: str) -> tuple[str, list[
     raise DescriptionError(
         source, f"joint '{name}'", f"{short} has no MuJoCo equivalent; it cannot be exported"
     )
+
+
+def _composite_elements(jm: pin.JointModel, name: str, source: str) -> list[MjJoint]:
+    """Hinges and slides of a composite of 1-DoF revolute and prismatic joints."""
+    out: list[MjJoint] = []
+    axes = np.eye(3)
+    composite = jm.extract() if hasattr(jm, "extract") else jm
+    for k, (sub, M) in enumerate(zip(composite.joints, composite.jointPlacements, strict=True)):
+        short = sub.shortname()
+        revolute = short.startswith(("JointModelR", "JointModelRevolute")) and not short.startswith(
+            ("JointModelRUB", "JointModelRevoluteUnbounded")
+        )
+        prismatic = short.startswith(("JointModelP", "JointModelPrismatic")) and short != (
+            "JointModelPlanar"
+        )
+        if not (revolute or prismatic) or not M.isIdentity():
+            raise DescriptionError(
+                source,
+                f"joint '{name}'",
+                "a composite joint is exported only as revolute and prismatic joints without "
+                f"placements between them ({short} at part {k + 1})",
+            )
+        if revolute:
+            axis = _unit(pin.log3(_placement(sub, np.ones(1)).rotation))
+        else:
+            axis = _unit(_placement(sub, np.ones(1)).translation)
+        along = [i for i in range(3) if np.allclose(axis, axes[i], rtol=0.0, atol=1e-15)]
+        tag = f"{'r' if revolute else 't'}{'xyz'[along[0]]}" if along else f"{k + 1}"
+        if any(e.name == f"{name}_{tag}" for e in out):
+            tag = f"{k + 1}"
+        out.append(MjJoint(f"{name}_{tag}", "hinge" if revolute else "slide", axis))
+    return out
 
 
 def _body_names(model: pin.Model) -> list[str]:

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from pkdyn.model.description import NAMESPACE
 
-__all__ = ["Shape", "UrdfWriter", "rod_inertia", "segment_origin", "rpy_z_to"]
+__all__ = ["Record", "Shape", "UrdfWriter", "rod_inertia", "segment_origin", "rpy_z_to"]
 
 Vec = Sequence[float] | np.ndarray
 
@@ -62,6 +64,16 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
+_X = np.array([1.0, 0.0, 0.0])
+_EYE = np.eye(3)
+_Y = np.array([0.0, 1.0, 0.0])
+
+
+def _norm(v: np.ndarray) -> float:
+    """``np.linalg.norm`` of a vector, the same arithmetic (``sqrt(v . v)``) without its checks."""
+    return math.sqrt(float(v.dot(v)))
+
+
 def rpy_z_to(d: Vec) -> tuple[float, float, float]:
     """Roll-pitch-yaw [rad] of a rotation taking the z axis onto direction ``d``.
 
@@ -75,13 +87,12 @@ def rpy_z_to(d: Vec) -> tuple[float, float, float]:
     import pinocchio as pin
 
     z = np.asarray(d, dtype=float)
-    z = z / np.linalg.norm(z)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    z = z / _norm(z)
+    helper = _X if abs(z[0]) < 0.9 else _Y
     x = _cross(helper, z)
-    x /= np.linalg.norm(x)
+    x /= _norm(x)
     y = _cross(z, x)
-    R = np.column_stack([x, y, z])
-    rpy = pin.rpy.matrixToRpy(R)
+    rpy = pin.rpy.matrixToRpy(np.array([x, y, z]).T)
     return (float(rpy[0]), float(rpy[1]), float(rpy[2]))
 
 
@@ -99,7 +110,7 @@ def segment_origin(p0: Vec, p1: Vec) -> tuple[tuple[float, ...], tuple[float, fl
     a = np.asarray(p0, dtype=float)
     b = np.asarray(p1, dtype=float)
     mid = 0.5 * (a + b)
-    return tuple(float(x) for x in mid), rpy_z_to(b - a), float(np.linalg.norm(b - a))
+    return tuple(mid.tolist()), rpy_z_to(b - a), _norm(b - a)
 
 
 def rod_inertia(
@@ -119,27 +130,56 @@ def rod_inertia(
     """
     a = np.asarray(p0, dtype=float)
     b = np.asarray(p1, dtype=float)
-    L = float(np.linalg.norm(b - a))
+    L = _norm(b - a)
     d = (b - a) / L
     i_ax = 0.5 * mass * radius**2
     i_tr = mass * (3 * radius**2 + L**2) / 12.0
-    eye = np.eye(3)
-    inertia = i_tr * (eye - np.outer(d, d)) + i_ax * np.outer(d, d)
-    return tuple(float(x) for x in 0.5 * (a + b)), inertia
+    dd = d[:, None] * d[None, :]  # (np.outer's products)
+    inertia = i_tr * (_EYE - dd) + i_ax * dd
+    return tuple((0.5 * (a + b)).tolist()), inertia
+
+
+@dataclass(frozen=True)
+class Record:
+    """One element a builder wrote, as its numbers (the text is rendered from it).
+
+    Attributes:
+        kind: The :class:`UrdfWriter` method that wrote it: ``link``, ``joint``,
+            ``transmission`` (URDF elements), ``pkdyn_joint``, ``closure``, ``coupling``,
+            ``linear_coupling``, ``platform`` (pkdyn elements).
+        args: Its arguments, by name, as the builder gave them.
+
+    """
+
+    kind: str
+    args: dict[str, Any]
+
+
+_URDF_KINDS = ("link", "joint", "transmission")
 
 
 class UrdfWriter:
     """Accumulates links, joints and pkdyn extension elements; writes a stable document.
 
+    The elements are kept as :class:`Record` s (:attr:`records`, in the order written) and
+    rendered by :meth:`to_string`: the family candidates of a design study
+    (:mod:`pkdyn.model.candidate`) read the numbers from the records without any text.
+
     Args:
         name: Robot name.
+
+    Attributes:
+        name: Robot name.
+        records: The elements written, in order.
 
     """
 
     def __init__(self, name: str) -> None:
         self.name = name
-        self._parts: list[str] = []
-        self._ext: list[str] = []
+        self.records: list[Record] = []
+
+    def _add(self, _kind: str, **args: Any) -> None:
+        self.records.append(Record(_kind, args))
 
     def link(
         self,
@@ -163,6 +203,25 @@ class UrdfWriter:
             collisions: Collision shapes.
 
         """
+        self._add(
+            "link",
+            name=name,
+            mass=mass,
+            com=com,
+            inertia=inertia,
+            visuals=tuple(visuals),
+            collisions=tuple(collisions),
+        )
+
+    @staticmethod
+    def _render_link(
+        name: str,
+        mass: float,
+        com: Vec,
+        inertia: np.ndarray | None,
+        visuals: Sequence[Shape],
+        collisions: Sequence[Shape],
+    ) -> str:
         out = [f'  <link name="{name}">']
         if mass > 0:
             I = np.zeros((3, 3)) if inertia is None else np.asarray(inertia)
@@ -183,7 +242,7 @@ class UrdfWriter:
                 f"<geometry>{s.geometry_xml()}</geometry></collision>"
             )
         out.append("  </link>")
-        self._parts.append("\n".join(out))
+        return "\n".join(out)
 
     def rod(
         self,
@@ -242,6 +301,29 @@ class UrdfWriter:
             limit: ``(lower, upper, effort, velocity)`` [rad or m, N m or N, rad/s or m/s].
 
         """
+        self._add(
+            "joint",
+            name=name,
+            kind=kind,
+            parent=parent,
+            child=child,
+            xyz=xyz,
+            rpy=rpy,
+            axis=axis,
+            limit=limit,
+        )
+
+    @staticmethod
+    def _render_joint(
+        name: str,
+        kind: str,
+        parent: str,
+        child: str,
+        xyz: Vec,
+        rpy: Vec,
+        axis: Vec | None,
+        limit: tuple[float, float, float, float] | None,
+    ) -> str:
         out = [
             f'  <joint name="{name}" type="{kind}">',
             f'    <parent link="{parent}"/><child link="{child}"/>',
@@ -256,7 +338,7 @@ class UrdfWriter:
                 f'velocity="{_f(vel)}"/>'
             )
         out.append("  </joint>")
-        self._parts.append("\n".join(out))
+        return "\n".join(out)
 
     def spherical(
         self,
@@ -281,7 +363,9 @@ class UrdfWriter:
 
         """
         self.joint(name, "continuous", parent, child, xyz, rpy, axis=(0.0, 0.0, 1.0))
-        self._ext.append(self._pkdyn_joint(name, "spherical", None, cone, pyramid))
+        self._add(
+            "pkdyn_joint", name=name, kind="spherical", axis2=None, cone=cone, pyramid=pyramid
+        )
 
     def universal(
         self,
@@ -310,10 +394,12 @@ class UrdfWriter:
 
         """
         self.joint(name, "continuous", parent, child, xyz, rpy, axis=axis1)
-        self._ext.append(self._pkdyn_joint(name, "universal", axis2, cone, pyramid))
+        self._add(
+            "pkdyn_joint", name=name, kind="universal", axis2=axis2, cone=cone, pyramid=pyramid
+        )
 
     @staticmethod
-    def _pkdyn_joint(
+    def _render_pkdyn_joint(
         name: str,
         kind: str,
         axis2: Vec | None,
@@ -352,14 +438,22 @@ class UrdfWriter:
             axis: Hinge axis in each frame's coordinates.
 
         """
+        self._add("closure", name=name, kind=kind, frame1=frame1, frame2=frame2, axis=axis)
+
+    @staticmethod
+    def _render_closure(
+        name: str,
+        kind: str,
+        frame1: tuple[str, Vec, Vec],
+        frame2: tuple[str, Vec, Vec],
+        axis: Vec | None,
+    ) -> str:
         extra = f' axis="{_v(axis)}"' if axis is not None else ""
         frames = "".join(
             f'<pkdyn:frame link="{link}" xyz="{_v(xyz)}" rpy="{_v(rpy)}"/>'
             for link, xyz, rpy in (frame1, frame2)
         )
-        self._ext.append(
-            f'  <pkdyn:closure name="{name}" type="{kind}"{extra}>{frames}</pkdyn:closure>'
-        )
+        return f'  <pkdyn:closure name="{name}" type="{kind}"{extra}>{frames}</pkdyn:closure>'
 
     def coupling(
         self,
@@ -385,6 +479,25 @@ class UrdfWriter:
             source_ref: Reference position of ``source`` [rad or m].
 
         """
+        self._add(
+            "coupling",
+            name=name,
+            joint=joint,
+            source=source,
+            coefficients=tuple(coefficients),
+            joint_ref=joint_ref,
+            source_ref=source_ref,
+        )
+
+    @staticmethod
+    def _render_coupling(
+        name: str,
+        joint: str,
+        source: str | None,
+        coefficients: Sequence[float],
+        joint_ref: float,
+        source_ref: float,
+    ) -> str:
         attrs = f'name="{name}" joint="{joint}"'
         c = [float(x) for x in coefficients]
         if source is not None:
@@ -400,7 +513,7 @@ class UrdfWriter:
             attrs += f' joint_ref="{_f(joint_ref)}"'
         if source_ref and source is not None:
             attrs += f' source_ref="{_f(source_ref)}"'
-        self._ext.append(f"  <pkdyn:coupling {attrs}/>")
+        return f"  <pkdyn:coupling {attrs}/>"
 
     def linear_coupling(
         self, name: str, terms: Sequence[tuple[str, float]], offset: float = 0.0
@@ -413,8 +526,14 @@ class UrdfWriter:
             offset: Right-hand side [rad or m].
 
         """
+        self._add("linear_coupling", name=name, terms=tuple(terms), offset=offset)
+
+    @staticmethod
+    def _render_linear_coupling(
+        name: str, terms: Sequence[tuple[str, float]], offset: float
+    ) -> str:
         body = "".join(f'<pkdyn:term joint="{j}" coefficient="{_f(float(a))}"/>' for j, a in terms)
-        self._ext.append(
+        return (
             f'  <pkdyn:coupling name="{name}" offset="{_f(float(offset))}">{body}</pkdyn:coupling>'
         )
 
@@ -437,12 +556,25 @@ class UrdfWriter:
             efficiency: Gearbox efficiency (``pkdyn:efficiency``, written when below 1).
 
         """
+        self._add(
+            "transmission",
+            joint=joint,
+            actuator=actuator,
+            reduction=reduction,
+            rotor_inertia=rotor_inertia,
+            efficiency=efficiency,
+        )
+
+    @staticmethod
+    def _render_transmission(
+        joint: str, actuator: str, reduction: float, rotor_inertia: float, efficiency: float
+    ) -> str:
         drive = ""
         if rotor_inertia:
             drive += f'<pkdyn:rotor_inertia value="{_f(rotor_inertia)}"/>'
         if efficiency != 1.0:
             drive += f'<pkdyn:efficiency value="{_f(efficiency)}"/>'
-        self._parts.append(
+        return (
             f'  <transmission name="{joint}_transmission">\n'
             "    <type>transmission_interface/SimpleTransmission</type>\n"
             f'    <joint name="{joint}"><hardwareInterface>'
@@ -464,7 +596,11 @@ class UrdfWriter:
             rpy: Frame orientation in the link frame [rad].
 
         """
-        self._ext.append(
+        self._add("platform", link=link, task=tuple(task), xyz=xyz, rpy=rpy)
+
+    @staticmethod
+    def _render_platform(link: str, task: Sequence[str], xyz: Vec, rpy: Vec) -> str:
+        return (
             f'  <pkdyn:platform link="{link}" xyz="{_v(xyz)}" rpy="{_v(rpy)}" '
             f'task="{" ".join(task)}"/>'
         )
@@ -483,4 +619,10 @@ class UrdfWriter:
         if comment:
             head.append(f"<!-- {comment} -->")
         head.append(f'<robot name="{self.name}" xmlns:pkdyn="{NAMESPACE}">')
-        return "\n".join(head + self._parts + self._ext + ["</robot>", ""])
+        parts = [self._render(r) for r in self.records if r.kind in _URDF_KINDS]
+        ext = [self._render(r) for r in self.records if r.kind not in _URDF_KINDS]
+        return "\n".join(head + parts + ext + ["</robot>", ""])
+
+    def _render(self, record: Record) -> str:
+        render: Any = getattr(self, f"_render_{record.kind}")
+        return str(render(**record.args))
