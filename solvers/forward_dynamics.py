@@ -108,9 +108,14 @@ COLLAPSE = 0.25
 value at the start is rejected and shortened (see :meth:`ForwardDynamics.simulate`)."""
 
 CHECK_PERIOD = 8
-"""Largest number of steps (``dopri5`` substeps, output steps of ``euler`` and ``rk4``)
-between two checks of the conditioning of the closure forces in :meth:`ForwardDynamics.simulate`;
-fewer while it falls, every step near a singularity (:meth:`ForwardDynamics._observe`)."""
+"""Largest number of output steps of ``euler`` and ``rk4`` between two checks of the
+conditioning of the closure forces in :meth:`ForwardDynamics.simulate`; fewer while it falls,
+every step near a singularity (:meth:`ForwardDynamics._observe`)."""
+
+ADAPTIVE_CHECK_PERIOD = 32
+"""The same for the substeps of ``dopri5``, which also checks at once when the proximal solver
+needs more iterations than at the last check (the free proxy between checks,
+:meth:`ForwardDynamics._due`; a check costs about one of the six evaluations of a substep)."""
 
 STEP_CHECK_PERIOD = 32
 """The same for the fixed steps of :meth:`ForwardDynamics.step` (a control loop, where a check,
@@ -314,6 +319,7 @@ class ForwardDynamics:
         self._h_cond = math.inf  # dopri5 substep limit from the conditioning [s]
         self._cond_due = -math.inf  # time from which the next check is due [s]
         self._since_check = 0  # steps since the last check
+        self._iter_seen = 0  # proximal iterations of the state last checked
         self._cond_log: tuple[array, array] | None = None  # (t, kappa) of simulate's checks
         self._eval_id = 0  # dynamics evaluations made (their factorization in self.data)
         self._eig_id = -1  # the evaluation whose kappa a refinement computed
@@ -523,7 +529,9 @@ class ForwardDynamics:
         Updates the passages, the rate of ``kappa`` since the last check, and the time the
         next check is due: at once near a singularity (``kappa`` below :data:`WATCH`); while
         ``kappa`` falls, after a quarter of the time its rate would take to bring it to
-        :data:`~solvers.conditioning.NEAR_SINGULAR`; else after :data:`CHECK_PERIOD` steps.
+        :data:`~solvers.conditioning.NEAR_SINGULAR`; else after :data:`CHECK_PERIOD` steps, or
+        sooner (:meth:`_due`). The proximal iterations of the last evaluation (that of the state
+        observed) are the reference of :meth:`_due`'s proxy.
         """
         if t > self._cond_t:
             self._cond_rate = (kappa - self.conditioning) / (t - self._cond_t)
@@ -536,6 +544,7 @@ class ForwardDynamics:
             self._cond_log[0].append(t)
             self._cond_log[1].append(kappa)
         self._since_check = 0
+        self._iter_seen = self.prox.iter
         rate = self._cond_rate
         if kappa < WATCH:
             self._cond_due = t
@@ -545,9 +554,26 @@ class ForwardDynamics:
             self._cond_due = math.inf
 
     def _due(self, t: float, period: int = CHECK_PERIOD) -> bool:
-        """Whether a conditioning check is due at ``t`` [s] (counts the steps since the last)."""
+        """Whether a conditioning check is due at ``t`` [s] (counts the steps since the last).
+
+        Due as :meth:`_observe` planned it, after ``period`` steps, or at once when the last
+        evaluation (the state at ``t``) took more proximal iterations than the state last
+        checked: a free proxy of ``kappa`` between checks. Pinocchio's iterations contract the
+        closures' force error by ``mu / (mu + g)`` along each eigenvalue ``g`` of their
+        Delassus matrix, the closures' ``r``-th (``kappa^2 g_max``) the slowest, and stop at
+        the solver's accuracy: their number, about ``log(1 / accuracy) / log(1 + g_r / mu)``,
+        grows by one each time ``g_r`` falls by a large factor on the way to a singularity (the
+        Delta falling under ``dopri5``'s gains: 3 to 4 near ``kappa`` = 0.1, 5 near 4e-3, 9
+        near 8e-4, the cap of 30 near 1e-4), before ``kappa`` reaches :data:`WATCH`. It may
+        also grow with the forces (a check more, never one less). Under the Euler step's stiff
+        gains (``0.5 / h``) it stays at 3 down to ``kappa`` = 6e-4 on the same fall: the fixed
+        steps keep their short periods (:data:`CHECK_PERIOD`, :data:`STEP_CHECK_PERIOD`) and
+        take the proxy as an extra.
+        """
         self._since_check += 1
-        return t >= self._cond_due or self._since_check >= period
+        return (
+            t >= self._cond_due or self._since_check >= period or self.prox.iter > self._iter_seen
+        )
 
     def _reset_conditioning(self) -> None:
         self.passages.reset()
@@ -556,15 +582,15 @@ class ForwardDynamics:
         self._cond_rate = 0.0
         self._cond_due = -math.inf
         self._since_check = 0
+        self._iter_seen = 0
         self._h_cond = math.inf
 
     def _scheduled_check(self, t: float, data: pin.Data) -> None:
         """The conditioning check of a fixed step of :meth:`step` at ``t`` [s], when due.
 
-        As :meth:`_observe` plans it, at most :data:`STEP_CHECK_PERIOD` steps apart.
+        As :meth:`_due` decides, at most :data:`STEP_CHECK_PERIOD` steps apart.
         """
-        self._since_check += 1
-        if t >= self._cond_due or self._since_check >= STEP_CHECK_PERIOD:
+        if self._due(t, STEP_CHECK_PERIOD):
             self._observe(t, self._kappa(data))
 
     def _generalized(
@@ -797,7 +823,7 @@ class ForwardDynamics:
                 err = 1e10
             fac = min(5.0, 0.9 * err**-0.2) if err > 0.0 else 5.0
             accept = err <= 1.0
-            check = accept and watch and self._due(t + h)
+            check = accept and watch and self._due(t + h, ADAPTIVE_CHECK_PERIOD)
             if check:
                 kappa = self._kappa()  # at q_new: the last stage's evaluation
                 k0 = self.conditioning
@@ -861,7 +887,8 @@ class ForwardDynamics:
         at every substep (and it shortens its substeps through a passage, see
         :meth:`simulate`); ``euler`` and ``rk4`` at the state the step starts from (the
         control-loop step: the state it ends at), every :data:`STEP_CHECK_PERIOD` calls, sooner
-        when the conditioning falls, every call near a singularity
+        when the conditioning falls or the proximal solver's iterations grow (:meth:`_due`),
+        every call near a singularity
         (a passage shorter than ``dt`` is estimated from the samples around it: these steps
         have a fixed size).
 
@@ -877,17 +904,30 @@ class ForwardDynamics:
             if self._control is None:
                 self._control = ProjectedEulerStep(self)
             q, v = self._control.step(t, q, v, dt, tau)
-            if self._watch:
-                self._scheduled_check(t + dt, self._control.data)
+            if self._watch:  # (:meth:`_scheduled_check` inline: a control loop's overhead)
+                self._since_check += 1
+                if (
+                    t + dt >= self._cond_due
+                    or self._since_check >= STEP_CHECK_PERIOD
+                    or self.prox.iter > self._iter_seen
+                ):
+                    self._observe(t + dt, self._kappa(self._control.data))
             return q, v
         if self.integrator == "euler":
             if self._auto_gains and dt != self._gains_step:
                 self._euler_gains(dt)
             g = self._generalized(t, q, v, tau)[1]
-            f = self.passive_forces(q, v)
-            a = self._accel(q, v, g if f is None else g + f)
-            if self._watch:
-                self._scheduled_check(t, self.data)
+            if self.passive is not None:
+                g = g + self.passive.force(q, v)
+            a = self._accel(q, v, g)
+            if self._watch:  # (as above)
+                self._since_check += 1
+                if (
+                    t >= self._cond_due
+                    or self._since_check >= STEP_CHECK_PERIOD
+                    or self.prox.iter > self._iter_seen
+                ):
+                    self._observe(t, self._kappa(self.data))
             v = v + dt * a
             q = pin.integrate(self.model, q, dt * v)
         else:
@@ -1088,7 +1128,7 @@ class ForwardDynamics:
         for k in range(n_steps + 1):
             if ev is None:
                 ev = self._evaluate(t, q, v, tau)
-                if watch and (k == 0 or self._due(t)):
+                if watch and (k == 0 or self._due(t, CHECK_PERIOD)):
                     self._observe(t, self._kappa())
             if not math.isfinite(float(ev.a @ ev.a)):
                 raise IntegrationError(f"non-finite acceleration at t = {t:.6g} s", t)

@@ -21,6 +21,7 @@ from pkdyn.analysis.kinematics import NEAR_SINGULAR_TOL, SINGULAR_TOL
 from pkdyn.dynamics import ForwardDynamics, simulate
 from pkdyn.exceptions import InvalidInputError, SimulationError
 from solvers import ForwardDynamics as SolverDynamics
+from solvers import forward_dynamics as fd_module
 from solvers.conditioning import (
     LEAVE,
     NEAR_SINGULAR,
@@ -358,6 +359,46 @@ def test_control_loop_reports_the_crossing_once(robots):
     assert ev.through and t_lo <= ev.time <= t_lo + h
     mine = [w for w in caught if "parallel singularity" in str(w.message)]
     assert len(mine) == 1 and "ForwardDynamics.events" in str(mine[0].message)
+
+
+def test_the_iteration_proxy_alone_finds_the_crossing(robots, monkeypatch):
+    """Between the conditioning's checks of ``dopri5``, a rise of the proximal solver's
+    iteration count calls one (``ForwardDynamics._due``): with the periodic checks switched
+    off, only the one at home (where the Delta at rest has no rate of fall) and those the proxy
+    calls remain, and the crossing is still reported in the 1 ms step where the
+    parallelograms' normals become coplanar; without the proxy (no check after the first) it
+    is not."""
+    monkeypatch.setattr(fd_module, "ADAPTIVE_CHECK_PERIOD", 10**9)
+    monkeypatch.setattr(fd_module, "STEP_CHECK_PERIOD", 10**9)
+    robot = robots["delta"]
+    h = 1e-3
+
+    def run(proxy: bool) -> tuple[ForwardDynamics, np.ndarray]:
+        fd = ForwardDynamics(robot, integrator="dopri5")
+        if not proxy:
+            observe = fd._observe
+
+            def blind(t: float, kappa: float) -> None:
+                observe(t, kappa)
+                fd._iter_seen = 10**9  # more than any iteration count
+
+            fd._observe = blind  # type: ignore[method-assign]
+        q, v = fd.project_state(robot.q_home, np.zeros(robot.nv))
+        dets = []
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for k in range(400):
+                q, v = fd.step(k * h, q, v, h)
+                dets.append(parallelogram_normals_det(robot, q))
+        return fd, np.array(dets)
+
+    fd, det = run(proxy=True)
+    cross = np.flatnonzero(np.sign(det[1:]) != np.sign(det[:-1]))
+    assert len(cross) == 1 and len(fd.events) == 1
+    t_lo = (cross[0] + 1) * h
+    assert fd.events[0].through and t_lo <= fd.events[0].time <= t_lo + h
+    blind, _ = run(proxy=False)
+    assert not blind.events
 
 
 def test_simulate_reports_passages_and_warns_once(robots):
