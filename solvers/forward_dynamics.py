@@ -567,8 +567,9 @@ class ForwardDynamics:
         near 8e-4, the cap of 30 near 1e-4), before ``kappa`` reaches :data:`WATCH`. It may
         also grow with the forces (a check more, never one less). Under the Euler step's stiff
         gains (``0.5 / h``) it stays at 3 down to ``kappa`` = 6e-4 on the same fall: the fixed
-        steps keep their short periods (:data:`CHECK_PERIOD`, :data:`STEP_CHECK_PERIOD`) and
-        take the proxy as an extra.
+        steps keep their short periods (:data:`CHECK_PERIOD`, :data:`STEP_CHECK_PERIOD`), and
+        the Euler steps of :meth:`step` go without the proxy (a read of the solver's settings
+        per step for nothing).
         """
         self._since_check += 1
         return (
@@ -887,8 +888,8 @@ class ForwardDynamics:
         at every substep (and it shortens its substeps through a passage, see
         :meth:`simulate`); ``euler`` and ``rk4`` at the state the step starts from (the
         control-loop step: the state it ends at), every :data:`STEP_CHECK_PERIOD` calls, sooner
-        when the conditioning falls or the proximal solver's iterations grow (:meth:`_due`),
-        every call near a singularity
+        when the conditioning falls (``rk4``: or the proximal solver's iterations grow,
+        :meth:`_due`), every call near a singularity
         (a passage shorter than ``dt`` is estimated from the samples around it: these steps
         have a fixed size).
 
@@ -904,13 +905,9 @@ class ForwardDynamics:
             if self._control is None:
                 self._control = ProjectedEulerStep(self)
             q, v = self._control.step(t, q, v, dt, tau)
-            if self._watch:  # (:meth:`_scheduled_check` inline: a control loop's overhead)
+            if self._watch:  # (the check inline, without the iteration proxy: see _due)
                 self._since_check += 1
-                if (
-                    t + dt >= self._cond_due
-                    or self._since_check >= STEP_CHECK_PERIOD
-                    or self.prox.iter > self._iter_seen
-                ):
+                if t + dt >= self._cond_due or self._since_check >= STEP_CHECK_PERIOD:
                     self._observe(t + dt, self._kappa(self._control.data))
             return q, v
         if self.integrator == "euler":
@@ -922,11 +919,7 @@ class ForwardDynamics:
             a = self._accel(q, v, g)
             if self._watch:  # (as above)
                 self._since_check += 1
-                if (
-                    t >= self._cond_due
-                    or self._since_check >= STEP_CHECK_PERIOD
-                    or self.prox.iter > self._iter_seen
-                ):
+                if t >= self._cond_due or self._since_check >= STEP_CHECK_PERIOD:
                     self._observe(t, self._kappa(self.data))
             v = v + dt * a
             q = pin.integrate(self.model, q, dt * v)
