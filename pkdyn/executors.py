@@ -49,6 +49,7 @@ __all__ = [
     "Executor",
     "ProcessExecutor",
     "SerialExecutor",
+    "check_scheduler",
     "check_timeout",
     "make_executor",
     "ordered",
@@ -81,6 +82,18 @@ def check_timeout(timeout: Any, name: str = "timeout") -> float:
             name, f"must be a number of seconds in (0, {MAX_TIMEOUT:g}], got {timeout!r}"
         )
     return t
+
+
+def check_scheduler(address: Any, name: str = "scheduler") -> str | None:
+    """A Dask scheduler's address (``tcp://host:8786``), or ``None`` for none.
+
+    Raises:
+        InvalidInputError: Not a string, or an empty one (it would mean no scheduler).
+
+    """
+    if address is not None and (not isinstance(address, str) or not address.strip()):
+        raise InvalidInputError(name, f"expected an address (tcp://host:8786), got {address!r:.40}")
+    return address
 
 
 def _first_line(err: BaseException) -> str:
@@ -418,10 +431,12 @@ def make_executor(
         designs: Designs evaluated at once (a sweep: all of them; NSGA-II: the population).
 
     Raises:
-        InvalidInputError: ``workers`` not a whole number >= 1, a bad timeout.
+        InvalidInputError: ``workers`` not a whole number >= 1, a bad timeout, a scheduler
+            address that is not a non-empty string.
         StudyError: The Dask scheduler cannot be reached.
 
     """
+    scheduler = check_scheduler(scheduler)
     if client is not None or scheduler:
         return DaskExecutor(client, scheduler, timeout)
     if workers is not None and (

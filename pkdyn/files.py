@@ -129,6 +129,10 @@ def output_target(path: str | os.PathLike[str], option: str = "") -> Path:
             those; a name too long; a missing or read-only directory.
 
     """
+    if not isinstance(path, str | os.PathLike):
+        raise OutputError(
+            repr(path)[:80], f"{option + ': ' if option else ''}expected a file name (str or Path)"
+        )
     p = Path(path)
     where = f"{option}: " if option else ""
     name = shown(path)
@@ -259,6 +263,8 @@ def input_file(
         PkdynError: From ``error``: missing, unreadable, not a regular file, or too large.
 
     """
+    if not isinstance(path, str | os.PathLike):  # (an int would be a file descriptor)
+        raise error(f"path: expected a file name (str or Path), got {type(path).__name__}")
     try:
         st = os.stat(path)
     except OSError as err:

@@ -148,7 +148,12 @@ class Identifiability(Result):
             parameter has no effect (or is identifiable).
 
         """
-        c = self.combinations.get(int(j))
+        from pkdyn.inputs import count, positive
+
+        j = count("j", j, 0, len(self.names) - 1)
+        tol = positive("tol", tol)
+        top = count("top", top, 1)
+        c = self.combinations.get(j)
         if c is None or c.size == 0 or not np.any(c):
             return []
         order = np.argsort(-np.abs(c))

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -25,7 +25,11 @@ __all__ = [
     "count",
     "flag",
     "instance",
+    "is_complex",
+    "matrix",
+    "names",
     "non_negative",
+    "number_array",
     "positive",
     "real",
     "seed",
@@ -171,7 +175,7 @@ def flag(name: str, value: Any) -> bool:
     raise InvalidInputError(name, f"expected True or False, got {value!r} ({type(value).__name__})")
 
 
-def instance(name: str, value: Any, kind: type | tuple[type, ...], what: str) -> Any:
+def instance(name: str, value: Any, kind: Any, what: str) -> Any:
     """``value`` if it is an instance of ``kind``.
 
     Args:
@@ -187,6 +191,46 @@ def instance(name: str, value: Any, kind: type | tuple[type, ...], what: str) ->
     if not isinstance(value, kind):
         raise InvalidInputError(name, f"expected {what}, got {type(value).__name__} {value!r:.60}")
     return value
+
+
+def number_array(name: str, value: Any, what: str = "numbers") -> np.ndarray:
+    """A number or a sequence of numbers as a flat float array (not checked further).
+
+    Args:
+        name: The input's name, for the message.
+        value: A number or a (nested) sequence of numbers.
+        what: What the input holds, for the message (``numbers [N, N m]``).
+
+    Returns:
+        A float array copy (n,), NaN and infinite values included.
+
+    Raises:
+        InvalidInputError: Strings, mappings, complex numbers or nested ragged lists.
+
+    """
+    try:
+        if isinstance(value, str | bytes | dict) or is_complex(value):
+            raise TypeError
+        return np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):  # (a ragged list makes np.iscomplexobj raise too)
+        raise InvalidInputError(name, f"expected {what}, got {value!r:.60}") from None
+
+
+def _nonfinite(x: float) -> str:
+    """``nan (NaN: not a number)``, ``inf`` or ``-inf``, for messages."""
+    return "nan (NaN: not a number)" if math.isnan(x) else f"{x}"
+
+
+def is_complex(value: Any) -> bool:
+    """``value`` holds complex numbers.
+
+    ``False`` for what numpy cannot make an array of, such as rows of unequal length
+    (``np.iscomplexobj`` raises ``ValueError`` on those: the caller refuses them as such).
+    """
+    try:
+        return bool(np.iscomplexobj(value))
+    except (TypeError, ValueError):  # ragged: refused as such by the caller
+        return False
 
 
 def vector(
@@ -216,12 +260,9 @@ def vector(
             infinite or absurd values.
 
     """
-    if isinstance(value, str | bytes | dict) or np.iscomplexobj(value):
+    if isinstance(value, bool):
         raise InvalidInputError(name, f"expected numbers, got {value!r:.60}")
-    try:
-        arr = np.array(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InvalidInputError(name, f"expected numbers, got {value!r:.60}") from None
+    arr = number_array(name, value)
     sizes = (size,) if isinstance(size, int) else size
     if sizes is not None and arr.size not in sizes:
         want = " or ".join(str(s) for s in sizes)
@@ -229,7 +270,9 @@ def vector(
     ok = np.isfinite(arr) | (infinite & (arr == np.inf))
     if not ok.all():
         k = int(np.flatnonzero(~ok)[0])
-        raise InvalidInputError(name, f"value #{k + 1} is {arr[k]}; give finite numbers")
+        raise InvalidInputError(
+            name, f"value #{k + 1} is {_nonfinite(arr[k])}; give finite numbers"
+        )
     big = np.isfinite(arr) & (np.abs(arr) > bound)
     if big.any():
         k = int(np.flatnonzero(big)[0])
@@ -239,3 +282,122 @@ def vector(
             f"(at most {bound:g})",
         )
     return arr
+
+
+def matrix(
+    name: str,
+    value: Any,
+    rows: int | None = None,
+    cols: int | None = None,
+    unit: str = "",
+    *,
+    bound: float = MAX_MAGNITUDE,
+) -> np.ndarray:
+    """A 2-D array of finite real numbers (rows of values), each of magnitude at most ``bound``.
+
+    Args:
+        name: The input's name, for the message.
+        value: Rows of numbers (a sequence of sequences, or an array).
+        rows: Required number of rows, or ``None`` for any (at least one).
+        cols: Required number of columns, or ``None`` for any (at least one).
+        unit: Unit, for the message.
+        bound: Largest magnitude accepted.
+
+    Returns:
+        A float array copy (rows, cols).
+
+    Raises:
+        InvalidInputError: Not rows of numbers (strings, complex numbers, rows of unequal
+            length, more or fewer than 2 dimensions), the wrong shape, no value, NaN, infinite
+            or absurd values.
+
+    """
+    if isinstance(value, str | bytes | dict) or is_complex(value):
+        raise InvalidInputError(name, f"expected rows of numbers, got {value!r:.60}")
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            name, f"expected rows of numbers (each as long), got {value!r:.60}"
+        ) from None
+    if arr.ndim != 2 or arr.size == 0:
+        raise InvalidInputError(name, f"expected rows of numbers (2-D), got shape {arr.shape}")
+    for axis, want, what in ((0, rows, "rows"), (1, cols, "columns")):
+        if want is not None and arr.shape[axis] != want:
+            raise InvalidInputError(
+                name, f"expected {want} {what}, got {arr.shape[axis]} (shape {arr.shape})"
+            )
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        i, j = (int(k) for k in np.argwhere(bad)[0])
+        raise InvalidInputError(
+            name, f"row {i + 1}, value #{j + 1} is {_nonfinite(arr[i, j])}; give finite numbers"
+        )
+    big = np.abs(arr) > bound
+    if big.any():
+        i, j = (int(k) for k in np.argwhere(big)[0])
+        raise InvalidInputError(
+            name,
+            f"row {i + 1}, value #{j + 1} = {arr[i, j]:g}{_unit(unit)} is beyond any plausible "
+            f"value (at most {bound:g})",
+        )
+    return arr
+
+
+def names(
+    name: str,
+    value: Any,
+    known: Sequence[str] | None = None,
+    what: str = "name",
+    *,
+    empty: bool = False,
+) -> tuple[str, ...]:
+    """A list of names (joints, actuators, frames, metrics...), each a string, none twice.
+
+    A single string is one name (not a sequence of one-letter names).
+
+    Args:
+        name: The input's name, for the message.
+        value: A string or a sequence of strings.
+        known: The names accepted, or ``None`` for any.
+        what: What a name is, for the message (``joint``).
+        empty: An empty list is accepted.
+
+    Returns:
+        The names, in order.
+
+    Raises:
+        InvalidInputError: Not strings (numbers, nested lists, a mapping, ``None``), no name
+            when one is needed, a name given twice, or one not in ``known`` (the message lists
+            the closest).
+
+    """
+    if isinstance(value, str):
+        value = (value,)
+    if isinstance(value, Mapping) or not isinstance(value, Iterable):
+        raise InvalidInputError(
+            name, f"expected a list of {what} names, got {type(value).__name__} {value!r:.60}"
+        )
+    out = tuple(value)
+    for v in out:
+        if not isinstance(v, str):
+            raise InvalidInputError(
+                name, f"expected {what} names (strings), got {type(v).__name__} {v!r:.60}"
+            )
+        if not v.strip():
+            raise InvalidInputError(name, f"an empty {what} name")
+    if not out and not empty:
+        raise InvalidInputError(name, f"name at least one {what}")
+    seen: set[str] = set()
+    for v in out:
+        if v in seen:
+            raise InvalidInputError(name, f"{what} '{v}' is named twice")
+        seen.add(v)
+        if known is not None and v not in known:
+            from pkdyn.exceptions import close_match
+
+            listed = ", ".join(known[:12]) + (" ..." if len(known) > 12 else "")
+            raise InvalidInputError(
+                name, f"'{v}' is not a {what} ({listed}){close_match(v, list(known))}"
+            )
+    return out

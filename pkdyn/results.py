@@ -50,13 +50,38 @@ def register_plot(result_type: type) -> Callable[[Callable[..., Any]], Callable[
         result_type: A :class:`Result` subclass.
 
     Returns:
-        The decorator (it returns the function unchanged).
+        The decorator: the function, its first argument checked (an instance of
+        ``result_type``, or what its annotation names besides: a sequence, a mapping); any other
+        value is refused by :class:`~pkdyn.exceptions.InvalidInputError` naming the argument.
 
     """
 
     def deco(fn: Callable[..., Any]) -> Callable[..., Any]:
-        _PLOTTERS[result_type] = fn
-        return fn
+        import functools
+        import inspect
+
+        first, param = next(iter(inspect.signature(fn).parameters.items()))
+        hint = str(param.annotation)
+        also: tuple[type, ...] = ()
+        if "Sequence" in hint:
+            also += (list, tuple)
+        if "Mapping" in hint:
+            also += (Mapping,)
+
+        @functools.wraps(fn)
+        def checked(*args: Any, **kwargs: Any) -> Any:
+            value = args[0] if args else kwargs.get(first)
+            if not isinstance(value, (result_type, *also)):
+                from pkdyn.exceptions import InvalidInputError
+
+                raise InvalidInputError(
+                    first,
+                    f"expected a {result_type.__name__}, got {type(value).__name__} {value!r:.40}",
+                )
+            return fn(*args, **kwargs)
+
+        _PLOTTERS[result_type] = checked
+        return checked
 
     return deco
 

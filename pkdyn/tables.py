@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.exceptions import InvalidInputError
+from pkdyn.exceptions import InvalidInputError, OutputError
 from pkdyn.files import read_bytes, shown
 
 __all__ = ["MAX_CELL", "MAX_COLUMNS", "Table", "read_table", "write_table"]
@@ -322,37 +322,47 @@ def _parquet(data: bytes, src: str, what: str, max_rows: int, hint: str) -> Tabl
 
 
 def write_table(
-    path: str | os.PathLike[str], columns: Sequence[str], data: np.ndarray | Any
+    path: str | os.PathLike[str],
+    columns: Sequence[str],
+    data: np.ndarray | Any,
+    *,
+    digits: int = 17,
 ) -> None:
-    """Write a table :func:`read_table` reads back exactly, atomically.
+    """Write a table :func:`read_table` reads, atomically (a file is left intact on error).
 
-    CSV (values with 17 significant digits: the same floats read back) unless the file's suffix
-    is ``.parquet`` or ``.pq``.
+    CSV (values with ``digits`` significant digits; 17, the default, reads back the same floats)
+    unless the file's suffix is ``.parquet`` or ``.pq``.
 
     Args:
         path: The file.
         columns: Column names.
         data: Values (N, len(columns)).
+        digits: Significant digits of the CSV values (1 to 17).
 
     Raises:
         InvalidInputError: ``data`` does not have one value per column in each row.
+        OutputError: The file cannot be written.
 
     """
-    from pkdyn.files import atomic_path, atomic_write
+    from pkdyn.files import atomic_path, atomic_write, output_target
 
+    output_target(path, "path")  # refused before any work: not a file name, a directory, ...
     values = np.asarray(data, dtype=float)
     if values.ndim != 2 or values.shape[1] != len(columns):
         raise InvalidInputError(
             "data", f"expected rows of {len(columns)} values ({', '.join(columns)})"
         )
-    if Path(path).suffix.lower() in (".parquet", ".pq"):
-        import pyarrow as pa
-        import pyarrow.parquet as pq
+    try:
+        if Path(path).suffix.lower() in (".parquet", ".pq"):
+            import pyarrow as pa
+            import pyarrow.parquet as pq
 
-        table = pa.table({c: values[:, k] for k, c in enumerate(columns)})
-        with atomic_path(path) as tmp:
-            pq.write_table(table, tmp)
-        return
-    with atomic_write(path, newline="") as fh:
-        csv.writer(fh, lineterminator="\n").writerow(columns)
-        np.savetxt(fh, values, delimiter=",", fmt="%.17g")
+            table = pa.table({c: values[:, k] for k, c in enumerate(columns)})
+            with atomic_path(path) as tmp:
+                pq.write_table(table, tmp)
+            return
+        with atomic_write(path, newline="") as fh:
+            csv.writer(fh, lineterminator="\n").writerow(columns)
+            np.savetxt(fh, values, delimiter=",", fmt=f"%.{digits}g")
+    except OSError as err:
+        raise OutputError(os.fspath(path), err.strerror or str(err)) from None

@@ -18,7 +18,9 @@ import math
 from collections.abc import Iterable
 from typing import Any
 
-__all__ = ["columns", "matrix", "quantity", "vector"]
+import numpy as np
+
+__all__ = ["columns", "matrix", "quantity", "value_range", "vector"]
 
 _PREFIXES = [
     (1e12, "T"),
@@ -102,6 +104,25 @@ def vector(values: Iterable[float], unit: str = "", digits: int = 4, roundoff: f
     tiny = roundoff * max(finite, default=0.0)  # round-off of the vector's own scale: 0
     parts = ", ".join(_plain(0.0 if abs(x) <= tiny else x, digits) for x in xs)
     return f"[{parts}]{(' ' + unit) if unit else ''}"
+
+
+def value_range(name: str, values: Iterable[float] | np.ndarray, unit: str = "") -> str:
+    """``name min .. max unit`` over the finite values, or ``name: none`` when none is finite.
+
+    Args:
+        name: What the values are (``LCI``, ``cond(J)``).
+        values: The values in SI units, any shape (NaN and infinite ones are passed over).
+        unit: Their unit.
+
+    Returns:
+        The text, each bound written by :func:`quantity`.
+
+    """
+    x = np.asarray(values, dtype=float)
+    finite = x[np.isfinite(x)]
+    if finite.size == 0:
+        return f"{name}: none"
+    return f"{name} {quantity(float(finite.min()), unit)} .. {quantity(float(finite.max()), unit)}"
 
 
 def columns(rows: Iterable[Iterable[str]], indent: str = "") -> str:

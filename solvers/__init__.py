@@ -14,6 +14,7 @@ dampers, friction), :mod:`~solvers.integrators`
 (Runge-Kutta tableaux), :mod:`~solvers.projection` (state projection onto the closures),
 :mod:`~solvers.recording` (what a simulation records), :mod:`~solvers.forward_dynamics` (time
 stepping), :mod:`~solvers.sampled` (kinematics and closure errors of many sampled states at once),
+:mod:`~solvers.vec3` (cross products of stacked 3-vectors),
 :mod:`~solvers.inverse_dynamics` (constrained inverse dynamics, proxsuite QP) and
 :mod:`~solvers.numerics` (rank decisions, null spaces, least squares: the one cut-off rule).
 """

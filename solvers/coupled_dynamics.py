@@ -29,6 +29,19 @@ from solvers.coupling import CouplingRows
 
 __all__ = ["CoupledDynamics"]
 
+_RTOL = 1e-12
+"""Relative cut-off of the couplings' equations (:func:`solvers.numerics.lstsq`)."""
+
+
+_LOWER: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _lower(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the strict lower triangle of an (n, n) matrix (made once per size)."""
+    if n not in _LOWER:
+        _LOWER[n] = np.tril_indices(n, -1)
+    return _LOWER[n]
+
 
 class CoupledDynamics:
     """Accelerations and forces of closures and couplings (see the module docstring).
@@ -79,6 +92,14 @@ class CoupledDynamics:
         self.G = np.zeros((model.nv, rows.n))
         self.CG = np.zeros((rows.n, rows.n))
         self.Minv: np.ndarray | None = None
+        self._Li: np.ndarray | None = None  # the inverse Cholesky factor of CG, if certified
+        self._lower = _lower(model.nv)
+        self._lam0 = np.zeros(0)
+        self._Lam = np.zeros((0, rows.n))
+        # rows without a source: a constant Jacobian (filled once) and no drift
+        self._constant = rows.constant
+        if self._constant:
+            rows.jacobian(np.zeros(model.nq), self._C)
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Constrained acceleration (nv,) for generalized forces ``tau`` (nv,) [N m or N].
@@ -86,34 +107,45 @@ class CoupledDynamics:
         The multipliers are left in :attr:`lam` (closures) and :attr:`mu` (couplings).
         """
         model, data, rows = self.model, self.data, self.rows
-        C = rows.jacobian(q, self._C)
+        C = self._C if self._constant else rows.jacobian(q, self._C)
         kp, kd = self.gains
-        c = -rows.drift(q, v) - kd * C.dot(v) - kp * rows.residual(q)
+        c = -kd * C.dot(v) - kp * rows.residual(q)
+        if not self._constant:
+            c -= rows.drift(q, v)
         if self.n_pin:  # (views on the data: used before the next call overwrites them)
             a0 = pin.constraintDynamics(model, data, q, v, tau, self.cms, self.cds, self.prox)
             lam0 = data.lambda_c
             G, Lam = self._response(C)
+            self._Li = None
         else:
             a0 = np.array(pin.aba(model, data, q, v, tau))
-            Minv = pin.computeMinverse(model, data, q)
-            self.Minv = Minv = np.triu(Minv) + np.triu(Minv, 1).T
+            Minv = pin.computeMinverse(model, data, q)  # (a new array: its upper triangle)
+            Minv[self._lower] = Minv.T[self._lower]
+            self.Minv = Minv
             G = Minv.dot(C.T)
-            lam0, Lam = np.zeros(0), np.zeros((0, rows.n))
+            lam0, Lam = self._lam0, self._Lam
         CG = C.dot(G)
         self.G, self.CG = G, CG
+        if not self.n_pin and CG.shape[0] > 1:  # C M^-1 C^T: symmetric positive (semi)definite
+            self._Li = numerics.lstsq_spd_factor(CG, _RTOL)
         self.mu = mu = self.solve(c - C.dot(a0))
-        self.lam = lam0 + Lam.dot(mu)
+        self.lam = lam0 + Lam.dot(mu) if self.n_pin else lam0
         return a0 + G.dot(mu)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """The coupling forces ``mu`` (k,) with ``C G mu = b``, ``G`` of the last evaluation.
 
-        Minimum norm where couplings are redundant with the closures or one another.
+        Minimum norm where couplings are redundant with the closures or one another. Without
+        closures ``C G = C M^-1 C^T`` is solved by its Cholesky factor where that is certified
+        to give the same solution (:func:`solvers.numerics.lstsq_spd_factor`).
         """
         CG = self.CG
         if CG.shape == (1, 1):  # one coupling: numerics.lstsq's rule, without its SVD
             return b / CG[0] if CG[0, 0] != 0.0 else np.zeros(1)
-        return numerics.lstsq(CG, b, 1e-12)
+        Li = self._Li
+        if Li is not None:
+            return Li.T.dot(Li.dot(b))
+        return numerics.lstsq(CG, b, _RTOL)
 
     def couple(self, x: np.ndarray, r: np.ndarray) -> np.ndarray:
         """``x + G mu`` with ``C (x + G mu) = r`` (the last evaluation's ``C``, ``G``).

@@ -237,6 +237,16 @@ class CouplingRows:
         self.scirc_any = bool(self.scirc.any())
         self.all_sourced = bool(self.has_source.all())
         self.wrapped = bool(np.any(self.period > 0.0))
+        # no source: the rows are constant (no drift, a constant Jacobian)
+        self.constant = not bool(self.has_source.any())
+        # no source and no circular joint: the residual of one state is ``A_q q - b - p(0)``
+        self._Aq: np.ndarray | None = None
+        self._b0 = self.b + self.coef[:, 0]  # b + p(0): a locked joint's constant included
+        if self.constant and not self.tcirc_any and k:
+            self._Aq = np.zeros((k, int(model.nq)))
+            for i, r in enumerate(rows):
+                for iq, _, _, a in r.terms:
+                    self._Aq[i, iq] += a
         # one state at a time: plain floats (numpy's per-call overhead dominates small rows)
         self._scalar = [
             (
@@ -299,6 +309,8 @@ class CouplingRows:
     def residual(self, q: np.ndarray) -> np.ndarray:
         """Residuals ``r`` (..., k) [rad or m] of configurations ``q`` (..., nq)."""
         if q.ndim == 1:
+            if self._Aq is not None:  # (no wrapping: periods come from circular joints)
+                return self._Aq.dot(q) - self._b0
             return self._one(q, 0)
         x = self._coordinate(q, self.tq, self.tcirc, self.tcirc_any)  # (..., k, width)
         r = np.einsum("...kt,kt->...k", x, self.ta) - self.b - self._horner(self.coef, self._u(q))
@@ -342,6 +354,8 @@ class CouplingRows:
 
     def drift(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Acceleration drift ``gamma = -p''(u) v_s^2`` (..., k) [rad/s^2 or m/s^2]."""
+        if self.constant:
+            return np.zeros((*v.shape[:-1], self.n))
         vs = v[..., self.sv]
         d2 = self._one(q, 2) if q.ndim == 1 else self._horner(self.d2, self._u(q))
         return -d2 * vs * vs  # p'' = 0 without a source

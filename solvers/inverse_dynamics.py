@@ -701,7 +701,9 @@ class InverseDynamics:
         done = np.zeros(n, dtype=bool)
         n_p = self._vp.size
         nc = self.constraints.n
-        if n == 0 or n_p == 0 or nc == 0:
+        if n and nc == 0:
+            return self._solve_free_batch(b, out, s)
+        if n == 0 or n_p == 0:
             return done
         Jp, Ja = J[:, :, self._vp], J[:, :, self._va]
         JpT = np.swapaxes(Jp, 1, 2)
@@ -744,6 +746,34 @@ class InverseDynamics:
         out.constraint_forces[s : s + n][ok] = lam[ok]
         out.residual[s : s + n][ok] = np.abs(y[ok]).max(axis=1)
         return done
+
+    def _solve_free_batch(self, b: np.ndarray, out: InverseTrajectory, s: int) -> np.ndarray:
+        """:meth:`_solve_state` on a batch without constraint rows (same margins, same solution).
+
+        Without rows ``Z = I`` and ``G = S^T``, whose columns are the distinct actuated axes
+        scaled by the gains: its singular values are ``|gains|``, so ``rank(G) = n_a`` when the
+        smallest gain clears the rank tolerance (with :meth:`_solve_unique`'s margin), the
+        unreachable part of ``b`` is its passive entries and ``tau = b_a / gains``. Samples
+        whose passive entries exceed the consistency tolerance or whose efforts break a bound
+        are left to the general path (which raises).
+
+        Results go into ``out`` from row ``s``; returns where this applied (n,).
+        """
+        n = b.shape[0]
+        if not self._gmin > 1e3 * self._g_tol:
+            return np.zeros(n, dtype=bool)
+        scale = np.maximum(1.0, np.abs(b).max(axis=1))
+        bp = np.abs(b[:, self._vp]).max(axis=1, initial=0.0)
+        ok = bp <= self.consistency_tol * scale
+        gains = self.actuation.gains
+        tau = b[:, self._va] / gains
+        if self._bounded:
+            tol = self.eps * np.maximum(1.0, np.abs(tau).max(axis=1))[:, None]
+            ok &= ~((tau < self.lower - tol) | (tau > self.upper + tol)).any(axis=1)
+        ya = np.abs(b[:, self._va] - gains * tau).max(axis=1, initial=0.0)
+        out.tau[s : s + n][ok] = tau[ok]
+        out.residual[s : s + n][ok] = np.maximum(bp, ya)[ok]
+        return ok
 
 
 def _vector(

@@ -65,13 +65,18 @@ def project_state(
         )
     q = sol.q
     J = cs.jacobian(data, q)
+    Jv = J @ v
+    if not Jv.any():  # v keeps the closures already (a start at rest): y = 0
+        return q, np.array(v, dtype=float)
     M = pin.crba(model, data, q)
     M = np.triu(M) + np.triu(M, 1).T
     try:
         L = np.linalg.cholesky(M)
     except np.linalg.LinAlgError:  # massless bodies: Euclidean projection instead
-        return q, v - numerics.lstsq(J, J @ v, 1e-10)
+        return q, v - numerics.lstsq(J, Jv, 1e-10)
     # v+ = v - M^-1 J^T y with (J M^-1 J^T) y = J v (minimum-norm y for redundant closures)
     B = np.linalg.solve(L, J.T)  # L^-1 J^T
-    y = numerics.lstsq(B.T @ B, J @ v, 1e-12)
+    BB = B.T @ B
+    Li = numerics.lstsq_spd_factor(BB, 1e-12) if BB.shape[0] > 1 else None
+    y = Li.T @ (Li @ Jv) if Li is not None else numerics.lstsq(BB, Jv, 1e-12)
     return q, v - np.linalg.solve(L.T, B @ y)

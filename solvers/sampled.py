@@ -37,15 +37,9 @@ import pinocchio as pin
 
 from solvers.closure import support_mask
 from solvers.constraints import ConstraintSet
+from solvers.vec3 import cross
 
 __all__ = ["SampledKinematics"]
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of (..., 3) arrays (cheaper than ``np.cross`` on small rows)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _turn(R: np.ndarray, R1: np.ndarray, n: np.ndarray) -> np.ndarray:
@@ -62,7 +56,7 @@ def _turn(R: np.ndarray, R1: np.ndarray, n: np.ndarray) -> np.ndarray:
 def _relative_motion(d: np.ndarray, oMc2: np.ndarray) -> np.ndarray:
     """Spatial motions (n, 6), world axes at the origin, in contact frames ``oMc2`` (n, 4, 4)."""
     R2, p2 = oMc2[:, :3, :3], oMc2[:, :3, 3]
-    lin = d[:, :3] + _cross(d[:, 3:], p2)  # at the contact point
+    lin = d[:, :3] + cross(d[:, 3:], p2)  # at the contact point
     return np.concatenate(
         [np.einsum("nji,nj->ni", R2, lin), np.einsum("nji,nj->ni", R2, d[:, 3:])], axis=1
     )
@@ -269,7 +263,7 @@ class SampledKinematics:
         H, acc = self.H[:n], self.acc[:n]
         R, p = H[..., :3, :3], H[..., :3, 3]
         ang = np.einsum("nkij,nkj->nki", R, acc[..., 3:])
-        lin = np.einsum("nkij,nkj->nki", R, acc[..., :3]) + _cross(p, ang)
+        lin = np.einsum("nkij,nkj->nki", R, acc[..., :3]) + cross(p, ang)
         return np.concatenate([lin, ang], axis=-1)
 
     def closure_errors(
@@ -378,7 +372,7 @@ class SampledKinematics:
             a2 = (H[:, s2, :3, :3] @ M2.rotation) @ a
             for k in range(2):
                 f = R1 @ F[:, k]
-                w = _cross(a2, f)
+                w = cross(a2, f)
                 if r_out is not None:
                     r_out[:, o + k] = np.sum(f * a2, axis=-1)
                 if J_out is not None:
@@ -391,7 +385,7 @@ class SampledKinematics:
                     ev_out[:, o + k] = np.sum(w * (w2 - w1), axis=-1)
                 if ea_out is not None:
                     assert A is not None
-                    dw = _cross(_cross(w2, a2), f) + _cross(a2, _cross(w1, f))
+                    dw = cross(cross(w2, a2), f) + cross(a2, cross(w1, f))
                     ea_out[:, o + k] = np.sum(dw * (w2 - w1), axis=-1) + np.sum(
                         w * (A[:, s2, 3:] - A[:, s1, 3:]), axis=-1
                     )
@@ -426,8 +420,8 @@ class SampledKinematics:
             p = np.einsum("nkij,kj->nki", Hs[..., :3, :3], self._pt_local[s]) + Hs[..., :3, 3]
             Vs, As = V[:, slot], A[:, slot]
             w = Vs[..., 3:]
-            vp = Vs[..., :3] + _cross(w, p)
-            ap = As[..., :3] + _cross(As[..., 3:], p) + _cross(w, vp)
+            vp = Vs[..., :3] + cross(w, p)
+            ap = As[..., :3] + cross(As[..., 3:], p) + cross(w, vp)
             side.append((p, vp, ap))
         return side
 
@@ -648,7 +642,7 @@ class SampledKinematics:
         oMf = self.H[:n, s] @ M.homogeneous
         p, R = oMf[:, :3, 3], oMf[:, :3, :3]
         F = W[:, :3]
-        moment = _cross(p, F) + np.einsum("nij,nj->ni", R, W[:, 3:])  # about the world origin
+        moment = cross(p, F) + np.einsum("nij,nj->ni", R, W[:, 3:])  # about the world origin
         Jw = self.Jw[:n]
         g = np.einsum("nrv,nr->nv", Jw[:, :3], F) + np.einsum("nrv,nr->nv", Jw[:, 3:], moment)
         return g * self.masks[s]

@@ -16,25 +16,25 @@ import pinocchio as pin
 
 __all__ = ["scratch_data"]
 
-_DATAS: dict[tuple[int, int], pin.Data] = {}
+_DATAS: dict[tuple[int, int], tuple[weakref.ref[pin.Model], pin.Data]] = {}
 _LOCK = threading.Lock()
 
 
-def _drop(key: int) -> None:
-    with _LOCK:
-        for k in [k for k in _DATAS if k[0] == key]:
-            del _DATAS[k]
-
-
 def scratch_data(model: pin.Model) -> pin.Data:
-    """A data of ``model`` for this thread, made on first use (see the module docstring)."""
+    """A data of ``model`` for this thread, made on first use (see the module docstring).
+
+    The entries hold their model weakly and are checked against it (an ``id`` can be reused
+    by a later model); the entries of dead models are dropped at the next new entry. No
+    finalizer runs here: one run by the garbage collector while this thread holds the lock
+    would wait for it forever.
+    """
     key = (id(model), threading.get_ident())
-    data = _DATAS.get(key)
-    if data is None:
-        data = model.createData()
-        with _LOCK:
-            first = not any(k[0] == key[0] for k in _DATAS)
-            _DATAS[key] = data
-        if first:
-            weakref.finalize(model, _drop, key[0])
+    entry = _DATAS.get(key)
+    if entry is not None and entry[0]() is model:
+        return entry[1]
+    data = model.createData()
+    with _LOCK:
+        for k in [k for k, (ref, _) in _DATAS.items() if ref() is None]:
+            del _DATAS[k]
+        _DATAS[key] = (weakref.ref(model), data)
     return data

@@ -223,6 +223,16 @@ def _make(name, request):  # noqa: C901 (one branch per result type)
             0.0,
         )
         return balance_springs(robot, [spring], np.linspace(-1.0, 1.0, 7)[:, None])
+    if name == "SizingGrid":
+        from pkdyn.dynamics.sizing_grid import sizing_grid
+
+        return sizing_grid(fx("delta"), [0.5, 1.0], [0.0, 1.0], dt=0.01, progress=False)
+    if name == "FastestGrid":
+        from pkdyn.dynamics.fastest_grid import fastest_grid
+        from pkdyn.dynamics.trajectory import named_task
+
+        path = named_task(fx("delta"), "adept", cycle_time=1.0, dt=0.02)
+        return fastest_grid(fx("delta"), path, [0.0, 1.0], progress=False)
     if name == "StudyResult":
         from pkdyn.design.run import run_study
         from pkdyn.design.study import Study
@@ -306,6 +316,8 @@ PLOTTED = [
     "StudyResult",
     "ScenarioReport",
     "ConditioningMap",
+    "SizingGrid",
+    "FastestGrid",
 ]
 
 

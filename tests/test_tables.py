@@ -14,7 +14,7 @@ import pyarrow.parquet as pq
 import pytest
 
 import pkdyn
-from pkdyn.exceptions import InvalidInputError
+from pkdyn.exceptions import InvalidInputError, OutputError
 from pkdyn.tables import MAX_CELL, read_table, write_table
 
 
@@ -113,6 +113,17 @@ def test_only_regular_files_are_read(tmp_path):
     ):
         with pytest.raises(InvalidInputError, match=needle):
             read_table(path)
+
+
+def test_write_table_digits_and_unwritable_paths(tmp_path):
+    X = np.array([[1.0 / 3.0, -2.0e-7], [123456.789012345, 0.0]])
+    write_table(tmp_path / "d.csv", ["t", "x"], X, digits=10)
+    text = (tmp_path / "d.csv").read_text()
+    assert text.splitlines()[1] == f"{X[0, 0]:.10g},{X[0, 1]:.10g}"
+    back = read_table(tmp_path / "d.csv").data
+    assert np.all(np.abs(back - X) <= 1e-9 * np.abs(X))  # 10 significant digits
+    with pytest.raises(OutputError, match="no_such_dir"):
+        write_table(tmp_path / "no_such_dir" / "d.csv", ["t", "x"], X)
 
 
 def test_parquet_reads_like_csv_and_names_rows(tmp_path):

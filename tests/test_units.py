@@ -1,8 +1,9 @@
 import math
 
+import numpy as np
 import pytest
 
-from pkdyn.units import quantity, vector
+from pkdyn.units import quantity, value_range, vector
 
 
 @pytest.mark.parametrize(
@@ -42,3 +43,9 @@ def test_quantity(value, unit, text):
 def test_vector_has_no_negative_zero():
     assert vector([0.0, -0.0, 0.1], "rad") == "[0, 0, 0.1] rad"
     assert vector([1e-20, -2.5], "m", digits=3) == "[1e-20, -2.5] m"
+
+
+def test_value_range_over_finite_values_any_shape():
+    x = np.array([[2.0e-5, np.nan], [np.inf, 5.3e-5]])
+    assert value_range("d", x, "m") == "d 20 um .. 53 um"
+    assert value_range("LCI", [np.nan, np.nan]) == "LCI: none"

@@ -36,6 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import AssemblyError, InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
 from pkdyn.results import Result, jsonable
 from pkdyn.units import quantity
@@ -134,8 +135,18 @@ class MapSamples(Result):
         return np.einsum("kji,kj->ki", self.J_inv, ta)
 
 
+def _numbers(x: Any, what: str) -> np.ndarray:
+    """``x`` as a float array, or a refusal naming ``what`` (strings, mappings, ragged rows)."""
+    if isinstance(x, str | bytes | dict):
+        raise InvalidInputError(what, f"expected numbers, got {x!r:.60}")
+    try:
+        return np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(what, f"expected numbers (rows as long), got {x!r:.60}") from None
+
+
 def _per_sample(x: Sequence[float] | np.ndarray, shape: tuple[int, ...], what: str) -> np.ndarray:
-    a = np.asarray(x, dtype=float)
+    a = _numbers(x, what)
     if a.shape == shape[1:]:
         a = np.broadcast_to(a, shape)
     if a.shape != shape or not np.all(np.isfinite(a)):
@@ -196,11 +207,16 @@ class ActuationMap:
         actuators: Sequence[str] | None = None,
         q_ref: np.ndarray | None = None,
     ) -> None:
-        self.robot = robot
-        self.joints = list(joints)
-        self.actuators = [a.name for a in robot.actuators] if actuators is None else list(actuators)
-        if not self.joints:
-            raise InvalidInputError("joints", "name at least one joint")
+        from pkdyn.inputs import names
+        from pkdyn.model.arguments import check_robot, configuration
+
+        self.robot = robot = check_robot(robot)
+        self.joints = list(names("joints", joints, what="joint"))
+        self.actuators = (
+            [a.name for a in robot.actuators]
+            if actuators is None
+            else list(names("actuators", actuators, what="actuator"))
+        )
         self.joint_q, self.joint_v = _coordinates(robot, self.joints, "joints")
         self.act_q, self.act_v = _coordinates(robot, self.actuators, "actuators")
         if self.joint_v.size != self.act_v.size:
@@ -219,7 +235,7 @@ class ActuationMap:
         self.moving_v = np.setdiff1d(np.arange(model.nv), self.held_v)
         self._pos_a = np.searchsorted(self.moving_v, self.act_v)
         self._pos_j = np.searchsorted(self.moving_v, self.joint_v)
-        self.q_ref = np.array(robot.q_home if q_ref is None else q_ref, dtype=float)
+        self.q_ref = robot.q_home.copy() if q_ref is None else configuration(robot, q_ref, "q_ref")
         self._data = model.createData()
         self._free = {
             "a": np.setdiff1d(self.moving_v, self.act_v),
@@ -248,7 +264,7 @@ class ActuationMap:
         return sol.q, sol.converged
 
     def _samples(self, values: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
-        v = np.asarray(values, dtype=float)
+        v = _numbers(values, what)
         if v.ndim == 1:
             v = v[None, :]
         if v.ndim != 2 or v.shape[1] != self.n or not np.all(np.isfinite(v)):
@@ -264,6 +280,7 @@ class ActuationMap:
             )
         return v
 
+    @public
     def from_joints(
         self,
         qj: Sequence[float] | np.ndarray,
@@ -288,6 +305,7 @@ class ActuationMap:
         """
         return self._map(self._samples(qj, "qj"), self.joint_q, self._free["j"], q_init, strict)
 
+    @public
     def from_actuators(
         self,
         qa: Sequence[float] | np.ndarray,
@@ -397,6 +415,7 @@ def _inverse_cut(G: np.ndarray) -> np.ndarray:
     return np.asarray((Vt[:r].T / s[:r]) @ U[:, :r].T)
 
 
+@public
 def actuation_map(
     robot: Robot,
     joints: Sequence[str],

@@ -30,6 +30,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.results import Result, deprecated_alias, jsonable
@@ -128,6 +129,9 @@ class CollisionReport(Result):
 
     def table(self, top: int = 10) -> str:
         """The smallest distance, the verdict, and the ``top`` closest pairs (0: all)."""
+        from pkdyn.inputs import count
+
+        top = count("top", top, 0)
         state = "IN COLLISION" if self.in_collision else "clear"
         lines = [
             f"min distance {quantity(self.min_distance, 'm')} ({state}, margin "
@@ -314,6 +318,22 @@ def interference_checker(robot: Robot) -> CollisionChecker:
     return checker
 
 
+def _pairs(pairs: Any) -> list[tuple[str, str]]:
+    """Pairs of names (two strings each), or a refusal naming ``pairs``."""
+    from pkdyn.inputs import names
+
+    if isinstance(pairs, str | bytes) or not isinstance(pairs, Sequence | np.ndarray):
+        raise InvalidInputError("pairs", f"expected pairs of names, got {pairs!r:.60}")
+    out = []
+    for p in pairs:
+        two = names("pairs", p, what="geometry or link") if not isinstance(p, str) else (p,)
+        if len(two) != 2:
+            raise InvalidInputError("pairs", f"expected pairs of two names, got {p!r:.60}")
+        out.append((two[0], two[1]))
+    return out
+
+
+@public
 def distance_report(
     robot: Robot,
     q: np.ndarray,
@@ -338,8 +358,11 @@ def distance_report(
         PkdynError: No collision geometry pair to check.
 
     """
-    if not np.isfinite(margin):
-        raise InvalidInputError("margin", f"must be a finite distance [m], got {margin}")
+    from pkdyn.inputs import non_negative
+
+    margin = non_negative("margin", margin, "m")
+    if pairs is not None:
+        pairs = _pairs(pairs)
     checker = interference_checker(robot) if pairs is None else CollisionChecker(robot, pairs)
     return checker.report(q, margin)
 

@@ -25,7 +25,7 @@ from pkdyn.exceptions import PkdynError, SingularConfigurationError
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.robot import Robot
 from pkdyn.results import Result, jsonable
-from pkdyn.units import quantity
+from pkdyn.units import quantity, value_range
 
 __all__ = [
     "Dexterity",
@@ -216,8 +216,8 @@ class DexterityMap(Result):
         """How many poses are valid, and the range of each index over them."""
         return (
             f"{int(np.count_nonzero(self.valid))} of {self.valid.size} poses reached and "
-            f"regular; {_range('LCI', self.lci)}, {_range('cond(J)', self.cond)}, "
-            f"{_range('manipulability', self.manipulability)} (dimensionless)"
+            f"regular; {value_range('LCI', self.lci)}, {value_range('cond(J)', self.cond)}, "
+            f"{value_range('manipulability', self.manipulability)} (dimensionless)"
         )
 
 
@@ -259,12 +259,3 @@ def dexterity_map(
         valid[i] = True
         out["w"][i], out["k"][i], out["l"][i] = d.manipulability, d.cond, d.lci
     return DexterityMap(P, valid, out["w"], out["k"], out["l"])
-
-
-def _range(name: str, x: np.ndarray, unit: str = "") -> str:
-    """``name min .. max unit`` over the finite values (or ``none``)."""
-    x = np.asarray(x, dtype=float)
-    ok = x[np.isfinite(x)]
-    if ok.size == 0:
-        return f"{name}: none"
-    return f"{name} {quantity(float(ok.min()), unit)} .. {quantity(float(ok.max()), unit)}"

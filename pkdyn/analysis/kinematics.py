@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
+from pkdyn.model.arguments import public
 from pkdyn.model.platform_jacobian import platform_jacobian as _platform_jacobian
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
@@ -62,6 +63,7 @@ __all__ = [
     "NEAR_SINGULAR_TOL",
     "COND_MAX",
     "ASSEMBLY_TOL",
+    "check_assembled",
     "NearSingularityWarning",
     "KinematicModels",
     "kinematic_models",
@@ -150,6 +152,7 @@ def robot_scales(robot: Robot, task_rows: np.ndarray) -> tuple[np.ndarray, np.nd
     return a_scale, x_scale
 
 
+@public
 def platform_jacobian(
     robot: Robot,
     q: np.ndarray | None,
@@ -265,15 +268,30 @@ def passive_map(
 
 def _checked_q(robot: Robot, q: Sequence[float] | np.ndarray) -> np.ndarray:
     qq = as_finite("q", q, robot.nq)
-    if robot.constraints.n:
-        res = float(np.max(np.abs(robot.constraints.residual(robot.data, qq))))
-        if res > ASSEMBLY_TOL:
-            raise InvalidInputError(
-                "q",
-                f"not an assembled configuration of {robot.name} (closure residual {res:.3g}); "
-                "obtain q from pkdyn.forward_geometry, inverse_geometry or project",
-            )
+    check_assembled(robot, qq)
     return qq
+
+
+def check_assembled(robot: Robot, q: np.ndarray) -> None:
+    """Refuse a configuration that does not close the robot's loops (within ``ASSEMBLY_TOL``).
+
+    Args:
+        robot: The robot (its ``data`` is used).
+        q: Configuration (nq,), finite.
+
+    Raises:
+        InvalidInputError: A closure residual above :data:`ASSEMBLY_TOL`, with its size.
+
+    """
+    if robot.constraints.n == 0:
+        return
+    res = float(np.max(np.abs(robot.constraints.residual(robot.data, q))))
+    if res > ASSEMBLY_TOL:
+        raise InvalidInputError(
+            "q",
+            f"not an assembled configuration of {robot.name} (closure residual {res:.3g}); "
+            "obtain q from pkdyn.forward_geometry, inverse_geometry or project",
+        )
 
 
 @dataclass
@@ -521,6 +539,7 @@ def _relation_count(robot: Robot, rows: np.ndarray) -> int:
     return count
 
 
+@public
 def kinematic_models(robot: Robot, q: Sequence[float] | np.ndarray) -> KinematicModels:
     """Parallel matrix ``A``, serial matrix ``B`` and Jacobians of a robot at ``q``.
 

@@ -46,7 +46,7 @@ from pkdyn.closed_form import delta as delta_cf
 from pkdyn.closed_form import planar_3rrr as rrr_cf
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.results import Result, jsonable
-from pkdyn.units import quantity
+from pkdyn.units import quantity, value_range
 
 __all__ = [
     "KIND_NAMES",
@@ -106,7 +106,7 @@ class Conditioning(Result):
         return (
             f"{int(np.count_nonzero(self.valid))} of {np.asarray(self.valid).size} poses "
             f"reachable: {counts}; {int(np.count_nonzero(self.near))} near a singularity; "
-            f"{_range('LCI', self.lci)} (dimensionless)"
+            f"{value_range('LCI', self.lci)} (dimensionless)"
         )
 
     def reshape(self, shape: tuple[int, ...]) -> Conditioning:
@@ -362,12 +362,3 @@ def planar_3rrr_map(
         {"phi": float(phi)},
         planar_3rrr_conditioning(g, X, mode, length).reshape(Xg.shape),
     )
-
-
-def _range(name: str, x: np.ndarray, unit: str = "") -> str:
-    """``name min .. max unit`` over the finite values (or ``none``)."""
-    x = np.asarray(x, dtype=float)
-    ok = x[np.isfinite(x)]
-    if ok.size == 0:
-        return f"{name}: none"
-    return f"{name} {quantity(float(ok.min()), unit)} .. {quantity(float(ok.max()), unit)}"

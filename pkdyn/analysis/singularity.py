@@ -61,6 +61,7 @@ from pkdyn.analysis.kinematics import (
     relation_margins,
     robot_scales,
 )
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.results import Result
 from pkdyn.units import quantity
@@ -214,6 +215,7 @@ def _directions(
     return margin, D / np.where(norms > 0, norms, 1.0)
 
 
+@public
 def classify(
     robot: Robot,
     q: Sequence[float] | np.ndarray,

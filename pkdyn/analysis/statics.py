@@ -38,6 +38,7 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import SINGULAR_TOL, NearSingularityWarning, kinematic_models
 from pkdyn.exceptions import InvalidInputError, SingularConfigurationError
+from pkdyn.model.arguments import public
 from pkdyn.model.description import LinearCouplingSpec
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
@@ -225,6 +226,7 @@ class StaticsResult(Result):
         return "\n".join(lines)
 
 
+@public
 def static_equilibrium(
     robot: Robot,
     q: Sequence[float] | np.ndarray,

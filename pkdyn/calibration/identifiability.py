@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pkdyn.exceptions import InvalidInputError
 from pkdyn.identifiability import Identifiability
 from pkdyn.identifiability import identifiability as _identifiability
 from pkdyn.results import deprecated
@@ -65,7 +66,12 @@ def observability(s: np.ndarray, poses: int) -> dict[str, float]:
         ``{"O1": ..., "O5": ...}`` (zeros when ``s`` is empty or has a zero).
 
     """
-    s = np.sort(np.asarray(s, dtype=float))[::-1]
+    from pkdyn.inputs import count, vector
+
+    s = np.sort(vector("s", s, unit="", bound=np.inf))[::-1]
+    poses = count("poses", poses, 1)
+    if np.any(s < 0.0):
+        raise InvalidInputError("s", "singular values are >= 0")
     if s.size == 0 or s[-1] <= 0.0:
         return dict.fromkeys(INDICES, 0.0)
     return {
@@ -110,7 +116,19 @@ def identifiability(
         columns.
 
     """
-    W = np.asarray(W, dtype=float)
+    from pkdyn.inputs import count, matrix, positive, vector
+    from pkdyn.inputs import names as names_
+
+    W = matrix("W", W, bound=np.inf)
+    names = names_("names", names, what="parameter")
+    if len(names) != W.shape[1]:
+        raise InvalidInputError("names", f"{len(names)} names for {W.shape[1]} columns of W")
+    poses = count("poses", poses, 1)
+    rtol = positive("rtol", rtol)
+    if scale is not None:
+        scale = vector("scale", scale, W.shape[1])
+    if prior is not None:
+        prior = vector("prior", prior, W.shape[1], bound=np.inf)
     out = _identifiability(W, names, poses, rtol, prior, pivot=True, units=units)
     ident = out.identifiable
     sc = np.ones(W.shape[1]) if scale is None else np.asarray(scale, dtype=float)

@@ -38,6 +38,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import pose_to_vector
 from pkdyn.model.robot import Robot
 
@@ -93,6 +94,9 @@ class Measurements:
 
     def where(self, i: int) -> str:
         """``line L`` of its file (``row R`` of a Parquet file, or of the measurements given)."""
+        from pkdyn.inputs import count
+
+        i = count("i", i, 0, len(self.qa) - 1)
         if self.lines is not None:
             return f"{self.line_word} {int(self.lines[int(i)])}"
         if self._rows is not None:
@@ -119,8 +123,10 @@ class Measurements:
             "plane": ("group",),
             "joints": (),
         }[self.kind]
+        from pkdyn.inputs import names
+
+        self.joints = names("joints", self.joints, what="joint", empty=True)
         if self.kind == "joints":
-            self.joints = tuple(str(j) for j in self.joints)
             if not self.joints or self.q is None:
                 raise InvalidInputError(
                     "joints", "joints measurements need the joint names and their coordinates q"
@@ -196,8 +202,11 @@ class Measurements:
         return self._rotations
 
     def subset(self, idx: np.ndarray | Sequence[int]) -> Measurements:
-        """The measurements of some rows."""
-        i = np.asarray(idx, dtype=int)
+        """The measurements of some rows (their indices, each in ``0 .. len - 1``)."""
+        from pkdyn.inputs import count
+
+        flat = _array("idx", idx, 1).reshape(-1)  # (none: an empty subset)
+        i = np.array([count("idx", v, 0, len(self.qa) - 1) for v in flat], dtype=int)
         return Measurements(
             self.kind,
             self.qa[i],
@@ -214,6 +223,10 @@ class Measurements:
 
     def with_readings(self, qa: np.ndarray) -> Measurements:
         """The same measurements with other actuator values (N, n_a) (e.g. joint coordinates)."""
+        from pkdyn.inputs import matrix
+
+        rows, cols = self.qa.shape
+        qa = matrix("qa", qa, rows, cols, "rad or m", bound=np.inf)  # (the reach: the caller's)
         return Measurements(
             self.kind,
             qa,
@@ -243,6 +256,12 @@ class Measurements:
             The measurements.
 
         """
+        if (
+            isinstance(placements, pin.SE3)
+            or not isinstance(placements, Sequence)
+            or not all(isinstance(M, pin.SE3) for M in placements)
+        ):
+            raise InvalidInputError("placements", "expected a sequence of pin.SE3 placements")
         vec = [pose_to_vector(M) for M in placements]
         P = np.array([v[0] for v in vec]).reshape(-1, 3)
         rpy = np.array([v[1] for v in vec]).reshape(-1, 3) if kind == "pose" else None
@@ -251,15 +270,22 @@ class Measurements:
 
 def _array(name: str, value: Any, ndim: int) -> np.ndarray:
     """``value`` as a float array of at most ``ndim`` dimensions (2: rows of values)."""
-    if isinstance(value, str | bytes | dict) or np.iscomplexobj(value):
+    if isinstance(value, str | bytes | dict):
         raise InvalidInputError(name, f"expected an array of numbers, got {value!r:.60}")
     try:
-        arr = np.asarray(value, dtype=float)
+        arr = np.asarray(value)
+        if np.iscomplexobj(arr):
+            raise TypeError
+        arr = np.asarray(arr, dtype=float)
     except (TypeError, ValueError):
-        raise InvalidInputError(name, f"expected an array of numbers, got {value!r:.60}") from None
+        raise InvalidInputError(
+            name, f"expected an array of numbers (rows as long), got {value!r:.60}"
+        ) from None
     arr = np.atleast_2d(arr) if ndim == 2 else arr
     if arr.ndim > ndim:
         raise InvalidInputError(name, f"expected {ndim} dimensions at most, got shape {arr.shape}")
+    if ndim == 2 and arr.shape[1] == 0:
+        raise InvalidInputError(name, "no value: give one row of values per measurement")
     return arr
 
 
@@ -295,6 +321,7 @@ def _columns(robot: Robot, kind: str, joints: Sequence[str] = ()) -> list[str]:
     return qa + tail
 
 
+@public
 def read_csv(path: str | os.PathLike[str], robot: Robot, kind: str | None = None) -> Measurements:
     """Measurements from a table file (module docstring): CSV or Parquet.
 
@@ -379,6 +406,7 @@ def read_csv(path: str | os.PathLike[str], robot: Robot, kind: str | None = None
     return Measurements(kind, qa, group=data[:, n_a], **at)  # type: ignore[arg-type]
 
 
+@public
 def write_csv(path: str | os.PathLike[str], robot: Robot, m: Measurements) -> None:
     """Write measurements as a table :func:`read_csv` reads back exactly (atomically).
 
@@ -390,7 +418,10 @@ def write_csv(path: str | os.PathLike[str], robot: Robot, m: Measurements) -> No
         m: The measurements.
 
     """
+    from pkdyn.inputs import instance
     from pkdyn.tables import write_table
+
+    instance("m", m, Measurements, "Measurements (pkdyn.calibration.read_csv)")
 
     cols = _columns(robot, m.kind, m.joints)
     if m.kind == "joints":

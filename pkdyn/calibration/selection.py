@@ -29,6 +29,7 @@ import pinocchio as pin
 
 from pkdyn.calibration.identifiability import INDICES, identifiability, observability
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.inputs import is_complex
 from pkdyn.model.assembly import inverse_geometry
 from pkdyn.model.robot import Robot
 from pkdyn.precision.parameters import ParameterModel
@@ -204,7 +205,7 @@ def select_poses(
 
     if index not in INDICES:
         raise InvalidInputError("index", f"'{index}': use one of {', '.join(INDICES)}")
-    if isinstance(blocks, str | bytes | dict) or np.iscomplexobj(blocks):
+    if isinstance(blocks, str | bytes | dict) or is_complex(blocks):
         raise InvalidInputError("blocks", "expected an array (M, rows, n_par) (design_matrix)")
     try:
         blocks = np.asarray(blocks, dtype=float)

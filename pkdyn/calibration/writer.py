@@ -97,6 +97,8 @@ def calibrated_urdf(result: Calibrated, xml: str | None = None) -> str:
             has no element to write it in (a closure read from a sidecar).
 
     """
+    if xml is not None and not isinstance(xml, str):
+        raise InvalidInputError("xml", f"expected the URDF text (str), got {type(xml).__name__}")
     robot = result.nominal
     text = source_urdf(robot, "calibrated placements") if xml is None else xml
     ET.register_namespace("pkdyn", NAMESPACE)

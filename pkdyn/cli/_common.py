@@ -418,3 +418,40 @@ def posed_command(sub: Any, name: str, help_: str) -> argparse.ArgumentParser:
     qa_argument(where)
     sp.add_argument("--json", action="store_true")
     return sp
+
+
+def worker_options(
+    sp: argparse.ArgumentParser, what: str, per: str = "chunk of work", more: str = ""
+) -> None:
+    """``--workers``, ``--scheduler``, ``--timeout``: where a command's work runs.
+
+    Args:
+        sp: The sub-command's parser.
+        what: What the workers evaluate (the help).
+        per: The unit of work a worker takes (the help: at most one worker per ``per``).
+        more: What happens to more workers (the help), if anything.
+
+    """
+    sp.add_argument(
+        "--workers",
+        type=integer,
+        help=f"local worker processes for {what} (default: the usable cores, at most one per "
+        f"{per}{more})",
+    )
+    sp.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786")
+    sp.add_argument(
+        "--timeout",
+        type=number,
+        default=10.0,
+        help="seconds to wait for the scheduler to answer, or for a worker (10; at most 3600)",
+    )
+
+
+def check_worker_options(args: argparse.Namespace) -> None:
+    """``--workers``, ``--scheduler`` and ``--timeout`` checked before any work."""
+    from pkdyn.executors import check_scheduler, check_timeout
+
+    check_timeout(args.timeout, "--timeout")
+    check_scheduler(args.scheduler, "--scheduler")
+    if args.workers is not None and args.workers < 1:
+        raise InvalidInputError("--workers", f"must be >= 1, got {args.workers}")

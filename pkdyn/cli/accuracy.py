@@ -42,9 +42,14 @@ def _cmd_accuracy(args: argparse.Namespace) -> None:
     check_map_options(args)
     count("--top", args.top, 0)
     seed("--seed", args.seed)
-    if args.tolerance is not None and (
-        not 1 <= len(args.tolerance) <= 3 or min(args.tolerance) < 0
-    ):
+    if args.plot and args.map is None:
+        raise InvalidInputError("--plot", "plots a map: give --map xy|xz|yz")
+    if args.tolerance is not None and not 1 <= len(args.tolerance) <= 3:
+        raise InvalidInputError("--tolerance", "give LENGTH [ANGLE [GAIN]] >= 0 (m, rad, -)")
+    from pkdyn.inputs import vector
+
+    tolerance = None if args.tolerance is None else vector("--tolerance", args.tolerance, (1, 2, 3))
+    if tolerance is not None and np.any(tolerance < 0.0):
         raise InvalidInputError("--tolerance", "give LENGTH [ANGLE [GAIN]] >= 0 (m, rad, -)")
     robot = load(args)
     model = parameter_model(robot, args.model)

@@ -16,7 +16,7 @@ import argparse
 import json
 from typing import Any
 
-from pkdyn.cli._common import integer, number, params
+from pkdyn.cli._common import integer, number, params, worker_options
 from pkdyn.cli._paths import input_option, output_option
 from pkdyn.cli._spelling import spelled_option
 from pkdyn.exceptions import InvalidInputError
@@ -53,7 +53,7 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
     objectives += [f"max:{m}" for m in _flat(args.maximize)]
     if objectives:
         d["objectives"] = objectives
-    if args.require:
+    if args.require is not None:  # ("" is refused, not ignored)
         from pkdyn.design.requirement import Requirement
 
         samples = 5 if args.samples is None else args.samples
@@ -85,7 +85,7 @@ def _definition(args: argparse.Namespace) -> dict[str, Any]:
             d["n"] = args.n
     if args.seed is not None:
         d["seed"] = args.seed
-    if args.parametrisation:
+    if args.parametrisation is not None:  # ("" is refused by the study, not ignored)
         d["parametrisation"] = args.parametrisation
     settings = {
         k: v
@@ -325,19 +325,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--generations", type=integer, help="nsga2 generations")
     sp.add_argument("--population", type=integer, help="nsga2 population")
     sp.add_argument("--seed", type=integer)
-    sp.add_argument(
-        "--workers",
-        type=integer,
-        help="local worker processes (default: the usable cores, at most one per design; more "
-        "are capped, with a warning)",
-    )
-    sp.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786")
-    sp.add_argument(
-        "--timeout",
-        type=number,
-        default=10.0,
-        help="seconds to wait for the scheduler to answer, or for a worker (10; at most 3600)",
-    )
+    worker_options(sp, "the designs", "design", "; more are capped, with a warning")
     output_option(
         sp,
         "-o",

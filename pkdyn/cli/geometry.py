@@ -40,6 +40,7 @@ def _cmd_urdf(args: argparse.Namespace) -> None:
     if args.robot in library.FAMILIES:
         from pkdyn.model.families import export_urdf
 
+        load(args)  # every option checked (--home, --tol, --xacro-arg), as for a file
         fam = library.FAMILIES[args.robot]
         text = export_urdf(args.robot, fam.make_params(overrides))
     else:

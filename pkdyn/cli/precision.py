@@ -14,7 +14,16 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.cli._common import emit, integer, load, number, qa_argument, robot_command
+from pkdyn.cli._common import (
+    check_worker_options,
+    emit,
+    integer,
+    load,
+    number,
+    qa_argument,
+    robot_command,
+    worker_options,
+)
 from pkdyn.cli._paths import output_option
 from pkdyn.cli._spelling import spelled_option
 from pkdyn.exceptions import InvalidInputError
@@ -96,38 +105,6 @@ def map_options(sp: argparse.ArgumentParser, grid: int, fields: tuple[str, ...])
         help=f"field plotted (default: {fields[0]})",
     )
     worker_options(sp, "the general path's poses and the Monte Carlo's robots")
-
-
-def worker_options(sp: argparse.ArgumentParser, what: str) -> None:
-    """``--workers``, ``--scheduler``, ``--timeout``, as ``pkdyn design`` has them.
-
-    Args:
-        sp: The sub-command's parser.
-        what: What the workers evaluate (the help).
-
-    """
-    sp.add_argument(
-        "--workers",
-        type=integer,
-        help=f"local worker processes for {what} (default: the usable cores, at most one per "
-        "chunk of work)",
-    )
-    sp.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786")
-    sp.add_argument(
-        "--timeout",
-        type=number,
-        default=10.0,
-        help="seconds to wait for the scheduler to answer, or for a worker (10; at most 3600)",
-    )
-
-
-def check_worker_options(args: argparse.Namespace) -> None:
-    """``--workers`` and ``--timeout`` checked before any work."""
-    from pkdyn.executors import check_timeout
-
-    check_timeout(args.timeout, "--timeout")
-    if args.workers is not None and args.workers < 1:
-        raise InvalidInputError("--workers", f"must be >= 1, got {args.workers}")
 
 
 def posed_or_map(
@@ -295,6 +272,10 @@ def _cmd_modes(args: argparse.Namespace) -> None:
     check_map_options(args)
     if args.top is not None and args.top < 1:
         raise InvalidInputError("--top", f"{args.top}: give 1 or more")
+    if args.mode < 1:
+        raise InvalidInputError(
+            "--mode", f"{args.mode} is not a mode number: they count from 1 (the lowest)"
+        )
     if args.map is not None:
         for option, value in (("--html", args.html), ("--gravity", args.gravity or None)):
             if value is not None:

@@ -26,6 +26,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.pose import pose_from_vector
+from solvers.vec3 import cross
 
 __all__ = [
     "PHI",
@@ -70,25 +71,13 @@ def perpendicular(v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
     return unit_vector(v1 - (v1 @ v2) * v2)
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross products of (n, 3) arrays (cheaper than ``np.cross`` for small n)."""
-    return np.stack(
-        [
-            a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
-            a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
-            a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0],
-        ],
-        axis=1,
-    )
-
-
 def _units(v: np.ndarray) -> np.ndarray:
     return v / np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
 
 
 def _angles(v1: np.ndarray, v2: np.ndarray, n: np.ndarray) -> np.ndarray:
     """Equation (1), row-wise."""
-    return np.arctan2(np.einsum("ij,ij->i", n, _cross(v1, v2)), np.einsum("ij,ij->i", v1, v2))
+    return np.arctan2(np.einsum("ij,ij->i", n, cross(v1, v2)), np.einsum("ij,ij->i", v1, v2))
 
 
 def _perps(v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
@@ -212,13 +201,13 @@ def virtual_joints(
     l_c = _units(P_C - A)
     v_c = _units(P_O - P_C)
     q6 = 0.5 * np.pi - _angles(_perps(l_c, u), v_c, u)
-    q5 = 0.5 * np.pi - _angles(u, l_c, _units(_cross(u, l_c)))
+    q5 = 0.5 * np.pi - _angles(u, l_c, _units(cross(u, l_c)))
     q4 = np.linalg.norm(P_C - A, axis=1)
-    v3 = _units(_cross(l_c, u))
+    v3 = _units(cross(l_c, u))
     w_p = _perps(w_a, v3)
     q3 = _angles(l_c, w_p, v3)
     x1 = _perps(v3, w_a)
-    q2 = _angles(w_p, w_a, _units(_cross(x1, w_a)))
+    q2 = _angles(w_p, w_a, _units(cross(x1, w_a)))
     q1 = _angles(u_a, x1, w_a)
     return np.column_stack([q1, q2, q3, q4, q5, q6])
 

@@ -37,6 +37,10 @@ MAX_CLAVEL_RAYS = 720
 T = TypeVar("T")
 
 
+_TEXT_OPTIONS = ("profile",)
+"""Options of the named trajectories that are not numbers."""
+
+
 @dataclass(frozen=True)
 class Conditions:
     """What every design of a study is evaluated against.
@@ -93,6 +97,13 @@ class Conditions:
             "trajectory_options",
             fields.mapping("trajectory_options", self.trajectory_options),
         )
+        from pkdyn.dynamics.trajectory import TRAJECTORIES, _check_named, _number
+
+        set_(self, "trajectory", fields.text("trajectory", self.trajectory, TRAJECTORIES))
+        _check_named(self.trajectory, self.trajectory_options)
+        for key in self.trajectory_options:
+            if key not in _TEXT_OPTIONS:  # (their ranges: checked when the cycle is built)
+                _number(self.trajectory, dict(self.trajectory_options), key, 0.0)
         set_(self, "payload", fields.number("payload", self.payload, 0.0, unit="kg"))
         if self.length is not None:
             set_(self, "length", fields.number("length", self.length, 0.0, open_low=True, unit="m"))
@@ -110,14 +121,10 @@ class Conditions:
             self, "clavel_rays", fields.integer("clavel_rays", self.clavel_rays, 3, MAX_CLAVEL_RAYS)
         )
         if self.actuator_stiffness is not None:
-            try:
-                k = np.atleast_1d(np.asarray(self.actuator_stiffness, dtype=float))
-            except (TypeError, ValueError):
-                raise InvalidInputError(
-                    "actuator_stiffness",
-                    f"expected numbers [N m/rad or N/m], got {self.actuator_stiffness!r}",
-                ) from None
-            if k.ndim != 1 or not np.all(k > 0.0):  # (NaN fails too)
+            from pkdyn.inputs import vector
+
+            k = vector("actuator_stiffness", self.actuator_stiffness, unit="N m/rad or N/m")
+            if k.size == 0 or not np.all(k > 0.0):
                 raise InvalidInputError(
                     "actuator_stiffness", f"{k.tolist()}: stiffnesses must be > 0 [N m/rad or N/m]"
                 )
@@ -167,7 +174,7 @@ class Conditions:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Conditions:
         """From the study-file form (see :meth:`as_dict`)."""
-        d = dict(data)
+        d = fields.mapping("conditions", data)
         req = d.pop("requirement", None)
         known = {k for k in cls.__dataclass_fields__ if not k.startswith("_")}
         bad = [k for k in d if k not in known]
@@ -193,9 +200,28 @@ class DesignContext:
         self._memo: dict[str, Any] = {}
 
     def cached(self, key: str, compute: Callable[[], T]) -> T:
-        """``compute()`` once per design under ``key`` (shared between metrics)."""
+        """``compute()`` once per design under ``key`` (shared between metrics).
+
+        Raises:
+            InvalidInputError: ``key`` is not a string or ``compute`` not a function.
+            StudyError: ``compute`` raised (or called ``sys.exit``): the cause is kept.
+
+        """
+        from pkdyn.exceptions import PkdynError, StudyError
+        from pkdyn.inputs import callable_input
+
+        if not isinstance(key, str):
+            raise InvalidInputError("key", f"expected a string, got {key!r:.40}")
+        callable_input("compute", compute)
         if key not in self._memo:
-            self._memo[key] = compute()
+            try:
+                self._memo[key] = compute()
+            except (PkdynError, MemoryError):
+                raise
+            except (Exception, SystemExit) as err:
+                raise StudyError(
+                    f"cached '{key}'", f"the compute function raised {type(err).__name__}: {err}"
+                ) from err
         return self._memo[key]  # type: ignore[no-any-return]
 
     def requirement(self) -> Requirement:

@@ -121,6 +121,12 @@ def evaluate_design(study: Study, index: int, x: Any) -> Row:
             exhausted = where  # not a property of the design: stop the study, below
         except Exception as err:  # a user metric's bug, a numerical failure: record it
             return Row(index, xs, False, _reason(err, where + "error: "), tuple(values))
+        except SystemExit as err:  # sys.exit in a metric or a parametrisation: stop the study
+            raise StudyError(
+                f"design {index}",
+                f"{where}called sys.exit({err.code!r}): a metric or parametrisation must return "
+                "a value or raise an exception, not end the program",
+            ) from None
     if exhausted:
         raise StudyError(
             f"design {index}",

@@ -11,10 +11,20 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["Constraint", "Objective"]
+
+
+def _metric_name(what: str, name: Any) -> str:
+    """A metric's name: a non-empty string (checked against the metrics by the study)."""
+    if not isinstance(name, str) or not name.strip():
+        raise InvalidInputError(what, f"expected a metric name, got {name!r:.40}")
+    return name
 
 
 @dataclass(frozen=True)
@@ -33,14 +43,18 @@ class Constraint:
     bound: float
 
     def __post_init__(self) -> None:
+        from pkdyn.inputs import real
+
+        _metric_name("constraint", self.metric)
         if self.op not in (">=", "<="):
             raise InvalidInputError("constraint", f"operator must be >= or <=, got '{self.op}'")
-        if not math.isfinite(self.bound):
-            raise InvalidInputError("constraint", f"{self.metric}: bound must be finite")
+        object.__setattr__(self, "bound", real(f"constraint {self.metric}: bound", self.bound))
 
     @classmethod
     def parse(cls, text: str) -> Constraint:
         """``NAME>=VALUE`` or ``NAME<=VALUE`` (spaces allowed)."""
+        if not isinstance(text, str):
+            raise InvalidInputError("constraint", f"expected NAME>=VALUE, got {text!r:.40}")
         m = re.fullmatch(r"\s*([A-Za-z_][A-Za-z0-9_:.]*)\s*(>=|<=)\s*(\S+)\s*", text)
         if m is None:
             raise InvalidInputError("constraint", f"'{text}': expected NAME>=VALUE or NAME<=VALUE")
@@ -52,6 +66,8 @@ class Constraint:
 
     def violation(self, value: float) -> float:
         """How far ``value`` is on the wrong side (0 when satisfied; ``inf`` for NaN)."""
+        if isinstance(value, bool) or not isinstance(value, int | float | np.floating):
+            raise InvalidInputError("value", f"expected a number, got {value!r:.40}")
         if not math.isfinite(value):
             return math.inf
         return max(0.0, self.bound - value if self.op == ">=" else value - self.bound)
@@ -74,12 +90,15 @@ class Objective:
     sense: str = "min"
 
     def __post_init__(self) -> None:
+        _metric_name("objective", self.metric)
         if self.sense not in ("min", "max"):
             raise InvalidInputError("objective", f"sense must be min or max, got '{self.sense}'")
 
     @classmethod
     def parse(cls, text: str) -> Objective:
         """``min:NAME`` / ``max:NAME`` (or a bare ``NAME``, minimised)."""
+        if not isinstance(text, str):
+            raise InvalidInputError("objective", f"expected [min:|max:]NAME, got {text!r:.40}")
         sense, sep, name = text.partition(":")
         if not sep:
             return cls(text.strip())

@@ -59,7 +59,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -67,6 +67,7 @@ import numpy as np
 
 from pkdyn.design.context import DesignContext
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import MODELLING_JOINTS, Robot
 
 __all__ = [
@@ -104,8 +105,11 @@ class Metric:
     geometry: bool = False
 
     def __post_init__(self) -> None:
-        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.name):
-            raise InvalidInputError("metric", f"'{self.name}': names are identifiers")
+        _check_metric(self.name, self.unit, self.summary, self.geometry)
+        if not callable(self.fn):
+            raise InvalidInputError(
+                f"metric '{self.name}'", f"fn: expected a function, got {self.fn!r:.40}"
+            )
 
     def __call__(self, robot: Robot, ctx: DesignContext) -> float:
         """The value for one design.
@@ -134,6 +138,19 @@ _BUILTIN: set[str] = set()
 """The built-in metric and group names (a plug-in may not replace them), filled below."""
 
 
+@public
+def _check_metric(name: Any, unit: Any, summary: Any, geometry: Any) -> None:
+    """A metric's name (an identifier), unit and summary (strings) and geometry flag."""
+    from pkdyn.inputs import flag
+
+    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
+        raise InvalidInputError("metric", f"{name!r:.40}: names are identifiers")
+    for what, value in (("unit", unit), ("summary", summary)):
+        if not isinstance(value, str):
+            raise InvalidInputError(f"metric '{name}'", f"{what}: expected text, got {value!r:.40}")
+    flag(f"metric '{name}' geometry", geometry)
+
+
 def metric(
     name: str, unit: str, summary: str = "", geometry: bool = False
 ) -> Callable[[MetricFn], MetricFn]:
@@ -149,6 +166,7 @@ def metric(
         The decorator (the function is returned unchanged).
 
     """
+    _check_metric(name, unit, summary, geometry)
 
     def wrap(fn: MetricFn) -> MetricFn:
         if name in _BUILTIN:
@@ -561,8 +579,14 @@ def resolve_metrics(items: Sequence[str | Metric]) -> list[Metric]:
             ``module:attribute`` whose module is not a loaded plug-in.
 
     """
+    if isinstance(items, str | bytes | Mapping) or not isinstance(items, Iterable):
+        raise InvalidInputError("metric", f"expected metric names, got {items!r:.60}")
     out: dict[str, Metric] = {}
     for item in items:
+        if not isinstance(item, str | Metric):
+            raise InvalidInputError(
+                "metric", f"expected a metric name or a Metric, got {item!r:.40}"
+            )
         if isinstance(item, Metric):
             out.setdefault(item.name, item)
             continue

@@ -41,6 +41,24 @@ class Parametrisation:
     summary: str = ""
     optional: tuple[str, ...] = ()
 
+    def __post_init__(self) -> None:
+        from pkdyn.inputs import callable_input, names
+
+        if not isinstance(self.name, str) or not self.name.strip():
+            raise InvalidInputError(
+                "parametrisation", f"name: expected text, got {self.name!r:.40}"
+            )
+        if not isinstance(self.summary, str):
+            raise InvalidInputError(
+                f"parametrisation '{self.name}'",
+                f"summary: expected text, got {self.summary!r:.40}",
+            )
+        object.__setattr__(self, "inputs", names("inputs", self.inputs, what="variable"))
+        object.__setattr__(
+            self, "optional", names("optional", self.optional, what="variable", empty=True)
+        )
+        callable_input("fn", self.fn)
+
     @property
     def names(self) -> tuple[str, ...]:
         """Every variable name it reads."""

@@ -72,7 +72,7 @@ def load_plugin(name: str) -> ModuleType:
     except ModuleNotFoundError as err:
         hint = " (a file in this directory: --plugin ./NAME.py)" if err.name == name else ""
         raise InvalidInputError("--plugin", f"no module named '{err.name}'{hint}") from None
-    except Exception as err:  # the plug-in's own error, in one line
+    except (Exception, SystemExit) as err:  # the plug-in's own error (or exit), in one line
         raise InvalidInputError("--plugin", f"'{name}' failed to import: {_line(err)}") from None
     _LOADED[name] = module
     return module
@@ -92,6 +92,7 @@ def _load_file(path: Path) -> ModuleType:
     name = path.stem
     if not name.isidentifier():
         raise InvalidInputError("--plugin", f"'{path}': the file name must be a Python identifier")
+    _check_unshadowed(path, name)
     spec = importlib.util.spec_from_file_location(name, path)
     if spec is None or spec.loader is None:  # pragma: no cover - a .py file always has one
         raise InvalidInputError("--plugin", f"'{path}' cannot be imported")
@@ -99,7 +100,7 @@ def _load_file(path: Path) -> ModuleType:
     sys.modules[name] = module
     try:
         spec.loader.exec_module(module)
-    except Exception as err:
+    except (Exception, SystemExit) as err:  # the plug-in's own error (or exit), in one line
         sys.modules.pop(name, None)
         raise InvalidInputError("--plugin", f"'{path}' failed to import: {_line(err)}") from None
     try:  # workers (spawned, Dask) cannot import a file by name: ship its code
@@ -111,6 +112,43 @@ def _load_file(path: Path) -> ModuleType:
     _LOADED[name] = module
     _FILES[key] = module
     return module
+
+
+def _check_unshadowed(path: Path, name: str) -> None:
+    """Refuse a plug-in file named like a module Python already has or can import.
+
+    Loading ``json.py`` as module ``json`` would replace the standard library's for the rest of
+    the run (every ``import json`` then gets the plug-in); a file that *is* the importable
+    module (its directory on the Python path) is not a clash.
+
+    Raises:
+        InvalidInputError: The clash, naming the module and where it comes from.
+
+    """
+    loaded = sys.modules.get(name)
+    origin = getattr(loaded, "__file__", None) if loaded is not None else None
+    if name in _LOADED and origin and Path(origin).resolve() != path.resolve():
+        raise InvalidInputError(
+            "--plugin",
+            f"'{path}': a plug-in named '{name}' is already loaded from {origin}; rename one "
+            "of the files",
+        )
+    if loaded is None:
+        try:
+            spec = importlib.util.find_spec(name)
+        except (ImportError, ValueError):
+            spec = None
+        if spec is None:
+            return
+        origin = spec.origin
+    if origin and Path(origin).resolve() == path.resolve():
+        return
+    where = f" ({origin})" if origin else " (built in)"
+    raise InvalidInputError(
+        "--plugin",
+        f"'{path}': a plug-in file is loaded as module '{name}', the name of a module Python "
+        f"already has{where}; loading it would replace that module: rename the file",
+    )
 
 
 def load_entry_points() -> list[str]:

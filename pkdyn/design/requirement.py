@@ -122,7 +122,7 @@ class Requirement:
 
     def count_at(self, samples: int) -> int:
         """Number of poses this requirement would have at ``samples`` per axis."""
-        s, z = int(samples), self.size
+        s, z = fields.integer("samples", samples, 2), self.size
         if self.kind == "box":
             return int(np.prod([s if z[k] > 0.0 else 1 for k in ("dx", "dy", "dz")]))
         if self.kind == "cylinder":

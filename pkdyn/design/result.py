@@ -148,8 +148,11 @@ class StudyResult(Result):
             StudyError: The memory runs out (never read as "no design passes").
 
         """
+        from pkdyn.design import fields
         from pkdyn.design.evaluate import evaluate_design
 
+        samples = fields.integer("--verify (samples per axis)", samples, 2)
+        candidates = fields.integer("candidates", candidates, 1)
         if self.study.requirement is None:
             return self.best()
         dense = check_verify(self.study, samples, candidates)
@@ -172,10 +175,14 @@ class StudyResult(Result):
 
         """
         chosen = self.verified_best(samples, candidates)
-        self._chosen, self.verified = chosen, int(samples)
+        self._chosen, self.verified = chosen, int(samples)  # (checked by verified_best)
         return chosen
 
     def _row(self, i: int | None) -> int:
+        if i is not None:
+            from pkdyn.design import fields
+
+            i = fields.integer("design (row position)", i, 0, len(self.designs) - 1)
         i = self.best() if i is None else i
         if i is None:
             raise StudyError(
@@ -227,6 +234,9 @@ class StudyResult(Result):
 
     def command(self, what: str = "urdf", i: int | None = None) -> str:
         """The ordinary ``pkdyn`` command for a design: ``urdf``, ``size`` or ``workspace``."""
+        from pkdyn.design import fields
+
+        what = fields.text("what", what, ("urdf", "size", "workspace"))
         s = self.study
         base = f"pkdyn {what} {s.family} {self.param_args(i)}"
         if what == "size":
@@ -298,6 +308,9 @@ class StudyResult(Result):
 
     def report(self, top: int = 5) -> str:
         """A readable report: counts, reasons, the chosen design, the front."""
+        from pkdyn.design import fields
+
+        top = fields.integer("top", top, 1)
         c = self.counts()
         s = self.study
         lines = [

@@ -28,6 +28,7 @@ from pkdyn.design.study import MAX_STUDY_FILE, Study
 from pkdyn.design.table import PartialFile, Table, output_paths
 from pkdyn.exceptions import InvalidInputError, PkdynError, StudyError
 from pkdyn.files import atomic_write, read_text
+from pkdyn.model.arguments import public
 from pkdyn.progress import progress as progress_bar
 
 __all__ = ["run_study"]
@@ -139,6 +140,7 @@ def _belonging(study: Study, rows: list[Row], source: Path) -> dict[int, Row]:
     return kept
 
 
+@public
 def run_study(
     study: Study,
     out: str | os.PathLike[str] | None = None,
@@ -183,6 +185,13 @@ def run_study(
         raise InvalidInputError(
             "study", f"expected a pkdyn.design.Study, got {type(study).__name__}"
         )
+    from pkdyn.executors import check_scheduler, check_timeout
+    from pkdyn.files import output_target
+
+    scheduler_timeout = check_timeout(scheduler_timeout, "scheduler_timeout")
+    check_scheduler(scheduler)
+    if out is not None:
+        output_target(out, "out")
     t0 = time.perf_counter()
     variables = study.space.names
     units = study.units
@@ -235,7 +244,15 @@ def run_study(
         partial.close(remove=True)
     if study.requirement is not None:
         contains = table.column("contains")
-        reached = float(np.nanmax(contains)) if np.isfinite(contains).any() else 0.0
+        if not np.isfinite(contains).any():  # not one design could be checked: say why
+            reasons = [r.reason for r in table.rows if r.reason]
+            common = max(set(reasons), key=reasons.count) if reasons else "no value"
+            raise StudyError(
+                "requirement",
+                f"no design of the {len(table)} could be checked against the required "
+                f"workspace: {common}",
+            )
+        reached = float(np.nanmax(contains))
         if reached < 1.0:
             where = f"; the table is in {paths['csv']}" if paths else ""
             raise StudyError(

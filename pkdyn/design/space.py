@@ -13,7 +13,7 @@ import ast
 import dataclasses
 import math
 import numbers
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -54,6 +54,14 @@ class Range:
             raise InvalidInputError(
                 f"range '{self.name}'", f"bounds must be finite, got {self.low}:{self.high}"
             )
+        from pkdyn.inputs import MAX_MAGNITUDE
+
+        if max(abs(self.low), abs(self.high)) > MAX_MAGNITUDE:
+            raise InvalidInputError(
+                f"range '{self.name}'",
+                f"{self.low:g}:{self.high:g} is beyond any plausible value (at most "
+                f"{MAX_MAGNITUDE:g} in SI units)",
+            )
         if self.high == self.low:
             raise InvalidInputError(
                 f"range '{self.name}'",
@@ -73,6 +81,8 @@ class Range:
             InvalidInputError: Not of that form, or bounds that are not numbers.
 
         """
+        if not isinstance(text, str):
+            raise InvalidInputError("--range", f"expected NAME=LOW:HIGH, got {text!r:.40}")
         name, sep, span = text.partition("=")
         low, sep2, high = span.partition(":")
         if not (sep and sep2 and name.strip()):
@@ -84,11 +94,29 @@ class Range:
 
     def at(self, u: np.ndarray) -> np.ndarray:
         """Values at fractions ``u`` in [0, 1] of the interval."""
-        return self.low + np.asarray(u, dtype=float) * (self.high - self.low)
+        from pkdyn.inputs import vector
+
+        u = vector("u", u)
+        if u.size == 0 or np.any((u < 0.0) | (u > 1.0)):
+            raise InvalidInputError("u", "expected fractions in [0, 1] (at least one)")
+        return self.low + u * (self.high - self.low)
 
     def fraction(self, x: np.ndarray) -> np.ndarray:
         """Fractions in [0, 1] of values ``x`` (inverse of :meth:`at`)."""
-        return (np.asarray(x, dtype=float) - self.low) / (self.high - self.low)
+        from pkdyn.inputs import vector
+
+        x = vector("x", x)
+        if x.size == 0:
+            raise InvalidInputError("x", "no value")
+        return (x - self.low) / (self.high - self.low)
+
+
+def _numbers(x: Any) -> Any:
+    """``x`` as an array when it can be one (else as given: its check refuses it)."""
+    try:
+        return np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        return x
 
 
 @dataclass(frozen=True)
@@ -116,6 +144,16 @@ class DesignSpace:
     parametrisation: str | None = None
 
     def __post_init__(self) -> None:
+        if isinstance(self.ranges, str | bytes | Mapping) or not isinstance(self.ranges, Iterable):
+            raise InvalidInputError("ranges", f"expected Range objects, got {self.ranges!r:.60}")
+        if not all(isinstance(r, Range) for r in self.ranges):
+            raise InvalidInputError("ranges", "expected Range objects (pkdyn.design.Range)")
+        if not isinstance(self.fixed, Mapping):
+            raise InvalidInputError(
+                "fixed", f"expected a mapping NAME: VALUE, got {self.fixed!r:.60}"
+            )
+        if not isinstance(self.family, str):
+            raise InvalidInputError("family", f"expected a family name, got {self.family!r:.40}")
         object.__setattr__(self, "ranges", tuple(self.ranges))
         object.__setattr__(self, "fixed", dict(self.fixed))
         fam = self.family_obj
@@ -139,10 +177,13 @@ class DesignSpace:
             "fixed",
             {k: _coerce(fam.name, k, v, getattr(default, k, 0.0)) for k, v in self.fixed.items()},
         )
+        from pkdyn.model.families import _check_magnitude
+
         for k, v in self.fixed.items():
             bad = _not_finite(v)
             if bad is not None:
                 raise ParameterError(fam.name, k, f"fixed at {bad}: give a finite number")
+            _check_magnitude(fam.name, k, v)
         if self._mapping is not None:
             missing = [n for n in self._mapping.inputs if n not in names and n not in self.fixed]
             if missing:
@@ -190,9 +231,14 @@ class DesignSpace:
 
     def values(self, u: np.ndarray) -> np.ndarray:
         """Design variables (n, d) from unit-cube points (n, d); integer parameters rounded."""
-        u = np.atleast_2d(np.asarray(u, dtype=float))
-        if u.shape[1] != self.dimension:
-            raise InvalidInputError("samples", f"expected {self.dimension} columns, got {u.shape}")
+        from pkdyn.inputs import matrix
+
+        pts = _numbers(u)
+        if isinstance(pts, np.ndarray) and pts.ndim == 1:
+            pts = pts[None, :]
+        u = matrix("u", pts, None, self.dimension)
+        if np.any((u < 0.0) | (u > 1.0)):
+            raise InvalidInputError("u", "expected points of the unit cube (fractions in [0, 1])")
         x = np.column_stack([r.at(u[:, k]) for k, r in enumerate(self.ranges)])
         for k, whole in enumerate(self.integral):
             if whole:
@@ -209,6 +255,9 @@ class DesignSpace:
             ``{parameter: value}`` for :meth:`pkdyn.model.families.Family.make_params`.
 
         """
+        from pkdyn.inputs import vector
+
+        x = vector("x", x, self.dimension)
         vals: dict[str, Any] = dict(self.fixed)
         vals.update({r.name: float(v) for r, v in zip(self.ranges, x, strict=True)})
         mapping = self._mapping
@@ -241,8 +290,19 @@ class DesignSpace:
 
 
 def _coerce(family: str, name: str, value: Any, default: Any) -> Any:
-    """A fixed value given as text (command line) in the type of the parameter's default."""
+    """A fixed value given as text (command line) in the type of the parameter's default.
+
+    A number where the default is a number, numbers where it is a tuple (a value of another
+    type would fail every design of the study, each on its own).
+    """
     if not isinstance(value, str) or isinstance(default, str):
+        if value is None or default is None or isinstance(default, str):
+            return value
+        number = isinstance(default, numbers.Real) and not isinstance(default, bool)
+        if number and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
+            raise ParameterError(family, name, f"expected a number, got {value!r:.40}")
+        if isinstance(default, tuple) and not _numbers_only(value):
+            raise ParameterError(family, name, f"expected numbers, got {value!r:.60}")
         return value
     try:
         if isinstance(default, bool):
@@ -256,6 +316,13 @@ def _coerce(family: str, name: str, value: Any, default: Any) -> Any:
         raise ParameterError(
             family, name, f"cannot use {value!r} (expected {type(default).__name__})"
         ) from None
+
+
+def _numbers_only(v: Any) -> bool:
+    """``v`` is a number or (nested) tuples or lists of numbers."""
+    if isinstance(v, tuple | list):
+        return all(_numbers_only(x) for x in v)
+    return isinstance(v, numbers.Real) and not isinstance(v, bool)
 
 
 def _not_finite(v: Any) -> str | None:

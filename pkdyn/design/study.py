@@ -417,6 +417,8 @@ class Study:
             StudyError: Not a mapping, or unknown keys.
 
         """
+        if not isinstance(source, str):
+            raise InvalidInputError("source", f"expected a name for messages, got {source!r:.40}")
         if not isinstance(data, Mapping):
             raise StudyError(source, "a study file is a mapping (family, ranges, metrics...)")
         known = set(cls.__dataclass_fields__)

@@ -172,11 +172,19 @@ class Table:
             got = next(reader)
         except StopIteration:
             return []
+        except csv.Error as err:  # a header cell beyond the csv module's field limit
+            raise StudyError("results", f"the header is not a CSV row ({err})") from None
         if list(got) != list(header):
             raise StudyError("results", f"columns {got} differ from the study's {list(header)}")
         d = header.index("feasible") - 1
         rows = []
-        for fields in reader:
+        while True:
+            try:
+                fields = next(reader)
+            except StopIteration:
+                break
+            except csv.Error:  # a cell beyond the csv module's field limit: a torn row
+                continue
             if len(fields) != len(header):
                 continue
             try:

@@ -18,6 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.description import ActuatorSpec
 from pkdyn.model.robot import Robot
 from solvers import Actuation, Drives
@@ -29,6 +30,7 @@ DRIVE_SMOOTHING = 0.1
 efficiency blend smoothly (:class:`solvers.Drives`)."""
 
 
+@public
 def actuation(robot: Robot) -> Actuation:
     """The robot's actuation for the solvers (joint-side efforts: unit gains).
 

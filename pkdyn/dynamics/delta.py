@@ -43,6 +43,7 @@ from pkdyn.dynamics.trajectory import TaskTrajectory
 from pkdyn.exceptions import PkdynError, TrajectoryError
 from pkdyn.model.robot import Robot
 from pkdyn.results import Result, jsonable
+from solvers.vec3 import cross
 
 __all__ = ["ActuatorTrajectory", "DeltaDynamics", "delta_inverse_dynamics", "has_delta_dynamics"]
 
@@ -110,18 +111,6 @@ def has_delta_dynamics(robot: Robot) -> bool:
         and getattr(p, "bar_joint", "spherical") == "spherical"
         and len(robot.actuators) == 3
         and robot.platform_frame is not None
-    )
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of (..., 3) arrays (faster than ``np.cross`` on small rows)."""
-    return np.stack(
-        [
-            a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-            a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-            a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0],
-        ],
-        axis=-1,
     )
 
 
@@ -301,8 +290,8 @@ class DeltaDynamics:
         a = self.axis[None]  # (1, 3 arms, 3): arm axes
         E = self.O[None] + self._in_world(c, s, self.elbow)  # elbow ball centres (N, 3, 3)
         d = P[:, None, :] + self.attach[None] - E  # bar vectors, |d| = length
-        E1 = _cross(a, E - self.O[None])  # dE/d alpha
-        E2 = _cross(a, E1)  # d2E/d alpha2
+        E1 = cross(a, E - self.O[None])  # dE/d alpha
+        E2 = cross(a, E1)  # d2E/d alpha2
         g = _dot(d, E1)  # (N, 3)
         self._check_singular(t, d, E1, g)
         alpha_d = _dot(d, Pd[:, None, :]) / g
@@ -315,7 +304,7 @@ class DeltaDynamics:
         grav = self.gravity
         # arms: Q_k = I_axis alpha_dd - m g . (a x r)
         r_arm = self._in_world(c, s, self.arm_lever)
-        Q = self.arm_axial * alpha_dd - self.arm_mass * _dot(_cross(a, r_arm), grav[None, None])
+        Q = self.arm_axial * alpha_dd - self.arm_mass * _dot(cross(a, r_arm), grav[None, None])
         # nacelle (translating): w = m (P_ddot - g)
         w = self.nacelle_mass * (Pdd - grav)
         # bars, summed per arm: centre c = E + f d; F = m (c_ddot - g) with
@@ -329,8 +318,8 @@ class DeltaDynamics:
         L = self.length[None, :, None]
         u = d / L
         d2 = Pdd3 - Edd
-        M = self.inertia_t[None, :, None] * _cross(u, d2 / L)
-        uxM = _cross(M, u) / L  # [u]x^T M / L
+        M = self.inertia_t[None, :, None] * cross(u, d2 / L)
+        uxM = cross(M, u) / L  # [u]x^T M / L
         w += np.sum(uxM - Jinv * _dot(E1, uxM)[..., None], axis=1)
         tau = Q + np.linalg.solve(np.swapaxes(Jinv, 1, 2), w[..., None])[..., 0]
         return ActuatorTrajectory(t.copy(), list(self.names), alpha, alpha_d, alpha_dd, tau)

@@ -5,12 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from solvers.energy import KineticEnergy
 
 __all__ = ["elastic_energy", "mechanical_energy"]
 
 
+@public
 def mechanical_energy(robot: Robot, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
     """Kinetic and gravitational potential energy of the whole mechanism.
 
@@ -29,6 +31,7 @@ def mechanical_energy(robot: Robot, q: np.ndarray, v: np.ndarray) -> tuple[float
     return kinetic, potential
 
 
+@public
 def elastic_energy(robot: Robot, q: np.ndarray) -> float:
     """Potential energy of the robot's springs (joint and two-frame springs) at ``q``.
 

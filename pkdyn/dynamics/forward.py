@@ -29,7 +29,8 @@ from pkdyn.dynamics.actuation import actuation, drives
 from pkdyn.dynamics.callbacks import user_efforts
 from pkdyn.dynamics.simulation_result import SimulationResult
 from pkdyn.exceptions import InvalidInputError, SimulationError
-from pkdyn.inputs import callable_input, count, instance, positive, real
+from pkdyn.inputs import callable_input, count, flag, instance, positive, real
+from pkdyn.model.arguments import public
 from pkdyn.model.passive import FRICTION_SMOOTHING
 from pkdyn.model.pose import as_configuration, as_finite
 from pkdyn.model.reuse import kept_data
@@ -47,6 +48,7 @@ TorqueFn = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 """Actuator efforts ``tau(t, q, v)`` (n_a,) [N m or N] from the time [s], ``q`` and ``v``."""
 
 
+@public
 @one_blas_thread
 def simulate(
     robot: Robot,
@@ -219,7 +221,9 @@ def _untimed(message: str, time: float) -> str:
 
 
 def _extra(name: str, x: float | Sequence[float], nv: int) -> np.ndarray:
-    arr = np.asarray(x, dtype=float)
+    from pkdyn.inputs import vector
+
+    arr = vector(name, x, (1, nv))
     if arr.ndim > 1 or arr.size not in (1, nv) or not np.all(np.isfinite(arr)):
         raise InvalidInputError(name, f"expected one or {nv} finite values, got {arr.tolist()}")
     if np.any(arr < 0.0):
@@ -339,7 +343,7 @@ class ForwardDynamics(_SolverDynamics):
         instance("robot", robot, Robot, "a Robot (pkdyn.load)")
         if not isinstance(integrator, str) or integrator not in ("dopri5", "rk4", "euler"):
             raise InvalidInputError("integrator", f"unknown {integrator!r} (dopri5, rk4 or euler)")
-        forces = _passive(robot, passive, viscous, coulomb)
+        forces = _passive(robot, flag("passive", passive), viscous, coulomb)
         try:
             super().__init__(
                 robot.model,
@@ -355,7 +359,7 @@ class ForwardDynamics(_SolverDynamics):
         except ValueError as err:
             raise InvalidInputError("options", str(err)) from None
         self.robot = robot
-        self.warn_events = bool(warn_events)
+        self.warn_events = flag("warn_events", warn_events)
         self._warned = False
         self._user_tau: Any = None
         self._checked_tau: TorqueFn | None = None

@@ -21,6 +21,7 @@ from pkdyn.dynamics.actuation import actuation
 from pkdyn.dynamics.series import series_table
 from pkdyn.dynamics.trajectory import JointTrajectory
 from pkdyn.exceptions import InfeasibleEffortError, InvalidInputError, TrajectoryError
+from pkdyn.model.arguments import public
 from pkdyn.model.reuse import kept
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.progress import progress as progress_bar
@@ -120,7 +121,9 @@ class EffortTrajectory(Result):
 def _wrench_series(robot: Robot, wrench: Any, n: int) -> np.ndarray | None:
     if wrench is None:
         return None
-    W = np.asarray(wrench, dtype=float)
+    from pkdyn.inputs import matrix, vector
+
+    W = vector("wrench", wrench, 6) if np.ndim(_probe(wrench)) <= 1 else matrix("wrench", wrench)
     if W.shape == (6,):
         W = np.broadcast_to(W, (n, 6))
     if W.shape != (n, 6) or not np.all(np.isfinite(W)):
@@ -130,6 +133,14 @@ def _wrench_series(robot: Robot, wrench: Any, n: int) -> np.ndarray | None:
             "wrench", f"{robot.name} declares no platform to apply it to; {PLATFORM_HINT}"
         )
     return W
+
+
+def _probe(x: Any) -> Any:
+    """``x`` as an array for its number of dimensions (a scalar when it cannot be one)."""
+    try:
+        return np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        return 0.0
 
 
 CONSISTENCY_TOL = 1e-7
@@ -169,6 +180,7 @@ def _solver(
     return solver
 
 
+@public
 def inverse_dynamics(
     robot: Robot,
     trajectory: JointTrajectory,
@@ -213,7 +225,13 @@ def inverse_dynamics(
             not satisfy the closures (position, velocity or acceleration, :data:`CONSISTENCY_TOL`).
 
     """
-    traj = trajectory
+    from pkdyn.inputs import instance, vector
+
+    traj = instance("trajectory", trajectory, JointTrajectory, "a JointTrajectory")
+    if weights is not None:
+        weights = vector("weights", weights, len(robot.actuators))
+        if np.any(weights <= 0.0):
+            raise InvalidInputError("weights", f"must be > 0, got {weights.tolist()}")
     N = traj.t.size
     if traj.q.shape != (N, robot.nq) or traj.v.shape != (N, robot.nv):
         raise TrajectoryError(

@@ -381,7 +381,11 @@ def _from_yaml(text: str, source: str) -> Catalog:
 
 
 def _from_csv(text: str, source: str) -> Catalog:
-    rows = list(csv.reader(line for line in text.splitlines() if not line.startswith("#")))
+    lines = (line for line in text.lstrip("\ufeff").splitlines() if not line.startswith("#"))
+    try:
+        rows = list(csv.reader(lines))
+    except csv.Error as err:  # a cell beyond the csv module's field limit, a NUL byte
+        raise CatalogError(source, None, None, f"not a CSV table ({err})") from None
     rows = [r for r in rows if any(c.strip() for c in r)]
     if not rows:
         raise CatalogError(source, None, None, "empty CSV file (expected a header row)")

@@ -10,12 +10,14 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.inputs import non_negative
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 
 __all__ = ["with_payload"]
 
 
+@public
 def with_payload(
     robot: Robot,
     mass: float,
@@ -45,7 +47,12 @@ def with_payload(
             "robot", f"{robot.name} declares no platform to carry a payload; {PLATFORM_HINT}"
         )
     c = as_finite("offset", offset, 3)
-    I3 = np.zeros((3, 3)) if inertia is None else np.asarray(inertia, dtype=float).reshape(3, 3)
+    if inertia is None:
+        I3 = np.zeros((3, 3))
+    else:
+        from pkdyn.inputs import vector
+
+        I3 = vector("inertia", inertia, 9, "kg m^2").reshape(3, 3)
     model = pin.Model(robot.model)
     frame = model.frames[robot.platform_frame]
     joint = frame.parentJoint

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 import numpy as np
 
-from pkdyn.exceptions import OutputError
-from pkdyn.files import atomic_write
 from pkdyn.model.robot import Robot
+from pkdyn.tables import write_table
 from solvers import ForwardResult
 
 __all__ = ["simulation_columns", "write_simulation_csv"]
@@ -80,11 +78,4 @@ def write_simulation_csv(robot: Robot, result: ForwardResult, path: str | Path) 
     """
     cols = simulation_columns(robot, result)
     rows = np.column_stack(list(cols.values()))
-    try:
-        with atomic_write(path, newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(list(cols))
-            for row in rows:
-                w.writerow([f"{x:.10g}" for x in row])
-    except OSError as err:
-        raise OutputError(str(path), err.strerror or str(err)) from None
+    write_table(path, list(cols), rows, digits=10)

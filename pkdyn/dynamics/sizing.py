@@ -13,7 +13,6 @@ motor's continuous torque. Joint-side efforts include the reflected rotor inerti
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,10 +24,9 @@ from pkdyn.dynamics.actuation import drives
 from pkdyn.dynamics.inverse import EffortTrajectory, inverse_dynamics
 from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import JointTrajectory
-from pkdyn.exceptions import OutputError
-from pkdyn.files import atomic_write
 from pkdyn.model.robot import Robot
 from pkdyn.results import Result, deprecated_alias, jsonable
+from pkdyn.tables import write_table
 from pkdyn.units import quantity
 
 __all__ = [
@@ -250,14 +248,7 @@ class SizingResult(Result):
         readings = traj.qa if self.readings is None else self.readings
         rates = traj.qa_dot if self.reading_rates is None else self.reading_rates
         table = np.column_stack([traj.t, readings, rates, ef.tau, ef.energy])
-        try:
-            with atomic_write(path, newline="") as fh:
-                w = csv.writer(fh)
-                w.writerow(header)
-                for row in table:
-                    w.writerow([f"{x:.10g}" for x in row])
-        except OSError as err:
-            raise OutputError(str(path), err.strerror or str(err)) from None
+        write_table(path, header, table, digits=10)
 
 
 def _rms(t: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -771,6 +771,8 @@ def task_at_home(
                 "cycles", f"{name}: expected a whole number >= 1, got {cycles:g}"
             )
         depth = _number(name, opts, "depth", 0.05)
+        if depth < 0.0:
+            raise InvalidInputError("depth", f"{name}: the pick line lies below home: >= 0 m")
         bottom = home[:3] - np.array([0.0, 0.0, depth])
         one = adept_cycle(
             bottom,

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.tables import Table, read_table
 
 __all__ = ["MAX_BYTES", "MAX_SAMPLES", "Measurements", "read_measurements"]
@@ -59,9 +60,28 @@ class Measurements:
 
     def where(self, k: int) -> str:
         """``line L`` of sample ``k`` in its file (``row R``: Parquet), or ``sample k`` (from 0)."""
+        from pkdyn.inputs import count
+
+        k = count("k", k, 0, self.t.size - 1)
         if self.lines is None:
             return f"sample {k}"
         return f"{self.line_word} {int(self.lines[k])}"
+
+    def __post_init__(self) -> None:
+        from pkdyn.inputs import instance, matrix, vector
+
+        instance("source", self.source, str, "a name for messages (str)")
+        t = vector("t", self.t, unit="s", bound=MAX_VALUE)
+        if t.size < 2:
+            raise InvalidInputError("t", f"{t.size} samples: at least 2")
+        object.__setattr__(self, "t", t)  # (frozen: the checked copies replace what was given)
+        qa = matrix("qa", self.qa, t.size, None, "rad or m", bound=MAX_VALUE)
+        object.__setattr__(self, "qa", qa)
+        for name in ("qa_dot", "qa_ddot", "tau"):
+            value = getattr(self, name)
+            if value is not None:
+                arr = matrix(name, value, t.size, qa.shape[1], bound=MAX_VALUE)
+                object.__setattr__(self, name, arr)
 
 
 MAX_BYTES = 512_000_000
@@ -74,6 +94,7 @@ MIN_STEP = 1e-9
 """Smallest time step between samples [s]."""
 
 
+@public
 def read_measurements(
     path: str | os.PathLike[str], actuators: list[str], need_tau: bool = True
 ) -> Measurements:
@@ -94,6 +115,10 @@ def read_measurements(
             that do not increase.
 
     """
+    from pkdyn.inputs import instance, names
+
+    instance("path", path, str | os.PathLike, "a CSV file name")
+    actuators = list(names("actuators", actuators, what="actuator"))
     table = read_table(
         path,
         "data",

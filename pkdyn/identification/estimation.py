@@ -180,8 +180,9 @@ class Accumulator:
         x = np.append(theta0, -1.0)
         rss = np.array([float(np.sum((R @ x) ** 2)) for R in Rs])
         sigma = np.sqrt(rss / dof)
-        floor = 1e-12 * max(float(sigma.max()), 1e-300)
-        w = 1.0 / np.maximum(sigma, floor)
+        top = float(sigma.max())
+        # an exact fit (no residual at all) has no noise to weigh the actuators by
+        w = 1.0 / np.maximum(sigma, 1e-12 * top) if top > 0.0 else np.ones_like(sigma)
         # 3. the weighted factor [A b]
         Rw = self._square(_qr_r(np.vstack([R * wj for R, wj in zip(Rs, w, strict=True)])))
         A, b = Rw[:p, :p], Rw[:p, p]

@@ -58,11 +58,23 @@ def derivatives(
         raise InvalidInputError(
             "cutoff", f"{fc:g} Hz must lie in (0, {0.5 * fs:g}) Hz (half the sampling rate)"
         )
+    duration = float(t[-1] - t[0])
+    if fc * duration < 1.0:  # below one period over the record: the filter leaves no motion
+        raise InvalidInputError(
+            "cutoff",
+            f"{fc:g} Hz is below 1 / duration = {1.0 / duration:g} Hz: the filter would remove "
+            f"the whole {duration:g} s motion; give a cut-off above the motion's frequencies",
+        )
     sos = butter(_ORDER, fc, fs=fs, output="sos")
     pad = 3 * (2 * sos.shape[0] + 1)
     if t.size <= pad:
         raise InvalidInputError("data", f"{t.size} samples: the filter needs more than {pad}")
-    qf = sosfiltfilt(sos, qa, axis=0)
+    try:
+        qf = sosfiltfilt(sos, qa, axis=0)
+    except np.linalg.LinAlgError:  # a filter too narrow for the floating point
+        raise InvalidInputError(
+            "cutoff", f"{fc:g} Hz is too low a cut-off for samples at {fs:g} Hz"
+        ) from None
     qd = np.gradient(qf, h, axis=0)
     qdd = np.gradient(qd, h, axis=0)
     return qf, qd, qdd

@@ -41,6 +41,7 @@ from pkdyn.identification.physical import consistent_parameters
 from pkdyn.identification.regressor import ClosedLoopRegressor
 from pkdyn.identification.result import Fit, IdentificationResult
 from pkdyn.identification.structure import check_identifiable, structural_base
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
 from pkdyn.results import renamed_keyword
@@ -168,6 +169,7 @@ def _coarse_pass(
 
 
 @renamed_keyword("data", "measurements")
+@public
 def identify(
     robot: Robot,
     measurements: Measurements,
@@ -216,12 +218,18 @@ def _identify(
     workers: int | None,
 ) -> IdentificationResult:
     start = time.perf_counter()
-    from pkdyn.inputs import count, instance
+    from pkdyn.inputs import count, flag, instance, positive
     from pkdyn.workers import can_fork, fork_map
 
     instance("robot", robot, Robot, "a Robot (pkdyn.load)")
     what = "Measurements (pkdyn.identification.read_measurements)"
     instance("measurements", data, Measurements, what)
+    if cutoff is not None:
+        cutoff = positive("cutoff", cutoff, "Hz")
+    if workers is not None:
+        workers = count("workers", workers, 1, 1024)
+    if progress is not None:
+        progress = flag("progress", progress)
     check_identifiable(robot)
     n_a = len(robot.actuators)
     if data.tau is None:
@@ -269,6 +277,12 @@ def _identify(
         shares = fork_map(_worker, work, jobs)
     else:
         shares = [_accumulate(work, jobs[0], progress)]
+    if not np.any(data.tau):
+        raise InvalidInputError(
+            data.source,
+            "every tau_* value is 0: the efforts carry nothing to identify from (check the "
+            "tau_* columns: joint-side efforts [N m or N])",
+        )
     acc = Accumulator(n_a, base.size)
     colsq = np.zeros(int(ps.identified.sum()))
     for share in shares:

@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 
 __all__ = [
@@ -166,7 +167,13 @@ def placement_map(M: pin.SE3) -> np.ndarray:
 def _groups(groups: Sequence[str] | str | None) -> tuple[str, ...]:
     if groups is None:
         return DEFAULT_GROUPS
-    items = groups.replace(",", " ").split() if isinstance(groups, str) else list(groups)
+    from pkdyn.inputs import names
+
+    items = (
+        groups.replace(",", " ").split()
+        if isinstance(groups, str)
+        else list(names("parameters", groups, what="group", empty=True))
+    )
     bad = [g for g in items if g not in GROUPS]
     if bad or not items:
         raise InvalidInputError(
@@ -178,6 +185,7 @@ def _groups(groups: Sequence[str] | str | None) -> tuple[str, ...]:
     return tuple(g for g in GROUPS if g in items)
 
 
+@public
 def parameter_set(robot: Robot, groups: Sequence[str] | str | None = None) -> ParameterSet:
     """The standard parameters of a robot, with the chosen groups marked identified.
 

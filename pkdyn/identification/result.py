@@ -18,6 +18,7 @@ import numpy as np
 from pkdyn.identifiability import Identifiability
 from pkdyn.identification.estimation import Estimate
 from pkdyn.identification.parameters import ParameterSet
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.results import Result, deprecated
 from pkdyn.units import quantity
@@ -25,6 +26,7 @@ from pkdyn.units import quantity
 __all__ = ["Fit", "IdentificationResult", "predict_efforts"]
 
 
+@public
 def predict_efforts(
     robot: Robot,
     ps: ParameterSet,
@@ -55,7 +57,16 @@ def predict_efforts(
     """
     from pkdyn.identification.motion import BATCH, MotionSampler
     from pkdyn.identification.regressor import ClosedLoopRegressor
+    from pkdyn.inputs import instance, matrix, vector
 
+    instance("ps", ps, ParameterSet, "a ParameterSet (pkdyn.identification.parameter_set)")
+    theta = vector("theta", theta, ps.p)
+    t = vector("t", t, unit="s")
+    n_a = len(robot.actuators)
+    qa, qa_dot, qa_ddot = (
+        matrix(name, x, t.size, n_a, "rad or m")
+        for name, x in (("qa", qa), ("qa_dot", qa_dot), ("qa_ddot", qa_ddot))
+    )
     reg = ClosedLoopRegressor(robot, ps)
     sampler = MotionSampler(robot)
     N = t.size
@@ -175,7 +186,15 @@ class IdentificationResult(Result):
             qa_ddot: Their accelerations (N, n_a).
 
         """
+        from pkdyn.inputs import matrix, vector
+
         r = self.robot
+        t = vector("t", t, unit="s")
+        n_a = len(r.actuators)
+        qa, qa_dot, qa_ddot = (
+            matrix(name, x, t.size, n_a, "rad or m")
+            for name, x in (("qa", qa), ("qa_dot", qa_dot), ("qa_ddot", qa_ddot))
+        )
         return predict_efforts(
             r,
             self.parameters,
@@ -284,6 +303,9 @@ class IdentificationResult(Result):
 
     def table(self, limit: int = 40) -> str:
         """A text report: fit, base parameters with their deviations and excitation, the rest."""
+        from pkdyn.inputs import count
+
+        limit = count("limit", limit, 1)
         e = self.estimate
         names = self.robot.actuator_names
         eu = self._effort_unit()

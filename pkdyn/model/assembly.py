@@ -26,6 +26,7 @@ from pkdyn.exceptions import (
     JointLimitError,
     UnreachablePoseError,
 )
+from pkdyn.model.arguments import public
 from pkdyn.model.families import FAMILIES, Family
 from pkdyn.model.pose import as_finite, pose_from_vector, pose_to_vector
 from pkdyn.model.robot import PLATFORM_HINT, Robot
@@ -136,6 +137,7 @@ class GeometryResult(Result):
         return pose_to_vector(self.placement)[1]
 
 
+@public
 def closure_residual(robot: Robot, q: np.ndarray) -> float:
     """Largest absolute closure residual component at ``q`` [m or rad] (0 without loops).
 
@@ -251,6 +253,7 @@ def _seeded(
     return sol.q if sol.converged else None
 
 
+@public
 def project(robot: Robot, q: np.ndarray, tol: float = DEFAULT_TOL) -> np.ndarray:
     """Assembled configuration near ``q``: minimum-norm Gauss-Newton steps onto the closures.
 
@@ -282,6 +285,7 @@ def project(robot: Robot, q: np.ndarray, tol: float = DEFAULT_TOL) -> np.ndarray
     return sol.q
 
 
+@public
 def forward_geometry(
     robot: Robot,
     qa: Sequence[float] | np.ndarray,
@@ -351,6 +355,11 @@ def forward_geometry(
     return _result(robot, sol, sol.error)
 
 
+MAX_STARTS = 10_000
+"""Most random starts of :func:`assembly_modes` (each a direct geometric model, ~1 ms)."""
+
+
+@public
 def assembly_modes(
     robot: Robot,
     qa: Sequence[float] | np.ndarray,
@@ -363,7 +372,7 @@ def assembly_modes(
     Args:
         robot: The robot.
         qa: Actuated coordinates [rad or m].
-        starts: Number of random initial guesses.
+        starts: Number of random initial guesses (at most :data:`MAX_STARTS`).
         seed: Random seed.
         spread: Amplitude of the random passive perturbation [rad or m].
 
@@ -371,8 +380,13 @@ def assembly_modes(
         Distinct solutions, sorted by platform height then position (first: the home-like one).
 
     """
+    from pkdyn.inputs import count, positive
+    from pkdyn.inputs import seed as seed_
+
     qa = as_finite("actuated coordinates", qa, len(robot.actuators))
-    rng = np.random.default_rng(seed)
+    starts = count("starts", starts, 1, MAX_STARTS)
+    rng = np.random.default_rng(seed_("seed", seed))
+    spread = positive("spread", spread, "rad or m")
     found: list[GeometryResult] = []
     for k in range(starts):
         dv = np.zeros(robot.nv)
@@ -393,6 +407,7 @@ def assembly_modes(
     return found
 
 
+@public
 def inverse_geometry(
     robot: Robot,
     pose: Sequence[float] | np.ndarray | pin.SE3,

@@ -376,6 +376,24 @@ def resolve_frame(model: pin.Model, ref: FrameRef, source: str, what: str) -> tu
     return f.parentJoint, f.placement * ref.placement
 
 
+def _closure_frames(
+    model: pin.Model, c: ClosureSpec, source: str
+) -> tuple[int, pin.SE3, int, pin.SE3]:
+    """The joints and placements of a closure's two frames, on two different bodies.
+
+    Raises:
+        DescriptionError: A frame names a missing link, or both frames are on one body.
+
+    """
+    j1, M1 = resolve_frame(model, c.frame1, source, f"closure '{c.name}'")
+    j2, M2 = resolve_frame(model, c.frame2, source, f"closure '{c.name}'")
+    if j1 == j2:
+        raise DescriptionError(
+            source, f"closure '{c.name}'", "both frames are on the same body; nothing to close"
+        )
+    return j1, M1, j2, M2
+
+
 def constraint_models(
     model: pin.Model, closures: Sequence[ClosureSpec], source: str
 ) -> tuple[list[pin.RigidConstraintModel], list[str]]:
@@ -400,12 +418,7 @@ def constraint_models(
     owner: list[str] = []
     local = pin.ReferenceFrame.LOCAL
     for c in closures:
-        j1, M1 = resolve_frame(model, c.frame1, source, f"closure '{c.name}'")
-        j2, M2 = resolve_frame(model, c.frame2, source, f"closure '{c.name}'")
-        if j1 == j2:
-            raise DescriptionError(
-                source, f"closure '{c.name}'", "both frames are on the same body; nothing to close"
-            )
+        j1, M1, j2, M2 = _closure_frames(model, c, source)
         if c.kind == "weld":
             cm = pin.RigidConstraintModel(pin.ContactType.CONTACT_6D, model, j1, M1, j2, M2, local)
             cm.name = c.name
@@ -549,12 +562,7 @@ def closures(model: pin.Model, specs: Sequence[ClosureSpec], source: str) -> lis
     """
     out: list[Closure] = []
     for c in specs:
-        j1, M1 = resolve_frame(model, c.frame1, source, f"closure '{c.name}'")
-        j2, M2 = resolve_frame(model, c.frame2, source, f"closure '{c.name}'")
-        if j1 == j2:
-            raise DescriptionError(
-                source, f"closure '{c.name}'", "both frames are on the same body; nothing to close"
-            )
+        j1, M1, j2, M2 = _closure_frames(model, c, source)
         axis = tuple(float(x) for x in np.asarray(c.axis, dtype=float).reshape(3))
         out.append(Closure(c.name, c.kind, int(j1), M1, int(j2), M2, axis))  # type: ignore[arg-type]
     return out

@@ -213,6 +213,8 @@ def family(name: str) -> Family:
         UnknownRobotError: No such family.
 
     """
+    if not isinstance(name, str):
+        raise UnknownRobotError(repr(name), list(FAMILIES))
     try:
         return FAMILIES[name]
     except KeyError:

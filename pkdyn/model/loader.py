@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError, InvalidInputError, ParameterError, UnknownRobotError
+from pkdyn.model.arguments import public
 from pkdyn.model.assembly import check_actuator_limits
 from pkdyn.model.build import (
     build_tree,
@@ -119,6 +120,7 @@ def _package_dirs(path: Path | None) -> list[str]:
     return dirs
 
 
+@public
 def load(
     name_or_path: str | os.PathLike[str],
     sidecar: str | os.PathLike[str] | None = None,
@@ -169,6 +171,12 @@ def load(
             ``AssemblyError`` and a ``DescriptionError``).
 
     """
+    from pkdyn.inputs import instance
+
+    instance("name_or_path", name_or_path, str | os.PathLike, "a library robot name or a file")
+    if sidecar is not None:
+        instance("sidecar", sidecar, str | os.PathLike, "a YAML file name")
+    package_dirs = _directories(package_dirs)
     name = str(name_or_path)
     if name in FAMILIES and xacro_args:
         raise ParameterError(name, "xacro_args", "apply to .xacro files only")
@@ -225,6 +233,21 @@ def load(
     )
 
 
+def _directories(value: Any) -> list[str]:
+    """``package_dirs``: existing directories (mesh look-up), or ``None`` for none."""
+    if value is None:
+        return []
+    from pkdyn.inputs import names
+
+    if isinstance(value, list | tuple):
+        value = list(dict.fromkeys(value)) if all(isinstance(v, str) for v in value) else value
+    dirs = list(names("package_dirs", value, what="directory", empty=True))
+    for d in dirs:
+        if not Path(d).is_dir():
+            raise InvalidInputError("package_dirs", f"'{d}' is not a directory")
+    return dirs
+
+
 @dataclasses.dataclass(frozen=True)
 class _Options:
     """What the user asked of an import: elements to leave out, inertias to repair."""
@@ -248,6 +271,7 @@ class _Parts:
     dropped: tuple[str, ...] = ()  # collision elements left out (malformed)
 
 
+@public
 def load_string(
     xml: str,
     source: str,
@@ -282,9 +306,16 @@ def load_string(
         The loaded robot.
 
     """
+    from pkdyn.inputs import instance
     from pkdyn.model.formats.unread import ignored_names
     from pkdyn.model.formats.xmldoc import lenient
 
+    instance("xml", xml, str, "the text of a description (str)")
+    instance("source", source, str, "a name for messages (str)")
+    if sidecar is not None:
+        instance("sidecar", sidecar, str | os.PathLike, "a YAML file name")
+        sidecar = Path(sidecar)
+    package_dirs = _directories(package_dirs)
     opts = _Options(ignored_names(ignore_elements), bool(repair_inertias))
 
     xml = lenient(xml)  # Drake's and Gazebo's leniencies: comments with --, drake: undeclared

@@ -110,8 +110,13 @@ class Robot:
         Returns:
             The tolerance [m or rad].
 
+        Raises:
+            InvalidInputError: ``rtol`` not a finite number > 0.
+
         """
-        return float(rtol) * min(1.0, self.length_scale)
+        from pkdyn.inputs import positive
+
+        return positive("rtol", rtol) * min(1.0, self.length_scale)
 
     @property
     def nq(self) -> int:
@@ -229,10 +234,10 @@ class Robot:
             Joint coordinates (or their derivatives), same shape.
 
         Raises:
-            InvalidInputError: Not numbers, or not ``n_a`` per row.
+            InvalidInputError: Not finite numbers, or not ``n_a`` per row.
 
         """
-        r = self._readings_array("readings", readings)
+        r = self._readings_array("readings", readings, rates)
         g = self.encoder_gains
         return r * g if rates else r * g + self.encoder_offsets
 
@@ -247,14 +252,16 @@ class Robot:
             Readings, same shape.
 
         Raises:
-            InvalidInputError: Not numbers, or not ``n_a`` per row.
+            InvalidInputError: Not finite numbers, or not ``n_a`` per row.
 
         """
-        q = self._readings_array("qa", qa)
+        q = self._readings_array("qa", qa, rates)
         g = self.encoder_gains
         return q / g if rates else (q - self.encoder_offsets) / g
 
-    def _readings_array(self, name: str, value: Any) -> np.ndarray:
+    def _readings_array(self, name: str, value: Any, rates: Any = False) -> np.ndarray:
+        if not isinstance(rates, bool | np.bool_):
+            raise InvalidInputError("rates", f"expected True or False, got {rates!r:.40}")
         try:
             arr = np.asarray(value, dtype=float)
         except (TypeError, ValueError):
@@ -266,6 +273,8 @@ class Robot:
                 f"expected {n_a} values per row ({', '.join(self.actuator_names)}), got shape "
                 f"{arr.shape}",
             )
+        if not np.all(np.isfinite(arr)):
+            raise InvalidInputError(name, "expected finite numbers, got NaN or infinity")
         return arr
 
     def components(self) -> list[int]:
@@ -352,7 +361,7 @@ class Robot:
             (``dof + internal`` of :meth:`mobility_split`).
 
         """
-        qq = self.q_home if q is None else q
+        qq, tol = self._q_tol(q, tol)
         if self.constraints.n == 0:
             return self.nv
         _, J = self.constraints.residual_and_jacobian(self.data, qq)
@@ -376,7 +385,7 @@ class Robot:
             ``(dof, internal)``.
 
         """
-        qq = self.q_home if q is None else q
+        qq, tol = self._q_tol(q, tol)
         if self.constraints.n:
             _, Jc = self.constraints.residual_and_jacobian(self.data, qq)
             N = null_space(Jc, tol, scale=1.0)
@@ -399,6 +408,13 @@ class Robot:
             + f", platform task: {task}>"
         )
 
+    def _q_tol(self, q: Any, tol: Any) -> tuple[np.ndarray, float]:
+        """A configuration (default home) and a relative tolerance, checked."""
+        from pkdyn.inputs import positive, vector
+
+        qq = self.q_home if q is None else vector("q", q, self.nq, "rad or m")
+        return qq, positive("tol", tol)
+
     def platform_placement(self, q: np.ndarray) -> pin.SE3:
         """World placement of the platform frame at ``q``.
 
@@ -411,6 +427,9 @@ class Robot:
         """
         if self.platform_frame is None:
             raise PkdynError(f"{self.name} declares no platform frame; {PLATFORM_HINT}")
+        from pkdyn.inputs import vector
+
+        q = vector("q", q, self.nq, "rad or m")
         pin.framesForwardKinematics(self.model, self.data, q)
         return pin.SE3(self.data.oMf[self.platform_frame])
 

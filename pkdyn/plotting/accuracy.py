@@ -35,7 +35,10 @@ def plot_accuracy_map(
         InvalidInputError: Unknown field, a map that is not a 2-D grid, or no valid position.
 
     """
-    if field not in FIELDS:
+    from pkdyn.inputs import instance
+
+    instance("amap", amap, AccuracyMap, "an AccuracyMap (pkdyn.precision.accuracy)")
+    if not isinstance(field, str) or field not in FIELDS:
         raise InvalidInputError("field", f"must be one of {', '.join(FIELDS)}, got {field!r}")
     if len(amap.shape) != 2:
         raise InvalidInputError("amap", "plots need a 2-D grid (accuracy_map(plane=...))")

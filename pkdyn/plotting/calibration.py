@@ -13,7 +13,7 @@ import numpy as np
 
 from pkdyn.calibration.planner import CalibrationPlan
 from pkdyn.calibration.result import CalibrationResult
-from pkdyn.plotting._save import save_figure
+from pkdyn.plotting._save import finish_figure
 from pkdyn.results import register_plot
 from pkdyn.units import quantity
 
@@ -99,10 +99,7 @@ def plot_calibration(
         else f"{result.nominal.name}, {result.model.kind}: residuals (model minus measurement), "
         f"{quantity(result.before.rms, unit)} -> {quantity(result.after.rms, unit)} RMS"
     )
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path)
 
 
 @register_plot(CalibrationPlan)
@@ -133,7 +130,4 @@ def plot_calibration_plan(
     ax.set_ylabel(f"{'RMS' if plan.statistic == 'rms' else 'largest'} position error [um]")
     ax.legend(fontsize="small")
     ax.set_title(title if title is not None else plan.summary(), fontsize="small", wrap=True)
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path)

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.design.result import StudyResult
-from pkdyn.plotting._save import save_figure
+from pkdyn.plotting._save import finish_figure
 from pkdyn.results import register_plot
 
 __all__ = ["plot_pareto"]
@@ -110,6 +110,4 @@ def plot_pareto(
         if title is not None
         else f"{s.name or s.family}: {counts['designs']} designs, {counts['feasible']} feasible"
     )
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path, tight=False)

@@ -12,7 +12,7 @@ from pkdyn.dynamics.fastest_grid import FastestGrid
 from pkdyn.dynamics.simulation_result import SimulationResult
 from pkdyn.dynamics.sizing import SizingResult
 from pkdyn.dynamics.sizing_grid import SizingGrid
-from pkdyn.plotting._save import save_figure
+from pkdyn.plotting._save import finish_figure
 from pkdyn.results import register_plot
 from solvers.conditioning import NEAR_SINGULAR, THROUGH
 
@@ -67,10 +67,7 @@ def plot_efforts(
         else f"{result.robot}: {result.trajectory}, payload {result.payload:g} kg "
         f"(peak {peak:.3g}, {np.round(result.duration, 4):g} s)"
     )
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path)
 
 
 @register_plot(SimulationResult)
@@ -103,7 +100,13 @@ def plot_simulation(
     from matplotlib.figure import Figure
 
     from pkdyn.dynamics.simulation_output import simulation_columns
+    from pkdyn.exceptions import InvalidInputError
+    from pkdyn.inputs import instance
+    from solvers import ForwardResult
 
+    instance("result", result, ForwardResult, "a simulation (pkdyn.dynamics.simulate)")
+    if not hasattr(robot, "actuator_names"):
+        raise InvalidInputError("robot", f"expected the simulated Robot, got {robot!r:.40}")
     cols = simulation_columns(robot, result, readings=False)  # (joint coordinates)
     t = cols["t"]
     fig = Figure(figsize=(8.0, 11.0))
@@ -134,10 +137,7 @@ def plot_simulation(
     fig.suptitle(
         title if title is not None else f"{robot.name}: {float(t[-1] - t[0]):g} s simulated"
     )
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path)
 
 
 @register_plot(SizingGrid)
@@ -181,10 +181,7 @@ def plot_sizing_grid(
     ax.set_ylabel("cycle time [s]")
     fig.colorbar(image, ax=ax, label=f"peak effort [{result.effort_unit}]")
     ax.set_title(title if title is not None else f"{result.robot}: {result.trajectory}")
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path)
 
 
 def _hatch(i: int, j: int) -> Any:
@@ -226,7 +223,4 @@ def plot_fastest_grid(
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize="small")
     fig.suptitle(title if title is not None else f"{result.robot}: fastest {result.path}")
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path)

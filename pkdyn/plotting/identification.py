@@ -9,7 +9,7 @@ import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
 from pkdyn.identification.result import IdentificationResult
-from pkdyn.plotting._save import save_figure
+from pkdyn.plotting._save import finish_figure
 from pkdyn.results import register_plot
 
 __all__ = ["plot_identification"]
@@ -60,7 +60,4 @@ def plot_identification(
     axes[0].legend(loc="upper right", fontsize="small", ncol=2)
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(title if title is not None else f"{result.robot.name}: identification fit")
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path)

@@ -13,7 +13,8 @@ import numpy as np
 
 from pkdyn.analysis.maps import ConditioningMap
 from pkdyn.exceptions import InvalidInputError
-from pkdyn.plotting._save import save_figure
+from pkdyn.model.arguments import public
+from pkdyn.plotting._save import finish_figure
 from pkdyn.results import register_plot
 
 __all__ = ["plot_conditioning_map"]
@@ -28,6 +29,7 @@ _LABELS = {
 
 
 @register_plot(ConditioningMap)
+@public
 def plot_conditioning_map(
     cmap: ConditioningMap,
     field: str = "lci",
@@ -58,7 +60,10 @@ def plot_conditioning_map(
     from matplotlib import colors
     from matplotlib.figure import Figure
 
-    if field not in _LABELS:
+    from pkdyn.inputs import instance
+
+    instance("cmap", cmap, ConditioningMap, "a ConditioningMap (pkdyn.analysis.maps)")
+    if not isinstance(field, str) or field not in _LABELS:
         raise InvalidInputError("field", f"must be one of {', '.join(_LABELS)}, got {field!r}")
     if cmap.data is None:
         raise InvalidInputError("cmap", "the map holds no data (no sample was computed)")
@@ -83,6 +88,4 @@ def plot_conditioning_map(
     ax.set_ylabel(f"{cmap.axes[1]} [{'rad' if cmap.axes[1] == 'phi' else 'm'}]")
     fixed = ", ".join(f"{k} = {v:.4g}" for k, v in cmap.fixed.items())
     ax.set_title(title if title is not None else f"{cmap.robot}: {field} ({fixed})")
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path, tight=False)

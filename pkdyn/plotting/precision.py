@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
-from pkdyn.plotting._save import save_figure
+from pkdyn.plotting._save import finish_figure
 from pkdyn.precision.budgets import ToleranceRanking
 from pkdyn.precision.grid import SINGULAR, UNREACHABLE, GridMap
 from pkdyn.precision.maps import PrecisionMap
@@ -57,13 +57,6 @@ def _axes(ax: Any, size: tuple[float, float]) -> tuple[Any, Any]:
     return fig, fig.add_subplot(1, 1, 1)
 
 
-def _done(fig: Any, path: str | Path | None) -> Any:
-    """Save the figure when a path is given (atomically); return it."""
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
-
-
 def _edges(x: np.ndarray) -> tuple[float, float]:
     d = (x[-1] - x[0]) / max(x.size - 1, 1) if x.size > 1 else 1.0
     return float(x[0] - d / 2), float(x[-1] + d / 2)
@@ -99,7 +92,7 @@ def plot_grid_map(
     from matplotlib.colors import ListedColormap
 
     name = field if field is not None else next(iter(result.values), None)
-    if name is None or name not in result.values:
+    if not isinstance(name, str) or name not in result.values:
         raise InvalidInputError(
             "field", f"'{name}': this map holds {', '.join(result.values) or 'nothing'}"
         )
@@ -148,7 +141,7 @@ def plot_grid_map(
         f"{c['unreachable']} unreachable grey, {c['singular']} singular red)",
         fontsize=9,
     )
-    return _done(fig, path)
+    return finish_figure(fig, path, tight=False)
 
 
 def plot_precision_map(
@@ -174,6 +167,11 @@ def plot_precision_map(
         The matplotlib Figure.
 
     """
+    from pkdyn.inputs import instance, positive
+
+    instance("pmap", pmap, PrecisionMap, "a PrecisionMap (pkdyn.precision.precision_map)")
+    if reference is not None:
+        reference = positive("reference", reference)
     return plot_grid_map(pmap, field, path=path, ax=ax, title=title, reference=reference)
 
 
@@ -203,6 +201,12 @@ def plot_modes(
         InvalidInputError: A rigid robot (no mode to draw).
 
     """
+    from pkdyn.inputs import instance, positive, vector
+
+    instance("result", result, Modes, "Modes (pkdyn.precision.modes)")
+    length = positive("length", length, "m")
+    if band is not None:
+        band = tuple(vector("band", band, 2, "Hz"))
     if result.frequencies.size == 0:
         raise InvalidInputError("modes", "the robot is rigid: there is no mode to draw")
     fig, ax = _axes(ax, (7.0, 3.5))
@@ -224,7 +228,7 @@ def plot_modes(
         default += " (NOT VALID here: see the warnings)"
     ax.set_title(title if title is not None else default)
     ax.legend(loc="upper right", fontsize=8)
-    return _done(fig, path)
+    return finish_figure(fig, path, tight=False)
 
 
 @register_plot(MonteCarlo)
@@ -269,7 +273,7 @@ def plot_monte_carlo(
     ax.set_ylabel("robots")
     ax.set_title(title if title is not None else f"Monte Carlo: {len(e)} robots")
     ax.legend(fontsize=8)
-    return _done(fig, path)
+    return finish_figure(fig, path, tight=False)
 
 
 @register_plot(ToleranceRanking)
@@ -297,4 +301,4 @@ def plot_ranking(
     ax.barh(names, share, color="C0")
     ax.set_xlabel("share of the position variance [%]")
     ax.set_title(title if title is not None else f"tolerances ({result.total} parameters)")
-    return _done(fig, path)
+    return finish_figure(fig, path, tight=False)

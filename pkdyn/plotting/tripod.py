@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.plotting._save import save_figure
+from pkdyn.plotting._save import finish_figure
 from pkdyn.results import register_plot
 from pkdyn.tripod.analysis import ScenarioReport
 from pkdyn.tripod.compare import Comparison
@@ -111,10 +111,7 @@ def plot_scenario(report: Any, path: str | Path | None = None, title: str | None
         if title is not None
         else f"{robot}: {len(report.reports)} phases, {float(t[-1]):.1f} s"
     )
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=110)
-    return fig
+    return finish_figure(fig, path, dpi=110)
 
 
 _METRICS = (
@@ -172,7 +169,4 @@ def plot_comparison(
         ax.grid(axis="y", alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.suptitle(title if title is not None else "tripod against four-branch walker, same plans")
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=110)
-    return fig
+    return finish_figure(fig, path, dpi=110)

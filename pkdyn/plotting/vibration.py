@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.plotting._save import save_figure
+from pkdyn.plotting._save import finish_figure
 from pkdyn.precision.vibration_result import VibrationResult
 from pkdyn.results import register_plot
 
@@ -93,6 +93,4 @@ def plot_vibration(
         ax2.set_ylabel("components [um]")
         ax2.legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("time [ms]")
-    if path is not None:
-        save_figure(fig, path, dpi=120)
-    return fig
+    return finish_figure(fig, path, tight=False)

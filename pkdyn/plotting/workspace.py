@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.plotting._save import save_figure
+from pkdyn.plotting._save import finish_figure, save_figure
 from pkdyn.results import register_plot
 from pkdyn.units import quantity, vector
 from pkdyn.workspace.clavel import ClavelComparison
@@ -127,10 +127,7 @@ def plot_translation_workspace(
         f"(rpy {vector(ws.rpy, 'rad')}, {ws.method})",
         fontsize=10,
     )
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=110)
-    return fig
+    return finish_figure(fig, path, dpi=110)
 
 
 def _sphere(ax: Any, ow: OrientationWorkspace, half: int, colour: str) -> None:
@@ -240,14 +237,18 @@ def plot_mel_study(
     """
     from matplotlib.figure import Figure
 
+    if not study or not all(isinstance(ow, OrientationWorkspace) for ow in study.values()):
+        from pkdyn.exceptions import InvalidInputError
+
+        raise InvalidInputError(
+            "study", "expected a MEL study: limits name -> OrientationWorkspace (mel_study)"
+        )
     n = len(study)
     fig = Figure(figsize=(13.0, 4.4 * n))
     for i, (name, ow) in enumerate(study.items()):
         plot_orientation_workspace(ow, fig=fig, row=(i, n), title=f"limits: {name}")
     fig.tight_layout(rect=(0.02, 0, 1, 1))
-    if path is not None:
-        save_figure(fig, path, dpi=100)
-    return fig
+    return finish_figure(fig, path, dpi=100, tight=False)
 
 
 @register_plot(ClavelComparison)
@@ -305,7 +306,4 @@ def plot_clavel(comparison: ClavelComparison, path: str | Path | None = None) ->
         f"{quantity(comparison.V_workspace, 'm^3')}",
         fontsize=10,
     )
-    fig.tight_layout()
-    if path is not None:
-        save_figure(fig, path, dpi=110)
-    return fig
+    return finish_figure(fig, path, dpi=110)

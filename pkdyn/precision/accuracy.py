@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.precision.accuracy_maps import AccuracyMap, accuracy_map, slice_grid
 from pkdyn.precision.budgets import (
@@ -130,6 +131,7 @@ class Accuracy(Result):
 
 
 @renamed_keyword("progress_bar", "progress")
+@public
 def accuracy_budget(
     robot: Robot,
     q: Sequence[float] | np.ndarray,
@@ -175,6 +177,10 @@ def accuracy_budget(
         SingularConfigurationError: A parallel singularity (unbounded errors).
 
     """
+    if top is not None:
+        from pkdyn.inputs import count
+
+        top = count("top", top, 1)
     assumed = []
     if resolution is None:
         resolution = 0.0

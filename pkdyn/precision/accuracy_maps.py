@@ -26,6 +26,7 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import NearSingularityWarning
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision.budgets import (
@@ -121,7 +122,7 @@ class AccuracyMap(GridMap):
 
     def field(self, name: str) -> np.ndarray:
         """One of the error fields on the grid (``[i_u, i_v]``)."""
-        if name not in FIELDS:
+        if not isinstance(name, str) or name not in FIELDS:
             raise InvalidInputError("field", f"'{name}': use {', '.join(FIELDS)}")
         return self._flat(name).reshape(self.shape)
 
@@ -177,8 +178,9 @@ def _legacy_grid(P: np.ndarray, shape: tuple[int, ...] | None, axes: tuple[str, 
     return PlaneGrid(plane, P[:, iu].copy(), P[:1, iv].copy(), float(P[0, 3 - iu - iv]))
 
 
-@one_blas_thread
 @renamed_keyword("progress_bar", "progress")
+@public
+@one_blas_thread
 def accuracy_map(
     robot: Robot,
     plane: str | np.ndarray = "xy",

@@ -29,11 +29,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.precision.material import Material
 
 __all__ = ["Section", "centre_compliance", "tip_compliance"]
@@ -57,10 +59,11 @@ class Section:
     inner_radius: float = 0.0
 
     def __post_init__(self) -> None:
-        r, ri = self.radius, self.inner_radius
-        if not (math.isfinite(r) and r > 0.0):
-            raise InvalidInputError("radius", f"must be a finite length > 0 m, got {r}")
-        if not (math.isfinite(ri) and 0.0 <= ri < r):
+        from pkdyn.inputs import non_negative, positive
+
+        r = positive("radius", self.radius, "m")
+        ri = non_negative("inner_radius", self.inner_radius, "m")
+        if not ri < r:
             raise InvalidInputError("inner_radius", f"must lie in [0, radius = {r:g}) m, got {ri}")
 
     @property
@@ -96,13 +99,20 @@ class Section:
             ``kappa`` [-].
 
         """
+        from pkdyn.inputs import real
+
+        # (an equivalent isotropic laminate's may exceed 0.5)
+        nu = 0.0 if poisson is None else real("poisson", poisson)
         m2 = (self.inner_radius / self.radius) ** 2
-        nu = 0.0 if poisson is None else float(poisson)
         return 6 * (1 + nu) * (1 + m2) ** 2 / ((7 + 6 * nu) * (1 + m2) ** 2 + (20 + 12 * nu) * m2)
 
     def mass(self, length: float, material: Material) -> float:
         """Mass of a straight piece of this section [kg] (``density A L``)."""
-        return material.density * self.area * length
+        from pkdyn.inputs import instance
+
+        _check_length(length)
+        instance("material", material, Material, "a Material (pkdyn.precision.STEEL...)")
+        return material.density * self.area * float(length)
 
     def inertia(self, length: float, material: Material) -> pin.Inertia:
         """Inertia of a straight piece along ``z``, centred on the origin (a tube or a rod).
@@ -117,10 +127,23 @@ class Section:
 
 
 def _check_length(length: float) -> None:
-    if not (math.isfinite(length) and length > 0.0):
-        raise InvalidInputError("length", f"must be a finite length > 0 m, got {length}")
+    from pkdyn.inputs import positive
+
+    positive("length", length, "m", bound=MAX_LENGTH)
 
 
+MAX_LENGTH = 1e3
+"""Longest beam [m] (its compliance grows like the length cubed: beyond, a unit error)."""
+
+
+def _check_parts(section: Any, material: Any) -> None:
+    from pkdyn.inputs import instance
+
+    instance("section", section, Section, "a Section (pkdyn.precision.Section)")
+    instance("material", material, Material, "a Material (pkdyn.precision.STEEL...)")
+
+
+@public
 def centre_compliance(
     length: float, section: Section, material: Material, shear: bool = True
 ) -> np.ndarray:
@@ -137,7 +160,8 @@ def centre_compliance(
 
     """
     _check_length(length)
-    L, E, G = length, material.E, material.G
+    _check_parts(section, material)
+    L, E, G = float(length), material.E, material.G
     A, I, J = section.area, section.second_moment, section.polar_moment
     bend = L**3 / (12.0 * E * I)
     if shear:
@@ -145,6 +169,7 @@ def centre_compliance(
     return np.array([bend, bend, L / (E * A), L / (E * I), L / (E * I), L / (G * J)])
 
 
+@public
 def tip_compliance(
     length: float, section: Section, material: Material, shear: bool = True
 ) -> np.ndarray:

@@ -37,6 +37,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.precision._format import chop
 from pkdyn.precision.grid import reach
@@ -338,6 +339,7 @@ class ActuatorAccuracy(Budget):
 
 
 @one_blas_thread
+@public
 def actuator_errors(
     robot: Robot,
     q: Sequence[float] | np.ndarray,
@@ -491,6 +493,10 @@ class GeometricAccuracy(Budget):
             share of the position variance (sums to 1).
 
         """
+        if top is not None:
+            from pkdyn.inputs import count
+
+            top = count("top", top, 1)
         pos = np.linalg.norm(self.K[:3], axis=0)
         rot = np.linalg.norm(self.K[3:], axis=0)
         var = (pos * self.std) ** 2
@@ -551,6 +557,7 @@ class GeometricAccuracy(Budget):
 
 
 @one_blas_thread
+@public
 def geometric_errors(
     robot: Robot,
     q: Sequence[float] | np.ndarray,

@@ -44,6 +44,8 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.inputs import is_complex
+from pkdyn.model.arguments import public
 from pkdyn.model.reuse import kept
 from pkdyn.model.robot import Robot, length_scale_at
 from pkdyn.precision.links import LinkCompliance, link_compliances
@@ -100,10 +102,17 @@ class ElasticModel:
         """The model for configuration ``q`` (nq,) of the robot (itself, or rebuilt).
 
         Rebuilt when a prismatic leg's rod is compliant: its free length follows the stroke.
+
+        Raises:
+            InvalidInputError: ``q`` is not nq finite numbers.
+
         """
+        from pkdyn.model.arguments import configuration
+
+        q = configuration(self.base, q)
         if not any(lc.sliding for lc in self.links):
             return self
-        found = link_compliances(self.base, self.material, self.shear, np.asarray(q, float))
+        found = link_compliances(self.base, self.material, self.shear, q)
         return _build(self.base, self.actuator_stiffness, found, self.material, self.shear)
 
     @property
@@ -133,17 +142,23 @@ class ElasticModel:
 
     def embed(self, q: np.ndarray) -> np.ndarray:
         """Extended configuration of a configuration of the robot, links undeformed."""
+        from pkdyn.inputs import vector
+
+        q = vector("q", q, self.base.nq, "rad or m")
         if self.robot is self.base:
-            return np.array(q, dtype=float)
+            return q
         out = pin.neutral(self.robot.model)
         out[self.q_index] = q
         return out
 
     def restrict(self, q: np.ndarray) -> np.ndarray:
         """The robot's coordinates (nq,) of an extended configuration (deflections dropped)."""
-        return np.array(np.asarray(q, dtype=float)[self.q_index])
+        from pkdyn.inputs import vector
+
+        return np.array(vector("q", q, self.robot.nq, "rad or m")[self.q_index])
 
 
+@public
 def actuator_stiffness(
     robot: Robot, value: float | Sequence[float] | np.ndarray | None = None
 ) -> np.ndarray:
@@ -174,7 +189,7 @@ def actuator_stiffness(
                 "<pkdyn:stiffness value=...> in its transmission",
             )
         return np.array([float(a.stiffness) for a in robot.actuators])  # type: ignore[arg-type]
-    if isinstance(value, bool | str | bytes | dict) or np.iscomplexobj(value):
+    if isinstance(value, bool | str | bytes | dict) or is_complex(value):
         raise InvalidInputError("actuator_stiffness", f"{value!r:.60} is not a number")
     try:
         arr = np.atleast_1d(np.asarray(value, dtype=float)).reshape(-1)
@@ -202,6 +217,7 @@ def actuator_stiffness(
     return arr
 
 
+@public
 def elastic_model(
     robot: Robot,
     actuator_stiffness: float | Sequence[float] | np.ndarray | None = None,

@@ -35,9 +35,9 @@ from pkdyn.precision.condensation import (
     spring_force,
 )
 from pkdyn.precision.elastic import ElasticModel
-from solvers import numerics, solve_lm
+from solvers import SolveResult, numerics, solve_lm
 
-__all__ = ["Equilibrium", "loaded_equilibrium"]
+__all__ = ["Equilibrium", "loaded_equilibrium", "reassembled"]
 
 _MAX_ITER = 40
 
@@ -102,20 +102,37 @@ def tangent_along(
     return out
 
 
-def _project(em: ElasticModel, q: np.ndarray) -> np.ndarray:
+def reassembled(em: ElasticModel, q: np.ndarray, tol: float = 1e-10) -> SolveResult:
+    """Close the loops of the elastic model's robot near ``q``, its rigid coordinates held.
+
+    Levenberg-Marquardt on the constraint residual over the free coordinates (every velocity
+    coordinate but ``em.rigid_v``), from ``q``.
+
+    Args:
+        em: The elastic model (its robot has constraints: ``robot.constraints.n > 0``).
+        q: Configuration (nq,) near an assembled one.
+        tol: Residual tolerance of the solve.
+
+    Returns:
+        The solve: ``q`` assembled when ``converged``.
+
+    """
     r = em.robot
-    if r.constraints.n == 0:
-        return q
-    free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
     cs, data = r.constraints, r.data
-    sol = solve_lm(
+    return solve_lm(
         r.model,
         q,
         lambda x: cs.local_residual(data, x),
         lambda x: cs.local_jacobian_after_residual(data, x),
-        free=free,
-        tol=1e-13,
+        free=np.setdiff1d(np.arange(r.nv), em.rigid_v),
+        tol=tol,
     )
+
+
+def _project(em: ElasticModel, q: np.ndarray) -> np.ndarray:
+    if em.robot.constraints.n == 0:
+        return q
+    sol = reassembled(em, q, tol=1e-13)
     if not sol.converged:
         raise PkdynError(
             f"{em.base.name}: the loaded mechanism cannot be kept assembled (closure residual "

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -77,6 +78,34 @@ def _built_placements(robot: Robot, xml: str, where: tuple[Placement, ...]) -> l
     desc = parse_description(xml, robot.name)
     model = build_tree(xml, desc.joints, robot.name)
     cms, owner = constraint_models(model, desc.closures, robot.name)
+
+    def platform() -> pin.SE3:
+        assert desc.platform is not None
+        return resolve_frame(model, desc.platform.frame, robot.name, "platform")[1]
+
+    return _read_placements(model, cms, owner, platform, where)
+
+
+def _read_placements(
+    model: pin.Model,
+    cms: Sequence[Any],
+    owner: Sequence[str],
+    platform: Callable[[], pin.SE3],
+    where: tuple[Placement, ...],
+) -> list[pin.SE3]:
+    """The placements ``where`` names, read from a model and its constraint models.
+
+    Args:
+        model: The kinematic tree.
+        cms: Its constraint models (``pin.RigidConstraintModel``).
+        owner: The closure each constraint model belongs to (same order).
+        platform: The platform frame's placement (called when ``where`` names it).
+        where: The placements to read.
+
+    Returns:
+        One placement per entry of ``where`` (a closure's from its first constraint model).
+
+    """
     first: dict[str, int] = {}
     for k, o in enumerate(owner):
         first.setdefault(o, k)
@@ -88,8 +117,7 @@ def _built_placements(robot: Robot, xml: str, where: tuple[Placement, ...]) -> l
             cm = cms[first[pl.closure]]
             out.append(pin.SE3(cm.joint1_placement if pl.side == 1 else cm.joint2_placement))
         else:
-            assert desc.platform is not None
-            out.append(resolve_frame(model, desc.platform.frame, robot.name, "platform")[1])
+            out.append(platform())
     return out
 
 
@@ -118,20 +146,14 @@ def _written_placements(robot: Robot, params: Any, where: tuple[Placement, ...])
     builder = kept(robot, ("family candidates", name), lambda: CandidateBuilder(name))
     model_robot = builder.unassembled(params)
     model = model_robot.model
-    first: dict[str, int] = {}
-    for k, o in enumerate(model_robot.constraint_owner):
-        first.setdefault(o, k)
-    out = []
-    for pl in where:
-        if pl.kind == "joint":
-            out.append(pin.SE3(model.jointPlacements[model.getJointId(pl.name)]))
-        elif pl.kind == "closure":
-            cm = model_robot.constraint_models[first[pl.closure]]
-            out.append(pin.SE3(cm.joint1_placement if pl.side == 1 else cm.joint2_placement))
-        else:
-            assert model_robot.platform_frame is not None
-            out.append(pin.SE3(model.frames[model_robot.platform_frame].placement))
-    return out
+
+    def platform() -> pin.SE3:
+        assert model_robot.platform_frame is not None
+        return pin.SE3(model.frames[model_robot.platform_frame].placement)
+
+    return _read_placements(
+        model, model_robot.constraint_models, model_robot.constraint_owner, platform, where
+    )
 
 
 def _family_name(robot: Robot) -> str:

@@ -304,9 +304,11 @@ class GridMap(Flagged, Result):
         return float(self.u[i]), float(self.v[j])
 
     def _field(self, name: str) -> np.ndarray:
-        if name not in self.values:
+        if not isinstance(name, str) or name not in self.values:
             raise InvalidInputError(
-                "field", f"'{name}': this map holds {', '.join(self.values) or 'nothing'}"
+                "field",
+                f"name {name!r:.60} is not a field of this map: it holds "
+                f"{', '.join(self.values) or 'nothing'}",
             )
         return np.asarray(self.values[name], dtype=float)
 

@@ -30,6 +30,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.description import ComplianceSpec
 from pkdyn.model.robot import Robot
 from pkdyn.precision.beam import Section, centre_compliance
@@ -238,6 +239,7 @@ def _no_beam(robot: Robot, what: str) -> InvalidInputError:
     )
 
 
+@public
 def link_compliances(
     robot: Robot,
     material: str | Material | None = None,

@@ -35,6 +35,8 @@ import pinocchio as pin
 
 from pkdyn.analysis.kinematics import NearSingularityWarning
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.inputs import is_complex
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision.batched import batchable, translational_batch
@@ -152,7 +154,7 @@ class PoseFigures(Result):
 
 
 def _poses(P: np.ndarray, R: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    if isinstance(P, str | bytes | dict) or np.iscomplexobj(P):
+    if isinstance(P, str | bytes | dict) or is_complex(P):
         raise InvalidInputError("P", f"expected finite positions (N, 3) [m], got {P!r:.60}")
     try:
         P = np.atleast_2d(np.asarray(P, dtype=float))
@@ -173,6 +175,7 @@ def _poses(P: np.ndarray, R: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]
 
 
 @one_blas_thread
+@public
 def pose_figures(
     robot: Robot,
     P: np.ndarray,
@@ -390,6 +393,7 @@ class PrecisionMap(GridMap):
 
 
 @one_blas_thread
+@public
 def precision_map(
     robot: Robot,
     plane: str = "xy",
@@ -458,7 +462,9 @@ def precision_map(
             DeprecationWarning,
             stacklevel=3,
         )
-        v = float(checked_vector("value", value, 1, "m", bound=100.0 * robot.length_scale)[0])
+        from pkdyn.inputs import real
+
+        v = real("value", value, "m", bound=100.0 * robot.length_scale)
         c = (
             robot.platform_placement(robot.q_home).translation.copy()
             if center is None
@@ -471,7 +477,9 @@ def precision_map(
     box = ev.default_bounds(R) if extent is None and bounds is None else None
     grid = plane_grid(robot, plane, center, extent, samples, bounds, box)
     P = grid.positions()
-    codes = ev.violations(P, R, ("reach", *limits), 0.0)
+    from pkdyn.workspace.limits import check_kinds
+
+    codes = ev.violations(P, R, check_kinds(limits), 0.0)
     inside = codes == REACHABLE
     fig = pose_figures(
         robot,

@@ -47,6 +47,8 @@ class Material:
     density: float
 
     def __post_init__(self) -> None:
+        if not isinstance(self.name, str):
+            raise InvalidInputError("name", f"a material's name is a string, got {self.name!r:.40}")
         for what in ("E", "G", "density"):
             value = getattr(self, what)
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0.0):

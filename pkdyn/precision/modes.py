@@ -31,18 +31,19 @@ import pinocchio as pin
 import scipy.linalg
 
 from pkdyn.exceptions import InvalidInputError, PkdynError, SingularConfigurationError
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.precision._format import chop
 from pkdyn.precision.condensation import Reduced, compliance, negligible, reduce
 from pkdyn.precision.elastic import ElasticModel
-from pkdyn.precision.equilibrium import loaded_equilibrium, tangent_along
+from pkdyn.precision.equilibrium import loaded_equilibrium, reassembled, tangent_along
 from pkdyn.precision.material import Material
 from pkdyn.precision.stiffness import nothing_compliant, prepared
 from pkdyn.precision.validity import Flagged, Validity, stiffness_check
 from pkdyn.results import Result, deprecated, jsonable, renamed_keyword
 from pkdyn.threads import one_blas_thread
 from pkdyn.units import quantity
-from solvers import numerics, solve_lm
+from solvers import numerics
 
 __all__ = ["Modes", "mass_matrix", "mode_trajectory", "modes", "modes_json"]
 
@@ -111,8 +112,10 @@ class Modes(Flagged, Result):
         self.top = value
 
     def _shown(self, top: int | None) -> int:
+        from pkdyn.inputs import count as whole
+
         n = self.frequencies.size
-        c = self.top if top is None else top
+        c = self.top if top is None else whole("top", top, 1)
         return n if c is None else min(int(c), n)
 
     @renamed_keyword("count", "top")
@@ -201,6 +204,7 @@ def _eigen(red: Reduced, M: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
 
 
 @one_blas_thread
+@public
 def modes(
     robot: Robot | ElasticModel,
     q: Sequence[float] | np.ndarray,
@@ -359,12 +363,19 @@ def mode_trajectory(
         InvalidInputError: No such mode, or a non-positive amplitude, period or count.
 
     """
+    from pkdyn.inputs import count, instance, positive
+
+    instance("em", em, ElasticModel, "an ElasticModel (pkdyn.precision.elastic_model)")
+    instance("result", result, Modes, "Modes (pkdyn.precision.modes)")
     n = result.frequencies.size
-    if not 0 <= index < n:
+    index = count("index", index, 0)
+    if not index < n:
         raise InvalidInputError("mode", f"{index + 1} is not a mode number: 1 to {n}")
-    for what, value in (("period", period), ("cycles", cycles), ("samples", samples)):
-        if not (np.isfinite(value) and value > 0):
-            raise InvalidInputError(what, f"must be > 0, got {value}")
+    period = positive("period", period, "s")
+    cycles = count("cycles", cycles, 1, 1000)
+    samples = count("samples", samples, 2, 10_000)
+    if amplitude is not None:
+        amplitude = positive("amplitude", amplitude, "m")
     if result.elastic is not None and result.elastic.robot.nq == em.robot.nq:
         em = result.elastic  # (the model at the modes' configuration)
     r = em.robot
@@ -376,19 +387,10 @@ def mode_trajectory(
         raise InvalidInputError("amplitude", f"must be > 0 m, got {amplitude}")
     t = np.linspace(0.0, cycles * period, int(cycles * samples) + 1)
     Q = np.empty((t.size, r.nq))
-    free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
-    cs, data = r.constraints, r.data
     for i, ti in enumerate(t):
         qi = pin.integrate(r.model, q0, a * np.sin(2.0 * np.pi * ti / period) * u)
-        if cs.n:
-            qi = solve_lm(
-                r.model,
-                qi,
-                lambda x: cs.local_residual(data, x),
-                lambda x: cs.local_jacobian_after_residual(data, x),
-                free=free,
-                tol=1e-10,
-            ).q
+        if r.constraints.n:
+            qi = reassembled(em, qi).q
         Q[i] = qi
     return t, Q
 

@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.arguments import public
 from pkdyn.model.assembly import forward_geometry
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
@@ -118,6 +119,7 @@ def _draw(rng: np.random.Generator, t: np.ndarray, distribution: str) -> np.ndar
 
 
 @renamed_keyword("progress_bar", "progress")
+@public
 @one_blas_thread
 def monte_carlo(
     robot: Robot,

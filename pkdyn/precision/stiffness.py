@@ -42,8 +42,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.analysis.kinematics import ASSEMBLY_TOL, TASK_NAMES
+from pkdyn.analysis.kinematics import TASK_NAMES, check_assembled
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.pose import as_finite
 from pkdyn.model.robot import Robot
 from pkdyn.precision._format import chop
@@ -286,7 +287,10 @@ def transport(K: np.ndarray, r: np.ndarray) -> np.ndarray:
         ``T d``).
 
     """
-    r = np.asarray(r, dtype=float)
+    from pkdyn.inputs import matrix, vector
+
+    K = matrix("K", K, 6, 6, bound=np.inf)
+    r = vector("r", r, 3, "m")
     T_inv = np.eye(6)
     T_inv[:3, 3:] = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
     return np.asarray(T_inv.T @ K @ T_inv)
@@ -295,17 +299,10 @@ def transport(K: np.ndarray, r: np.ndarray) -> np.ndarray:
 def _wrench(robot: Robot, wrench: Sequence[float] | np.ndarray | None) -> np.ndarray | None:
     if wrench is None:
         return None
-    from pkdyn.inputs import MAX_MAGNITUDE
+    from pkdyn.inputs import MAX_MAGNITUDE, number_array
 
     rows = np.asarray(robot.task_rows, dtype=int)
-    if isinstance(wrench, str | bytes | dict) or np.iscomplexobj(wrench):
-        raise InvalidInputError("wrench", f"expected numbers [N, N m], got {wrench!r:.60}")
-    try:
-        arr = np.atleast_1d(np.asarray(wrench, dtype=float)).reshape(-1)
-    except (TypeError, ValueError):
-        raise InvalidInputError(
-            "wrench", f"expected numbers [N, N m], got {wrench!r:.60}"
-        ) from None
+    arr = number_array("wrench", wrench, "numbers [N, N m]")
     if arr.size not in (6, rows.size):
         raise InvalidInputError(
             "wrench",
@@ -349,18 +346,6 @@ def _principal(
 def _scaled(C: np.ndarray, rows: list[int], L: float) -> np.ndarray:
     W = np.array([1.0 if i < 3 else L for i in rows])
     return np.asarray(W[:, None] * C * W[None, :])
-
-
-def _check_assembled(robot: Robot, q: np.ndarray) -> None:
-    if robot.constraints.n == 0:
-        return
-    res = float(np.max(np.abs(robot.constraints.residual(robot.data, q))))
-    if res > ASSEMBLY_TOL:
-        raise InvalidInputError(
-            "q",
-            f"not an assembled configuration of {robot.name} (closure residual {res:.3g}); "
-            "obtain q from pkdyn.forward_geometry, inverse_geometry or project",
-        )
 
 
 def nothing_compliant(em: ElasticModel) -> bool:
@@ -478,7 +463,7 @@ def prepared(
     if base.platform_frame is None:
         raise InvalidInputError("robot", f"{base.name} declares no platform frame")
     qq = as_finite("q", q, base.nq)
-    _check_assembled(base, qq)
+    check_assembled(base, qq)
     p = _point(point, base)
     w = _wrench(base, wrench)
     em = (
@@ -490,6 +475,7 @@ def prepared(
 
 
 @one_blas_thread
+@public
 def stiffness(
     robot: Robot | ElasticModel,
     q: Sequence[float] | np.ndarray,
@@ -569,6 +555,7 @@ def _frame(em: ElasticModel, q: np.ndarray) -> tuple[int, pin.SE3]:
     return fid, pin.SE3(r.data.oMf[fid])
 
 
+@public
 def stiffness_json(robot: Robot, q: np.ndarray, **kwargs: Any) -> dict[str, Any]:
     """JSON-ready :func:`stiffness` for the CLI (keys of :meth:`Stiffness.to_json`)."""
     return stiffness(robot, q, **kwargs).to_json()

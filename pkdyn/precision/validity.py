@@ -109,6 +109,9 @@ class Validity:
 
     def warn(self, stacklevel: int = 3) -> None:
         """Issue one :class:`PrecisionWarning` per warning."""
+        from pkdyn.inputs import count
+
+        stacklevel = count("stacklevel", stacklevel, 1, 100)
         for text in self.warnings:
             _warnings.warn(text, PrecisionWarning, stacklevel=stacklevel)
 

@@ -49,6 +49,7 @@ from pkdyn.dynamics.delta import DeltaDynamics
 from pkdyn.dynamics.payload import with_payload
 from pkdyn.dynamics.trajectory import TRAJECTORIES, TaskTrajectory, named_task
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.precision.elastic import ElasticModel, elastic_model
 from pkdyn.precision.material import Material
@@ -267,6 +268,7 @@ def _dominant(
 
 
 @one_blas_thread
+@public
 def vibration(
     robot: Robot,
     trajectory: str | Path | TaskTrajectory = "adept",

@@ -50,6 +50,7 @@ from pkdyn.model.robot import Robot
 from pkdyn.precision.elastic import ElasticModel
 from pkdyn.precision.vectorised import _delta_jacobian, _delta_mass, vectorised
 from pkdyn.precision.vibration_modal import PathModes
+from solvers.vec3 import cross
 
 __all__ = [
     "ActuatorMotion",
@@ -212,20 +213,9 @@ class DeltaModes:
         )
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.stack(
-        [
-            a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-            a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-            a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0],
-        ],
-        axis=-1,
-    )
-
-
 def _turn(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The smallest rotations (..., 3, 3) taking unit vectors ``a`` to ``b`` (..., 3)."""
-    k = _cross(a, b)
+    k = cross(a, b)
     c = np.einsum("...i,...i->...", a, b)
     K = np.zeros((*k.shape[:-1], 3, 3))
     K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -k[..., 2], k[..., 1], -k[..., 0]
@@ -289,13 +279,13 @@ def delta_joint_trajectory(
     E = dd.O[None] + dd._in_world(c, s, dd.elbow)
     d = P[:, None, :] + dd.attach[None] - E
     L = dd.length[None, :, None]
-    E1 = _cross(a, E - dd.O[None])
-    E2 = _cross(a, E1)
+    E1 = cross(a, E - dd.O[None])
+    E2 = cross(a, E1)
     u = d / L
     ud = (Pd[:, None, :] - E1 * ad[..., None]) / L
     udd = (Pdd[:, None, :] - E1 * add[..., None] - E2 * (ad**2)[..., None]) / L
-    w_bar = _cross(u, ud)  # (N, arm, 3): the bars' angular velocity, world axes
-    al_bar = _cross(u, udd)
+    w_bar = cross(u, ud)  # (N, arm, 3): the bars' angular velocity, world axes
+    al_bar = cross(u, udd)
     w_rel = w_bar - ad[..., None] * a  # relative to the arm
     al_rel = al_bar - add[..., None] * a
     # arm frames R0 Ry(alpha) (N, arm, 3, 3)
@@ -329,7 +319,7 @@ def delta_joint_trajectory(
         v = np.einsum("nij,nj->ni", Rt, w_rel[:, k])
         V[:, jm.idx_v : jm.idx_v + 3] = v
         w_local = np.einsum("nij,nj->ni", Rt, w_bar[:, k])
-        A[:, jm.idx_v : jm.idx_v + 3] = np.einsum("nij,nj->ni", Rt, al_rel[:, k]) - _cross(
+        A[:, jm.idx_v : jm.idx_v + 3] = np.einsum("nij,nj->ni", Rt, al_rel[:, k]) - cross(
             w_local, v
         )
     jm = model.joints[nac]

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.inputs import number_array
 from pkdyn.precision.elastic import ElasticModel
 
 __all__ = [
@@ -158,14 +159,9 @@ def actuator_damping_values(
     """
     names = em.base.actuator_names
     actuator_damping = value
-    if isinstance(actuator_damping, bool | str | bytes | dict):
+    if isinstance(actuator_damping, bool):
         raise InvalidInputError("actuator_damping", f"{actuator_damping!r:.60} is not a number")
-    try:
-        arr = np.atleast_1d(np.asarray(actuator_damping, dtype=float)).reshape(-1)
-    except (TypeError, ValueError):
-        raise InvalidInputError(
-            "actuator_damping", f"{actuator_damping!r:.60} is not a number"
-        ) from None
+    arr = number_array("actuator_damping", actuator_damping, "a number or one per actuator")
     if arr.size not in (1, len(names)):
         raise InvalidInputError(
             "actuator_damping",

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -10,12 +9,11 @@ from typing import Any
 
 import numpy as np
 
-from pkdyn.exceptions import OutputError
-from pkdyn.files import atomic_write
 from pkdyn.precision.elastic import ElasticModel
 from pkdyn.precision.vibration_damping import Damping
 from pkdyn.precision.vibration_figures import RESIDUAL_WINDOW
 from pkdyn.results import Result, jsonable
+from pkdyn.tables import write_table
 from pkdyn.units import quantity, vector
 
 __all__ = ["Display", "DominantMode", "VibrationResult"]
@@ -285,14 +283,7 @@ class VibrationResult(Result):
         table = np.column_stack(
             [self.t, self.deviation, self.deviation_norm, self.deviation_from_rest]
         )
-        try:
-            with atomic_write(path, newline="") as fh:
-                w = csv.writer(fh)
-                w.writerow(header)
-                for row in table:
-                    w.writerow([f"{x:.10g}" for x in row])
-        except OSError as err:
-            raise OutputError(str(path), err.strerror or str(err)) from None
+        write_table(path, header, table, digits=10)
 
 
 def _freqs(f: np.ndarray, count: int = 4) -> str:

@@ -71,7 +71,9 @@ class Lock:
 
 
 def _joint(model: pin.Model, name: str) -> tuple[int, pin.JointModel]:
-    if not model.existJointName(name):
+    if not isinstance(model, pin.Model):
+        raise InvalidInputError("model", f"expected a pin.Model (robot.model), got {model!r:.40}")
+    if not isinstance(name, str) or not model.existJointName(name):
         raise InvalidInputError("lock", f"no joint named '{name}' in the model")
     j = model.getJointId(name)
     return j, model.joints[j]
@@ -116,7 +118,13 @@ def lock_constraint(
             express (e.g. the first coordinate of a universal joint alone).
 
     """
+    from pkdyn.inputs import instance, positive, vector
+
+    instance("lock", lock, Lock, "a Lock")
     j, jm = _joint(model, lock.joint)
+    arm = positive("arm", arm, "m")
+    if q is not None:
+        q = vector("q", q, model.nq, "rad or m")
     kind = jm.shortname()
     coords = tuple(int(c) for c in lock.coordinates)
     if sorted(coords) != sorted(set(coords)) or not all(0 <= c < jm.nq for c in coords):
@@ -193,5 +201,13 @@ def lock_values(
         The values [rad or m].
 
     """
+    from pkdyn.inputs import count, vector
+
     _, jm = _joint(model, joint)
-    return tuple(float(q[jm.idx_q + int(c)]) for c in coordinates)
+    q = vector("q", q, model.nq, "rad or m")
+    if isinstance(coordinates, str | bytes) or not hasattr(coordinates, "__iter__"):
+        raise InvalidInputError("coordinates", f"expected indices, got {coordinates!r:.40}")
+    idx = [count("coordinates", c, 0, jm.nq - 1) for c in coordinates]
+    if not idx:
+        raise InvalidInputError("coordinates", "name at least one coordinate")
+    return tuple(float(q[jm.idx_q + c]) for c in idx)

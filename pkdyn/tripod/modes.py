@@ -45,6 +45,7 @@ import pinocchio as pin
 from pkdyn.closed_form import tripod as tripod_cf
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.library import tripod
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.tripod.locks import Lock, lock_constraint, lock_values
 from solvers import Closure
@@ -82,11 +83,17 @@ _FOOT_TURN = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, np.pi), np.zeros(3))
 
 def branch_numbers(source: Robot | tripod.Params | int) -> tuple[int, ...]:
     """Branch numbers ``1 .. n`` of a tripod or walker (its robot, its parameters or ``n``)."""
-    if isinstance(source, int):
-        n = source
-    else:
+    if isinstance(source, Robot | tripod.Params):
         p = source.params if isinstance(source, Robot) else source
         n = tripod_cf.branch_count(p)
+    elif (
+        isinstance(source, bool) or not isinstance(source, int | np.integer) or source not in (3, 4)
+    ):
+        raise InvalidInputError(
+            "branches", f"expected 3 (tripod) or 4 (walker), or the robot, got {source!r:.40}"
+        )
+    else:
+        n = int(source)
     return tuple(range(1, n + 1))
 
 
@@ -127,7 +134,11 @@ def _site(branch: int, name: str) -> tuple[str, list[int]]:
 
 
 def _check_branch(branch: int, branches: int = 3) -> None:
-    if branch not in branch_numbers(branches):
+    if (
+        isinstance(branch, bool)
+        or not isinstance(branch, int | np.integer)
+        or branch not in branch_numbers(branches)
+    ):
         raise InvalidInputError(
             "branch", f"expected 1 to {branches} ({branches} branches), got {branch!r}"
         )
@@ -147,8 +158,10 @@ class Stance:
     footholds: tuple[pin.SE3, ...]
 
     def __post_init__(self) -> None:
-        if len(self.footholds) not in (3, 4) or not all(
-            isinstance(f, pin.SE3) for f in self.footholds
+        if (
+            not isinstance(self.footholds, tuple | list)
+            or len(self.footholds) not in (3, 4)
+            or not all(isinstance(f, pin.SE3) for f in self.footholds)
         ):
             raise InvalidInputError(
                 "stance", "expected three (tripod) or four (walker) pin.SE3 foot frames"
@@ -157,6 +170,10 @@ class Stance:
     @classmethod
     def default(cls, p: tripod.Params) -> Stance:
         """The library model's footholds (:func:`pkdyn.closed_form.tripod.foothold_frames`)."""
+        if not isinstance(p, tripod.Params):
+            raise InvalidInputError(
+                "p", f"expected the tripod's parameters (robot.params), got {p!r:.40}"
+            )
         return cls(tuple(tripod_cf.foothold_frames(p)))
 
     @property
@@ -167,6 +184,8 @@ class Stance:
     def moved(self, branch: int, foothold: pin.SE3) -> Stance:
         """The same stance with foot ``branch`` on a new foothold."""
         _check_branch(branch, self.branches)
+        if not isinstance(foothold, pin.SE3):
+            raise InvalidInputError("foothold", f"expected a pin.SE3, got {foothold!r:.40}")
         f = list(self.footholds)
         f[branch - 1] = pin.SE3(foothold)
         return Stance(tuple(f))
@@ -193,6 +212,14 @@ class Mode:
     locks: tuple[Lock, ...] = ()
     locked: tuple[str, ...] = ()
 
+    def __post_init__(self) -> None:
+        if self.kind not in ("PP", "BE"):
+            raise InvalidInputError("kind", f"expected 'PP' or 'BE', got {self.kind!r:.40}")
+        if self.branch is not None:
+            _check_branch(self.branch, 4)
+        if self.kind == "BE" and self.branch is None:
+            raise InvalidInputError("branch", "mode BE needs its swinging branch")
+
     def lock_vector(self, robot: Robot, q: np.ndarray) -> np.ndarray:
         """Current values of the locked coordinates at ``q``, in the order of ``locks``.
 
@@ -204,6 +231,9 @@ class Mode:
             The values [rad], one per locked coordinate.
 
         """
+        from pkdyn.model.arguments import check_robot, configuration
+
+        q = configuration(check_robot(robot), q)
         out: list[float] = []
         for lk in self.locks:
             out.extend(lock_values(robot.model, q, lk.joint, lk.coordinates))
@@ -219,6 +249,7 @@ def pp_mode() -> Mode:
     return Mode("PP")
 
 
+@public
 def be_mode(
     robot: Robot, q: np.ndarray, branch: int, values: Sequence[float] | None = None
 ) -> Mode:
@@ -245,11 +276,9 @@ def be_mode(
         sites += [(s, "q1") for s in held]
         vals = [lock_values(robot.model, q, *_site(b, m))[0] for b, m in sites]
     else:
-        vals = [float(v) for v in values]
-        if len(vals) != len(names) or not np.all(np.isfinite(vals)):
-            raise InvalidInputError(
-                "values", f"expected {len(names)} finite lock values, got {values!r}"
-            )
+        from pkdyn.inputs import vector
+
+        vals = [float(v) for v in vector("values", values, len(names), "rad")]
     b = f"branch{branch}"
     locks = (
         Lock(f"{b}_q2q1", (0, 1), (vals[1], vals[0]), f"{b}_q1,{b}_q2"),
@@ -263,9 +292,12 @@ def be_mode(
 
 def foot_frame(foothold: pin.SE3) -> pin.SE3:
     """Placement of a foot link frame (the BE platform) clamped on foot frame ``R_A``."""
+    if not isinstance(foothold, pin.SE3):
+        raise InvalidInputError("foothold", f"expected a pin.SE3, got {foothold!r:.40}")
     return pin.SE3(foothold) * _FOOT_TURN
 
 
+@public
 def foot_placement(robot: Robot, q: np.ndarray, branch: int) -> pin.SE3:
     """Foot frame ``R_A`` of branch ``i`` at ``q`` (origin ``A_i``, ``w_a`` the sole normal).
 
@@ -284,6 +316,7 @@ def foot_placement(robot: Robot, q: np.ndarray, branch: int) -> pin.SE3:
     return pin.SE3(robot.data.oMf[fid]) * _FOOT_TURN.inverse()
 
 
+@public
 def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = None) -> Robot:
     """The tripod with the constraint set and platform of a mode on a stance.
 
@@ -308,6 +341,10 @@ def mode_robot(robot: Robot, stance: Stance, mode: Mode, q: np.ndarray | None = 
             f"{robot.name}: tripod modes need the library tripod (pkdyn.load('tripod')) "
             "to know its footholds"
         )
+    from pkdyn.inputs import instance
+
+    instance("stance", stance, Stance, "a Stance (pkdyn.tripod.Stance.default)")
+    instance("mode", mode, Mode, "a Mode (pkdyn.tripod.pp_mode, be_mode)")
     p: tripod.Params = robot.params
     model = robot.model
     default = tripod_cf.foothold_frames(p)

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.viewer.animation import chain, check_trajectory
 from pkdyn.viewer.camera import Camera, bounding_box, frame_box, project
@@ -46,6 +47,7 @@ __all__ = [
 ]
 
 
+@public
 def animate(
     robot: Robot,
     t: np.ndarray,
@@ -77,4 +79,7 @@ def animate(
 
 def export_html(scene: Scene, path: str | Path) -> Path:
     """Write the scene as one self-contained HTML file (see :meth:`Scene.save_html`)."""
+    from pkdyn.inputs import instance
+
+    instance("scene", scene, Scene, "a Scene (pkdyn.viewer.Scene)")
     return scene.save_html(path)

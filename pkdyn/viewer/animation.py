@@ -34,16 +34,12 @@ def check_trajectory(t: np.ndarray, Q: np.ndarray, nq: int) -> tuple[np.ndarray,
         InvalidInputError: Wrong shapes, NaN, or times going backwards.
 
     """
-    tt = np.asarray(t, dtype=float)
-    QQ = np.asarray(Q, dtype=float)
-    if tt.ndim != 1 or tt.size == 0:
-        raise InvalidInputError(
-            "t", f"expected a non-empty (N,) array of times [s], got {tt.shape}"
-        )
-    if QQ.shape != (tt.size, nq):
-        raise InvalidInputError("Q", f"expected shape ({tt.size}, {nq}), got {QQ.shape}")
-    if not (np.all(np.isfinite(tt)) and np.all(np.isfinite(QQ))):
-        raise InvalidInputError("trajectory", "contains NaN or infinite values")
+    from pkdyn.inputs import matrix, vector
+
+    tt = vector("t", t, unit="s")
+    if tt.size == 0:
+        raise InvalidInputError("t", "expected a non-empty (N,) array of times [s]")
+    QQ = matrix("Q", Q, tt.size, nq, "rad or m")
     if np.any(np.diff(tt) < 0):
         k = int(np.flatnonzero(np.diff(tt) < 0)[0])
         raise InvalidInputError("t", f"times go backwards at sample {k + 1} ({tt[k + 1]} s)")
@@ -64,8 +60,9 @@ def keyframes(t: np.ndarray, max_rate: float = 60.0) -> np.ndarray:
         Increasing sample indices.
 
     """
-    if max_rate <= 0:
-        raise InvalidInputError("max_rate", f"must be positive, got {max_rate}")
+    from pkdyn.inputs import positive
+
+    max_rate = positive("max_rate", max_rate, "1/s")
     keep = [0]
     step = 1.0 / max_rate
     for i in range(1, len(t) - 1):
@@ -92,6 +89,16 @@ def chain(
         The chained ``(t, Q)``, time starting at 0.
 
     """
+    from pkdyn.inputs import non_negative
+
+    pause = non_negative("pause", pause, "s")
+    if isinstance(segments, str | bytes) or not hasattr(segments, "__iter__"):
+        raise InvalidInputError("segments", f"expected (t, Q) pairs, got {segments!r:.40}")
+    segments = list(segments)
+    if any(not isinstance(s, tuple | list) or len(s) != 2 for s in segments):
+        raise InvalidInputError("segments", "expected (t, Q) pairs")
+    nq = np.shape(segments[0][1])[-1] if segments and np.ndim(segments[0][1]) == 2 else 0
+    segments = [check_trajectory(t, Q, nq) for t, Q in segments]
     ts: list[np.ndarray] = []
     Qs: list[np.ndarray] = []
     end = 0.0
@@ -105,7 +112,7 @@ def chain(
         Qs.append(np.asarray(Q, dtype=float))
         end = float(ts[-1][-1])
     if not ts:
-        raise InvalidInputError("trajectories", "nothing to chain")
+        raise InvalidInputError("segments", "nothing to chain")
     return np.concatenate(ts), np.vstack(Qs)
 
 

@@ -9,9 +9,12 @@ where a point lands in a screenshot.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
+
+from pkdyn.exceptions import InvalidInputError
 
 __all__ = ["FOV_DEG", "Camera", "bounding_box", "frame_box", "project"]
 
@@ -36,6 +39,16 @@ class Camera:
     position: np.ndarray
     fov_deg: float = FOV_DEG
 
+    def __post_init__(self) -> None:
+        from pkdyn.inputs import positive, vector
+
+        object.__setattr__(self, "target", vector("target", self.target, 3, "m"))
+        object.__setattr__(self, "position", vector("position", self.position, 3, "m"))
+        fov = positive("fov_deg", self.fov_deg, "deg")
+        if not fov < 180.0:
+            raise InvalidInputError("fov_deg", f"a field of view lies in (0, 180) deg, got {fov:g}")
+        object.__setattr__(self, "fov_deg", fov)
+
     @property
     def offset_yup(self) -> list[float]:
         """Camera position relative to the target in three.js's y-up axes (meshcat's rotated)."""
@@ -57,6 +70,11 @@ def bounding_box(
         ``(lo, hi)`` corners (3,) [m]; a zero-size box at the origin for an empty model.
 
     """
+    from pkdyn.inputs import instance, vector
+
+    instance("model", model, pin.Model, "a pin.Model (robot.model)")
+    instance("geometry_model", geometry_model, pin.GeometryModel, "a pin.GeometryModel")
+    q = vector("q", q, model.nq, "rad or m")
     data = model.createData()
     gdata = geometry_model.createData()
     pin.updateGeometryPlacements(model, data, geometry_model, gdata, q)
@@ -100,9 +118,16 @@ def frame_box(
         The camera.
 
     """
-    size = np.asarray(hi, float) - np.asarray(lo, float)
+    from pkdyn.inputs import positive, vector
+
+    lo, hi = vector("lo", lo, 3, "m"), vector("hi", hi, 3, "m")
+    margin = positive("margin", margin)
+    aspect = positive("aspect", aspect)
+    size = hi - lo
     if direction is not None:
-        d = np.asarray(direction, float)
+        d = vector("direction", direction, 3)
+        if not np.linalg.norm(d) > 0.0:
+            raise InvalidInputError("direction", "a zero vector has no direction")
     elif size[2] < 0.2 * max(size[0], size[1]):
         d = np.array([0.6, -0.7, 1.4])
     else:
@@ -114,6 +139,14 @@ def frame_box(
     half = min(half_v, np.arctan(np.tan(half_v) * aspect))
     dist = margin * radius / np.sin(half)
     return Camera(target=target, position=target + dist * d)
+
+
+def _numbers(x: Any) -> Any:
+    """``x`` as given when it cannot be an array (its check names it), else an array."""
+    try:
+        return np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        return x
 
 
 def project(camera: Camera, points: np.ndarray, width: int, height: int) -> np.ndarray:
@@ -129,6 +162,14 @@ def project(camera: Camera, points: np.ndarray, width: int, height: int) -> np.n
         (N, 2) pixel coordinates (column, row), origin at the top-left corner.
 
     """
+    from pkdyn.inputs import count, instance, matrix
+
+    instance("camera", camera, Camera, "a Camera (pkdyn.viewer.frame_box)")
+    pts = _numbers(points)
+    if isinstance(pts, np.ndarray) and pts.ndim == 1:
+        pts = pts[None, :]
+    points = matrix("points", pts, None, 3, "m")
+    width, height = count("width", width, 1, 100_000), count("height", height, 1, 100_000)
     f = camera.target - camera.position
     f = f / np.linalg.norm(f)
     right = np.cross(f, _UP)

@@ -12,6 +12,7 @@ import warnings
 import numpy as np
 
 from pkdyn.analysis.collisions import CollisionChecker, distance_report
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as bar
 
@@ -40,6 +41,7 @@ CLOSEST_COLOR = (0.85, 0.00, 0.85)
 """Colour of the two geometry objects closest to collision."""
 
 
+@public
 def singularity_labels(
     robot: Robot, Q: np.ndarray, progress: bool | None = None
 ) -> tuple[np.ndarray, list[str]]:
@@ -57,7 +59,9 @@ def singularity_labels(
 
     """
     from pkdyn.analysis.singularity import classify
+    from pkdyn.inputs import matrix
 
+    Q = matrix("Q", Q, None, robot.nq, "rad or m")
     labels = np.zeros(len(Q), dtype=int)
     kinds: list[str] = []
     with warnings.catch_warnings():
@@ -69,6 +73,7 @@ def singularity_labels(
     return labels, kinds
 
 
+@public
 def closest_pair(robot: Robot, q: np.ndarray) -> tuple[str, str, float]:
     """The two collision objects closest to each other (coal, via ``distance_report``).
 

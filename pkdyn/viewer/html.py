@@ -75,5 +75,13 @@ def static_html(commands: Sequence[bytes], title: str = "pkdyn viewer") -> str:
         The HTML document (viewer JavaScript included, about 0.9 MB plus the scene).
 
     """
+    from pkdyn.exceptions import InvalidInputError
+
+    if not isinstance(title, str):
+        raise InvalidInputError("title", f"expected a string, got {title!r:.40}")
+    if isinstance(commands, str | bytes | dict) or not all(
+        isinstance(c, bytes) for c in (commands if hasattr(commands, "__iter__") else [None])
+    ):
+        raise InvalidInputError("commands", "expected a sequence of bytes (meshcat commands)")
     lines = ",\n".join(f'    "{base64.b64encode(c).decode("ascii")}"' for c in commands)
     return _PAGE.format(title=html.escape(title), viewer=viewer_javascript(), commands=lines)

@@ -18,6 +18,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.precision.elastic import ElasticModel
 from pkdyn.precision.modes import Modes, mode_trajectory
@@ -108,6 +109,7 @@ def _along(M: pin.SE3, axis: np.ndarray, mid: np.ndarray) -> bool:
     return bool(parallel and np.linalg.norm(np.cross(off, axis)) < 1e-6)
 
 
+@public
 def animate_mode(
     model: ElasticModel,
     result: Modes,
@@ -140,6 +142,10 @@ def animate_mode(
         The scene, playing.
 
     """
+    from pkdyn.inputs import instance
+
+    instance("model", model, ElasticModel, "an ElasticModel (pkdyn.precision.elastic_model)")
+    instance("result", result, Modes, "Modes (pkdyn.precision.modes)")
     em = result.elastic if result.elastic is not None else model
     t, Q = mode_trajectory(em, result, index, amplitude, period, cycles)
     scene = Scene(display_robot(em), Q[0], collision=collision, serve=serve)

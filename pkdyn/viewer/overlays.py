@@ -22,7 +22,9 @@ def rgb(color: Color, name: str = "color") -> np.ndarray:
         InvalidInputError: Not 3 or 4 components in [0, 1].
 
     """
-    c = np.asarray(color, dtype=float).ravel()
+    from pkdyn.inputs import vector
+
+    c = vector(name, color, (3, 4))
     if c.size not in (3, 4) or not np.all(np.isfinite(c)) or c.min() < 0 or c.max() > 1:
         raise InvalidInputError(name, f"expected 3 or 4 components in [0, 1], got {list(c)}")
     return np.append(c, 1.0) if c.size == 3 else c

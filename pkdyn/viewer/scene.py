@@ -7,6 +7,7 @@ import io
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import meshcat
 import numpy as np
@@ -15,6 +16,7 @@ from pinocchio.visualize import MeshcatVisualizer
 
 from pkdyn.exceptions import InvalidInputError, OutputError, PkdynError
 from pkdyn.files import atomic_write
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import Robot
 from pkdyn.viewer import highlight as hl
 from pkdyn.viewer._server import LOOPBACK, ServerProcess, start_server
@@ -28,6 +30,18 @@ __all__ = ["BACKGROUND", "Scene"]
 
 BACKGROUND = ((1.0, 1.0, 1.0), (0.82, 0.84, 0.86))
 """Background gradient (top, bottom): light and neutral, so that every part colour shows."""
+
+
+def _probe(x: Any) -> np.ndarray:
+    """A colour's components (3 or 4), once :func:`rgb` accepted it."""
+    return np.asarray(x, dtype=float).reshape(-1)
+
+
+def _name(name: Any) -> str:
+    """A scene object's name: a non-empty string."""
+    if not isinstance(name, str) or not name:
+        raise InvalidInputError("name", f"expected a non-empty string, got {name!r:.40}")
+    return name
 
 
 class Scene:
@@ -62,6 +76,7 @@ class Scene:
 
     """
 
+    @public
     def __init__(
         self,
         robot: Robot,
@@ -125,6 +140,10 @@ class Scene:
                 self._base[node] = rgb(obj.meshColor)
                 if obj.parentJoint != 0:
                     self._moving.append(node)
+        if frames is not None:
+            from pkdyn.inputs import names
+
+            frames = list(names("frames", frames, what="frame", empty=True))
         self._frames = self._frame_ids(frames)
         self._boxes: list[tuple[np.ndarray, np.ndarray]] = []
         self._auto_camera = True
@@ -171,6 +190,7 @@ class Scene:
             InvalidInputError: No geometry object has that name.
 
         """
+        _name(name)
         out: list[str] = []
         for kind, model in self._shown():
             if model.existGeometryName(name):
@@ -191,9 +211,12 @@ class Scene:
             raise InvalidInputError("geometry", f"no geometry object '{name}' (known: {known})")
         return out
 
+    @public
     def robot_box(self, q: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """World bounding box (lo, hi) [m] of the drawn geometry at ``q`` (default: shown q)."""
-        qq = self.q if q is None else np.asarray(q, dtype=float)
+        from pkdyn.inputs import vector
+
+        qq = self.q if q is None else vector("q", q, self.robot.nq, "rad or m")
         return bounding_box(self.robot.model, self._shown()[0][1], qq)
 
     # -- view -------------------------------------------------------------------------------
@@ -205,8 +228,9 @@ class Scene:
 
     def set_background(self, top: Color, bottom: Color) -> None:
         """Background gradient colours (RGB in [0, 1])."""
-        self.vis["/Background"].set_property("top_color", [float(x) for x in rgb(top)[:3]])
-        self.vis["/Background"].set_property("bottom_color", [float(x) for x in rgb(bottom)[:3]])
+        top_rgb, bottom_rgb = rgb(top, "top")[:3], rgb(bottom, "bottom")[:3]
+        self.vis["/Background"].set_property("top_color", [float(x) for x in top_rgb])
+        self.vis["/Background"].set_property("bottom_color", [float(x) for x in bottom_rgb])
 
     def look_at(self, camera: Camera) -> None:
         """Place the camera (it orbits its target when the user drags the view).
@@ -215,6 +239,9 @@ class Scene:
         content (``/meshcat``), the grid and the axes are shifted by ``-target`` and the camera
         is put at ``position - target``: what the page shows is the world seen from ``camera``.
         """
+        from pkdyn.inputs import instance
+
+        instance("camera", camera, Camera, "a Camera (pkdyn.viewer.frame_box)")
         self._auto_camera = False
         self._camera = camera
         shift = pin.SE3(np.eye(3), -np.asarray(camera.target, float)).homogeneous
@@ -228,6 +255,7 @@ class Scene:
         """The current camera."""
         return self._camera
 
+    @public
     def frame(self, direction: np.ndarray | None = None, aspect: float = 4.0 / 3.0) -> Camera:
         """Aim the camera at the robot (at the shown q) and the overlays.
 
@@ -249,9 +277,9 @@ class Scene:
 
     def display(self, q: np.ndarray) -> None:
         """Show the robot at configuration ``q`` (nq,) (the camera follows until set by hand)."""
-        qq = np.asarray(q, dtype=float)
-        if qq.shape != (self.robot.nq,) or not np.all(np.isfinite(qq)):
-            raise InvalidInputError("q", f"expected {self.robot.nq} finite values, got {qq.shape}")
+        from pkdyn.inputs import vector
+
+        qq = vector("q", q, self.robot.nq, "rad or m")
         self.q = qq
         self.viz.display(qq)
         data = self.viz.data
@@ -271,13 +299,17 @@ class Scene:
         size: float = 0.005,
     ) -> None:
         """Overlay a point cloud (N, 3) [m] (a workspace sample) as ``overlays/<name>``."""
-        obj = point_cloud(points, color, size)
+        from pkdyn.inputs import matrix, positive
+
+        _name(name)
+        P = matrix("points", points, None, 3, "m")
+        obj = point_cloud(P, rgb(color)[: len(_probe(color))], positive("size", size, "m"))
         self.vis[f"overlays/{name}"].set_object(obj)
-        P = np.asarray(points, dtype=float)
         self._boxes.append((P.min(axis=0), P.max(axis=0)))
         if self._auto_camera:
             self.frame()
 
+    @public
     def add_mesh(
         self,
         name: str,
@@ -287,14 +319,24 @@ class Scene:
         wireframe: bool = False,
     ) -> None:
         """Overlay a triangle mesh (a workspace boundary) as ``overlays/<name>``."""
-        self.vis[f"overlays/{name}"].set_object(triangle_mesh(vertices, faces, color, wireframe))
-        V = np.asarray(vertices, dtype=float)
+        from pkdyn.inputs import matrix
+
+        _name(name)
+        V = matrix("vertices", vertices, None, 3, "m")
+        F = matrix("faces", faces, None, 3)
+        if np.any(F != np.round(F)) or F.min() < 0 or F.max() >= len(V):
+            raise InvalidInputError("faces", f"expected vertex indices in 0..{len(V) - 1}")
+        mesh = triangle_mesh(V, F.astype(int), color, wireframe)
+        self.vis[f"overlays/{name}"].set_object(mesh)
         self._boxes.append((V.min(axis=0), V.max(axis=0)))
         if self._auto_camera:
             self.frame()
 
     def highlight(self, names: Sequence[str], color: Color = hl.CLOSEST_COLOR) -> None:
         """Colour geometry objects (by visual or collision name, see :meth:`nodes`)."""
+        from pkdyn.inputs import names as names_
+
+        names = names_("names", names, what="geometry object")
         c = [float(x) for x in rgb(color)]
         for name in names:
             for node in self.nodes(name):
@@ -305,6 +347,7 @@ class Scene:
         for node, c in self._base.items():
             self.vis[f"{node}/<object>"].set_property("color", [float(x) for x in c])
 
+    @public
     def highlight_singular(self, q: np.ndarray | None = None) -> str:
         """Colour the moving parts if ``q`` (default: shown q) is singular or near-singular.
 
@@ -321,6 +364,7 @@ class Scene:
                 self.vis[f"{node}/<object>"].set_property("color", [*color, alpha])
         return {hl.SINGULAR: "singular", hl.NEAR: "near"}.get(label, "regular")
 
+    @public
     def highlight_closest(self, q: np.ndarray | None = None) -> tuple[str, str, float]:
         """Colour the two collision objects closest to each other at ``q`` (default: shown q).
 
@@ -335,6 +379,7 @@ class Scene:
 
     # -- animation --------------------------------------------------------------------------
 
+    @public
     def animate(
         self,
         t: np.ndarray,
@@ -436,6 +481,9 @@ class Scene:
             OutputError: The file cannot be written (an existing file is left intact).
 
         """
+        from pkdyn.files import output_target
+
+        output_target(path)
         p = Path(path)
         try:
             with atomic_write(p) as fh:

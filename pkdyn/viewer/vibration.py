@@ -6,9 +6,10 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
+from pkdyn.precision.equilibrium import reassembled
 from pkdyn.precision.vibration_result import VibrationResult
 from pkdyn.viewer.scene import Scene
-from solvers import solve_lm
 
 __all__ = ["animate_vibration", "exaggerated"]
 
@@ -31,6 +32,9 @@ def exaggerated(
         InvalidInputError: A result without its deformation, or a non-positive scale.
 
     """
+    from pkdyn.inputs import instance
+
+    instance("result", result, VibrationResult, "a VibrationResult (pkdyn.precision.vibration)")
     em = result.elastic
     shown = result.animation()
     if em is None or shown is None:
@@ -43,25 +47,17 @@ def exaggerated(
     from pkdyn.inputs import positive
 
     scale = positive("scale", scale, bound=1e12)
-    free = np.setdiff1d(np.arange(r.nv), em.rigid_v)
-    cs, data = r.constraints, r.data
     Q = np.empty_like(command)
     q = command[0]
     for k, (qc, u) in enumerate(zip(command, deformation, strict=True)):
         q = pin.integrate(r.model, qc, scale * u)
-        if cs.nc:
-            q = solve_lm(
-                r.model,
-                q,
-                lambda x: cs.local_residual(data, x),
-                lambda x: cs.local_jacobian_after_residual(data, x),
-                free=free,
-                tol=1e-10,
-            ).q
+        if r.constraints.nc:
+            q = reassembled(em, q).q
         Q[k] = q
     return np.asarray(t_coarse), Q, float(scale)
 
 
+@public
 def animate_vibration(
     result: VibrationResult,
     *,

@@ -36,6 +36,7 @@ import numpy as np
 
 from pkdyn.closed_form.delta import THETA, DeltaGeometry, elbow_points, inverse
 from pkdyn.exceptions import InvalidInputError, PkdynError
+from pkdyn.model.arguments import public
 from pkdyn.progress import progress_steps
 from pkdyn.results import Result, deprecated_alias, jsonable
 from pkdyn.units import columns, quantity
@@ -206,11 +207,28 @@ def clavel_comparison(
     return ClavelComparison(cf, nu, v_ws, gamma_max, ab_min)
 
 
+def _check_geometry(g: Any) -> None:
+    """``g`` has Clavel's lengths ``ra, rb, la, lb`` [m] (a Delta's parameters)."""
+    from pkdyn.inputs import non_negative, positive
+
+    if not all(hasattr(g, a) for a in ("ra", "rb", "la", "lb")):
+        raise InvalidInputError(
+            "g", f"expected a Delta geometry (ra, rb, la, lb; robot.params), got {g!r:.60}"
+        )
+    for a in ("ra", "la", "lb"):
+        positive(f"g.{a}", getattr(g, a), "m")
+    non_negative("g.rb", g.rb, "m")
+
+
 def _check_limits(gamma_max: float, ab_min: float) -> None:
+    from pkdyn.inputs import real
+
+    gamma_max = real("gamma_max", gamma_max, "rad")
+    ab_min = real("ab_min", ab_min, "rad")
     if not 0.0 < gamma_max < math.pi / 2:
         raise InvalidInputError("gamma_max", f"{gamma_max} rad: need 0 < gamma_max < pi/2")
     if not 0.0 <= ab_min < math.pi:
-        raise InvalidInputError("(alpha+beta)_min", f"{ab_min} rad: need 0 <= value < pi")
+        raise InvalidInputError("ab_min", f"(alpha+beta)_min = {ab_min} rad: need 0 <= value < pi")
 
 
 def clavel_closed_form(
@@ -231,6 +249,7 @@ def clavel_closed_form(
         PkdynError: The hexagon is wider than the arms and bars reach: no complete prism.
 
     """
+    _check_geometry(g)
     _check_limits(gamma_max, ab_min)
     la = g.la
     r, b = (g.ra - g.rb) / la, g.lb / la
@@ -396,6 +415,7 @@ class _Sampler:
         return best
 
 
+@public
 def clavel_numeric(
     g: DeltaGeometry,
     gamma_max: float = GAMMA_MAX,
@@ -440,9 +460,18 @@ def clavel_numeric(
         PkdynError: No valid position on the axis.
 
     """
+    from pkdyn.inputs import count, positive
+
+    _check_geometry(g)
     _check_limits(gamma_max, ab_min)
-    if rays < 12 or fractions < 3 or heights < 20:
-        raise InvalidInputError("sampling", "need rays >= 12, fractions >= 3, heights >= 20")
+    rays = count("rays", rays, 12)
+    fractions = count("fractions", fractions, 3)
+    heights = count("heights", heights, 20)
+    tol = positive("tol", tol, "m")
+    if tol < 1e-13 * g.la:
+        raise InvalidInputError(
+            "tol", f"{tol:g} m: below what floating point resolves on a {g.la:g} m arm (1e-13 la)"
+        )
     if rays * fractions * heights > 50_000_000:
         raise InvalidInputError(
             "sampling",

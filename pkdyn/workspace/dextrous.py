@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.description import ConeLimit, PyramidLimit
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
@@ -71,6 +72,7 @@ def dextrous_violations(legs: HexapodLegs, C: np.ndarray, joint_limits: bool) ->
     return out
 
 
+@public
 def dextrous_workspace(
     robot: Robot,
     bounds: np.ndarray | Sequence[Sequence[float]] | None = None,
@@ -111,7 +113,9 @@ def dextrous_workspace(
             hi = np.maximum(hi, lo + 1e-3)
         box = np.column_stack([lo, hi])
     else:
-        box = np.asarray(bounds, dtype=float)
+        from pkdyn.inputs import matrix
+
+        box = matrix("bounds", bounds, 3, 2, "m")
     if box.shape != (3, 2) or not np.all(np.isfinite(box)):
         raise InvalidInputError("bounds", "expected 3 rows (min, max) of finite numbers [m]")
     xs, ys, zs = _grid_axes(box, step, samples, (0, 1, 2), np.zeros(3))

@@ -59,9 +59,14 @@ def check_kinds(kinds: Sequence[str]) -> tuple[str, ...]:
         InvalidInputError: An unknown kind.
 
     """
-    bad = [k for k in kinds if k not in LIMIT_KINDS]
+    from pkdyn.inputs import names
+
+    if not isinstance(kinds, str):  # (a single kind given as a string is that kind)
+        kinds = names("limits", kinds, what="limit kind", empty=True)
+    bad = [k for k in ([kinds] if isinstance(kinds, str) else kinds) if k not in LIMIT_KINDS]
     if bad:
         raise InvalidInputError("limits", f"unknown kind '{bad[0]}' (use {', '.join(LIMIT_KINDS)})")
+    kinds = (kinds,) if isinstance(kinds, str) else kinds
     return tuple(k for k in LIMIT_KINDS if k == "reach" or k in kinds)
 
 

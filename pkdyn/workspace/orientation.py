@@ -31,6 +31,7 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError
+from pkdyn.model.arguments import public
 from pkdyn.model.description import PyramidLimit
 from pkdyn.model.robot import Robot
 from pkdyn.progress import progress as progress_bar
@@ -52,13 +53,18 @@ __all__ = [
 
 
 def _unit(name: str, v: Sequence[float]) -> np.ndarray:
-    a = np.asarray(v, dtype=float)
+    from pkdyn.inputs import vector
+
+    a = vector(name, v, 3)
     n = float(np.linalg.norm(a)) if a.shape == (3,) else 0.0
     if not n > 1e-12 or not np.all(np.isfinite(a)):
         got = " ".join(f"{x:g}" for x in np.ravel(a))
         raise InvalidInputError(name, f"expected a non-zero 3-vector, got [{got}]")
     return a / n
 
+
+TOL_MIN = 1e-14
+"""Finest bisection tolerance on an angle [rad] (a few ulps of 2 pi: finer never ends)."""
 
 MAX_ORIENTATIONS = 5_000_000
 """Most sampled orientations of one orientation workspace (refused beyond, with the estimate)."""
@@ -113,12 +119,26 @@ class OrientationWorkspace(Result):
     kinds: tuple[str, ...] = ()
     margin: float = 0.0
 
+    @staticmethod
+    def _angles(theta1: Any, theta2: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The two angle arrays (n,) each [rad], checked: finite, of one length."""
+        from pkdyn.inputs import vector
+
+        t1, t2 = vector("theta1", theta1, unit="rad"), vector("theta2", theta2, unit="rad")
+        if t1.size != t2.size or t1.size == 0:
+            raise InvalidInputError(
+                "theta2", f"{t2.size} angles for {t1.size} theta1: give as many of each (>= 1)"
+            )
+        return t1, t2
+
     def direction(self, theta1: np.ndarray, theta2: np.ndarray) -> np.ndarray:
         """``N_e`` (..., 3) for angles (broadcast)."""
+        theta1, theta2 = self._angles(theta1, theta2)
         return rotations(self.X1, self.X2, self.R0, theta1, theta2) @ self.N
 
     def jacobian(self, theta1: np.ndarray, theta2: np.ndarray) -> np.ndarray:
         """Area element ``|dN_e/dtheta1 x dN_e/dtheta2|`` of the (theta1, theta2) map."""
+        theta1, theta2 = self._angles(theta1, theta2)
         n1 = (_axis_angle(self.X1, theta1) @ self.R0) @ self.N
         R2 = _axis_angle(self.X2, theta2)
         d1 = R2 @ np.cross(self.X1, n1)[..., :, None]
@@ -152,6 +172,8 @@ class OrientationWorkspace(Result):
 
         """
         x, w = np.polynomial.legendre.leggauss(8)
+        if half is not None and (isinstance(half, bool) or half not in (0, 1)):
+            raise InvalidInputError("half", f"expected None, 0 or 1, got {half!r:.40}")
         d1 = 2 * math.pi / len(self.theta1)
         total = 0.0
         for t1, arcs in zip(self.theta1, self.arcs, strict=True):
@@ -171,6 +193,9 @@ class OrientationWorkspace(Result):
     def arc_points(self, per_radian: int = 40) -> list[np.ndarray]:
         """``N_e`` polylines (M, 3) of every allowed arc, for plots."""
         out = []
+        from pkdyn.inputs import count
+
+        per_radian = count("per_radian", per_radian, 1, 100_000)
         for t1, arcs in zip(self.theta1, self.arcs, strict=True):
             for s, e in arcs:
                 t2 = np.linspace(s, e, max(2, int(per_radian * (e - s)) + 1))
@@ -286,6 +311,7 @@ def _codes(
     return out
 
 
+@public
 def orientation_workspace(
     robot: Robot,
     center: Sequence[float] | None = None,
@@ -338,8 +364,16 @@ def orientation_workspace(
                 "interference out (--limits stroke joint; limits=('stroke', 'joint'))",
             )
         inter = leg_interference(robot)
-    if n1 < 2 or n2 < 8:
-        raise InvalidInputError("samples", "need n1 >= 2 and n2 >= 8")
+    from pkdyn.inputs import count, non_negative, positive, vector
+
+    n1 = count("n1", n1, 2)
+    n2 = count("n2", n2, 8)
+    margin = non_negative("margin", margin, "m")
+    tol = positive("tol", tol, "rad")
+    if tol < TOL_MIN:
+        raise InvalidInputError(
+            "tol", f"{tol:g} rad: below the {TOL_MIN:g} rad floating point resolves on an angle"
+        )
     if n1 * n2 > MAX_ORIENTATIONS:
         raise InvalidInputError(
             "samples",
@@ -349,11 +383,9 @@ def orientation_workspace(
     if center is None:
         C = robot.platform_placement(robot.q_home).translation.copy()
     else:
-        C = np.asarray(center, dtype=float)
-        if C.shape != (3,) or not np.all(np.isfinite(C)):
-            raise InvalidInputError("center", "expected 3 finite coordinates [m]")
+        C = vector("center", center, 3, "m")
     Nv, x1, x2 = _unit("N", N), _unit("X1", X1), _unit("X2", X2)
-    R0 = pin.rpy.rpyToMatrix(np.asarray(rpy0, dtype=float))
+    R0 = pin.rpy.rpyToMatrix(vector("rpy0", rpy0, 3, "rad"))
     t1 = 2 * math.pi * np.arange(n1) / n1
     t2 = 2 * math.pi * np.arange(n2) / n2
     codes = np.empty((n1, n2), dtype=np.int8)
@@ -524,6 +556,7 @@ MEL_CASES = {
 """Merlet's three studies of the MEL prototype (chapter 3, Figs. 3.2-3.10)."""
 
 
+@public
 def mel_study(
     robot: Robot,
     center: Sequence[float] | None = None,

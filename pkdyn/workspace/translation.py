@@ -23,6 +23,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import InvalidInputError, PkdynError
 from pkdyn.inputs import count, positive
+from pkdyn.model.arguments import public
 from pkdyn.model.robot import PLATFORM_HINT, Robot
 from pkdyn.results import Result, deprecated_alias, jsonable
 from pkdyn.units import quantity
@@ -113,6 +114,12 @@ class TranslationWorkspace(Result):
 
     def points(self, mask: np.ndarray | None = None) -> np.ndarray:
         """Positions (M, 3) [m] of the samples selected by ``mask`` (default: reachable)."""
+        if mask is not None:
+            m = np.asarray(mask) if isinstance(mask, np.ndarray | list | tuple) else None
+            if m is None or m.dtype != bool or m.shape != self.codes.shape:
+                raise InvalidInputError(
+                    "mask", f"expected a boolean array of the grid's shape {self.codes.shape}"
+                )
         idx = np.nonzero(self.reachable if mask is None else mask)
         return np.column_stack([a[i] for a, i in zip(self.axes, idx, strict=True)])
 
@@ -147,6 +154,9 @@ class TranslationWorkspace(Result):
         if axis not in AXES:
             raise InvalidInputError("axis", f"'{axis}': use x, y or z")
         d = AXES.index(axis)
+        from pkdyn.inputs import real
+
+        value = real("value", value, "m")
         k = int(np.argmin(np.abs(self.axes[d] - value)))
         others = [i for i in range(3) if i != d]
         return self.axes[others[0]], self.axes[others[1]], np.take(self.codes, k, axis=d)
@@ -306,6 +316,7 @@ MAX_GRID_SAMPLES = 10_000_000
 numerically): larger requests are refused before any work, with the estimate."""
 
 
+@public
 def translation_workspace(
     robot: Robot,
     rpy: Sequence[float] = (0.0, 0.0, 0.0),
@@ -346,11 +357,10 @@ def translation_workspace(
         raise PkdynError(
             f"{robot.name} declares no platform frame: no workspace to sample; {PLATFORM_HINT}"
         )
-    rpy_a = np.asarray(rpy, dtype=float)
-    if rpy_a.shape != (3,) or not np.all(np.isfinite(rpy_a)):
-        raise InvalidInputError("rpy", "expected 3 finite angles [rad]")
-    if not np.isfinite(margin):
-        raise InvalidInputError("margin", f"must be a finite distance [m], got {margin}")
+    from pkdyn.inputs import matrix, non_negative, vector
+
+    rpy_a = vector("rpy", rpy, 3, "rad")
+    margin = non_negative("margin", margin, "m")
     kinds = check_kinds(limits)
     if "interference" in kinds and not robot.collision_model.ngeoms:
         raise InvalidInputError(
@@ -362,7 +372,7 @@ def translation_workspace(
     ev = evaluator if evaluator is not None else evaluator_for(robot, method, progress)
     R = pin.rpy.rpyToMatrix(rpy_a)
     dims = tuple(int(d) for d in robot.task_rows if d < 3)
-    box = ev.default_bounds(R) if bounds is None else np.asarray(bounds, dtype=float)
+    box = ev.default_bounds(R) if bounds is None else matrix("bounds", bounds, 3, 2, "m")
     if box.shape != (3, 2) or not np.all(np.isfinite(box)):
         raise InvalidInputError("bounds", "expected 3 rows (min, max) of finite numbers [m]")
     home = robot.platform_placement(robot.q_home).translation

@@ -23,6 +23,7 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.description import ClosureSpec, FrameRef
+from pkdyn.model.formats.xmldoc import finite_numbers
 
 __all__ = ["closure", "implicit_world", "urdf_constraints"]
 
@@ -34,16 +35,6 @@ def _local(tag: str) -> str:
 
 def _is_drake(tag: str) -> bool:
     return "drake" in tag.split("}")[0].lower() or tag.startswith("drake:")
-
-
-def _numbers(source: str, where: str, text: str | None, n: int) -> np.ndarray:
-    try:
-        v = np.array([float(t) for t in (text or "").split()], dtype=float)
-    except ValueError:
-        raise DescriptionError(source, where, f"expected {n} numbers, got '{text}'") from None
-    if v.shape != (n,) or not np.all(np.isfinite(v)):
-        raise DescriptionError(source, where, f"expected {n} finite numbers, got '{text}'")
-    return v
 
 
 def closure(
@@ -98,10 +89,10 @@ def closure(
                 f"missing drake:{prefix}_{offset} (Drake requires both points of a constraint)",
             )
         if kind == "ball_constraint":
-            p = _numbers(source, f"{where} {offset}", read(o), 3)
+            p = finite_numbers(source, f"{where} {offset}", read(o), 3)
             M = pin.SE3(np.eye(3), p)
         else:
-            x = _numbers(source, f"{where} {offset}", read(o), 6)
+            x = finite_numbers(source, f"{where} {offset}", read(o), 6)
             M = pin.SE3(pin.rpy.rpyToMatrix(x[3:]), x[:3])
         out.append(FrameRef(name, M))
     kind_ = "point" if kind == "ball_constraint" else "weld"

@@ -25,21 +25,12 @@ import pinocchio as pin
 
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.description import ClosureSpec, FrameRef
+from pkdyn.model.formats.xmldoc import finite_numbers
 from pkdyn.model.validate import unit_vector
 
 __all__ = ["gazebo_closures"]
 
 _KINDS = {"fixed": "weld", "revolute": "hinge", "continuous": "hinge", "ball": "point"}
-
-
-def _numbers(source: str, where: str, text: str | None, n: int) -> np.ndarray:
-    try:
-        v = np.array([float(t) for t in (text or "").split()], dtype=float)
-    except ValueError:
-        raise DescriptionError(source, where, f"expected {n} numbers, got '{text}'") from None
-    if v.shape != (n,) or not np.all(np.isfinite(v)):
-        raise DescriptionError(source, where, f"expected {n} finite numbers, got '{text}'")
-    return v
 
 
 def _link_poses(model: pin.Model) -> dict[str, pin.SE3]:
@@ -99,7 +90,7 @@ def gazebo_closures(root: ET.Element, model: pin.Model, source: str) -> list[Clo
         rel = child
         X = pin.SE3.Identity()
         if pose_el is not None:
-            v = _numbers(source, f"{where} <pose>", pose_el.text, 6)
+            v = finite_numbers(source, f"{where} <pose>", pose_el.text, 6)
             X = pin.SE3(pin.rpy.rpyToMatrix(v[3:]), v[:3])
             rel = pose_el.get("relative_to") or pose_el.get("frame") or child
             if rel not in poses:
@@ -110,7 +101,7 @@ def gazebo_closures(root: ET.Element, model: pin.Model, source: str) -> list[Clo
         axis = np.array([0.0, 0.0, 1.0])
         xyz = el.find("axis/xyz")
         if xyz is not None:
-            v = _numbers(source, f"{where} <axis><xyz>", xyz.text, 3)
+            v = finite_numbers(source, f"{where} <axis><xyz>", xyz.text, 3)
             u = unit_vector(v)
             if u is None or float(np.abs(v).max()) < 1e-12:
                 raise DescriptionError(source, f"{where} <axis>", "zero axis")

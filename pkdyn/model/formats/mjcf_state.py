@@ -391,10 +391,19 @@ class StateMap:
 
     def v(self, q: np.ndarray, qvel: np.ndarray) -> np.ndarray:
         """Pinocchio velocity of a MuJoCo ``qvel`` at the Pinocchio configuration ``q``."""
-        out = np.asarray(qvel, dtype=float)[self._dof_of_v].copy()
+        return self._transposed(q, qvel)
+
+    def _transposed(self, q: np.ndarray, x_mj: np.ndarray) -> np.ndarray:
+        """``T^T x_mj`` (nv,) of a MuJoCo dof vector (nv_mj,): ``T`` of :meth:`velocity_matrix`.
+
+        ``T`` is orthogonal on each remapped joint, so this inverts ``qvel = T v`` and maps a
+        MuJoCo generalized force to the Pinocchio one of the same power.
+        """
+        x_mj = np.asarray(x_mj, dtype=float)
+        out = x_mj[self._dof_of_v].copy()
         for jm, R in self._rotations(q):
             n = R.shape[0]
-            out[jm.idx_v : jm.idx_v + n] = R.T @ qvel[jm.dof : jm.dof + n]
+            out[jm.idx_v : jm.idx_v + n] = R.T @ x_mj[jm.dof : jm.dof + n]
         return out
 
     def _coriolis(self, jm: JointMap, v: np.ndarray) -> np.ndarray:
@@ -424,8 +433,4 @@ class StateMap:
 
     def force(self, q: np.ndarray, f_mj: np.ndarray) -> np.ndarray:
         """Pinocchio generalized force of a MuJoCo one (``qfrc_*``): ``T^T f_mj`` (same power)."""
-        out = np.asarray(f_mj, dtype=float)[self._dof_of_v].copy()
-        for jm, R in self._rotations(q):
-            n = R.shape[0]
-            out[jm.idx_v : jm.idx_v + n] = R.T @ f_mj[jm.dof : jm.dof + n]
-        return out
+        return self._transposed(q, f_mj)

@@ -11,13 +11,25 @@ import numpy as np
 
 from pkdyn.model.description import NAMESPACE
 
-__all__ = ["Record", "Shape", "UrdfWriter", "rod_inertia", "segment_origin", "rpy_z_to"]
+__all__ = [
+    "Record",
+    "Shape",
+    "UrdfWriter",
+    "number_text",
+    "rod_inertia",
+    "rpy_z_to",
+    "segment_origin",
+    "vector_text",
+]
 
 Vec = Sequence[float] | np.ndarray
 
 
-def _f(x: float) -> str:
-    """Shortest text that reads back as the same double (no rounding of the geometry)."""
+def number_text(x: float) -> str:
+    """Shortest text that reads back as the same double (no rounding of the geometry).
+
+    ``0`` for both zeros, no trailing ``.0`` (``2``, ``0.1``, ``1e-07``).
+    """
     v = float(x)
     if v == 0.0:
         return "0"
@@ -25,8 +37,12 @@ def _f(x: float) -> str:
     return s[:-2] if s.endswith(".0") else s
 
 
-def _v(v: Vec) -> str:
-    return " ".join(_f(x) for x in v)
+def vector_text(v: Vec) -> str:
+    """The numbers of ``v`` as :func:`number_text` writes them, separated by spaces."""
+    return " ".join(number_text(x) for x in v)
+
+
+_f, _v = number_text, vector_text  # short names for the element templates below
 
 
 @dataclass(frozen=True)

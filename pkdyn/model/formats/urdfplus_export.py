@@ -31,22 +31,11 @@ import pinocchio as pin
 from pkdyn.exceptions import DescriptionError
 from pkdyn.model.description import NAMESPACE, ClosureSpec, LinearCouplingSpec
 from pkdyn.model.formats import unread, urdfplus
+from pkdyn.model.formats.urdf_writer import number_text, vector_text
 from pkdyn.model.formats.xmldoc import parse_xml
 from pkdyn.model.validate import inertia_problem, repair_inertias
 
 __all__ = ["pkdyn_description"]
-
-
-def _num(x: float) -> str:
-    v = float(x)
-    if v == 0.0:
-        return "0"
-    text = repr(v)
-    return text[:-2] if text.endswith(".0") else text
-
-
-def _vec(v: np.ndarray) -> str:
-    return " ".join(_num(x) for x in v)
 
 
 def _add(root: ET.Element, el: ET.Element) -> None:
@@ -66,17 +55,17 @@ def _closure(c: ClosureSpec) -> ET.Element:
         attrs = {"link": f.link}
         M = f.placement
         if np.any(M.translation != 0.0):
-            attrs["xyz"] = _vec(M.translation)
+            attrs["xyz"] = vector_text(M.translation)
         if not np.array_equal(M.rotation, np.eye(3)):
-            attrs["rpy"] = _vec(pin.rpy.matrixToRpy(M.rotation))
+            attrs["rpy"] = vector_text(pin.rpy.matrixToRpy(M.rotation))
         ET.SubElement(el, "pkdyn:frame", attrs)
     return el
 
 
 def _coupling(c: LinearCouplingSpec) -> ET.Element:
-    el = ET.Element("pkdyn:coupling", {"name": c.name, "offset": _num(c.offset)})
+    el = ET.Element("pkdyn:coupling", {"name": c.name, "offset": number_text(c.offset)})
     for joint, coef in c.terms:
-        ET.SubElement(el, "pkdyn:term", {"joint": joint, "coefficient": _num(coef)})
+        ET.SubElement(el, "pkdyn:term", {"joint": joint, "coefficient": number_text(coef)})
     return el
 
 

@@ -23,12 +23,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
 
+import numpy as np
+
 from pkdyn.exceptions import DescriptionError
 
 __all__ = [
     "DRAKE_NAMESPACE",
     "MAX_FILE_BYTES",
     "XmlDoc",
+    "finite_numbers",
     "lenient",
     "parse_xml",
     "read_text",
@@ -232,3 +235,28 @@ def parse_xml(text: str, source: str, path: Path | None = None) -> XmlDoc:
     except (AssertionError, IndexError):  # TreeBuilder on an empty or unbalanced document
         raise DescriptionError(source, "XML", "malformed document (no root element)") from None
     return XmlDoc(root, source, path, lines, keep)
+
+
+def finite_numbers(source: str, where: str, text: str | None, n: int) -> np.ndarray:
+    """The ``n`` finite numbers of an element's text (white-space separated).
+
+    Args:
+        source: The file, named in errors.
+        where: The element, named in errors.
+        text: The element's text (``None``: empty).
+        n: How many numbers it must hold.
+
+    Returns:
+        (n,) the numbers.
+
+    Raises:
+        DescriptionError: A token is not a number, or there are not ``n`` finite ones.
+
+    """
+    try:
+        v = np.array([float(t) for t in (text or "").split()], dtype=float)
+    except ValueError:
+        raise DescriptionError(source, where, f"expected {n} numbers, got '{text}'") from None
+    if v.shape != (n,) or not np.all(np.isfinite(v)):
+        raise DescriptionError(source, where, f"expected {n} finite numbers, got '{text}'")
+    return v
