@@ -173,6 +173,7 @@ class Conditioning:
             scale += [1.0] * 3 if cm.type == _POINT else [1.0] * 3 + [float(length_scale)] * 3
         self.scale = np.array(scale)
         self._welds = bool(np.any(self.scale != 1.0))
+        self._outer = self.scale[:, None] * self.scale[None, :]  # S G S = G * outer
         self.rank = rank
         self.nc = self.scale.size
 
@@ -206,10 +207,21 @@ class Conditioning:
         return float(sigma[r - 1] / sigma[0])
 
     def __call__(self, data: pin.Data, mu: float) -> float:
-        """``kappa`` at the last evaluation made with ``data`` (one symmetric eigen-solve)."""
+        """``kappa`` at the last evaluation made with ``data`` (one symmetric eigen-solve).
+
+        Pinocchio returns ``G + mu I`` as a new array, worked on in place: with points only
+        (``S = I``) its eigenvalues less ``mu`` are those of ``G``.
+        """
         if not self.nc:
             return 1.0
-        return self.kappa(np.linalg.eigvalsh(self.delassus(data, mu)[1]))
+        G = data.constraint_chol.getInverseOperationalSpaceInertiaMatrix()
+        if not self._welds:
+            g = np.linalg.eigvalsh(G)
+            g -= mu
+            return self.kappa(g)
+        G.flat[:: self.nc + 1] -= mu
+        G *= self._outer
+        return self.kappa(np.linalg.eigvalsh(G))
 
 
 class Passages:

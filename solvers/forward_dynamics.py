@@ -108,9 +108,14 @@ COLLAPSE = 0.25
 value at the start is rejected and shortened (see :meth:`ForwardDynamics.simulate`)."""
 
 CHECK_PERIOD = 8
-"""Largest number of steps (``dopri5`` substeps, output steps of ``euler`` and ``rk4``)
-between two checks of the conditioning of the closure forces in :meth:`ForwardDynamics.simulate`;
-fewer while it falls, every step near a singularity (:meth:`ForwardDynamics._observe`)."""
+"""Largest number of output steps of ``euler`` and ``rk4`` between two checks of the
+conditioning of the closure forces in :meth:`ForwardDynamics.simulate`; fewer while it falls,
+every step near a singularity (:meth:`ForwardDynamics._observe`)."""
+
+ADAPTIVE_CHECK_PERIOD = 32
+"""The same for the substeps of ``dopri5``, which also checks at once when the proximal solver
+needs more iterations than at the last check (the free proxy between checks,
+:meth:`ForwardDynamics._due`; a check costs about one of the six evaluations of a substep)."""
 
 STEP_CHECK_PERIOD = 32
 """The same for the fixed steps of :meth:`ForwardDynamics.step` (a control loop, where a check,
@@ -290,6 +295,7 @@ class ForwardDynamics:
             if cs.coupling_rows is not None
             else None
         )
+        self._rigid = self._schur is None and self.nc > 0  # Pinocchio's call alone evaluates
         self._chart = any(
             model.joints[j].shortname() not in COMMUTATIVE_JOINTS for j in range(1, model.njoints)
         )
@@ -313,6 +319,7 @@ class ForwardDynamics:
         self._h_cond = math.inf  # dopri5 substep limit from the conditioning [s]
         self._cond_due = -math.inf  # time from which the next check is due [s]
         self._since_check = 0  # steps since the last check
+        self._iter_seen = 0  # proximal iterations of the state last checked
         self._cond_log: tuple[array, array] | None = None  # (t, kappa) of simulate's checks
         self._eval_id = 0  # dynamics evaluations made (their factorization in self.data)
         self._eig_id = -1  # the evaluation whose kappa a refinement computed
@@ -356,10 +363,23 @@ class ForwardDynamics:
 
     def _accel(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Acceleration as a view on ``data.ddq`` (overwritten by the next call)."""
+        if self._rigid:  # (:meth:`_solve` inline: one Python call less per evaluation)
+            a = pin.constraintDynamics(
+                self.model,
+                self.data,
+                q,
+                v,
+                tau,
+                self.constraint_models,
+                self.constraint_datas,
+                self.prox,
+            )
+            self._eval_id += 1
+            if self.prox.iter >= self._max_iter:
+                return self._capped(a)
+            return a
         if self._schur is not None:
             return self._schur.acceleration(q, v, tau)
-        if self.nc:
-            return self._solve(q, v, tau)
         return pin.aba(self.model, self.data, q, v, tau)
 
     def _solve(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -370,7 +390,7 @@ class ForwardDynamics:
         ``g_min`` falls below ``mu`` and the iteration cap leaves the closures' acceleration
         equations unsolved (a closure acceleration error of up to 1e2 m/s^2 on the falling
         Delta), which the error control cannot see. Such an evaluation is finished by
-        :meth:`_refine`.
+        :meth:`_refine` (:meth:`_capped`).
         """
         a = pin.constraintDynamics(
             self.model,
@@ -384,8 +404,26 @@ class ForwardDynamics:
         )
         self._eval_id += 1
         if self.prox.iter >= self._max_iter:
-            return self._refine(a)
+            return self._capped(a)
         return a
+
+    def _capped(self, a: np.ndarray) -> np.ndarray:
+        """An evaluation whose proximal iterations hit their cap: refined where unsolved.
+
+        Iteration ``k`` of Pinocchio's proximal solver solves ``(G + mu I) x_k = b + mu
+        x_{k-1}`` for the closure forces (``G = J M^-1 J^T``, ``b`` the closures' desired
+        acceleration), and the acceleration from the same solve: the closures' acceleration
+        residual it leaves is ``J a - b = mu (x_{k-1} - x_k)``, whose largest component is
+        ``mu`` times the ``relative_residual`` Pinocchio reports. Within the solver's absolute
+        accuracy the acceleration is solved (redundant closures, the two points of a hinge or
+        a planar loop's out-of-plane rows, make the iterations hit their cap while their forces
+        drift by round-off in the closures' null space): nothing to do, no Jacobian needed.
+        Else :meth:`_refine`, which measures the residual itself.
+        """
+        prox = self.prox
+        if prox.mu * prox.relative_residual <= prox.absolute_accuracy:
+            return a
+        return self._refine(a)
 
     def _refine(self, a: np.ndarray) -> np.ndarray:
         """Finish an evaluation whose proximal iterations hit their cap (exact least squares).
@@ -491,7 +529,9 @@ class ForwardDynamics:
         Updates the passages, the rate of ``kappa`` since the last check, and the time the
         next check is due: at once near a singularity (``kappa`` below :data:`WATCH`); while
         ``kappa`` falls, after a quarter of the time its rate would take to bring it to
-        :data:`~solvers.conditioning.NEAR_SINGULAR`; else after :data:`CHECK_PERIOD` steps.
+        :data:`~solvers.conditioning.NEAR_SINGULAR`; else after :data:`CHECK_PERIOD` steps, or
+        sooner (:meth:`_due`). The proximal iterations of the last evaluation (that of the state
+        observed) are the reference of :meth:`_due`'s proxy.
         """
         if t > self._cond_t:
             self._cond_rate = (kappa - self.conditioning) / (t - self._cond_t)
@@ -504,6 +544,7 @@ class ForwardDynamics:
             self._cond_log[0].append(t)
             self._cond_log[1].append(kappa)
         self._since_check = 0
+        self._iter_seen = self.prox.iter
         rate = self._cond_rate
         if kappa < WATCH:
             self._cond_due = t
@@ -513,9 +554,27 @@ class ForwardDynamics:
             self._cond_due = math.inf
 
     def _due(self, t: float, period: int = CHECK_PERIOD) -> bool:
-        """Whether a conditioning check is due at ``t`` [s] (counts the steps since the last)."""
+        """Whether a conditioning check is due at ``t`` [s] (counts the steps since the last).
+
+        Due as :meth:`_observe` planned it, after ``period`` steps, or at once when the last
+        evaluation (the state at ``t``) took more proximal iterations than the state last
+        checked: a free proxy of ``kappa`` between checks. Pinocchio's iterations contract the
+        closures' force error by ``mu / (mu + g)`` along each eigenvalue ``g`` of their
+        Delassus matrix, the closures' ``r``-th (``kappa^2 g_max``) the slowest, and stop at
+        the solver's accuracy: their number, about ``log(1 / accuracy) / log(1 + g_r / mu)``,
+        grows by one each time ``g_r`` falls by a large factor on the way to a singularity (the
+        Delta falling under ``dopri5``'s gains: 3 to 4 near ``kappa`` = 0.1, 5 near 4e-3, 9
+        near 8e-4, the cap of 30 near 1e-4), before ``kappa`` reaches :data:`WATCH`. It may
+        also grow with the forces (a check more, never one less). Under the Euler step's stiff
+        gains (``0.5 / h``) it stays at 3 down to ``kappa`` = 6e-4 on the same fall: the fixed
+        steps keep their short periods (:data:`CHECK_PERIOD`, :data:`STEP_CHECK_PERIOD`), and
+        the Euler steps of :meth:`step` go without the proxy (a read of the solver's settings
+        per step for nothing).
+        """
         self._since_check += 1
-        return t >= self._cond_due or self._since_check >= period
+        return (
+            t >= self._cond_due or self._since_check >= period or self.prox.iter > self._iter_seen
+        )
 
     def _reset_conditioning(self) -> None:
         self.passages.reset()
@@ -524,15 +583,15 @@ class ForwardDynamics:
         self._cond_rate = 0.0
         self._cond_due = -math.inf
         self._since_check = 0
+        self._iter_seen = 0
         self._h_cond = math.inf
 
     def _scheduled_check(self, t: float, data: pin.Data) -> None:
         """The conditioning check of a fixed step of :meth:`step` at ``t`` [s], when due.
 
-        As :meth:`_observe` plans it, at most :data:`STEP_CHECK_PERIOD` steps apart.
+        As :meth:`_due` decides, at most :data:`STEP_CHECK_PERIOD` steps apart.
         """
-        self._since_check += 1
-        if t >= self._cond_due or self._since_check >= STEP_CHECK_PERIOD:
+        if self._due(t, STEP_CHECK_PERIOD):
             self._observe(t, self._kappa(data))
 
     def _generalized(
@@ -700,7 +759,7 @@ class ForwardDynamics:
                 a = dynamics(model, data, q, v, zero, cms, cds, prox)
                 if prox.iter >= cap:  # (see _solve)
                     self._eval_id += 1
-                    a = self._refine(a)
+                    a = self._capped(a)
                 v = v + h * a
                 q = integrate(model, q, h * v)
             return q, v, w_act, w_fric, None
@@ -765,7 +824,7 @@ class ForwardDynamics:
                 err = 1e10
             fac = min(5.0, 0.9 * err**-0.2) if err > 0.0 else 5.0
             accept = err <= 1.0
-            check = accept and watch and self._due(t + h)
+            check = accept and watch and self._due(t + h, ADAPTIVE_CHECK_PERIOD)
             if check:
                 kappa = self._kappa()  # at q_new: the last stage's evaluation
                 k0 = self.conditioning
@@ -829,7 +888,8 @@ class ForwardDynamics:
         at every substep (and it shortens its substeps through a passage, see
         :meth:`simulate`); ``euler`` and ``rk4`` at the state the step starts from (the
         control-loop step: the state it ends at), every :data:`STEP_CHECK_PERIOD` calls, sooner
-        when the conditioning falls, every call near a singularity
+        when the conditioning falls (``rk4``: or the proximal solver's iterations grow,
+        :meth:`_due`), every call near a singularity
         (a passage shorter than ``dt`` is estimated from the samples around it: these steps
         have a fixed size).
 
@@ -845,17 +905,22 @@ class ForwardDynamics:
             if self._control is None:
                 self._control = ProjectedEulerStep(self)
             q, v = self._control.step(t, q, v, dt, tau)
-            if self._watch:
-                self._scheduled_check(t + dt, self._control.data)
+            if self._watch:  # (the check inline, without the iteration proxy: see _due)
+                self._since_check += 1
+                if t + dt >= self._cond_due or self._since_check >= STEP_CHECK_PERIOD:
+                    self._observe(t + dt, self._kappa(self._control.data))
             return q, v
         if self.integrator == "euler":
             if self._auto_gains and dt != self._gains_step:
                 self._euler_gains(dt)
             g = self._generalized(t, q, v, tau)[1]
-            f = self.passive_forces(q, v)
-            a = self._accel(q, v, g if f is None else g + f)
-            if self._watch:
-                self._scheduled_check(t, self.data)
+            if self.passive is not None:
+                g = g + self.passive.force(q, v)
+            a = self._accel(q, v, g)
+            if self._watch:  # (as above)
+                self._since_check += 1
+                if t >= self._cond_due or self._since_check >= STEP_CHECK_PERIOD:
+                    self._observe(t, self._kappa(self.data))
             v = v + dt * a
             q = pin.integrate(self.model, q, dt * v)
         else:
@@ -1056,7 +1121,7 @@ class ForwardDynamics:
         for k in range(n_steps + 1):
             if ev is None:
                 ev = self._evaluate(t, q, v, tau)
-                if watch and (k == 0 or self._due(t)):
+                if watch and (k == 0 or self._due(t, CHECK_PERIOD)):
                     self._observe(t, self._kappa())
             if not math.isfinite(float(ev.a @ ev.a)):
                 raise IntegrationError(f"non-finite acceleration at t = {t:.6g} s", t)

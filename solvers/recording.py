@@ -52,8 +52,8 @@ class ForwardResult:
             without couplings).
         conditioning: Conditioning ``kappa`` of the closure forces (N,) at the recorded times
             (:mod:`solvers.conditioning`; 1 without rigid closures): checked every step near a
-            singularity and at most ``CHECK_PERIOD`` steps apart elsewhere, interpolated
-            linearly in time between the checks.
+            singularity and at most ``CHECK_PERIOD`` (``ADAPTIVE_CHECK_PERIOD`` for ``dopri5``)
+            steps apart elsewhere, interpolated linearly in time between the checks.
         events: Passages near or through singularities of the closures
             (:class:`~solvers.conditioning.SingularityEvent`), in time order.
 

@@ -21,6 +21,7 @@ from pkdyn.analysis.kinematics import NEAR_SINGULAR_TOL, SINGULAR_TOL
 from pkdyn.dynamics import ForwardDynamics, simulate
 from pkdyn.exceptions import InvalidInputError, SimulationError
 from solvers import ForwardDynamics as SolverDynamics
+from solvers import forward_dynamics as fd_module
 from solvers.conditioning import (
     LEAVE,
     NEAR_SINGULAR,
@@ -290,6 +291,49 @@ def test_refined_forces_are_the_exact_constrained_dynamics(robots):
     assert np.max(np.abs(J @ a + gamma)) < 1e-2 * np.max(np.abs(J @ a_prox + gamma))
 
 
+def test_capped_iterations_report_the_closures_acceleration_residual(robots):
+    """An evaluation whose proximal iterations hit their cap is left as it is only when
+    ``mu * relative_residual`` (what Pinocchio reports, an infinity norm in its contact
+    frames) is within the solver's accuracy (``ForwardDynamics._capped``): that figure is the
+    closures' acceleration residual ``J a + gamma`` of the acceleration returned, here measured
+    on the same points with the closure rows' own world-frame Jacobian and drift (no Baumgarte
+    gains): its largest point norm lies between the figure and sqrt(3) times it, to
+    round-off, near the Delta's crossing, where both are far above round-off, and where they
+    are not."""
+    robot = robots["delta"]
+    model = robot.model
+    J0 = robot.closure_set.jacobian(model.createData(), robot.q_home)
+    N = null_space(J0)
+    v0 = N @ (N.T @ np.random.default_rng(0).standard_normal(robot.nv))
+    v0 *= 0.5 / np.max(np.abs(v0))
+    path = SolverDynamics(model, robot.constraint_models).simulate(
+        robot.q_home, v0, 0.41, 1e-4, record_every=1
+    )
+    raw = SolverDynamics(model, robot.constraint_models, baumgarte=(0.0, 0.0))
+    rows = raw._pin_rows  # the points of Pinocchio's constraint models, world frame
+    assert all(cm.type == pin.ContactType.CONTACT_3D for cm in raw.constraint_models)
+    prox, data = raw.prox, model.createData()
+    zero = np.zeros(robot.nv)
+    seen = {"above": 0, "within": 0}
+    for q, v in zip(path.q[-60:], path.v[-60:], strict=True):
+        a = pin.constraintDynamics(
+            model, raw.data, q, v, zero, raw.constraint_models, raw.constraint_datas, prox
+        )
+        if prox.iter < prox.max_iter:
+            continue
+        pin.forwardKinematics(model, data, q, v, zero)
+        pin.computeJointJacobians(model, data, q)
+        rows.calc(data)
+        gamma = rows.drift(data)
+        r = (rows.jacobian(data) @ a + gamma).reshape(-1, 3)
+        largest = float(np.max(np.linalg.norm(r, axis=1)))
+        reported = prox.mu * prox.relative_residual
+        noise = 1e-12 * float(np.max(np.abs(gamma)))  # round-off of the solve
+        assert reported * (1 - 1e-3) - noise <= largest <= math.sqrt(3) * reported * 1.001 + noise
+        seen["above" if reported > prox.absolute_accuracy else "within"] += 1
+    assert seen["above"] and seen["within"]
+
+
 # --------------------------------------------------------------------------- public boundary
 
 
@@ -315,6 +359,46 @@ def test_control_loop_reports_the_crossing_once(robots):
     assert ev.through and t_lo <= ev.time <= t_lo + h
     mine = [w for w in caught if "parallel singularity" in str(w.message)]
     assert len(mine) == 1 and "ForwardDynamics.events" in str(mine[0].message)
+
+
+def test_the_iteration_proxy_alone_finds_the_crossing(robots, monkeypatch):
+    """Between the conditioning's checks of ``dopri5``, a rise of the proximal solver's
+    iteration count calls one (``ForwardDynamics._due``): with the periodic checks switched
+    off, only the one at home (where the Delta at rest has no rate of fall) and those the proxy
+    calls remain, and the crossing is still reported in the 1 ms step where the
+    parallelograms' normals become coplanar; without the proxy (no check after the first) it
+    is not."""
+    monkeypatch.setattr(fd_module, "ADAPTIVE_CHECK_PERIOD", 10**9)
+    monkeypatch.setattr(fd_module, "STEP_CHECK_PERIOD", 10**9)
+    robot = robots["delta"]
+    h = 1e-3
+
+    def run(proxy: bool) -> tuple[ForwardDynamics, np.ndarray]:
+        fd = ForwardDynamics(robot, integrator="dopri5")
+        if not proxy:
+            observe = fd._observe
+
+            def blind(t: float, kappa: float) -> None:
+                observe(t, kappa)
+                fd._iter_seen = 10**9  # more than any iteration count
+
+            fd._observe = blind  # type: ignore[method-assign]
+        q, v = fd.project_state(robot.q_home, np.zeros(robot.nv))
+        dets = []
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for k in range(400):
+                q, v = fd.step(k * h, q, v, h)
+                dets.append(parallelogram_normals_det(robot, q))
+        return fd, np.array(dets)
+
+    fd, det = run(proxy=True)
+    cross = np.flatnonzero(np.sign(det[1:]) != np.sign(det[:-1]))
+    assert len(cross) == 1 and len(fd.events) == 1
+    t_lo = (cross[0] + 1) * h
+    assert fd.events[0].through and t_lo <= fd.events[0].time <= t_lo + h
+    blind, _ = run(proxy=False)
+    assert not blind.events
 
 
 def test_simulate_reports_passages_and_warns_once(robots):

@@ -107,10 +107,15 @@ def build_tree(xml: str, joints: Sequence[JointSpec], source: str) -> pin.Model:
 def _axis_of(jm: pin.JointModel) -> np.ndarray:
     """Axis of a 1-DOF revolute joint model (aligned or not, bounded or not).
 
-    Read from the joint's motion subspace at its neutral configuration.
+    Read from the joint's motion subspace at its neutral configuration, computed on a copy of
+    the joint in a one-joint model: ``jm`` indexes its own model's configuration (its
+    ``idx_q``), and its ``calc`` on a one-element vector read memory past it (a crash, at
+    times).
     """
-    jd = jm.createData()
-    jm.calc(jd, pin.neutral(_single_joint_model(jm)))
+    single = _single_joint_model(jm)
+    own = single.joints[1]
+    jd = own.createData()
+    own.calc(jd, pin.neutral(single))
     S = np.reshape(np.asarray(jd.S), (6, -1))
     axis = S[3:, 0]
     return axis / np.linalg.norm(axis)
