@@ -70,6 +70,14 @@ _GAP_TOL = 1e-10
 """Largest out-of-plane gap (relative to the robot's size) [m or rad] of a planar closure whose
 out-of-plane rows are dropped."""
 
+_FREE_JOINTS = frozenset({"JointModelSpherical", "JointModelFreeFlyer"})
+"""Joints whose world twist columns turn about three orthonormal axes at every configuration."""
+
+_FREE_SCALE = 1e9
+"""Largest robot size [m] (``1 +`` the farthest joint origin at neutral) for which a closure moved
+by one of :data:`_FREE_JOINTS` is known not to be planar without computing it (see
+:meth:`ClosureRows._turns_freely`)."""
+
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _LOCAL = pin.ReferenceFrame.LOCAL
 _3D = pin.ContactType.CONTACT_3D
@@ -204,6 +212,15 @@ class ClosureRows:
             if c.kind == "hinge" and not np.linalg.norm(c.axis) > 0.0:
                 raise ValueError(f"closure {c.name!r}: the hinge axis is zero")
         self._masks: dict[int, np.ndarray] = {}
+        self._free: dict[int, bool] = {}
+        self._loc: (
+            tuple[
+                pin.StdVec_RigidConstraintModel,
+                pin.StdVec_RigidConstraintData,
+                list[tuple[bool, int, pin.RigidConstraintModel, pin.RigidConstraintData]],
+            ]
+            | None
+        ) = None
         self._base: list[tuple[bool, int, pin.SE3, int, pin.SE3]] = []
         normals = self._normals() if self.reduce else [None] * len(self.closures)
         self.blocks = [self._plan(c, n) for c, n in zip(self.closures, normals, strict=True)]
@@ -236,6 +253,11 @@ class ClosureRows:
         scale = 1.0 + max((float(np.linalg.norm(M.translation)) for M in data.oMi), default=0.0)
         out: list[np.ndarray | None] = []
         for c in self.closures:
+            if scale < _FREE_SCALE and (
+                self._turns_freely(c.joint1) or self._turns_freely(c.joint2)
+            ):
+                out.append(None)
+                continue
             cols = np.flatnonzero(self.mask(c.joint1) + self.mask(c.joint2))
             n = plane_normal(np.reshape(data.J, (6, model.nv))[:, cols])
             if n is not None:
@@ -247,6 +269,24 @@ class ClosureRows:
                     n = None
             out.append(n)
         return out
+
+    def _turns_freely(self, j: int) -> bool:
+        """Whether a ball or free joint moves joint ``j``'s body (then no closure on it is planar).
+
+        Such a joint's world twist columns turn about three orthonormal axes ``w_i`` (columns of
+        its world rotation) whatever the configuration: for any unit ``n``, ``sum |w_i x n|^2 =
+        2``, so one of them is at least ``sqrt(2/3)`` off ``n`` while its twist's norm is at most
+        ``sqrt(1 + |p|^2)`` (``p`` its origin): :func:`~solvers.planar.plane_normal` finds no
+        plane as long as ``|p| < 1e9`` m (checked by the caller), without the arithmetic.
+        """
+        found = self._free.get(j)
+        if found is None:
+            k, found = j, False
+            while k > 0 and not found:
+                found = self.model.joints[k].shortname() in _FREE_JOINTS
+                k = int(self.model.parents[k])
+            self._free[j] = found
+        return found
 
     def _add_base(self, is_point: bool, c: Closure, off: pin.SE3 | None = None) -> int:
         M1, M2 = c.placement1, c.placement2
@@ -297,8 +337,6 @@ class ClosureRows:
         model = self.model
         self._cms = pin.StdVec_RigidConstraintModel()
         self._cds = pin.StdVec_RigidConstraintData()
-        self._loc_cms = pin.StdVec_RigidConstraintModel()
-        self._loc_cds = pin.StdVec_RigidConstraintData()
         sizes = [3 if it[0] else 6 for it in self._base]
         self.base_offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
         self.nb = int(self.base_offsets[-1])
@@ -307,19 +345,10 @@ class ClosureRows:
             c = pin.RigidConstraintModel(kind, model, j1, M1, j2, M2, _LWA if is_point else _LOCAL)
             self._cms.append(c)
             self._cds.append(c.createData())
-            c = pin.RigidConstraintModel(kind, model, j1, M1, j2, M2, _LOCAL)
-            self._loc_cms.append(c)
-            self._loc_cds.append(c.createData())
         self._entries = [
             (it[0], int(o), cm, cd)
             for it, o, cm, cd in zip(
                 self._base, self.base_offsets, self._cms, self._cds, strict=False
-            )
-        ]
-        self._loc_entries = [
-            (it[0], int(o), cm, cd)
-            for it, o, cm, cd in zip(
-                self._base, self.base_offsets, self._loc_cms, self._loc_cds, strict=False
             )
         ]
         self._welds = [(int(o), cd) for is_point, o, _, cd in self._entries if not is_point]
@@ -335,6 +364,30 @@ class ClosureRows:
             if is_point
         ]
         self._other = [k for k, it in enumerate(self._base) if not it[0]]
+
+    def _local(
+        self,
+    ) -> tuple[
+        pin.StdVec_RigidConstraintModel,
+        pin.StdVec_RigidConstraintData,
+        list[tuple[bool, int, pin.RigidConstraintModel, pin.RigidConstraintData]],
+    ]:
+        """The base models with ``LOCAL`` rows, their datas and entries (made on first use)."""
+        if self._loc is None:
+            cms = pin.StdVec_RigidConstraintModel()
+            cds = pin.StdVec_RigidConstraintData()
+            for is_point, j1, M1, j2, M2 in self._base:
+                c = pin.RigidConstraintModel(
+                    _3D if is_point else _6D, self.model, j1, M1, j2, M2, _LOCAL
+                )
+                cms.append(c)
+                cds.append(c.createData())
+            entries = [
+                (it[0], int(o), cm, cd)
+                for it, o, cm, cd in zip(self._base, self.base_offsets, cms, cds, strict=False)
+            ]
+            self._loc = (cms, cds, entries)
+        return self._loc
 
     def _build_maps(self) -> None:
         """Index maps from the base rows to the rows (module docstring)."""
@@ -534,7 +587,7 @@ class ClosureRows:
         :attr:`identity`.
         """
         model = self.model
-        for is_point, o, cm, cd in self._loc_entries:
+        for is_point, o, cm, cd in self._local()[2]:
             cm.calc(model, data, cd)
             if is_point:
                 out[o : o + 3] = cd.c1Mc2.translation
@@ -544,7 +597,8 @@ class ClosureRows:
 
     def local_jacobian(self, data: pin.Data) -> np.ndarray:
         """Pinocchio's ``LOCAL`` constraint Jacobian (n, nv): only when :attr:`identity`."""
-        J = pin.getConstraintsJacobian(self.model, data, self._loc_cms, self._loc_cds)
+        cms, cds, _ = self._local()
+        J = pin.getConstraintsJacobian(self.model, data, cms, cds)
         return np.reshape(J, (self.n, self.model.nv))
 
     def drift(self, data: pin.Data) -> np.ndarray:

@@ -136,6 +136,31 @@ class _Bar:
     inertia_t: float  # transverse inertia about the centre of mass [kg m^2]
 
 
+def _solid(
+    p_bar: np.ndarray, lever: np.ndarray, Ic: np.ndarray
+) -> tuple[float, float, float, bool]:
+    """A bar's axial figures, and whether it is not a solid of revolution about its axis.
+
+    Returns ``(length [m], transverse inertia [kg m^2], centre-of-mass fraction, not one)``.
+
+    Args:
+        p_bar: Lower ball centre in the bar frame (3,) [m] (the upper one at its origin).
+        lever: Centre of mass in the bar frame (3,) [m].
+        Ic: Inertia about the centre of mass, bar frame (3, 3) [kg m^2].
+
+    """
+    length = float(np.linalg.norm(p_bar))
+    z = p_bar / length
+    It = float(Ic.trace() - z @ Ic @ z) / 2.0
+    Ia = float(z @ Ic @ z)
+    sym = It * (np.eye(3) - np.outer(z, z)) + Ia * np.outer(z, z)
+    bad = bool(
+        np.linalg.norm(_cross3(lever, z)) > 1e-12
+        or np.max(np.abs(Ic - sym)) > 1e-12 * (1.0 + abs(It))
+    )
+    return length, It, float(lever @ z) / length, bad
+
+
 class DeltaDynamics:
     """The Delta's kinematic and inertial data read from a loaded model, for many trajectories.
 
@@ -169,16 +194,17 @@ class DeltaDynamics:
         self.arm_mass = np.array([float(i.mass) for i in arm_I])
         self.arm_lever = np.array([np.array(i.lever) for i in arm_I])  # arm frame
         y = np.array([0.0, 1.0, 0.0])
-        self.arm_axial = (
-            np.array(
-                [
-                    float(i.inertia[1, 1])
-                    + float(i.mass) * float(np.sum(_cross3(y, np.asarray(i.lever)) ** 2))
-                    for i in arm_I
-                ]
-            )
-            + np.asarray(model.armature)[iv]
-        )
+        axial: dict[bytes, float] = {}  # (the arms of a library Delta share it: computed once)
+        keys = []
+        for i in arm_I:
+            lever, inertia = np.asarray(i.lever), np.asarray(i.inertia)
+            key = float(i.mass).hex().encode() + lever.tobytes() + inertia.tobytes()
+            keys.append(key)
+            if key not in axial:
+                axial[key] = float(inertia[1, 1]) + float(i.mass) * float(
+                    np.sum(_cross3(y, lever) ** 2)
+                )
+        self.arm_axial = np.array([axial[k] for k in keys]) + np.asarray(model.armature)[iv]
         self.gravity = np.array(model.gravity.linear)
         frame = model.frames[robot.platform_frame]
         nac = int(frame.parentJoint)
@@ -190,22 +216,23 @@ class DeltaDynamics:
             raise PkdynError(f"payload must be >= 0 kg, got {payload}")
         self.nacelle_mass = float(model.inertias[nac].mass) + float(payload)
         bars = []
+        # a bar's axial figures are a function of its lower ball and its inertia alone: the
+        # bars of a library Delta share them, computed once (the same numbers, bit for bit)
+        solids: dict[bytes, tuple[float, float, float, float]] = {}
         for cm in robot.constraint_models:
             j1, j2 = int(cm.joint1_id), int(cm.joint2_id)
             if j2 != nac or int(model.parents[j1]) not in arms:
                 raise PkdynError(f"{robot.name}: closure on joint {model.names[j1]} is not a bar")
             p_bar = np.array(cm.joint1_placement.translation)  # lower ball, bar frame
-            length = float(np.linalg.norm(p_bar))
             inert = model.inertias[j1]
-            z = p_bar / length
             lever = np.array(inert.lever)
             Ic = np.array(inert.inertia)
-            It = float(Ic.trace() - z @ Ic @ z) / 2.0
-            Ia = float(z @ Ic @ z)
-            sym = It * (np.eye(3) - np.outer(z, z)) + Ia * np.outer(z, z)
-            if np.linalg.norm(_cross3(lever, z)) > 1e-12 or np.max(np.abs(Ic - sym)) > 1e-12 * (
-                1.0 + abs(It)
-            ):
+            key = p_bar.tobytes() + lever.tobytes() + Ic.tobytes()
+            solid = solids.get(key)
+            if solid is None:
+                solid = solids[key] = _solid(p_bar, lever, Ic)
+            length, It, fraction, bad = solid
+            if bad:
                 raise PkdynError(
                     f"{robot.name}: bar '{model.names[j1]}' is not a solid of revolution about "
                     "its axis; use pkdyn.dynamics.inverse_dynamics"
@@ -216,7 +243,7 @@ class DeltaDynamics:
                     elbow=np.array(model.jointPlacements[j1].translation),
                     nacelle=self.R_nacelle @ np.array(cm.joint2_placement.translation) - f_off,
                     mass=float(inert.mass),
-                    fraction=float(lever @ z) / length,
+                    fraction=fraction,
                     length=length,
                     inertia_t=It,
                 )

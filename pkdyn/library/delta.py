@@ -171,6 +171,12 @@ class Params:
         reach = self.la + self.lb + self.ra
         return middle_of_reach(NAME, "z_home", -reach, 0.0, self._reachable)
 
+    @functools.cached_property
+    def _home(self) -> tuple[float, ...]:
+        """:func:`home` of these parameters (the layout and the assembly both ask for it)."""
+        alpha, _ = cf.inverse(self, np.array([0.0, 0.0, self.home_height()]))
+        return tuple(float(a) for a in alpha[0])
+
     def home_height(self) -> float:
         """Nacelle height at home [m]: ``z_home``, or the middle of the vertical reach."""
         return float(self.z_home) if self.z_home is not None else self._derived_height()
@@ -190,8 +196,7 @@ _SIGNED = {
 
 def home(p: Params) -> list[float]:
     """Arm angles [rad] with the nacelle at ``(0, 0, p.home_height())``."""
-    alpha, _ = cf.inverse(p, np.array([0.0, 0.0, p.home_height()]))
-    return [float(a) for a in alpha[0]]
+    return list(p._home)
 
 
 def forward_position(
@@ -390,10 +395,10 @@ def layout(p: Params) -> UrdfWriter:
             if hinged:
                 _hinged_bar(w, p, i, side, u, theta, pitch, cone)
                 continue
-            R_j = pin.rpy.rpyToMatrix(*jrpy)
             if p.bar_joint == "spherical":
                 w.spherical(f"{bar}_upper", arm, bar, (p.la, sign * s, 0.0), jrpy, cone=cone)
             else:
+                R_j = pin.rpy.rpyToMatrix(*jrpy)
                 axis1 = R_j.T @ np.array([0.0, 1.0, 0.0])
                 axis2 = np.cross(np.array([0.0, 0.0, 1.0]), axis1)
                 w.universal(

@@ -171,7 +171,7 @@ def _unit(v: Any) -> np.ndarray:
 
 def _total(v: Any) -> float:
     """The sum of the numbers of a vector (NaN or infinite when one is)."""
-    return float(np.sum(v)) if isinstance(v, np.ndarray) else float(sum(v))
+    return float(sum(v.ravel().tolist())) if isinstance(v, np.ndarray) else float(sum(v))
 
 
 def _skeleton(records: Sequence[Record]) -> tuple[Hashable, ...] | None:

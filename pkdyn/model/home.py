@@ -291,9 +291,10 @@ def find_home(
         return HomeResult(q, closures, {}, False)
     r_file = _per_closure(robot, robot.constraints.residual(robot.data, q))
     sol = _solve(robot, q, free, 100)
-    if sol.converged and (not singular(robot, sol.q) or (user and free is not None)):
+    at_singularity = sol.converged and singular(robot, sol.q)  # (computed once)
+    if sol.converged and (not at_singularity or (user and free is not None)):
         _warn_file_pose(robot, r_file, sol.q, q, tol)
-        if user and singular(robot, sol.q):
+        if user and at_singularity:
             warn(f"{robot.source}: the given home configuration is singular")
         return HomeResult(sol.q, closures, {}, False)
     best = sol if not sol.converged else None

@@ -90,6 +90,21 @@ def _norm(v: np.ndarray) -> float:
     return math.sqrt(float(v.dot(v)))
 
 
+_MEMO_SIZE = 256
+"""Most entries of each memo of the pure functions below (a builder repeats a few inputs: the
+bars of a Delta are one rod; a design study writes thousands of builders' elements)."""
+
+_RPY: dict[Any, tuple[float, float, float]] = {}
+_RODS: dict[Any, tuple[Any, ...]] = {}
+
+
+def _remember(memo: dict[Any, Any], key: Any, value: Any) -> Any:
+    if len(memo) >= _MEMO_SIZE:
+        memo.clear()
+    memo[key] = value
+    return value
+
+
 def rpy_z_to(d: Vec) -> tuple[float, float, float]:
     """Roll-pitch-yaw [rad] of a rotation taking the z axis onto direction ``d``.
 
@@ -100,9 +115,17 @@ def rpy_z_to(d: Vec) -> tuple[float, float, float]:
         ``(roll, pitch, yaw)``.
 
     """
+    z = np.asarray(d, dtype=float)
+    key = (z.shape, z.tobytes())  # (bytes: -0.0 and 0.0 are different inputs)
+    found = _RPY.get(key)
+    if found is None:
+        found = _remember(_RPY, key, _rpy_z_to(z))
+    return found
+
+
+def _rpy_z_to(z: np.ndarray) -> tuple[float, float, float]:
     import pinocchio as pin
 
-    z = np.asarray(d, dtype=float)
     z = z / _norm(z)
     helper = _X if abs(z[0]) < 0.9 else _Y
     x = _cross(helper, z)
@@ -282,8 +305,13 @@ class UrdfWriter:
             extra_visuals: More visual shapes (e.g. an elbow).
 
         """
-        com, inertia = rod_inertia(mass, radius, p0, p1)
-        xyz, rpy, length = segment_origin(p0, p1)
+        a, b = np.asarray(p0, dtype=float), np.asarray(p1, dtype=float)
+        key = (np.array([mass, radius], dtype=float).tobytes(), a.shape, a.tobytes(), b.tobytes())
+        found = _RODS.get(key)
+        if found is None:  # (the same numbers as computing them again: pure functions)
+            found = _remember(_RODS, key, (*rod_inertia(mass, radius, a, b), *segment_origin(a, b)))
+        com, inertia, xyz, rpy, length = found
+        inertia = inertia.copy()
         self.link(
             name,
             mass,
