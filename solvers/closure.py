@@ -247,15 +247,21 @@ class ClosureRows:
     def _normals(self) -> list[np.ndarray | None]:
         """The plane normal of each closure whose out-of-plane rows vanish by construction."""
         model = self.model
+        free = [self._turns_freely(c.joint1) or self._turns_freely(c.joint2) for c in self.closures]
+        if all(free):
+            # no plane to find (see _turns_freely): the joints' origins at neutral lie within the
+            # sum of the joint placements' offsets, an upper bound of the scale checked below;
+            # nothing to compute (a Data of a large model costs milliseconds to make)
+            bound = 1.0 + sum(float(np.linalg.norm(M.translation)) for M in model.jointPlacements)
+            if bound < _FREE_SCALE:
+                return [None] * len(self.closures)
         data = scratch_data(model)
         q0 = pin.neutral(model)
         pin.computeJointJacobians(model, data, q0)
         scale = 1.0 + max((float(np.linalg.norm(M.translation)) for M in data.oMi), default=0.0)
         out: list[np.ndarray | None] = []
-        for c in self.closures:
-            if scale < _FREE_SCALE and (
-                self._turns_freely(c.joint1) or self._turns_freely(c.joint2)
-            ):
+        for c, turns in zip(self.closures, free, strict=True):
+            if scale < _FREE_SCALE and turns:
                 out.append(None)
                 continue
             cols = np.flatnonzero(self.mask(c.joint1) + self.mask(c.joint2))
