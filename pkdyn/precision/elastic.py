@@ -332,6 +332,7 @@ def _extended(
     virtual: dict[int, int] = {}
     pieces: dict[int, list[tuple[LinkCompliance, int]]] = {}
     vids: dict[int, int] = {}  # id(link compliance) -> its virtual joint
+    fixed = _fixed_inertias(model) if comp else {}
     for j in range(1, model.njoints):
         jm = model.joints[j]
         pj, off = carrier[model.parents[j]]
@@ -349,7 +350,11 @@ def _extended(
         )
         chain = comp.get(j, [])
         whole = _whole(chain[-1]) if chain else None
-        tip, root = _split(model, j, whole) if whole is not None else (None, model.inertias[j])
+        tip, root = (
+            _split(model, j, whole, fixed.get(j, ()))
+            if whole is not None
+            else (None, model.inertias[j])
+        )
         new.appendBodyToJoint(nid, root, pin.SE3.Identity())
         jmap[j] = nid
         carrier[j] = (nid, pin.SE3.Identity())
@@ -411,10 +416,9 @@ def _extended(
     q_home = pin.neutral(new)
     q_home[q_index] = robot.q_home
     # the extended tree's structure is the same at every pose of a sliding leg: its data (nv^3
-    # in size) is made once per robot and structure (pkdyn.model.reuse)
-    structure = tuple(
-        (str(new.joints[j].shortname()), int(new.parents[j])) for j in range(new.njoints)
-    )
+    # in size) is made once per robot and structure (pkdyn.model.reuse): the robot's tree with
+    # the virtual joints of each compliant body (its pieces)
+    structure = tuple((j, len(chain)) for j, chain in comp.items())
     data = kept(robot, ("elastic extension", structure), new.createData)
     ext = dataclasses.replace(
         robot,
@@ -502,8 +506,20 @@ def _constraints(
     return ConstraintSet(new, closures, couplings, reduce=reduce)
 
 
+def _fixed_inertias(model: pin.Model) -> dict[int, list[tuple[pin.SE3, pin.Inertia]]]:
+    """Per joint, ``(placement, inertia)`` of the links merged into its body by fixed joints."""
+    out: dict[int, list[tuple[pin.SE3, pin.Inertia]]] = {}
+    for f in model.frames:
+        if f.type == pin.FrameType.FIXED_JOINT and f.inertia.mass > 0:
+            out.setdefault(int(f.parentJoint), []).append((f.placement, f.inertia))
+    return out
+
+
 def _split(
-    model: pin.Model, joint: int, lc: LinkCompliance
+    model: pin.Model,
+    joint: int,
+    lc: LinkCompliance,
+    fixed: Sequence[tuple[pin.SE3, pin.Inertia]],
 ) -> tuple[pin.Inertia | None, pin.Inertia]:
     """``(tip part in the virtual joint's frame, root part in the joint frame)`` of a body.
 
@@ -520,12 +536,10 @@ def _split(
     root_pt = lc.placement.act(np.array([0.0, 0.0, -h]))
     main = pin.Inertia(inertia)
     tip = pin.Inertia.Zero()
-    for f in model.frames:
-        if f.parentJoint != joint or f.type != pin.FrameType.FIXED_JOINT or f.inertia.mass <= 0:
-            continue
-        part = f.placement.act(f.inertia)
+    for placement, f_inertia in fixed:  # (_fixed_inertias: the joint's, in frame order)
+        part = placement.act(f_inertia)
         main = main - part
-        o = np.asarray(f.placement.translation)
+        o = np.asarray(placement.translation)
         if np.linalg.norm(o - tip_pt) < np.linalg.norm(o - root_pt):
             tip = tip + part
     if main.mass > 0.0:
@@ -545,9 +559,19 @@ def _split(
 
 def _valid(inertia: pin.Inertia) -> bool:
     """A physical inertia: positive mass, rotational inertia about the centre of mass >= 0."""
+    if not inertia.mass > 0.0:
+        return False
     I = np.asarray(inertia.inertia)
     scale = max(float(np.trace(I)), 1e-300)
-    return bool(inertia.mass > 0.0 and np.linalg.eigvalsh(0.5 * (I + I.T))[0] >= -1e-9 * scale)
+    # Gershgorin: every eigenvalue is at least a diagonal term less its row's other terms
+    # (enough for the usual nearly diagonal inertias; the eigenvalues otherwise)
+    (a, b, c), (d, e, f), (g, h, i) = I.tolist()
+    bd, cg, fh = 0.5 * abs(b + d), 0.5 * abs(c + g), 0.5 * abs(f + h)
+    t = -1e-9 * scale
+    if a - bd - cg >= t and e - bd - fh >= t and i - cg - fh >= t:  # (NaN: not taken)
+        return True
+    S = 0.5 * (I + I.T)
+    return bool(np.linalg.eigvalsh(S)[0] >= -1e-9 * scale)
 
 
 def _geometry(gm: pin.GeometryModel, jmap: dict[int, int]) -> pin.GeometryModel:
