@@ -333,20 +333,26 @@ def _extended(
     pieces: dict[int, list[tuple[LinkCompliance, int]]] = {}
     vids: dict[int, int] = {}  # id(link compliance) -> its virtual joint
     fixed = _fixed_inertias(model) if comp else {}
+    # (each read of a model's vector copies all of it: read once)
+    effort, velocity = np.asarray(model.effortLimit), np.asarray(model.velocityLimit)
+    lower, upper = np.asarray(model.lowerPositionLimit), np.asarray(model.upperPositionLimit)
+    parents, names, placements = list(model.parents), list(model.names), model.jointPlacements
+    big = np.full(6, 1e3)
+    lo = np.concatenate([np.full(3, -1e3), np.full(4, -1.0)])
     for j in range(1, model.njoints):
         jm = model.joints[j]
-        pj, off = carrier[model.parents[j]]
+        pj, off = carrier[parents[j]]
         sq = slice(jm.idx_q, jm.idx_q + jm.nq)
         sv = slice(jm.idx_v, jm.idx_v + jm.nv)
         nid = new.addJoint(
             pj,
             jm,
-            off * model.jointPlacements[j],
-            model.names[j],
-            model.effortLimit[sv],
-            model.velocityLimit[sv],
-            model.lowerPositionLimit[sq],
-            model.upperPositionLimit[sq],
+            off * placements[j],
+            names[j],
+            effort[sv],
+            velocity[sv],
+            lower[sq],
+            upper[sq],
         )
         chain = comp.get(j, [])
         whole = _whole(chain[-1]) if chain else None
@@ -360,13 +366,11 @@ def _extended(
         carrier[j] = (nid, pin.SE3.Identity())
         prev, prev_at = nid, pin.SE3.Identity()  # the body before the piece, its frame in j's
         for k, lc in enumerate(chain):
-            big = np.full(6, 1e3)
-            lo = np.concatenate([np.full(3, -1e3), np.full(4, -1.0)])
             vid = new.addJoint(
                 prev,
                 pin.JointModelFreeFlyer(),
                 prev_at.actInv(lc.placement),
-                f"{model.names[j]}{DEFLECTION_SUFFIX}" + (f"{k}" if len(chain) > 1 else ""),
+                f"{names[j]}{DEFLECTION_SUFFIX}" + (f"{k}" if len(chain) > 1 else ""),
                 big,
                 big,
                 lo,

@@ -33,9 +33,9 @@ from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.arguments import public
 from pkdyn.model.description import ComplianceSpec
 from pkdyn.model.robot import Robot
-from pkdyn.precision.beam import Section, centre_compliance
+from pkdyn.precision.beam import Section, _centre, _check_length
 from pkdyn.precision.material import Material, as_material
-from solvers.vec3 import cross
+from solvers.vec3 import cross_one
 
 __all__ = ["SLENDERNESS", "LinkCompliance", "link_compliances"]
 
@@ -214,12 +214,12 @@ def _root_tip(robot: Robot, rod: _Rod) -> tuple[np.ndarray, np.ndarray] | None:
 def _beam_frame(root: np.ndarray, tip: np.ndarray) -> pin.SE3:
     """Mid-point frame with ``z`` from root to tip."""
     d = tip - root
-    z = d / np.sqrt(d.dot(d))  # (np.linalg.norm's arithmetic, np.cross's: vec3.cross)
+    z = d / np.sqrt(d.dot(d))  # (np.linalg.norm's arithmetic, np.cross's: vec3)
     helper = _X if abs(z[0]) < 0.9 else _Y
-    x = cross(helper, z)
+    x = cross_one(helper, z)
     x /= np.sqrt(x.dot(x))
     R = np.empty((3, 3))
-    R[:, 0], R[:, 1], R[:, 2] = x, cross(z, x), z
+    R[:, 0], R[:, 1], R[:, 2] = x, cross_one(z, x), z
     return pin.SE3(R, 0.5 * (root + tip))
 
 
@@ -369,7 +369,7 @@ def link_compliances(
                     name,
                     j,
                     _beam_frame(root + a * z, root + b * z),
-                    centre_compliance(b - a, section, mat, shear),
+                    _centre_checked(b - a, section, mat, shear),
                     "beam",
                     b - a,
                     section,
@@ -383,6 +383,12 @@ def link_compliances(
                 )
             )
     return out
+
+
+def _centre_checked(length: float, section: Section, material: Material, shear: bool) -> np.ndarray:
+    """:func:`pkdyn.precision.beam.centre_compliance` of a section and material made here."""
+    _check_length(length)
+    return _centre(float(length), section, material, shear)
 
 
 _CUT_TOL = 1e-6
