@@ -212,7 +212,7 @@ def number_array(name: str, value: Any, what: str = "numbers") -> np.ndarray:
         if isinstance(value, str | bytes | dict) or is_complex(value):
             raise TypeError
         return np.array(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):  # (a ragged list makes np.iscomplexobj raise too)
+    except (TypeError, ValueError):  # (a ragged list: np.array raises ValueError)
         raise InvalidInputError(name, f"expected {what}, got {value!r:.60}") from None
 
 
