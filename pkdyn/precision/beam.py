@@ -161,7 +161,12 @@ def centre_compliance(
     """
     _check_length(length)
     _check_parts(section, material)
-    L, E, G = float(length), material.E, material.G
+    return _centre(float(length), section, material, shear)
+
+
+def _centre(L: float, section: Section, material: Material, shear: bool) -> np.ndarray:
+    """:func:`centre_compliance` of checked arguments."""
+    E, G = material.E, material.G
     A, I, J = section.area, section.second_moment, section.polar_moment
     bend = L**3 / (12.0 * E * I)
     if shear:

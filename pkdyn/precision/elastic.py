@@ -332,36 +332,45 @@ def _extended(
     virtual: dict[int, int] = {}
     pieces: dict[int, list[tuple[LinkCompliance, int]]] = {}
     vids: dict[int, int] = {}  # id(link compliance) -> its virtual joint
+    fixed = _fixed_inertias(model) if comp else {}
+    # (each read of a model's vector copies all of it: read once)
+    effort, velocity = np.asarray(model.effortLimit), np.asarray(model.velocityLimit)
+    lower, upper = np.asarray(model.lowerPositionLimit), np.asarray(model.upperPositionLimit)
+    parents, names, placements = list(model.parents), list(model.names), model.jointPlacements
+    big = np.full(6, 1e3)
+    lo = np.concatenate([np.full(3, -1e3), np.full(4, -1.0)])
     for j in range(1, model.njoints):
         jm = model.joints[j]
-        pj, off = carrier[model.parents[j]]
+        pj, off = carrier[parents[j]]
         sq = slice(jm.idx_q, jm.idx_q + jm.nq)
         sv = slice(jm.idx_v, jm.idx_v + jm.nv)
         nid = new.addJoint(
             pj,
             jm,
-            off * model.jointPlacements[j],
-            model.names[j],
-            model.effortLimit[sv],
-            model.velocityLimit[sv],
-            model.lowerPositionLimit[sq],
-            model.upperPositionLimit[sq],
+            off * placements[j],
+            names[j],
+            effort[sv],
+            velocity[sv],
+            lower[sq],
+            upper[sq],
         )
         chain = comp.get(j, [])
         whole = _whole(chain[-1]) if chain else None
-        tip, root = _split(model, j, whole) if whole is not None else (None, model.inertias[j])
+        tip, root = (
+            _split(model, j, whole, fixed.get(j, ()))
+            if whole is not None
+            else (None, model.inertias[j])
+        )
         new.appendBodyToJoint(nid, root, pin.SE3.Identity())
         jmap[j] = nid
         carrier[j] = (nid, pin.SE3.Identity())
         prev, prev_at = nid, pin.SE3.Identity()  # the body before the piece, its frame in j's
         for k, lc in enumerate(chain):
-            big = np.full(6, 1e3)
-            lo = np.concatenate([np.full(3, -1e3), np.full(4, -1.0)])
             vid = new.addJoint(
                 prev,
                 pin.JointModelFreeFlyer(),
                 prev_at.actInv(lc.placement),
-                f"{model.names[j]}{DEFLECTION_SUFFIX}" + (f"{k}" if len(chain) > 1 else ""),
+                f"{names[j]}{DEFLECTION_SUFFIX}" + (f"{k}" if len(chain) > 1 else ""),
                 big,
                 big,
                 lo,
@@ -411,10 +420,9 @@ def _extended(
     q_home = pin.neutral(new)
     q_home[q_index] = robot.q_home
     # the extended tree's structure is the same at every pose of a sliding leg: its data (nv^3
-    # in size) is made once per robot and structure (pkdyn.model.reuse)
-    structure = tuple(
-        (str(new.joints[j].shortname()), int(new.parents[j])) for j in range(new.njoints)
-    )
+    # in size) is made once per robot and structure (pkdyn.model.reuse): the robot's tree with
+    # the virtual joints of each compliant body (its pieces)
+    structure = tuple((j, len(chain)) for j, chain in comp.items())
     data = kept(robot, ("elastic extension", structure), new.createData)
     ext = dataclasses.replace(
         robot,
@@ -502,8 +510,20 @@ def _constraints(
     return ConstraintSet(new, closures, couplings, reduce=reduce)
 
 
+def _fixed_inertias(model: pin.Model) -> dict[int, list[tuple[pin.SE3, pin.Inertia]]]:
+    """Per joint, ``(placement, inertia)`` of the links merged into its body by fixed joints."""
+    out: dict[int, list[tuple[pin.SE3, pin.Inertia]]] = {}
+    for f in model.frames:
+        if f.type == pin.FrameType.FIXED_JOINT and f.inertia.mass > 0:
+            out.setdefault(int(f.parentJoint), []).append((f.placement, f.inertia))
+    return out
+
+
 def _split(
-    model: pin.Model, joint: int, lc: LinkCompliance
+    model: pin.Model,
+    joint: int,
+    lc: LinkCompliance,
+    fixed: Sequence[tuple[pin.SE3, pin.Inertia]],
 ) -> tuple[pin.Inertia | None, pin.Inertia]:
     """``(tip part in the virtual joint's frame, root part in the joint frame)`` of a body.
 
@@ -520,12 +540,10 @@ def _split(
     root_pt = lc.placement.act(np.array([0.0, 0.0, -h]))
     main = pin.Inertia(inertia)
     tip = pin.Inertia.Zero()
-    for f in model.frames:
-        if f.parentJoint != joint or f.type != pin.FrameType.FIXED_JOINT or f.inertia.mass <= 0:
-            continue
-        part = f.placement.act(f.inertia)
+    for placement, f_inertia in fixed:  # (_fixed_inertias: the joint's, in frame order)
+        part = placement.act(f_inertia)
         main = main - part
-        o = np.asarray(f.placement.translation)
+        o = np.asarray(placement.translation)
         if np.linalg.norm(o - tip_pt) < np.linalg.norm(o - root_pt):
             tip = tip + part
     if main.mass > 0.0:
@@ -545,9 +563,19 @@ def _split(
 
 def _valid(inertia: pin.Inertia) -> bool:
     """A physical inertia: positive mass, rotational inertia about the centre of mass >= 0."""
+    if not inertia.mass > 0.0:
+        return False
     I = np.asarray(inertia.inertia)
     scale = max(float(np.trace(I)), 1e-300)
-    return bool(inertia.mass > 0.0 and np.linalg.eigvalsh(0.5 * (I + I.T))[0] >= -1e-9 * scale)
+    # Gershgorin: every eigenvalue is at least a diagonal term less its row's other terms
+    # (enough for the usual nearly diagonal inertias; the eigenvalues otherwise)
+    (a, b, c), (d, e, f), (g, h, i) = I.tolist()
+    bd, cg, fh = 0.5 * abs(b + d), 0.5 * abs(c + g), 0.5 * abs(f + h)
+    t = -1e-9 * scale
+    if a - bd - cg >= t and e - bd - fh >= t and i - cg - fh >= t:  # (NaN: not taken)
+        return True
+    S = 0.5 * (I + I.T)
+    return bool(np.linalg.eigvalsh(S)[0] >= -1e-9 * scale)
 
 
 def _geometry(gm: pin.GeometryModel, jmap: dict[int, int]) -> pin.GeometryModel:

@@ -33,8 +33,9 @@ from pkdyn.exceptions import InvalidInputError
 from pkdyn.model.arguments import public
 from pkdyn.model.description import ComplianceSpec
 from pkdyn.model.robot import Robot
-from pkdyn.precision.beam import Section, centre_compliance
+from pkdyn.precision.beam import Section, _centre, _check_length
 from pkdyn.precision.material import Material, as_material
+from solvers.vec3 import cross_one
 
 __all__ = ["SLENDERNESS", "LinkCompliance", "link_compliances"]
 
@@ -185,6 +186,16 @@ def _attachments(robot: Robot, joint: int) -> list[np.ndarray]:
     return pts
 
 
+def _rod_ends(robot: Robot) -> dict[int, tuple[np.ndarray, np.ndarray] | None]:
+    """:func:`_root_tip` of each body's rod, read once per robot (as :func:`_rods`)."""
+    from pkdyn.model.reuse import kept
+
+    def make() -> dict[int, tuple[np.ndarray, np.ndarray] | None]:
+        return {j: _root_tip(robot, rod) for j, rod in _rods(robot).items()}
+
+    return kept(robot, "rod ends", make)
+
+
 def _root_tip(robot: Robot, rod: _Rod) -> tuple[np.ndarray, np.ndarray] | None:
     """(root, tip) of a rod, ``None`` when the link carries nothing."""
     a, b = rod.ends
@@ -202,12 +213,18 @@ def _root_tip(robot: Robot, rod: _Rod) -> tuple[np.ndarray, np.ndarray] | None:
 
 def _beam_frame(root: np.ndarray, tip: np.ndarray) -> pin.SE3:
     """Mid-point frame with ``z`` from root to tip."""
-    z = (tip - root) / np.linalg.norm(tip - root)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x)
-    R = np.column_stack([x, np.cross(z, x), z])
+    d = tip - root
+    z = d / np.sqrt(d.dot(d))  # (np.linalg.norm's arithmetic, np.cross's: vec3)
+    helper = _X if abs(z[0]) < 0.9 else _Y
+    x = cross_one(helper, z)
+    x /= np.sqrt(x.dot(x))
+    R = np.empty((3, 3))
+    R[:, 0], R[:, 1], R[:, 2] = x, cross_one(z, x), z
     return pin.SE3(R, 0.5 * (root + tip))
+
+
+_X = np.array([1.0, 0.0, 0.0])
+_Y = np.array([0.0, 1.0, 0.0])
 
 
 def _body_joint(robot: Robot, link: str) -> int:
@@ -286,12 +303,14 @@ def link_compliances(
     rods = _rods(robot) if beams_wanted else {}
     if beams_wanted and not rods:
         raise _no_beam(robot, "material" if argument is not None else "pkdyn:material")
+    rod_ends = _rod_ends(robot) if rods else {}
+    names = _link_names(robot)
     out: list[LinkCompliance] = []
     for j in range(1, robot.model.njoints):
         spec = specs.get(j)
         if spec is not None and spec.rigid:
             continue
-        name = spec.link if spec is not None else _link_name(robot, j)
+        name = spec.link if spec is not None else names.get(j, str(robot.model.names[j]))
         if spec is not None and spec.compliance is not None:
             out.append(
                 LinkCompliance(name, j, spec.frame, np.array(spec.compliance, float), "description")
@@ -321,11 +340,11 @@ def link_compliances(
                     "compliance instead",
                 )
             continue
-        ends = _root_tip(robot, rod)
+        ends = rod_ends[j]
         if ends is None:
             continue
         sliding = False
-        mouth = _mouth(robot, rod, rods, robot.q_home if q is None else q)
+        mouth = _mouth(robot, rod, rods, robot.q_home if q is None else q, rod_ends)
         if mouth is not None:  # a rod sliding out of its parent: the part outside deflects
             ends, sliding = _outside(ends, mouth), True
             if ends is None:
@@ -350,7 +369,7 @@ def link_compliances(
                     name,
                     j,
                     _beam_frame(root + a * z, root + b * z),
-                    centre_compliance(b - a, section, mat, shear),
+                    _centre_checked(b - a, section, mat, shear),
                     "beam",
                     b - a,
                     section,
@@ -364,6 +383,12 @@ def link_compliances(
                 )
             )
     return out
+
+
+def _centre_checked(length: float, section: Section, material: Material, shear: bool) -> np.ndarray:
+    """:func:`pkdyn.precision.beam.centre_compliance` of a section and material made here."""
+    _check_length(length)
+    return _centre(float(length), section, material, shear)
 
 
 _CUT_TOL = 1e-6
@@ -389,7 +414,13 @@ def _cuts(robot: Robot, joint: int, root: np.ndarray, z: np.ndarray, L: float) -
     return out
 
 
-def _mouth(robot: Robot, rod: _Rod, rods: dict[int, _Rod], q: np.ndarray) -> np.ndarray | None:
+def _mouth(
+    robot: Robot,
+    rod: _Rod,
+    rods: dict[int, _Rod],
+    q: np.ndarray,
+    rod_ends: dict[int, tuple[np.ndarray, np.ndarray] | None],
+) -> np.ndarray | None:
     """Where a rod leaves its parent's beam (rod joint frame) at ``q``, for a prismatic leg.
 
     A link hung on a prismatic joint, whose beam lies along the joint's axis and whose parent
@@ -403,7 +434,7 @@ def _mouth(robot: Robot, rod: _Rod, rods: dict[int, _Rod], q: np.ndarray) -> np.
     parent = rods.get(int(model.parents[rod.joint]))
     if parent is None:
         return None
-    ends = _root_tip(robot, parent)
+    ends = rod_ends[int(model.parents[rod.joint])]
     if ends is None:
         return None
     jd = jm.createData()
@@ -430,8 +461,10 @@ def _outside(
     return (root + max(s, 0.0) * z, tip)
 
 
-def _link_name(robot: Robot, joint: int) -> str:
+def _link_names(robot: Robot) -> dict[int, str]:
+    """The first body frame's name of each joint that has one."""
+    out: dict[int, str] = {}
     for f in robot.model.frames:
-        if f.parentJoint == joint and f.type == pin.FrameType.BODY:
-            return str(f.name)
-    return str(robot.model.names[joint])
+        if f.type == pin.FrameType.BODY:
+            out.setdefault(int(f.parentJoint), str(f.name))
+    return out

@@ -72,13 +72,22 @@ def perturbed(
     """
     p = np.asarray(p, dtype=float)
     xi = model.twists(p)
-    new = [
-        local_placement(robot, pl) * pin.exp6(pin.Motion(x))
-        for pl, x in zip(model.placements, xi, strict=True)
+    moved = np.any(xi != 0.0, axis=1).tolist()
+    nominal = _nominal(robot, tuple(model.placements), shared)
+    new = [  # (a placement not moved is left as it is: M exp(0) = M)
+        M * pin.exp6(pin.Motion(x)) if m else M for M, x, m in zip(nominal, xi, moved, strict=True)
     ]
-    moved = [bool(np.any(x != 0.0)) for x in xi]
     out = _rebuilt(robot, model.placements, new, moved, assemble, shared)
     return Perturbed(out, model.gains(p))
+
+
+def _nominal(robot: Robot, where: tuple[Placement, ...], shared: bool) -> list[pin.SE3]:
+    """The placements' nominal values (:func:`local_placement`), kept per robot if ``shared``."""
+
+    def make() -> list[pin.SE3]:
+        return [local_placement(robot, pl) for pl in where]
+
+    return kept(robot, ("nominal placements", where), make) if shared else make()
 
 
 def with_placements(
@@ -143,10 +152,13 @@ def _rebuilt(
                     platform, frame=FrameRef(fr.link, fr.placement * delta)
                 )
     cms = pin.StdVec_RigidConstraintModel()
-    for cm, owner in zip(robot.constraint_models, robot.constraint_owner, strict=True):
-        f1, f2 = _first_frames(robot, owner)  # a hinge's arm models are offsets of these
-        new1 = frames.get((owner, 1), f1) * f1.actInv(cm.joint1_placement)
-        new2 = frames.get((owner, 2), f2) * f2.actInv(cm.joint2_placement)
+    first, arms = _closure_frames(robot, shared)
+    for cm, owner, (off1, off2) in zip(
+        robot.constraint_models, robot.constraint_owner, arms, strict=True
+    ):
+        f1, f2 = first[owner]  # a hinge's arm models are offsets of these
+        new1 = frames.get((owner, 1), f1) * off1
+        new2 = frames.get((owner, 2), f2) * off2
         c = pin.RigidConstraintModel(
             cm.type, model, cm.joint1_id, new1, cm.joint2_id, new2, cm.reference_frame
         )
@@ -157,7 +169,7 @@ def _rebuilt(
         ref = []
         for side, fr in ((1, c.frame1), (2, c.frame2)):
             if (c.name, side) in frames:
-                f_old = _first_frames(robot, c.name)[side - 1]
+                f_old = first[c.name][side - 1]
                 fr = FrameRef(fr.link, fr.placement * f_old.actInv(frames[(c.name, side)]))
             ref.append(fr)
         new_closures.append(dataclasses.replace(c, frame1=ref[0], frame2=ref[1]))
@@ -180,6 +192,25 @@ def _rebuilt(
     else:  # (its length scale computed in the kept data, not a new one)
         out.__dict__["length_scale"] = length_scale_at(model, out.data, out.q_home)
     return out
+
+
+def _closure_frames(
+    robot: Robot, shared: bool
+) -> tuple[dict[str, tuple[pin.SE3, pin.SE3]], list[tuple[pin.SE3, pin.SE3]]]:
+    """The two frames of each closure, and each constraint model's offsets from them.
+
+    Kept per robot if ``shared`` (:func:`perturbed`).
+    """
+
+    def make() -> tuple[dict[str, tuple[pin.SE3, pin.SE3]], list[tuple[pin.SE3, pin.SE3]]]:
+        first = {owner: _first_frames(robot, owner) for owner in robot.constraint_owner}
+        arms = []
+        for cm, owner in zip(robot.constraint_models, robot.constraint_owner, strict=True):
+            f1, f2 = first[owner]
+            arms.append((f1.actInv(cm.joint1_placement), f2.actInv(cm.joint2_placement)))
+        return first, arms
+
+    return kept(robot, "closure frames", make) if shared else make()
 
 
 def _first_frames(robot: Robot, closure: str) -> tuple[pin.SE3, pin.SE3]:

@@ -246,13 +246,17 @@ def _delta_mass(dd: DeltaDynamics, Jinv: np.ndarray, E1: np.ndarray, d: np.ndarr
         J, e1 = Jinv[:, k], E1[:, k]
         u = d[:, k] / dd.length[k]
         b = dd.inertia_t[k] / dd.length[k] ** 2
-        ue = np.sum(u * e1, axis=-1)
+        ue = (u * e1).sum(axis=-1)
         e = e1 - u * ue[:, None]
-        ux = np.sum(e1 * e1, axis=-1) - ue**2  # |u x E'|^2
-        a = dd.arm_axial[k] + dd.m_ee[k] * np.sum(e1 * e1, axis=-1) + b * ux
+        e1e1 = (e1 * e1).sum(axis=-1)
+        ux = e1e1 - ue**2  # |u x E'|^2
+        a = dd.arm_axial[k] + dd.m_ee[k] * e1e1 + b * ux
         M += a[:, None, None] * _outer(J, J)
-        M += dd.m_ep[k] * (_outer(e1, J) + _outer(J, e1))
-        M -= b * (_outer(u, u) + _outer(e, J) + _outer(J, e))
+        # (x y^T + y x^T as x y^T plus its transpose: the same products, one outer fewer)
+        o = _outer(e1, J)
+        M += dd.m_ep[k] * (o + np.swapaxes(o, 1, 2))
+        o = _outer(e, J)
+        M -= b * (_outer(u, u) + o + np.swapaxes(o, 1, 2))
         scalar += b
     M += scalar * np.eye(3)[None]
     return 0.5 * (M + np.swapaxes(M, 1, 2))
