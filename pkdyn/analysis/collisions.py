@@ -44,6 +44,7 @@ __all__ = [
     "distance_report",
     "interference_checker",
     "segment_distance",
+    "segment_distance_parts",
 ]
 
 _GJK_TOLERANCE = 1e-10
@@ -392,6 +393,29 @@ def segment_distance(
     r = np.asarray(p1, dtype=float) - p2
     a = np.einsum("...i,...i->...", d1, d1)
     e = np.einsum("...i,...i->...", d2, d2)
+    return segment_distance_parts(d1, d2, r, a, e)
+
+
+def segment_distance_parts(
+    d1: np.ndarray, d2: np.ndarray, r: np.ndarray, a: np.ndarray, e: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`segment_distance` from its parts (the arithmetic after them, the same bits).
+
+    For callers that pair a few segments many ways: each segment's direction and squared
+    length made once, gathered per pair (an element of ``einsum`` over the last axis does not
+    depend on the other elements).
+
+    Args:
+        d1: Directions ``q1 - p1`` of the first segments (..., 3) [m].
+        d2: Directions ``q2 - p2`` of the second segments (..., 3) [m].
+        r: ``p1 - p2`` (..., 3) [m].
+        a: ``d1 . d1`` (...) [m^2], as ``np.einsum("...i,...i->...", d1, d1)``.
+        e: ``d2 . d2`` (...) [m^2], likewise.
+
+    Returns:
+        ``(d, s, t)`` as :func:`segment_distance`.
+
+    """
     f = np.einsum("...i,...i->...", d2, r)
     c = np.einsum("...i,...i->...", d1, r)
     b = np.einsum("...i,...i->...", d1, d2)

@@ -114,9 +114,13 @@ class _DeltaCheck(RequiredCheck):
         return delta_cf.inverse(self.robot.params, self.P)
 
     @cached_property
+    def _checked(self) -> tuple[np.ndarray, tuple[np.ndarray, list[np.ndarray], np.ndarray] | None]:
+        """The limits' codes, and the elbows of the poses within them (when made)."""
+        return self._evaluator._violations(self.P, self.kinds, 0.0, self._solved)
+
+    @property
     def codes(self) -> np.ndarray:
-        P = self.P
-        return self._evaluator.violations(P, np.eye(3), self.kinds, 0.0, self._solved)
+        return self._checked[0]
 
     @cached_property
     def inv_cond(self) -> np.ndarray:
@@ -139,7 +143,12 @@ class _DeltaCheck(RequiredCheck):
         ok = self.reached
         out = np.full(ok.size, np.nan)
         if ok.any():
-            out[ok] = self._evaluator.clearance(self.P[ok], self._solved[0][ok])
+            made = self._checked[1]
+            if made is None:
+                out[ok] = self._evaluator.clearance(self.P[ok], self._solved[0][ok])
+            else:  # the limits' elbows of the reached poses (the same numbers, made once)
+                todo, E, tip = made
+                out[todo] = self._evaluator._clearance(self.P[todo], E, tip)
         return out
 
 

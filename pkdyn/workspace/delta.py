@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from pkdyn.analysis.collisions import segment_distance
+from pkdyn.analysis.collisions import segment_distance_parts
 from pkdyn.closed_form.delta import inverse
 from pkdyn.exceptions import PkdynError
 from pkdyn.model.description import ConeLimit, PyramidLimit
@@ -125,6 +125,7 @@ class DeltaEvaluator(PoseEvaluator):
         self.arm_r = np.array([radius.get(j, 0.0) for j in arms])
         self.bar_r = max((radius.get(j, 0.0) for j in bar_joints), default=0.0)
         self.la = float(robot.params.la)
+        self._pair_index: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def _elbows(self, alpha: np.ndarray) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
         """Arm rotations (N, 3, 3, 3), bar joint centres per bar (N, 3), arm tips (N, 3, 3)."""
@@ -147,20 +148,38 @@ class DeltaEvaluator(PoseEvaluator):
         ``solved``: Clavel's inverse model at ``P`` (``inverse(params, P)``) when the caller
         has it.
         """
+        return self._violations(P, kinds, margin, solved)[0]
+
+    def _violations(
+        self,
+        P: np.ndarray,
+        kinds: tuple[str, ...],
+        margin: float,
+        solved: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> tuple[np.ndarray, tuple[np.ndarray, list[np.ndarray], np.ndarray] | None]:
+        """:meth:`violations`, and the elbows of the poses that pass (when it made them).
+
+        Returns:
+            The codes (N,) and, when the elbows were made (``joint`` or ``interference``
+            checked), ``(todo, E, tip)``: the indices of the poses within every limit checked,
+            their bar joint centres per bar (n, 3) and arm tips (n, 3, 3), as
+            ``_elbows(alpha[todo])`` makes them (its rows are computed one pose at a time).
+
+        """
         P = np.atleast_2d(np.asarray(P, dtype=float))
         alpha, ok = inverse(self.robot.params, P) if solved is None else solved
         out = np.full(P.shape[0], REACHABLE, dtype=np.int8)
         out[~ok] = LIMIT_KINDS.index("reach")
         todo = np.flatnonzero(ok)
         if todo.size == 0:
-            return out
+            return out, None
         a = alpha[todo]
         if "stroke" in kinds:
             bad = np.any((a < self.lo) | (a > self.hi), axis=1)
             out[todo[bad]] = LIMIT_KINDS.index("stroke")
             todo, a = todo[~bad], a[~bad]
         if not ({"joint", "interference"} & set(kinds)) or todo.size == 0:
-            return out
+            return out, None
         R_arm, E, tip = self._elbows(a)
         Pk = P[todo]
         if "joint" in kinds:
@@ -177,7 +196,9 @@ class DeltaEvaluator(PoseEvaluator):
         if "interference" in kinds and todo.size:
             bad = self.interference.bad(self._placements(Pk, R_arm, E), todo.size, margin)
             out[todo[bad]] = LIMIT_KINDS.index("interference")
-        return out
+            keep = ~bad
+            todo, tip, E = todo[keep], tip[keep], [e[keep] for e in E]
+        return out, (todo, E, tip)
 
     @property
     def interference(self) -> PlacedInterference:
@@ -214,31 +235,51 @@ class DeltaEvaluator(PoseEvaluator):
         out["nacelle"] = (np.array(M.rotation), P + M.translation)
         return out
 
+    def _pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The clearance's segment pairs: first, second segment, sum of radii (n_pairs,).
+
+        Segments ``0..n_bars-1`` are the bars, ``n_bars + k`` arm ``k``; in the order of
+        :meth:`_clearance`'s pairs: per bar, the bars of other arms after it, then the other
+        arms.
+        """
+        if self._pair_index is None:
+            nb = len(self.bars)
+            first, second, radii = [], [], []
+            for b1, (k1, _, _, _) in enumerate(self.bars):
+                for b2 in range(b1 + 1, nb):
+                    if self.bars[b2][0] != k1:  # bars of different arms
+                        first.append(b1)
+                        second.append(b2)
+                        radii.append(2 * self.bar_r)
+                for k in range(3):
+                    if k != k1:  # a bar and another arm
+                        first.append(b1)
+                        second.append(nb + k)
+                        radii.append(self.bar_r + self.arm_r[k])
+            self._pair_index = (np.array(first), np.array(second), np.array(radii))
+        return self._pair_index
+
     def _clearance(self, P: np.ndarray, E: list[np.ndarray], tip: np.ndarray) -> np.ndarray:
         if self.bar_r <= 0.0:
             raise PkdynError(
                 f"{self.robot.name}: interference needs collision geometry (geometry=True)"
             )
-        ends = [P + p_nac for _, _, p_nac, _ in self.bars]
+        # the segments' starts and directions, their squared lengths once per segment (not per
+        # pair): the arithmetic of segment_distance on the pairs, element for element
         O = np.array([m.translation for m in self.M_arm])
-        p1, q1, p2, q2, radii = [], [], [], [], []
-        for b1, (k1, _, _, _) in enumerate(self.bars):
-            for b2 in range(b1 + 1, len(self.bars)):
-                if self.bars[b2][0] != k1:  # bars of different arms
-                    p1 += [E[b1]]
-                    q1 += [ends[b1]]
-                    p2 += [E[b2]]
-                    q2 += [ends[b2]]
-                    radii.append(2 * self.bar_r)
-            for k in range(3):
-                if k != k1:  # a bar and another arm
-                    p1 += [E[b1]]
-                    q1 += [ends[b1]]
-                    p2 += [np.broadcast_to(O[k], P.shape)]
-                    q2 += [tip[:, k]]
-                    radii.append(self.bar_r + self.arm_r[k])
-        d, _, _ = segment_distance(np.stack(p1), np.stack(q1), np.stack(p2), np.stack(q2))
-        return np.min(d - np.array(radii)[:, None], axis=0)
+        n = P.shape[0]
+        start = np.empty((len(self.bars) + 3, n, 3))
+        axis = np.empty_like(start)
+        for b, (_, _, p_nac, _) in enumerate(self.bars):
+            start[b] = E[b]
+            axis[b] = (P + p_nac) - E[b]
+        for k in range(3):
+            start[len(self.bars) + k] = O[k]
+            axis[len(self.bars) + k] = tip[:, k] - np.broadcast_to(O[k], P.shape)
+        sq = np.einsum("...i,...i->...", axis, axis)
+        i1, i2, radii = self._pairs()
+        d, _, _ = segment_distance_parts(axis[i1], axis[i2], start[i1] - start[i2], sq[i1], sq[i2])
+        return np.min(d - radii[:, None], axis=0)
 
     def clearance(self, P: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
         """Smallest distance between the bars and the arms, as axis distances minus radii [m].
