@@ -157,3 +157,72 @@ def test_delta_clearance_from_segments_is_the_pairwise_one(seed: int) -> None:
         assert np.all(np.isnan(chk.clearance[~ok]))
         checked += 1
     assert checked >= 3
+
+
+# ---------------------------------------------------------------------- Delta bar cones
+
+
+@pytest.fixture(scope="module")
+def delta_bars() -> tuple[Any, np.ndarray, Any]:
+    """A library Delta's evaluator, arm angles of poses within the strokes, elbows."""
+    from pkdyn.design.context import DesignContext
+    from pkdyn.design.evaluate import build
+    from pkdyn.design.study import Study
+
+    study = Study(
+        "delta",
+        {"la": (0.2, 0.2001), "lb": (0.45, 0.4501), "ra": (0.15, 0.1501)},
+        fixed={"z_home": -0.35},
+        metrics=["required"],
+        requirement={"kind": "cylinder", "D": 0.4, "H": 0.1, "center": [0, 0, -0.35], "samples": 5},
+        n=1,
+    )
+    robot = build(study, study.designs()[0])
+    chk: Any = DesignContext(robot, study.conditions).required()
+    ev = chk._evaluator
+    alpha, ok = chk._solved
+    a = alpha[ok]
+    a = a[~np.any((a < ev.lo) | (a > ev.hi), axis=1)]
+    P = chk.P[ok][~np.any((alpha[ok] < ev.lo) | (alpha[ok] > ev.hi), axis=1)]
+    assert len(a) > 100
+    return ev, a, (P, *ev._elbows(a))
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    bar=st.integers(0, 5),
+    pose=st.integers(0, 10_000),
+    offset=st.sampled_from([0.0, 1e-15, -1e-15, 1e-12, -1e-12, 1e-9, -1e-9, 3e-9, -3e-9])
+    | st.floats(-0.3, 0.3),
+)
+def test_cone_screening_gives_direction_margins_verdicts(delta_bars, bar, pose, offset) -> None:
+    from pkdyn.model.description import ConeLimit
+    from pkdyn.workspace.limits import direction_margin
+
+    ev, a, (P, R_arm, E, _) = delta_bars
+    k, Mb, p_nac, lim = ev.bars[bar]
+    assert isinstance(lim, ConeLimit)
+    u = P + p_nac - E[bar]
+    d = np.einsum("nji,nj->ni", R_arm[:, k] @ Mb.rotation, u)
+    tilt = np.arccos(np.clip(d @ lim.axis / np.linalg.norm(d, axis=-1), -1.0, 1.0))
+    # a cone whose edge passes at (or next to) one of the poses' tilts
+    half = float(np.clip(tilt[pose % len(tilt)] + offset, 0.0, np.pi))
+    cone = ConeLimit(lim.axis, half)
+    want = direction_margin(cone, d) < 0.0
+    got = ev._outside_cone(k, Mb, cone, (np.cos(a), np.sin(a)), u)
+    if got is None:  # undecided somewhere: the caller computes direction_margin
+        assert np.min(np.abs(np.cos(tilt) - np.cos(half))) <= 10 * 1e-9 or half in (0.0, np.pi)
+    else:
+        assert np.array_equal(got, want)
+
+
+def test_cone_screening_decides_the_library_cones(delta_bars) -> None:
+    from pkdyn.workspace.limits import direction_margin
+
+    ev, a, (P, R_arm, E, _) = delta_bars
+    for b, (k, Mb, p_nac, lim) in enumerate(ev.bars):
+        u = P + p_nac - E[b]
+        d = np.einsum("nji,nj->ni", R_arm[:, k] @ Mb.rotation, u)
+        got = ev._outside_cone(k, Mb, lim, (np.cos(a), np.sin(a)), u)
+        assert got is not None
+        assert np.array_equal(got, direction_margin(lim, d) < 0.0)
