@@ -16,6 +16,7 @@ description, not of the builder's parameters:
 from __future__ import annotations
 
 import math
+from functools import cached_property
 
 import numpy as np
 import pinocchio as pin
@@ -109,21 +110,7 @@ class DeltaEvaluator(PoseEvaluator):
             )
         self._arm_joints = [int(j) for j in arms]
         self._bar_joints = [int(j) for j in bar_joints]
-        self._bar_points = [
-            np.array(
-                next(
-                    cm.joint1_placement.translation
-                    for cm in robot.constraint_models
-                    if int(cm.joint1_id) == j
-                )
-            )
-            for j in bar_joints
-        ]
         self._interference: PlacedInterference | None = None
-        if robot.platform_frame is not None:  # joint frame = (R_home, 0) * frame^-1, at P = 0
-            fp = model.frames[robot.platform_frame].placement
-            home = robot.platform_placement(robot.q_home)
-            self._nacelle_joint = pin.SE3(home.rotation, np.zeros(3)) * fp.inverse()
         self.lb = float(robot.params.lb)
         radius = {
             int(g.parentJoint): float(getattr(g.geometry, "radius", 0.0))
@@ -133,6 +120,24 @@ class DeltaEvaluator(PoseEvaluator):
         self.bar_r = max((radius.get(j, 0.0) for j in bar_joints), default=0.0)
         self.la = float(robot.params.la)
         self._pair_index: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    @cached_property
+    def _bar_points(self) -> list[np.ndarray]:
+        """Each bar's lower ball centre in its frame (the interference definition's axes)."""
+        cms = self.robot.constraint_models
+        return [
+            np.array(next(cm.joint1_placement.translation for cm in cms if int(cm.joint1_id) == j))
+            for j in self._bar_joints
+        ]
+
+    @cached_property
+    def _nacelle_joint(self) -> pin.SE3:
+        """The nacelle joint frame when the platform frame is at 0: ``(R_home, 0) frame^-1``."""
+        robot = self.robot
+        assert robot.platform_frame is not None
+        fp = robot.model.frames[robot.platform_frame].placement
+        home = robot.platform_placement(robot.q_home)
+        return pin.SE3(home.rotation, np.zeros(3)) * fp.inverse()
 
     def _elbows(self, alpha: np.ndarray) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
         """Arm rotations (N, 3, 3, 3), bar joint centres per bar (N, 3), arm tips (N, 3, 3)."""
@@ -192,6 +197,7 @@ class DeltaEvaluator(PoseEvaluator):
         if "joint" in kinds:
             bad = np.zeros(todo.size, dtype=bool)
             cs: tuple[np.ndarray, np.ndarray] | None = None
+            axes: dict[tuple[int, bytes], np.ndarray] = {}
             for b, (k, Mb, p_nac, lim) in enumerate(self.bars):
                 if lim is None:
                     continue
@@ -199,7 +205,7 @@ class DeltaEvaluator(PoseEvaluator):
                 if isinstance(lim, ConeLimit):
                     if cs is None:
                         cs = (np.cos(a), np.sin(a))
-                    outside = self._outside_cone(k, Mb, lim, cs, u)
+                    outside = self._outside_cone(k, Mb, lim, cs, u, axes)
                     if outside is not None:
                         bad |= outside
                         continue
@@ -222,6 +228,7 @@ class DeltaEvaluator(PoseEvaluator):
         lim: ConeLimit,
         cs: tuple[np.ndarray, np.ndarray],
         u: np.ndarray,
+        axes: dict[tuple[int, bytes], np.ndarray] | None = None,
     ) -> np.ndarray | None:
         """Poses whose bar leaves its cone, where every verdict is sure; else ``None``.
 
@@ -233,13 +240,19 @@ class DeltaEvaluator(PoseEvaluator):
         1), and the arc cosine turns a difference in cosines into a larger one in angles: a
         cosine farther than :data:`CONE_BOUND` from ``cos(half_angle)`` gives
         ``direction_margin``'s verdict. ``None`` (the caller computes ``direction_margin`` on
-        every pose, as before) when one pose is closer, or not finite.
+        every pose, as before) when one pose is closer, or not finite. ``axes``: the carried
+        axes already made for these poses, by arm and axis (filled).
         """
         ax = np.asarray(lim.axis, dtype=float)
         v = Mb.rotation @ ax  # the cone's axis in the arm frame
-        c, s = cs[0][:, k], cs[1][:, k]
-        w = np.stack([c * v[0] + s * v[2], np.broadcast_to(v[1], c.shape), c * v[2] - s * v[0]])
-        w = self.M_arm[k].rotation @ w  # (3, N), world axes
+        key = (k, v.tobytes())
+        w = None if axes is None else axes.get(key)
+        if w is None:  # (an arm's bars share it)
+            c, s = cs[0][:, k], cs[1][:, k]
+            w = np.stack([c * v[0] + s * v[2], np.broadcast_to(v[1], c.shape), c * v[2] - s * v[0]])
+            w = self.M_arm[k].rotation @ w  # (3, N), world axes
+            if axes is not None:
+                axes[key] = w
         n = np.sqrt(np.einsum("ni,ni->n", u, u))
         x = np.einsum("ni,in->n", u, w) / n
         bound = CONE_BOUND * max(1.0, float(np.linalg.norm(ax)))
