@@ -106,8 +106,11 @@ def _study(metrics: list[str], n: int, **settings: object) -> Study:
 
 
 def metric_rows(n: int = 200) -> list[Row]:
+    from pkdyn.threads import single_blas_thread
+
     rows: list[Row] = []
-    with warnings.catch_warnings():
+    # inside one BLAS-thread block, as a study runs its designs (run_study, evaluate_designs)
+    with warnings.catch_warnings(), single_blas_thread():
         warnings.simplefilter("ignore")
         base = _study(["contains"], n)
         X = base.designs()

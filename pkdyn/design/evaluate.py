@@ -27,6 +27,7 @@ from pkdyn.design.study import Study
 from pkdyn.exceptions import PkdynError, StudyError
 from pkdyn.model.candidate import CandidateBuilder
 from pkdyn.model.robot import Robot
+from pkdyn.threads import single_blas_thread
 
 __all__ = ["Row", "build", "candidates", "evaluate_design", "evaluate_designs", "pack"]
 
@@ -170,4 +171,5 @@ def evaluate_designs(payload: bytes | Study, items: list[tuple[int, list[float]]
 
     """
     study = payload if isinstance(payload, Study) else _unpack(payload)
-    return [evaluate_design(study, i, np.asarray(x, dtype=float)) for i, x in items]
+    with single_blas_thread():  # (once per batch: free inside a study's block, pkdyn.threads)
+        return [evaluate_design(study, i, np.asarray(x, dtype=float)) for i, x in items]

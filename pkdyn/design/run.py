@@ -30,6 +30,7 @@ from pkdyn.exceptions import InvalidInputError, PkdynError, StudyError
 from pkdyn.files import atomic_write, read_text
 from pkdyn.model.arguments import public
 from pkdyn.progress import progress as progress_bar
+from pkdyn.threads import single_blas_thread
 
 __all__ = ["run_study"]
 
@@ -224,8 +225,11 @@ def run_study(
             X = study.designs()
             items = [(i, [float(v) for v in x]) for i, x in enumerate(X)]
             stream = _evaluate(ex, payload, items, done, partial)
-        for row in progress_bar(stream, "designs", "design", progress, total=study.total):
-            results[row.index] = row
+        # one BLAS thread for the whole study (its parallelism is over designs): set once here
+        # (the local pool's forked workers inherit it), not by each precision metric per design
+        with single_blas_thread():
+            for row in progress_bar(stream, "designs", "design", progress, total=study.total):
+                results[row.index] = row
         failed = False
     finally:
         if partial is not None:
