@@ -347,7 +347,8 @@ def _gough_stewart_closed_form(robot: Robot, model: ParameterModel) -> bool:
     the length its prismatic joint reads (:func:`pkdyn.closed_form.gough_stewart.forward`).
     """
     from pkdyn.library.gough_stewart import Params
-    from pkdyn.precision.family_parameters import _read_placements, _resolved
+    from pkdyn.precision.family_parameters import _resolved
+    from pkdyn.precision.placements import local_placement
 
     if robot.family != "gough_stewart" or not isinstance(robot.params, Params):
         return False
@@ -359,13 +360,7 @@ def _gough_stewart_closed_form(robot: Robot, model: ParameterModel) -> bool:
     if _gough_stewart_columns(robot, model) is None:
         return False
     where = placements(robot)
-
-    def platform() -> pin.SE3:
-        return pin.SE3(frame.placement)
-
-    ours = _read_placements(
-        robot.model, robot.constraint_models, robot.constraint_owner, platform, where
-    )
+    ours = [local_placement(robot, pl) for pl in where]
     built = built_placements(robot, _resolved(robot))
     scale = robot.length_scale
     return all(
