@@ -19,11 +19,12 @@ import numpy as np
 import pinocchio as pin
 
 from pkdyn.model.assembly import forward_geometry
-from pkdyn.model.build import constraint_set
+from pkdyn.model.build import closures, constraint_set
 from pkdyn.model.description import FrameRef
 from pkdyn.model.reuse import kept, kept_data
 from pkdyn.model.robot import Robot, length_scale_at
 from pkdyn.precision.parameters import ParameterModel, Placement, local_placement
+from solvers.constraints import ConstraintSet
 
 __all__ = ["Perturbed", "perturbed", "with_placements"]
 
@@ -151,14 +152,19 @@ def _rebuilt(
                 platform = dataclasses.replace(
                     platform, frame=FrameRef(fr.link, fr.placement * delta)
                 )
-    cms = pin.StdVec_RigidConstraintModel()
+    work = _working(robot, model) if shared else None
+    cms = pin.StdVec_RigidConstraintModel() if work is None else work[0]
     first, arms = _closure_frames(robot, shared)
-    for cm, owner, (off1, off2) in zip(
-        robot.constraint_models, robot.constraint_owner, arms, strict=True
+    for k, (cm, owner, (off1, off2)) in enumerate(
+        zip(robot.constraint_models, robot.constraint_owner, arms, strict=True)
     ):
         f1, f2 = first[owner]  # a hinge's arm models are offsets of these
         new1 = frames.get((owner, 1), f1) * off1
         new2 = frames.get((owner, 2), f2) * off2
+        if work is not None:  # (the working copies: the same numbers written in place)
+            cms[k].joint1_placement = new1
+            cms[k].joint2_placement = new2
+            continue
         c = pin.RigidConstraintModel(
             cm.type, model, cm.joint1_id, new1, cm.joint2_id, new2, cm.reference_frame
         )
@@ -175,7 +181,11 @@ def _rebuilt(
         new_closures.append(dataclasses.replace(c, frame1=ref[0], frame2=ref[1]))
     desc = dataclasses.replace(desc, closures=tuple(new_closures), platform=platform)
     # the constraint layer of the perturbed description (couplings depend on no placement)
-    constraints = constraint_set(model, desc.closures, desc.couplings, robot.name)
+    if work is not None:
+        constraints = work[1]
+        constraints.move_closures(closures(model, desc.closures, robot.name))
+    else:
+        constraints = constraint_set(model, desc.closures, desc.couplings, robot.name)
     out = dataclasses.replace(
         robot,
         model=model,
@@ -192,6 +202,40 @@ def _rebuilt(
     else:  # (its length scale computed in the kept data, not a new one)
         out.__dict__["length_scale"] = length_scale_at(model, out.data, out.q_home)
     return out
+
+
+def _working(
+    robot: Robot, model: pin.Model
+) -> tuple[pin.StdVec_RigidConstraintModel, ConstraintSet] | None:
+    """Constraint models and a constraint layer on ``model``, kept per robot, moved in place.
+
+    The shared working copy of :func:`perturbed`: its placements are written for each robot
+    (:meth:`solvers.constraints.ConstraintSet.move_closures`) where the layer's rows do not
+    depend on them (:attr:`~solvers.constraints.ConstraintSet.movable`); ``None`` otherwise
+    (each robot then gets a layer of its own).
+    """
+
+    def make() -> tuple[tuple[pin.StdVec_RigidConstraintModel, ConstraintSet] | None]:
+        desc = robot.description
+        constraints = constraint_set(model, desc.closures, desc.couplings, robot.name)
+        if not constraints.movable:
+            return (None,)
+        cms = pin.StdVec_RigidConstraintModel()
+        for cm in robot.constraint_models:
+            c = pin.RigidConstraintModel(
+                cm.type,
+                model,
+                cm.joint1_id,
+                cm.joint1_placement,
+                cm.joint2_id,
+                cm.joint2_placement,
+                cm.reference_frame,
+            )
+            c.name = cm.name
+            cms.append(c)
+        return ((cms, constraints),)
+
+    return kept(robot, "perturbed constraints", make)[0]
 
 
 def _closure_frames(
