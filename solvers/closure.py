@@ -361,16 +361,18 @@ class ClosureRows:
         self._welds = [(int(o), cd) for is_point, o, _, cd in self._entries if not is_point]
         # the point rows' drift: per side, the joint and the point (translation only: the
         # classical acceleration in the joint frame, turned to world axes by the joint's rotation)
-        self._pt_sides = self._point_sides()
+        self._pt_sides: list[tuple[int, list[tuple[int, pin.SE3]], bool]] | None = None
         self._other = [k for k, it in enumerate(self._base) if not it[0]]
 
     def _point_sides(self) -> list[tuple[int, list[tuple[int, pin.SE3]], bool]]:
-        """The point base models' sides, for the drift.
+        """The point base models' sides, for the drift (made on first use).
 
         Per point base model: its row offset, per side on a moving body ``(joint, point)`` (the
         point as a translation), and whether its first side moves.
         """
-        return [
+        if self._pt_sides is not None:
+            return self._pt_sides
+        self._pt_sides = [
             (
                 int(self.base_offsets[k]),
                 [(int(j), pin.SE3(np.eye(3), M.translation)) for j, M in ((j1, M1), (j2, M2)) if j],
@@ -379,6 +381,7 @@ class ClosureRows:
             for k, (is_point, j1, M1, j2, M2) in enumerate(self._base)
             if is_point
         ]
+        return self._pt_sides
 
     def _local(
         self,
@@ -502,7 +505,7 @@ class ClosureRows:
                     cms[k].joint2_placement = M2
             b.closure = c
         self.closures = tuple(closures)
-        self._pt_sides = self._point_sides()
+        self._pt_sides = None  # (made again on first use)
 
     @property
     def base_items(self) -> list[tuple[bool, int, pin.SE3, int, pin.SE3]]:
@@ -675,7 +678,7 @@ class ClosureRows:
         """Acceleration drift ``gamma`` (n,) from ``data`` after ``forwardKinematics(q, v, 0)``."""
         g = np.zeros(self.nb)
         classic, oMi, vel, acc = pin.classicAcceleration, data.oMi, data.v, data.a
-        for o, sides, first in self._pt_sides:  # classical accelerations of the points, world
+        for o, sides, first in self._point_sides():  # classical accelerations of the points, world
             for i, (j, M) in enumerate(sides):
                 lin = oMi[j].rotation.dot(classic(vel[j], acc[j], M))
                 if i == 0 and first:
