@@ -77,7 +77,7 @@ def perturbed(
     moved = np.any(xi != 0.0, axis=1).tolist()
     nominal = _nominal(robot, tuple(model.placements), shared)
     new = [  # (a placement not moved is left as it is: M exp(0) = M)
-        M * pin.exp6(pin.Motion(x)) if m else M for M, x, m in zip(nominal, xi, moved, strict=True)
+        M * pin.exp6(x) if m else M for M, x, m in zip(nominal, xi, moved, strict=True)
     ]
     out = _rebuilt(robot, model.placements, new, moved, assemble, shared)
     return Perturbed(out, model.gains(p))
