@@ -75,7 +75,7 @@ def perturbed(
     p = np.asarray(p, dtype=float)
     xi = model.twists(p)
     moved = np.any(xi != 0.0, axis=1).tolist()
-    nominal = _nominal(robot, tuple(model.placements), shared)
+    nominal = _nominal(robot, model, shared)
     new = [  # (a placement not moved is left as it is: M exp(0) = M)
         M * pin.exp6(x) if m else M for M, x, m in zip(nominal, xi, moved, strict=True)
     ]
@@ -83,13 +83,17 @@ def perturbed(
     return Perturbed(out, model.gains(p))
 
 
-def _nominal(robot: Robot, where: tuple[Placement, ...], shared: bool) -> list[pin.SE3]:
-    """The placements' nominal values (:func:`local_placement`), kept per robot if ``shared``."""
+def _nominal(robot: Robot, model: ParameterModel, shared: bool) -> list[pin.SE3]:
+    """The model's placements' nominal values (:func:`local_placement`), kept if ``shared``.
+
+    Kept per robot and parameter model (the model by identity: hashing its placements costs
+    more than the rest of a robot's placements).
+    """
 
     def make() -> list[pin.SE3]:
-        return [local_placement(robot, pl) for pl in where]
+        return [local_placement(robot, pl) for pl in model.placements]
 
-    return kept(robot, ("nominal placements", where), make) if shared else make()
+    return kept(robot, ("nominal placements", model), make) if shared else make()
 
 
 def with_placements(
