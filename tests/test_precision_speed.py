@@ -185,6 +185,25 @@ def test_gough_stewart_family_monte_carlo_fails_the_general_path_s_samples(
     assert np.allclose(fast.errors, slow.errors, rtol=0.0, atol=atol)
 
 
+def test_gough_stewart_family_monte_carlo_is_the_general_path_away_from_home(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    robot = pkdyn.load("gough_stewart", geometry=False)
+    home = robot.platform_placement(robot.q_home)
+    turned = pin.SE3(
+        pin.exp3(np.array([0.1, -0.08, 0.2])), home.translation + np.array([0.03, -0.02, 0.04])
+    )
+    q = pkdyn.inverse_geometry(robot, turned).q
+    model = parameter_model(robot, "family", gains=True)
+    kw = dict(samples=30, seed=2, progress=False)
+    fast = monte_carlo_module.monte_carlo(robot, q, model, 1e-4, **kw)
+    monkeypatch.setattr(monte_carlo_module, "_gough_stewart_closed_form", lambda *a: False)
+    slow = monte_carlo_module.monte_carlo(robot, q, model, 1e-4, **kw)
+    assert fast.failed == slow.failed == 0
+    atol = 1e-9 * robot.length_scale
+    assert np.allclose(fast.errors, slow.errors, rtol=0.0, atol=atol)
+
+
 def test_gough_stewart_batched_direct_model_inverts_the_leg_lengths() -> None:
     from pkdyn.closed_form.gough_stewart import forward, leg_lengths, rotation_log
 
