@@ -46,6 +46,7 @@ one moment on ``joint1``'s body at ``p1``, world axes.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -360,6 +361,17 @@ class ClosureRows:
         self._welds = [(int(o), cd) for is_point, o, _, cd in self._entries if not is_point]
         # the point rows' drift: per side, the joint and the point (translation only: the
         # classical acceleration in the joint frame, turned to world axes by the joint's rotation)
+        self._pt_sides: list[tuple[int, list[tuple[int, pin.SE3]], bool]] | None = None
+        self._other = [k for k, it in enumerate(self._base) if not it[0]]
+
+    def _point_sides(self) -> list[tuple[int, list[tuple[int, pin.SE3]], bool]]:
+        """The point base models' sides, for the drift (made on first use).
+
+        Per point base model: its row offset, per side on a moving body ``(joint, point)`` (the
+        point as a translation), and whether its first side moves.
+        """
+        if self._pt_sides is not None:
+            return self._pt_sides
         self._pt_sides = [
             (
                 int(self.base_offsets[k]),
@@ -369,7 +381,7 @@ class ClosureRows:
             for k, (is_point, j1, M1, j2, M2) in enumerate(self._base)
             if is_point
         ]
-        self._other = [k for k, it in enumerate(self._base) if not it[0]]
+        return self._pt_sides
 
     def _local(
         self,
@@ -439,6 +451,61 @@ class ClosureRows:
             self._pl_dst = np.array([p[0] for p in self._planes], dtype=int)[:, None] + np.arange(2)
             self._pl_src = np.array([p[1] for p in self._planes], dtype=int)[:, None] + np.arange(3)
             self._pl_E = np.array([p[2] for p in self._planes])
+
+    @functools.cached_property
+    def movable(self) -> bool:
+        """Whether :meth:`move` applies: the rows do not depend on the frames' placements.
+
+        Points and welds alone, each Pinocchio's rows as they are, each moved by a ball or free
+        joint (no plane to find whatever the placements, :meth:`_turns_freely`), on a model at
+        most half :data:`_FREE_SCALE` in size (placements moved by less than the robot's size
+        keep it below the bound): a set of the moved closures made anew has the same rows.
+        """
+        if not (self.reduce and self.identity):
+            return False
+        if any(c.kind not in ("point", "weld") for c in self.closures):
+            return False
+        if not all(
+            self._turns_freely(c.joint1) or self._turns_freely(c.joint2) for c in self.closures
+        ):
+            return False
+        bound = 1.0 + sum(float(np.linalg.norm(M.translation)) for M in self.model.jointPlacements)
+        return bound < 0.5 * _FREE_SCALE
+
+    def move(self, closures: Sequence[Closure]) -> None:
+        """Put other frames' placements on the same closures, in place (:attr:`movable` sets).
+
+        The rows of ``ClosureRows(model, closures)`` without making them: the constraint
+        models' placements are written (Pinocchio's and the ``LOCAL`` copies), nothing else
+        changes. The perturbed robots of a Monte Carlo, one after the other.
+
+        Args:
+            closures: The closures (same names, kinds and joints, in the same order), with the
+                new placements.
+
+        Raises:
+            ValueError: The set is not :attr:`movable`, or the closures are not its own.
+
+        """
+        if not self.movable:
+            raise ValueError("these closures' rows depend on their placements: make a new set")
+        if len(closures) != len(self.closures) or any(
+            (c.name, c.kind, int(c.joint1), int(c.joint2)) != (o.name, o.kind, o.joint1, o.joint2)
+            for c, o in zip(closures, self.closures, strict=False)
+        ):
+            raise ValueError("move takes the same closures (names, kinds, joints, order)")
+        local = self._loc[0] if self._loc is not None else None
+        for k, (c, b) in enumerate(zip(closures, self.blocks, strict=True)):
+            M1, M2 = pin.SE3(c.placement1), pin.SE3(c.placement2)
+            is_point, j1, _, j2, _ = self._base[k]
+            self._base[k] = (is_point, j1, M1, j2, M2)
+            for cms in (self._cms, local):
+                if cms is not None:
+                    cms[k].joint1_placement = M1
+                    cms[k].joint2_placement = M2
+            b.closure = c
+        self.closures = tuple(closures)
+        self._pt_sides = None  # (made again on first use)
 
     @property
     def base_items(self) -> list[tuple[bool, int, pin.SE3, int, pin.SE3]]:
@@ -611,7 +678,7 @@ class ClosureRows:
         """Acceleration drift ``gamma`` (n,) from ``data`` after ``forwardKinematics(q, v, 0)``."""
         g = np.zeros(self.nb)
         classic, oMi, vel, acc = pin.classicAcceleration, data.oMi, data.v, data.a
-        for o, sides, first in self._pt_sides:  # classical accelerations of the points, world
+        for o, sides, first in self._point_sides():  # classical accelerations of the points, world
             for i, (j, M) in enumerate(sides):
                 lin = oMi[j].rotation.dot(classic(vel[j], acc[j], M))
                 if i == 0 and first:

@@ -194,6 +194,29 @@ class ConstraintSet:
         )
 
     @property
+    def movable(self) -> bool:
+        """Whether :meth:`move_closures` applies (:attr:`solvers.closure.ClosureRows.movable`)."""
+        return self._closure is not None and self._closure.movable
+
+    def move_closures(self, closures: Sequence[Closure]) -> None:
+        """Put other placements on the same closures, in place (see :meth:`ClosureRows.move`).
+
+        The set then has the rows ``rebuilt(closures)`` would have (the couplings depend on no
+        placement); for the robots of a Monte Carlo, one after the other.
+
+        Args:
+            closures: The closures (same names, kinds and joints, in the same order), with the
+                new placements.
+
+        Raises:
+            ValueError: The set is not :attr:`movable`, or the closures are not its own.
+
+        """
+        if self._closure is None:
+            raise ValueError("a set without closures has no placements to move")
+        self._closure.move(closures)
+
+    @property
     def items(self) -> list[tuple[bool, int, pin.SE3, int, pin.SE3]]:
         """Per constraint model of the closures, unreduced: ``(is_point, joint1, placement1, ...)``.
 

@@ -142,6 +142,129 @@ def test_delta_family_monte_carlo_is_the_general_path(
     assert np.allclose(fast.errors, slow.errors, rtol=0.0, atol=atol)
 
 
+def _gough_stewart_both_ways(
+    robot: pkdyn.Robot, tolerance: float, monkeypatch: pytest.MonkeyPatch, **kw: object
+) -> tuple[object, object]:
+    """The Monte Carlo of the family's joint centres and gains: batched, then general."""
+    model = parameter_model(robot, "family", gains=True)
+    assert monte_carlo_module._gough_stewart_closed_form(robot, model)
+    fast = monte_carlo_module.monte_carlo(robot, robot.q_home, model, tolerance, **kw)
+    with monkeypatch.context() as m:
+        m.setattr(monte_carlo_module, "_gough_stewart_closed_form", lambda *a: False)
+        slow = monte_carlo_module.monte_carlo(robot, robot.q_home, model, tolerance, **kw)
+    return fast, slow
+
+
+@pytest.mark.parametrize(
+    ("base_joint", "distribution"),
+    [("universal", "uniform"), ("universal", "normal"), ("spherical", "uniform")],
+)
+def test_gough_stewart_family_monte_carlo_is_the_general_path(
+    base_joint: str, distribution: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    robot = pkdyn.load("gough_stewart", geometry=False, base_joint=base_joint)
+    kw = dict(samples=40, distribution=distribution, seed=5, progress=False)
+    fast, slow = _gough_stewart_both_ways(robot, 1e-4, monkeypatch, **kw)
+    assert fast.failed == slow.failed == 0
+    assert float(np.abs(slow.errors[:, 3:]).max()) > 1e-6  # (rotations too: not all zero)
+    # the general path solves each robot to the assembly tolerance (1e-12 of the closures)
+    atol = 1e-9 * robot.length_scale
+    assert np.allclose(fast.errors, slow.errors, rtol=0.0, atol=atol)
+
+
+def test_gough_stewart_family_monte_carlo_fails_the_general_path_s_samples(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # 6 cm on 80 cm: some joint centres put a leg off its stroke at home (the family refuses
+    # them), some platforms move far (the general path solves them): the same samples fail
+    robot = pkdyn.load("gough_stewart", geometry=False)
+    kw = dict(samples=40, distribution="uniform", seed=1, progress=False)
+    fast, slow = _gough_stewart_both_ways(robot, 0.06, monkeypatch, **kw)
+    assert 0 < fast.failed == slow.failed < 40
+    atol = 1e-9 * robot.length_scale
+    assert np.allclose(fast.errors, slow.errors, rtol=0.0, atol=atol)
+
+
+def test_gough_stewart_family_monte_carlo_is_the_general_path_away_from_home(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    robot = pkdyn.load("gough_stewart", geometry=False)
+    home = robot.platform_placement(robot.q_home)
+    turned = pin.SE3(
+        pin.exp3(np.array([0.1, -0.08, 0.2])), home.translation + np.array([0.03, -0.02, 0.04])
+    )
+    q = pkdyn.inverse_geometry(robot, turned).q
+    model = parameter_model(robot, "family", gains=True)
+    kw = dict(samples=30, seed=2, progress=False)
+    fast = monte_carlo_module.monte_carlo(robot, q, model, 1e-4, **kw)
+    monkeypatch.setattr(monte_carlo_module, "_gough_stewart_closed_form", lambda *a: False)
+    slow = monte_carlo_module.monte_carlo(robot, q, model, 1e-4, **kw)
+    assert fast.failed == slow.failed == 0
+    atol = 1e-9 * robot.length_scale
+    assert np.allclose(fast.errors, slow.errors, rtol=0.0, atol=atol)
+
+
+def test_gough_stewart_batched_direct_model_inverts_the_leg_lengths() -> None:
+    from pkdyn.closed_form.gough_stewart import forward, leg_lengths, rotation_log
+
+    p = _resolved(pkdyn.load("gough_stewart", geometry=False))
+    rng = np.random.default_rng(7)
+    n = 200
+    A = p.a + rng.uniform(-0.01, 0.01, (n, 6, 3))
+    B = p.b + rng.uniform(-0.01, 0.01, (n, 6, 3))
+    start = np.array([0.0, 0.0, p.home_height()])
+    P = start + rng.uniform(-0.05, 0.05, (n, 3))
+    w = rng.uniform(-0.15, 0.15, (n, 3))
+    R = np.stack([pin.exp3(x) for x in w])
+    rho = leg_lengths(A, B, P, R)
+    for k in range(3):  # (one set of joint centres per platform: each its own lengths)
+        assert np.array_equal(rho[k], leg_lengths(A[k], B[k], P[k], R[k])[0])
+    Ps, Rs, ok = forward(A, B, rho, start, np.eye(3), 1e-13 * p.home_height())
+    assert ok.all()
+    assert np.allclose(Ps, P, rtol=0.0, atol=1e-12)
+    assert np.allclose(rotation_log(Rs), w, rtol=0.0, atol=1e-12)
+    # lengths no platform has (legs of 1 cm and of 5 m between joints 1 m apart at most):
+    # not converged, and said so
+    impossible = np.tile([0.01, 0.01, 0.01, 5.0, 5.0, 5.0], (5, 1))
+    _, _, ok = forward(A[:5], B[:5], impossible, start, np.eye(3), 1e-13)
+    assert not ok.any()
+
+
+def test_rotation_log_is_pinocchio_s() -> None:
+    from pkdyn.closed_form.gough_stewart import rotation_log
+
+    rng = np.random.default_rng(8)
+    u = rng.normal(size=(300, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    for lo, hi in ((0.0, 1e-9), (1e-9, 1e-4), (1e-4, 1.0), (1.0, 3.0), (3.0, np.pi - 1e-9)):
+        w = u * rng.uniform(lo, hi, (300, 1))
+        R = np.stack([pin.exp3(x) for x in w])
+        ref = np.stack([pin.log3(x) for x in R])
+        assert np.allclose(rotation_log(R), ref, rtol=0.0, atol=1e-12)
+
+
+def test_gough_stewart_family_shortcut_declines_other_robots() -> None:
+    from pkdyn.precision.perturbation import with_placements
+    from pkdyn.precision.placements import local_placement
+
+    robot = pkdyn.load("gough_stewart", geometry=False)
+    model = parameter_model(robot, "family")
+    assert monte_carlo_module._gough_stewart_closed_form(robot, model)
+    # a joint moved: no longer the robot its parameters build
+    where = placements(robot)
+    values = [local_placement(robot, pl) for pl in where]
+    values[0].translation = values[0].translation + np.array([1e-3, 0.0, 0.0])
+    moved = with_placements(robot, where, values, assemble=False)
+    assert not monte_carlo_module._gough_stewart_closed_form(moved, model)
+    # a model with a parameter that is neither a joint centre nor a gain
+    other = dataclasses.replace(model, names=("rho_min[0]",) + model.names[1:])
+    assert not monte_carlo_module._gough_stewart_closed_form(robot, other)
+    # no family: the general path
+    assert not monte_carlo_module._gough_stewart_closed_form(
+        dataclasses.replace(robot, params=None), model
+    )
+
+
 @pytest.mark.parametrize("name", list(FAMILIES))
 def test_family_placements_written_in_place_are_the_urdf_ones(name: str) -> None:
     robot = pkdyn.load(name, geometry=False)

@@ -33,6 +33,7 @@ __all__ = [
     "check_model_size",
     "replace_joints",
     "resolve_frame",
+    "find_frame",
     "closures",
     "constraint_models",
     "constraint_set",
@@ -366,19 +367,31 @@ def resolve_frame(model: pin.Model, ref: FrameRef, source: str, what: str) -> tu
         DescriptionError: No link or frame of that name.
 
     """
-    fid = None
-    for ftype in (pin.FrameType.BODY, None):
-        if ftype is None:
-            if model.existFrame(ref.link):
-                fid = model.getFrameId(ref.link)
-        elif model.existFrame(ref.link, ftype):
-            fid = model.getFrameId(ref.link, ftype)
-        if fid is not None:
-            break
+    fid = find_frame(model, ref.link)
     if fid is None:
         raise DescriptionError(source, what, f"names link '{ref.link}', which does not exist")
     f = model.frames[fid]
     return f.parentJoint, f.placement * ref.placement
+
+
+def find_frame(model: pin.Model, link: str) -> int | None:
+    """The id of the frame a :class:`FrameRef` names: its link's body frame, else any frame.
+
+    Args:
+        model: The model.
+        link: Link (or frame) name.
+
+    Returns:
+        The frame id, or ``None`` if the model has no frame of that name.
+
+    """
+    for ftype in (pin.FrameType.BODY, None):
+        if ftype is None:
+            if model.existFrame(link):
+                return int(model.getFrameId(link))
+        elif model.existFrame(link, ftype):
+            return int(model.getFrameId(link, ftype))
+    return None
 
 
 def _closure_frames(

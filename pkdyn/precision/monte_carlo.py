@@ -191,6 +191,17 @@ def monte_carlo(
         dp_all = _draw_all(rng, t, distribution, int(samples))
         errors_all, ok = _delta_family_errors(robot, model, dp_all, readings, nominal)
         return MonteCarlo(errors_all[ok], int(np.sum(~ok)), distribution=distribution, seed=seed)
+    if family and _gough_stewart_closed_form(robot, model):
+        dp_all = _draw_all(rng, t, distribution, int(samples))
+        errors_all, solved, refused = _gough_stewart_family_errors(
+            robot, model, dp_all, qq, nominal
+        )
+        ok = solved.copy()
+        for k in np.flatnonzero(~solved & ~refused):  # the few the batch leaves: general path
+            e = _sample_error(robot, model, dp_all[k], qq, True, nominal)
+            if e is not None:
+                errors_all[k], ok[k] = e, True
+        return MonteCarlo(errors_all[ok], int(np.sum(~ok)), distribution=distribution, seed=seed)
     if workers != 1 or scheduler or client is not None:
         from pkdyn.precision.parallel import fingerprint, recipe, run_chunks
 
@@ -233,11 +244,17 @@ def _sample_error(
         else:
             pert = perturbed(robot, model, dp, assemble=False, shared=True)
             sample, qa = pert.robot, pert.joint_coordinates(readings)
-        res = forward_geometry(sample, qa, q_init=q, check_limits=False)
+        res = _solve_forward(sample, qa, q_init=q, check_limits=False)
     except PkdynError:
         return None
     assert res.placement is not None
     return pose_error(nominal, res.placement)
+
+
+_solve_forward = forward_geometry.__wrapped__  # type: ignore[attr-defined]
+""":func:`~pkdyn.model.assembly.forward_geometry` without its public argument checks: the Monte
+Carlo checked ``q`` once, and the robots and readings it passes are its own (the checks cost a
+tenth of a sample)."""
 
 
 def _chunk(payload: Any, chunk: list[np.ndarray]) -> list[np.ndarray | None]:
@@ -324,3 +341,149 @@ def _delta_family_errors(
     errors = np.zeros((len(dp), 6))
     errors[:, :3] = P - np.asarray(nominal.translation)[None, :]
     return errors, ok
+
+
+def _gough_stewart_closed_form(robot: Robot, model: ParameterModel) -> bool:
+    """Whether the samples of a family model of the Gough-Stewart have its batched direct model.
+
+    A library Gough-Stewart (either base joint) built as its family builds it (its placements
+    are those of its parameters: no other mounting, no moved joint), with its platform frame
+    at the platform's origin, and a model whose parameters are joint centres ``A``, ``B`` or
+    actuator gains: every sample is then a platform whose legs join ``A_i`` to ``B_i`` with
+    the length its prismatic joint reads (:func:`pkdyn.closed_form.gough_stewart.forward`).
+    """
+    from pkdyn.library.gough_stewart import Params
+    from pkdyn.precision.family_parameters import _resolved
+    from pkdyn.precision.placements import local_placement
+
+    if robot.family != "gough_stewart" or not isinstance(robot.params, Params):
+        return False
+    if robot.platform_frame is None or len(robot.actuators) != 6:
+        return False
+    frame = robot.model.frames[robot.platform_frame]
+    if not frame.placement.isIdentity(0.0):
+        return False
+    if _gough_stewart_columns(robot, model) is None:
+        return False
+    where = placements(robot)
+    ours = [local_placement(robot, pl) for pl in where]
+    built = built_placements(robot, _resolved(robot))
+    scale = robot.length_scale
+    return all(
+        np.allclose(a.homogeneous, b.homogeneous, rtol=0.0, atol=1e-12 * scale)
+        for a, b in zip(ours, built, strict=True)
+    )
+
+
+def _gough_stewart_columns(
+    robot: Robot, model: ParameterModel
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Where each of the model's joint-centre parameters sits in ``[A; B]`` (12, 3), or ``None``.
+
+    Returns:
+        The model's column (k,) and the flat index into the (12, 3) array ``[A; B]`` (k,) of
+        each joint-centre parameter; ``None`` if a parameter is neither a joint centre nor a
+        gain.
+
+    """
+    from pkdyn.precision.family_parameters import _param_name, _resolved, _scalar_fields
+
+    p0 = _resolved(robot)
+    flat = {
+        _param_name(f, idx, p0): (0 if f == "A" else 18) + 3 * idx[0] + idx[1]
+        for f, idx, _ in _scalar_fields(p0)
+        if f in ("A", "B")
+    }
+    gains = np.any(model.G != 0.0, axis=0) if model.G.size else np.zeros(len(model.names), bool)
+    cols, where = [], []
+    for k, name in enumerate(model.names):
+        if name in flat:
+            cols.append(k)
+            where.append(flat[name])
+        elif not gains[k]:
+            return None
+    return np.array(cols, dtype=int), np.array(where, dtype=int)
+
+
+_GS_TOL = 1e-13
+"""Leg-length residual of a converged sample of the batched direct model, in robot sizes."""
+
+_GS_MARGIN = 1e-2
+"""Smallest singular value of a sample's leg rows, relative to its largest, of a sample the
+batched direct model keeps; nearer a singularity, the general path solves it."""
+
+_GS_MOVED = 0.5
+"""Farthest a sample the batched direct model keeps may move from the nominal pose: in robot
+sizes and in rad (farther, the general path solves it)."""
+
+
+def _gough_stewart_family_errors(
+    robot: Robot,
+    model: ParameterModel,
+    dp: np.ndarray,
+    q: np.ndarray,
+    nominal: pin.SE3,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pose errors (n, 6) of family samples of the Gough-Stewart, which were solved, refused.
+
+    Per sample, the joint centres ``A``, ``B`` of the family's parameters moved by ``dp``, the
+    legs at the readings with the samples' gains, and the direct geometric model solved by
+    Newton's method from the nominal pose, every sample at once
+    (:func:`pkdyn.closed_form.gough_stewart.forward`). A sample is left to the caller (``False``)
+    where the general path would do something else than one solve from ``q`` (an actuator
+    moving farther than a continuation step), where Newton's method does not converge, or
+    near a singularity (:data:`_GS_MARGIN`) or far from the start (:data:`_GS_MOVED`): the
+    general path then decides.
+
+    Returns:
+        The pose errors (n, 6) [m, rad] (of the solved samples), which samples were solved
+        (n,), and which the family refuses (n,): joint centres that put a leg off its stroke
+        at the home pose (``Params``' own test; on the general path, a failed sample).
+
+    """
+    from pkdyn.closed_form.gough_stewart import forward, leg_lengths, leg_rows, rotation_log
+    from pkdyn.model.assembly import CONTINUATION_STEP
+    from pkdyn.precision.family_parameters import _resolved
+
+    p0 = _resolved(robot)
+    n = len(dp)
+    columns = _gough_stewart_columns(robot, model)
+    assert columns is not None
+    cols, where = columns
+    values = model.nominal[None, :] + dp
+    AB = np.broadcast_to(np.concatenate([p0.a, p0.b]).ravel(), (n, 36)).copy()
+    AB[:, where] = values[:, cols]
+    AB = AB.reshape(n, 12, 3)
+    A, B = AB[:, :6], AB[:, 6:]
+    readings = q[robot.actuated_q]
+    gains = dp @ model.G.T if model.G.size else np.zeros((n, 6))
+    rho = readings[None, :] * (1.0 + gains)
+    near = np.max(np.abs(rho - readings) / robot.actuator_scale, axis=1) <= CONTINUATION_STEP
+    R0 = np.asarray(nominal.rotation)
+    p_start = np.asarray(nominal.translation)
+    P, R, solved = forward(A, B, rho, p_start, R0, _GS_TOL * robot.length_scale)
+    solved &= near
+    # the family refuses joint centres that put a leg off its stroke at the home pose
+    # (Params.__post_init__): those samples fail on the general path; at the stroke's ends
+    # to rounding, the general path decides
+    home = np.broadcast_to(np.array([0.0, 0.0, p0.home_height()]), (n, 3))
+    at_home = leg_lengths(A, B, home, np.broadcast_to(np.eye(3), (n, 3, 3)))
+    lo, hi = np.asarray(p0.rho_min, dtype=float), np.asarray(p0.rho_max, dtype=float)
+    margin = _GS_TOL * robot.length_scale
+    refused = np.any((at_home < lo - margin) | (at_home > hi + margin), axis=1)
+    accepted = np.all((at_home > lo + margin) & (at_home < hi - margin), axis=1)
+    solved &= accepted
+    rows = leg_rows(A[solved], B[solved], P[solved], R[solved])
+    s = np.linalg.svd(rows, compute_uv=False)
+    solved[solved] = s[:, -1] > _GS_MARGIN * s[:, 0]
+    errors = np.zeros((n, 6))
+    errors[:, :3] = P - p_start[None, :]
+    errors[:, 3:] = rotation_log(np.matmul(R0.T[None], R))
+    # a platform moved far from the start: the general path's (damped) solve may end in
+    # another assembly mode, or nowhere
+    moved = np.maximum(
+        np.sqrt(np.sum(errors[:, :3] ** 2, axis=1)) / robot.length_scale,
+        np.sqrt(np.sum(errors[:, 3:] ** 2, axis=1)),
+    )
+    solved &= moved <= _GS_MOVED
+    return errors, np.where(refused, False, solved), refused
