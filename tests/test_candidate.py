@@ -199,3 +199,33 @@ def test_design_rows_do_not_depend_on_the_path() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert sum(r.feasible for r in rows) > 0
+
+
+@pytest.mark.parametrize("name", list(FAMILIES))
+def test_moved_constraint_layer_is_a_new_one(name: str) -> None:
+    """A candidate's constraint layer (the template's moved in place where its rows allow) has
+    the rows of the set made anew from its description, bit for bit, at random configurations;
+    the candidates of a family whose rows do not depend on the placements share one set."""
+    from pkdyn.model.build import constraint_set
+
+    rng = np.random.default_rng(7 + sum(map(ord, name)))
+    builder = CandidateBuilder(name, collision=True)
+    layers = set()
+    for _ in range(4):
+        robot = builder.robot(_random_params(name, rng))
+        layers.add(id(robot.constraints))
+        fresh = constraint_set(
+            robot.model, robot.description.closures, robot.description.couplings, robot.source
+        )
+        assert list(fresh.names) == list(robot.constraints.names)
+        for _ in range(3):
+            q = pin.randomConfiguration(
+                robot.model, -np.ones(robot.model.nq), np.ones(robot.model.nq)
+            )
+            r_got, J_got = robot.constraints.residual_and_jacobian(robot.data, q)
+            d2 = robot.model.createData()
+            r_want, J_want = fresh.residual_and_jacobian(d2, q)
+            assert r_got.tobytes() == r_want.tobytes()
+            assert J_got.tobytes() == J_want.tobytes()
+    if builder._templates and next(iter(builder._templates.values())).robot.constraints.movable:
+        assert len(layers) == 1  # (moved in place, not made again)
