@@ -227,5 +227,6 @@ def test_moved_constraint_layer_is_a_new_one(name: str) -> None:
             r_want, J_want = fresh.residual_and_jacobian(d2, q)
             assert r_got.tobytes() == r_want.tobytes()
             assert J_got.tobytes() == J_want.tobytes()
-    if builder._templates and next(iter(builder._templates.values())).robot.constraints.movable:
+    template = next(iter(builder._templates.values()), None)
+    if template is not None and template.robot.constraints.movable:
         assert len(layers) == 1  # (moved in place, not made again)
