@@ -13,6 +13,10 @@ arithmetic of the URDF path: the candidate is the robot ``pkdyn.load(family, **p
 bit for bit (``tests/test_candidate.py`` checks every family over random parameters; each
 skeleton is checked against its own URDF build when it is first met, and a skeleton whose
 in-place copy would differ is built by the URDF path every time).
+The constraint layer is the template's, its closures moved in place
+(:meth:`solvers.constraints.ConstraintSet.move_closures`) where its rows do not depend on the
+placements (points and welds on ball or free joints: the Delta, the Gough-Stewart), else made
+anew for each candidate.
 
 Validation: a description pkdyn generated itself is not validated again for each candidate (the
 first build of its skeleton was, and the builder's ``Params`` validate the parameters); a user's
