@@ -152,3 +152,79 @@ def test_library_family_home_override():
     robot = pkdyn.load("five_bar", home=[2.0, 1.0])
     np.testing.assert_allclose(robot.q_home[robot.actuated_q], [2.0, 1.0], atol=1e-15)
     assert pkdyn.closure_residual(robot, robot.q_home) < 1e-12
+
+
+# ---------------------------------------------------------------------- the full-rank bound
+
+
+def _with_singular_values(rng: np.random.Generator, s: np.ndarray, n: int) -> np.ndarray:
+    """A matrix (m, n) with singular values ``s`` (m,) and random singular vectors."""
+    m = s.size
+    U, _ = np.linalg.qr(rng.standard_normal((m, m)))
+    V, _ = np.linalg.qr(rng.standard_normal((n, m)))
+    return (U * s) @ V.T
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_full_rank_bound_never_contradicts_rank(seed):
+    """Where the bound proves ``rank(J) == m``, :func:`rank` counts every row (at the cut-off)."""
+    from pkdyn.model.home import RANK_RTOL, full_rank_bound, rank
+
+    rng = np.random.default_rng(seed)
+    proved = refused = 0
+    for _ in range(300):
+        m, n_p, n_a = int(rng.integers(2, 19)), 0, int(rng.integers(1, 5))
+        n_p = m + int(rng.integers(0, 8))
+        top = 10.0 ** rng.uniform(-2, 3)
+        s = np.sort(top * 10.0 ** rng.uniform(-3, 0, m))[::-1]
+        # the smallest near the cut-off: 0.5x to 5x of RTOL * max(|J|, 1)
+        s[-1] = RANK_RTOL * max(top, 1.0) * 10.0 ** rng.uniform(-0.5, 0.7)
+        Jp = _with_singular_values(rng, s, n_p)
+        Ja = rng.standard_normal((m, n_a)) * top * rng.uniform(0.0, 3.0)
+        J = np.hstack([Ja, Jp])
+        s_p = np.linalg.svd(Jp, compute_uv=False)
+        if full_rank_bound(s_p, J):
+            proved += 1
+            assert rank(J) == m
+            assert rank(Jp) == m
+        else:
+            refused += 1
+    assert proved > 20 and refused > 20
+
+
+def test_full_rank_bound_refuses_what_it_cannot_prove():
+    from pkdyn.model.home import full_rank_bound
+
+    J = np.eye(3, 5)
+    assert full_rank_bound(np.linalg.svd(J[:, :3], compute_uv=False), J)
+    assert not full_rank_bound(np.array([1.0, 1.0]), J)  # fewer values than rows
+    assert not full_rank_bound(np.zeros(0), np.zeros((0, 4)))
+    J[2, 2] = 1e-12
+    assert not full_rank_bound(np.linalg.svd(J[:, :3], compute_uv=False), J)
+    J[0, 0] = np.nan
+    assert not full_rank_bound(np.array([1.0, 1.0, 1.0]), J)
+
+
+@pytest.mark.parametrize("name", ["delta", "gough_stewart", "five_bar", "planar_3rrr"])
+def test_singular_verdict_equals_the_exhaustive_one(name):
+    """``singular`` at and near each family's home: the verdict of both ranks computed."""
+    from pkdyn.model.home import rank
+
+    robot = pkdyn.load(name)
+    rng = np.random.default_rng(3)
+    cs = robot.constraints
+    asserted = 0
+    for k in range(6):
+        q = (
+            robot.q_home
+            if k == 0
+            else pin.integrate(robot.model, robot.q_home, rng.uniform(-0.05, 0.05, robot.nv))
+        )
+        J = cs.jacobian(robot.data, q)
+        r = rank(J)
+        exhaustive_cut = robot.actuated_v.size and rank(J[:, robot.passive_v]) < r
+        if exhaustive_cut or r < J.shape[0]:
+            continue  # (the probe of the null space is unchanged)
+        assert singular(robot, q) is False
+        asserted += 1
+    assert asserted > 0

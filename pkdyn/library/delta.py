@@ -146,22 +146,31 @@ class Params:
             raise ParameterError(NAME, "ra", f"must exceed rb ({self.rb}) for a Delta")
         if self.z_home is not None:
             in_range(NAME, "z_home", self.z_home, -math.inf, 0.0)
-            if not self._reachable(np.array([self.z_home]))[0]:
+            # the home's arm angles, which the layout and the assembly read (:meth:`_home`),
+            # tell whether it is reachable: one inverse model for both (the same numbers:
+            # :meth:`_reachable` sees x = y = -0.0 where :meth:`_home` sees +0.0, and the
+            # inverse model uses them only as x c + y s - R (-R exactly) and (-x s + y c)^2)
+            alpha, ok = cf.inverse(self, np.array([0.0, 0.0, self.z_home]))
+            if not (ok[0] and self._inside(alpha)[0] and self.z_home < 0.0):
                 raise ParameterError(
                     NAME,
                     "z_home",
                     f"{self.z_home} m is not reachable below the base with these lengths and arm "
                     f"limits (leave z_home unset: it is then {self._derived_height():.4g} m)",
                 )
+            self.__dict__["_home"] = tuple(float(a) for a in alpha[0])
         else:
             self._derived_height()  # raises if nothing is reachable
+
+    def _inside(self, alpha: np.ndarray) -> np.ndarray:
+        """Which rows of arm angles (N, arms) lie within the arm limits (NaN: not)."""
+        with np.errstate(invalid="ignore"):
+            return np.all((alpha >= self.alpha_min) & (alpha <= self.alpha_max), axis=1)
 
     def _reachable(self, z: np.ndarray) -> np.ndarray:
         """Nacelle heights on the axis reached with every arm within its limits."""
         alpha, ok = cf.inverse(self, np.column_stack([0.0 * z, 0.0 * z, z]))
-        with np.errstate(invalid="ignore"):
-            inside = np.all((alpha >= self.alpha_min) & (alpha <= self.alpha_max), axis=1)
-        return ok & inside & (z < 0.0)
+        return ok & self._inside(alpha) & (z < 0.0)
 
     def _derived_height(self) -> float:
         return self._derived
@@ -295,8 +304,22 @@ def resolved(p: Params) -> Params:
     return dataclasses.replace(p, z_home=p.home_height())
 
 
-def _arm_rotation(theta: float, alpha: float) -> np.ndarray:
-    return pin.rpy.rpyToMatrix(0.0, 0.0, theta) @ pin.rpy.rpyToMatrix(0.0, alpha, 0.0)
+@functools.lru_cache(maxsize=4)
+def _arm_frames(arms: int) -> tuple[tuple[Any, np.ndarray, np.ndarray, np.ndarray], ...]:
+    """Per arm: ``theta``, the radial and tangential unit vectors ``u``, ``t`` and the yaw.
+
+    What :func:`layout` needs of the arms' plane angles alone, the same numbers once per arm
+    count (read-only arrays); an arm's rotation is ``yaw @ rpyToMatrix(0, alpha, 0)``.
+    """
+    out = []
+    for theta in 2.0 * np.pi * np.arange(arms) / arms:  # (Params.theta)
+        u = np.array([np.cos(theta), np.sin(theta), 0.0])
+        t = np.array([-np.sin(theta), np.cos(theta), 0.0])
+        yaw = pin.rpy.rpyToMatrix(0.0, 0.0, theta)
+        for a in (u, t, yaw):
+            a.flags.writeable = False
+        out.append((theta, u, t, yaw))
+    return tuple(out)
 
 
 def _hinged_bar(
@@ -348,9 +371,8 @@ def layout(p: Params) -> UrdfWriter:
     )
     alphas = home(p)
     P = np.array([0.0, 0.0, p.home_height()])
-    for i, (theta, alpha) in enumerate(zip(p.theta, alphas, strict=True), start=1):
-        u = np.array([np.cos(theta), np.sin(theta), 0.0])
-        t = np.array([-np.sin(theta), np.cos(theta), 0.0])
+    frames = _arm_frames(p.arms)
+    for i, ((theta, u, t, yaw), alpha) in enumerate(zip(frames, alphas, strict=True), start=1):
         arm = f"arm{i}"
         elbow = Shape(
             "cylinder",
@@ -376,7 +398,7 @@ def layout(p: Params) -> UrdfWriter:
             efficiency=p.efficiency,
             extra_visuals=[elbow],
         )
-        R_arm = _arm_rotation(theta, alpha)
+        R_arm = yaw @ pin.rpy.rpyToMatrix(0.0, alpha, 0.0)
         O = p.ra * u
         hinged = p.parallelogram == "hinge"
         if hinged:
@@ -384,10 +406,12 @@ def layout(p: Params) -> UrdfWriter:
             # axis y at home). A pitch-only joint frame keeps y (the arm axis) exact.
             d = R_arm.T @ (P + p.rb * u - O - R_arm @ np.array([p.la, 0.0, 0.0]))
             pitch = (0.0, float(np.arctan2(d[0], d[2])), 0.0)
+        ru = p.rb * u
         for side, sign in (("a", 1.0), ("b", -1.0)):
             bar = f"bar{i}{side}"
             elbow_w = O + R_arm @ np.array([p.la, sign * s, 0.0])
-            attach = P + p.rb * u + sign * s * t
+            st = sign * s * t
+            attach = P + ru + st  # (P + rb u + sign s t)
             d_arm = R_arm.T @ (attach - elbow_w)
             jrpy = rpy_z_to(d_arm)
             w.rod(bar, p.bar_mass, p.bar_radius, (0, 0, 0), (0, 0, p.lb), ORANGE)
@@ -408,7 +432,7 @@ def layout(p: Params) -> UrdfWriter:
                 f"loop{i}{side}",
                 "point",
                 (bar, (0.0, 0.0, p.lb), (0.0, 0.0, 0.0)),
-                ("nacelle", p.rb * u + sign * s * t, (0.0, 0.0, 0.0)),
+                ("nacelle", ru + st, (0.0, 0.0, 0.0)),
             )
     nacelle_r = p.rb + 0.015
     I_n = np.diag([1 / 4, 1 / 4, 1 / 2]) * p.nacelle_mass * nacelle_r**2

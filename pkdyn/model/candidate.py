@@ -63,6 +63,8 @@ from solvers.constraints import ConstraintSet
 __all__ = ["CandidateBuilder", "difference", "urdf_pose"]
 
 _IDENTITY = pin.SE3.Identity()
+_HERE = _IDENTITY * _IDENTITY
+"""A joint's body in its joint frame, as the parser places it (the identity; never changed)."""
 _ZERO = pin.Inertia.Zero()
 _MAX_TEMPLATES = 4
 """Skeletons a builder keeps (a study whose parameters change the structure cycles a few)."""
@@ -535,7 +537,7 @@ class CandidateBuilder:
                     model.lowerVelocityLimit[iv] = vel if sv > 0.0 else -vel
                     model.upperVelocityLimit[iv] = vel
                 # its body (when it has mass), then its body frame (no inertia), first
-                here = _IDENTITY * _IDENTITY
+                here = _HERE
                 own = [(here, _link_inertia(child))] if massive else []
                 inertia.setdefault(jid, [])[:0] = [*own, (here, _ZERO)]
             elif r.kind == "link" and t.geometry:
@@ -711,8 +713,31 @@ class CandidateBuilder:
         )
 
 
+_INERTIAS: dict[tuple[Any, ...], pin.Inertia] = {}
+"""The inertias made, by their numbers' bytes (a Delta's six bars are one; never changed)."""
+
+
 def _link_inertia(link: dict[str, Any]) -> pin.Inertia:
-    """The inertia Pinocchio's URDF parser makes of a link's ``<inertial>`` (origin rpy 0)."""
+    """The inertia Pinocchio's URDF parser makes of a link's ``<inertial>`` (origin rpy 0).
+
+    Remembered by the bytes of the mass, centre of mass and inertia (the same numbers as
+    making it again: the callers only read it).
+    """
+    raw = link["inertia"]
+    key = (
+        np.asarray(link["mass"], dtype=float).tobytes(),
+        np.asarray(link["com"], dtype=float).tobytes(),
+        None if raw is None else np.asarray(raw, dtype=float).tobytes(),
+    )
+    found = _INERTIAS.get(key)
+    if found is None:
+        if len(_INERTIAS) >= 256:
+            _INERTIAS.clear()
+        found = _INERTIAS[key] = _make_link_inertia(link)
+    return found
+
+
+def _make_link_inertia(link: dict[str, Any]) -> pin.Inertia:
     I = np.zeros((3, 3)) if link["inertia"] is None else np.asarray(link["inertia"], dtype=float)
     sym = np.array(
         [

@@ -100,12 +100,25 @@ class HomeResult:
     couplings: list[CouplingSpec | LinearCouplingSpec] | None = None
 
 
-def _solve(robot: Robot, q0: np.ndarray, free: np.ndarray | None, max_iter: int) -> SolveResult:
+def _solve(
+    robot: Robot,
+    q0: np.ndarray,
+    free: np.ndarray | None,
+    max_iter: int,
+    r0: np.ndarray | None = None,
+) -> SolveResult:
+    """Levenberg-Marquardt from ``q0``; ``r0``: the residual at ``q0``, already evaluated."""
     cs, data = robot.constraints, robot.data
+    first = [] if r0 is None else [r0]
+
+    def residual(q: np.ndarray) -> np.ndarray:
+        # the solver's first call is at q0 (a copy): the residual already evaluated there
+        return first.pop() if first else cs.residual(data, q)
+
     return solve_lm(
         robot.model,
         q0,
-        lambda q: cs.residual(data, q),
+        residual,
         lambda q: cs.jacobian(data, q),
         free,
         _SOLVE_TOL,
@@ -139,9 +152,17 @@ def singular(robot: Robot, q: np.ndarray, rng: np.random.Generator | None = None
     if cs.n == 0:
         return False
     J = cs.jacobian(data, q)
-    r = rank(J)
-    if robot.actuated_v.size and rank(J[:, robot.passive_v]) < r:
-        return True
+    if robot.actuated_v.size:
+        Jp = J[:, robot.passive_v]
+        s_p = np.linalg.svd(Jp, compute_uv=False) if Jp.size else np.zeros(0)
+        r_p = numerics.rank_of(s_p, RANK_RTOL, 1.0)  # (rank(J_passive))
+        if r_p == J.shape[0] and full_rank_bound(s_p, J):
+            return False  # rank J = rank J_passive = every row: not singular, nothing to probe
+        r = rank(J)
+        if r_p < r:
+            return True
+    else:
+        r = rank(J)
     if r == J.shape[0]:  # full row rank: no configuration has a higher one (nothing to probe)
         return False
     Z = numerics.null_space(J, RANK_RTOL, 1.0)
@@ -155,6 +176,36 @@ def singular(robot: Robot, q: np.ndarray, rng: np.random.Generator | None = None
         if sol.converged and rank(cs.jacobian(data, sol.q)) > r:
             return True
     return False
+
+
+FULL_RANK_MARGIN = 2.0
+"""Factor between the passive columns' smallest singular value and the cut-off bound that
+proves every row of the closure Jacobian counts (:func:`full_rank_bound`)."""
+
+
+def full_rank_bound(s_passive: np.ndarray, J: np.ndarray) -> bool:
+    """Whether ``rank(J)`` is every row of ``J``, proved from the passive columns' SVD alone.
+
+    ``J`` (m, nv) holds the passive columns ``J_p`` and more: its m-th singular value is at
+    least ``J_p``'s (interlacing) and its largest at most its Frobenius norm, so
+    ``s_m(J_p) > 2 RTOL max(|J|_F, 1)`` puts ``s_m(J)`` above :func:`rank`'s cut-off
+    ``RTOL max(s_1(J), 1)`` with a factor 2 to spare, which no rounding of the two SVDs
+    (relative errors ~1e-15 of ``s_1``) can undo: :func:`rank` would count all m. ``False``
+    when the bound does not prove it (the caller then computes ``rank(J)``).
+
+    Args:
+        s_passive: Singular values of ``J_p``, largest first (at least m of them to prove it).
+        J: The closure Jacobian (m, nv).
+
+    Returns:
+        ``True`` when ``rank(J) == m`` is proved.
+
+    """
+    m = J.shape[0]
+    if m == 0 or s_passive.size < m:
+        return False
+    frobenius = math.sqrt(float(np.einsum("ij,ij->", J, J)))
+    return bool(s_passive[m - 1] > FULL_RANK_MARGIN * RANK_RTOL * max(frobenius, 1.0))
 
 
 def _direction(k: int, n: int) -> np.ndarray:
@@ -289,8 +340,8 @@ def find_home(
         free = robot.passive_v
     if robot.constraints.n == 0:
         return HomeResult(q, closures, {}, False)
-    r_file = _per_closure(robot, robot.constraints.residual(robot.data, q))
-    sol = _solve(robot, q, free, 100)
+    r_file = robot.constraints.residual(robot.data, q)
+    sol = _solve(robot, q, free, 100, r_file)
     at_singularity = sol.converged and singular(robot, sol.q)  # (computed once)
     if sol.converged and (not at_singularity or (user and free is not None)):
         _warn_file_pose(robot, r_file, sol.q, q, tol)
@@ -440,8 +491,15 @@ def _worst(robot: Robot, sol: SolveResult) -> float:
 
 
 def _warn_file_pose(
-    robot: Robot, r_file: dict[str, float], q: np.ndarray, q0: np.ndarray, tol: float
+    robot: Robot, residual: np.ndarray, q: np.ndarray, q0: np.ndarray, tol: float
 ) -> None:
+    """Warn when the description's own pose (residual there) misses the closures by <= tol."""
+    # the largest closure residual is the largest component (the closures' rows cover it);
+    # per closure only when it warns (or is not a number: compared closure by closure)
+    worst = float(np.max(np.abs(residual), initial=0.0))
+    if math.isfinite(worst) and not EXACT_TOL < worst <= tol:
+        return
+    r_file = _per_closure(robot, residual)
     worst = max(r_file.values(), default=0.0)
     if EXACT_TOL < worst <= tol:
         name = max(r_file, key=lambda k: r_file[k])

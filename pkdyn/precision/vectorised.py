@@ -93,14 +93,10 @@ def inv3(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     a, b, c = A[:, 0, 0], A[:, 0, 1], A[:, 0, 2]
     d, e, f = A[:, 1, 0], A[:, 1, 1], A[:, 1, 2]
     g, h, i = A[:, 2, 0], A[:, 2, 1], A[:, 2, 2]
-    co = np.stack(
-        [
-            np.stack([e * i - f * h, c * h - b * i, b * f - c * e], -1),
-            np.stack([f * g - d * i, a * i - c * g, c * d - a * f], -1),
-            np.stack([d * h - e * g, b * g - a * h, a * e - b * d], -1),
-        ],
-        -2,
-    )
+    co = np.empty(A.shape[:1] + (3, 3))  # (the adjugate, entry by entry)
+    co[:, 0, 0], co[:, 0, 1], co[:, 0, 2] = e * i - f * h, c * h - b * i, b * f - c * e
+    co[:, 1, 0], co[:, 1, 1], co[:, 1, 2] = f * g - d * i, a * i - c * g, c * d - a * f
+    co[:, 2, 0], co[:, 2, 1], co[:, 2, 2] = d * h - e * g, b * g - a * h, a * e - b * d
     det = a * co[:, 0, 0] + b * co[:, 1, 0] + c * co[:, 2, 0]
     safe = np.where(det != 0.0, det, 1.0)
     return co / safe[:, None, None], det
@@ -212,16 +208,38 @@ def _delta_jacobian(
     alpha, ok = delta_cf.inverse(dd.params, P - dd.f_off)
     reached = np.array(ok, dtype=bool)
     alpha = np.where(np.isfinite(alpha), alpha, 0.0)
-    c, s = np.cos(alpha), np.sin(alpha)
-    E = dd.O[None] + dd._in_world(c, s, dd.elbow)
-    d = P[:, None, :] + dd.attach[None] - E
-    E1 = cross(dd.axis[None], E - dd.O[None])
-    g = np.sum(d * E1, axis=-1)
-    scale = np.sqrt(np.sum(d * d, axis=-1) * np.sum(E1 * E1, axis=-1))
-    margin = np.min(np.abs(g) / np.where(scale > 0.0, scale, 1.0), axis=1)
+    c, s = np.cos(alpha).T, np.sin(alpha).T  # (arm, N)
+    # Component-major, (arm, component, N): the products, sums and differences of
+    # DeltaDynamics._in_world, solvers.vec3.cross and the sums over components (numpy's
+    # sum(axis=-1): 0 + x + y + z) in their order, each a loop over the poses; the arrays
+    # returned are (N, arm, component), C-ordered, as before.
+    e, R0, O = dd.elbow, dd.R0, dd.O[:, :, None]
+    x = c * e[:, 0, None] + s * e[:, 2, None]
+    z = c * e[:, 2, None] - s * e[:, 0, None]
+    mid = (e[:, 1, None] * R0[:, :, 1])[:, :, None]
+    E = O + (x[:, None, :] * R0[:, :, 0, None] + mid + z[:, None, :] * R0[:, :, 2, None])
+    d = P.T[None, :, :] + dd.attach[:, :, None] - E
+    a0, a1, a2 = (dd.axis[:, i, None] for i in range(3))
+    b = E - O
+    E1 = np.stack(
+        [a1 * b[:, 2] - a2 * b[:, 1], a2 * b[:, 0] - a0 * b[:, 2], a0 * b[:, 1] - a1 * b[:, 0]],
+        axis=1,
+    )
+    p = d * E1
+    g = 0.0 + p[:, 0] + p[:, 1] + p[:, 2]
+    p = d * d
+    dd2 = 0.0 + p[:, 0] + p[:, 1] + p[:, 2]
+    p = E1 * E1
+    scale = np.sqrt(dd2 * (0.0 + p[:, 0] + p[:, 1] + p[:, 2]))
+    margin = np.min(np.abs(g) / np.where(scale > 0.0, scale, 1.0), axis=0)
     ok = ok & (margin > SINGULAR_TOL)
-    g = np.where(ok[:, None], g, 1.0)
-    return ok, d / g[..., None], E1, d, reached, margin
+    g = np.where(ok[None, :], g, 1.0)
+    Jinv = d / g[:, None, :]
+
+    def rows(a: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(a.transpose(2, 0, 1))
+
+    return ok, rows(Jinv), rows(E1), rows(d), reached, margin
 
 
 def _outer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -241,23 +259,45 @@ def _delta_mass(dd: DeltaDynamics, Jinv: np.ndarray, E1: np.ndarray, d: np.ndarr
     """
     N = Jinv.shape[0]
     scalar = dd.nacelle_mass + float(np.sum(dd.m_pp))
-    M = np.zeros((N, 3, 3))
+    # Component-major, (arm, component, N) and (3, 3, N): the same products and sums in the same
+    # order as on (N, 3) and (N, 3, 3) arrays, each a loop over the poses instead of N loops of
+    # three; a sum over the three components is numpy's ``sum(axis=-1)``: 0 + x + y + z.
+    Jk = np.ascontiguousarray(Jinv.transpose(1, 2, 0))
+    E1k = np.ascontiguousarray(E1.transpose(1, 2, 0))
+    dk = np.ascontiguousarray(d.transpose(1, 2, 0))
+    Mt = np.zeros((3, 3, N))
+    T, o = np.empty((3, 3, N)), np.empty((3, 3, N))
+    oT = o.transpose(1, 0, 2)
+    mul, add = np.multiply, np.add
     for k in range(3):
-        J, e1 = Jinv[:, k], E1[:, k]
-        u = d[:, k] / dd.length[k]
+        J, e1 = Jk[k], E1k[k]
+        u = dk[k] / dd.length[k]
         b = dd.inertia_t[k] / dd.length[k] ** 2
-        ue = (u * e1).sum(axis=-1)
-        e = e1 - u * ue[:, None]
-        e1e1 = (e1 * e1).sum(axis=-1)
+        p = u * e1
+        ue = 0.0 + p[0] + p[1] + p[2]
+        e = e1 - u * ue
+        p = e1 * e1
+        e1e1 = 0.0 + p[0] + p[1] + p[2]
         ux = e1e1 - ue**2  # |u x E'|^2
         a = dd.arm_axial[k] + dd.m_ee[k] * e1e1 + b * ux
-        M += a[:, None, None] * _outer(J, J)
-        # (x y^T + y x^T as x y^T plus its transpose: the same products, one outer fewer)
-        o = _outer(e1, J)
-        M += dd.m_ep[k] * (o + np.swapaxes(o, 1, 2))
-        o = _outer(e, J)
-        M -= b * (_outer(u, u) + o + np.swapaxes(o, 1, 2))
+        Jr = J[None, :, :]  # J_j, (1, 3, N)
+        mul(J[:, None, :], Jr, out=T)  # a J J^T
+        T *= a
+        Mt += T
+        # m_ep (E' J^T + J E'^T), as E' J^T plus its transpose: one outer product fewer
+        mul(e1[:, None, :], Jr, out=o)
+        add(o, oT, out=T)
+        T *= dd.m_ep[k]
+        Mt += T
+        # b (u u^T + e J^T + J e^T)
+        mul(e[:, None, :], Jr, out=o)
+        mul(u[:, None, :], u[None, :, :], out=T)
+        T += o
+        T += oT
+        T *= b
+        Mt -= T
         scalar += b
+    M = np.ascontiguousarray(Mt.transpose(2, 0, 1))
     M += scalar * np.eye(3)[None]
     return 0.5 * (M + np.swapaxes(M, 1, 2))
 
@@ -303,9 +343,10 @@ def delta_figures(
         defl = np.where(ok, np.linalg.norm(_mv(C, F), axis=-1), np.nan)
     f1 = np.full(N, np.nan)
     if frequency and ok.any():
-        M = _delta_mass(dd, Jinv[ok], E1[ok], d[ok])
+        sel: np.ndarray | slice = slice(None) if ok.all() else ok  # (every pose: no copies)
+        M = _delta_mass(dd, Jinv[sel], E1[sel], d[sel])
         L_inv, _ = inv3(_chol3(M))
-        A = np.matmul(np.matmul(L_inv, K[ok]), np.swapaxes(L_inv, 1, 2))
+        A = np.matmul(np.matmul(L_inv, K[sel]), np.swapaxes(L_inv, 1, 2))
         A = 0.5 * (A + np.swapaxes(A, 1, 2))
         f1[ok] = np.sqrt(np.maximum(sym3_min_eig(A), 0.0)) / (2.0 * np.pi)
     return VectorisedFigures(ok, kmin, defl, f1, reached, ok & (margin < NEAR_SERIAL_TOL))
