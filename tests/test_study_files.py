@@ -184,8 +184,22 @@ BUDGETS = {
         "poses per design, more than 100,000",
     ),  # fmt: skip
     "study x requirement": (
-        ["--require", "box:dx=0.1,dy=0.1,dz=0.1,z=-0.3", "--samples", "40", "--n", "1000"],
-        "64000 required poses = 6.4e+07 evaluations",
+        ["--require", "box:dx=0.1,dy=0.1,dz=0.1,z=-0.3", "--samples", "40", "--n", "4000"],
+        "64000 required poses = 2.56e+08 evaluations, more than the 2e+08 a study may ask in "
+        "closed form",
+    ),
+    "study x requirement, numeric path": (
+        [
+            "--require",
+            "box:dx=0.1,dy=0.1,dz=0.1,z=-0.3",
+            "--samples",
+            "40",
+            "--n",
+            "1000",
+            "--param",
+            "parallelogram=hinge",
+        ],  # fmt: skip
+        "64000 required poses = 6.4e+07 evaluations, more than the 2e+07 a study may ask (",
     ),
     "study x duty cycle": (
         ["--metric", "peak_effort", "--dt", "1e-5", "--n", "10000"],
@@ -204,6 +218,28 @@ def test_work_beyond_the_budgets_is_refused_up_front(tmp_path, capsys, case):
     err = capsys.readouterr().err
     assert code == 1 and len(err.strip().splitlines()) == 1, err
     assert match in err
+
+
+def test_the_closed_form_budget_admits_the_worked_study_at_100000_designs():
+    """The library Delta's closed forms (a pose ~12 us, a duty-cycle sample ~3 us) have a
+    larger budget than the numeric path's: the worked study runs at 100,000 designs."""
+    req = {"kind": "cylinder", "D": 0.4, "H": 0.1, "center": [0, 0, -0.35], "samples": 5}
+    duty = {"trajectory": "adept", "trajectory_options": {"cycle_time": 0.5}, "payload": 1.0}
+    args = {"metrics": ["required", "peak_effort"], "requirement": req, "n": 100_000, **duty}
+    s = Study("delta", {"la": (0.15, 0.35)}, **args)
+    assert s.total * s.requirement.count == 42_500_000  # more than the numeric path's 2e7
+    hinge = {"parallelogram": "hinge"}
+    with pytest.raises(InvalidInputError, match="more than the 2e\\+07 a study may ask \\("):
+        Study("delta", {"la": (0.15, 0.35)}, fixed=hinge, **args)
+    with pytest.raises(InvalidInputError, match="duty-cycle samples = 5.01e\\+07 evaluations"):
+        Study(
+            "delta",
+            {"la": (0.15, 0.35)},
+            fixed=hinge,
+            **{**args, "requirement": None, "metrics": ["peak_effort"]},
+        )
+    with pytest.raises(InvalidInputError, match="more than the 2e\\+08 a study may ask in closed"):
+        Study("delta", {"la": (0.15, 0.35)}, **{**args, "n": 500_000})
 
 
 # ---------------------------------------------------------------------- resumed studies

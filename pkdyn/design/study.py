@@ -53,7 +53,7 @@ from pkdyn.dynamics.trajectory import TRAJECTORIES, task_at_home
 from pkdyn.exceptions import InvalidInputError, StudyError
 from pkdyn.files import read_text
 
-__all__ = ["MAX_SEED", "MAX_STUDY_FILE", "MAX_STUDY_WORK", "Study"]
+__all__ = ["MAX_CLOSED_FORM_WORK", "MAX_SEED", "MAX_STUDY_FILE", "MAX_STUDY_WORK", "Study"]
 
 MAX_SEED = 2**32 - 1
 """Largest seed (the samplers' and NSGA-II's generators take 32-bit seeds)."""
@@ -64,6 +64,12 @@ MAX_STUDY_FILE = 1_000_000
 MAX_STUDY_WORK = 20_000_000
 """Most pose checks, duty-cycle samples or workspace grid points a study may ask for, over all
 its designs (each is microseconds in closed form, up to a millisecond on the numeric path)."""
+
+MAX_CLOSED_FORM_WORK = 200_000_000
+"""Most required poses or duty-cycle samples a study may ask for, over all its designs, where
+every design takes the library Delta's closed forms (a pose and its figures about 12 us, a
+duty-cycle sample 3 us, ``bench/design.py``: 40 min of CPU at most; the worked study at 100,000
+designs asks for 4.25e7 poses and 5.01e7 samples)."""
 
 _CONDITION_KEYS = (
     "limits",
@@ -239,6 +245,7 @@ class Study:
         budgets = []
         if self.requirement is not None:
             budgets.append(("required poses", self.requirement.count, "--require samples"))
+        closed = self._closed_form()
         if self.uses_duty:
             budgets.append(("duty-cycle samples", duty_samples, "--dt or the cycles"))
         if any(m.name in ("workspace_volume", "gci") for m in self.metric_list):
@@ -246,13 +253,44 @@ class Study:
             budgets.append(("workspace grid points", s**3, "workspace_samples"))
         for what, per_design, fix in budgets:
             work = designs * per_design
-            if work > MAX_STUDY_WORK:
+            cap = (
+                MAX_CLOSED_FORM_WORK
+                if closed and what != "workspace grid points"
+                else MAX_STUDY_WORK
+            )
+            if work > cap:
+                how = " in closed form" if cap == MAX_CLOSED_FORM_WORK else ""
                 raise InvalidInputError(
                     "study",
                     f"{designs} designs x {per_design} {what} = {work:.3g} evaluations, more "
-                    f"than the {MAX_STUDY_WORK:.0e} a study may ask (hours of computing); "
+                    f"than the {cap:.0e} a study may ask{how} (hours of computing); "
                     f"lower the designs or {fix}",
                 )
+
+    def _closed_form(self) -> bool:
+        """Whether every design takes the library Delta's closed forms (poses, duty cycle).
+
+        The family ``delta`` with three arms of ball-jointed bars, without a parametrisation
+        (:class:`pkdyn.workspace.delta.DeltaEvaluator` and
+        :func:`pkdyn.dynamics.delta.delta_inverse_dynamics` take every such design).
+        """
+        space = self.space
+        if space.family != "delta" or space.parametrisation is not None:
+            return False
+        value = {
+            name: space.fixed.get(name, getattr(space._defaults, name, default))
+            for name, default in (
+                ("parallelogram", "ball"),
+                ("arms", 3),
+                ("bar_joint", "spherical"),
+            )
+        }
+        ranged = {r.name for r in space.ranges}
+        return "arms" not in ranged and value == {
+            "parallelogram": "ball",
+            "arms": 3,
+            "bar_joint": "spherical",
+        }
 
     # ------------------------------------------------------------------ derived
 
