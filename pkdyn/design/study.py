@@ -277,20 +277,16 @@ class Study:
         space = self.space
         if space.family != "delta" or space.parametrisation is not None:
             return False
-        value = {
-            name: space.fixed.get(name, getattr(space._defaults, name, default))
-            for name, default in (
-                ("parallelogram", "ball"),
-                ("arms", 3),
-                ("bar_joint", "spherical"),
-            )
-        }
+        from types import SimpleNamespace
+
+        from pkdyn.dynamics.delta import delta_closed_form_params
+
+        names = ("arms", "parallelogram", "bar_joint")
+        fixed = {n: space.fixed.get(n, getattr(space._defaults, n, None)) for n in names}
         ranged = {r.name for r in space.ranges}
-        return "arms" not in ranged and value == {
-            "parallelogram": "ball",
-            "arms": 3,
-            "bar_joint": "spherical",
-        }
+        return "arms" not in ranged and delta_closed_form_params(
+            SimpleNamespace(**{n: v for n, v in fixed.items() if v is not None})
+        )
 
     # ------------------------------------------------------------------ derived
 

@@ -49,6 +49,7 @@ __all__ = [
     "DET_BOUND",
     "ActuatorTrajectory",
     "DeltaDynamics",
+    "delta_closed_form_params",
     "delta_inverse_dynamics",
     "has_delta_dynamics",
     "unit_dets",
@@ -108,14 +109,26 @@ class ActuatorTrajectory(Result):
         )
 
 
-def has_delta_dynamics(robot: Robot) -> bool:
-    """Whether :func:`delta_inverse_dynamics` applies: a library Delta, 3 arms, ball bars."""
-    p = robot.params
+def delta_closed_form_params(p: Any) -> bool:
+    """Whether Delta parameters give 3 arms of ball-jointed bars (Clavel's closed forms apply).
+
+    Args:
+        p: The family's parameters (or any object with ``arms``, ``parallelogram``,
+            ``bar_joint``; a missing one takes the library's default).
+
+    """
     return (
-        robot.family == "delta"
-        and getattr(p, "arms", 3) == 3
+        getattr(p, "arms", 3) == 3
         and getattr(p, "parallelogram", "ball") == "ball"
         and getattr(p, "bar_joint", "spherical") == "spherical"
+    )
+
+
+def has_delta_dynamics(robot: Robot) -> bool:
+    """Whether :func:`delta_inverse_dynamics` applies: a library Delta, 3 arms, ball bars."""
+    return (
+        robot.family == "delta"
+        and delta_closed_form_params(robot.params)
         and len(robot.actuators) == 3
         and robot.platform_frame is not None
     )
