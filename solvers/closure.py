@@ -57,7 +57,7 @@ import pinocchio as pin
 from solvers.planar import PLANAR_TOL, plane_normal
 from solvers.scratch import scratch_data
 
-__all__ = ["CLOSURE_KINDS", "HINGE_ARM", "Closure", "ClosureRows", "support_mask"]
+__all__ = ["CLOSURE_KINDS", "FREE_SCALE", "HINGE_ARM", "Closure", "ClosureRows", "support_mask"]
 
 CLOSURE_KINDS = ("point", "hinge", "weld")
 """The kinds of closure."""
@@ -74,7 +74,7 @@ out-of-plane rows are dropped."""
 _FREE_JOINTS = frozenset({"JointModelSpherical", "JointModelFreeFlyer"})
 """Joints whose world twist columns turn about three orthonormal axes at every configuration."""
 
-_FREE_SCALE = 1e9
+FREE_SCALE = 1e9
 """Largest robot size [m] (``1 +`` the farthest joint origin at neutral) for which a closure moved
 by one of :data:`_FREE_JOINTS` is known not to be planar without computing it (see
 :meth:`ClosureRows._turns_freely`)."""
@@ -254,7 +254,7 @@ class ClosureRows:
             # sum of the joint placements' offsets, an upper bound of the scale checked below;
             # nothing to compute (a Data of a large model costs milliseconds to make)
             bound = 1.0 + sum(float(np.linalg.norm(M.translation)) for M in model.jointPlacements)
-            if bound < _FREE_SCALE:
+            if bound < FREE_SCALE:
                 return [None] * len(self.closures)
         data = scratch_data(model)
         q0 = pin.neutral(model)
@@ -262,7 +262,7 @@ class ClosureRows:
         scale = 1.0 + max((float(np.linalg.norm(M.translation)) for M in data.oMi), default=0.0)
         out: list[np.ndarray | None] = []
         for c, turns in zip(self.closures, free, strict=True):
-            if scale < _FREE_SCALE and turns:
+            if scale < FREE_SCALE and turns:
                 out.append(None)
                 continue
             cols = np.flatnonzero(self.mask(c.joint1) + self.mask(c.joint2))
@@ -458,7 +458,7 @@ class ClosureRows:
 
         Points and welds alone, each Pinocchio's rows as they are, each moved by a ball or free
         joint (no plane to find whatever the placements, :meth:`_turns_freely`), on a model at
-        most half :data:`_FREE_SCALE` in size (placements moved by less than the robot's size
+        most half :data:`FREE_SCALE` in size (placements moved by less than the robot's size
         keep it below the bound): a set of the moved closures made anew has the same rows.
         """
         if not (self.reduce and self.identity):
@@ -470,7 +470,7 @@ class ClosureRows:
         ):
             return False
         bound = 1.0 + sum(float(np.linalg.norm(M.translation)) for M in self.model.jointPlacements)
-        return bound < 0.5 * _FREE_SCALE
+        return bound < 0.5 * FREE_SCALE
 
     def move(self, closures: Sequence[Closure]) -> None:
         """Put other frames' placements on the same closures, in place (:attr:`movable` sets).
