@@ -57,7 +57,15 @@ import pinocchio as pin
 from solvers.planar import PLANAR_TOL, plane_normal
 from solvers.scratch import scratch_data
 
-__all__ = ["CLOSURE_KINDS", "FREE_SCALE", "HINGE_ARM", "Closure", "ClosureRows", "support_mask"]
+__all__ = [
+    "CLOSURE_KINDS",
+    "FREE_SCALE",
+    "HINGE_ARM",
+    "Closure",
+    "ClosureRows",
+    "size_bound",
+    "support_mask",
+]
 
 CLOSURE_KINDS = ("point", "hinge", "weld")
 """The kinds of closure."""
@@ -78,6 +86,23 @@ FREE_SCALE = 1e9
 """Largest robot size [m] (``1 +`` the farthest joint origin at neutral) for which a closure moved
 by one of :data:`_FREE_JOINTS` is known not to be planar without computing it (see
 :meth:`ClosureRows._turns_freely`)."""
+
+
+def size_bound(model: pin.Model) -> float:
+    """``1 +`` the sum of the joint placements' offsets [m], compared with :data:`FREE_SCALE`.
+
+    An upper bound of ``1 +`` the farthest joint origin at neutral (each origin is reached by
+    its chain of placements); nothing to compute but the offsets' norms.
+
+    Args:
+        model: The model.
+
+    Returns:
+        The bound [m].
+
+    """
+    return 1.0 + sum(math.hypot(*M.translation) for M in model.jointPlacements)
+
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _LOCAL = pin.ReferenceFrame.LOCAL
@@ -253,8 +278,7 @@ class ClosureRows:
             # no plane to find (see _turns_freely): the joints' origins at neutral lie within the
             # sum of the joint placements' offsets, an upper bound of the scale checked below;
             # nothing to compute (a Data of a large model costs milliseconds to make)
-            bound = 1.0 + sum(float(np.linalg.norm(M.translation)) for M in model.jointPlacements)
-            if bound < FREE_SCALE:
+            if size_bound(model) < FREE_SCALE:
                 return [None] * len(self.closures)
         data = scratch_data(model)
         q0 = pin.neutral(model)
@@ -469,8 +493,7 @@ class ClosureRows:
             self._turns_freely(c.joint1) or self._turns_freely(c.joint2) for c in self.closures
         ):
             return False
-        bound = 1.0 + sum(float(np.linalg.norm(M.translation)) for M in self.model.jointPlacements)
-        return bound < 0.5 * FREE_SCALE
+        return size_bound(self.model) < 0.5 * FREE_SCALE
 
     def move(self, closures: Sequence[Closure]) -> None:
         """Put other frames' placements on the same closures, in place (:attr:`movable` sets).

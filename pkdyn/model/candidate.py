@@ -57,7 +57,7 @@ from pkdyn.model.home import ASSEMBLY_TOL
 from pkdyn.model.passive import passive_forces
 from pkdyn.model.robot import Robot
 from pkdyn.model.validate import unit_vector
-from solvers.closure import FREE_SCALE, Closure
+from solvers.closure import FREE_SCALE, Closure, size_bound
 from solvers.constraints import ConstraintSet
 
 __all__ = ["CandidateBuilder", "difference", "urdf_pose"]
@@ -628,8 +628,7 @@ class CandidateBuilder:
         model = t.robot.model
         layer = t.robot.constraints
         if not desc.couplings and layer.nk == 0 and layer.movable:
-            size = 1.0 + sum(math.hypot(*M.translation) for M in model.jointPlacements)
-            if size < 0.5 * FREE_SCALE:  # (the bound movable holds the template's model to)
+            if size_bound(model) < 0.5 * FREE_SCALE:  # (the bound movable holds the template to)
                 closures = [
                     Closure(
                         c.name,
